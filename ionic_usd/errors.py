@@ -1,0 +1,90 @@
+"""Exception hierarchy: every error the package raises derives from :class:`IonicError`."""
+
+from __future__ import annotations
+
+__all__ = [
+    "IonicError",
+    "ParameterError",
+    "GrammarError",
+    "GeometryError",
+    "BudgetError",
+    "ReferenceCurveError",
+    "OutputExistsError",
+    "UsdAuthoringError",
+]
+
+
+class IonicError(Exception):
+    """Root of all errors raised by ionic_usd."""
+
+
+class ParameterError(IonicError, ValueError):
+    """A parameter is out of range, non-finite or inconsistent with another one.
+
+    The message names the parameter, the value and the valid range.
+    """
+
+    def __init__(self, name: str, value: object, valid: str, *, context: str = "") -> None:
+        self.name = name
+        self.value = value
+        self.valid = valid
+        where = f"{context}: " if context else ""
+        super().__init__(f"{where}{name} = {value!r} is invalid; expected {valid}")
+
+
+class GrammarError(IonicError, ValueError):
+    """A grammar string could not be parsed.
+
+    Carries the source, the character offset of the offending token, its length and the
+    1-based module number, and renders the source with a caret under the token.
+    """
+
+    def __init__(
+        self,
+        message: str,
+        source: str,
+        offset: int,
+        *,
+        length: int = 1,
+        module: int | None = None,
+        grammar: str = "grammar",
+    ) -> None:
+        self.message = message
+        self.source = source
+        self.offset = max(0, min(offset, len(source)))
+        self.length = max(1, length)
+        self.module = module
+        self.grammar = grammar
+        super().__init__(self._render())
+
+    def get_context(self) -> str:
+        """The source line with a caret (``^~~``) under the offending token."""
+        line = self.source.replace("\n", " ")
+        return f"  {line}\n  {' ' * self.offset}^{'~' * (self.length - 1)}"
+
+    def _render(self) -> str:
+        where = f" in module {self.module}" if self.module is not None else ""
+        return (
+            f"{self.grammar} error{where} at column {self.offset + 1}: {self.message}\n"
+            f"{self.get_context()}"
+        )
+
+
+class GeometryError(IonicError, ValueError):
+    """Geometry that cannot be built (e.g. a self-intersecting spiral band)."""
+
+
+class BudgetError(IonicError, MemoryError):
+    """A level of detail would exceed the configured triangle/memory budget."""
+
+
+class ReferenceCurveError(IonicError, ValueError):
+    """A reference curve file is unreadable, empty or malformed (names file and line)."""
+
+
+class OutputExistsError(IonicError, FileExistsError):
+    """An output exists and ``force`` was not given."""
+
+
+class UsdAuthoringError(IonicError, RuntimeError):
+    """A USD layer could not be composed or written (e.g. an unresolved reference)."""

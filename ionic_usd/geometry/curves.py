@@ -1,0 +1,167 @@
+"""Curves and surfaces of revolution: arc-length resampling, Bézier, ellipse arcs, revolve."""
+
+from __future__ import annotations
+
+from math import comb
+
+import numpy as np
+
+from ionic_usd.errors import GeometryError, ParameterError
+from ionic_usd.geometry.mesh import Mesh
+from ionic_usd.geometry.stitch import stitch
+
+__all__ = [
+    "polyline_length",
+    "cumulative_length",
+    "resample_polyline",
+    "bernstein",
+    "bezier",
+    "ring_angles",
+    "ring",
+    "revolve",
+]
+
+
+def cumulative_length(curve: np.ndarray) -> np.ndarray:
+    """(n,) float: arc length from the first node to each node of a polyline (n, d)."""
+    c = np.asarray(curve, dtype=np.float64)
+    return np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(c, axis=0), axis=1))])
+
+
+def polyline_length(curve: np.ndarray) -> float:
+    """Total length of a polyline (n, d)."""
+    return float(cumulative_length(curve)[-1])
+
+
+def resample_polyline(
+    curve: np.ndarray, *, count: int | None = None, spacing: float | None = None
+) -> np.ndarray:
+    """Resample a polyline at constant arc-length spacing, keeping both end points.
+
+    Parameters
+    ----------
+    curve : (n, d) float, n ≥ 2
+    count : int, optional
+        Number of output nodes (≥ 2).
+    spacing : float, optional
+        Target node spacing; the node count is ``ceil(length / spacing) + 1`` so the actual
+        spacing is ``length / (count - 1)`` ≤ ``spacing``.
+
+    Returns
+    -------
+    (count, d) float
+    """
+    c = np.asarray(curve, dtype=np.float64)
+    if c.ndim != 2 or len(c) < 2:
+        raise GeometryError("resample_polyline needs an (n, d) array with n >= 2")
+    s = cumulative_length(c)
+    total = s[-1]
+    if (count is None) == (spacing is None):
+        raise ParameterError("count/spacing", (count, spacing), "exactly one of them")
+    if spacing is not None:
+        if not np.isfinite(spacing) or spacing <= 0:
+            raise ParameterError("spacing", spacing, "a finite number > 0")
+        count = int(np.ceil(total / spacing - 1e-9)) + 1
+    if count < 2:
+        raise ParameterError("count", count, "an integer >= 2")
+    if total == 0:
+        return np.repeat(c[:1], count, axis=0)
+    t = np.linspace(0.0, total, count)
+    # drop zero-length segments so interpolation is well defined
+    keep = np.concatenate([[True], np.diff(s) > 0])
+    s, c = s[keep], c[keep]
+    return np.stack([np.interp(t, s, c[:, k]) for k in range(c.shape[1])], axis=1)
+
+
+def bernstein(n: int, t: np.ndarray) -> np.ndarray:
+    """Bernstein basis B_i^n(t) (paper formula 1).
+
+    Returns
+    -------
+    (len(t), n + 1) float
+    """
+    t = np.asarray(t, dtype=np.float64)[:, None]
+    i = np.arange(n + 1)[None, :]
+    coef = np.array([comb(n, k) for k in range(n + 1)], dtype=np.float64)[None, :]
+    return coef * t**i * (1.0 - t) ** (n - i)
+
+
+def bezier(control: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Points of a Bézier curve of any degree (paper formula 2).
+
+    Parameters
+    ----------
+    control : (k, d) float, k ≥ 2
+    t : (s,) float in [0, 1]
+
+    Returns
+    -------
+    (s, d) float
+    """
+    p = np.asarray(control, dtype=np.float64)
+    return bernstein(len(p) - 1, t) @ p
+
+
+def ring_angles(segments: int) -> np.ndarray:
+    """(segments,) float: angles of a ring's vertices, starting at 0, increasing."""
+    return np.arange(segments) * (2.0 * np.pi / segments)
+
+
+def ring(radius: float | np.ndarray, y: float, segments: int) -> np.ndarray:
+    """(segments, 3) float: a horizontal circle about the +Y axis, vertex 0 at +X."""
+    th = ring_angles(segments)
+    r = np.broadcast_to(np.asarray(radius, dtype=np.float64), th.shape)
+    return np.stack([r * np.cos(th), np.full_like(th, y), -r * np.sin(th)], axis=1)
+
+
+def revolve(
+    profile: np.ndarray,
+    segments: int,
+    *,
+    name: str = "revolved",
+    axis_tol: float = 1e-12,
+) -> tuple[Mesh, list[np.ndarray]]:
+    """Revolve a half-profile about the +Y axis into a triangle mesh (a lathe).
+
+    Parameters
+    ----------
+    profile : (n, 2) float
+        (radius, height) nodes. Traverse the solid's section counter-clockwise (outer side
+        going up, a top face going inward, a bottom face going outward) so faces point out.
+        A node on the axis (radius ≤ ``axis_tol``) becomes a single vertex (a cap centre).
+    segments : int ≥ 3
+
+    Returns
+    -------
+    mesh : Mesh without normals
+    rows : list of (segments,) or (1,) int arrays, the vertex indices of each profile node
+    """
+    prof = np.asarray(profile, dtype=np.float64)
+    if prof.ndim != 2 or prof.shape[1] != 2 or len(prof) < 2:
+        raise GeometryError("revolve needs an (n, 2) profile with n >= 2")
+    if segments < 3:
+        raise ParameterError("segments", segments, "an integer >= 3", context="revolve")
+    if np.any(prof[:, 0] < -axis_tol):
+        raise GeometryError("revolve: profile radius below zero crosses the axis")
+    pts, rows, start = [], [], 0
+    for r, y in prof:
+        if r <= axis_tol:
+            pts.append(np.array([[0.0, y, 0.0]]))
+            rows.append(np.array([start]))
+            start += 1
+        else:
+            pts.append(ring(r, y, segments))
+            rows.append(np.arange(start, start + segments))
+            start += segments
+    tris = [
+        stitch(rows[k], rows[k + 1], is_closed=True)
+        for k in range(len(rows) - 1)
+        if not (len(rows[k]) == 1 and len(rows[k + 1]) == 1)
+    ]
+    mesh = Mesh(
+        np.concatenate(pts),
+        np.full(sum(len(t) for t in tris), 3, dtype=np.int32),
+        np.concatenate(tris).reshape(-1),
+        name=name,
+    )
+    return mesh, rows

@@ -1,0 +1,331 @@
+"""The immutable :class:`Mesh` value and the operations on it (merge, transform, weld, normals).
+
+Fields map 1:1 to ``UsdGeom.Mesh``: ``points`` → ``points``, ``face_vertex_counts`` →
+``faceVertexCounts``, ``face_vertex_indices`` → ``faceVertexIndices``, ``normals`` → ``normals``
+(with ``normals_interpolation``), ``st`` / ``st_indices`` → the indexed primvar ``primvars:st``.
+Winding is counter-clockwise seen from outside (USD's default ``orientation = rightHanded``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from typing import Literal
+
+import numpy as np
+
+from ionic_usd.errors import GeometryError
+
+__all__ = [
+    "Mesh",
+    "merge",
+    "transform",
+    "weld",
+    "face_normals",
+    "smooth_normals",
+    "triangulate_fan",
+]
+
+Interpolation = Literal["vertex", "faceVarying"]
+
+
+def _frozen(a: np.ndarray) -> np.ndarray:
+    a = np.ascontiguousarray(a)
+    a.setflags(write=False)
+    return a
+
+
+@dataclass(frozen=True, eq=False)
+class Mesh:
+    """A polygon mesh.
+
+    Parameters
+    ----------
+    points : (n, 3) float64
+    face_vertex_counts : (f,) int32
+    face_vertex_indices : (k,) int32, ``k == face_vertex_counts.sum()``
+    normals : (n, 3) or (k, 3) float32 or None
+        Unit normals per vertex (``normals_interpolation == "vertex"``) or per face corner
+        (``"faceVarying"``, which allows crisp edges on a watertight point set).
+    st : (u, 2) float32 or None
+        Texture coordinates, indexed per face corner by ``st_indices`` (faceVarying, indexed).
+    st_indices : (k,) int32 or None
+    name : str
+        A prim name for authoring.
+    """
+
+    points: np.ndarray
+    face_vertex_counts: np.ndarray
+    face_vertex_indices: np.ndarray
+    normals: np.ndarray | None = None
+    normals_interpolation: Interpolation = "vertex"
+    st: np.ndarray | None = None
+    st_indices: np.ndarray | None = None
+    name: str = "mesh"
+    _cache: dict = field(default_factory=dict, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        pts = np.asarray(self.points, dtype=np.float64).reshape(-1, 3)
+        counts = np.asarray(self.face_vertex_counts, dtype=np.int32).reshape(-1)
+        idx = np.asarray(self.face_vertex_indices, dtype=np.int32).reshape(-1)
+        if counts.size and counts.min() < 3:
+            raise GeometryError(f"mesh {self.name!r}: faces need at least 3 vertices")
+        if int(counts.sum()) != idx.size:
+            raise GeometryError(
+                f"mesh {self.name!r}: face_vertex_counts sum to {int(counts.sum())} "
+                f"but there are {idx.size} face_vertex_indices"
+            )
+        if idx.size and (idx.min() < 0 or idx.max() >= len(pts)):
+            raise GeometryError(f"mesh {self.name!r}: a face vertex index is out of range")
+        if not np.all(np.isfinite(pts)):
+            raise GeometryError(f"mesh {self.name!r}: points contain non-finite values")
+        object.__setattr__(self, "points", _frozen(pts))
+        object.__setattr__(self, "face_vertex_counts", _frozen(counts))
+        object.__setattr__(self, "face_vertex_indices", _frozen(idx))
+        if self.normals is not None:
+            nrm = np.asarray(self.normals, dtype=np.float32).reshape(-1, 3)
+            want = len(pts) if self.normals_interpolation == "vertex" else idx.size
+            if self.normals_interpolation not in ("vertex", "faceVarying"):
+                raise GeometryError(f"unknown normals interpolation {self.normals_interpolation!r}")
+            if len(nrm) != want:
+                raise GeometryError(
+                    f"mesh {self.name!r}: {len(nrm)} normals for "
+                    f"{self.normals_interpolation} interpolation, expected {want}"
+                )
+            object.__setattr__(self, "normals", _frozen(nrm))
+        if (self.st is None) != (self.st_indices is None):
+            raise GeometryError(f"mesh {self.name!r}: st and st_indices go together")
+        if self.st is not None:
+            st = np.asarray(self.st, dtype=np.float32).reshape(-1, 2)
+            sti = np.asarray(self.st_indices, dtype=np.int32).reshape(-1)
+            if sti.size != idx.size or (sti.size and (sti.min() < 0 or sti.max() >= len(st))):
+                raise GeometryError(f"mesh {self.name!r}: st_indices do not match the faces")
+            object.__setattr__(self, "st", _frozen(st))
+            object.__setattr__(self, "st_indices", _frozen(sti))
+
+    # -- derived views -------------------------------------------------------------------
+    @property
+    def n_points(self) -> int:
+        return len(self.points)
+
+    @property
+    def n_faces(self) -> int:
+        return len(self.face_vertex_counts)
+
+    @property
+    def n_triangles(self) -> int:
+        """Triangles after fan triangulation of every face."""
+        return int((self.face_vertex_counts - 2).sum())
+
+    @property
+    def triangles(self) -> np.ndarray:
+        """(t, 3) int32 vertex indices of the fan-triangulated faces."""
+        if "tri" not in self._cache:
+            self._cache["tri"] = triangulate_fan(self.face_vertex_counts, self.face_vertex_indices)
+        return self._cache["tri"]
+
+    @property
+    def extent(self) -> np.ndarray:
+        """(2, 3) float64: min and max corner of the points."""
+        if len(self.points) == 0:
+            return np.zeros((2, 3))
+        return np.stack([self.points.min(axis=0), self.points.max(axis=0)])
+
+    def with_(self, **changes) -> Mesh:
+        """A copy with some fields replaced (the cache is not carried over)."""
+        changes.setdefault("_cache", {})
+        return replace(self, **changes)
+
+
+def triangulate_fan(counts: np.ndarray, indices: np.ndarray) -> np.ndarray:
+    """Fan-triangulate polygon faces.
+
+    Parameters
+    ----------
+    counts : (f,) int
+    indices : (k,) int
+
+    Returns
+    -------
+    (t, 3) int32
+    """
+    counts = np.asarray(counts, dtype=np.int64)
+    indices = np.asarray(indices, dtype=np.int32)
+    if counts.size and np.all(counts == 3):
+        return indices.reshape(-1, 3)
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    ntri = counts - 2
+    face_of_tri = np.repeat(np.arange(len(counts)), ntri)
+    k = np.arange(ntri.sum()) - np.repeat(np.cumsum(ntri) - ntri, ntri)
+    s = starts[face_of_tri]
+    return np.stack([indices[s], indices[s + k + 1], indices[s + k + 2]], axis=1).astype(np.int32)
+
+
+def face_normals(points: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Unit normals and areas of triangles.
+
+    Returns
+    -------
+    normals : (t, 3) float64 (zero for degenerate triangles)
+    areas : (t,) float64
+    """
+    p = points[triangles]
+    cr = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    ln = np.linalg.norm(cr, axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        n = np.where(ln[:, None] > 0, cr / ln[:, None], 0.0)
+    return n, 0.5 * ln
+
+
+def smooth_normals(mesh: Mesh, groups: np.ndarray | None = None) -> Mesh:
+    """Angle-weighted normals, smooth within smoothing groups and crisp between them.
+
+    Parameters
+    ----------
+    mesh : triangle mesh
+    groups : (t,) int or None
+        Smoothing group per triangle. ``None`` gives per-vertex normals smooth everywhere;
+        otherwise faceVarying normals where a corner averages only the triangles of its own
+        group around its vertex (so an edge between two groups is crisp).
+    """
+    tri = mesh.triangles
+    if not np.all(mesh.face_vertex_counts == 3):
+        raise GeometryError("smooth_normals expects a triangle mesh")
+    pts = mesh.points
+    fn, _ = face_normals(pts, tri)
+    p = pts[tri]
+    # corner angles as weights: robust to uneven triangulations (ring stitching fans)
+    w = np.empty(tri.shape)
+    for c in range(3):
+        u = p[:, (c + 1) % 3] - p[:, c]
+        v = p[:, (c + 2) % 3] - p[:, c]
+        cosang = np.einsum("ij,ij->i", u, v) / np.maximum(
+            np.linalg.norm(u, axis=1) * np.linalg.norm(v, axis=1), 1e-300
+        )
+        w[:, c] = np.arccos(np.clip(cosang, -1.0, 1.0))
+    contrib = (fn[:, None, :] * w[:, :, None]).reshape(-1, 3)
+    corner_vertex = tri.reshape(-1)
+    if groups is None:
+        acc = np.zeros((len(pts), 3))
+        np.add.at(acc, corner_vertex, contrib)
+        out = _normalise(acc)
+        return mesh.with_(normals=out.astype(np.float32), normals_interpolation="vertex")
+    groups = np.asarray(groups).reshape(-1)
+    if groups.size != len(tri):
+        raise GeometryError("smooth_normals: one group per triangle expected")
+    key = corner_vertex.astype(np.int64) * (int(groups.max()) + 1) + np.repeat(groups, 3)
+    uniq, inv = np.unique(key, return_inverse=True)
+    acc = np.zeros((len(uniq), 3))
+    np.add.at(acc, inv, contrib)
+    out = _normalise(acc)[inv]
+    return mesh.with_(normals=out.astype(np.float32), normals_interpolation="faceVarying")
+
+
+def _normalise(v: np.ndarray) -> np.ndarray:
+    ln = np.linalg.norm(v, axis=1, keepdims=True)
+    return np.where(ln > 0, v / np.where(ln > 0, ln, 1.0), np.array([0.0, 1.0, 0.0]))
+
+
+def _fv_normals(m: Mesh) -> np.ndarray | None:
+    if m.normals is None:
+        return None
+    if m.normals_interpolation == "faceVarying":
+        return m.normals
+    return m.normals[m.face_vertex_indices]
+
+
+def merge(meshes: list[Mesh] | tuple[Mesh, ...], name: str = "mesh") -> Mesh:
+    """Concatenate meshes into one (no welding; see :func:`weld`).
+
+    Normals are kept when every mesh has them (per vertex if all are per vertex, else
+    faceVarying); texture coordinates are kept when every mesh has them.
+    """
+    meshes = list(meshes)
+    if not meshes:
+        raise GeometryError("merge needs at least one mesh")
+    offsets = np.cumsum([0] + [m.n_points for m in meshes[:-1]])
+    points = np.concatenate([m.points for m in meshes])
+    counts = np.concatenate([m.face_vertex_counts for m in meshes])
+    idx = np.concatenate([m.face_vertex_indices + o for m, o in zip(meshes, offsets, strict=True)])
+    normals, interp = None, "vertex"
+    if all(m.normals is not None for m in meshes):
+        if all(m.normals_interpolation == "vertex" for m in meshes):
+            normals = np.concatenate([m.normals for m in meshes])
+        else:
+            normals = np.concatenate([_fv_normals(m) for m in meshes])
+            interp = "faceVarying"
+    st = sti = None
+    if all(m.st is not None for m in meshes):
+        so = np.cumsum([0] + [len(m.st) for m in meshes[:-1]])
+        st = np.concatenate([m.st for m in meshes])
+        sti = np.concatenate([m.st_indices + o for m, o in zip(meshes, so, strict=True)])
+    return Mesh(points, counts, idx, normals, interp, st, sti, name=name)
+
+
+def transform(mesh: Mesh, matrix: np.ndarray) -> Mesh:
+    """Apply a 4×4 affine transform (column-vector convention, ``p' = M @ p``).
+
+    Normals use the inverse transpose; a mirroring transform (negative determinant) reverses
+    the winding so faces stay outward.
+    """
+    m = np.asarray(matrix, dtype=np.float64)
+    if m.shape != (4, 4):
+        raise GeometryError(f"transform expects a 4x4 matrix, got shape {m.shape}")
+    lin, t = m[:3, :3], m[:3, 3]
+    pts = mesh.points @ lin.T + t
+    det = np.linalg.det(lin)
+    if abs(det) < 1e-15:
+        raise GeometryError("transform matrix is singular")
+    normals = mesh.normals
+    if normals is not None:
+        nm = np.linalg.inv(lin).T
+        normals = _normalise(normals.astype(np.float64) @ nm.T).astype(np.float32)
+    counts, idx, sti = mesh.face_vertex_counts, mesh.face_vertex_indices, mesh.st_indices
+    if det < 0:
+        perm = _reverse_faces_perm(counts)
+        idx = idx[perm]
+        if sti is not None:
+            sti = sti[perm]
+        if normals is not None and mesh.normals_interpolation == "faceVarying":
+            normals = normals[perm]
+    return mesh.with_(points=pts, face_vertex_indices=idx, normals=normals, st_indices=sti)
+
+
+def _reverse_faces_perm(counts: np.ndarray) -> np.ndarray:
+    """Corner permutation that reverses every face's vertex order (keeping its first vertex)."""
+    counts = counts.astype(np.int64)
+    starts = np.repeat(np.cumsum(counts) - counts, counts)
+    local = np.arange(counts.sum()) - starts
+    n = np.repeat(counts, counts)
+    return (starts + np.where(local == 0, 0, n - local)).astype(np.int64)
+
+
+def weld(mesh: Mesh, tol: float = 1e-9) -> Mesh:
+    """Merge points closer than ``tol`` (by rounding to a grid) and drop collapsed faces.
+
+    Normals become faceVarying (corner normals are preserved as they were).
+    """
+    q = np.round(mesh.points / tol).astype(np.int64)
+    _, first, inv = np.unique(q, axis=0, return_index=True, return_inverse=True)
+    inv = inv.reshape(-1)
+    pts = mesh.points[first]
+    idx = inv[mesh.face_vertex_indices]
+    normals = _fv_normals(mesh)
+    # faces that collapsed (two equal consecutive indices) are dropped: only for triangles
+    counts = mesh.face_vertex_counts
+    keep_corner = np.ones(idx.size, dtype=bool)
+    keep_face = np.ones(len(counts), dtype=bool)
+    if np.all(counts == 3):
+        t = idx.reshape(-1, 3)
+        bad = (t[:, 0] == t[:, 1]) | (t[:, 1] == t[:, 2]) | (t[:, 0] == t[:, 2])
+        keep_face = ~bad
+        keep_corner = np.repeat(keep_face, 3)
+    return Mesh(
+        pts,
+        counts[keep_face],
+        idx[keep_corner],
+        None if normals is None else normals[keep_corner],
+        "faceVarying",
+        mesh.st,
+        None if mesh.st_indices is None else mesh.st_indices[keep_corner],
+        name=mesh.name,
+    )
