@@ -187,37 +187,58 @@ def smooth_normals(mesh: Mesh, groups: np.ndarray | None = None) -> Mesh:
         otherwise faceVarying normals where a corner averages only the triangles of its own
         group around its vertex (so an edge between two groups is crisp).
     """
-    tri = mesh.triangles
     if not np.all(mesh.face_vertex_counts == 3):
         raise GeometryError("smooth_normals expects a triangle mesh")
+    tri = mesh.triangles
     pts = mesh.points
-    fn, _ = face_normals(pts, tri)
-    p = pts[tri]
-    # corner angles as weights: robust to uneven triangulations (ring stitching fans)
-    w = np.empty(tri.shape)
-    for c in range(3):
-        u = p[:, (c + 1) % 3] - p[:, c]
-        v = p[:, (c + 2) % 3] - p[:, c]
-        cosang = np.einsum("ij,ij->i", u, v) / np.maximum(
-            np.linalg.norm(u, axis=1) * np.linalg.norm(v, axis=1), 1e-300
-        )
-        w[:, c] = np.arccos(np.clip(cosang, -1.0, 1.0))
-    contrib = (fn[:, None, :] * w[:, :, None]).reshape(-1, 3)
+    p0, p1, p2 = pts[tri[:, 0]], pts[tri[:, 1]], pts[tri[:, 2]]
+    e0, e1, e2 = p1 - p0, p2 - p1, p0 - p2
+    cr = np.cross(e0, -e2)
+    twice_area = np.linalg.norm(cr, axis=1)
+    unit = cr / np.where(twice_area > 0, twice_area, 1.0)[:, None]
+    # corner angles (atan2 of |cross| and dot) weight each face: independent of how a flat
+    # region is triangulated, unlike area weights
+    dots = (-np.einsum("ij,ij->i", e0, e2), -np.einsum("ij,ij->i", e1, e0),
+            -np.einsum("ij,ij->i", e2, e1))
+    angle = [np.arctan2(twice_area, d) for d in dots]
     corner_vertex = tri.reshape(-1)
+    npts = len(pts)
+
+    def by_vertex(weights) -> np.ndarray:
+        # one bincount per corner column avoids materialising per-corner weight arrays
+        return sum(
+            np.bincount(tri[:, c], weights=weights[c], minlength=npts) for c in range(3)
+        )
+
+    per_vertex = _normalise(
+        np.stack([by_vertex([unit[:, k] * angle[c] for c in range(3)]) for k in range(3)], axis=1)
+    )
     if groups is None:
-        acc = np.zeros((len(pts), 3))
-        np.add.at(acc, corner_vertex, contrib)
-        out = _normalise(acc)
-        return mesh.with_(normals=out.astype(np.float32), normals_interpolation="vertex")
-    groups = np.asarray(groups).reshape(-1)
+        return mesh.with_(normals=per_vertex.astype(np.float32), normals_interpolation="vertex")
+    groups = np.asarray(groups, dtype=np.int64).reshape(-1)
     if groups.size != len(tri):
         raise GeometryError("smooth_normals: one group per triangle expected")
-    key = corner_vertex.astype(np.int64) * (int(groups.max()) + 1) + np.repeat(groups, 3)
-    uniq, inv = np.unique(key, return_inverse=True)
-    acc = np.zeros((len(uniq), 3))
-    np.add.at(acc, inv, contrib)
-    out = _normalise(acc)[inv]
-    return mesh.with_(normals=out.astype(np.float32), normals_interpolation="faceVarying")
+    # a vertex lies in a single group iff its corners' groups all equal one of them (any one)
+    some = np.empty(npts, dtype=np.int64)
+    for c in range(3):
+        some[tri[:, c]] = groups
+    spread = by_vertex([np.abs(groups - some[tri[:, c]]) for c in range(3)])
+    single = spread == 0
+    out = per_vertex.astype(np.float32)[corner_vertex]
+    multi = np.flatnonzero(~single[corner_vertex])
+    if multi.size:
+        face = multi // 3
+        key = corner_vertex[multi].astype(np.int64) * (int(groups.max()) + 1) + groups[face]
+        uniq, inv = np.unique(key, return_inverse=True)
+        inv = inv.reshape(-1)
+        wcorner = np.stack(angle, axis=1).reshape(-1)[multi]
+        acc = np.stack(
+            [np.bincount(inv, weights=unit[face, k] * wcorner, minlength=len(uniq))
+             for k in range(3)],
+            axis=1,
+        )
+        out[multi] = _normalise(acc)[inv]
+    return mesh.with_(normals=out, normals_interpolation="faceVarying")
 
 
 def _normalise(v: np.ndarray) -> np.ndarray:

@@ -74,7 +74,7 @@ def auto_sequence(u_a: np.ndarray, u_b: np.ndarray, is_closed: bool) -> np.ndarr
     if is_closed and m == 1:
         return np.ones(n, dtype=np.int64)
     if is_closed:
-        edge_mid = 0.5 * (u_b + np.append(u_b[1:], 1.0))
+        edge_mid = 0.5 * (u_b + np.append(u_b[1:], u_b[0] + 1.0))
     else:
         edge_mid = 0.5 * (u_b[:-1] + u_b[1:])
     bounds = 0.5 * (u_a[:-1] + u_a[1:])  # Voronoi boundaries between consecutive a-nodes

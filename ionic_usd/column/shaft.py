@@ -1,0 +1,387 @@
+"""The fluted column shaft (paper section IV, Table 1; SPEC §1).
+
+Geometry, from the bottom (y = 0) up; the axis is +Y::
+
+    plain ring      y ∈ [0, ring_bottom]                 (a plain cylinder band, M vertices/row)
+    flute ends      y ∈ [ring_bottom, + arc_bottom]       ($h rows, rounded "channel arcs")
+    fluted body     y ∈ [..., + height]                   ($a: the shaft without the arcs)
+    flute ends      arc_top                              ($h rows)
+    plain ring      ring_top                              (M vertices/row)
+
+Radius: linear taper from ``bottom_radius`` ($d) to ``top_radius`` ($c) over the whole length
+plus an optional entasis ``E·d·sin(π t)`` (t = y / length): a convex swelling that vanishes at
+both ends and is largest at mid-height — the simplest smooth curve with Vitruvius' property
+that the swelling adds to, and never reverses, the taper for small E.
+
+Cross-section: ``flutes`` ($e) flutes, centred at angles (k + ½)·360°/e so a fillet straddles
+angle 0. Each flute is half an ellipse cut into the circle: its diameter parallel to the
+tangent is the chord spanning the central angle ``flute_angle`` ($f), the perpendicular
+semi-axis is ``flute_depth`` ($g) times the parallel one (g = 1: Vitruvius' semicircular flute).
+Between flutes the fillet is an arc of the circle. The flute ends are rounded in elevation: over
+the arc height ``arc_ratio``·ρ ($b, ρ = the flute's half-chord) the flute shrinks as
+``sqrt(1 - s²)`` in width and depth (an ellipsoidal spoon end), and the last, narrowed row is
+joined to the plain ring — which has a different vertex count — by ring stitching.
+
+Level of detail: ``flute_slices`` ($h) slices across a flute and rows in each arc;
+``flute_slices_per_fillet_slice`` ($i): the fillet is cut into ``round(w / (i·f/h))`` slices
+(w = fillet angle), at least one; the plain rings use the fillet's angular step.
+
+The shaft is a closed solid (bottom and top caps) unless ``cap_bottom`` / ``cap_top`` is off: then
+it is open exactly at its bottom / top ring (``ring_segments`` vertices, vertex 0 at +X,
+increasing angle), where the base and capital join.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, fields
+
+import numpy as np
+
+from ionic_usd.errors import BudgetError, ParameterError
+from ionic_usd.geometry.mesh import Mesh, smooth_normals
+from ionic_usd.geometry.stitch import auto_sequence, stitch
+
+__all__ = [
+    "ShaftParams",
+    "SHAFT_PARAMETER_DOCS",
+    "build_shaft",
+    "shaft_triangle_estimate",
+    "shaft_radius_at",
+    "shaft_silhouette",
+    "shaft_cross_section",
+    "DEFAULT_TRIANGLE_BUDGET",
+]
+
+DEFAULT_TRIANGLE_BUDGET = 20_000_000
+
+# name -> (paper letter, unit, description); drives --help and TOML comments
+SHAFT_PARAMETER_DOCS: dict[str, tuple[str, str, str]] = {
+    "height": ("$a", "m", "shaft height without the channel arcs (fluted body)"),
+    "arc_ratio": ("$b", "ratio", "channel-arc height as a ratio to the flute's half-chord"),
+    "top_radius": ("$c", "m", "radius of the shaft's top circle"),
+    "bottom_radius": ("$d", "m", "radius of the shaft's bottom circle"),
+    "flutes": ("$e", "count", "number of flutes (Ionic: 24)"),
+    "flute_angle": ("$f", "deg", "central angle of one flute; 360/e - f is the fillet"),
+    "flute_depth": ("$g", "ratio", "flute ellipse depth: perpendicular/parallel diameter"),
+    "flute_slices": ("$h", "count", "slices across one flute and rows per flute end (LOD)"),
+    "flute_slices_per_fillet_slice": ("$i", "count", "flute slices per fillet slice (LOD)"),
+    "ring_bottom": ("", "m", "height of the plain ring below the flutes"),
+    "ring_top": ("", "m", "height of the plain ring above the flutes"),
+    "entasis": ("", "ratio", "entasis amplitude as a fraction of the bottom radius (0 = none)"),
+    "entasis_rows": ("", "count", "rows along the fluted body when entasis > 0"),
+}
+
+
+@dataclass(frozen=True)
+class ShaftParams:
+    """The nine shaft parameters of the paper's Table 1 plus plain rings and entasis.
+
+    Defaults: the Temple of Portunus (lower diameter 0.95 m, top diameter 6/7 of it after
+    Vitruvius III.3.12 for columns of 20-30 ft; 24 flutes, fillet = ¼ flute width and
+    semicircular flutes after Vitruvius III.5.14). Lengths in metres, angles in degrees.
+    """
+
+    height: float = 7.02
+    arc_ratio: float = 1.0
+    top_radius: float = 0.475 * 6.0 / 7.0
+    bottom_radius: float = 0.475
+    flutes: int = 24
+    flute_angle: float = 12.0
+    flute_depth: float = 1.0
+    flute_slices: int = 8
+    flute_slices_per_fillet_slice: int = 4
+    ring_bottom: float = 0.06
+    ring_top: float = 0.06
+    entasis: float = 0.0
+    entasis_rows: int = 16
+
+    def __post_init__(self) -> None:
+        ctx = "shaft"
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if isinstance(v, bool) or not isinstance(v, int | float):
+                raise ParameterError(f.name, v, "a number", context=ctx)
+            if not math.isfinite(v):
+                raise ParameterError(f.name, v, "a finite number", context=ctx)
+        for name in ("flutes", "flute_slices", "flute_slices_per_fillet_slice", "entasis_rows"):
+            if int(getattr(self, name)) != getattr(self, name):
+                raise ParameterError(name, getattr(self, name), "an integer", context=ctx)
+            object.__setattr__(self, name, int(getattr(self, name)))
+        _pos = "a finite number > 0"
+        if self.height <= 0:
+            raise ParameterError("height ($a)", self.height, _pos, context=ctx)
+        if self.top_radius <= 0:
+            raise ParameterError("top_radius ($c)", self.top_radius, _pos, context=ctx)
+        if self.bottom_radius <= 0:
+            raise ParameterError("bottom_radius ($d)", self.bottom_radius, _pos, context=ctx)
+        if self.flutes < 3:
+            raise ParameterError("flutes ($e)", self.flutes, "an integer >= 3", context=ctx)
+        period = 360.0 / self.flutes
+        if not 0 < self.flute_angle < period:
+            raise ParameterError(
+                "flute_angle ($f)", self.flute_angle,
+                f"0 < f < 360/e = {period:g} deg (the rest of 360/e is the fillet)", context=ctx,
+            )
+        if not 0 < self.flute_depth <= 4:
+            raise ParameterError("flute_depth ($g)", self.flute_depth, "0 < g <= 4", context=ctx)
+        if self.arc_ratio < 0:
+            raise ParameterError("arc_ratio ($b)", self.arc_ratio, "a number >= 0", context=ctx)
+        if self.flute_slices < 1:
+            raise ParameterError("flute_slices ($h)", self.flute_slices, "an integer >= 1",
+                                 context=ctx)
+        if self.flute_slices_per_fillet_slice < 1:
+            raise ParameterError("flute_slices_per_fillet_slice ($i)",
+                                 self.flute_slices_per_fillet_slice, "an integer >= 1",
+                                 context=ctx)
+        for name in ("ring_bottom", "ring_top"):
+            if getattr(self, name) < 0:
+                raise ParameterError(name, getattr(self, name), "a number >= 0", context=ctx)
+        if not -0.2 <= self.entasis <= 0.2:
+            raise ParameterError("entasis", self.entasis, "-0.2 <= entasis <= 0.2", context=ctx)
+        if self.entasis_rows < 1:
+            raise ParameterError("entasis_rows", self.entasis_rows, "an integer >= 1",
+                                 context=ctx)
+        # the flutes must not cut through the axis: chord distance minus depth stays > 0
+        for name, r in (("bottom_radius ($d)", self.bottom_radius),
+                        ("top_radius ($c)", self.top_radius)):
+            a = math.radians(self.flute_angle) / 2
+            if r * math.cos(a) - self.flute_depth * r * math.sin(a) <= 0.05 * r:
+                raise ParameterError("flute_depth ($g)", self.flute_depth,
+                                     f"flutes shallower than the radius at {name}", context=ctx)
+
+    # -- derived quantities --------------------------------------------------------------
+    @property
+    def fillet_angle(self) -> float:
+        """Fillet width in degrees (360/e − f)."""
+        return 360.0 / self.flutes - self.flute_angle
+
+    @property
+    def fillet_slices(self) -> int:
+        step = self.flute_slices_per_fillet_slice * self.flute_angle / self.flute_slices
+        return max(1, round(self.fillet_angle / step))
+
+    @property
+    def ring_segments(self) -> int:
+        """Vertices in a plain-ring row (the bottom/top rings the base and capital meet)."""
+        step = self.fillet_angle / self.fillet_slices
+        per = max(1, round((360.0 / self.flutes) / step))
+        return self.flutes * max(per, 2 if self.flutes < 8 else 1)
+
+    @property
+    def fluted_segments(self) -> int:
+        """Vertices in a fluted row."""
+        return self.flutes * (self.flute_slices + self.fillet_slices)
+
+    def arc_height(self, radius: float) -> float:
+        """Height of a flute end at a shaft radius: $b × the flute's half-chord."""
+        return self.arc_ratio * radius * math.sin(math.radians(self.flute_angle) / 2)
+
+    @property
+    def length(self) -> float:
+        """Total shaft length: rings + arcs + $a."""
+        return (self.ring_bottom + self.arc_height(self.bottom_radius) + self.height
+                + self.arc_height(self.top_radius) + self.ring_top)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def shaft_radius_at(p: ShaftParams, y: np.ndarray) -> np.ndarray:
+    """Radius of the shaft's circle (fillet surface) at heights ``y`` (m): taper + entasis."""
+    t = np.clip(np.asarray(y, dtype=np.float64) / p.length, 0.0, 1.0)
+    r = p.bottom_radius + (p.top_radius - p.bottom_radius) * t
+    return r + p.entasis * p.bottom_radius * np.sin(np.pi * t)
+
+
+def _row_layout(p: ShaftParams) -> tuple[np.ndarray, np.ndarray]:
+    """Heights and flute scale factors (0..1] of the fluted rows, bottom to top.
+
+    A flute end is a quarter ellipse in elevation (scale k = cos φ at height fraction
+    s = sin φ); rows sample φ in equal steps, which puts more rows where the end curves most.
+    The tip itself (k = 0) is the plain ring row. A zero-height end is a single full row.
+    """
+    h = p.flute_slices
+    y0 = p.ring_bottom
+    ab = p.arc_height(p.bottom_radius)
+    at = p.arc_height(p.top_radius)
+    phi = 0.5 * np.pi * np.arange(h - 1, -1, -1) / h  # from the tip side to the full flute
+    s, k_end = np.sin(phi), np.cos(phi)
+
+    def end(height: float) -> tuple[np.ndarray, np.ndarray]:
+        return (s, k_end) if height > 0 else (np.zeros(1), np.ones(1))
+
+    sb, kb = end(ab)
+    st, kt = end(at)
+    body_rows = p.entasis_rows if p.entasis != 0 else 1
+    y_body = y0 + ab + p.height * np.arange(1, body_rows) / body_rows
+    ys = np.concatenate([y0 + ab * (1.0 - sb), y_body, y0 + ab + p.height + at * st[::-1]])
+    ks = np.concatenate([kb, np.ones(len(y_body)), kt[::-1]])
+    return ys, ks
+
+
+def _fluted_rows(p: ShaftParams, ys: np.ndarray, ks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Points (R, N, 3) and angles (R, N) of fluted rows; also per-vertex flute index."""
+    e, h, nf = p.flutes, p.flute_slices, p.fillet_slices
+    period = 2 * np.pi / e
+    r = shaft_radius_at(p, ys)[:, None, None]  # (R,1,1)
+    alpha = (np.radians(p.flute_angle) / 2 * ks)[:, None, None]  # flute half-angle per row
+    centre = (np.arange(e) + 0.5) * period  # (e,)
+    phi = np.pi * np.arange(h) / h  # (h,) corner1 + interior flute vertices
+    rho = r * np.sin(alpha)
+    x_r = r * np.cos(alpha) - p.flute_depth * rho * np.sin(phi)  # (R,1,h)
+    x_t = -rho * np.cos(phi)
+    flute_ang = centre[None, :, None] + np.arctan2(x_t, x_r)  # (R,e,h)
+    flute_rad = np.broadcast_to(np.hypot(x_r, x_t), flute_ang.shape)
+    # fillet: corner2 and interior vertices on the circle up to the next flute
+    fil = (np.arange(nf) / nf)[None, None, :]
+    fil_ang = centre[None, :, None] + alpha + (period - 2 * alpha) * fil  # (R,e,nf)
+    fil_rad = np.broadcast_to(r, fil_ang.shape)
+    ang = np.concatenate([flute_ang, fil_ang], axis=2).reshape(len(ys), -1)
+    rad = np.concatenate([flute_rad, fil_rad], axis=2).reshape(len(ys), -1)
+    pts = np.stack([rad * np.cos(ang), np.broadcast_to(ys[:, None], ang.shape),
+                    -rad * np.sin(ang)], axis=2)
+    return pts, ang
+
+
+def shaft_triangle_estimate(p: ShaftParams, *, caps: int = 2) -> int:
+    """Triangles :func:`build_shaft` will emit (computed without building)."""
+    ys, _ = _row_layout(p)
+    n, m = p.fluted_segments, p.ring_segments
+    rings = 2 * m * ((p.ring_bottom > 0) + (p.ring_top > 0))
+    return 2 * n * (len(ys) - 1) + 2 * (n + m) + rings + caps * m
+
+
+def build_shaft(
+    p: ShaftParams | None = None,
+    *,
+    cap_bottom: bool = True,
+    cap_top: bool = True,
+    y_offset: float = 0.0,
+    max_triangles: int = DEFAULT_TRIANGLE_BUDGET,
+    name: str = "shaft",
+) -> Mesh:
+    """Build the fluted shaft as a triangle mesh with crisp fillet edges.
+
+    Parameters
+    ----------
+    p : ShaftParams (defaults to the Portunus shaft)
+    cap_bottom, cap_top : close the shaft with flat caps (off where base/capital join)
+    y_offset : lift the shaft (m), e.g. by the base height
+    max_triangles : refuse a level of detail above this many triangles (BudgetError)
+
+    Returns
+    -------
+    Mesh with faceVarying normals: smooth inside each flute and over fillets and rings,
+    crisp at every flute/fillet edge and at the caps.
+    """
+    p = p or ShaftParams()
+    est = shaft_triangle_estimate(p, caps=int(cap_bottom) + int(cap_top))
+    if est > max_triangles:
+        raise BudgetError(
+            f"shaft: this level of detail needs about {est:,} triangles, above the budget of "
+            f"{max_triangles:,} (lower flute_slices $h or raise max_triangles)"
+        )
+    e, h, nf = p.flutes, p.flute_slices, p.fillet_slices
+    n, m = p.fluted_segments, p.ring_segments
+    ys, ks = _row_layout(p)
+    fl_pts, fl_ang = _fluted_rows(p, ys, ks)
+    nrows = len(ys)
+    L = p.length
+    ring_ys = np.array([0.0, p.ring_bottom, L - p.ring_top, L])
+    ring_ang = np.arange(m) * (2 * np.pi / m)
+    ring_r = shaft_radius_at(p, ring_ys)[:, None]
+    ring_pts = np.stack([ring_r * np.cos(ring_ang), np.broadcast_to(ring_ys[:, None], (4, m)),
+                         -ring_r * np.sin(ring_ang)], axis=2)
+    # vertex layout: [4 plain rows][fluted rows][2 cap centres]
+    base_fl = 4 * m
+    points = np.concatenate([ring_pts.reshape(-1, 3), fl_pts.reshape(-1, 3),
+                             [[0.0, 0.0, 0.0], [0.0, L, 0.0]]])
+    c_bot, c_top = base_fl + nrows * n, base_fl + nrows * n + 1
+    plain = [np.arange(k * m, (k + 1) * m) for k in range(4)]
+
+    # groups: 0 = fillets and plain rings (one smooth cylinder), 1..e = flutes, e+1/e+2 caps
+    col = np.arange(n) % (h + nf)
+    flute_of_col = np.arange(n) // (h + nf)
+    quad_group = np.where(col < h, 1 + flute_of_col, 0)  # quad (col, col+1) lies in a flute?
+
+    tris, groups = [], []
+    # fluted bands: regular quads, split along the rising diagonal
+    if nrows > 1:
+        r0 = base_fl + np.arange(nrows - 1)[:, None] * n
+        j = np.arange(n)[None, :]
+        a0, a1 = r0 + j, r0 + (j + 1) % n
+        b0, b1 = a0 + n, a1 + n
+        t1 = np.stack([a0, a1, b0], axis=-1).reshape(-1, 3)
+        t2 = np.stack([a1, b1, b0], axis=-1).reshape(-1, 3)
+        tris += [np.stack([t1, t2], axis=1).reshape(-1, 3)]
+        groups += [np.repeat(np.tile(quad_group, nrows - 1), 2)]
+    # plain rings and their stitching to the narrowed flute ends (angle parameters)
+    if p.ring_bottom == 0:
+        plain[1] = plain[0]
+    if p.ring_top == 0:
+        plain[2] = plain[3]
+    u_ring = ring_ang / (2 * np.pi)
+    first_fl = base_fl + np.arange(n)
+    last_fl = base_fl + (nrows - 1) * n + np.arange(n)
+    seq_bot = auto_sequence(u_ring, fl_ang[0] / (2 * np.pi), True)  # ring below flute row
+    seq_top = auto_sequence(fl_ang[-1] / (2 * np.pi), u_ring, True)
+    # a stitch triangle touching a flute's interior vertex continues that flute's spoon end
+    interior = (col > 0) & (col < h)
+    bands = [(plain[1], first_fl, seq_bot), (last_fl, plain[2], seq_top)]
+    if p.ring_bottom > 0:
+        bands.insert(0, (plain[0], plain[1], None))
+    if p.ring_top > 0:
+        bands.append((plain[2], plain[3], None))
+    for lo, hi, seq in bands:
+        t = stitch(lo, hi, is_closed=True, sequence=seq)
+        fl_col = np.where(t >= base_fl, (t - base_fl) % n, -1)
+        touch = np.where(fl_col >= 0, interior[np.maximum(fl_col, 0)], False)
+        g = np.zeros(len(t), dtype=np.int64)
+        hit = touch.any(axis=1)
+        which = np.argmax(touch, axis=1)
+        g[hit] = 1 + flute_of_col[fl_col[hit, which[hit]]]
+        tris.append(t)
+        groups.append(g)
+    if cap_bottom:
+        t = stitch(plain[0], np.array([c_bot]), is_closed=True, direction=-1)
+        tris.append(t)
+        groups.append(np.full(len(t), e + 1))
+    if cap_top:
+        t = stitch(plain[3], np.array([c_top]), is_closed=True)
+        tris.append(t)
+        groups.append(np.full(len(t), e + 2))
+    tri = np.concatenate(tris).astype(np.int32)
+    # drop points no triangle uses (cap centres of an open shaft, collapsed ring rows)
+    keep = np.zeros(len(points), dtype=bool)
+    keep[tri.reshape(-1)] = True
+    remap = np.cumsum(keep) - 1
+    tri = remap[tri]
+    points = points[keep]
+    if y_offset:
+        points = points + np.array([0.0, y_offset, 0.0])
+    mesh = Mesh(points, np.full(len(tri), 3, np.int32), tri.reshape(-1), name=name)
+    return smooth_normals(mesh, np.concatenate(groups))
+
+
+def shaft_silhouette(p: ShaftParams, samples: int = 200) -> np.ndarray:
+    """(samples, 2) float: the shaft's outline (radius of the fillet surface, y) bottom to top."""
+    ys = np.linspace(0.0, p.length, samples)
+    return np.stack([shaft_radius_at(p, ys), ys], axis=1)
+
+
+def shaft_cross_section(p: ShaftParams, y: float) -> np.ndarray:
+    """(N, 2) float: the closed cross-section polygon (x, −z) at height ``y`` (m).
+
+    At heights inside the fluted body or the flute ends the flutes are included (scaled as in
+    the mesh); in the plain rings it is the circle at the plain-ring resolution.
+    """
+    ys, ks = _row_layout(p)
+    y = float(y)
+    if y < ys[0] or y > ys[-1]:
+        r = float(shaft_radius_at(p, np.array([y]))[0])
+        ang = np.arange(p.ring_segments) * (2 * np.pi / p.ring_segments)
+        return np.stack([r * np.cos(ang), r * np.sin(ang)], axis=1)
+    k = float(np.interp(y, ys, ks))
+    pts, _ = _fluted_rows(p, np.array([y]), np.array([k]))
+    return np.stack([pts[0, :, 0], -pts[0, :, 2]], axis=1)

@@ -1,0 +1,431 @@
+"""Reference curves traced from drawings: CSV/SVG readers and alignment to generated curves.
+
+A reference curve is an ``(n, 2)`` float array in metres (``scale`` converts from the file's
+units). Readers raise :class:`~ionic_usd.errors.ReferenceCurveError` — and nothing else — for
+any unreadable or malformed file; the message names the file and the line (CSV) or element
+(SVG).
+
+CSV format: one ``x,y`` point per line (``;``, tab or spaces also separate the two numbers);
+blank lines and ``#`` comments (whole line or trailing) are ignored; the first data line may be
+a header (any line with a non-numeric field).
+
+SVG format: the first ``<path>`` element, or the element whose ``id`` is given (a ``<path>``
+or any basic shape such as ``<polyline>``). Transforms are applied (svgelements ``reify``);
+straight segments keep their end nodes, curved segments (Bézier, arcs) are sampled with
+``samples_per_curve`` points each; resample the result with
+:func:`ionic_usd.evaluate.metrics.resample` for constant spacing. SVG's y axis points down:
+pass ``flip_y=True`` to get y up.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ionic_usd.errors import ParameterError, ReferenceCurveError
+from ionic_usd.evaluate.metrics import _as_curve, _PolylineIndex, hausdorff_distance
+
+__all__ = [
+    "Alignment",
+    "align",
+    "read_csv_curve",
+    "read_reference",
+    "read_svg_curve",
+]
+
+_SPLIT = re.compile(r"[,;\s]+")
+
+
+def _check_options(scale: float, samples_per_curve: int | None = None) -> None:
+    if not (isinstance(scale, (int, float)) and math.isfinite(scale) and scale > 0):
+        raise ParameterError("scale", scale, "a finite number > 0 (metres per file unit)")
+    if samples_per_curve is not None and (
+        not isinstance(samples_per_curve, int) or samples_per_curve < 2
+    ):
+        raise ParameterError("samples_per_curve", samples_per_curve, "an integer >= 2")
+
+
+def _read_bytes(path: Path) -> bytes:
+    try:
+        return path.read_bytes()
+    except OSError as exc:
+        raise ReferenceCurveError(f"{path}: cannot read file: {exc.strerror or exc}") from exc
+
+
+def _finish(points: np.ndarray, path: Path, where: str, scale: float, flip_y: bool) -> np.ndarray:
+    if points.shape[0] == 0:
+        raise ReferenceCurveError(f"{path}: {where}: no points")
+    if points.shape[0] == 1:
+        raise ReferenceCurveError(f"{path}: {where}: a single point is not a curve")
+    if not np.all(np.isfinite(points)):
+        raise ReferenceCurveError(f"{path}: {where}: non-finite coordinates")
+    out = points * float(scale)
+    if flip_y:
+        out[:, 1] = -out[:, 1]
+    if not np.all(np.isfinite(out)):
+        raise ReferenceCurveError(f"{path}: {where}: coordinates overflow after scaling")
+    if not np.any(np.linalg.norm(np.diff(out, axis=0), axis=1) > 0.0):
+        raise ReferenceCurveError(f"{path}: {where}: all points coincide (zero length)")
+    return out
+
+
+def read_csv_curve(path: str | Path, *, scale: float = 1.0, flip_y: bool = False) -> np.ndarray:
+    """Read a polyline from a CSV/text file of ``x,y`` lines.
+
+    Parameters
+    ----------
+    path : str or Path
+    scale : float
+        Metres per file unit.
+    flip_y : bool
+        Negate y (for curves traced in image coordinates).
+
+    Returns
+    -------
+    (n, 2) float
+        n >= 2, in metres.
+
+    Raises
+    ------
+    ReferenceCurveError
+        Unreadable or non-UTF-8 file, bad row, non-finite value, fewer than two points or a
+        zero-length curve; the message names the file and line.
+    """
+    _check_options(scale)
+    path = Path(path)
+    data = _read_bytes(path)
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise ReferenceCurveError(
+            f"{path}: not UTF-8 text (byte {exc.start}): {exc.reason}"
+        ) from exc
+    rows: list[tuple[float, float]] = []
+    seen_content = False
+    last_line = 0
+    for lineno, raw in enumerate(text.split("\n"), start=1):
+        line = raw.split("#", 1)[0].strip()
+        if not line:
+            continue
+        fields = [f for f in _SPLIT.split(line) if f]
+        try:
+            values = [float(f) for f in fields]
+        except ValueError:
+            values = None
+        if values is None:
+            if not seen_content:  # a header line
+                seen_content = True
+                continue
+            raise ReferenceCurveError(
+                f"{path}: line {lineno}: bad row {line[:60]!r}: expected two numbers x,y"
+            )
+        seen_content = True
+        if len(values) != 2:
+            raise ReferenceCurveError(
+                f"{path}: line {lineno}: bad row {line[:60]!r}: expected 2 values x,y, "
+                f"got {len(values)}"
+            )
+        if not (math.isfinite(values[0]) and math.isfinite(values[1])):
+            raise ReferenceCurveError(f"{path}: line {lineno}: non-finite value {line[:60]!r}")
+        rows.append((values[0], values[1]))
+        last_line = lineno
+    if not rows:
+        raise ReferenceCurveError(f"{path}: empty: no data rows")
+    return _finish(np.array(rows, dtype=np.float64), path, f"line {last_line}", scale, flip_y)
+
+
+def _element_name(element: object) -> str:
+    tag = type(element).__name__.lower()
+    ident = getattr(element, "id", None)
+    return f"<{tag} id={ident!r}>" if ident else f"<{tag}>"
+
+
+def read_svg_curve(
+    path: str | Path,
+    *,
+    element_id: str | None = None,
+    subpath: int | None = None,
+    scale: float = 1.0,
+    flip_y: bool = False,
+    samples_per_curve: int = 64,
+) -> np.ndarray:
+    """Read a polyline from an SVG path (parsed and sampled with svgelements).
+
+    Parameters
+    ----------
+    path : str or Path
+    element_id : str, optional
+        ``id`` of the element to read; default: the first ``<path>``.
+    subpath : int, optional
+        Which subpath (0-based, split at move-to commands) when the path has several; a path
+        with several drawn subpaths and no ``subpath`` is an error.
+    scale : float
+        Metres per SVG user unit.
+    flip_y : bool
+        Negate y (SVG's y axis points down).
+    samples_per_curve : int
+        Points per curved segment (Bézier, arc), >= 2; straight segments keep their nodes.
+
+    Returns
+    -------
+    (n, 2) float
+        n >= 2, in metres.
+
+    Raises
+    ------
+    ReferenceCurveError
+        Unreadable or malformed file, no (matching) path, empty path, ambiguous subpaths,
+        non-finite or degenerate curve; the message names the file and element.
+    """
+    _check_options(scale, samples_per_curve)
+    path = Path(path)
+    data = _read_bytes(path)
+    # svgelements is imported lazily: only SVG users need it.
+    import svgelements as se
+
+    try:
+        svg = se.SVG.parse(io.BytesIO(data), reify=True)
+        elements = list(svg.elements())
+    except Exception as exc:  # noqa: BLE001 - any parser failure is a malformed file
+        raise ReferenceCurveError(f"{path}: cannot parse SVG: {exc}") from exc
+
+    chosen = None
+    for element in elements:
+        if element_id is not None:
+            if getattr(element, "id", None) == element_id:
+                chosen = element
+                break
+        elif isinstance(element, se.Path):
+            chosen = element
+            break
+    if chosen is None:
+        what = f"no element with id={element_id!r}" if element_id else "no <path> element"
+        raise ReferenceCurveError(f"{path}: {what}")
+    where = _element_name(chosen)
+    try:
+        points = _sample_svg_element(chosen, se, subpath, samples_per_curve, path, where)
+    except ReferenceCurveError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - malformed geometry inside svgelements
+        raise ReferenceCurveError(f"{path}: {where}: cannot sample: {exc}") from exc
+    return _finish(points, path, where, scale, flip_y)
+
+
+def _sample_svg_element(element, se, subpath, samples, path, where) -> np.ndarray:
+    if isinstance(element, se.Path):
+        shape = element
+    elif isinstance(element, se.Shape):
+        shape = se.Path(element)
+    else:
+        raise ReferenceCurveError(f"{path}: {where} is not a path or shape")
+    drawn = []
+    for sub in shape.as_subpaths():
+        segs = [s for s in sub if not isinstance(s, se.Move)]
+        if segs:
+            drawn.append(segs)
+    if not drawn:
+        raise ReferenceCurveError(f"{path}: {where}: empty path (no drawn segments)")
+    if subpath is None:
+        if len(drawn) > 1:
+            raise ReferenceCurveError(
+                f"{path}: {where}: {len(drawn)} subpaths; choose one with subpath=0.."
+                f"{len(drawn) - 1}"
+            )
+        segs = drawn[0]
+    else:
+        if not 0 <= subpath < len(drawn):
+            raise ReferenceCurveError(
+                f"{path}: {where}: subpath {subpath} out of range 0..{len(drawn) - 1}"
+            )
+        segs = drawn[subpath]
+    t = np.linspace(0.0, 1.0, samples)[1:]
+    out: list[np.ndarray] = []
+    for seg in segs:
+        if seg.start is None or seg.end is None:
+            continue
+        if not out:
+            out.append(np.array([[seg.start.x, seg.start.y]], dtype=np.float64))
+        if isinstance(seg, (se.Line, se.Close)):
+            out.append(np.array([[seg.end.x, seg.end.y]], dtype=np.float64))
+        else:
+            out.append(np.asarray(seg.npoint(t), dtype=np.float64).reshape(-1, 2))
+    if not out:
+        raise ReferenceCurveError(f"{path}: {where}: empty path (no drawn segments)")
+    return np.concatenate(out)
+
+
+def read_reference(
+    path: str | Path,
+    *,
+    scale: float = 1.0,
+    flip_y: bool = False,
+    element_id: str | None = None,
+    samples_per_curve: int = 64,
+) -> np.ndarray:
+    """Read a reference curve, choosing the reader by suffix (``.svg``; ``.csv``/``.txt``).
+
+    Returns
+    -------
+    (n, 2) float
+        In metres. See :func:`read_csv_curve` and :func:`read_svg_curve`.
+    """
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix == ".svg":
+        return read_svg_curve(
+            path,
+            element_id=element_id,
+            scale=scale,
+            flip_y=flip_y,
+            samples_per_curve=samples_per_curve,
+        )
+    if suffix in (".csv", ".txt", ".tsv", ".dat"):
+        return read_csv_curve(path, scale=scale, flip_y=flip_y)
+    raise ReferenceCurveError(f"{path}: unknown reference format {suffix!r}; use .csv or .svg")
+
+
+# --------------------------------------------------------------------------------------------
+# alignment
+# --------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Alignment:
+    """What :func:`align` did to the generated curve, so reports can say so.
+
+    Attributes
+    ----------
+    translation : tuple of float
+        Added to the (possibly mirrored) generated curve, length d.
+    mirrored : bool
+        Whether x was negated (handedness flipped) before translating.
+    hausdorff_before, hausdorff_after : float
+        :func:`~ionic_usd.evaluate.metrics.hausdorff_distance` to the reference before and
+        after; ``after <= before``.
+    """
+
+    translation: tuple[float, ...]
+    mirrored: bool
+    hausdorff_before: float
+    hausdorff_after: float
+
+    def __post_init__(self) -> None:
+        if len(self.translation) not in (2, 3) or not all(
+            math.isfinite(v) for v in self.translation
+        ):
+            raise ParameterError("translation", self.translation, "2 or 3 finite numbers")
+        for name in ("hausdorff_before", "hausdorff_after"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0):
+                raise ParameterError(name, value, "a finite number >= 0")
+
+    def describe(self) -> str:
+        """One sentence for a report."""
+        shift = ", ".join(f"{v:+.6g}" for v in self.translation)
+        mirror = "mirrored in x, then " if self.mirrored else ""
+        return (
+            f"generated curve {mirror}translated by ({shift}); Hausdorff "
+            f"{self.hausdorff_before:.6g} -> {self.hausdorff_after:.6g}"
+        )
+
+    def as_dict(self) -> dict[str, object]:
+        return {
+            "translation": list(self.translation),
+            "mirrored": self.mirrored,
+            "hausdorff_before": self.hausdorff_before,
+            "hausdorff_after": self.hausdorff_after,
+        }
+
+
+def _arc_centroid(c: np.ndarray) -> np.ndarray:
+    # Length-weighted centroid: independent of how densely the curve is sampled.
+    seg = np.linalg.norm(np.diff(c, axis=0), axis=1)
+    if c.shape[0] < 2 or seg.sum() == 0.0:
+        return c.mean(axis=0)
+    mid = 0.5 * (c[1:] + c[:-1])
+    return (mid * seg[:, None]).sum(axis=0) / seg.sum()
+
+
+def align(
+    reference: np.ndarray, generated: np.ndarray, *, allow_mirror: bool = False
+) -> tuple[np.ndarray, Alignment]:
+    """Move the generated curve onto the reference (translation, optionally a mirror).
+
+    The centroids (arc-length weighted) are matched, then the translation is refined by
+    minimising :func:`~ionic_usd.evaluate.metrics.hausdorff_distance` with Nelder–Mead
+    (it is not differentiable). The untouched position is a candidate too, so the result is
+    never worse than the input. With ``allow_mirror`` the generated curve with x negated is
+    also tried and kept if it fits better (the handedness of a traced drawing is arbitrary).
+
+    Parameters
+    ----------
+    reference : (n, d) float
+    generated : (m, d) float
+
+    Returns
+    -------
+    aligned : (m, d) float
+        The moved generated curve.
+    alignment : Alignment
+    """
+    from scipy.optimize import minimize
+
+    ref = _as_curve(reference, "reference", min_nodes=2)
+    gen = _as_curve(generated, "generated", min_nodes=2)
+    if ref.shape[1] != gen.shape[1]:
+        raise ParameterError("generated", f"dimension {gen.shape[1]}", f"{ref.shape[1]}")
+    ref_index = _PolylineIndex(ref)
+    before = hausdorff_distance(ref, gen)
+
+    best: tuple[float, np.ndarray, bool] | None = None
+    for mirrored in (False, True) if allow_mirror else (False,):
+        g = gen.copy()
+        if mirrored:
+            g[:, 0] = -g[:, 0]
+        g_index = _PolylineIndex(g)
+
+        def cost(t: np.ndarray, g=g, g_index=g_index) -> float:
+            # d(ref node, g + t) = d(ref node - t, g): both indexes are built once.
+            return float(
+                max(ref_index.distances(g + t).max(), g_index.distances(ref - t).max())
+            )
+
+        starts = [_arc_centroid(ref) - _arc_centroid(g)]
+        if not mirrored:
+            starts.append(np.zeros(ref.shape[1]))
+        x0 = min(starts, key=cost)
+        f0 = cost(x0)
+        step = max(f0, 1e-9 * (1.0 + float(np.abs(ref).max())))
+        simplex = np.vstack([x0, x0 + step * np.eye(ref.shape[1])])
+        res = minimize(
+            cost,
+            x0,
+            method="Nelder-Mead",
+            options={
+                "initial_simplex": simplex,
+                "xatol": 1e-9 * (1.0 + step),
+                "fatol": 1e-12 * (1.0 + f0),
+                "maxiter": 200 * ref.shape[1] * 4,
+            },
+        )
+        x, fx = (res.x, float(res.fun)) if res.fun <= f0 else (x0, f0)
+        if best is None or fx < best[0]:
+            best = (fx, np.asarray(x, dtype=np.float64), mirrored)
+    assert best is not None
+    fx, t, mirrored = best
+    if fx >= before:  # no improvement: leave the curve where it was
+        t, mirrored = np.zeros(ref.shape[1]), False
+    aligned = gen.copy()
+    if mirrored:
+        aligned[:, 0] = -aligned[:, 0]
+    aligned += t
+    after = hausdorff_distance(ref, aligned)
+    return aligned, Alignment(
+        translation=tuple(float(v) for v in t),
+        mirrored=mirrored,
+        hausdorff_before=before,
+        hausdorff_after=after,
+    )

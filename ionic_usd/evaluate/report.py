@@ -1,0 +1,257 @@
+"""Evaluation reports: a text table like the paper's Table 6, JSON, and overlay plots (Fig. 9).
+
+JSON layout written by :func:`write_json` (schema ``"ionic_usd.evaluate/1"``)::
+
+    {
+      "schema": "ionic_usd.evaluate/1",
+      "unit": "m",                       # unit of every length and distance
+      "parts": {
+        "<part>": {
+          "nodes_a": int, "nodes_b": int,            # node counts (a = reference)
+          "length_a": float, "length_b": float,      # polyline lengths
+          "mean_length": float,                      # their mean, the % denominator
+          "hausdorff": float,         # node-to-curve, symmetric (paper: "weak Fréchet")
+          "node_hausdorff": float,    # node-to-node, symmetric (paper: "Hausdorff")
+          "average_error": float,     # mean node-to-curve distance, both directions pooled
+          "discrete_frechet": float,  # Eiter-Mannila
+          "frechet": float,           # continuous, Alt-Godau
+          "<measure>_pct": float | null,   # each measure as % of mean_length
+          "alignment": {              # only when an Alignment was given for the part
+            "translation": [float, ...], "mirrored": bool,
+            "hausdorff_before": float, "hausdorff_after": float
+          }
+        }
+      },
+      "metadata": {...}               # free-form, as passed (must be JSON-serialisable)
+    }
+
+All files are written atomically: to a temporary file in the destination folder, then
+``os.replace``-d over the target, so readers never see a half-written file.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import IO, Any
+
+import numpy as np
+
+from ionic_usd.errors import ParameterError
+from ionic_usd.evaluate.metrics import CurveComparison, _as_curve, point_to_polyline_distances
+from ionic_usd.evaluate.reference import Alignment
+
+__all__ = ["SCHEMA", "format_table", "plot_overlay", "write_json"]
+
+SCHEMA = "ionic_usd.evaluate/1"
+
+# (field, column title) in the order of the paper's Table 6, then the true Fréchet measures.
+_COLUMNS = (
+    ("hausdorff", "weak Fréchet*"),
+    ("node_hausdorff", "Hausdorff*"),
+    ("average_error", "avg error"),
+    ("discrete_frechet", "discrete Fréchet"),
+    ("frechet", "Fréchet"),
+)
+
+
+def _atomic_write(path: str | Path, write: Callable[[IO[bytes]], None]) -> Path:
+    path = Path(path)
+    folder = path.parent if str(path.parent) else Path(".")
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
+    replaced = False
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            write(fh)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+        replaced = True
+    finally:
+        if not replaced:  # whatever interrupted us, leave no temporary file behind
+            try:
+                os.unlink(tmp)
+            except FileNotFoundError:
+                pass
+    return path
+
+
+def _cell(value: float, pct: float, unit: str, digits: int) -> str:
+    pct_text = "n/a" if math.isnan(pct) else f"{pct:.2f}%"
+    return f"{value:.{digits}f} {unit} ({pct_text})"
+
+
+def format_table(
+    rows: Mapping[str, CurveComparison], *, unit: str = "m", digits: int = 4
+) -> str:
+    """Plain-text table in the shape of the paper's Table 6.
+
+    One line per part: node counts (a + b), curve lengths (a + b), then each measure in
+    ``unit`` and as a percentage of the mean curve length. Columns marked ``*`` use the
+    paper's names: "weak Fréchet" is the node-to-curve Hausdorff distance, "Hausdorff" the
+    node-to-node one.
+
+    Parameters
+    ----------
+    rows : mapping of str to CurveComparison
+        Part name (e.g. ``"base"``) to its comparison, in display order.
+    unit : str
+        Label for the distances' unit.
+    digits : int
+        Decimals for distances.
+
+    Returns
+    -------
+    str
+        Lines joined with ``\\n``, ending with a footnote line.
+    """
+    if not rows:
+        raise ParameterError("rows", rows, "at least one part")
+    header = ["part", "nodes", "length", *(title for _, title in _COLUMNS)]
+    body = []
+    for name, c in rows.items():
+        if not isinstance(c, CurveComparison):
+            raise ParameterError(f"rows[{name!r}]", type(c).__name__, "a CurveComparison")
+        body.append(
+            [
+                str(name),
+                f"{c.nodes_a} + {c.nodes_b}",
+                f"{c.length_a:.{digits}f} + {c.length_b:.{digits}f}",
+                *(
+                    _cell(getattr(c, field), c.percent(field), unit, digits)
+                    for field, _ in _COLUMNS
+                ),
+            ]
+        )
+    widths = [max(len(r[k]) for r in [header, *body]) for k in range(len(header))]
+
+    def line(cells: list[str]) -> str:
+        first = cells[0].ljust(widths[0])
+        rest = (c.rjust(w) for c, w in zip(cells[1:], widths[1:], strict=True))
+        return "  ".join([first, *rest]).rstrip()
+
+    rule = "  ".join("-" * w for w in widths)
+    footnote = (
+        "* paper's names: weak Fréchet = node-to-curve Hausdorff, Hausdorff = node-to-node; "
+        "% of the mean curve length"
+    )
+    return "\n".join([line(header), rule, *(line(r) for r in body), footnote])
+
+
+def write_json(
+    path: str | Path,
+    rows: Mapping[str, CurveComparison],
+    *,
+    alignments: Mapping[str, Alignment] | None = None,
+    metadata: Mapping[str, Any] | None = None,
+    unit: str = "m",
+) -> Path:
+    """Write comparisons (and the alignments applied) as JSON; keys in the module docstring.
+
+    Parameters
+    ----------
+    path : str or Path
+    rows : mapping of str to CurveComparison
+    alignments : mapping of str to Alignment, optional
+        Keyed by part; each must name a part in ``rows``.
+    metadata : mapping, optional
+        Stored as is under ``"metadata"``.
+    unit : str
+
+    Returns
+    -------
+    Path
+        The written file.
+    """
+    alignments = dict(alignments or {})
+    unknown = sorted(set(alignments) - set(rows))
+    if unknown:
+        raise ParameterError("alignments", unknown, f"parts among {sorted(rows)}")
+    parts: dict[str, Any] = {}
+    for name, c in rows.items():
+        if not isinstance(c, CurveComparison):
+            raise ParameterError(f"rows[{name!r}]", type(c).__name__, "a CurveComparison")
+        entry: dict[str, Any] = c.as_dict()
+        if name in alignments:
+            entry["alignment"] = alignments[name].as_dict()
+        parts[str(name)] = entry
+    doc = {"schema": SCHEMA, "unit": unit, "parts": parts, "metadata": dict(metadata or {})}
+    try:
+        text = json.dumps(doc, indent=2, ensure_ascii=False, allow_nan=False)
+    except (TypeError, ValueError) as exc:
+        raise ParameterError("metadata", metadata, "JSON-serialisable values") from exc
+    return _atomic_write(path, lambda fh: fh.write(text.encode("utf-8") + b"\n"))
+
+
+def plot_overlay(
+    a: np.ndarray,
+    b: np.ndarray,
+    path: str | Path,
+    *,
+    title: str | None = None,
+    labels: tuple[str, str] = ("reference", "generated"),
+    dpi: int = 150,
+) -> Path:
+    """PNG like the paper's Figure 9: the two curves, and node-to-curve distance circles.
+
+    Left panel: both curves overlaid (reference yellow, generated red, as in the paper).
+    Right panel: the curves with, at every node, a circle whose radius is that node's
+    distance to the other curve (edges included) — the largest circle is the paper's
+    "weak Fréchet" distance. matplotlib (Agg) is imported only here.
+
+    Parameters
+    ----------
+    a, b : (n, 2), (m, 2) float
+    path : str or Path
+        Output ``.png``.
+    title : str, optional
+    labels : (str, str)
+    dpi : int
+
+    Returns
+    -------
+    Path
+        The written file.
+    """
+    a = _as_curve(a, "a", min_nodes=2)
+    b = _as_curve(b, "b", min_nodes=2)
+    if a.shape[1] != 2 or b.shape[1] != 2:
+        raise ParameterError("a/b", (a.shape, b.shape), "2D curves (n, 2)")
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.collections import EllipseCollection
+    from matplotlib.figure import Figure
+
+    ra = point_to_polyline_distances(a, b)
+    rb = point_to_polyline_distances(b, a)
+    colours = ("#d4a500", "#d62728")
+    fig = Figure(figsize=(11, 5.5), layout="constrained")
+    FigureCanvasAgg(fig)
+    left, right = fig.subplots(1, 2, sharex=True, sharey=True)
+    for ax in (left, right):
+        ax.plot(a[:, 0], a[:, 1], "-", color=colours[0], lw=1.2, label=labels[0])
+        ax.plot(b[:, 0], b[:, 1], "-", color=colours[1], lw=1.0, label=labels[1])
+        ax.set_aspect("equal", adjustable="box")
+        ax.grid(True, lw=0.3, alpha=0.5)
+    for pts, r, colour in ((a, ra, colours[0]), (b, rb, colours[1])):
+        right.add_collection(
+            EllipseCollection(
+                2 * r, 2 * r, np.zeros_like(r), units="xy", offsets=pts,
+                offset_transform=right.transData, facecolors="none", edgecolors=colour,
+                linewidths=0.5, alpha=0.8,
+            )
+        )
+    left.legend(loc="best", fontsize=8)
+    left.set_title("curves", fontsize=10)
+    worst = float(max(ra.max(), rb.max()))
+    right.set_title(f"node-to-curve distances (max {worst:.4g})", fontsize=10)
+    if title:
+        fig.suptitle(title)
+
+    def write(fh: IO[bytes]) -> None:
+        fig.savefig(fh, format="png", dpi=dpi)
+
+    return _atomic_write(path, write)

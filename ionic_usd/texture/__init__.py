@@ -1,0 +1,43 @@
+"""Texturing: procedural stone maps and texture files (OpenImageIO)."""
+
+from .stone import (
+    MARBLE,
+    MAX_TEXTURE_SIZE,
+    MIN_TEXTURE_SIZE,
+    STONE_STYLES,
+    STUCCO_PAINTED,
+    TRAVERTINE,
+    USDZ_TEXTURE_FORMATS,
+    StoneMaps,
+    StoneStyle,
+    TextureError,
+    copy_user_textures,
+    generate_stone_maps,
+    get_stone_style,
+    height_to_normal,
+    linear_to_srgb,
+    srgb_to_linear,
+    validate_user_texture,
+    write_stone_textures,
+)
+
+__all__ = [
+    "MARBLE",
+    "MAX_TEXTURE_SIZE",
+    "MIN_TEXTURE_SIZE",
+    "STONE_STYLES",
+    "STUCCO_PAINTED",
+    "TRAVERTINE",
+    "USDZ_TEXTURE_FORMATS",
+    "StoneMaps",
+    "StoneStyle",
+    "TextureError",
+    "copy_user_textures",
+    "generate_stone_maps",
+    "get_stone_style",
+    "height_to_normal",
+    "linear_to_srgb",
+    "srgb_to_linear",
+    "validate_user_texture",
+    "write_stone_textures",
+]

@@ -1,0 +1,106 @@
+"""Author :class:`ionic_usd.geometry.Mesh` values as ``UsdGeom.Mesh`` prims with the Sdf API.
+
+Arrays go straight from numpy to USD (``Vt.*Array.FromNumpy``); callers that author many prims
+wrap the calls in one ``Sdf.ChangeBlock`` so change processing runs once.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from pxr import Sdf, Vt
+
+from ionic_usd.geometry.mesh import Mesh
+from ionic_usd.usd.stage import ensure_typed_ancestors
+
+__all__ = ["author_mesh", "define_prim", "mesh_extent", "write_meshes"]
+
+_T = Sdf.ValueTypeNames
+
+
+def define_prim(layer: Sdf.Layer, path: str | Sdf.Path, type_name: str = "Xform") -> Sdf.PrimSpec:
+    """A ``def`` prim spec of a type, with typed ancestors."""
+    path = Sdf.Path(str(path))
+    ensure_typed_ancestors(layer, path)
+    spec = layer.GetPrimAtPath(path) or Sdf.CreatePrimInLayer(layer, path)
+    spec.specifier = Sdf.SpecifierDef
+    spec.typeName = type_name
+    return spec
+
+
+def _attr(spec: Sdf.PrimSpec, name: str, type_name, value, *, uniform: bool = False,
+          interpolation: str | None = None) -> Sdf.AttributeSpec:
+    attr = spec.attributes.get(name)
+    if attr is None:
+        variability = Sdf.VariabilityUniform if uniform else Sdf.VariabilityVarying
+        attr = Sdf.AttributeSpec(spec, name, type_name, variability)
+    attr.default = value
+    if interpolation is not None:
+        attr.SetInfo("interpolation", interpolation)
+    return attr
+
+
+def mesh_extent(mesh: Mesh) -> Vt.Vec3fArray:
+    """The mesh's bounds as a USD ``extent`` value."""
+    return Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(mesh.extent, dtype=np.float32))
+
+
+def author_mesh(
+    layer: Sdf.Layer,
+    path: str | Sdf.Path,
+    mesh: Mesh,
+    *,
+    double_sided: bool = False,
+) -> Sdf.PrimSpec:
+    """Write a mesh prim (points, counts, indices, normals, st, extent, no subdivision).
+
+    Parameters
+    ----------
+    layer : the layer to author into
+    path : prim path; missing ancestors are created as ``Xform``
+    mesh : the geometry; normals and ``st`` are written when present
+    """
+    spec = define_prim(layer, path, "Mesh")
+    pts = np.ascontiguousarray(mesh.points, dtype=np.float32)
+    _attr(spec, "points", _T.Point3fArray, Vt.Vec3fArray.FromNumpy(pts))
+    _attr(spec, "faceVertexCounts", _T.IntArray,
+          Vt.IntArray.FromNumpy(np.ascontiguousarray(mesh.face_vertex_counts, dtype=np.int32)))
+    _attr(spec, "faceVertexIndices", _T.IntArray,
+          Vt.IntArray.FromNumpy(np.ascontiguousarray(mesh.face_vertex_indices, dtype=np.int32)))
+    _attr(spec, "extent", _T.Float3Array, mesh_extent(mesh))
+    _attr(spec, "subdivisionScheme", _T.Token, "none", uniform=True)
+    _attr(spec, "doubleSided", _T.Bool, bool(double_sided), uniform=True)
+    if mesh.normals is not None:
+        _attr(spec, "normals", _T.Normal3fArray,
+              Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(mesh.normals, dtype=np.float32)),
+              interpolation=mesh.normals_interpolation)
+    if mesh.st is not None:
+        _attr(spec, "primvars:st", _T.TexCoord2fArray,
+              Vt.Vec2fArray.FromNumpy(np.ascontiguousarray(mesh.st, dtype=np.float32)),
+              interpolation="faceVarying")
+        _attr(spec, "primvars:st:indices", _T.IntArray,
+              Vt.IntArray.FromNumpy(np.ascontiguousarray(mesh.st_indices, dtype=np.int32)))
+    return spec
+
+
+def write_meshes(
+    path,
+    meshes: dict[str, Mesh],
+    *,
+    root: str = "Column",
+    kind: str = "component",
+    force: bool = False,
+    comment: str = "",
+):
+    """Write meshes as ``/<root>/Geom/<name>`` into a new USD file (atomically).
+
+    Returns the written path. Every ancestor is a typed ``Xform``; the root has ``kind``.
+    """
+    from ionic_usd.usd.stage import check_output_path, new_layer, save_layer  # noqa: PLC0415
+
+    check_output_path(path, force=force)
+    layer = new_layer(root, kind=kind, comment=comment)
+    with Sdf.ChangeBlock():
+        define_prim(layer, f"/{root}/Geom", "Xform")
+        for name, mesh in meshes.items():
+            author_mesh(layer, f"/{root}/Geom/{name}", mesh)
+    return save_layer(layer, path, force=force)

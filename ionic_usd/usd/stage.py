@@ -1,0 +1,159 @@
+"""Stage creation, atomic saving and validation — every stage ionic_usd writes goes through here."""
+
+from __future__ import annotations
+
+import os
+import secrets
+from collections.abc import Iterable
+from pathlib import Path
+
+from pxr import Kind, Sdf, Usd, UsdGeom
+
+from ionic_usd.errors import OutputExistsError, ParameterError, UsdAuthoringError
+
+__all__ = [
+    "USD_EXTENSIONS",
+    "create_stage",
+    "new_layer",
+    "save_layer",
+    "save_stage",
+    "check_output_path",
+    "validate_stage",
+    "ensure_typed_ancestors",
+]
+
+USD_EXTENSIONS = (".usda", ".usdc", ".usd")
+_KINDS = ("component", "assembly", "group", "subcomponent", "model")
+
+
+def check_output_path(path: str | os.PathLike, *, force: bool = False) -> Path:
+    """Validate an output path: a USD extension, and no existing file unless ``force``."""
+    p = Path(path)
+    if p.suffix.lower() not in USD_EXTENSIONS:
+        raise ParameterError("output", str(p), f"a file ending in one of {', '.join(USD_EXTENSIONS)}")
+    if p.exists() and not force:
+        raise OutputExistsError(f"{p} exists; pass --force (force=True) to overwrite it")
+    return p
+
+
+def new_layer(
+    default_prim: str,
+    *,
+    kind: str | None = "component",
+    prim_type: str = "Xform",
+    up_axis: str = "Y",
+    meters_per_unit: float = 1.0,
+    comment: str = "",
+) -> Sdf.Layer:
+    """An anonymous layer with the stage metadata every ionic_usd layer carries.
+
+    Sets ``defaultPrim``, ``upAxis``, ``metersPerUnit`` and defines the default prim with its
+    type and ``kind`` — what Pixar's StageMetadataChecker and DCC importers expect.
+    """
+    if kind is not None and kind not in _KINDS:
+        raise ParameterError("kind", kind, f"one of {', '.join(_KINDS)}")
+    if up_axis not in ("Y", "Z"):
+        raise ParameterError("up_axis", up_axis, "'Y' or 'Z'")
+    layer = Sdf.Layer.CreateAnonymous(".usda")
+    with Sdf.ChangeBlock():
+        spec = Sdf.CreatePrimInLayer(layer, Sdf.Path.absoluteRootPath.AppendChild(default_prim))
+        spec.specifier = Sdf.SpecifierDef
+        spec.typeName = prim_type
+        if kind is not None:
+            spec.kind = kind
+        layer.defaultPrim = default_prim
+        root = layer.pseudoRoot
+        root.SetInfo("upAxis", up_axis)
+        root.SetInfo("metersPerUnit", float(meters_per_unit))
+        if comment:
+            layer.comment = comment
+    return layer
+
+
+def create_stage(
+    default_prim: str,
+    *,
+    kind: str | None = "component",
+    prim_type: str = "Xform",
+    up_axis: str = "Y",
+    meters_per_unit: float = 1.0,
+    comment: str = "",
+) -> Usd.Stage:
+    """An in-memory stage whose root layer comes from :func:`new_layer`."""
+    layer = new_layer(default_prim, kind=kind, prim_type=prim_type, up_axis=up_axis,
+                      meters_per_unit=meters_per_unit, comment=comment)
+    return Usd.Stage.Open(layer)
+
+
+def save_layer(layer: Sdf.Layer, path: str | os.PathLike, *, force: bool = False) -> Path:
+    """Export a layer atomically: write a temporary file beside ``path``, then rename.
+
+    The file format follows the extension (``.usda`` text, ``.usdc``/``.usd`` crate).
+    """
+    p = check_output_path(path, force=force)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    tmp = p.with_name(f".{p.stem}.{secrets.token_hex(4)}.tmp{p.suffix}")
+    try:
+        if not layer.Export(str(tmp)):
+            raise UsdAuthoringError(f"could not write {p}")
+        os.replace(tmp, p)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+    # a later Sdf.Layer.FindOrOpen of this path must see the new content, not a cached one
+    cached = Sdf.Layer.Find(str(p))
+    if cached is not None:
+        cached.Reload(force=True)
+    return p
+
+
+def save_stage(stage: Usd.Stage, path: str | os.PathLike, *, force: bool = False) -> Path:
+    """Flatten nothing: export the stage's root layer atomically (see :func:`save_layer`)."""
+    return save_layer(stage.GetRootLayer(), path, force=force)
+
+
+def ensure_typed_ancestors(layer: Sdf.Layer, path: Sdf.Path, prim_type: str = "Xform") -> None:
+    """Give every untyped ancestor spec of ``path`` a type (Blender drops untyped parents)."""
+    for anc in path.GetParentPath().GetPrefixes():
+        spec = layer.GetPrimAtPath(anc)
+        if spec is None:
+            spec = Sdf.CreatePrimInLayer(layer, anc)
+            spec.specifier = Sdf.SpecifierDef
+        if not spec.typeName and spec.specifier == Sdf.SpecifierDef:
+            spec.typeName = prim_type
+
+
+def validate_stage(
+    stage: Usd.Stage | str | os.PathLike, *, include: Iterable[str] | None = None
+) -> list[str]:
+    """Run OpenUSD's registered validators (``pxr.UsdValidation``); return the error messages.
+
+    Warnings are not returned. ``include`` restricts to validators by name.
+    """
+    from pxr import UsdValidation  # noqa: PLC0415 - heavy plugin load only when validating
+
+    if not isinstance(stage, Usd.Stage):
+        opened = Usd.Stage.Open(str(stage))
+        if opened is None:
+            raise UsdAuthoringError(f"cannot open {stage}")
+        stage = opened
+    reg = UsdValidation.ValidationRegistry()
+    if include is None:
+        validators = reg.GetOrLoadAllValidators()
+    else:
+        validators = reg.GetOrLoadValidatorsByName(list(include))
+    ctx = UsdValidation.ValidationContext(validators)
+    errors = ctx.Validate(stage)
+    return [
+        e.GetErrorAsString()
+        for e in errors
+        if not e.HasNoError() and e.GetType() == UsdValidation.ValidationErrorType.Error
+    ]
+
+
+def model_kind(prim: Usd.Prim) -> str:
+    """The kind of a prim ('' when none)."""
+    return str(Usd.ModelAPI(prim).GetKind() or "")
+
+
+_ = (Kind, UsdGeom)

@@ -1,0 +1,66 @@
+"""The command line: outputs validate, errors are one line with status 2 and write nothing."""
+
+from __future__ import annotations
+
+import tomllib
+
+import pytest
+
+from ionic_usd.cli import main
+from ionic_usd.column.shaft import ShaftParams
+from ionic_usd.usd import validate_stage
+
+
+def test_shaft_command_writes_valid_usd(tmp_path, capsys):
+    out = tmp_path / "s.usdc"
+    assert main(["shaft", "-o", str(out), "--flute-slices", "3"]) == 0
+    assert out.exists()
+    assert validate_stage(out) == []
+    assert "triangles" in capsys.readouterr().out
+
+
+def test_print_config_roundtrips_through_config(tmp_path, capsys):
+    assert main(["shaft", "--print-config", "--flutes", "20", "--flute-angle", "14"]) == 0
+    text = capsys.readouterr().out
+    data = tomllib.loads(text)
+    assert ShaftParams(**data["shaft"]) == ShaftParams(flutes=20, flute_angle=14.0)
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(text)
+    assert main(["shaft", "--config", str(cfg), "-o", str(tmp_path / "x.usda")]) == 0
+
+
+@pytest.mark.parametrize(
+    "args,needle",
+    [
+        (["--flutes", "2"], "flutes ($e) = 2"),
+        (["--bottom-radius", "0"], "bottom_radius ($d)"),
+        (["--flute-angle", "15"], "flute_angle ($f)"),
+        (["--flute-slices", "0"], "flute_slices ($h)"),
+        (["--height", "nan"], "height"),
+        (["--flute-slices", "5000", "--max-triangles", "100000"], "triangles"),
+    ],
+)
+def test_bad_input_one_line_status_2_nothing_written(tmp_path, capsys, args, needle):
+    out = tmp_path / "bad.usda"
+    assert main(["shaft", "-o", str(out), *args]) == 2
+    err = capsys.readouterr().err.strip()
+    assert needle in err and len(err.splitlines()) == 1
+    assert not out.exists()
+
+
+def test_unknown_toml_key(tmp_path, capsys):
+    cfg = tmp_path / "c.toml"
+    cfg.write_text("[shaft]\nflute_cnt = 24\n")
+    assert main(["shaft", "--config", str(cfg), "-o", str(tmp_path / "x.usda")]) == 2
+    assert "flute_cnt" in capsys.readouterr().err
+    cfg.write_text("[shaft\n")
+    assert main(["shaft", "--config", str(cfg)]) == 2
+
+
+def test_existing_output_needs_force(tmp_path, capsys):
+    out = tmp_path / "s.usda"
+    out.write_text("user data")
+    assert main(["shaft", "-o", str(out)]) == 2
+    assert out.read_text() == "user data"
+    assert main(["shaft", "-o", str(out), "--force"]) == 0
+    assert validate_stage(out) == []

@@ -1,0 +1,144 @@
+"""Geometry kernel: Mesh, merge/transform/weld, normals, curves, revolve."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from ionic_usd.errors import GeometryError, ParameterError
+from ionic_usd.geometry import (
+    Mesh,
+    bezier,
+    inspect_mesh,
+    merge,
+    polyline_length,
+    resample_polyline,
+    revolve,
+    smooth_normals,
+    transform,
+    weld,
+)
+
+
+def test_kernel_imports_with_pxr_blocked():
+    code = (
+        "import sys\n"
+        "class Block:\n"
+        "    def find_spec(self, name, path=None, target=None):\n"
+        "        if name == 'pxr' or name.startswith('pxr.'):\n"
+        "            raise ImportError('pxr is blocked')\n"
+        "sys.meta_path.insert(0, Block())\n"
+        "import ionic_usd.geometry, ionic_usd.column.shaft\n"
+        "ionic_usd.column.shaft.build_shaft()\n"
+        "assert not any(m == 'pxr' or m.startswith('pxr.') for m in sys.modules)\n"
+        "print('ok')\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "ok"
+
+
+def cube() -> Mesh:
+    p = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], float)
+    quads = [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]]
+    return Mesh(p, [4] * 6, np.array(quads).reshape(-1), name="cube")
+
+
+def test_mesh_is_immutable_and_validated():
+    m = cube()
+    with pytest.raises(ValueError):
+        m.points[0, 0] = 5.0
+    with pytest.raises(GeometryError, match="sum to"):
+        Mesh(m.points, [4] * 5, m.face_vertex_indices)
+    with pytest.raises(GeometryError, match="out of range"):
+        Mesh(m.points, [3], [0, 1, 99])
+    with pytest.raises(GeometryError, match="non-finite"):
+        Mesh(np.full((3, 3), np.nan), [3], [0, 1, 2])
+
+
+def test_cube_fan_triangulation_is_closed_with_unit_volume():
+    r = inspect_mesh(cube())
+    assert r.n_triangles == 12
+    assert r.watertight
+    assert r.signed_volume == pytest.approx(1.0)
+    assert r.area == pytest.approx(6.0)
+
+
+def test_transform_mirror_keeps_outward_winding():
+    m = smooth_normals(Mesh(cube().points, [3] * 12, cube().triangles.reshape(-1)))
+    mirror = np.diag([-1.0, 1.0, 1.0, 1.0])
+    t = transform(m, mirror)
+    assert inspect_mesh(t).signed_volume == pytest.approx(1.0)
+    assert_allclose(t.normals[:, 0], -m.normals[:, 0], atol=1e-6)
+    scale = np.diag([2.0, 3.0, 4.0, 1.0])
+    assert inspect_mesh(transform(m, scale)).signed_volume == pytest.approx(24.0)
+
+
+def test_merge_and_weld():
+    a = Mesh(cube().points, [3] * 12, cube().triangles.reshape(-1))
+    b = transform(a, np.array([[1, 0, 0, 5], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1.0]]))
+    m = merge([a, b])
+    assert m.n_points == 16 and m.n_triangles == 24
+    assert inspect_mesh(m).signed_volume == pytest.approx(2.0)
+    # two copies on top of each other weld into 8 points with duplicate faces
+    w = weld(merge([a, a]))
+    assert w.n_points == 8
+    assert inspect_mesh(w).duplicate_faces == 12
+
+
+def test_smooth_normals_groups_crisp_and_smooth():
+    tri = Mesh(cube().points, [3] * 12, cube().triangles.reshape(-1))
+    smooth = smooth_normals(tri)
+    # per-vertex normal of a cube corner points along the diagonal
+    d = tri.points - 0.5
+    assert_allclose(smooth.normals, d / np.linalg.norm(d, axis=1, keepdims=True), atol=1e-6)
+    # one group per face side -> faceVarying normals equal the face normals
+    groups = np.repeat(np.arange(6), 2)
+    crisp = smooth_normals(tri, groups)
+    assert crisp.normals_interpolation == "faceVarying"
+    p = tri.points[tri.triangles]
+    fn = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    fn /= np.linalg.norm(fn, axis=1, keepdims=True)
+    assert_allclose(crisp.normals, np.repeat(fn, 3, axis=0), atol=1e-6)
+
+
+def test_resample_polyline_constant_spacing(rng):
+    curve = np.cumsum(rng.normal(size=(50, 2)), axis=0)
+    out = resample_polyline(curve, count=200)
+    seg = np.linalg.norm(np.diff(out, axis=0), axis=1)
+    assert_allclose(out[[0, -1]], curve[[0, -1]])
+    # nodes are equally spaced along the original curve's arc length; chords are never longer
+    assert seg.max() <= polyline_length(curve) / 199 + 1e-9
+    sp = resample_polyline(curve, spacing=0.5)
+    assert (len(sp) - 1) * 0.5 >= polyline_length(curve) - 1e-9
+    with pytest.raises(ParameterError):
+        resample_polyline(curve, spacing=-1)
+
+
+def test_bezier_endpoints_and_line():
+    ctrl = np.array([[0.0, 0.0], [1.0, 2.0], [3.0, 2.0], [4.0, 0.0]])
+    t = np.linspace(0, 1, 11)
+    pts = bezier(ctrl, t)
+    assert_allclose(pts[[0, -1]], ctrl[[0, -1]])
+    # a straight control polygon gives a straight line with the same parameter
+    line = bezier(np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]]), t)
+    assert_allclose(line, np.stack([2 * t, 2 * t], axis=1))
+    # de Casteljau at t = 0.5 for the cubic
+    assert_allclose(bezier(ctrl, np.array([0.5]))[0], [2.0, 1.5])
+
+
+@pytest.mark.parametrize("segments", [3, 8, 64])
+def test_revolve_cylinder_volume(segments):
+    prof = np.array([[0, 0], [1, 0], [1, 2], [0, 2]], float)
+    m, rows = revolve(prof, segments)
+    r = inspect_mesh(m)
+    assert r.watertight
+    expected = 0.5 * segments * np.sin(2 * np.pi / segments) * 2.0
+    assert r.signed_volume == pytest.approx(expected)
+    assert [len(x) for x in rows] == [1, segments, segments, 1]
+    with pytest.raises(GeometryError):
+        revolve(np.array([[-1.0, 0.0], [1.0, 1.0]]), 8)

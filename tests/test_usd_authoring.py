@@ -1,0 +1,61 @@
+"""USD authoring: stage metadata, mesh attributes, atomic writes, validation."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+from pxr import Sdf, Usd, UsdGeom
+
+from ionic_usd.column.shaft import ShaftParams, build_shaft
+from ionic_usd.errors import OutputExistsError, ParameterError
+from ionic_usd.usd import new_layer, save_layer, validate_stage, write_meshes
+
+
+@pytest.mark.parametrize("ext", [".usda", ".usdc", ".usd"])
+def test_shaft_roundtrip_and_validates(tmp_path, ext):
+    mesh = build_shaft(ShaftParams(flute_slices=4))
+    path = write_meshes(tmp_path / f"shaft{ext}", {"Shaft": mesh}, root="Shaft")
+    stage = Usd.Stage.Open(str(path))
+    assert stage.GetDefaultPrim().GetPath() == Sdf.Path("/Shaft")
+    assert UsdGeom.GetStageUpAxis(stage) == UsdGeom.Tokens.y
+    assert UsdGeom.GetStageMetersPerUnit(stage) == 1.0
+    assert Usd.ModelAPI(stage.GetDefaultPrim()).GetKind() == "component"
+    prim = stage.GetPrimAtPath("/Shaft/Geom/Shaft")
+    geom = UsdGeom.Mesh(prim)
+    assert_allclose(np.array(geom.GetPointsAttr().Get()), mesh.points, atol=1e-6)
+    assert list(geom.GetFaceVertexIndicesAttr().Get()) == mesh.face_vertex_indices.tolist()
+    assert geom.GetSubdivisionSchemeAttr().Get() == "none"
+    assert geom.GetNormalsInterpolation() == UsdGeom.Tokens.faceVarying
+    assert len(geom.GetNormalsAttr().Get()) == mesh.face_vertex_indices.size
+    extent = np.array(geom.GetExtentAttr().Get())
+    assert_allclose(extent, mesh.extent, atol=1e-6)
+    # every ancestor is typed
+    for p in (stage.GetPrimAtPath("/Shaft"), stage.GetPrimAtPath("/Shaft/Geom")):
+        assert p.GetTypeName() == "Xform"
+    # file format follows the extension
+    head = path.read_bytes()[:8]
+    assert head == (b"#usda 1." if ext == ".usda" else b"PXR-USDC")
+    assert validate_stage(stage) == []
+
+
+def test_validator_catches_missing_metadata(tmp_path):
+    layer = Sdf.Layer.CreateAnonymous(".usda")
+    Sdf.CreatePrimInLayer(layer, "/A").specifier = Sdf.SpecifierDef
+    errors = validate_stage(Usd.Stage.Open(layer))
+    assert any("defaultPrim" in e for e in errors)
+    assert any("upAxis" in e for e in errors)
+
+
+def test_atomic_write_and_force(tmp_path):
+    path = tmp_path / "a.usda"
+    save_layer(new_layer("A"), path)
+    before = path.read_bytes()
+    with pytest.raises(OutputExistsError):
+        save_layer(new_layer("B"), path)
+    assert path.read_bytes() == before
+    save_layer(new_layer("B"), path, force=True)
+    assert b'defaultPrim = "B"' in path.read_bytes()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.usda"]  # no temp leftovers
+    with pytest.raises(ParameterError, match="usda"):
+        save_layer(new_layer("C"), tmp_path / "c.obj")
