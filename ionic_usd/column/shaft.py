@@ -221,27 +221,35 @@ def _row_layout(p: ShaftParams) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _fluted_rows(p: ShaftParams, ys: np.ndarray, ks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Points (R, N, 3) and angles (R, N) of fluted rows; also per-vertex flute index."""
+    """Points (R, N, 3) of fluted rows and the angles (R, N) of their vertices about +Y.
+
+    One period (flute + fillet) is computed in the flute's local polar frame (R × (h + nf)
+    values), then rotated to every flute by the angle-addition formulas: products instead
+    of trigonometry over the whole grid.
+    """
     e, h, nf = p.flutes, p.flute_slices, p.fillet_slices
     period = 2 * np.pi / e
-    r = shaft_radius_at(p, ys)[:, None, None]  # (R,1,1)
-    alpha = (np.radians(p.flute_angle) / 2 * ks)[:, None, None]  # flute half-angle per row
-    centre = (np.arange(e) + 0.5) * period  # (e,)
-    phi = np.pi * np.arange(h) / h  # (h,) corner1 + interior flute vertices
+    r = shaft_radius_at(p, ys)[:, None]  # (R,1)
+    alpha = (np.radians(p.flute_angle) / 2 * ks)[:, None]  # flute half-angle per row
+    phi = np.pi * np.arange(h) / h  # corner1 + interior flute vertices
     rho = r * np.sin(alpha)
-    x_r = r * np.cos(alpha) - p.flute_depth * rho * np.sin(phi)  # (R,1,h)
+    x_r = r * np.cos(alpha) - p.flute_depth * rho * np.sin(phi)  # (R,h)
     x_t = -rho * np.cos(phi)
-    flute_ang = centre[None, :, None] + np.arctan2(x_t, x_r)  # (R,e,h)
-    flute_rad = np.broadcast_to(np.hypot(x_r, x_t), flute_ang.shape)
     # fillet: corner2 and interior vertices on the circle up to the next flute
-    fil = (np.arange(nf) / nf)[None, None, :]
-    fil_ang = centre[None, :, None] + alpha + (period - 2 * alpha) * fil  # (R,e,nf)
-    fil_rad = np.broadcast_to(r, fil_ang.shape)
-    ang = np.concatenate([flute_ang, fil_ang], axis=2).reshape(len(ys), -1)
-    rad = np.concatenate([flute_rad, fil_rad], axis=2).reshape(len(ys), -1)
-    pts = np.stack([rad * np.cos(ang), np.broadcast_to(ys[:, None], ang.shape),
-                    -rad * np.sin(ang)], axis=2)
-    return pts, ang
+    fil_delta = alpha + (period - 2 * alpha) * (np.arange(nf) / nf)  # (R,nf)
+    delta = np.concatenate([np.arctan2(x_t, x_r), fil_delta], axis=1)  # (R,K) local angle
+    rc = np.concatenate([x_r, r * np.cos(fil_delta)], axis=1)  # rad·cos(delta)
+    rs = np.concatenate([x_t, r * np.sin(fil_delta)], axis=1)  # rad·sin(delta)
+    centre = (np.arange(e) + 0.5) * period
+    cc, sc = np.cos(centre)[None, :, None], np.sin(centre)[None, :, None]
+    rc, rs = rc[:, None, :], rs[:, None, :]
+    R, K = len(ys), h + nf
+    pts = np.empty((R, e, K, 3))
+    pts[..., 0] = cc * rc - sc * rs
+    pts[..., 1] = ys[:, None, None]
+    pts[..., 2] = -(sc * rc + cc * rs)
+    ang = (centre[None, :, None] + delta[:, None, :]).reshape(R, -1)
+    return pts.reshape(R, e * K, 3), ang
 
 
 def shaft_triangle_estimate(p: ShaftParams, *, caps: int = 2) -> int:
@@ -306,16 +314,17 @@ def build_shaft(
     quad_group = np.where(col < h, 1 + flute_of_col, 0)  # quad (col, col+1) lies in a flute?
 
     tris, groups = [], []
-    # fluted bands: regular quads, split along the rising diagonal
+    grid_tri = np.zeros((0, 3), dtype=np.int64)
+    grid_normals = np.zeros((0, 3), dtype=np.float32)
+    # fluted bands: regular quads, split along the rising diagonal; their normals come from
+    # the grid directly (dense arrays, no scatter), the rest of the mesh uses smooth_normals
     if nrows > 1:
-        r0 = base_fl + np.arange(nrows - 1)[:, None] * n
-        j = np.arange(n)[None, :]
+        r0 = (base_fl + np.arange(nrows - 1)[:, None] * n).astype(np.int32)
+        j = np.arange(n, dtype=np.int32)[None, :]
         a0, a1 = r0 + j, r0 + (j + 1) % n
         b0, b1 = a0 + n, a1 + n
-        t1 = np.stack([a0, a1, b0], axis=-1).reshape(-1, 3)
-        t2 = np.stack([a1, b1, b0], axis=-1).reshape(-1, 3)
-        tris += [np.stack([t1, t2], axis=1).reshape(-1, 3)]
-        groups += [np.repeat(np.tile(quad_group, nrows - 1), 2)]
+        grid_tri = np.stack([a0, a1, b0, a1, b1, b0], axis=-1).reshape(-1, 3)
+        grid_normals = _grid_normals(fl_pts, col, h)
     # plain rings and their stitching to the narrowed flute ends (angle parameters)
     if p.ring_bottom == 0:
         plain[1] = plain[0]
@@ -351,17 +360,63 @@ def build_shaft(
         t = stitch(plain[3], np.array([c_top]), is_closed=True)
         tris.append(t)
         groups.append(np.full(len(t), e + 2))
-    tri = np.concatenate(tris).astype(np.int32)
+    rest = np.concatenate(tris)
+    # the bands and caps touch few points: compute their normals on a compact copy
+    used, local = np.unique(rest, return_inverse=True)
+    rest_mesh = Mesh(points[used], np.full(len(rest), 3, np.int32), local.reshape(-1))
+    rest_normals = smooth_normals(rest_mesh, np.concatenate(groups)).normals
+    tri = np.concatenate([grid_tri, rest]).astype(np.int32)
+    normals = np.concatenate([grid_normals, rest_normals])
     # drop points no triangle uses (cap centres of an open shaft, collapsed ring rows)
-    keep = np.zeros(len(points), dtype=bool)
-    keep[tri.reshape(-1)] = True
-    remap = np.cumsum(keep) - 1
-    tri = remap[tri]
-    points = points[keep]
+    keep = np.ones(len(points), dtype=bool)
+    keep[[c_bot, c_top]] = [cap_bottom, cap_top]
+    if p.ring_bottom == 0:
+        keep[m:2 * m] = False
+    if p.ring_top == 0:
+        keep[2 * m:3 * m] = False
+    if not keep.all():
+        remap = (np.cumsum(keep) - 1).astype(np.int32)
+        tri = remap[tri]
+        points = points[keep]
     if y_offset:
         points = points + np.array([0.0, y_offset, 0.0])
-    mesh = Mesh(points, np.full(len(tri), 3, np.int32), tri.reshape(-1), name=name)
-    return smooth_normals(mesh, np.concatenate(groups))
+    return Mesh(points, np.full(len(tri), 3, np.int32), tri.reshape(-1), normals,
+                "faceVarying", name=name)
+
+
+def _grid_normals(pts: np.ndarray, col: np.ndarray, h: int) -> np.ndarray:
+    """Corner normals of the fluted grid's triangles, crisp at the flute corners.
+
+    ``pts`` (R, N, 3) rows of the fluted grid; quads (r, j) are split into (a0, a1, b0) and
+    (a1, b1, b0). A vertex's normal on each side of a crease column is the mean of the unit
+    normals of the quads on that side (a regular grid: equal weights are the angle weights).
+
+    Returns
+    -------
+    (2 (R-1) N · 3, 3) float32, in triangle-corner order
+    """
+    pts = pts.astype(np.float32)  # normals need no more precision; halves the memory traffic
+    a0 = pts[:-1]
+    a1 = np.roll(pts[:-1], -1, axis=1)
+    b0 = pts[1:]
+    b1 = np.roll(pts[1:], -1, axis=1)
+    q = np.cross(b1 - a0, b0 - a1)  # diagonal cross product: the quad's normal
+    q /= np.maximum(np.linalg.norm(q, axis=2, keepdims=True), 1e-30)
+    zero = np.zeros_like(q[:1])
+    v = np.concatenate([zero, q]) + np.concatenate([q, zero])  # quads above+below a vertex
+    v_left = np.roll(v, 1, axis=1)  # the quads to the left of vertex j are column j - 1
+    crease = ((col == 0) | (col == h))[None, :, None]
+    n_right = v + np.where(crease, 0.0, v_left)
+    n_left = v_left + np.where(crease, 0.0, v)
+    n_right /= np.maximum(np.linalg.norm(n_right, axis=2, keepdims=True), 1e-30)
+    n_left /= np.maximum(np.linalg.norm(n_left, axis=2, keepdims=True), 1e-30)
+    n_left_next = np.roll(n_left, -1, axis=1)  # left side of vertex j + 1
+    corners = np.stack(
+        [n_right[:-1], n_left_next[:-1], n_right[1:],
+         n_left_next[:-1], n_left_next[1:], n_right[1:]],
+        axis=2,
+    )
+    return corners.reshape(-1, 3)
 
 
 def shaft_silhouette(p: ShaftParams, samples: int = 200) -> np.ndarray:

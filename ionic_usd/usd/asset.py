@@ -1,0 +1,243 @@
+"""Component assets with variant sets, laid out like Pixar's Kitchen_set and usd-exchange.
+
+::
+
+    <Name>/<Name>.usda            interface: Xform default prim, kind = component, assetInfo,
+                                  variant sets, extentsHint, payload → ./Payload/Contents.usda
+    <Name>/Payload/Contents.usda  sublayers ./Materials.usda and ./Geometry.usdc
+    <Name>/Payload/Geometry.usdc  every mesh once: /<Name>/Geom/<Part>/<Variant>_<lod>
+    <Name>/Payload/Materials.usda UsdPreviewSurface materials, default binding on Geom
+    <Name>/Payload/Textures/      texture images (./Textures/… from Materials.usda)
+
+Variant sets live on the interface's default prim, so they are visible before the payload is
+loaded. Each mesh carries tags — the variant it belongs to in each variant set that concerns
+it (a shaft is tagged only with its ``lod``; a base with ``lod`` and ``base``). A variant
+deactivates (``active = false``) every mesh whose tag for that set differs, so the active
+meshes are those matching every selection, geometry shared between variants is authored once,
+and switching one set changes exactly the meshes tagged by it.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from pxr import Gf, Sdf, Usd, Vt
+
+from ionic_usd.errors import OutputExistsError, ParameterError
+from ionic_usd.geometry.mesh import Mesh
+from ionic_usd.usd.materials import MaterialTextures, author_preview_material, bind_material
+from ionic_usd.usd.mesh import author_mesh, define_prim
+from ionic_usd.usd.stage import new_layer, save_layer
+
+__all__ = ["AssetMesh", "AssetSpec", "write_asset", "write_asset_layers", "replace_folder"]
+
+
+@dataclass(frozen=True)
+class AssetMesh:
+    """One mesh of the asset: ``/<Name>/Geom/<part>/<name>`` with its variant tags."""
+
+    part: str
+    name: str
+    mesh: Mesh
+    tags: Mapping[str, str]
+
+
+@dataclass(frozen=True)
+class AssetSpec:
+    """Everything an asset holds; paths of textures are relative to ``Payload/``.
+
+    ``variant_sets`` maps each set to its variants in display order; ``defaults`` gives each
+    set's selection. ``finishes`` maps a variant of the ``finish`` set (if present) to a
+    material name; ``materials`` maps material names to their textures.
+    """
+
+    name: str
+    version: str
+    meshes: tuple[AssetMesh, ...]
+    variant_sets: Mapping[str, tuple[str, ...]]
+    defaults: Mapping[str, str]
+    materials: Mapping[str, MaterialTextures]
+    default_material: str
+    finishes: Mapping[str, str] = field(default_factory=dict)
+    custom_data: Mapping[str, object] = field(default_factory=dict)
+    documentation: str = ""
+
+    def __post_init__(self) -> None:
+        for vset, variants in self.variant_sets.items():
+            sel = self.defaults.get(vset)
+            if sel not in variants:
+                raise ParameterError(f"defaults[{vset!r}]", sel, f"one of {', '.join(variants)}")
+        for m in self.meshes:
+            for vset, v in m.tags.items():
+                if vset not in self.variant_sets or v not in self.variant_sets[vset]:
+                    raise ParameterError(f"tags of {m.part}/{m.name}", dict(m.tags),
+                                         "variant sets and variants declared by the asset")
+        if self.default_material not in self.materials:
+            raise ParameterError("default_material", self.default_material,
+                                 f"one of {', '.join(self.materials)}")
+        for fin, mat in self.finishes.items():
+            if mat not in self.materials:
+                raise ParameterError(f"finishes[{fin!r}]", mat, f"one of {', '.join(self.materials)}")
+
+
+def _geometry_layer(spec: AssetSpec) -> Sdf.Layer:
+    layer = new_layer(spec.name, kind=None)
+    with Sdf.ChangeBlock():
+        define_prim(layer, f"/{spec.name}/Geom", "Xform")
+        for m in spec.meshes:
+            define_prim(layer, f"/{spec.name}/Geom/{m.part}", "Xform")
+            author_mesh(layer, f"/{spec.name}/Geom/{m.part}/{m.name}", m.mesh)
+    return layer
+
+
+def _materials_layer(spec: AssetSpec) -> Sdf.Layer:
+    layer = new_layer(spec.name, kind=None)
+    stage = Usd.Stage.Open(layer)
+    stage.DefinePrim(f"/{spec.name}/Materials", "Scope")
+    for mat_name, tex in spec.materials.items():
+        author_preview_material(stage, f"/{spec.name}/Materials/{mat_name}", tex)
+    geom = stage.DefinePrim(f"/{spec.name}/Geom", "Xform")
+    bind_material(geom, f"/{spec.name}/Materials/{spec.default_material}")
+    return layer
+
+
+def _contents_layer(spec: AssetSpec) -> Sdf.Layer:
+    layer = new_layer(spec.name, kind=None)
+    layer.subLayerPaths.append("./Materials.usda")
+    layer.subLayerPaths.append("./Geometry.usdc")
+    return layer
+
+
+def _extent_of(meshes: list[Mesh]) -> np.ndarray:
+    lo = np.min([m.extent[0] for m in meshes], axis=0)
+    hi = np.max([m.extent[1] for m in meshes], axis=0)
+    return np.stack([lo, hi])
+
+
+def _interface_layer(spec: AssetSpec) -> Sdf.Layer:
+    name = spec.name
+    layer = new_layer(name, kind="component", comment=spec.documentation)
+    root = layer.GetPrimAtPath(f"/{name}")
+    root.assetInfo = {
+        "name": name,
+        "version": spec.version,
+        "identifier": Sdf.AssetPath(f"./{name}.usda"),
+    }
+    root.payloadList.Prepend(Sdf.Payload("./Payload/Contents.usda"))
+    if spec.custom_data:
+        root.customData = dict(spec.custom_data)
+    if spec.documentation:
+        root.documentation = spec.documentation
+    with Sdf.ChangeBlock():
+        for vset, variants in spec.variant_sets.items():
+            vs_spec = Sdf.VariantSetSpec(root, vset)
+            root.variantSetNameList.Append(vset)
+            for v in variants:
+                var = Sdf.VariantSpec(vs_spec, v)
+                vprim = var.primSpec
+                for m in spec.meshes:
+                    if vset in m.tags and m.tags[vset] != v:
+                        geom = _over(vprim, "Geom")
+                        part = _over(geom, m.part)
+                        _over(part, m.name).active = False
+                if vset == "lod":
+                    # extentsHint lets a DCC frame the asset before its payload loads
+                    ms = [m.mesh for m in spec.meshes if m.tags.get("lod", v) == v]
+                    ext = _extent_of(ms)
+                    attr = Sdf.AttributeSpec(vprim, "extentsHint", Sdf.ValueTypeNames.Float3Array,
+                                             Sdf.VariabilityUniform)
+                    attr.default = Vt.Vec3fArray([Gf.Vec3f(*ext[0]), Gf.Vec3f(*ext[1])])
+                if vset == "finish" and v in spec.finishes:
+                    geom = _over(vprim, "Geom")
+                    geom.SetInfo("apiSchemas", Sdf.TokenListOp.Create(
+                        prependedItems=["MaterialBindingAPI"]))
+                    rel = Sdf.RelationshipSpec(geom, "material:binding", custom=False)
+                    rel.targetPathList.explicitItems = [
+                        Sdf.Path(f"/{name}/Materials/{spec.finishes[v]}")
+                    ]
+            root.variantSelections[vset] = spec.defaults[vset]
+    return layer
+
+
+def _over(parent: Sdf.PrimSpec, child: str) -> Sdf.PrimSpec:
+    spec = parent.nameChildren.get(child)
+    if spec is None:
+        spec = Sdf.PrimSpec(parent, child, Sdf.SpecifierOver)
+    return spec
+
+
+def write_asset_layers(spec: AssetSpec, folder: Path) -> dict[str, Path]:
+    """Write the four layers of an asset into ``folder`` (which must hold ``Payload/Textures``)."""
+    folder = Path(folder)
+    payload = folder / "Payload"
+    payload.mkdir(parents=True, exist_ok=True)
+    written = {
+        "geometry": save_layer(_geometry_layer(spec), payload / "Geometry.usdc", force=True),
+        "materials": save_layer(_materials_layer(spec), payload / "Materials.usda", force=True),
+        "contents": save_layer(_contents_layer(spec), payload / "Contents.usda", force=True),
+    }
+    written["interface"] = save_layer(_interface_layer(spec), folder / f"{spec.name}.usda",
+                                      force=True)
+    return written
+
+
+def replace_folder(build: Callable[[Path], object], dest: Path, *, force: bool = False):
+    """Build a folder in a temporary sibling, then move it into place atomically.
+
+    An existing ``dest`` is refused unless ``force``; with ``force`` it is swapped out by
+    renames (so readers never see a half-written asset) and deleted afterwards. Returns what
+    ``build`` returned.
+    """
+    dest = Path(dest)
+    if dest.exists() and not force:
+        raise OutputExistsError(f"{dest} exists; pass --force (force=True) to replace it")
+    dest.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{dest.name}.", dir=dest.parent))
+    old = None
+    done = False
+    try:
+        result = build(tmp)
+        if dest.exists():
+            old = dest.with_name(f".{dest.name}.old-{os.getpid()}")
+            os.replace(dest, old)
+        os.replace(tmp, dest)
+        done = True
+    finally:
+        if not done:  # nothing half-written stays behind; the previous asset is restored
+            shutil.rmtree(tmp, ignore_errors=True)
+            if old is not None and not dest.exists():
+                os.replace(old, dest)
+    if old is not None:
+        shutil.rmtree(old, ignore_errors=True)
+    # layers cached under the old content must be re-read
+    for layer in Sdf.Layer.GetLoadedLayers():
+        real = layer.realPath
+        if real and Path(real).is_relative_to(dest.resolve()):
+            layer.Reload(force=True)
+    return result
+
+
+def write_asset(
+    spec: AssetSpec,
+    folder: str | os.PathLike,
+    *,
+    populate: Callable[[Path], None] | None = None,
+    force: bool = False,
+) -> Path:
+    """Write an asset folder atomically; ``populate(tmp_folder)`` adds textures first."""
+    dest = Path(folder)
+
+    def build(tmp: Path):
+        (tmp / "Payload" / "Textures").mkdir(parents=True, exist_ok=True)
+        if populate is not None:
+            populate(tmp)
+        write_asset_layers(spec, tmp)
+
+    replace_folder(build, dest, force=force)
+    return dest / f"{spec.name}.usda"

@@ -1,0 +1,89 @@
+"""UsdPreviewSurface materials reading ``st`` through UsdUVTexture (DESIGN convention 11)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from pxr import Gf, Sdf, Usd, UsdShade
+
+__all__ = ["MaterialTextures", "author_preview_material", "bind_material"]
+
+
+@dataclass(frozen=True)
+class MaterialTextures:
+    """Anchored relative asset paths (``./Textures/…``) of one material's texture maps.
+
+    ``basecolor`` is sRGB-encoded; ``roughness`` and ``normal`` are data (``raw``). The normal
+    map is tangent space, OpenGL convention (+Y up), 8-bit: decoded with scale 2, bias −1.
+    """
+
+    basecolor: str
+    roughness: str
+    normal: str
+
+
+def author_preview_material(
+    stage: Usd.Stage,
+    path: str,
+    textures: MaterialTextures,
+    *,
+    metallic: float = 0.0,
+    specular_tint: tuple[float, float, float] | None = None,
+) -> UsdShade.Material:
+    """Define a Material with a UsdPreviewSurface fed by three UsdUVTexture nodes.
+
+    Parameters
+    ----------
+    stage : the stage whose edit target receives the material
+    path : material prim path, e.g. ``/IonicColumn/Materials/Travertine``
+    textures : the maps, as ``./``-relative asset paths from the authoring layer
+    """
+    mat = UsdShade.Material.Define(stage, path)
+    surf = UsdShade.Shader.Define(stage, f"{path}/PreviewSurface")
+    surf.CreateIdAttr("UsdPreviewSurface")
+    surf.CreateInput("metallic", Sdf.ValueTypeNames.Float).Set(float(metallic))
+    surf.CreateInput("useSpecularWorkflow", Sdf.ValueTypeNames.Int).Set(0)
+    mat.CreateSurfaceOutput().ConnectToSource(surf.ConnectableAPI(), "surface")
+
+    reader = UsdShade.Shader.Define(stage, f"{path}/StReader")
+    reader.CreateIdAttr("UsdPrimvarReader_float2")
+    reader.CreateInput("varname", Sdf.ValueTypeNames.String).Set("st")
+    st_out = reader.CreateOutput("result", Sdf.ValueTypeNames.Float2)
+
+    def texture(name: str, file: str, colour_space: str, out_name: str, out_type):
+        tex = UsdShade.Shader.Define(stage, f"{path}/{name}")
+        tex.CreateIdAttr("UsdUVTexture")
+        tex.CreateInput("file", Sdf.ValueTypeNames.Asset).Set(Sdf.AssetPath(file))
+        tex.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(st_out)
+        tex.CreateInput("sourceColorSpace", Sdf.ValueTypeNames.Token).Set(colour_space)
+        tex.CreateInput("wrapS", Sdf.ValueTypeNames.Token).Set("repeat")
+        tex.CreateInput("wrapT", Sdf.ValueTypeNames.Token).Set("repeat")
+        return tex, tex.CreateOutput(out_name, out_type)
+
+    _, rgb = texture("BaseColor", textures.basecolor, "sRGB", "rgb", Sdf.ValueTypeNames.Float3)
+    surf.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).ConnectToSource(rgb)
+    _, r = texture("Roughness", textures.roughness, "raw", "r", Sdf.ValueTypeNames.Float)
+    surf.CreateInput("roughness", Sdf.ValueTypeNames.Float).ConnectToSource(r)
+    ntex, n = texture("Normal", textures.normal, "raw", "rgb", Sdf.ValueTypeNames.Float3)
+    # 8-bit normal maps store n * 0.5 + 0.5; UsdUVTexture's scale/bias decode them
+    ntex.CreateInput("scale", Sdf.ValueTypeNames.Float4).Set(Gf.Vec4f(2.0, 2.0, 2.0, 1.0))
+    ntex.CreateInput("bias", Sdf.ValueTypeNames.Float4).Set(Gf.Vec4f(-1.0, -1.0, -1.0, 0.0))
+    surf.CreateInput("normal", Sdf.ValueTypeNames.Normal3f).ConnectToSource(n)
+    if specular_tint is not None:
+        surf.CreateInput("specularColor", Sdf.ValueTypeNames.Color3f).Set(Gf.Vec3f(*specular_tint))
+    return mat
+
+
+def bind_material(prim: Usd.Prim, material: UsdShade.Material | str) -> None:
+    """Apply MaterialBindingAPI to ``prim`` and bind ``material`` (a Material or its path).
+
+    A path binding works across layers: the material may live in another sublayer.
+    """
+    api = UsdShade.MaterialBindingAPI.Apply(prim)
+    if isinstance(material, str):
+        rel = api.GetDirectBindingRel()
+        if not rel:
+            rel = prim.CreateRelationship("material:binding", custom=False)
+        rel.SetTargets([Sdf.Path(material)])
+    else:
+        api.Bind(material)
