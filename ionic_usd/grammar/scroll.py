@@ -1,0 +1,236 @@
+"""The scroll-body (bolster) ring grammar (paper Table 5; SPEC §3).
+
+A string is a comma-separated list of modules ``R<r> P<p>``, one ring each: ``r ∈ [0, 2]`` is the
+ring radius as a fraction of the volute's total radius, ``p ∈ [0, 1]`` its position from the
+front (0) to the rear (1) volute; positions must not decrease (equal positions make a step).
+Whitespace of any kind (or none) may separate tokens and commas; the symbols are
+case-insensitive; numbers are decimal, optionally signed, with an optional exponent.
+
+Every syntax or range error raises :class:`~ionic_usd.errors.GrammarError` (``grammar='scroll'``)
+naming the 1-based module, with a caret under the offending token; nothing else escapes
+:func:`parse_scroll`. Self-contained on purpose: the grammar is small.
+
+Presets S1 and S2 (the paper's examples) ship in ``ionic_usd/data/scroll_presets.toml``.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import tomllib
+from dataclasses import dataclass, field
+from functools import lru_cache
+from importlib import resources
+
+from ionic_usd.errors import GrammarError, ParameterError
+
+__all__ = [
+    "ScrollRing",
+    "ScrollGrammar",
+    "parse_scroll",
+    "format_scroll",
+    "scroll_preset_names",
+    "scroll_preset_text",
+    "load_scroll_preset",
+    "resolve_scroll",
+    "RADIUS_RANGE",
+    "POSITION_RANGE",
+]
+
+GRAMMAR = "scroll"
+RADIUS_RANGE = (0.0, 2.0)
+POSITION_RANGE = (0.0, 1.0)
+
+_NUMBER = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?\Z")
+# characters that continue a word (a symbol letter and its value); see _tokens for where an
+# R or P inside a word starts a new one
+_WORD = re.compile(r"[^\s,]")
+
+
+@dataclass(frozen=True)
+class ScrollRing:
+    """One ring of the scroll body.
+
+    ``radius``: fraction of the volute's total radius, [0, 2]; ``position``: 0 = front volute,
+    1 = rear volute. ``span`` is the (offset, length) of the module in the source (not
+    compared).
+    """
+
+    radius: float
+    position: float
+    span: tuple[int, int] = field(default=(0, 0), compare=False, repr=False)
+
+
+@dataclass(frozen=True)
+class ScrollGrammar:
+    """A parsed scroll string: rings ordered front to rear."""
+
+    rings: tuple[ScrollRing, ...]
+    source: str = field(default="", compare=False)
+
+    @property
+    def radii(self) -> tuple[float, ...]:
+        return tuple(r.radius for r in self.rings)
+
+    @property
+    def positions(self) -> tuple[float, ...]:
+        return tuple(r.position for r in self.rings)
+
+    def __str__(self) -> str:
+        return format_scroll(self)
+
+
+def _fmt(x: float) -> str:
+    s = repr(float(x))
+    return s[:-2] if s.endswith(".0") else s
+
+
+def format_scroll(g: ScrollGrammar | list[ScrollRing] | tuple[ScrollRing, ...]) -> str:
+    """The canonical string of a scroll grammar (parses back to equal rings)."""
+    rings = g.rings if isinstance(g, ScrollGrammar) else tuple(g)
+    return ", ".join(f"R{_fmt(r.radius)} P{_fmt(r.position)}" for r in rings)
+
+
+def _tokens(source: str) -> list[tuple[str, int, int]]:
+    """Split into (text, offset, length): commas and words (a symbol letter + its value).
+
+    A letter after the first character of a word starts a new word only when it is R or P
+    and follows a digit or dot, so ``R0.7P0.1`` reads as two words while ``R1e5`` and
+    ``Rabc`` stay one word each (and fail as numbers).
+    """
+    out: list[tuple[str, int, int]] = []
+    i, n = 0, len(source)
+    while i < n:
+        ch = source[i]
+        if ch.isspace():
+            i += 1
+            continue
+        if ch == ",":
+            out.append((",", i, 1))
+            i += 1
+            continue
+        j = i + 1
+        while j < n and _WORD.match(source[j]):
+            if source[j] in "RrPp" and (source[j - 1].isdigit() or source[j - 1] == "."):
+                break
+            j += 1
+        out.append((source[i:j], i, j - i))
+        i = j
+    return out
+
+
+def parse_scroll(source: str) -> ScrollGrammar:
+    """Parse ``R<r> P<p>, R<r> P<p>, …`` into rings.
+
+    Raises
+    ------
+    GrammarError
+        Unknown token, missing value, non-number, r ∉ [0, 2], p ∉ [0, 1], a module without R
+        or P, an empty module or decreasing positions (the caret points at the token).
+    """
+    if not isinstance(source, str):
+        raise GrammarError(f"expected a string, got {type(source).__name__}", "", 0,
+                           grammar=GRAMMAR)
+    toks = _tokens(source)
+    if not toks:
+        raise GrammarError("empty scroll grammar: expected rings like 'R0.7 P0.05, R0.7 P0.95'",
+                           source, 0, length=max(1, len(source)), grammar=GRAMMAR)
+    # modules: runs of words between commas
+    modules: list[list[tuple[str, int, int]]] = [[]]
+    commas: list[tuple[str, int, int]] = []
+    for t in toks:
+        if t[0] == ",":
+            commas.append(t)
+            modules.append([])
+        else:
+            modules[-1].append(t)
+    rings: list[ScrollRing] = []
+    for k, words in enumerate(modules):
+        mod = k + 1
+        if not words:
+            at = commas[k] if k < len(commas) else commas[-1]
+            raise GrammarError(f"empty module {mod}: expected 'R<r> P<p>'", source, at[1],
+                               module=mod, grammar=GRAMMAR)
+        values: dict[str, tuple[float, int, int]] = {}
+        for text, off, ln in words:
+            sym = text[0].upper()
+            if sym not in "RP":
+                raise GrammarError(
+                    f"unknown token {text!r}: expected R<radius> or P<position>",
+                    source, off, length=ln, module=mod, grammar=GRAMMAR)
+            if sym in values:
+                raise GrammarError(f"second {sym} in one module (separate rings with commas)",
+                                   source, off, length=ln, module=mod, grammar=GRAMMAR)
+            if sym == "P" and "R" not in values:
+                raise GrammarError("P before R: a ring is written 'R<r> P<p>'",
+                                   source, off, length=ln, module=mod, grammar=GRAMMAR)
+            raw = text[1:]
+            if not raw:
+                raise GrammarError(f"missing value after {sym}", source, off, length=1,
+                                   module=mod, grammar=GRAMMAR)
+            if not _NUMBER.match(raw):
+                raise GrammarError(f"{raw!r} is not a number", source, off + 1,
+                                   length=len(raw), module=mod, grammar=GRAMMAR)
+            val = float(raw)
+            if not math.isfinite(val):  # e.g. 1e999
+                raise GrammarError(f"{raw!r} is not a finite number", source, off + 1,
+                                   length=len(raw), module=mod, grammar=GRAMMAR)
+            lo, hi = RADIUS_RANGE if sym == "R" else POSITION_RANGE
+            if not lo <= val <= hi:
+                what = "radius r" if sym == "R" else "position p"
+                raise GrammarError(f"{what} = {_fmt(val)} is outside [{_fmt(lo)}, {_fmt(hi)}]",
+                                   source, off + 1, length=len(raw), module=mod,
+                                   grammar=GRAMMAR)
+            values[sym] = (val, off, ln)
+        if "P" not in values:
+            last = words[-1]
+            raise GrammarError("missing position P<p> after the radius", source,
+                               last[1] + last[2], module=mod, grammar=GRAMMAR)
+        r, p = values["R"][0], values["P"][0]
+        if rings and p < rings[-1].position:
+            _, off, ln = values["P"]
+            raise GrammarError(
+                f"position p = {_fmt(p)} is below the previous ring's "
+                f"{_fmt(rings[-1].position)}: positions must not decrease",
+                source, off + 1, length=ln - 1, module=mod, grammar=GRAMMAR)
+        start = words[0][1]
+        end = words[-1][1] + words[-1][2]
+        rings.append(ScrollRing(r, p, (start, end - start)))
+    return ScrollGrammar(tuple(rings), source)
+
+
+# -- presets -----------------------------------------------------------------------------
+@lru_cache(maxsize=1)
+def _presets() -> dict[str, dict]:
+    path = resources.files("ionic_usd").joinpath("data", "scroll_presets.toml")
+    with path.open("rb") as fh:
+        data = tomllib.load(fh)
+    return {k.upper(): v for k, v in data.items()}
+
+
+def scroll_preset_names() -> tuple[str, ...]:
+    """Names of the shipped scroll presets (e.g. ``('S1', 'S2')``)."""
+    return tuple(sorted(_presets()))
+
+
+def scroll_preset_text(name: str) -> str:
+    """The grammar string of a preset (case-insensitive name)."""
+    key = name.upper() if isinstance(name, str) else name
+    if key not in _presets():
+        raise ParameterError("scroll preset", name,
+                             f"one of {', '.join(scroll_preset_names())}")
+    return _presets()[key]["grammar"]
+
+
+def load_scroll_preset(name: str) -> ScrollGrammar:
+    """Parse a shipped preset. Unknown names raise ParameterError listing the valid ones."""
+    return parse_scroll(scroll_preset_text(name))
+
+
+def resolve_scroll(spec: str | ScrollGrammar) -> ScrollGrammar:
+    """A preset name (``'S1'``), a grammar string or an already parsed grammar → grammar."""
+    if isinstance(spec, ScrollGrammar):
+        return spec
+    if isinstance(spec, str) and spec.strip().upper() in _presets():
+        return load_scroll_preset(spec.strip())
+    return parse_scroll(spec)
