@@ -111,6 +111,77 @@ def cmd_shaft(args: argparse.Namespace) -> int:
     return 0
 
 
+def _column_params(args: argparse.Namespace):
+    from ionic_usd.column.column import column_params_from_mapping, portunus_column_params
+    from ionic_usd.params import load_toml
+
+    params = portunus_column_params()
+    if args.config:
+        params = column_params_from_mapping(load_toml(args.config), context=str(args.config))
+    flags = {k: getattr(args, k) for k in ("lod", "base", "scroll") if getattr(args, k, None)}
+    if flags:
+        params = column_params_from_mapping({"column": flags}, context="command line",
+                                            base=params)
+    return params
+
+
+_PARTS = {
+    "all": ("Base", "Shaft", "CapitalBody", "CapitalScroll"),
+    "base": ("Base",),
+    "shaft": ("Shaft",),
+    "capital": ("CapitalBody", "CapitalScroll"),
+    "base+shaft": ("Base", "Shaft"),
+}
+
+
+def cmd_column(args: argparse.Namespace) -> int:
+    from ionic_usd.column.column import COLUMN_DOCS, build_column, column_params_to_tables
+    from ionic_usd.column.shaft import SHAFT_PARAMETER_DOCS
+    from ionic_usd.params import to_toml
+
+    params = _column_params(args)
+    if args.print_config:
+        from ionic_usd.column.capital import CAPITAL_PARAMETER_DOCS
+        from ionic_usd.column.volute import VOLUTE_PARAMETER_DOCS
+
+        docs = {"column": COLUMN_DOCS, "shaft": SHAFT_PARAMETER_DOCS,
+                "capital": CAPITAL_PARAMETER_DOCS, "volute": VOLUTE_PARAMETER_DOCS}
+        sys.stdout.write(to_toml(column_params_to_tables(params), docs,
+                                 header="ionic_usd column parameters (edit and pass with "
+                                 "--config); lengths in metres, angles in degrees"))
+        return 0
+    from ionic_usd.usd import check_output_path, write_meshes
+
+    out = check_output_path(args.output, force=args.force)
+    t0 = time.perf_counter()
+    col = build_column(params)
+    t1 = time.perf_counter()
+    meshes = {k: v for k, v in col.parts().items() if k in _PARTS[args.part]}
+    write_meshes(out, meshes, root="Column", force=args.force,
+                 comment=f"ionic_usd column ({params.lod}, base {params.base})")
+    t2 = time.perf_counter()
+    tris = sum(m.n_triangles for m in meshes.values())
+    print(f"wrote {out}: {', '.join(meshes)}; {tris:,} triangles, height {col.height:.3f} m "
+          f"(generate {1e3 * (t1 - t0):.1f} ms, write {1e3 * (t2 - t1):.1f} ms)")
+    return 0
+
+
+def cmd_preview(args: argparse.Namespace) -> int:
+    from ionic_usd.errors import ParameterError
+    from ionic_usd.preview import render_preview
+
+    try:
+        background = tuple(float(x) for x in args.background.split(","))
+    except ValueError:
+        raise ParameterError("--background", args.background, "three numbers R,G,B") from None
+    s = render_preview(args.scene, args.output, width=args.width, height=args.height,
+                       camera=args.camera, lod=args.lod, background=background,
+                       samples=args.samples, ground=not args.no_ground, force=args.force)
+    print(f"wrote {args.output}: {s.triangles:,} triangles, {s.meshes} meshes, "
+          f"{s.instances} instances ({s.seconds:.2f} s)")
+    return 0
+
+
 # -- parser --------------------------------------------------------------------------------------
 class _Parser(argparse.ArgumentParser):
     def error(self, message: str):  # one line, status 2 (argparse's own convention)
@@ -145,6 +216,44 @@ def build_parser() -> argparse.ArgumentParser:
                    f"[default {DEFAULT_TRIANGLE_BUDGET:,}]")
     add_dataclass_flags(p, ShaftParams, SHAFT_PARAMETER_DOCS, title="shaft parameters")
     p.set_defaults(func=cmd_shaft)
+
+    p = sub.add_parser(
+        "column",
+        help="write a whole column (base, shaft, capital) as USD",
+        description="Build base + shaft + capital (default: the Temple of Portunus column) and "
+        "write the parts as separate meshes under one Xform. Parameters: defaults, then "
+        "--config TOML ([column], [shaft], [capital], [volute] tables; see --print-config), "
+        "then flags.",
+    )
+    p.add_argument("-o", "--output", default="column.usda", help="output USD file")
+    p.add_argument("--config", type=Path, help="TOML file (see --print-config)")
+    p.add_argument("--print-config", action="store_true",
+                   help="print the full parameter set as TOML and exit")
+    p.add_argument("--force", action="store_true", help="overwrite an existing output file")
+    p.add_argument("--part", choices=list(_PARTS), default="all", help="which parts to write")
+    p.add_argument("--lod", help="level of detail: high, medium, low or custom")
+    p.add_argument("--base", help="base preset (G1, G2, attic_bezier, attic_bezier_plinth) or "
+                   "a base grammar string")
+    p.add_argument("--scroll", help="scroll preset (S1, S2) or ring grammar 'R0.7 P0.05, …'")
+    p.set_defaults(func=cmd_column)
+
+    p = sub.add_parser(
+        "preview",
+        help="render a USD scene to a PNG thumbnail (headless OpenGL)",
+        description="Render SCENE with moderngl on a software EGL context (needs the preview "
+        "extra: pip install 'ionic_usd[preview]'). Instances are drawn from one upload each.",
+    )
+    p.add_argument("scene", type=Path, help="USD file to render")
+    p.add_argument("-o", "--output", type=Path, default=Path("preview.png"), help="PNG file")
+    p.add_argument("--width", type=int, default=800)
+    p.add_argument("--height", type=int, default=600)
+    p.add_argument("--camera", choices=["auto", "front", "three-quarter"], default="auto")
+    p.add_argument("--lod", help="select this lod variant on every prim that has one")
+    p.add_argument("--background", default="0.80,0.84,0.89", help="R,G,B in [0, 1]")
+    p.add_argument("--samples", type=int, default=4, help="MSAA samples")
+    p.add_argument("--no-ground", action="store_true", help="no ground plane")
+    p.add_argument("--force", action="store_true", help="overwrite an existing PNG")
+    p.set_defaults(func=cmd_preview)
     return parser
 
 

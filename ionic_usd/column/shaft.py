@@ -311,7 +311,6 @@ def build_shaft(
     # groups: 0 = fillets and plain rings (one smooth cylinder), 1..e = flutes, e+1/e+2 caps
     col = np.arange(n) % (h + nf)
     flute_of_col = np.arange(n) // (h + nf)
-    quad_group = np.where(col < h, 1 + flute_of_col, 0)  # quad (col, col+1) lies in a flute?
 
     tris, groups = [], []
     grid_tri = np.zeros((0, 3), dtype=np.int64)

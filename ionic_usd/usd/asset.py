@@ -83,7 +83,8 @@ class AssetSpec:
                                  f"one of {', '.join(self.materials)}")
         for fin, mat in self.finishes.items():
             if mat not in self.materials:
-                raise ParameterError(f"finishes[{fin!r}]", mat, f"one of {', '.join(self.materials)}")
+                raise ParameterError(f"finishes[{fin!r}]", mat,
+                                     f"one of {', '.join(self.materials)}")
 
 
 def _geometry_layer(spec: AssetSpec) -> Sdf.Layer:

@@ -30,7 +30,8 @@ def check_output_path(path: str | os.PathLike, *, force: bool = False) -> Path:
     """Validate an output path: a USD extension, and no existing file unless ``force``."""
     p = Path(path)
     if p.suffix.lower() not in USD_EXTENSIONS:
-        raise ParameterError("output", str(p), f"a file ending in one of {', '.join(USD_EXTENSIONS)}")
+        raise ParameterError("output", str(p),
+                             f"a file ending in one of {', '.join(USD_EXTENSIONS)}")
     if p.exists() and not force:
         raise OutputExistsError(f"{p} exists; pass --force (force=True) to overwrite it")
     return p

@@ -1,0 +1,314 @@
+"""The whole column: base + shaft + capital stacked on one axis, levels of detail, presets.
+
+Vertical placement (metres, +Y up, origin at the centre of the base's bottom face)::
+
+    0 ............................ base bottom (on the stylobate)
+    base height .................. shaft bottom ring (welded ring of the base's top)
+    base height + shaft length ... shaft top = capital origin (the volutes hang below it)
+    + capital height ............. abacus top = column top
+
+Every base variant is scaled uniformly (``BaseParams.scale``) to the column's base height, so the
+shaft and the capital do not move when the base grammar changes — a base variant changes only
+the base. The Temple of Portunus column is 8.22 m from the base bottom to the abacus top with a
+lower diameter of 0.95 m (issue #6 brief, after Piranesi's survey as used by Konečný et al.);
+its shaft height $a is derived so that the total is exact.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+
+from ionic_usd.column.base import BaseParams, build_base, load_base_preset
+from ionic_usd.column.capital import CapitalParams, build_capital, capital_height
+from ionic_usd.column.shaft import ShaftParams, build_shaft
+from ionic_usd.errors import ParameterError
+from ionic_usd.geometry.mesh import Mesh, merge
+
+__all__ = [
+    "Lod",
+    "LODS",
+    "ColumnParams",
+    "Column",
+    "build_column",
+    "portunus_column_params",
+    "PORTUNUS_HEIGHT",
+    "PORTUNUS_LOWER_DIAMETER",
+    "COLUMN_DOCS",
+    "column_params_from_mapping",
+    "column_params_to_tables",
+]
+
+PORTUNUS_HEIGHT = 8.22  # m, base bottom to abacus top
+PORTUNUS_LOWER_DIAMETER = 0.95  # m
+
+
+@dataclass(frozen=True)
+class Lod:
+    """Sampling of every part for one level of detail.
+
+    ``flute_slices``/``fillet_ratio`` are the shaft's $h/$i; ``base_slices`` the rows per curved
+    base floor; ``spiral_samples``, ``ring_segments``, ``bolster_rows`` the capital's.
+    """
+
+    flute_slices: int
+    fillet_ratio: int
+    base_slices: int
+    spiral_samples: int
+    ring_segments: int
+    bolster_rows: int
+
+
+# Triangle budgets (default Portunus column, measured by tools/bench_column.py):
+# high ≈ 40k, medium ≈ 14k, low ≈ 6k triangles.
+LODS: dict[str, Lod] = {
+    "high": Lod(8, 4, 8, 192, 48, 32),
+    "medium": Lod(4, 2, 4, 96, 24, 16),
+    "low": Lod(2, 1, 2, 48, 16, 8),
+}
+
+
+def _lod(name: str) -> Lod | None:
+    """The named LOD; ``custom`` (None) keeps the parts' own sampling parameters."""
+    if name == "custom":
+        return None
+    if name not in LODS:
+        raise ParameterError("lod", name, f"one of {', '.join(LODS)}, custom")
+    return LODS[name]
+
+
+@dataclass(frozen=True)
+class ColumnParams:
+    """A column: its parts' parameters and a level of detail.
+
+    A named LOD (high, medium, low) sets the sampling of every part — the shaft's $h and $i,
+    the base's profile slices, the capital's spiral, ring and bolster counts; ``custom`` keeps
+    those fields as given.
+
+    ``base`` is a preset name (``G1``, ``G2``, ``attic_bezier``, ``attic_bezier_plinth``) or a
+    grammar string; ``base_height`` (m) is what every base is scaled to (None: the preset's own
+    height). The LOD overrides the sampling fields of ``shaft`` and ``capital``.
+    """
+
+    shaft: ShaftParams = field(default_factory=ShaftParams)
+    capital: CapitalParams = field(default_factory=CapitalParams)
+    base: str = "attic_bezier_plinth"
+    base_height: float | None = None
+    lod: str = "high"
+
+    def __post_init__(self) -> None:
+        _lod(self.lod)
+        if self.base_height is not None and not (
+            math.isfinite(self.base_height) and self.base_height > 0
+        ):
+            raise ParameterError("base_height", self.base_height, "a length > 0 (m) or unset")
+        self.base_params()  # validates the grammar / preset name now, not at build time
+
+    def base_params(self, base: str | None = None) -> BaseParams:
+        """BaseParams for ``base`` (default: this column's), at this LOD and base height."""
+        lod = _lod(self.lod)
+        shaft = self.shaft_params()
+        common = {
+            "shaft_radius": shaft.bottom_radius,
+            "segments": shaft.ring_segments,
+            "profile_slices": lod.base_slices if lod else 8,
+        }
+        name = self.base if base is None else base
+        try:
+            bp = load_base_preset(name, **common)
+        except ParameterError:
+            if any(ch.isdigit() for ch in name):  # a grammar string rather than a name
+                bp = BaseParams(grammar=name, **common)
+            else:
+                raise
+        if self.base_height is not None:
+            bp = dataclasses.replace(bp, scale=bp.scale * self.base_height / bp.height)
+        return bp
+
+    def shaft_params(self) -> ShaftParams:
+        lod = _lod(self.lod)
+        if lod is None:
+            return self.shaft
+        return dataclasses.replace(self.shaft, flute_slices=lod.flute_slices,
+                                   flute_slices_per_fillet_slice=lod.fillet_ratio)
+
+    def capital_params(self, scroll: str | None = None) -> CapitalParams:
+        lod = _lod(self.lod)
+        changes = {} if lod is None else {
+            "spiral_samples": lod.spiral_samples, "ring_segments": lod.ring_segments,
+            "bolster_rows": lod.bolster_rows}
+        if scroll is not None:
+            changes["scroll"] = scroll
+        return self.capital.with_(**changes)
+
+    def with_lod(self, lod: str) -> ColumnParams:
+        return dataclasses.replace(self, lod=lod)
+
+
+@dataclass(frozen=True)
+class Column:
+    """A built column: part meshes in column coordinates and the stacking heights (m)."""
+
+    params: ColumnParams
+    base: Mesh
+    shaft: Mesh
+    capital_body: Mesh
+    capital_scroll: Mesh
+    base_height: float
+    shaft_length: float
+    capital_height: float
+
+    @property
+    def height(self) -> float:
+        return self.base_height + self.shaft_length + self.capital_height
+
+    @property
+    def capital(self) -> Mesh:
+        return merge([self.capital_body, self.capital_scroll], name="capital")
+
+    def parts(self) -> dict[str, Mesh]:
+        """Prim name → mesh: ``Base``, ``Shaft``, ``CapitalBody``, ``CapitalScroll``."""
+        return {"Base": self.base, "Shaft": self.shaft, "CapitalBody": self.capital_body,
+                "CapitalScroll": self.capital_scroll}
+
+    @property
+    def n_triangles(self) -> int:
+        return sum(m.n_triangles for m in self.parts().values())
+
+
+def build_base_part(params: ColumnParams, base: str | None = None, **kwargs) -> Mesh:
+    return build_base(params.base_params(base), name="base", **kwargs)
+
+
+def build_shaft_part(params: ColumnParams, base_height: float, **kwargs) -> Mesh:
+    return build_shaft(params.shaft_params(), y_offset=base_height, name="shaft", **kwargs)
+
+
+def build_capital_parts(params: ColumnParams, y: float, scroll: str | None = None
+                        ) -> tuple[Mesh, Mesh]:
+    """(body: abacus, echinus, volutes, canales; scroll: the two bolsters) lifted to ``y``."""
+    from ionic_usd.geometry.mesh import transform
+
+    parts = build_capital(params.capital_params(scroll), top_radius=params.shaft.top_radius)
+    lift = [[1, 0, 0, 0], [0, 1, 0, y], [0, 0, 1, 0], [0, 0, 0, 1.0]]
+    body = merge([parts.abacus, parts.echinus, *parts.volutes, *parts.canales], name="capital")
+    scroll_mesh = merge(list(parts.bolsters), name="scroll")
+    return transform(body, lift), transform(scroll_mesh, lift)
+
+
+def build_column(params: ColumnParams | None = None) -> Column:
+    """Build every part of a column at its LOD, stacked on the +Y axis."""
+    params = params or portunus_column_params()
+    bp = params.base_params()
+    base = build_base(bp, name="base")
+    shaft = build_shaft_part(params, bp.height)
+    y_cap = bp.height + params.shaft.length
+    body, scroll = build_capital_parts(params, y_cap)
+    return Column(params, base, shaft, body, scroll, bp.height, params.shaft.length,
+                  capital_height(params.capital))
+
+
+def portunus_column_params(
+    *,
+    lod: str = "high",
+    base: str = "attic_bezier_plinth",
+    flutes: int = 24,
+    height: float = PORTUNUS_HEIGHT,
+    lower_diameter: float = PORTUNUS_LOWER_DIAMETER,
+    scroll: str = "S1",
+) -> ColumnParams:
+    """The Temple of Portunus column (Rome, Forum Boarium, 1st c. BC).
+
+    Sources: total height 8.22 m and lower diameter 0.95 m (issue #6 brief, after Piranesi's
+    measured drawings used by the paper); top diameter 6/7 of the bottom (Vitruvius III.3.12:
+    columns of 20–30 ft diminish by 1/7 — 8.22 m ≈ 28 Roman ft); Attic base half a diameter
+    high (Vitruvius III.5.1–3); 24 flutes with fillets ¼ of a flute and semicircular flutes
+    (Vitruvius III.5.14; ``flutes=20`` is the reconstruction hypothesis); capital proportions
+    after Vitruvius III.5.5–8 (see :mod:`ionic_usd.column.capital`).
+    """
+    d = lower_diameter / 2.0
+    base_h = lower_diameter / 2.0
+    cap = CapitalParams()
+    period = 360.0 / flutes
+    probe = ShaftParams(bottom_radius=d, top_radius=d * 6.0 / 7.0, flutes=flutes,
+                        flute_angle=0.8 * period)
+    fixed = probe.length - probe.height  # rings + flute ends
+    shaft_a = height - base_h - capital_height(cap) - fixed
+    if shaft_a <= 0:
+        raise ParameterError("height", height, "tall enough for base, capital and flute ends")
+    shaft = dataclasses.replace(probe, height=shaft_a)
+    return ColumnParams(shaft=shaft, capital=cap.with_(scroll=scroll), base=base,
+                        base_height=base_h, lod=lod)
+
+
+COLUMN_DOCS: dict[str, tuple[str, str, str]] = {
+    "lod": ("", "name", f"level of detail: {', '.join(LODS)}, or custom (use the sampling "
+            "fields of [shaft] and [capital] as given)"),
+    "base": ("", "name|grammar", "base preset (G1, G2, attic_bezier, attic_bezier_plinth) or a "
+             "base grammar string (tori v1 or Bézier v2, SPEC §2)"),
+    "base_height": ("", "m", "height every base is scaled to (unset: the grammar's own)"),
+    "scroll": ("", "name|grammar", "scroll-body ring grammar: S1, S2 or 'R<r> P<p>, …'"),
+}
+
+
+def column_params_from_mapping(data: dict, *, context: str = "column config",
+                               base: ColumnParams | None = None) -> ColumnParams:
+    """ColumnParams from TOML-like tables ``[column]``, ``[shaft]``, ``[capital]``, ``[volute]``.
+
+    Missing tables keep ``base``'s values (default: the Portunus column); unknown tables or keys
+    are errors naming them.
+    """
+    from ionic_usd.column.volute import VoluteParams
+    from ionic_usd.params import dataclass_from_mapping
+
+    cur = base or portunus_column_params()
+    unknown = sorted(set(data) - {"column", "shaft", "capital", "volute"})
+    if unknown:
+        raise ParameterError("table", f"[{unknown[0]}]", "one of [column], [shaft], [capital], "
+                             "[volute]", context=context)
+    for table in ("column", "shaft", "capital", "volute"):
+        if table in data and not isinstance(data[table], dict):
+            raise ParameterError(table, data[table], "a table", context=context)
+    col = dict(data.get("column", {}))
+    bad = sorted(set(col) - set(COLUMN_DOCS))
+    if bad:
+        raise ParameterError(bad[0], col[bad[0]], f"one of the keys {', '.join(COLUMN_DOCS)}",
+                             context=f"{context} [column]")
+    shaft = dataclass_from_mapping(ShaftParams, data.get("shaft", {}),
+                                   context=f"{context} [shaft]", base=cur.shaft)
+    volute = dataclass_from_mapping(VoluteParams, data.get("volute", {}),
+                                    context=f"{context} [volute]", base=cur.capital.volute)
+    cap_map = dict(data.get("capital", {}))
+    if "scroll" in col:
+        cap_map["scroll"] = col.pop("scroll")
+    cap_fields = {f.name for f in dataclasses.fields(CapitalParams) if not f.name.startswith("_")}
+    bad = sorted(set(cap_map) - cap_fields - {"scroll"})
+    if bad or "volute" in cap_map:
+        key = bad[0] if bad else "volute"
+        raise ParameterError(key, cap_map[key], "a [capital] key (volute parameters go in "
+                             "[volute])", context=f"{context} [capital]")
+    capital = cur.capital.with_(volute=volute, **cap_map)
+    return dataclasses.replace(cur, shaft=shaft, capital=capital, **col)
+
+
+def column_params_to_tables(p: ColumnParams) -> dict[str, dict]:
+    """The inverse of :func:`column_params_from_mapping` (for ``--print-config`` and fitting)."""
+    def plain(obj) -> dict:
+        out = {}
+        for f in dataclasses.fields(obj):
+            if f.name.startswith("_"):
+                continue
+            v = getattr(obj, f.name)
+            if dataclasses.is_dataclass(v):
+                continue
+            out[f.name] = v if not hasattr(v, "to_string") else v.to_string()
+        return out
+
+    cap = plain(p.capital)
+    scroll = cap.pop("scroll")
+    column = {"lod": p.lod, "base": p.base, "scroll": scroll}
+    if p.base_height is not None:
+        column["base_height"] = p.base_height
+    return {"column": column, "shaft": plain(p.shaft), "capital": cap,
+            "volute": plain(p.capital.volute)}

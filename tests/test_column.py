@@ -1,0 +1,112 @@
+"""The whole column: stacking, closedness, LODs, base variants, TOML config, CLI."""
+
+from __future__ import annotations
+
+import tomllib
+
+import numpy as np
+import pytest
+
+from ionic_usd.cli import main
+from ionic_usd.column.base import build_base
+from ionic_usd.column.column import (
+    LODS,
+    PORTUNUS_HEIGHT,
+    ColumnParams,
+    build_column,
+    column_params_from_mapping,
+    column_params_to_tables,
+    portunus_column_params,
+)
+from ionic_usd.column.shaft import build_shaft
+from ionic_usd.errors import GrammarError, ParameterError
+from ionic_usd.geometry import inspect_mesh, merge, weld
+from ionic_usd.usd import validate_stage
+
+
+@pytest.mark.parametrize("lod", list(LODS))
+def test_portunus_column_parts_closed_and_stacked(lod):
+    col = build_column(portunus_column_params(lod=lod))
+    for name, mesh in col.parts().items():
+        r = inspect_mesh(mesh)
+        assert r.closed and r.consistent and r.signed_volume > 0, (name, r)
+        assert r.degenerate_faces == 0, name
+    assert col.height == pytest.approx(PORTUNUS_HEIGHT)
+    # extents as designed: base from the ground, shaft on the base, abacus top = column top
+    assert col.base.extent[0, 1] == pytest.approx(0.0)
+    assert col.shaft.extent[0, 1] == pytest.approx(col.base_height)
+    assert col.shaft.extent[1, 1] == pytest.approx(col.base_height + col.shaft_length)
+    assert col.capital_body.extent[1, 1] == pytest.approx(PORTUNUS_HEIGHT)
+    # lower diameter 0.95 m, top diameter 6/7 of it
+    r_shaft = np.hypot(col.shaft.points[:, 0], col.shaft.points[:, 2])
+    assert r_shaft.max() == pytest.approx(0.475)
+    top = col.shaft.points[:, 1] > col.shaft.extent[1, 1] - 1e-9
+    assert r_shaft[top].max() == pytest.approx(0.475 * 6 / 7)
+
+
+def test_whole_column_mesh_is_closed():
+    col = build_column(portunus_column_params(lod="medium"))
+    r = inspect_mesh(merge(list(col.parts().values())))
+    assert r.closed and r.consistent
+
+
+@pytest.mark.parametrize("base", ["G1", "G2", "attic_bezier", "attic_bezier_plinth"])
+def test_base_variants_weld_to_shaft_and_keep_height(base):
+    p = portunus_column_params(lod="low", base=base)
+    bp = p.base_params()
+    assert bp.height == pytest.approx(p.base_height)
+    solid = weld(merge([build_base(bp, cap_top=False),
+                        build_shaft(p.shaft_params(), cap_bottom=False, y_offset=bp.height)]))
+    assert inspect_mesh(solid).watertight
+
+
+def test_lod_monotonic_in_triangles():
+    counts = [build_column(portunus_column_params(lod=lod)).n_triangles
+              for lod in ("low", "medium", "high")]
+    assert counts == sorted(counts) and len(set(counts)) == 3
+
+
+def test_config_roundtrip_and_errors():
+    p = portunus_column_params(base="G2", scroll="S2")
+    tables = column_params_to_tables(p)
+    assert column_params_from_mapping(tables) == p
+    with pytest.raises(ParameterError, match="flute_cnt"):
+        column_params_from_mapping({"shaft": {"flute_cnt": 3}})
+    with pytest.raises(ParameterError, match=r"\[roof\]"):
+        column_params_from_mapping({"roof": {}})
+    with pytest.raises(ParameterError, match="lod"):
+        ColumnParams(lod="ultra")
+    with pytest.raises(GrammarError):
+        column_params_from_mapping({"column": {"base": "R0 H0.1 C2 R0.1"}})
+
+
+def test_cli_column_validates_and_parts(tmp_path, capsys):
+    out = tmp_path / "c.usdc"
+    assert main(["column", "-o", str(out), "--lod", "low", "--base", "G1"]) == 0
+    assert validate_stage(out) == []
+    from pxr import Usd
+
+    stage = Usd.Stage.Open(str(out))
+    names = sorted(p.GetName() for p in stage.GetPrimAtPath("/Column/Geom").GetChildren())
+    assert names == ["Base", "CapitalBody", "CapitalScroll", "Shaft"]
+    out2 = tmp_path / "s.usda"
+    assert main(["column", "-o", str(out2), "--part", "shaft", "--lod", "low"]) == 0
+    stage = Usd.Stage.Open(str(out2))
+    assert [p.GetName() for p in stage.GetPrimAtPath("/Column/Geom").GetChildren()] == ["Shaft"]
+
+
+def test_cli_print_config_is_accepted_back(tmp_path, capsys):
+    assert main(["column", "--print-config", "--scroll", "S2"]) == 0
+    text = capsys.readouterr().out
+    assert tomllib.loads(text)["column"]["scroll"] == "S2"
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(text)
+    assert main(["column", "--config", str(cfg), "--lod", "low", "-o",
+                 str(tmp_path / "c.usda")]) == 0
+
+
+def test_cli_bad_grammar_points_at_token(tmp_path, capsys):
+    assert main(["column", "--base", "R0 H0.1 Cx R0.1", "-o", str(tmp_path / "x.usda")]) == 2
+    err = capsys.readouterr().err
+    assert "module 1" in err and "^" in err
+    assert not (tmp_path / "x.usda").exists()
