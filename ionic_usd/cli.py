@@ -166,6 +166,30 @@ def cmd_column(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_asset(args: argparse.Namespace) -> int:
+    from ionic_usd.usd.column_asset import ColumnAssetOptions, build_column_asset
+
+    params = _column_params(args)
+    user = None
+    if args.texture:
+        user = {}
+        for item in args.texture:
+            role, sep, path = item.partition("=")
+            if not sep:
+                from ionic_usd.errors import ParameterError
+
+                raise ParameterError("--texture", item, "ROLE=FILE with ROLE basecolor, "
+                                     "roughness or normal")
+            user[role] = path
+    opts = ColumnAssetOptions(params=params, texture_size=args.texture_size, seed=args.seed,
+                              make_tx=args.tx, user_textures=user)
+    rep = build_column_asset(args.output, opts, force=args.force)
+    lods = ", ".join(f"{k} {v:,}" for k, v in rep.triangles_per_lod.items())
+    print(f"wrote {rep.path}: {rep.meshes} meshes, triangles per LOD: {lods}; "
+          f"{rep.uv_unwraps} UV unwraps, {rep.bytes_on_disk / 1e6:.1f} MB, {rep.seconds:.2f} s")
+    return 0
+
+
 def cmd_preview(args: argparse.Namespace) -> int:
     from ionic_usd.errors import ParameterError
     from ionic_usd.preview import render_preview
@@ -236,6 +260,29 @@ def build_parser() -> argparse.ArgumentParser:
                    "a base grammar string")
     p.add_argument("--scroll", help="scroll preset (S1, S2) or ring grammar 'R0.7 P0.05, …'")
     p.set_defaults(func=cmd_column)
+
+    p = sub.add_parser(
+        "asset",
+        help="write the column as a USD component asset with variant sets",
+        description="Write IonicColumn/IonicColumn.usda (interface: kind=component, assetInfo, "
+        "variant sets lod/base/scroll/flutes/form/finish, payload) with Payload/Contents.usda, "
+        "Geometry.usdc, Materials.usda and Textures/ (xatlas UVs, OpenImageIO stone maps).",
+    )
+    p.add_argument("-o", "--output", default="IonicColumn", help="asset folder")
+    p.add_argument("--config", type=Path, help="column TOML (see ionic-usd column --print-config)")
+    p.add_argument("--base", help="default base (variants are always all four presets)")
+    p.add_argument("--scroll", help=argparse.SUPPRESS)
+    p.add_argument("--lod", help=argparse.SUPPRESS)
+    p.add_argument("--texture-size", type=int, default=1024,
+                   help="texture resolution in pixels (a power of two, 16-8192)")
+    p.add_argument("--seed", type=int, default=7, help="seed of the procedural stone")
+    p.add_argument("--tx", action="store_true", help="also write mipmapped .tx textures")
+    p.add_argument("--texture", action="append", metavar="ROLE=FILE",
+                   help="use your own travertine map (png/jpg) for ROLE basecolor, roughness "
+                   "or normal; give all three")
+    p.add_argument("--force", action="store_true",
+                   help="replace an existing asset folder (atomically)")
+    p.set_defaults(func=cmd_asset)
 
     p = sub.add_parser(
         "preview",

@@ -73,9 +73,7 @@ def _as_pair(a: object, b: object) -> tuple[np.ndarray, np.ndarray]:
     a = _as_curve(a, "a")
     b = _as_curve(b, "b")
     if a.shape[1] != b.shape[1]:
-        raise ParameterError(
-            "b", f"dimension {b.shape[1]}", f"the dimension of a ({a.shape[1]})"
-        )
+        raise ParameterError("b", f"dimension {b.shape[1]}", f"the dimension of a ({a.shape[1]})")
     return a, b
 
 
@@ -390,8 +388,7 @@ def average_error(a: np.ndarray, b: np.ndarray) -> float:
 # --------------------------------------------------------------------------------------------
 def _xyz(c: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     z = c[:, 2] if c.shape[1] == 3 else np.zeros(c.shape[0])
-    return (np.ascontiguousarray(c[:, 0]), np.ascontiguousarray(c[:, 1]),
-            np.ascontiguousarray(z))
+    return (np.ascontiguousarray(c[:, 0]), np.ascontiguousarray(c[:, 1]), np.ascontiguousarray(z))
 
 
 @njit(cache=True, fastmath=True)
@@ -435,13 +432,29 @@ def _dfd_squared(ax, ay, az, bx, by, bz, three_d):  # pragma: no cover - compile
         jlo = m - 1 - k + lo
         jhi = jlo + hi - lo
         if three_d:
-            _dfd_diagonal_3d(ax[lo:hi], ay[lo:hi], az[lo:hi], bxr[jlo:jhi], byr[jlo:jhi],
-                             bzr[jlo:jhi], prev1[lo:hi], prev1[lo + 1:hi + 1], prev2[lo:hi],
-                             cur[lo + 1:hi + 1])
+            _dfd_diagonal_3d(
+                ax[lo:hi],
+                ay[lo:hi],
+                az[lo:hi],
+                bxr[jlo:jhi],
+                byr[jlo:jhi],
+                bzr[jlo:jhi],
+                prev1[lo:hi],
+                prev1[lo + 1 : hi + 1],
+                prev2[lo:hi],
+                cur[lo + 1 : hi + 1],
+            )
         else:
-            _dfd_diagonal_2d(ax[lo:hi], ay[lo:hi], bxr[jlo:jhi], byr[jlo:jhi],
-                             prev1[lo:hi], prev1[lo + 1:hi + 1], prev2[lo:hi],
-                             cur[lo + 1:hi + 1])
+            _dfd_diagonal_2d(
+                ax[lo:hi],
+                ay[lo:hi],
+                bxr[jlo:jhi],
+                byr[jlo:jhi],
+                prev1[lo:hi],
+                prev1[lo + 1 : hi + 1],
+                prev2[lo:hi],
+                cur[lo + 1 : hi + 1],
+            )
         tmp = prev2
         prev2 = prev1
         prev1 = cur
@@ -497,6 +510,14 @@ def _free_interval(ox, oy, oz, vx, vy, vz, cx, cy, cz, eps2):  # pragma: no cove
     return lo, hi
 
 
+@njit(cache=True, inline="always")
+def _free_on_segment(x, y, z, j, cx, cy, cz, eps2):  # pragma: no cover - compiled
+    # Free interval on segment j of the polyline (x, y, z) seen from point c.
+    return _free_interval(
+        x[j], y[j], z[j], x[j + 1] - x[j], y[j + 1] - y[j], z[j + 1] - z[j], cx, cy, cz, eps2
+    )
+
+
 @njit(cache=True)
 def _frechet_decide(px, py, pz, qx, qy, qz, eps):  # pragma: no cover - compiled
     # Alt-Godau decision "Fréchet(P, Q) <= eps" on the free-space diagram, swept column by
@@ -521,8 +542,7 @@ def _frechet_decide(px, py, pz, qx, qy, qz, eps):  # pragma: no cover - compiled
     jmin = -1
     jmax = -1
     for j in range(m - 1):
-        lo, hi = _free_interval(qx[j], qy[j], qz[j], qx[j + 1] - qx[j], qy[j + 1] - qy[j],
-                                qz[j + 1] - qz[j], px[0], py[0], pz[0], eps2)
+        lo, hi = _free_on_segment(qx, qy, qz, j, px[0], py[0], pz[0], eps2)
         if lo != 0.0 or lo > hi:
             break
         llo[j] = lo
@@ -562,9 +582,7 @@ def _frechet_decide(px, py, pz, qx, qy, qz, eps):  # pragma: no cover - compiled
                 j += 1
                 continue
             # Right edge of cell (i, j): free interval on Q_j seen from p_{i+1}.
-            rlo, rhi = _free_interval(qx[j], qy[j], qz[j], qx[j + 1] - qx[j],
-                                      qy[j + 1] - qy[j], qz[j + 1] - qz[j],
-                                      px[i + 1], py[i + 1], pz[i + 1], eps2)
+            rlo, rhi = _free_on_segment(qx, qy, qz, j, px[i + 1], py[i + 1], pz[i + 1], eps2)
             if not has_bottom:
                 rlo = max(rlo, llo[j])
             if rlo <= rhi:
@@ -575,8 +593,9 @@ def _frechet_decide(px, py, pz, qx, qy, qz, eps):  # pragma: no cover - compiled
                     new_min = j
                 new_max = j
             # Top edge of cell (i, j): free interval on P_i seen from q_{j+1}.
-            tlo, thi = _free_interval(px[i], py[i], pz[i], vx, vy, vz,
-                                      qx[j + 1], qy[j + 1], qz[j + 1], eps2)
+            tlo, thi = _free_interval(
+                px[i], py[i], pz[i], vx, vy, vz, qx[j + 1], qy[j + 1], qz[j + 1], eps2
+            )
             if not has_left:
                 tlo = max(tlo, blo)
             if tlo <= thi:

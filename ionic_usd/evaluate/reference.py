@@ -64,12 +64,15 @@ def _finish(points: np.ndarray, path: Path, where: str, scale: float, flip_y: bo
         raise ReferenceCurveError(f"{path}: {where}: a single point is not a curve")
     if not np.all(np.isfinite(points)):
         raise ReferenceCurveError(f"{path}: {where}: non-finite coordinates")
-    out = points * float(scale)
+    with np.errstate(over="ignore", invalid="ignore"):
+        out = points * float(scale)
+        seg = np.linalg.norm(np.diff(out, axis=0), axis=1)
     if flip_y:
         out[:, 1] = -out[:, 1]
-    if not np.all(np.isfinite(out)):
-        raise ReferenceCurveError(f"{path}: {where}: coordinates overflow after scaling")
-    if not np.any(np.linalg.norm(np.diff(out, axis=0), axis=1) > 0.0):
+    # Lengths must be finite too, or every measure downstream would be inf.
+    if not (np.all(np.isfinite(out)) and np.all(np.isfinite(seg))):
+        raise ReferenceCurveError(f"{path}: {where}: coordinates overflow (too large)")
+    if not np.any(seg > 0.0):
         raise ReferenceCurveError(f"{path}: {where}: all points coincide (zero length)")
     return out
 
@@ -389,9 +392,7 @@ def align(
 
         def cost(t: np.ndarray, g=g, g_index=g_index) -> float:
             # d(ref node, g + t) = d(ref node - t, g): both indexes are built once.
-            return float(
-                max(ref_index.distances(g + t).max(), g_index.distances(ref - t).max())
-            )
+            return float(max(ref_index.distances(g + t).max(), g_index.distances(ref - t).max()))
 
         starts = [_arc_centroid(ref) - _arc_centroid(g)]
         if not mirrored:

@@ -85,9 +85,7 @@ def _cell(value: float, pct: float, unit: str, digits: int) -> str:
     return f"{value:.{digits}f} {unit} ({pct_text})"
 
 
-def format_table(
-    rows: Mapping[str, CurveComparison], *, unit: str = "m", digits: int = 4
-) -> str:
+def format_table(rows: Mapping[str, CurveComparison], *, unit: str = "m", digits: int = 4) -> str:
     """Plain-text table in the shape of the paper's Table 6.
 
     One line per part: node counts (a + b), curve lengths (a + b), then each measure in
@@ -228,7 +226,11 @@ def plot_overlay(
     ra = point_to_polyline_distances(a, b)
     rb = point_to_polyline_distances(b, a)
     colours = ("#d4a500", "#d62728")
-    fig = Figure(figsize=(11, 5.5), layout="constrained")
+    both = np.vstack((a, b))
+    span = np.ptp(both, axis=0)
+    aspect = float(span[1] / span[0]) if span[0] > 0 else 1.0
+    # Two equal-aspect panels side by side: size the figure to the data so it is not padded.
+    fig = Figure(figsize=(11, min(max(5.5 * aspect + 1.0, 3.0), 12.0)), layout="constrained")
     FigureCanvasAgg(fig)
     left, right = fig.subplots(1, 2, sharex=True, sharey=True)
     for ax in (left, right):
@@ -239,9 +241,16 @@ def plot_overlay(
     for pts, r, colour in ((a, ra, colours[0]), (b, rb, colours[1])):
         right.add_collection(
             EllipseCollection(
-                2 * r, 2 * r, np.zeros_like(r), units="xy", offsets=pts,
-                offset_transform=right.transData, facecolors="none", edgecolors=colour,
-                linewidths=0.5, alpha=0.8,
+                2 * r,
+                2 * r,
+                np.zeros_like(r),
+                units="xy",
+                offsets=pts,
+                offset_transform=right.transData,
+                facecolors="none",
+                edgecolors=colour,
+                linewidths=0.5,
+                alpha=0.8,
             )
         )
     left.legend(loc="best", fontsize=8)

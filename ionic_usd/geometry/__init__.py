@@ -1,5 +1,6 @@
 """Pure-numpy geometry kernel (no pxr): Mesh, ring stitching, curves, revolve, checks."""
 
+from ionic_usd.geometry.clip import clip_mesh
 from ionic_usd.geometry.analysis import MeshReport, boundary_edges, inspect_mesh, signed_volume
 from ionic_usd.geometry.curves import (
     bernstein,
@@ -28,6 +29,7 @@ __all__ = [
     "auto_sequence",
     "bernstein",
     "bezier",
+    "clip_mesh",
     "boundary_edges",
     "cumulative_length",
     "face_normals",

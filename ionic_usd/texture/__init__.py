@@ -21,7 +21,36 @@ from .stone import (
     write_stone_textures,
 )
 
+from .uv import (
+    DEFAULT_PADDING,
+    DEFAULT_RESOLUTION_CAP,
+    LOD_TEXELS_PER_METRE,
+    UVAtlas,
+    UVCache,
+    apply_uvs,
+    attach_uvs,
+    common_atlas_size,
+    default_cache,
+    default_cache_folder,
+    unwrap,
+    unwrap_parts,
+    uv_cache_key,
+)
+
 __all__ = [
+    "DEFAULT_PADDING",
+    "DEFAULT_RESOLUTION_CAP",
+    "LOD_TEXELS_PER_METRE",
+    "UVAtlas",
+    "UVCache",
+    "apply_uvs",
+    "attach_uvs",
+    "common_atlas_size",
+    "default_cache",
+    "default_cache_folder",
+    "unwrap",
+    "unwrap_parts",
+    "uv_cache_key",
     "MARBLE",
     "MAX_TEXTURE_SIZE",
     "MIN_TEXTURE_SIZE",

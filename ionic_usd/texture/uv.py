@@ -487,6 +487,56 @@ def _unwrap_uncached(mesh: Mesh, tpm: float, padding: int, cap: int) -> UVAtlas:
     )
 
 
+def _unwrap_job(args: tuple) -> UVAtlas:
+    mesh, tpm, padding, cap = args
+    return _unwrap_uncached(mesh, tpm, padding, cap)
+
+
+def prefetch(
+    meshes: Iterable[tuple[Mesh, float]],
+    *,
+    padding: int = DEFAULT_PADDING,
+    resolution_cap: int = DEFAULT_RESOLUTION_CAP,
+    cache: UVCache | None = None,
+    workers: int | None = None,
+) -> int:
+    """Unwrap, in parallel processes, every (mesh, texels_per_metre) the cache lacks.
+
+    xatlas holds the GIL, so threads do not help; a process pool over the cores does. The
+    results go into the cache (each counted as a miss, i.e. one xatlas run), so the
+    :func:`unwrap` calls that follow are hits. Returns the number of meshes unwrapped.
+    """
+    import multiprocessing as mp
+    from concurrent.futures import ProcessPoolExecutor
+
+    store = _resolve_cache(cache)
+    if store is None:
+        return 0
+    todo: dict[str, tuple] = {}
+    for mesh, tpm in meshes:
+        _check_options(tpm, padding, resolution_cap)
+        key = uv_cache_key(mesh, texels_per_metre=tpm, padding=padding,
+                           resolution_cap=resolution_cap)
+        if key in todo or key in store._memory:
+            continue
+        if store.persist and store.path_for(key).is_file():
+            continue  # get() will read (and verify) it
+        todo[key] = (mesh, float(tpm), int(padding), int(resolution_cap))
+    if not todo:
+        return 0
+    n = workers or os.cpu_count() or 1
+    if n <= 1 or len(todo) < 4:
+        results = [_unwrap_job(job) for job in todo.values()]
+    else:
+        ctx = mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
+        with ProcessPoolExecutor(max_workers=min(n, len(todo)), mp_context=ctx) as ex:
+            results = list(ex.map(_unwrap_job, todo.values(), chunksize=1))
+    for key, atlas in zip(todo, results, strict=True):
+        store.misses += 1
+        store.put(key, atlas)
+    return len(todo)
+
+
 def unwrap_parts(
     meshes: Mapping[str, Mesh],
     *,

@@ -65,6 +65,7 @@ class AssetSpec:
     materials: Mapping[str, MaterialTextures]
     default_material: str
     finishes: Mapping[str, str] = field(default_factory=dict)
+    st_scale: float | None = None
     custom_data: Mapping[str, object] = field(default_factory=dict)
     documentation: str = ""
 
@@ -102,7 +103,8 @@ def _materials_layer(spec: AssetSpec) -> Sdf.Layer:
     stage = Usd.Stage.Open(layer)
     stage.DefinePrim(f"/{spec.name}/Materials", "Scope")
     for mat_name, tex in spec.materials.items():
-        author_preview_material(stage, f"/{spec.name}/Materials/{mat_name}", tex)
+        author_preview_material(stage, f"/{spec.name}/Materials/{mat_name}", tex,
+                                st_scale=spec.st_scale)
     geom = stage.DefinePrim(f"/{spec.name}/Geom", "Xform")
     bind_material(geom, f"/{spec.name}/Materials/{spec.default_material}")
     return layer

@@ -29,6 +29,7 @@ def author_preview_material(
     *,
     metallic: float = 0.0,
     specular_tint: tuple[float, float, float] | None = None,
+    st_scale: float | None = None,
 ) -> UsdShade.Material:
     """Define a Material with a UsdPreviewSurface fed by three UsdUVTexture nodes.
 
@@ -37,6 +38,8 @@ def author_preview_material(
     stage : the stage whose edit target receives the material
     path : material prim path, e.g. ``/IonicColumn/Materials/Travertine``
     textures : the maps, as ``./``-relative asset paths from the authoring layer
+    st_scale : repeat the (tileable) textures this many times per unit of ``st`` through a
+        UsdTransform2d node; None reads ``st`` directly
     """
     mat = UsdShade.Material.Define(stage, path)
     surf = UsdShade.Shader.Define(stage, f"{path}/PreviewSurface")
@@ -49,6 +52,12 @@ def author_preview_material(
     reader.CreateIdAttr("UsdPrimvarReader_float2")
     reader.CreateInput("varname", Sdf.ValueTypeNames.String).Set("st")
     st_out = reader.CreateOutput("result", Sdf.ValueTypeNames.Float2)
+    if st_scale is not None:
+        xf = UsdShade.Shader.Define(stage, f"{path}/StTransform")
+        xf.CreateIdAttr("UsdTransform2d")
+        xf.CreateInput("in", Sdf.ValueTypeNames.Float2).ConnectToSource(st_out)
+        xf.CreateInput("scale", Sdf.ValueTypeNames.Float2).Set(Gf.Vec2f(st_scale, st_scale))
+        st_out = xf.CreateOutput("result", Sdf.ValueTypeNames.Float2)
 
     def texture(name: str, file: str, colour_space: str, out_name: str, out_type):
         tex = UsdShade.Shader.Define(stage, f"{path}/{name}")

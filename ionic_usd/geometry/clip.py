@@ -1,0 +1,334 @@
+"""Clip a mesh by a plane and cap the cut: engaged (half-)columns are columns cut by a wall.
+
+The clip is vectorised per triangle (Sutherland–Hodgman on every crossing triangle at once);
+each cut edge gets one new vertex shared by both its triangles, so a closed input stays
+closed. The cap fills the cut outline (several loops, possibly nested) with a constrained
+Delaunay triangulation from shapely, which adds no vertices, so cap and clipped surface share
+exactly the same boundary vertices.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import shapely
+from scipy.spatial import cKDTree
+
+from ionic_usd.errors import GeometryError
+from ionic_usd.geometry.mesh import Mesh, triangulate_fan
+
+__all__ = ["clip_mesh"]
+
+# snapping tolerance relative to the bounding-box diagonal: far above float noise (a point at
+# angle π on a ring has z ≈ 6e-17·r), far below any modelled feature
+_REL_EPS = 1e-9
+
+
+def _unit(v, what: str) -> np.ndarray:
+    a = np.asarray(v, dtype=np.float64).reshape(-1)
+    if a.shape != (3,) or not np.all(np.isfinite(a)):
+        raise GeometryError(f"clip_mesh: {what} must be 3 finite numbers, got {v!r}")
+    return a
+
+
+def _plane_frame(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Unit vectors (u, w) in the plane with u × w = −normal (the cap's outward side)."""
+    helper = np.eye(3)[int(np.argmin(np.abs(normal)))]
+    u = np.cross(helper, normal)
+    u /= np.linalg.norm(u)
+    w = np.cross(-normal, u)
+    return u, w
+
+
+def clip_mesh(
+    mesh: Mesh,
+    plane_point,
+    plane_normal,
+    *,
+    cap: bool = True,
+    eps: float | None = None,
+    name: str | None = None,
+) -> Mesh:
+    """Keep the part of a mesh on the side of a plane its normal points to.
+
+    Parameters
+    ----------
+    mesh : Mesh
+        Any polygon mesh (faces are fan-triangulated first). For ``cap=True`` it should be
+        closed (a union of closed shells), so the cut outline is a set of closed loops.
+    plane_point : (3,) float
+    plane_normal : (3,) float, non-zero (need not be unit length)
+    cap : bool
+        Close every cut with flat triangles in the plane facing ``−plane_normal``; a closed,
+        consistently wound input then gives a closed, consistently wound output.
+    eps : float, optional
+        Vertices closer to the plane than this are moved onto it (default
+        ``1e-9 × bounding-box diagonal``), so exact-on-plane vertices are robust to noise.
+    name : str, optional
+        Name of the result (default: the input's name).
+
+    Returns
+    -------
+    Mesh
+        Triangles, faceVarying normals when the input has normals (interpolated along cut
+        edges, ``−plane_normal`` on the cap), no texture coordinates (re-unwrap the result).
+        When the plane does not cut the mesh (everything is kept), the input is returned
+        unchanged apart from the name.
+
+    Raises
+    ------
+    GeometryError
+        Nothing is left on the kept side; the plane normal is zero; ``cap=True`` but the cut
+        outline does not close (the input is not closed) or cannot be triangulated.
+
+    Notes
+    -----
+    A face lying in the plane is kept when it faces ``−plane_normal`` (the solid behind it is
+    on the kept side) and dropped otherwise.
+    """
+    name = mesh.name if name is None else name
+    p0 = _unit(plane_point, "plane_point")
+    n = _unit(plane_normal, "plane_normal")
+    ln = float(np.linalg.norm(n))
+    if ln == 0.0:
+        raise GeometryError("clip_mesh: plane_normal is zero")
+    n = n / ln
+    if mesh.n_faces == 0:
+        raise GeometryError(f"clip_mesh: mesh {mesh.name!r} is empty, nothing is left")
+
+    pts = mesh.points
+    if eps is None:
+        eps = _REL_EPS * max(float(np.linalg.norm(np.ptp(pts, axis=0))), 1e-300)
+    raw = (pts - p0) @ n
+    near = np.abs(raw) <= eps
+    d = np.where(near, 0.0, raw)
+    s = np.sign(d).astype(np.int8)
+    tri = mesh.triangles.astype(np.int64)
+    ts = s[tri]
+    has_pos = (ts > 0).any(axis=1)
+    has_neg = (ts < 0).any(axis=1)
+    flat = ~has_pos & ~has_neg
+    if flat.any():
+        # a face in the plane bounds kept solid iff it faces away from the kept side
+        fp = pts[tri[flat]]
+        fn = np.cross(fp[:, 1] - fp[:, 0], fp[:, 2] - fp[:, 0]) @ n
+        keep_flat = np.zeros(len(tri), dtype=bool)
+        keep_flat[flat] = fn < 0
+    else:
+        keep_flat = np.zeros(len(tri), dtype=bool)
+    whole = (has_pos & ~has_neg) | keep_flat
+    split = has_pos & has_neg
+    if whole.all():
+        return mesh if mesh.name == name else mesh.with_(name=name)
+    if not whole.any() and not split.any():
+        raise GeometryError(
+            f"clip_mesh: mesh {mesh.name!r} lies entirely behind the plane "
+            f"(point {p0.tolist()}, normal {n.tolist()}); nothing is left"
+        )
+
+    pts = np.where(near[:, None], pts - raw[:, None] * n, pts)  # snap onto the plane
+    corner = triangulate_fan(mesh.face_vertex_counts,
+                             np.arange(mesh.face_vertex_indices.size)).astype(np.int64)
+    fv = None
+    if mesh.normals is not None:
+        fv = mesh.normals.astype(np.float64)
+        if mesh.normals_interpolation == "vertex":
+            fv = fv[mesh.face_vertex_indices]
+
+    # -- split the crossing triangles: one new vertex per crossing undirected edge ----------
+    st_ = tri[split]
+    ss = ts[split].astype(np.int64)
+    a, b = st_, np.roll(st_, -1, axis=1)  # edge k runs from corner k to corner k+1
+    cross = ss * np.roll(ss, -1, axis=1) < 0
+    lo, hi = np.minimum(a, b)[cross], np.maximum(a, b)[cross]
+    key = lo * len(pts) + hi
+    ukey, inv = np.unique(key, return_inverse=True)
+    elo, ehi = ukey // len(pts), ukey % len(pts)
+    # interpolate from the lower index so both triangles of an edge compute the same point
+    t = d[elo] / (d[elo] - d[ehi])
+    new_pts = pts[elo] + t[:, None] * (pts[ehi] - pts[elo])
+    new_pts -= ((new_pts - p0) @ n)[:, None] * n
+    edge_vertex = np.full(a.shape, -1, dtype=np.int64)
+    edge_vertex[cross] = len(pts) + inv.reshape(-1)
+    # candidate polygon per triangle: v0, x01, v1, x12, v2, x20 (Sutherland–Hodgman order)
+    cand = np.empty((len(st_), 6), dtype=np.int64)
+    cand[:, 0::2], cand[:, 1::2] = st_, edge_vertex
+    mask = np.empty((len(st_), 6), dtype=bool)
+    mask[:, 0::2], mask[:, 1::2] = ss >= 0, cross
+    counts = mask.sum(axis=1)  # 3 or 4: a clipped triangle is a triangle or a convex quad
+    poly_tri = triangulate_fan(counts, cand[mask])
+
+    all_pts = np.concatenate([pts, new_pts])
+    kept_tri = np.concatenate([tri[whole], poly_tri.astype(np.int64)])
+    kept_nrm = None
+    if fv is not None:
+        cc = corner[split]
+        cn = fv[cc]  # (m, 3 corners, 3)
+        sd = d[st_]
+        w = sd / np.where(cross, sd - np.roll(sd, -1, axis=1), 1.0)  # share of the next corner
+        en = cn + w[..., None] * (np.roll(cn, -1, axis=1) - cn)
+        cand_n = np.empty((len(st_), 6, 3))
+        cand_n[:, 0::2], cand_n[:, 1::2] = cn, en
+        poly_n = triangulate_fan(counts, np.arange(int(counts.sum())))
+        kept_nrm = np.concatenate([fv[corner[whole]], cand_n[mask][poly_n]])
+
+    faces = [kept_tri]
+    normals = [kept_nrm] if kept_nrm is not None else None
+    if cap:
+        on_plane = np.concatenate([s == 0, np.ones(len(new_pts), dtype=bool)])
+        cap_tri = _cap(all_pts, kept_tri, on_plane, n, mesh.name)
+        if len(cap_tri):
+            faces.append(cap_tri)
+            if normals is not None:
+                normals.append(np.broadcast_to(-n, (len(cap_tri), 3, 3)))
+    faces_all = np.concatenate(faces)
+    used, remap = np.unique(faces_all, return_inverse=True)
+    out_nrm = None
+    if normals is not None:
+        out_nrm = np.concatenate([np.reshape(x, (-1, 3)) for x in normals])
+        ln_ = np.linalg.norm(out_nrm, axis=1, keepdims=True)
+        out_nrm = np.where(ln_ > 0, out_nrm / np.where(ln_ > 0, ln_, 1.0), -n)
+    return Mesh(
+        all_pts[used],
+        np.full(len(faces_all), 3, dtype=np.int32),
+        remap.reshape(-1).astype(np.int32),
+        out_nrm,
+        "faceVarying",
+        name=name,
+    )
+
+
+def _chain(src: np.ndarray, dst: np.ndarray, xy: dict[int, np.ndarray],
+           mesh_name: str) -> list[np.ndarray]:
+    """Chain directed edges into closed loops (vertex index arrays, not repeating the start).
+
+    Where loops touch at a vertex (several outgoing edges), the walk takes the outgoing edge
+    first met turning clockwise from the way back, which keeps the region on the left of
+    every loop a single piece (no figure-eight loops).
+    """
+    order = np.argsort(src, kind="stable")
+    src, dst = src[order], dst[order]
+    uniq, first, cnt = np.unique(src, return_index=True, return_counts=True)
+    out_of = {int(v): (int(f), int(c)) for v, f, c in zip(uniq, first, cnt, strict=True)}
+    used = np.zeros(len(src), dtype=bool)
+    loops = []
+    for e0 in range(len(src)):
+        if used[e0]:
+            continue
+        used[e0] = True
+        loop = [int(src[e0])]
+        e = e0
+        while True:
+            v = int(dst[e])
+            f, c = out_of.get(v, (0, 0))
+            cands = [k for k in range(f, f + c) if not used[k] or k == e0]
+            if not cands:
+                raise GeometryError(
+                    f"clip_mesh: the cut outline of mesh {mesh_name!r} is not closed "
+                    "(is the mesh closed? use cap=False for open meshes)"
+                )
+            if len(cands) > 1:
+                back = xy[int(src[e])] - xy[v]
+                ab = np.arctan2(back[1], back[0])
+                ang = [(ab - np.arctan2(*(xy[int(dst[k])] - xy[v])[::-1])) % (2 * np.pi)
+                       for k in cands]
+                nxt = cands[int(np.argmin(ang))]
+            else:
+                nxt = cands[0]
+            if nxt == e0:
+                break
+            used[nxt] = True
+            loop.append(v)
+            e = nxt
+        loops.append(np.array(loop, dtype=np.int64))
+    return loops
+
+
+def _signed_area(p: np.ndarray) -> float:
+    x, y = p[:, 0], p[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+
+
+def _plane_loops(points: np.ndarray, triangles: np.ndarray, on_plane: np.ndarray,
+                   normal: np.ndarray, *, mesh_name: str = "mesh") -> list[np.ndarray]:
+    """Closed loops of a clipped mesh's border edges that lie in the cutting plane.
+
+    Parameters
+    ----------
+    points : (n, 3) float
+    triangles : (t, 3) int, the kept side of a clip (consistently wound)
+    on_plane : (n,) bool, which points lie in the plane
+    normal : (3,) float, unit normal pointing to the kept side
+
+    Returns
+    -------
+    list of (k,) int64 arrays, vertex indices of each loop, ordered counter-clockwise seen
+    from the ``−normal`` side for outer outlines and clockwise for holes (the winding a cap
+    facing ``−normal`` needs).
+    """
+    tri = np.asarray(triangles, dtype=np.int64)
+    directed = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
+    npts = len(points)
+    und = np.minimum(directed[:, 0], directed[:, 1]) * npts + np.maximum(
+        directed[:, 0], directed[:, 1])
+    _, inv, cnt = np.unique(und, return_inverse=True, return_counts=True)
+    border = (cnt[inv.reshape(-1)] == 1) & on_plane[directed[:, 0]] & on_plane[directed[:, 1]]
+    if not border.any():
+        return []
+    # the cap runs along each border edge the other way round
+    src, dst = directed[border, 1], directed[border, 0]
+    u, w = _plane_frame(np.asarray(normal, dtype=np.float64))
+    verts = np.unique(np.concatenate([src, dst]))
+    p2 = np.stack([points[verts] @ u, points[verts] @ w], axis=1)
+    xy = dict(zip(verts.tolist(), p2, strict=True))
+    return _chain(src, dst, xy, mesh_name)
+
+
+def _cap(points: np.ndarray, tri: np.ndarray, on_plane: np.ndarray, normal: np.ndarray,
+         mesh_name: str) -> np.ndarray:
+    """(c, 3) int64 cap triangles over the cut outline, wound to face ``−normal``."""
+    loops = _plane_loops(points, tri, on_plane, normal, mesh_name=mesh_name)
+    if not loops:
+        return np.empty((0, 3), dtype=np.int64)
+    u, w = _plane_frame(normal)
+    rings = [np.stack([points[lp] @ u, points[lp] @ w], axis=1) for lp in loops]
+    areas = np.array([_signed_area(r) for r in rings])
+    keep = [i for i in range(len(loops)) if len(loops[i]) >= 3 and areas[i] != 0.0]
+    outer = [i for i in keep if areas[i] > 0]
+    holes = [i for i in keep if areas[i] < 0]
+    # a hole belongs to the smallest outer outline around it (outlines of overlapping
+    # shells may cross each other; each outer outline is capped on its own)
+    outer_polys = [shapely.Polygon(rings[i]) for i in outer]
+    owned: dict[int, list[int]] = {i: [] for i in range(len(outer))}
+    for h in holes:
+        probe = shapely.Point(rings[h][0])
+        inside = [k for k, pg in enumerate(outer_polys)
+                  if pg.covers(probe) and pg.area > -areas[h]]
+        if not inside:
+            raise GeometryError(
+                f"clip_mesh: a hole in the cut of mesh {mesh_name!r} lies in no outline "
+                "(is the mesh consistently wound?)"
+            )
+        owned[min(inside, key=lambda k: outer_polys[k].area)].append(h)
+    caps = []
+    for k, i in enumerate(outer):
+        lp = np.concatenate([loops[i]] + [loops[h] for h in owned[k]])
+        ring_xy = np.concatenate([rings[i]] + [rings[h] for h in owned[k]])
+        poly = shapely.Polygon(rings[i], [rings[h] for h in owned[k]])
+        coords = shapely.get_coordinates(shapely.constrained_delaunay_triangles(poly))
+        if coords.size == 0:
+            continue
+        # constrained Delaunay adds no vertices: map its corners back to the loop vertices
+        dist, j = cKDTree(ring_xy).query(coords.reshape(-1, 4, 2)[:, :3].reshape(-1, 2))
+        scale = float(np.ptp(rings[i], axis=0).max())
+        if np.any(dist > 1e-9 * scale):
+            raise GeometryError(
+                f"clip_mesh: the cap triangulation of mesh {mesh_name!r} added vertices"
+            )
+        ct = lp[j].reshape(-1, 3)
+        ct = ct[(ct[:, 0] != ct[:, 1]) & (ct[:, 1] != ct[:, 2]) & (ct[:, 0] != ct[:, 2])]
+        # wind every cap triangle counter-clockwise in (u, w), i.e. facing −normal
+        q = points[ct]
+        flip = np.cross(q[:, 1] - q[:, 0], q[:, 2] - q[:, 0]) @ normal > 0
+        ct[flip] = ct[flip][:, ::-1]
+        caps.append(ct)
+    return np.concatenate(caps) if caps else np.empty((0, 3), dtype=np.int64)
