@@ -190,6 +190,36 @@ def cmd_asset(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_temple(args: argparse.Namespace) -> int:
+    from ionic_usd.column.column import column_params_from_mapping, portunus_column_params
+    from ionic_usd.params import load_toml
+    from ionic_usd.temple.layout import layout_from_mapping, portunus_layout
+    from ionic_usd.usd.temple import compose_temple
+
+    column = None
+    if args.config:
+        data = load_toml(args.config)
+        col_tables = {k: data.pop(k) for k in ("column", "shaft", "capital", "volute")
+                      if k in data}
+        layout = layout_from_mapping(data, context=str(args.config))
+    else:
+        col_tables = {}
+        layout = portunus_layout()
+    p = layout.params
+    base = portunus_column_params(height=p.columns_height,
+                                  lower_diameter=p.columns_lower_diameter)
+    if col_tables:
+        column = column_params_from_mapping(col_tables, context=str(args.config), base=base)
+    rep = compose_temple(args.output, layout, column, force=args.force,
+                         texture_size=args.texture_size, seed=args.seed)
+    print(f"wrote {rep.root} ({layout.name}): {rep.files} files, {rep.prims} prims, "
+          f"{rep.instances} column instances of {rep.prototypes} prototypes, "
+          f"{rep.triangles:,} triangles, {len(rep.hypotheses)} hypotheses, {rep.seconds:.2f} s")
+    print(f"  open {rep.root} in usdview, Blender, Houdini or Omniverse; put your own edits in "
+          f"{Path(args.output) / 'overrides.usda'} (kept on rebuilds)")
+    return 0
+
+
 def cmd_preview(args: argparse.Namespace) -> int:
     from ionic_usd.errors import ParameterError
     from ionic_usd.preview import render_preview
@@ -260,6 +290,23 @@ def build_parser() -> argparse.ArgumentParser:
                    "a base grammar string")
     p.add_argument("--scroll", help="scroll preset (S1, S2) or ring grammar 'R0.7 P0.05, …'")
     p.set_defaults(func=cmd_column)
+
+    p = sub.add_parser(
+        "temple",
+        help="compose a temple scene (default: the Temple of Portunus) — the main job",
+        description="Write a temple as a USD assembly: Temple.usda (root) with podium, cella, "
+        "entablature, roof and colonnade layers, the instanced column asset, textures, and one "
+        "variant set per reconstruction hypothesis (layers/). Your overrides.usda is kept.",
+    )
+    p.add_argument("-o", "--output", default="PortunusTemple", help="output folder")
+    p.add_argument("--config", type=Path,
+                   help="temple TOML (schema of ionic_usd/data/portunus.toml; may add [column], "
+                   "[shaft], [capital], [volute] tables for the column)")
+    p.add_argument("--texture-size", type=int, default=1024, help="texture resolution (px)")
+    p.add_argument("--seed", type=int, default=7, help="seed of the procedural stone")
+    p.add_argument("--force", action="store_true",
+                   help="rebuild an existing folder (atomically; overrides.usda is kept)")
+    p.set_defaults(func=cmd_temple)
 
     p = sub.add_parser(
         "asset",

@@ -78,6 +78,7 @@ __all__ = [
     "load_cuboids_toml",
     "cuboids_to_toml",
     "params_from_tables",
+    "layout_from_mapping",
     "build_layout",
     "layout_from_toml",
     "portunus_layout",
@@ -686,8 +687,14 @@ def layout_from_toml(
     path: str | os.PathLike, *, apply: Iterable[str] = ()
 ) -> TempleLayout:
     """Build a layout from a temple TOML (schema of ``portunus.toml``)."""
-    ctx = str(path)
-    data = load_toml(path)
+    return layout_from_mapping(load_toml(path), context=str(path), apply=apply)
+
+
+def layout_from_mapping(
+    data: Mapping[str, Any], *, context: str = "temple", apply: Iterable[str] = ()
+) -> TempleLayout:
+    """Build a layout from already-parsed TOML tables (see :func:`layout_from_toml`)."""
+    ctx = context
     params = params_from_tables(data, context=ctx)
     hyps = _hypotheses(data.get("hypothesis", []), ctx)
     extra = cuboids_from_tables(data.get("cuboid", []), context=ctx)
