@@ -204,7 +204,14 @@ def cmd_temple(args: argparse.Namespace) -> int:
         layout = layout_from_mapping(data, context=str(args.config))
     else:
         col_tables = {}
-        layout = portunus_layout()
+        layouts = {"portunus": portunus_layout}
+        if args.layout not in layouts:
+            from ionic_usd.errors import ParameterError
+
+            raise ParameterError("--layout", args.layout,
+                                 f"one of the built-in layouts: {', '.join(layouts)} "
+                                 "(or describe a temple in a TOML file: --config)")
+        layout = layouts[args.layout]()
     p = layout.params
     base = portunus_column_params(height=p.columns_height,
                                   lower_diameter=p.columns_lower_diameter)
@@ -302,6 +309,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--config", type=Path,
                    help="temple TOML (schema of ionic_usd/data/portunus.toml; may add [column], "
                    "[shaft], [capital], [volute] tables for the column)")
+    p.add_argument("--layout", default="portunus", help="built-in temple layout (portunus)")
     p.add_argument("--texture-size", type=int, default=1024, help="texture resolution (px)")
     p.add_argument("--seed", type=int, default=7, help="seed of the procedural stone")
     p.add_argument("--force", action="store_true",

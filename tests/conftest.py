@@ -2,10 +2,37 @@
 
 from __future__ import annotations
 
+import os
+import tempfile
+
 import numpy as np
 import pytest
+
+# the UV/texture caches of a test run live in a fresh folder: tests see cold and warm builds
+# of their own, never a developer's cache
+os.environ["IONIC_USD_CACHE"] = tempfile.mkdtemp(prefix="ionic_usd_test_cache_")
 
 
 @pytest.fixture
 def rng() -> np.random.Generator:
     return np.random.default_rng(12345)
+
+
+@pytest.fixture(scope="session")
+def column_asset(tmp_path_factory):
+    """The default column asset (small textures), built once per test session."""
+    from ionic_usd.usd.column_asset import ColumnAssetOptions, build_column_asset
+
+    folder = tmp_path_factory.mktemp("asset") / "IonicColumn"
+    report = build_column_asset(folder, ColumnAssetOptions(texture_size=64))
+    return report
+
+
+@pytest.fixture(scope="session")
+def portunus_temple(tmp_path_factory):
+    """The default Temple of Portunus scene (small textures), built once per test session."""
+    from ionic_usd.temple.layout import portunus_layout
+    from ionic_usd.usd.temple import compose_temple
+
+    folder = tmp_path_factory.mktemp("temple") / "PortunusTemple"
+    return compose_temple(folder, portunus_layout(), texture_size=64)

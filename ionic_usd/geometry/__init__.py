@@ -1,7 +1,7 @@
 """Pure-numpy geometry kernel (no pxr): Mesh, ring stitching, curves, revolve, checks."""
 
-from ionic_usd.geometry.clip import clip_mesh
 from ionic_usd.geometry.analysis import MeshReport, boundary_edges, inspect_mesh, signed_volume
+from ionic_usd.geometry.clip import clip_mesh
 from ionic_usd.geometry.curves import (
     bernstein,
     bezier,

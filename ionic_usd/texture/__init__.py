@@ -20,7 +20,6 @@ from .stone import (
     validate_user_texture,
     write_stone_textures,
 )
-
 from .uv import (
     DEFAULT_PADDING,
     DEFAULT_RESOLUTION_CAP,

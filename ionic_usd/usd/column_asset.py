@@ -74,7 +74,8 @@ SCROLL_VARIANTS = ("S1", "S2")
 FLUTE_VARIANTS = {"f24": 24, "f20": 20}
 FORM_VARIANTS = ("full", "engaged")
 # finish variant -> (material prim name, stone style of its textures)
-FINISHES = {"travertine": ("Travertine", "travertine"), "stucco": ("PaintedStucco", "stucco_painted")}
+FINISHES = {"travertine": ("Travertine", "travertine"),
+            "stucco": ("PaintedStucco", "stucco_painted")}
 ENGAGED_INSET = 0.05  # m: the cut lies this far behind the wall face (axis on the face)
 UV_SPAN = 32.0  # m of surface across st ∈ [0, 1]
 TILE_METRES = 2.0  # m of stone per repeat of the tileable maps

@@ -311,6 +311,7 @@ def compose_temple(
             (tmp / OVERRIDES_LAYER).write_bytes(user_bytes)
         else:
             save_layer(_user_overrides_layer(), tmp / OVERRIDES_LAYER)
+        _check_resolves(tmp / ROOT_LAYER)
 
     replace_folder(build, dest, force=force)
     root_path = dest / ROOT_LAYER
@@ -318,6 +319,22 @@ def compose_temple(
     if stage is None:
         raise UsdAuthoringError(f"cannot open the temple written at {root_path}")
     return _report(stage, dest, layout, time.perf_counter() - t0)
+
+
+def _check_resolves(root: Path) -> None:
+    """Every layer and asset the temple refers to must resolve (before it is moved in place):
+    an unresolved column reference would otherwise compose to an empty colonnade."""
+    from pxr import UsdUtils
+
+    _, _, unresolved = UsdUtils.ComputeAllDependencies(Sdf.AssetPath(str(root)))
+    if unresolved:
+        raise UsdAuthoringError(f"the temple refers to files that do not resolve: "
+                                f"{', '.join(sorted(unresolved))}")
+    stage = Usd.Stage.Open(str(root))
+    for prim in stage.GetPrimAtPath("/Temple/Colonnade").GetAllChildren():
+        for inst in prim.GetChildren():
+            if not inst.IsInstance() or not inst.GetPrototype().GetChildren():
+                raise UsdAuthoringError(f"column instance {inst.GetPath()} composed to nothing")
 
 
 def _report(stage: Usd.Stage, dest: Path, layout: TempleLayout, seconds: float) -> TempleReport:

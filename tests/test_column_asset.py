@@ -1,0 +1,228 @@
+"""The column component asset: layout on disk, variant sets, UVs, materials, textures, cache."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+from pxr import Sdf, Usd, UsdGeom, UsdShade
+
+from ionic_usd.errors import OutputExistsError, ParameterError
+from ionic_usd.geometry import Mesh, inspect_mesh
+from ionic_usd.texture.stone import TextureError
+from ionic_usd.usd import validate_stage
+from ionic_usd.usd.column_asset import ColumnAssetOptions, build_column_asset
+
+VARIANTS = {
+    "lod": ("high", "medium", "low"),
+    "base": ("attic_bezier_plinth", "attic_bezier", "G1", "G2"),
+    "scroll": ("S1", "S2"),
+    "flutes": ("f24", "f20"),
+    "form": ("full", "engaged"),
+    "finish": ("travertine", "stucco"),
+}
+
+
+def open_stage(report) -> Usd.Stage:
+    return Usd.Stage.Open(str(report.path))
+
+
+def active_meshes(stage) -> dict[str, Usd.Prim]:
+    return {str(p.GetPath()): p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh)}
+
+
+def mesh_value(prim) -> Mesh:
+    g = UsdGeom.Mesh(prim)
+    st = UsdGeom.PrimvarsAPI(prim).GetPrimvar("st")
+    return Mesh(np.array(g.GetPointsAttr().Get()), np.array(g.GetFaceVertexCountsAttr().Get()),
+                np.array(g.GetFaceVertexIndicesAttr().Get()), st=np.array(st.Get()),
+                st_indices=np.array(st.GetIndices()))
+
+
+def test_layout_on_disk_and_interface(column_asset):
+    root = column_asset.path.parent
+    assert column_asset.path.name == "IonicColumn.usda"
+    for rel in ("Payload/Contents.usda", "Payload/Geometry.usdc", "Payload/Materials.usda"):
+        assert (root / rel).is_file(), rel
+    layer = Sdf.Layer.FindOrOpen(str(column_asset.path))
+    prim = layer.GetPrimAtPath("/IonicColumn")
+    assert layer.defaultPrim == "IonicColumn" and prim.typeName == "Xform"
+    assert prim.kind == "component"
+    assert prim.assetInfo["name"] == "IonicColumn" and "version" in prim.assetInfo
+    assert [p.assetPath for p in prim.payloadList.prependedItems] == ["./Payload/Contents.usda"]
+    contents = Sdf.Layer.FindOrOpen(str(root / "Payload/Contents.usda"))
+    assert list(contents.subLayerPaths) == ["./Materials.usda", "./Geometry.usdc"]
+    # only ./-relative asset paths anywhere
+    for f in root.rglob("*.usd*"):
+        lay = Sdf.Layer.FindOrOpen(str(f))
+        for dep in lay.GetCompositionAssetDependencies():
+            assert dep.startswith("./"), (f, dep)
+    mats = (root / "Payload/Materials.usda").read_text()
+    assert "@./Textures/" in mats and "@../" not in mats
+
+
+def test_variant_sets_and_validation_per_selection(column_asset):
+    stage = open_stage(column_asset)
+    root = stage.GetDefaultPrim()
+    vsets = root.GetVariantSets()
+    assert set(vsets.GetNames()) == set(VARIANTS)
+    for name, variants in VARIANTS.items():
+        assert vsets.GetVariantSet(name).GetVariantNames() == sorted(variants)
+    assert validate_stage(stage) == []
+    for name, variants in VARIANTS.items():
+        vs = vsets.GetVariantSet(name)
+        default = vs.GetVariantSelection()
+        for v in variants:
+            vs.SetVariantSelection(v)
+            assert validate_stage(stage) == [], (name, v)
+        vs.SetVariantSelection(default)
+
+
+def test_every_selection_has_one_mesh_per_part(column_asset):
+    stage = open_stage(column_asset)
+    vsets = stage.GetDefaultPrim().GetVariantSets()
+    names = ["lod", "base", "scroll", "flutes", "form"]
+    for combo in itertools.product(*(VARIANTS[n] for n in names)):
+        for n, v in zip(names, combo, strict=True):
+            vsets.GetVariantSet(n).SetVariantSelection(v)
+        meshes = active_meshes(stage)
+        parts = sorted(p.split("/")[3] for p in meshes)
+        assert parts == ["Base", "CapitalBody", "CapitalScroll", "Shaft"], combo
+        lod = combo[0]
+        assert all(p.endswith(lod) or p.endswith(f"{lod}_engaged") for p in meshes), combo
+
+
+def test_every_mesh_closed_with_uvs_in_unit_square(column_asset):
+    layer = Sdf.Layer.FindOrOpen(str(column_asset.path.parent / "Payload/Geometry.usdc"))
+    stage = Usd.Stage.Open(layer)
+    prims = [p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh)]
+    assert len(prims) == column_asset.meshes == 3 * (4 + 2 + 2 + 1) * 2
+    for prim in prims:
+        m = mesh_value(prim)
+        r = inspect_mesh(m)
+        assert r.closed and r.consistent and r.signed_volume > 0, prim.GetPath()
+        assert m.st.min() >= 0.0 and m.st.max() <= 1.0, prim.GetPath()
+        assert UsdGeom.PrimvarsAPI(prim).GetPrimvar("st").GetInterpolation() == "faceVarying"
+        assert UsdGeom.PrimvarsAPI(prim).GetPrimvar("st").GetTypeName() == "texCoord2f[]"
+
+
+@pytest.mark.parametrize("name", ["Shaft/Shaft_f24_low", "Base/Base_G2_low",
+                                  "CapitalBody/CapitalBody_low_engaged"])
+def test_charts_do_not_overlap(column_asset, name):
+    from test_uv import rasterise, uv_charts
+
+    layer = Sdf.Layer.FindOrOpen(str(column_asset.path.parent / "Payload/Geometry.usdc"))
+    stage = Usd.Stage.Open(layer)
+    m = mesh_value(stage.GetPrimAtPath(f"/IonicColumn/Geom/{name}"))
+    res = 2048  # raster of the normalised [0,1] square
+    st = m.st * res
+    charts = uv_charts(m.st_indices, len(m.st))
+    cover, _ = rasterise(st, m.st_indices, res, res, charts)
+    assert cover.max() == 1
+
+
+def test_switching_variants_changes_exactly_their_part(column_asset):
+    stage = open_stage(column_asset)
+    vsets = stage.GetDefaultPrim().GetVariantSets()
+    expect = {"lod": {"Base", "Shaft", "CapitalBody", "CapitalScroll"}, "base": {"Base"},
+              "scroll": {"CapitalScroll"}, "flutes": {"Shaft"},
+              "form": {"Base", "Shaft", "CapitalBody", "CapitalScroll"}}
+    for name, parts in expect.items():
+        vs = vsets.GetVariantSet(name)
+        default = vs.GetVariantSelection()
+        before = set(active_meshes(stage))
+        vs.SetVariantSelection(VARIANTS[name][1])
+        after = set(active_meshes(stage))
+        changed = {p.split("/")[3] for p in before ^ after}
+        assert changed == parts, name
+        vs.SetVariantSelection(default)
+    # finish switches the bound material of every mesh and no geometry
+    vs = vsets.GetVariantSet("finish")
+    before = set(active_meshes(stage))
+    mats = set()
+    for v in VARIANTS["finish"]:
+        vs.SetVariantSelection(v)
+        assert set(active_meshes(stage)) == before
+        bound = {UsdShade.MaterialBindingAPI(p).ComputeBoundMaterial()[0].GetPath()
+                 for p in active_meshes(stage).values()}
+        assert len(bound) == 1
+        mats |= bound
+    assert {p.name for p in mats} == {"Travertine", "PaintedStucco"}
+
+
+def test_material_network(column_asset):
+    stage = open_stage(column_asset)
+    mat = UsdShade.Material(stage.GetPrimAtPath("/IonicColumn/Materials/Travertine"))
+    surf = mat.ComputeSurfaceSource()[0]
+    assert surf.GetIdAttr().Get() == "UsdPreviewSurface"
+    spaces = {}
+    for inp in ("diffuseColor", "roughness", "normal"):
+        src = surf.GetInput(inp).GetConnectedSources()[0][0].source
+        tex = UsdShade.Shader(src.GetPrim())
+        assert tex.GetIdAttr().Get() == "UsdUVTexture"
+        spaces[inp] = tex.GetInput("sourceColorSpace").Get()
+        path = tex.GetInput("file").Get().resolvedPath
+        assert path, inp
+    assert spaces == {"diffuseColor": "sRGB", "roughness": "raw", "normal": "raw"}
+    reader = stage.GetPrimAtPath("/IonicColumn/Materials/Travertine/StReader")
+    assert UsdShade.Shader(reader).GetInput("varname").Get() == "st"
+    geom = stage.GetPrimAtPath("/IonicColumn/Geom")
+    assert geom.HasAPI(UsdShade.MaterialBindingAPI)
+
+
+def test_textures_readable_with_declared_size(column_asset):
+    import OpenImageIO as oiio
+
+    tex = sorted((column_asset.path.parent / "Payload/Textures").glob("*.png"))
+    assert len(tex) == 6
+    for f in tex:
+        inp = oiio.ImageInput.open(str(f))
+        assert inp is not None, f
+        spec = inp.spec()
+        assert (spec.width, spec.height) == (64, 64)
+        assert spec.nchannels == (1 if "roughness" in f.name else 3)
+        inp.close()
+
+
+def test_rebuild_does_no_unwrapping(column_asset, tmp_path):
+    from ionic_usd.texture.uv import default_cache
+
+    cache = default_cache()
+    misses = cache.misses
+    rep = build_column_asset(tmp_path / "IonicColumn", ColumnAssetOptions(texture_size=64))
+    assert rep.uv_unwraps == 0 and cache.misses == misses
+    assert column_asset.uv_unwraps == column_asset.meshes  # the first build did unwrap them
+
+
+def test_force_replaces_atomically(tmp_path):
+    opts = ColumnAssetOptions(lods=("low",), bases=("G1",), scrolls=("S1",), flutes=("f24",),
+                              forms=("full",), texture_size=16)
+    dest = tmp_path / "IonicColumn"
+    build_column_asset(dest, opts)
+    (dest / "stray.txt").write_text("from the old asset")
+    with pytest.raises(OutputExistsError):
+        build_column_asset(dest, opts)
+    assert (dest / "stray.txt").exists()
+    build_column_asset(dest, opts, force=True)
+    assert not (dest / "stray.txt").exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["IonicColumn"]
+
+
+@pytest.mark.parametrize("kw,needle", [({"bases": ("G9",)}, "G1"), ({"lods": ("ultra",)}, "high"),
+                                       ({"scrolls": ()}, "S1"), ({"forms": ("quarter",)}, "engaged")])
+def test_unknown_variants_list_valid_ones(kw, needle):
+    with pytest.raises(ParameterError, match=needle):
+        ColumnAssetOptions(**kw)
+
+
+def test_bad_user_textures_refused_before_writing(tmp_path):
+    bad = tmp_path / "fake.png"
+    bad.write_bytes(b"not an image")
+    for textures in ({"basecolor": tmp_path / "missing.png", "roughness": bad, "normal": bad},
+                     {"basecolor": bad, "roughness": bad, "normal": bad}):
+        with pytest.raises(TextureError):
+            build_column_asset(tmp_path / "IonicColumn",
+                               ColumnAssetOptions(user_textures={k: str(v) for k, v in
+                                                                 textures.items()}))
+        assert not (tmp_path / "IonicColumn").exists()

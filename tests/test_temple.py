@@ -1,0 +1,159 @@
+"""The temple composer: counts, instancing, placement, roof pitch, hypotheses, user overrides."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from pxr import Gf, Sdf, Usd, UsdGeom
+
+from ionic_usd.cli import main
+from ionic_usd.errors import OutputExistsError
+from ionic_usd.temple.layout import portunus_layout
+from ionic_usd.usd import validate_stage
+from ionic_usd.usd.temple import compose_temple
+
+
+def stage_of(report) -> Usd.Stage:
+    return Usd.Stage.Open(str(report.root))
+
+
+def instances(stage) -> list[Usd.Prim]:
+    return [p for p in stage.Traverse() if p.IsInstance()]
+
+
+def test_counts_and_shared_prototypes(portunus_temple):
+    stage = stage_of(portunus_temple)
+    root = stage.GetDefaultPrim()
+    assert root.GetName() == "Temple" and Usd.ModelAPI(root).GetKind() == "assembly"
+    inst = instances(stage)
+    free = [p for p in inst if p.GetParent().GetName() == "Free"]
+    engaged = [p for p in inst if p.GetParent().GetName() == "Engaged"]
+    assert len(free) == 6 and len(engaged) == 12
+    protos = {p.GetPrototype() for p in inst}
+    assert len(protos) == 2 == len(stage.GetPrototypes())
+    assert {p.GetVariantSets().GetVariantSet("form").GetVariantSelection() for p in free} == {
+        "full"}
+    assert {p.GetVariantSets().GetVariantSet("form").GetVariantSelection()
+            for p in engaged} == {"engaged"}
+    folder = portunus_temple.root.parent
+    assert len(list(folder.rglob("IonicColumn.usda"))) == 1
+    assert portunus_temple.instances == 18
+    assert validate_stage(stage) == []
+
+
+def test_columns_stand_on_the_stylobate_at_the_documented_spacing(portunus_temple):
+    layout = portunus_layout()
+    stage = stage_of(portunus_temple)
+    cache = UsdGeom.XformCache()
+    pos = {p.GetName(): np.array(cache.GetLocalToWorldTransform(p).ExtractTranslation())
+           for p in instances(stage)}
+    assert all(abs(v[1] - layout.stylobate_height) < 1e-9 for v in pos.values())
+    s = layout.axial_spacing
+    assert s == pytest.approx(8.80 / 3)
+    front = sorted((v for k, v in pos.items() if k.startswith("front")), key=lambda v: v[0])
+    assert len(front) == 4
+    assert np.allclose(np.diff([v[0] for v in front]), s)
+    # every axis lies within the stylobate footprint
+    w, length = layout.params.stylobate_width, layout.params.stylobate_length
+    assert all(abs(v[0]) < w / 2 and abs(v[2]) < length / 2 for v in pos.values())
+    # world bounds: the column tops reach stylobate + column height
+    bbox = UsdGeom.BBoxCache(Usd.TimeCode.Default(), ["default", "render"])
+    prim = next(p for p in instances(stage) if p.GetName() == "front_1")
+    top = bbox.ComputeWorldBound(prim).ComputeAlignedRange().GetMax()[1]
+    assert top == pytest.approx(layout.stylobate_height + 8.22, abs=1e-4)
+
+
+def test_roof_inclined_by_the_documented_pitch(portunus_temple):
+    stage = stage_of(portunus_temple)
+    layout = portunus_layout()
+    pts = np.array(UsdGeom.Mesh(stage.GetPrimAtPath("/Temple/Roof/roof_left"))
+                   .GetPointsAttr().Get())
+    # the slab's top face: the four highest points over x
+    top = pts[np.argsort(pts[:, 1])[-4:]]
+    low = pts[np.argsort(pts[:, 1])[-8:-4]]
+    slope = (top[:, 1].mean() - low[:, 1].mean()) / abs(top[:, 0].mean() - low[:, 0].mean())
+    assert math.degrees(math.atan(slope)) == pytest.approx(layout.pitch_deg, abs=1e-6)
+    assert layout.pitch_deg == pytest.approx(math.degrees(math.atan(2 / 9)))
+
+
+def composed_values(stage) -> dict[str, tuple]:
+    out = {}
+    for prim in stage.Traverse():
+        vals = []
+        for a in prim.GetAttributes():
+            v = a.Get()
+            vals.append((a.GetName(), np.asarray(v).tobytes() if v is not None and hasattr(
+                v, "__len__") and not isinstance(v, str) else v))
+        rels = tuple((r.GetName(), tuple(r.GetTargets())) for r in prim.GetRelationships())
+        sel = tuple(sorted(prim.GetVariantSets().GetAllVariantSelections().items()))
+        out[str(prim.GetPath())] = (tuple(vals), rels, sel)
+    return out
+
+
+@pytest.mark.parametrize("hid", ["flutes-20", "roof-pitch-15", "frieze-plain",
+                                 "finish-bare-stone"])
+def test_each_hypothesis_switches_exactly_its_prims(portunus_temple, hid):
+    stage = stage_of(portunus_temple)
+    root = stage.GetDefaultPrim()
+    vset = "hyp_" + hid.replace("-", "_")
+    layer = Sdf.Layer.FindOrOpen(str(portunus_temple.root.parent / "layers" / f"{hid}.usda"))
+    named = set()
+    layer.Traverse(Sdf.Path("/Temple"), lambda p: named.add(str(p)) if p.IsPrimPath() and (
+        layer.GetPrimAtPath(p).customData.get("ionic_usd")) else None)
+    assert named
+    before = composed_values(stage)
+    root.GetVariantSets().GetVariantSet(vset).SetVariantSelection("alternative")
+    after = composed_values(stage)
+    changed = {p for p in after if before.get(p) != after[p] and not p.startswith("/__")}
+    changed.discard("/Temple")  # its variant selection itself
+    # instances whose variant selection changed re-point to other prototypes; their
+    # descendants are instance proxies and are not traversed
+    assert changed == named, hid
+    for p in named:
+        meta = stage.GetPrimAtPath(p).GetCustomData()["ionic_usd"]["hypothesis"]
+        assert meta["id"] == hid and meta["certainty"] in ("high", "medium", "low")
+        assert len(meta["sources"]) >= 1
+    assert validate_stage(stage) == []
+
+
+def test_unrealised_hypothesis_is_listed(portunus_temple):
+    stage = stage_of(portunus_temple)
+    listing = stage.GetDefaultPrim().GetCustomData()["ionic_usd"]["hypotheses"]
+    assert listing["corner_capitals_angled"]["realised"] is False
+    assert listing["roof_pitch_15"]["realised"] is True
+
+
+def test_user_overrides_survive_regeneration(tmp_path):
+    folder = tmp_path / "T"
+    layout = portunus_layout()
+    compose_temple(folder, layout, texture_size=16)
+    user = Sdf.Layer.FindOrOpen(str(folder / "overrides.usda"))
+    spec = Sdf.CreatePrimInLayer(user, "/Temple/Colonnade/Free/front_1")
+    spec.specifier = Sdf.SpecifierOver
+    a = Sdf.AttributeSpec(spec, "xformOp:rotateY", Sdf.ValueTypeNames.Float)
+    a.default = 33.0
+    spec.customData = {"note": "my reading of the plan"}
+    user.Save()
+    before = (folder / "overrides.usda").read_bytes()
+    with pytest.raises(OutputExistsError):
+        compose_temple(folder, layout, texture_size=16)
+    compose_temple(folder, layout, texture_size=16, force=True)
+    assert (folder / "overrides.usda").read_bytes() == before
+    stage = Usd.Stage.Open(str(folder / "Temple.usda"))
+    prim = stage.GetPrimAtPath("/Temple/Colonnade/Free/front_1")
+    assert prim.GetAttribute("xformOp:rotateY").Get() == 33.0
+    xf = UsdGeom.Xformable(prim).ComputeLocalToWorldTransform(Usd.TimeCode.Default())
+    assert Gf.IsClose(xf.ExtractRotation().GetAxis() * xf.ExtractRotation().GetAngle(),
+                      Gf.Vec3d(0, 33, 0), 1e-6)
+
+
+def test_cli_temple_errors(tmp_path, capsys):
+    assert main(["temple", "--layout", "parthenon", "-o", str(tmp_path / "x")]) == 2
+    err = capsys.readouterr().err
+    assert "portunus" in err and not (tmp_path / "x").exists()
+    cfg = tmp_path / "t.toml"
+    cfg.write_text("[podium]\nheight = -1\n")
+    assert main(["temple", "--config", str(cfg), "-o", str(tmp_path / "y")]) == 2
+    assert "podium" in capsys.readouterr().err and not (tmp_path / "y").exists()
