@@ -498,6 +498,9 @@ def _atomic_tmp(folder: Path, final: Path) -> Path:
 def _write_png(buf: object, path: Path) -> None:
     import OpenImageIO as oiio
 
+    # zlib level 2 instead of libpng's 6: measured 0.62 s → 0.16 s for a 1024² basecolor,
+    # files ≈ 12 % larger
+    buf.specmod().attribute("png:compressionLevel", 2)
     tmp = _atomic_tmp(path.parent, path)
     try:
         if not buf.write(str(tmp), oiio.UINT8, "png"):

@@ -328,10 +328,13 @@ def _resolve_cache(cache: UVCache | None | Literal[False]) -> UVCache | None:
 
 
 def uv_cache_key(mesh: Mesh, *, texels_per_metre: float, padding: int,
-                 resolution_cap: int = DEFAULT_RESOLUTION_CAP) -> str:
+                 resolution_cap: int = DEFAULT_RESOLUTION_CAP,
+                 max_chart_boundary: float | None = None) -> str:
     """SHA-256 hex digest of everything that determines :func:`unwrap`'s result."""
     h = hashlib.sha256()
     h.update(_SIGNATURE.encode())
+    if max_chart_boundary is not None:
+        h.update(f";boundary={float(max_chart_boundary)!r}".encode())
     h.update(f";tpm={float(texels_per_metre)!r};pad={int(padding)};cap={int(resolution_cap)}"
              .encode())
     pts = np.ascontiguousarray(mesh.points, dtype="<f8")
@@ -370,13 +373,16 @@ def _check_options(texels_per_metre: float, padding: int, resolution_cap: int) -
                              context="uv")
 
 
-def _run_xatlas(points: np.ndarray, tri: np.ndarray, tpm: float,
-                padding: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, xatlas.Atlas]:
+def _run_xatlas(points: np.ndarray, tri: np.ndarray, tpm: float, padding: int,
+                boundary: float | None = None
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, xatlas.Atlas]:
     atlas = xatlas.Atlas()
     atlas.add_mesh(points, tri)
     co = xatlas.ChartOptions()
     for k, v in _CHART_OPTIONS.items():
         setattr(co, k, v)
+    if boundary is not None:
+        co.max_boundary_length = float(boundary)
     po = xatlas.PackOptions()
     for k, v in _PACK_OPTIONS.items():
         setattr(po, k, v)
@@ -396,6 +402,7 @@ def unwrap(
     padding: int = DEFAULT_PADDING,
     resolution_cap: int = DEFAULT_RESOLUTION_CAP,
     cache: UVCache | None | Literal[False] = None,
+    max_chart_boundary: float | None = None,
 ) -> UVAtlas:
     """Cut, flatten and pack a triangle mesh into one atlas with xatlas.
 
@@ -411,6 +418,11 @@ def unwrap(
         Largest atlas side; a denser request is scaled down until it fits.
     cache : UVCache, None or False
         ``None`` uses :func:`default_cache`, ``False`` disables caching.
+    max_chart_boundary : float or None
+        Limit a chart's boundary length (m). xatlas's flattening cost grows faster than the
+        chart size; lathed parts (column bases) otherwise form a few huge charts. Measured on
+        the G2 base at 64 px/m: 1.39 s → 0.31 s with 2 m, at the price of more seams and
+        ≈ 10 % more area stretch on small discs.
 
     Returns
     -------
@@ -433,18 +445,20 @@ def unwrap(
         )
     store = _resolve_cache(cache)
     key = uv_cache_key(mesh, texels_per_metre=texels_per_metre, padding=padding,
-                       resolution_cap=resolution_cap)
+                       resolution_cap=resolution_cap, max_chart_boundary=max_chart_boundary)
     if store is not None:
         hit = store.get(key)
         if hit is not None:
             return hit
-    atlas = _unwrap_uncached(mesh, float(texels_per_metre), int(padding), int(resolution_cap))
+    atlas = _unwrap_uncached(mesh, float(texels_per_metre), int(padding), int(resolution_cap),
+                             max_chart_boundary)
     if store is not None:
         store.put(key, atlas)
     return atlas
 
 
-def _unwrap_uncached(mesh: Mesh, tpm: float, padding: int, cap: int) -> UVAtlas:
+def _unwrap_uncached(mesh: Mesh, tpm: float, padding: int, cap: int,
+                     boundary: float | None = None) -> UVAtlas:
     tri = mesh.triangles
     points = np.ascontiguousarray(mesh.points, dtype=np.float32)
     tri_u = np.ascontiguousarray(tri, dtype=np.uint32)
@@ -457,7 +471,7 @@ def _unwrap_uncached(mesh: Mesh, tpm: float, padding: int, cap: int) -> UVAtlas:
         tpm *= cap / guess
     t0 = time.perf_counter()
     for _ in range(_MAX_REFITS):
-        vmapping, indices, uvs, xa = _run_xatlas(points, tri_u, tpm, padding)
+        vmapping, indices, uvs, xa = _run_xatlas(points, tri_u, tpm, padding, boundary)
         side = max(xa.width, xa.height)
         if xa.atlas_count == 1 and side <= cap:
             break
@@ -488,12 +502,12 @@ def _unwrap_uncached(mesh: Mesh, tpm: float, padding: int, cap: int) -> UVAtlas:
 
 
 def _unwrap_job(args: tuple) -> UVAtlas:
-    mesh, tpm, padding, cap = args
-    return _unwrap_uncached(mesh, tpm, padding, cap)
+    mesh, tpm, padding, cap, boundary = args
+    return _unwrap_uncached(mesh, tpm, padding, cap, boundary)
 
 
 def prefetch(
-    meshes: Iterable[tuple[Mesh, float]],
+    meshes: Iterable[tuple[Mesh, float] | tuple[Mesh, float, float | None]],
     *,
     padding: int = DEFAULT_PADDING,
     resolution_cap: int = DEFAULT_RESOLUTION_CAP,
@@ -513,15 +527,17 @@ def prefetch(
     if store is None:
         return 0
     todo: dict[str, tuple] = {}
-    for mesh, tpm in meshes:
+    for item in meshes:
+        mesh, tpm = item[0], item[1]
+        boundary = item[2] if len(item) > 2 else None
         _check_options(tpm, padding, resolution_cap)
         key = uv_cache_key(mesh, texels_per_metre=tpm, padding=padding,
-                           resolution_cap=resolution_cap)
+                           resolution_cap=resolution_cap, max_chart_boundary=boundary)
         if key in todo or key in store._memory:
             continue
         if store.persist and store.path_for(key).is_file():
             continue  # get() will read (and verify) it
-        todo[key] = (mesh, float(tpm), int(padding), int(resolution_cap))
+        todo[key] = (mesh, float(tpm), int(padding), int(resolution_cap), boundary)
     if not todo:
         return 0
     n = workers or os.cpu_count() or 1
@@ -544,19 +560,27 @@ def unwrap_parts(
     padding: int = DEFAULT_PADDING,
     resolution_cap: int = DEFAULT_RESOLUTION_CAP,
     cache: UVCache | None | Literal[False] = None,
+    chart_boundaries: Mapping[str, float | None] | None = None,
 ) -> dict[str, UVAtlas]:
     """Unwrap every part separately at one common texel density.
 
     If the resolution cap lowered the density of some part, every part is unwrapped again
     at the lowest density used, so the density stays equal across parts.
+    ``chart_boundaries`` gives some parts a ``max_chart_boundary`` (see :func:`unwrap`).
     """
     if not meshes:
         raise GeometryError("unwrap_parts needs at least one mesh")
     kw = {"padding": padding, "resolution_cap": resolution_cap, "cache": cache}
-    atlases = {k: unwrap(m, texels_per_metre=texels_per_metre, **kw) for k, m in meshes.items()}
+    bnd = chart_boundaries or {}
+
+    def run(tpm: float) -> dict[str, UVAtlas]:
+        return {k: unwrap(m, texels_per_metre=tpm, max_chart_boundary=bnd.get(k), **kw)
+                for k, m in meshes.items()}
+
+    atlases = run(texels_per_metre)
     lowest = min(a.texels_per_metre for a in atlases.values())
     if lowest < float(texels_per_metre):
-        atlases = {k: unwrap(m, texels_per_metre=lowest, **kw) for k, m in meshes.items()}
+        atlases = run(lowest)
     return atlases
 
 

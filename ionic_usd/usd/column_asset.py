@@ -77,6 +77,7 @@ FORM_VARIANTS = ("full", "engaged")
 FINISHES = {"travertine": ("Travertine", "travertine"),
             "stucco": ("PaintedStucco", "stucco_painted")}
 ENGAGED_INSET = 0.05  # m: the cut lies this far behind the wall face (axis on the face)
+BASE_CHART_BOUNDARY = 2.0  # m: see texture.uv.unwrap(max_chart_boundary=…)
 UV_SPAN = 32.0  # m of surface across st ∈ [0, 1]
 TILE_METRES = 2.0  # m of stone per repeat of the tileable maps
 
@@ -173,13 +174,19 @@ def _with_uvs(meshes: list[AssetMesh], cache: UVCache | None) -> tuple[list[Asse
     from ionic_usd.texture.uv import prefetch
 
     misses0 = cache.misses if cache is not None else 0
-    prefetch([(m.mesh, LOD_TEXELS_PER_METRE[m.tags["lod"]]) for m in meshes], cache=cache)
+    def boundary(m: AssetMesh) -> float | None:
+        return BASE_CHART_BOUNDARY if m.part == "Base" else None
+
+    prefetch([(m.mesh, LOD_TEXELS_PER_METRE[m.tags["lod"]], boundary(m)) for m in meshes],
+             cache=cache)
     out = []
     for lod in {m.tags["lod"] for m in meshes}:
         these = [m for m in meshes if m.tags["lod"] == lod]
         tpm = LOD_TEXELS_PER_METRE[lod]
         atlases = unwrap_parts({f"{m.part}/{m.name}": m.mesh for m in these},
-                               texels_per_metre=tpm, cache=cache if cache is not None else None)
+                               texels_per_metre=tpm, cache=cache,
+                               chart_boundaries={f"{m.part}/{m.name}": boundary(m)
+                                                 for m in these})
         used = min(a.texels_per_metre for a in atlases.values())
         size = max(math.ceil(used * UV_SPAN), max(a.size for a in atlases.values()))
         for m in these:
