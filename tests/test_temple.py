@@ -157,3 +157,19 @@ def test_cli_temple_errors(tmp_path, capsys):
     cfg.write_text("[podium]\nheight = -1\n")
     assert main(["temple", "--config", str(cfg), "-o", str(tmp_path / "y")]) == 2
     assert "podium" in capsys.readouterr().err and not (tmp_path / "y").exists()
+
+
+def test_shipped_hypothesis_layers_are_up_to_date(portunus_temple):
+    from pathlib import Path
+
+    from ionic_usd.usd.temple import hypothesis_layers
+
+    shipped = Path(__file__).resolve().parent.parent / "layers" / "portunus"
+    layers = {k: v for k, v in hypothesis_layers(portunus_layout()).items() if v is not None}
+    assert sorted(p.stem for p in shipped.glob("*.usda")) == sorted(layers)
+    for hid, layer in layers.items():
+        fresh = layer.ExportToString()
+        assert Sdf.Layer.FindOrOpen(str(shipped / f"{hid}.usda")).ExportToString() == fresh, (
+            f"layers/portunus/{hid}.usda is stale: run python tools/make_layers.py")
+        written = portunus_temple.root.parent / "layers" / f"{hid}.usda"
+        assert Sdf.Layer.FindOrOpen(str(written)).ExportToString() == fresh

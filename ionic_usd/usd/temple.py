@@ -59,7 +59,7 @@ from ionic_usd.usd.materials import MaterialTextures, author_preview_material, b
 from ionic_usd.usd.mesh import author_mesh, define_prim
 from ionic_usd.usd.stage import new_layer, save_layer
 
-__all__ = ["TempleReport", "compose_temple", "ROOT_LAYER", "OVERRIDES_LAYER", "PART_LAYERS"]
+__all__ = ["TempleReport", "compose_temple", "hypothesis_layers", "ROOT_LAYER", "OVERRIDES_LAYER", "PART_LAYERS"]
 
 ROOT_LAYER = "Temple.usda"
 OVERRIDES_LAYER = "overrides.usda"
@@ -221,6 +221,12 @@ def _hypothesis_layer(h: Hypothesis, layout: TempleLayout, base_meshes) -> Sdf.L
     return lay
 
 
+def hypothesis_layers(layout: TempleLayout) -> dict[str, Sdf.Layer | None]:
+    """Hypothesis id → the anonymous layer of overs that realises it (None: not realisable)."""
+    base_meshes = _cuboid_meshes(layout)
+    return {h.id: _hypothesis_layer(h, layout, base_meshes) for h in layout.hypotheses}
+
+
 def _user_overrides_layer() -> Sdf.Layer:
     lay = Sdf.Layer.CreateAnonymous(".usda")
     lay.comment = ("Your overrides: the strongest layer of the temple. ionic_usd creates this "
@@ -264,7 +270,7 @@ def compose_temple(
     if (dest / OVERRIDES_LAYER).is_file():
         user_bytes = (dest / OVERRIDES_LAYER).read_bytes()
     base_meshes = _cuboid_meshes(layout)
-    hyp_layers = {h.id: _hypothesis_layer(h, layout, base_meshes) for h in layout.hypotheses}
+    hyp_layers = hypothesis_layers(layout)
     baseline_material = FINISHES[BASELINE_FINISH][0]
     stats: dict[str, object] = {}
 
