@@ -371,6 +371,29 @@ def _half_outline(loops2d: list[np.ndarray]) -> np.ndarray:
     return out
 
 
+def _radial_envelope(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """Side outline ``(r, y)`` of a solid of (near) revolution: the largest vertex radius at
+    every vertex height, bottom to top, closed to the axis at both ends.
+
+    Used for the shaft instead of the plane cut: the ring-stitching triangles between a plain
+    ring and the first fluted row dip a few millimetres below the fillet at angle 0, which a
+    cut would see but the silhouette (the outline of the side view) does not.
+    """
+    used = points[np.unique(triangles)]
+    r = np.hypot(used[:, 0], used[:, 2])
+    scale = 1.0 + float(np.abs(used).max())
+    ykey = np.round(used[:, 1] / (1e-7 * scale)).astype(np.int64)
+    levels, inv = np.unique(ykey, return_inverse=True)
+    rmax = np.zeros(len(levels))
+    np.maximum.at(rmax, inv, r)
+    ys = np.zeros(len(levels))
+    np.add.at(ys, inv, used[:, 1])
+    ys /= np.bincount(inv)
+    out = np.column_stack([rmax, ys])
+    out = out[out[:, 0] > 1e-7 * scale]
+    return np.vstack([[0.0, ys[0]], out, [0.0, ys[-1]]])
+
+
 def _outer_chain(loop: np.ndarray) -> np.ndarray:
     """Outer edge of a spiral band's closed outline (see :func:`section_from_usd`)."""
     c = loop[:-1] if np.allclose(loop[0], loop[-1]) else loop
@@ -454,8 +477,10 @@ def section_from_usd(
 
     * ``base`` — plane z = 0; the outer boundary of the section with x >= 0, bottom to top,
       without the caps' horizontal runs (as :func:`base_section`).
-    * ``shaft`` — with ``y`` None: plane z = 0, the outline ``(r, y)`` with x >= 0 from the axis
-      at the bottom to the axis at the top (as :func:`shaft_silhouette_section`); with ``y``:
+    * ``shaft`` — with ``y`` None: the side outline ``(r, y)``, the largest vertex radius at
+      each row height, from the axis at the bottom to the axis at the top (as
+      :func:`shaft_silhouette_section`; a plane cut would also see the stitching triangles
+      at the flute ends dip ~3 mm under the fillet); with ``y``:
       the cross-section ``(x, −z)`` at that height, closed (the longest loop).
     * ``volute`` — plane z through the middle of the front-right band's relief (from
       ``params``, else from the asset's stored parameters, else from the mesh: the two most
@@ -472,11 +497,11 @@ def section_from_usd(
     """
     path = Path(path)
     pts, tris = usd_part_triangles(path, part, variants=variants)
-    if part == "base" or (part == "shaft" and y is None):
+    if part == "shaft" and y is None:
+        return _radial_envelope(pts, tris)
+    if part == "base":
         loops = slice_mesh(pts, tris, np.zeros(3), np.array([0.0, 0.0, 1.0]))
         half = _half_outline([c[:, :2] for c in loops])
-        if part == "shaft":
-            return half
         scale = 1.0 + float(np.abs(half).max())
         return _strip_profile_ends(half, 1e-7 * scale)
     if part == "shaft":
