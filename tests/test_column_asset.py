@@ -209,8 +209,10 @@ def test_force_replaces_atomically(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["IonicColumn"]
 
 
-@pytest.mark.parametrize("kw,needle", [({"bases": ("G9",)}, "G1"), ({"lods": ("ultra",)}, "high"),
-                                       ({"scrolls": ()}, "S1"), ({"forms": ("quarter",)}, "engaged")])
+@pytest.mark.parametrize("kw,needle", [({"bases": ("G9",)}, "G1"),
+                                       ({"lods": ("ultra",)}, "high"),
+                                       ({"scrolls": ()}, "S1"),
+                                       ({"forms": ("quarter",)}, "engaged")])
 def test_unknown_variants_list_valid_ones(kw, needle):
     with pytest.raises(ParameterError, match=needle):
         ColumnAssetOptions(**kw)

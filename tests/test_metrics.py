@@ -7,12 +7,11 @@ import math
 
 import numpy as np
 import pytest
+import shapely  # noqa: E402
 from numpy.testing import assert_allclose
 
 from ionic_usd.errors import GeometryError, ParameterError
 from ionic_usd.evaluate import metrics as M
-
-shapely = pytest.importorskip("shapely")
 
 
 # ------------------------------------------------------------------------------ brute force
@@ -244,7 +243,8 @@ def test_discrete_frechet_vs_brute_force_and_geos(seed):
     assert M.discrete_frechet_distance(a, b) == pytest.approx(expected)
     assert M.discrete_frechet_distance(b, a) == pytest.approx(expected)
     if d == 2 and a.shape[0] > 1 and b.shape[0] > 1:
-        similaritymeasures = pytest.importorskip("similaritymeasures")
+        import similaritymeasures
+
         assert expected == pytest.approx(similaritymeasures.frechet_dist(a, b))
         # GEOS 3.14's DiscreteFrechetDistance sometimes returns a larger value than
         # Eiter-Mannila (e.g. seed 306: 20.11 vs 20.93; similaritymeasures agrees with the

@@ -21,8 +21,6 @@ from ionic_usd.evaluate.reference import (
     read_svg_curve,
 )
 
-pytest.importorskip("svgelements")
-
 
 def write(tmp_path: Path, name: str, content: str | bytes) -> Path:
     p = tmp_path / name

@@ -128,7 +128,6 @@ def test_vitruvian_defaults():
 
 def _brute_force_band_overlap(p: VoluteParams, samples=1500) -> bool:
     """Independent check: does any band polygon point fall inside another turn's band?"""
-    pytest.importorskip("shapely")
     from shapely.geometry import Polygon
 
     outer, inner = volute_curve(p, samples), volute_inner_curve(p, samples)

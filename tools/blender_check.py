@@ -149,7 +149,8 @@ def main() -> int:
     for m in meshes:
         print(f"    {m['name']:<40} polygons {m['polygons']:>6}  uv {m['uv_layers']}  "
               f"materials {m['materials']}")
-    print(f"  materials: {', '.join(f'{k} ({len(v)} images)' for k, v in rep['materials'].items())}")
+    mats = ", ".join(f"{k} ({len(v)} images)" for k, v in rep["materials"].items())
+    print(f"  materials: {mats}")
     if args.json:
         Path(args.json).write_text(json.dumps({"stage": facts, "blender": rep}, indent=1))
     if problems:
