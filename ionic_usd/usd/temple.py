@@ -59,7 +59,8 @@ from ionic_usd.usd.materials import MaterialTextures, author_preview_material, b
 from ionic_usd.usd.mesh import author_mesh, define_prim
 from ionic_usd.usd.stage import new_layer, save_layer
 
-__all__ = ["TempleReport", "compose_temple", "hypothesis_layers", "ROOT_LAYER", "OVERRIDES_LAYER", "PART_LAYERS"]
+__all__ = ["TempleReport", "compose_temple", "hypothesis_layers", "ROOT_LAYER",
+           "OVERRIDES_LAYER", "PART_LAYERS"]
 
 ROOT_LAYER = "Temple.usda"
 OVERRIDES_LAYER = "overrides.usda"
