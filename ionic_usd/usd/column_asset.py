@@ -20,7 +20,7 @@ scroll. Triangle budgets of the default column (all four parts, form = full): hi
 medium ≈ 16k, low ≈ 8.5k (``tools/bench_asset.py`` prints them).
 
 Texture coordinates come from xatlas, one chart set per part and LOD, at one texel density per
-LOD (``LOD_TEXELS_PER_METRE``); every LOD's pixel coordinates are divided by
+LOD (``ASSET_TEXELS_PER_METRE``); every LOD's pixel coordinates are divided by
 ``texels_per_metre × UV_SPAN`` so that ``st`` ∈ [0, 1] spans the same ``UV_SPAN`` metres on every
 part and LOD. The material repeats its tileable stone maps ``UV_SPAN / TILE_METRES`` times per
 unit of ``st`` (UsdTransform2d), i.e. once every ``TILE_METRES`` metres of stone.
@@ -48,7 +48,7 @@ from ionic_usd.column.column import (
 )
 from ionic_usd.errors import ParameterError
 from ionic_usd.geometry.mesh import Mesh
-from ionic_usd.texture.uv import LOD_TEXELS_PER_METRE, UVCache, attach_uvs, unwrap_parts
+from ionic_usd.texture.uv import UVCache, attach_uvs, unwrap_parts
 from ionic_usd.usd.asset import AssetMesh, AssetSpec, write_asset
 from ionic_usd.usd.materials import MaterialTextures
 
@@ -77,6 +77,11 @@ FORM_VARIANTS = ("full", "engaged")
 FINISHES = {"travertine": ("Travertine", "travertine"),
             "stucco": ("PaintedStucco", "stucco_painted")}
 ENGAGED_INSET = 0.05  # m: the cut lies this far behind the wall face (axis on the face)
+# Atlas density of the asset's UVs. The materials tile 2 m stone maps, so the atlas density
+# only sets the chart gutters (4 texels = 3 cm at 128 px/m) and the resolution available to a
+# later bake; xatlas's packing time grows with the atlas area (measured: the four parts of
+# the high-LOD column take 4.3 s at 256 px/m, 2.4 s at 64 px/m).
+ASSET_TEXELS_PER_METRE = {"high": 128.0, "medium": 64.0, "low": 32.0}
 BASE_CHART_BOUNDARY = 2.0  # m: see texture.uv.unwrap(max_chart_boundary=…)
 UV_SPAN = 32.0  # m of surface across st ∈ [0, 1]
 TILE_METRES = 2.0  # m of stone per repeat of the tileable maps
@@ -177,12 +182,12 @@ def _with_uvs(meshes: list[AssetMesh], cache: UVCache | None) -> tuple[list[Asse
     def boundary(m: AssetMesh) -> float | None:
         return BASE_CHART_BOUNDARY if m.part == "Base" else None
 
-    prefetch([(m.mesh, LOD_TEXELS_PER_METRE[m.tags["lod"]], boundary(m)) for m in meshes],
+    prefetch([(m.mesh, ASSET_TEXELS_PER_METRE[m.tags["lod"]], boundary(m)) for m in meshes],
              cache=cache)
     out = []
     for lod in {m.tags["lod"] for m in meshes}:
         these = [m for m in meshes if m.tags["lod"] == lod]
-        tpm = LOD_TEXELS_PER_METRE[lod]
+        tpm = ASSET_TEXELS_PER_METRE[lod]
         atlases = unwrap_parts({f"{m.part}/{m.name}": m.mesh for m in these},
                                texels_per_metre=tpm, cache=cache,
                                chart_boundaries={f"{m.part}/{m.name}": boundary(m)
