@@ -156,15 +156,11 @@ class BezierModule:
         return s + (" C1" if self.continuous else "")
 
 
-@dataclass(frozen=True)
-class TorusBase:
-    """A parsed v1 (tori) base grammar. ``source`` is the parsed text (not compared)."""
+class _ParsedBase:
+    """What both parsed base grammars share: a non-empty module tuple, height, text form."""
 
-    modules: tuple[TorusModule, ...]
-    source: str = field(default="", compare=False, repr=False)
-
-    version = 1
-    grammar_name = V1
+    modules: tuple
+    source: str
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "modules", tuple(self.modules))
@@ -179,13 +175,26 @@ class TorusBase:
         """Canonical letter form; parses back to an equal value."""
         return ", ".join(m.to_string() for m in self.modules)
 
-    def located(self) -> TorusBase:
+    def located(self):
         """This grammar with token offsets: itself if parsed from text, else re-parsed."""
-        return self if self.source else parse_base_v1(self.to_string())
+        if self.source:
+            return self
+        return (parse_base_v1 if self.version == 1 else parse_base_v2)(self.to_string())
 
 
 @dataclass(frozen=True)
-class BezierBase:
+class TorusBase(_ParsedBase):
+    """A parsed v1 (tori) base grammar. ``source`` is the parsed text (not compared)."""
+
+    modules: tuple[TorusModule, ...]
+    source: str = field(default="", compare=False, repr=False)
+
+    version = 1
+    grammar_name = V1
+
+
+@dataclass(frozen=True)
+class BezierBase(_ParsedBase):
     """A parsed v2 (Bézier) base grammar. ``source`` is the parsed text (not compared)."""
 
     modules: tuple[BezierModule, ...]
@@ -193,21 +202,6 @@ class BezierBase:
 
     version = 2
     grammar_name = V2
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "modules", tuple(self.modules))
-        if not self.modules:
-            raise ParameterError("modules", (), "at least one module", context="base grammar")
-
-    @property
-    def height(self) -> float:
-        return float(sum(m.height for m in self.modules))
-
-    def to_string(self) -> str:
-        return ", ".join(m.to_string() for m in self.modules)
-
-    def located(self) -> BezierBase:
-        return self if self.source else parse_base_v2(self.to_string())
 
 
 BaseGrammar = TorusBase | BezierBase

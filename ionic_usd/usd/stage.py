@@ -71,19 +71,9 @@ def new_layer(
     return layer
 
 
-def create_stage(
-    default_prim: str,
-    *,
-    kind: str | None = "component",
-    prim_type: str = "Xform",
-    up_axis: str = "Y",
-    meters_per_unit: float = 1.0,
-    comment: str = "",
-) -> Usd.Stage:
-    """An in-memory stage whose root layer comes from :func:`new_layer`."""
-    layer = new_layer(default_prim, kind=kind, prim_type=prim_type, up_axis=up_axis,
-                      meters_per_unit=meters_per_unit, comment=comment)
-    return Usd.Stage.Open(layer)
+def create_stage(default_prim: str, **metadata) -> Usd.Stage:
+    """An in-memory stage whose root layer comes from :func:`new_layer` (same keywords)."""
+    return Usd.Stage.Open(new_layer(default_prim, **metadata))
 
 
 def save_layer(layer: Sdf.Layer, path: str | os.PathLike, *, force: bool = False) -> Path:
