@@ -221,7 +221,7 @@ def _row_layout(p: ShaftParams) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _fluted_rows(p: ShaftParams, ys: np.ndarray, ks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Points (R, N, 3) of fluted rows and the angles (R, N) of their vertices about +Y.
+    """Points (R, N, 3) of fluted rows, and angles (2, N) about +Y of the first and last row.
 
     One period (flute + fillet) is computed in the flute's local polar frame (R × (h + nf)
     values), then rotated to every flute by the angle-addition formulas: products instead
@@ -248,7 +248,8 @@ def _fluted_rows(p: ShaftParams, ys: np.ndarray, ks: np.ndarray) -> tuple[np.nda
     pts[..., 0] = cc * rc - sc * rs
     pts[..., 1] = ys[:, None, None]
     pts[..., 2] = -(sc * rc + cc * rs)
-    ang = (centre[None, :, None] + delta[:, None, :]).reshape(R, -1)
+    # angles only of the first and last rows: the ones stitched to the plain rings
+    ang = (centre[None, :, None] + delta[[0, -1], None, :]).reshape(2, -1)
     return pts.reshape(R, e * K, 3), ang
 
 

@@ -110,16 +110,21 @@ def compare_aligned(
 
 
 @njit(cache=True)
-def _brute_distances(points, poly):  # pragma: no cover - compiled
-    # exact distance from each point to the polyline (all segments; small curves only)
+def _closest(points, poly):  # pragma: no cover - compiled
+    # exact closest point on the polyline for each point (all segments; fit-sized curves):
+    # distance, segment index and parameter t on that segment
     n, m = points.shape[0], poly.shape[0]
-    out = np.empty(n)
+    dist = np.empty(n)
+    seg = np.zeros(n, dtype=np.int64)
+    par = np.zeros(n)
     for i in range(n):
         px, py = points[i, 0], points[i, 1]
         best = np.inf
-        for j in range(m - 1):
+        for j in range(max(m - 1, 1)):
             ox, oy = poly[j, 0], poly[j, 1]
-            vx, vy = poly[j + 1, 0] - ox, poly[j + 1, 1] - oy
+            vx, vy = 0.0, 0.0
+            if m > 1:
+                vx, vy = poly[j + 1, 0] - ox, poly[j + 1, 1] - oy
             l2 = vx * vx + vy * vy
             t = ((px - ox) * vx + (py - oy) * vy) / l2 if l2 > 0.0 else 0.0
             t = min(max(t, 0.0), 1.0)
@@ -127,11 +132,10 @@ def _brute_distances(points, poly):  # pragma: no cover - compiled
             d2 = dx * dx + dy * dy
             if d2 < best:
                 best = d2
-        if m == 1:
-            dx, dy = px - poly[0, 0], py - poly[0, 1]
-            best = dx * dx + dy * dy
-        out[i] = math.sqrt(best)
-    return out
+                seg[i] = j
+                par[i] = t
+        dist[i] = math.sqrt(best)
+    return dist, seg, par
 
 
 class _Objective:
@@ -148,7 +152,7 @@ class _Objective:
         # brute force in numba: for fit-sized curves (hundreds of nodes) it beats the kd-tree
         # index, whose exactness loop re-queries many nodes of a badly placed candidate
         gen = np.ascontiguousarray(gen, dtype=np.float64)
-        return _brute_distances(gen, self.ref), _brute_distances(self.ref, gen)
+        return _closest(gen, self.ref)[0], _closest(self.ref, gen)[0]
 
     def value(self, gen: np.ndarray) -> float:
         self.calls += 1
@@ -166,6 +170,30 @@ class _Objective:
         da, db = self.both(gen)
         # per-node weights so both curves count equally whatever their node counts
         return np.concatenate([da / math.sqrt(da.size), db / math.sqrt(db.size)])
+
+    def jacobian(self, gen: np.ndarray, dgen: np.ndarray) -> np.ndarray:
+        """d residuals / d params from the curve's derivative ``dgen`` (m, 2, k).
+
+        A node-to-curve distance |p − q| changes along the unit vector (p − q)/|p − q| only
+        (the foot point q slides along the segment to first order), so
+        d|g_j − q| = n · dg_j for generated nodes and d|p − q| = −n · ((1 − t) dg_j +
+        t dg_{j+1}) for reference nodes whose foot lies on generated segment j.
+        """
+        gen = np.ascontiguousarray(gen, dtype=np.float64)
+        m, n = len(gen), len(self.ref)
+        da, seg_a, t_a = _closest(gen, self.ref)  # generated nodes → reference
+        db, seg_b, t_b = _closest(self.ref, gen)  # reference nodes → generated
+        foot_a = (self.ref[seg_a] * (1 - t_a)[:, None]
+                  + self.ref[np.minimum(seg_a + 1, n - 1)] * t_a[:, None])
+        na = np.divide(gen - foot_a, da[:, None], out=np.zeros_like(gen), where=da[:, None] > 0)
+        ja = np.einsum("ic,ick->ik", na, dgen)
+        j1 = np.minimum(seg_b + 1, m - 1)
+        dq = dgen[seg_b] * (1 - t_b)[:, None, None] + dgen[j1] * t_b[:, None, None]
+        foot_b = gen[seg_b] * (1 - t_b)[:, None] + gen[j1] * t_b[:, None]
+        nb = np.divide(self.ref - foot_b, db[:, None], out=np.zeros_like(self.ref),
+                       where=db[:, None] > 0)
+        jb = -np.einsum("ic,ick->ik", nb, dq)
+        return np.vstack([ja / math.sqrt(m), jb / math.sqrt(n)])
 
 
 @dataclass
@@ -200,6 +228,25 @@ class _Stages:
         r = self.objective.residuals(gen)
         return r
 
+    def jacobian(self, u: np.ndarray) -> np.ndarray:
+        """Residual Jacobian: the curve's derivative by forward differences (cheap: curves
+        only), the distances' derivative analytically (:meth:`_Objective.jacobian`)."""
+        u = np.clip(u, 0.0, 1.0)
+        gen = self.make(u)
+        k = len(u)
+        if gen is None:
+            return np.zeros((self.n_res, k))
+        dgen = np.zeros((*gen.shape, k))
+        h = 1e-7
+        for i in range(k):
+            step = h if u[i] + h <= 1.0 else -h
+            v = u.copy()
+            v[i] += step
+            g = self.make(v)
+            if g is not None and g.shape == gen.shape:
+                dgen[:, :, i] = (g - gen) / step
+        return self.objective.jacobian(gen, dgen)
+
     def run(self, u0: np.ndarray, *, seed: int, global_stage: bool, popsize: int,
             maxiter: int, polish_evals: int) -> None:
         self.cost(u0)
@@ -213,8 +260,8 @@ class _Stages:
         gen = self.make(self.best_u)
         assert gen is not None
         self.n_res = len(self.objective.residuals(gen))
-        ls = least_squares(self.residuals, self.best_u.copy(), bounds=(0.0, 1.0), method="trf",
-                           diff_step=1e-7, xtol=1e-10, ftol=1e-10, gtol=1e-10, x_scale="jac",
+        ls = least_squares(self.residuals, self.best_u.copy(), jac=self.jacobian,
+                           bounds=(0.0, 1.0), method="trf", xtol=1e-10, ftol=1e-10, gtol=1e-10, x_scale="jac",
                            max_nfev=self.ls_evals * (k + 1))
         self.iterations += int(ls.nfev)
         self.cost(ls.x)
@@ -374,7 +421,7 @@ def fit_volute(
         raise ParameterError("initial", v0, "a VoluteParams")
     first = volute_curve(v0, samples)
     moved, how = align(ref, first, allow_mirror=allow_mirror)
-    ref_o = orient_like(moved, ref)
+    ref_o = orient_like(moved, ref)  # run the reference the way θ runs (Fréchet measures)
     sign = -1.0 if how.mirrored else 1.0
     t_init = np.asarray(how.translation)
     diag = float(np.linalg.norm(np.ptp(ref, axis=0)))
@@ -401,7 +448,7 @@ def fit_volute(
             return None
         curve[:, 0] *= sign
         curve += x[5:7]
-        return orient_like(ref_o, curve)
+        return curve
 
     obj = _Objective(ref_o, measure)
     stages = _Stages(make, obj, penalty=10.0 * diag)
