@@ -384,6 +384,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-ground", action="store_true", help="no ground plane")
     p.add_argument("--force", action="store_true", help="overwrite an existing PNG")
     p.set_defaults(func=cmd_preview)
+
+    from ionic_usd.evaluate.commands import add_parsers
+
+    add_parsers(sub, _Parser)
     return parser
 
 

@@ -185,14 +185,21 @@ def test_textures_readable_with_declared_size(column_asset):
         inp.close()
 
 
-def test_rebuild_does_no_unwrapping(column_asset, tmp_path):
-    from ionic_usd.texture.uv import default_cache
+def test_rebuild_does_no_unwrapping(tmp_path):
+    from ionic_usd.texture.uv import UVCache
 
-    cache = default_cache()
+    cache = UVCache(tmp_path / "uv")
+    opts = ColumnAssetOptions(lods=("low",), bases=("G1",), scrolls=("S1",), flutes=("f24",),
+                              texture_size=16)
+    cold = build_column_asset(tmp_path / "a" / "IonicColumn", opts, cache=cache)
+    assert cold.uv_unwraps == cold.meshes == cache.misses > 0
     misses = cache.misses
-    rep = build_column_asset(tmp_path / "IonicColumn", ColumnAssetOptions(texture_size=64))
-    assert rep.uv_unwraps == 0 and cache.misses == misses
-    assert column_asset.uv_unwraps == column_asset.meshes  # the first build did unwrap them
+    warm = build_column_asset(tmp_path / "a" / "IonicColumn", opts, cache=cache, force=True)
+    assert warm.uv_unwraps == 0 and cache.misses == misses
+    # a fresh process (new in-memory layer) reads the files: still no unwrapping
+    again = UVCache(tmp_path / "uv")
+    build_column_asset(tmp_path / "b" / "IonicColumn", opts, cache=again)
+    assert again.misses == 0 and again.hits > 0
 
 
 def test_force_replaces_atomically(tmp_path):

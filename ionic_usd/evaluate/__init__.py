@@ -1,7 +1,18 @@
-"""Evaluation: curve similarity measures, reference curves and reports (paper §VII)."""
+"""Evaluation: curve similarity measures, reference curves, sections of the model, automatic
+fitting and reports (paper §VII)."""
 
 from __future__ import annotations
 
+from ionic_usd.evaluate.fit import (
+    FIT_MEASURES,
+    BaseLayout,
+    FitResult,
+    densify,
+    fit_base,
+    fit_shaft,
+    fit_volute,
+    suggest_base_layout,
+)
 from ionic_usd.evaluate.metrics import (
     CurveComparison,
     average_error,
@@ -25,8 +36,30 @@ from ionic_usd.evaluate.reference import (
     read_svg_curve,
 )
 from ionic_usd.evaluate.report import format_table, plot_overlay, write_json
+from ionic_usd.evaluate.sections import (
+    base_section,
+    section_from_usd,
+    shaft_cross_section_at,
+    shaft_silhouette_section,
+    slice_mesh,
+    volute_section,
+)
 
 __all__ = [
+    "FIT_MEASURES",
+    "BaseLayout",
+    "FitResult",
+    "densify",
+    "fit_base",
+    "fit_shaft",
+    "fit_volute",
+    "suggest_base_layout",
+    "base_section",
+    "section_from_usd",
+    "shaft_cross_section_at",
+    "shaft_silhouette_section",
+    "slice_mesh",
+    "volute_section",
     "Alignment",
     "align",
     "format_table",

@@ -18,7 +18,9 @@ parameter sets (any :class:`~ionic_usd.errors.IonicError` from the parameter cla
 large constant instead of stopping the fit. Reported comparisons (``before`` with the initial
 parameters, ``after`` with the fitted ones) are :func:`~ionic_usd.evaluate.metrics.compare`
 after :func:`~ionic_usd.evaluate.reference.align` (translation, mirror allowed), with the
-generated curve oriented like the reference (the Fréchet measures care about direction).
+generated curve oriented like the reference (the Fréchet measures care about direction) and
+both curves :func:`densify`-d to segments of at most the reference's length / 500 (so the
+discrete measures do not depend on how coarsely a curve happens to be sampled).
 
 Degeneracies, and what is held fixed:
 
@@ -78,6 +80,7 @@ __all__ = [
     "base_grammar_string",
     "orient_like",
     "compare_aligned",
+    "densify",
 ]
 
 #: Measures a fit can minimise (names of :class:`CurveComparison` fields).
@@ -92,11 +95,42 @@ def orient_like(reference: np.ndarray, curve: np.ndarray) -> np.ndarray:
     return curve[::-1].copy() if flip < same else curve
 
 
+def densify(curve: np.ndarray, max_segment: float) -> np.ndarray:
+    """Split every segment into the fewest equal parts no longer than ``max_segment``.
+
+    Unlike :func:`~ionic_usd.evaluate.metrics.resample` it keeps every original node, so
+    corners are not cut (which would add up to about half a spacing of error at each).
+
+    Parameters
+    ----------
+    curve : (n, d) float
+    max_segment : float > 0
+
+    Returns
+    -------
+    (m, d) float, m >= n
+    """
+    c = _as_curve(curve, "curve", min_nodes=1)
+    if not (math.isfinite(max_segment) and max_segment > 0):
+        raise ParameterError("max_segment", max_segment, "a length > 0")
+    if len(c) < 2:
+        return c
+    seg = np.linalg.norm(np.diff(c, axis=0), axis=1)
+    k = np.maximum(1, np.ceil(seg / max_segment).astype(np.int64))
+    idx = np.repeat(np.arange(len(seg)), k)
+    t = (np.arange(k.sum()) - np.repeat(np.cumsum(k) - k, k)) / k[idx]
+    pts = c[idx] + t[:, None] * (c[idx + 1] - c[idx])
+    return np.vstack([pts, c[-1:]])
+
+
 def compare_aligned(
     reference: np.ndarray, generated: np.ndarray, *, allow_mirror: bool = True,
-    spacing: float | None = None,
+    spacing: float | None = None, max_segment: float | None = None,
 ) -> tuple[CurveComparison, Alignment, np.ndarray]:
     """Align ``generated`` to ``reference``, orient it the same way, and compare.
+
+    ``spacing`` resamples both curves (as the paper); ``max_segment`` instead
+    :func:`densify`-s them (original nodes kept).
 
     Returns
     -------
@@ -106,6 +140,9 @@ def compare_aligned(
     """
     moved, how = align(reference, generated, allow_mirror=allow_mirror)
     moved = orient_like(reference, moved)
+    if max_segment is not None:
+        return (compare(densify(reference, max_segment), densify(moved, max_segment),
+                        spacing=spacing), how, moved)
     return compare(reference, moved, spacing=spacing), how, moved
 
 
@@ -136,6 +173,13 @@ def _closest(points, poly):  # pragma: no cover - compiled
                 par[i] = t
         dist[i] = math.sqrt(best)
     return dist, seg, par
+
+
+def _report_spacing(reference: np.ndarray) -> float:
+    """Longest segment of the reported comparisons: the reference's length / 500 (raw nodes
+    would make the discrete measures depend on how coarsely each curve happens to be
+    sampled; :func:`densify` keeps the corners that resampling would cut)."""
+    return curve_length(reference) / 500.0
 
 
 class _Objective:
@@ -208,6 +252,7 @@ class _Stages:
     iterations: int = field(init=False, default=0)
     n_res: int = field(init=False, default=0)
     ls_evals: int = 20
+    dgen: np.ndarray | None = None  # constant curve derivative (m, 2, k), if linear
 
     def cost(self, u: np.ndarray) -> float:
         u = np.clip(u, 0.0, 1.0)
@@ -236,6 +281,8 @@ class _Stages:
         k = len(u)
         if gen is None:
             return np.zeros((self.n_res, k))
+        if self.dgen is not None:  # a curve linear in its parameters
+            return self.objective.jacobian(gen, self.dgen)
         dgen = np.zeros((*gen.shape, k))
         h = 1e-7
         for i in range(k):
@@ -261,7 +308,9 @@ class _Stages:
         assert gen is not None
         self.n_res = len(self.objective.residuals(gen))
         ls = least_squares(self.residuals, self.best_u.copy(), jac=self.jacobian,
-                           bounds=(0.0, 1.0), method="trf", xtol=1e-10, ftol=1e-10, gtol=1e-10, x_scale="jac",
+                           bounds=(0.0, 1.0), method="trf",
+                           tr_solver="lsmr" if k > 24 else "exact", x_scale="jac",
+                           xtol=1e-10, ftol=1e-10, gtol=1e-10,
                            max_nfev=self.ls_evals * (k + 1))
         self.iterations += int(ls.nfev)
         self.cost(ls.x)
@@ -469,9 +518,11 @@ def fit_volute(
         notes.append("offsets kept (they move the eye, not the spiral)")
     col = dataclasses.replace(column, capital=column.capital.with_(volute=fitted))
     init_al = orient_like(ref_o, moved)  # the start's alignment, computed above
-    before = compare(ref_o, init_al)
+    h = _report_spacing(ref_o)
+    before = compare(densify(ref_o, h), densify(init_al, h))
     after, al, fit_al = compare_aligned(ref_o, volute_curve(fitted, samples),
-                                        allow_mirror=allow_mirror)
+                                        allow_mirror=allow_mirror,
+                                        max_segment=_report_spacing(ref_o))
     return FitResult("volute", fitted, col, before, after, measure, stages.iterations,
                      obj.calls, time.perf_counter() - t0, ref_o, fit_al, init_al, al,
                      tuple(notes))
@@ -620,6 +671,7 @@ def _layout_for_modules(p: np.ndarray, modules: Sequence[int]) -> BaseLayout:
     """Breaks for a given number of modules: the strongest suggested cuts, else arc length."""
     k = len(modules)
     sug = suggest_base_layout(p, max_modules=max(k, 2))
+    p = resample(p, count=400)  # the suggestion's indices refer to this resampling
     inner = list(sug.breaks[1:-1])
     n = len(p)
     if len(inner) > k - 1:
@@ -724,8 +776,8 @@ def fit_base(
             x0 += [r, max(y - y_bottom, 0.0)]
         y_bottom = max(float(c[-1, 1]), y_bottom)
     x0 = np.asarray(x0)
-    lo = np.where(np.arange(len(x0)) % 2 == 0, 1e-4 * size, -1e-9)  # R (even), h (odd)
-    lo = np.minimum(lo, x0 - 1e-9)
+    lo = np.where(np.arange(len(x0)) % 2 == 0, 1e-4 * size, 0.0)  # R (even), h (odd)
+    lo = np.minimum(lo, x0)
     box = _Box(lo, np.maximum(x0 + 0.5 * size, lo + 1e-6))
     counts = layout.points
     ts = {m: np.linspace(0.0, 1.0, 2 if m == 2 else slices + 1) for m in set(counts)}
@@ -736,21 +788,29 @@ def fit_base(
         for m in counts:
             pts = [start]
             for _ in range(m - 1):
-                pts.append(np.array([x[k], y0 + max(x[k + 1], 0.0)]))
+                pts.append(np.array([x[k], y0 + x[k + 1]]))
                 k += 2
             c = np.array(pts)
             out.append(c)
-            y0 = max(float(c[-1, 1]), y0)
+            y0 = float(c[-1, 1])
             start = c[-1]
         return out
 
+    def curve_of(x: np.ndarray) -> np.ndarray:
+        cs = controls(x)
+        return np.vstack([cs[0][:1]] + [bezier(c, ts[len(c)])[1:] for c in cs])
+
+    # the curve is linear in x (Bézier points are linear in the control points, which are
+    # linear in x while h >= 0): tabulate it once, then every evaluation is one matrix product
+    g0 = curve_of(np.zeros_like(x0))
+    lin = np.stack([curve_of(np.eye(len(x0))[i]) - g0 for i in range(len(x0))], axis=-1)
+    dgen = lin * (box.hi - box.lo)
+
     def make(u: np.ndarray) -> np.ndarray | None:
-        cs = controls(box.x(u))
-        curve = np.vstack([cs[0][:1]] + [bezier(c, ts[len(c)])[1:] for c in cs])
-        return curve
+        return g0 + lin @ box.x(u)
 
     obj = _Objective(ref_c, measure)
-    stages = _Stages(make, obj, penalty=10.0 * size)
+    stages = _Stages(make, obj, penalty=10.0 * size, ls_evals=4, dgen=dgen)
     stages.run(box.u(x0), seed=seed, global_stage=False, popsize=0, maxiter=0,
                polish_evals=polish_evals)
     grammar = base_grammar_string(controls(box.x(stages.best_u)), d)
@@ -758,8 +818,10 @@ def fit_base(
 
     height = parse_base_grammar(grammar, 2).height
     col = dataclasses.replace(column, base=grammar, base_height=height)
-    before, _, init_al = compare_aligned(ref, base_section(column), allow_mirror=False)
-    after, al, fit_al = compare_aligned(ref, base_section(col), allow_mirror=False)
+    before, _, init_al = compare_aligned(ref, base_section(column), allow_mirror=False,
+                                           max_segment=_report_spacing(ref))
+    after, al, fit_al = compare_aligned(ref, base_section(col), allow_mirror=False,
+                                           max_segment=_report_spacing(ref))
     notes = (f"{len(counts)} modules, points {list(counts)}",
              f"reference shifted by ({-shift[0]:+.6g}, {-shift[1]:+.6g}) m into column "
              f"coordinates (shaft radius d = {d:g} m)")
@@ -852,8 +914,10 @@ def fit_shaft(
     def section(c: ColumnParams) -> np.ndarray:
         return shaft_silhouette_section(c, samples=samples, ends=ends)
 
-    before, _, init_al = compare_aligned(ref, section(column), allow_mirror=False)
-    after, al, fit_al = compare_aligned(ref, section(col), allow_mirror=False)
+    before, _, init_al = compare_aligned(ref, section(column), allow_mirror=False,
+                                           max_segment=_report_spacing(ref))
+    after, al, fit_al = compare_aligned(ref, section(col), allow_mirror=False,
+                                           max_segment=_report_spacing(ref))
     notes = ("rings, flute-end ratio and flutes kept; r measured from the axis",
              f"ends {'included' if ends else 'left out'}; shaft bottom at y = {x[4]:.6g} m "
              "in the reference")

@@ -21,11 +21,13 @@ Conventions
 
 from __future__ import annotations
 
+import functools
 import math
 import os
 import shutil
 import tempfile
 from collections.abc import Mapping
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -66,6 +68,10 @@ USDZ_TEXTURE_FORMATS: dict[str, tuple[str, ...]] = {
 
 # Highest frequency (cycles per tile) drawn from the size-independent random stream.
 _KMAX = 512
+# Edge of the independently seeded cells of the Fourier-coefficient grid.
+_CELL = 64
+# Offset of the stream ids that draw frequencies beyond _KMAX (tiles larger than 1024).
+_HIGH_STREAM = 1000
 
 
 class TextureError(IonicError, ValueError):
@@ -160,12 +166,12 @@ TRAVERTINE = StoneStyle(
     base_color=(0.84, 0.76, 0.62),
     vein_color=(0.72, 0.62, 0.47),
     vein_strength=0.15,
-    pore_density=0.07,
+    pore_density=0.045,
     roughness_range=(0.55, 0.9),
     normal_strength=0.004,
     banding=0.8,
     mottling=0.35,
-    pore_color=(0.42, 0.35, 0.25),
+    pore_color=(0.5, 0.42, 0.3),
 )
 MARBLE = StoneStyle(
     name="marble",
@@ -254,12 +260,57 @@ def srgb_to_linear(c: np.ndarray) -> np.ndarray:
 def linear_to_srgb(c: np.ndarray) -> np.ndarray:
     """IEC 61966-2-1 sRGB encoding; input is clipped to [0, 1] first (any shape)."""
     c = np.clip(np.asarray(c, dtype=np.float32), 0.0, 1.0)
-    return np.where(c <= 0.0031308, c * 12.92, 1.055 * np.power(c, 1.0 / 2.4) - 0.055).astype(
-        np.float32
-    )
+    out = np.where(c <= 0.0031308, c * 12.92, 1.055 * np.power(c, 1.0 / 2.4) - 0.055)
+    return np.clip(out, 0.0, 1.0).astype(np.float32)
 
 
 # ---------------------------------------------------------------------------- periodic noise
+
+
+@dataclass(frozen=True)
+class _NoiseSpec:
+    """Spectrum of one periodic noise field (frequencies in cycles per tile).
+
+    The amplitude at frequency ``f`` is ``f**-beta`` with a Gaussian high cut at ``f_hi`` and a
+    low cut at ``f_lo``; ``stretch = (sx, sy)`` makes features ``sx / sy`` times longer along
+    the x axis rotated by ``angle_deg``.
+    """
+
+    stream: int
+    beta: float
+    f_lo: float
+    f_hi: float
+    stretch: tuple[float, float] = (1.0, 1.0)
+    angle_deg: float = 0.0
+
+    @property
+    def k_need(self) -> int:
+        # Beyond 3 f_hi the Gaussian cut is below 1.3e-4: coefficients there are not drawn.
+        return math.ceil(3.0 * self.f_hi / min(self.stretch))
+
+    def amplitude(self, kx: np.ndarray, ky: np.ndarray) -> np.ndarray:
+        a = math.radians(self.angle_deg)
+        u = (kx * math.cos(a) + ky * math.sin(a)) * self.stretch[0]
+        v = (ky * math.cos(a) - kx * math.sin(a)) * self.stretch[1]
+        f = np.maximum(np.sqrt(u * u + v * v), 1e-6)
+        amp = f ** (-self.beta) * np.exp(-((f / self.f_hi) ** 2))
+        amp *= 1.0 - np.exp(-((f / self.f_lo) ** 2))
+        return amp.astype(np.float32, copy=False)
+
+
+@functools.lru_cache(maxsize=64)
+def _sigma(spec: _NoiseSpec) -> float:
+    """Standard deviation of the unnormalised field in the infinite-resolution limit (x n^2)."""
+    k = spec.k_need
+    amp = spec.amplitude(
+        np.arange(0, k + 1, dtype=np.float32)[None, :],
+        np.arange(-k, k + 1, dtype=np.float32)[:, None],
+    )
+    amp[k, 0] = 0.0
+    # Columns kx > 0 of the half plane stand for two full-plane bins (Hermitian pairs);
+    # E|c|^2 = 2 for a complex coefficient with unit-variance parts.
+    var = 2.0 * (2.0 * float(np.sum(amp.astype(np.float64) ** 2)) - float(np.sum(amp[:, 0] ** 2)))
+    return math.sqrt(var)
 
 
 class _Spectrum:
@@ -272,66 +323,63 @@ class _Spectrum:
         self.iy = np.rint(np.fft.fftfreq(size) * size).astype(np.int64)
         self.ix = np.arange(size // 2 + 1, dtype=np.int64)
 
-    def field(
-        self,
-        stream: int,
-        *,
-        beta: float,
-        f_lo: float,
-        f_hi: float,
-        stretch: tuple[float, float] = (1.0, 1.0),
-        angle_deg: float = 0.0,
-    ) -> np.ndarray:
-        """Periodic Gaussian noise with a band-limited power-law spectrum, (n, n) float32.
+    def _draw_low(self, stream: int, k: int) -> np.ndarray:
+        """Complex white noise for ky in [-k, k], kx in [0, k]: (2k+1, k+1) complex64.
 
-        The amplitude at frequency ``f`` is ``f**-beta`` with a Gaussian high cut at ``f_hi``
-        and a low cut at ``f_lo`` (cycles per tile); ``stretch = (sx, sy)`` makes features
-        ``sx / sy`` times longer along the x axis rotated by ``angle_deg``. Normalised to unit
-        standard deviation in the infinite-resolution limit, so contrast does not depend on
-        ``size``.
+        The grid |k| <= _KMAX is cut into fixed 64 x 64 cells, each with its own seed, so a
+        coefficient has the same value whatever ``k`` (hence the tile size) is, and only the
+        cells that are needed are drawn.
         """
+        t = _CELL
+        out = np.empty((2 * k + 1, k + 1), dtype=np.complex64)
+        gy0, gy1 = _KMAX - k, _KMAX + k + 1  # global row range (row = ky + _KMAX)
+        for cy in range(gy0 // t, (gy1 - 1) // t + 1):
+            for cx in range(0, k // t + 1):
+                rng = np.random.default_rng([self.seed, stream, cy, cx])
+                cell = rng.standard_normal((t, t, 2), dtype=np.float32).view(np.complex64)[..., 0]
+                y0, y1 = max(cy * t, gy0), min((cy + 1) * t, gy1)
+                x0, x1 = cx * t, min((cx + 1) * t, k + 1)
+                out[y0 - gy0 : y1 - gy0, x0:x1] = cell[y0 - cy * t : y1 - cy * t, : x1 - x0]
+        return out
+
+    def field(self, spec: _NoiseSpec) -> np.ndarray:
+        """Periodic Gaussian noise, (n, n) float32, unit standard deviation in the
+        infinite-resolution limit (so contrast does not depend on ``size``)."""
         n = self.size
-        # Beyond 3 f_hi the Gaussian cut is below 1.3e-4: only draw coefficients inside |k| <= K.
-        k_need = math.ceil(3.0 * f_hi / min(stretch))
-        k = min(k_need, _KMAX)
-        seq = np.random.SeedSequence([self.seed, stream])
-        low_rng, high_rng = (np.random.default_rng(s) for s in seq.spawn(2))
-        # Fixed-shape draw: coefficient (ky, kx) gets the same value whatever the tile size.
-        block = low_rng.standard_normal((2 * k + 1, k + 1, 2), dtype=np.float32)
-        block = block.view(np.complex64)[..., 0]
-        cos_a, sin_a = math.cos(math.radians(angle_deg)), math.sin(math.radians(angle_deg))
-
-        def amplitude(kx: np.ndarray, ky: np.ndarray) -> np.ndarray:
-            u = (kx * cos_a + ky * sin_a) * stretch[0]
-            v = (ky * cos_a - kx * sin_a) * stretch[1]
-            f = np.maximum(np.sqrt(u * u + v * v), 1e-6)
-            return f ** (-beta) * np.exp(-((f / f_hi) ** 2)) * (1.0 - np.exp(-((f / f_lo) ** 2)))
-
-        amp = amplitude(
+        k = min(spec.k_need, _KMAX, n // 2)
+        scale = np.float32(n * n / _sigma(spec))
+        block = self._draw_low(spec.stream, k)
+        block *= spec.amplitude(
             np.arange(0, k + 1, dtype=np.float32)[None, :],
             np.arange(-k, k + 1, dtype=np.float32)[:, None],
         )
-        amp[k, 0] = 0.0
-        # Variance of irfft2 output: columns kx > 0 stand for two full-plane bins (Hermitian
-        # pairs), E|c|^2 = 2, and irfft2 divides by n^2.
-        var_unit = 2.0 * (2.0 * float(np.sum(amp**2)) - float(np.sum(amp[:, 0] ** 2)))
-        sigma = math.sqrt(var_unit)
-        block = block * (amp * np.float32(n * n / sigma))
-
-        spec = np.zeros((n, n // 2 + 1), dtype=np.complex64)
-        if k_need > _KMAX and n // 2 > _KMAX:
-            # Frequencies past the size-independent block come from a second stream.
-            hi_amp = amplitude(
-                self.ix[None, :].astype(np.float32), self.iy[:, None].astype(np.float32)
-            )
-            hi = high_rng.standard_normal((n, n // 2 + 1, 2), dtype=np.float32)
-            spec = hi.view(np.complex64)[..., 0] * (hi_amp * np.float32(n * n / sigma))
+        block *= scale
         if n // 2 <= k:
-            spec = block[self.iy + k, : n // 2 + 1]
+            coef = block[self.iy + k, : n // 2 + 1]
         else:
-            spec[: k + 1, : k + 1] = block[k:]
-            spec[n - k :, : k + 1] = block[:k]
-        return np.fft.irfft2(spec, s=(n, n)).astype(np.float32, copy=False)
+            coef = np.zeros((n, n // 2 + 1), dtype=np.complex64)
+            if spec.k_need > _KMAX:
+                # Frequencies past the size-independent block come from a second stream.
+                rng = np.random.default_rng([self.seed, _HIGH_STREAM + spec.stream])
+                hi = rng.standard_normal((n, n // 2 + 1, 2), dtype=np.float32)
+                coef = hi.view(np.complex64)[..., 0]
+                coef *= spec.amplitude(
+                    self.ix[None, :].astype(np.float32), self.iy[:, None].astype(np.float32)
+                )
+                coef *= scale
+            coef[: k + 1, : k + 1] = block[k:]
+            coef[n - k :, : k + 1] = block[:k]
+        return np.fft.irfft2(coef, s=(n, n)).astype(np.float32, copy=False)
+
+    def fields(self, specs: Mapping[str, _NoiseSpec]) -> dict[str, np.ndarray]:
+        """Several fields at once; threads overlap because numpy's FFT and RNG release the GIL
+        (each field has its own streams, so the result does not depend on scheduling)."""
+        workers = min(len(specs), os.cpu_count() or 1, 4)
+        if workers <= 1 or self.size < 256:
+            return {name: self.field(s) for name, s in specs.items()}
+        with ThreadPoolExecutor(max_workers=workers) as pool:
+            futures = {name: pool.submit(self.field, s) for name, s in specs.items()}
+            return {name: f.result() for name, f in futures.items()}
 
 
 def _gauss_quantile(p: float) -> float:
@@ -378,6 +426,18 @@ def height_to_normal(height: np.ndarray, depth: float) -> np.ndarray:
     return n.astype(np.float32)
 
 
+def _encode_srgb_inplace(c: np.ndarray) -> None:
+    """:func:`linear_to_srgb` without temporaries of the full shape beyond one mask."""
+    np.clip(c, 0.0, 1.0, out=c)
+    low = c <= 0.0031308
+    lin = c[low] * 12.92
+    np.power(c, np.float32(1.0 / 2.4), out=c)
+    c *= 1.055
+    c -= 0.055
+    c[low] = lin
+    np.clip(c, 0.0, 1.0, out=c)
+
+
 def _check_size(size: object) -> int:
     if isinstance(size, bool) or not isinstance(size, (int, np.integer)):
         raise ParameterError("size", size, "an int power of two in [16, 8192]")
@@ -415,67 +475,109 @@ def generate_stone_maps(style: StoneStyle | str, size: int = 1024, seed: int = 0
     seed = _check_seed(seed)
     sp = _Spectrum(n, seed)
 
-    zeros = np.zeros((n, n), dtype=np.float32)
-    # Each field has its own random stream, so skipping an unused one changes no other field.
-    cloud = sp.field(1, beta=1.6, f_lo=1.0, f_hi=24.0)
-    grain = sp.field(2, beta=0.3, f_lo=40.0, f_hi=260.0)
-    rough_f = sp.field(7, beta=0.8, f_lo=4.0, f_hi=120.0)
-    band = zeros
+    # Each field has its own random streams, so skipping an unused one changes no other field.
+    specs = {
+        "cloud": _NoiseSpec(1, beta=1.6, f_lo=1.0, f_hi=24.0),
+        "grain": _NoiseSpec(2, beta=0.3, f_lo=40.0, f_hi=260.0),
+        "rough": _NoiseSpec(7, beta=0.8, f_lo=4.0, f_hi=120.0),
+    }
     if st.banding > 0.0:
-        # Sedimentary layers: features 12x longer horizontally than vertically, slightly wavy.
-        band = sp.field(3, beta=1.2, f_lo=2.0, f_hi=90.0, stretch=(12.0, 1.0), angle_deg=2.0)
+        # Sedimentary layers: features 16x longer horizontally than vertically, slightly wavy.
+        specs["band"] = _NoiseSpec(3, 0.9, 2.0, 120.0, stretch=(16.0, 1.0), angle_deg=2.0)
+    if st.vein_strength > 0.0:
+        specs["vein_a"] = _NoiseSpec(4, 1.3, 1.0, 64.0, stretch=(2.5, 1.0), angle_deg=35.0)
+        specs["vein_b"] = _NoiseSpec(5, 1.0, 3.0, 128.0, stretch=(1.5, 1.0), angle_deg=-20.0)
+    if st.pore_density > 0.0:
+        # Pores are elongated along the layers in banded stone.
+        specs["pore"] = _NoiseSpec(6, 0.0, 20.0, 140.0, stretch=(1.0 + 5.0 * st.banding, 1.0))
+    fld = sp.fields(specs)
+    zeros = np.zeros((n, n), dtype=np.float32)
+    cloud, grain, rough_f = fld["cloud"], fld["grain"], fld["rough"]
+    band = fld.get("band", zeros)
 
     veins = zeros
     if st.vein_strength > 0.0:
         # Veins: thin neighbourhoods of the zero sets of smooth noise (meandering lines).
-        vein_a = sp.field(4, beta=1.5, f_lo=1.0, f_hi=48.0, stretch=(2.5, 1.0), angle_deg=35.0)
-        vein_b = sp.field(5, beta=1.2, f_lo=3.0, f_hi=96.0, stretch=(1.5, 1.0), angle_deg=-20.0)
-        veins = np.maximum(np.exp(-((vein_a / 0.07) ** 2)), 0.6 * np.exp(-((vein_b / 0.05) ** 2)))
+        vein_a, vein_b = fld["vein_a"], fld["vein_b"]
+        # Widths and presence vary along each vein (large-scale cloud), so veins swell, thin
+        # out and fade instead of looking like uniform contour lines.
+        fade_a = _smoothstep(-0.8, 0.6, cloud)
+        fade_b = _smoothstep(0.2, 1.4, -cloud + 0.5 * grain)
+        width = np.float32(0.06) * (1.0 + 0.6 * cloud)
+        primary = np.exp(-((vein_a / np.maximum(width, 0.015)) ** 2))
+        halo = 0.25 * np.exp(-((vein_a / 0.3) ** 2))
+        veins = np.maximum(primary, halo) * fade_a
+        veins = np.maximum(veins, 0.45 * np.exp(-((vein_b / 0.035) ** 2)) * fade_b)
         veins *= np.float32(st.vein_strength)
 
     pores = zeros
     if st.pore_density > 0.0:
-        pore_f = sp.field(6, beta=0.0, f_lo=20.0, f_hi=120.0, stretch=(1.0 + 3.0 * st.banding, 1.0))
-        # Pores cluster in the porous layers: the threshold drops where the band field is high.
-        t = _gauss_quantile(1.0 - st.pore_density)
-        pores = _smoothstep(t, t + 0.5, pore_f + np.float32(0.6 * st.banding) * band)
+        # Pores cluster in the porous layers: the threshold drops where the band field is high;
+        # the threshold is scaled by the std of the sum so the covered fraction stays as asked.
+        coupling = 1.2 * st.banding
+        t = _gauss_quantile(1.0 - st.pore_density) * math.sqrt(1.0 + coupling**2)
+        pores = _smoothstep(t, t + 0.6, fld["pore"] + np.float32(coupling) * band)
 
     base = srgb_to_linear(np.array(st.base_color, dtype=np.float32))
     vein_c = srgb_to_linear(np.array(st.vein_color, dtype=np.float32))
     pore_c = srgb_to_linear(np.array(st.pore_color, dtype=np.float32))
-    shade = (
-        1.0
-        + 0.18 * st.mottling * cloud
-        + 0.035 * grain
-        + 0.12 * st.banding * band
-        + 0.04 * st.banding * np.abs(band) * cloud
-    )
+    shade = 0.18 * st.mottling * cloud
+    shade += 0.035 * grain
+    shade += 1.0
+    if st.banding > 0.0:
+        shade += (0.16 * st.banding) * band
+        shade += (0.04 * st.banding) * np.abs(band) * cloud
     # Mottling also shifts hue a little (warmer/cooler patches) so the stone is not greyscale.
     hue = np.array([1.0, 0.2, -0.8], dtype=np.float32) * np.float32(0.04 * st.mottling)
-    col = (base * shade[..., None]) * (1.0 + cloud[..., None] * hue)
-    col += (vein_c - col) * veins[..., None]
-    col += (pore_c - col) * (0.85 * pores)[..., None]
-    base_color = linear_to_srgb(col)
+    pore_mix = 0.85 * pores
+    # Per channel on 2-D planes with in-place updates: (n, n, 3) temporaries cost more in
+    # page faults than in arithmetic.
+    base_color = np.empty((n, n, 3), dtype=np.float32)
+    for c in range(3):
+        ch = hue[c] * cloud
+        ch += 1.0
+        ch *= shade
+        ch *= base[c]
+        if st.vein_strength > 0.0:
+            ch += (vein_c[c] - ch) * veins
+        if st.pore_density > 0.0:
+            ch += (pore_c[c] - ch) * pore_mix
+        base_color[..., c] = ch
+    _encode_srgb_inplace(base_color)
 
-    height = (
-        0.25 * grain
-        + 0.6 * st.banding * band
-        + 0.35 * cloud * st.mottling
-        - 2.5 * pores
-        - 0.1 * veins
-    )
+    height = 0.25 * grain
+    height += (0.35 * st.mottling) * cloud
+    if st.banding > 0.0:
+        height += (0.6 * st.banding) * band
+    if st.pore_density > 0.0:
+        height -= 2.5 * pores
+    if st.vein_strength > 0.0:
+        height -= 0.1 * veins
     h_min, h_max = float(height.min()), float(height.max())
-    height = ((height - h_min) / max(h_max - h_min, 1e-12)).astype(np.float32)
-    normal = height_to_normal(height, st.normal_strength) * 0.5 + 0.5
+    height -= h_min
+    height *= np.float32(1.0 / max(h_max - h_min, 1e-12))
+    np.clip(height, 0.0, 1.0, out=height)  # float rounding can leave 1 + 1 ulp
+    normal = height_to_normal(height, st.normal_strength)
+    normal *= 0.5
+    normal += 0.5
+    np.clip(normal, 0.0, 1.0, out=normal)
 
     lo, hi = st.roughness_range
-    r = 0.5 + 0.2 * rough_f + 0.08 * grain + 0.6 * pores - 0.25 * veins
-    roughness = (lo + (hi - lo) * np.clip(r, 0.0, 1.0)).astype(np.float32)
+    r = 0.2 * rough_f
+    r += 0.08 * grain
+    r += 0.5
+    if st.pore_density > 0.0:
+        r += 0.6 * pores
+    if st.vein_strength > 0.0:
+        r -= 0.25 * veins
+    np.clip(r, 0.0, 1.0, out=r)
+    r *= np.float32(hi - lo)
+    r += np.float32(lo)
 
     return StoneMaps(
-        base_color=np.ascontiguousarray(base_color, dtype=np.float32),
-        roughness=roughness,
-        normal=normal.astype(np.float32),
+        base_color=base_color,
+        roughness=r,
+        normal=normal,
         height=height,
         style=st.name,
         seed=seed,
@@ -501,6 +603,10 @@ def _write_png(buf: object, path: Path) -> None:
     # zlib level 2 instead of libpng's 6: measured 0.62 s → 0.16 s for a 1024² basecolor,
     # files ≈ 12 % larger
     buf.specmod().attribute("png:compressionLevel", 2)
+    # zlib level 3 with the "average" filter: ~4x faster than the defaults (level 6, adaptive
+    # filters) and no larger on noisy images.
+    buf.specmod().attribute("png:compressionLevel", 3)
+    buf.specmod().attribute("png:filter", 64)
     tmp = _atomic_tmp(path.parent, path)
     try:
         if not buf.write(str(tmp), oiio.UINT8, "png"):
@@ -515,7 +621,8 @@ def _write_tx(buf: object, path: Path) -> None:
 
     config = oiio.ImageSpec()
     config.attribute("maketx:fileformatname", "tiff")
-    config.attribute("maketx:filtername", "lanczos3")
+    # maketx's default 2x2 box reduction: exact for power-of-two sizes and 2.5x faster than
+    # lanczos3, with no visible difference on noise-like stone.
     config.attribute("tile_width", 64)
     config.attribute("tile_height", 64)
     config.attribute("compression", "zip")
@@ -562,22 +669,33 @@ def write_stone_textures(
         "roughness": (maps.roughness, "Raw"),
         "normal": (maps.normal, "Raw"),
     }
-    written: dict[str, Path] = {}
-    for key, (data, colorspace) in planes.items():
+
+    def write_one(key: str) -> dict[str, Path]:
+        data, colorspace = planes[key]
         buf = oiio.ImageBuf(_to_uint8(data))
         # "Raw" makes the PNG writer omit sRGB/gAMA chunks, so viewers do not re-grade data.
         buf.specmod().attribute("oiio:ColorSpace", colorspace)
-        path = out / f"{maps.style}_{key}.png"
-        _write_png(buf, path)
-        written[key] = path
+        done = {key: out / f"{maps.style}_{key}.png"}
+        _write_png(buf, done[key])
         if make_tx:
-            tx = out / f"{maps.style}_{key}.tx"
-            _write_tx(buf, tx)
-            written[f"{key}_tx"] = tx
+            done[f"{key}_tx"] = out / f"{maps.style}_{key}.tx"
+            _write_tx(buf, done[f"{key}_tx"])
+        return done
+
+    # zlib and maketx run outside the GIL: the three maps encode in parallel.
+    with ThreadPoolExecutor(max_workers=min(3, os.cpu_count() or 1)) as pool:
+        results = list(pool.map(write_one, planes))
+    written: dict[str, Path] = {}
+    for part in results:
+        written.update(part)
     return written
 
 
 # ------------------------------------------------------------------------- user textures
+
+
+def _one_line(message: str) -> str:
+    return "; ".join(part.strip() for part in message.splitlines() if part.strip())
 
 
 def validate_user_texture(path: str | os.PathLike[str]) -> Path:
@@ -607,7 +725,7 @@ def validate_user_texture(path: str | os.PathLike[str]) -> Path:
         raise TextureError(p, "file is not readable (permission denied)")
     inp = oiio.ImageInput.open(str(p))
     if inp is None:
-        msg = oiio.geterror().strip() or "unknown format"
+        msg = _one_line(oiio.geterror()) or "unknown format"
         raise TextureError(p, f"OpenImageIO cannot read it as an image ({msg})")
     try:
         fmt = inp.format_name()
@@ -626,7 +744,7 @@ def validate_user_texture(path: str | os.PathLike[str]) -> Path:
         # Opening only parses the header; decode the pixels to catch truncated files.
         pixels = inp.read_image(0, 0, 0, spec.nchannels, oiio.UINT8)
         if pixels is None:
-            msg = inp.geterror().strip() or "decode failed"
+            msg = _one_line(inp.geterror()) or "decode failed"
             raise TextureError(p, f"pixels cannot be decoded ({msg})")
     finally:
         inp.close()

@@ -94,8 +94,12 @@ XATLAS_VERSION: str = getattr(xatlas, "__version__", "unknown")
 # Every xatlas option that changes the result; part of the cache key, so editing an option
 # here (or bumping the format tag) invalidates old cache entries.
 _CHART_OPTIONS = {"max_iterations": 1, "fix_winding": True}
-_PACK_OPTIONS = {"blockAlign": False, "rotate_charts": False, "rotate_charts_to_axis": False,
-                 "bruteForce": False}
+_PACK_OPTIONS = {
+    "blockAlign": False,
+    "rotate_charts": False,
+    "rotate_charts_to_axis": False,
+    "bruteForce": False,
+}
 _FORMAT = "ionic_usd.uv/1"
 _SIGNATURE = f"{_FORMAT};xatlas={XATLAS_VERSION};chart={_CHART_OPTIONS};pack={_PACK_OPTIONS}"
 # first guess of the fraction of the atlas the charts fill, used only to pre-shrink the
@@ -150,19 +154,25 @@ class UVAtlas:
                 raise ParameterError(name, v, "an integer >= 1", context="UVAtlas")
             object.__setattr__(self, name, int(v))
         if int(self.chart_count) != self.chart_count or self.chart_count < 0:
-            raise ParameterError("chart_count", self.chart_count, "an integer >= 0",
-                                 context="UVAtlas")
+            raise ParameterError(
+                "chart_count", self.chart_count, "an integer >= 0", context="UVAtlas"
+            )
         object.__setattr__(self, "chart_count", int(self.chart_count))
         if not 0.0 <= float(self.utilisation) <= 1.0 + 1e-6:
-            raise ParameterError("utilisation", self.utilisation, "0 <= utilisation <= 1",
-                                 context="UVAtlas")
+            raise ParameterError(
+                "utilisation", self.utilisation, "0 <= utilisation <= 1", context="UVAtlas"
+            )
         if not (math.isfinite(self.texels_per_metre) and self.texels_per_metre > 0):
-            raise ParameterError("texels_per_metre", self.texels_per_metre, "a number > 0",
-                                 context="UVAtlas")
+            raise ParameterError(
+                "texels_per_metre", self.texels_per_metre, "a number > 0", context="UVAtlas"
+            )
         if sti.size and (sti.min() < 0 or sti.max() >= len(st)):
             raise GeometryError("UVAtlas: st_indices out of range")
-        if st.size and (not np.all(np.isfinite(st)) or st.min() < -1e-3
-                        or np.any(st.max(axis=0) > np.array([self.width, self.height]) + 1e-3)):
+        if st.size and (
+            not np.all(np.isfinite(st))
+            or st.min() < -1e-3
+            or np.any(st.max(axis=0) > np.array([self.width, self.height]) + 1e-3)
+        ):
             raise GeometryError("UVAtlas: st_px outside the atlas")
         object.__setattr__(self, "st_px", _frozen(st))
         object.__setattr__(self, "st_indices", _frozen(sti))
@@ -182,12 +192,14 @@ class UVAtlas:
         """
         s = _next_pow2(self.size) if atlas_size is None else _check_atlas_size(atlas_size)
         if s < self.size:
-            raise ParameterError("atlas_size", atlas_size,
-                                 f"an integer >= {self.size} (this atlas's longer side)")
+            raise ParameterError(
+                "atlas_size", atlas_size, f"an integer >= {self.size} (this atlas's longer side)"
+            )
         return (self.st_px.astype(np.float64) / s).astype(np.float32)
 
 
 # -- cache ---------------------------------------------------------------------------------
+
 
 def default_cache_folder() -> Path:
     """``$IONIC_USD_CACHE/uv``, else ``$XDG_CACHE_HOME/ionic_usd/uv`` (``~/.cache/...``)."""
@@ -230,8 +242,10 @@ class UVCache:
         self._memory: dict[str, UVAtlas] = {}
 
     def __repr__(self) -> str:
-        return (f"UVCache({str(self.folder)!r}, persist={self.persist}, hits={self.hits}, "
-                f"misses={self.misses})")
+        return (
+            f"UVCache({str(self.folder)!r}, persist={self.persist}, hits={self.hits}, "
+            f"misses={self.misses})"
+        )
 
     def path_for(self, key: str) -> Path:
         return self.folder / f"{key}.npz"
@@ -270,14 +284,24 @@ class UVCache:
                     raise ValueError("key mismatch")
                 meta = z["meta"]
                 return UVAtlas(
-                    st_px=z["st_px"], st_indices=z["st_indices"],
-                    width=int(meta[0]), height=int(meta[1]), chart_count=int(meta[2]),
+                    st_px=z["st_px"],
+                    st_indices=z["st_indices"],
+                    width=int(meta[0]),
+                    height=int(meta[1]),
+                    chart_count=int(meta[2]),
                     utilisation=float(z["utilisation"]),
                     texels_per_metre=float(z["texels_per_metre"]),
                 )
         # a truncated, foreign or garbage file: ignore it, the caller recomputes and rewrites
-        except (OSError, ValueError, KeyError, IndexError, EOFError, zipfile.BadZipFile,
-                GeometryError):
+        except (
+            OSError,
+            ValueError,
+            KeyError,
+            IndexError,
+            EOFError,
+            zipfile.BadZipFile,
+            GeometryError,
+        ):
             self.corrupt += 1
             return None
 
@@ -285,11 +309,13 @@ class UVCache:
         tmp_name = None
         try:
             self.folder.mkdir(parents=True, exist_ok=True)
-            fd, tmp_name = tempfile.mkstemp(prefix=f".{key[:16]}.", suffix=".tmp",
-                                            dir=self.folder)
+            fd, tmp_name = tempfile.mkstemp(prefix=f".{key[:16]}.", suffix=".tmp", dir=self.folder)
             with os.fdopen(fd, "wb") as f:
                 np.savez(
-                    f, key=np.array(key), st_px=atlas.st_px, st_indices=atlas.st_indices,
+                    f,
+                    key=np.array(key),
+                    st_px=atlas.st_px,
+                    st_indices=atlas.st_indices,
                     meta=np.array([atlas.width, atlas.height, atlas.chart_count], np.int64),
                     utilisation=np.array(atlas.utilisation),
                     texels_per_metre=np.array(atlas.texels_per_metre),
@@ -327,16 +353,22 @@ def _resolve_cache(cache: UVCache | None | Literal[False]) -> UVCache | None:
     return cache
 
 
-def uv_cache_key(mesh: Mesh, *, texels_per_metre: float, padding: int,
-                 resolution_cap: int = DEFAULT_RESOLUTION_CAP,
-                 max_chart_boundary: float | None = None) -> str:
+def uv_cache_key(
+    mesh: Mesh,
+    *,
+    texels_per_metre: float,
+    padding: int,
+    resolution_cap: int = DEFAULT_RESOLUTION_CAP,
+    max_chart_boundary: float | None = None,
+) -> str:
     """SHA-256 hex digest of everything that determines :func:`unwrap`'s result."""
     h = hashlib.sha256()
     h.update(_SIGNATURE.encode())
     if max_chart_boundary is not None:
         h.update(f";boundary={float(max_chart_boundary)!r}".encode())
-    h.update(f";tpm={float(texels_per_metre)!r};pad={int(padding)};cap={int(resolution_cap)}"
-             .encode())
+    h.update(
+        f";tpm={float(texels_per_metre)!r};pad={int(padding)};cap={int(resolution_cap)}".encode()
+    )
     pts = np.ascontiguousarray(mesh.points, dtype="<f8")
     h.update(f";points={pts.shape}".encode())
     h.update(pts.tobytes())
@@ -350,6 +382,7 @@ def uv_cache_key(mesh: Mesh, *, texels_per_metre: float, padding: int,
 
 # -- unwrapping ----------------------------------------------------------------------------
 
+
 def _next_pow2(n: int) -> int:
     return 1 << max(0, int(n) - 1).bit_length()
 
@@ -361,21 +394,28 @@ def _check_atlas_size(atlas_size: int) -> int:
 
 
 def _check_options(texels_per_metre: float, padding: int, resolution_cap: int) -> None:
-    if isinstance(texels_per_metre, bool) or not isinstance(texels_per_metre, int | float) \
-            or not math.isfinite(texels_per_metre) or texels_per_metre <= 0:
-        raise ParameterError("texels_per_metre", texels_per_metre, "a finite number > 0",
-                             context="uv")
+    if (
+        isinstance(texels_per_metre, bool)
+        or not isinstance(texels_per_metre, int | float)
+        or not math.isfinite(texels_per_metre)
+        or texels_per_metre <= 0
+    ):
+        raise ParameterError(
+            "texels_per_metre", texels_per_metre, "a finite number > 0", context="uv"
+        )
     if isinstance(padding, bool) or int(padding) != padding or not 0 <= padding <= 64:
         raise ParameterError("padding", padding, "an integer 0..64", context="uv")
-    if isinstance(resolution_cap, bool) or int(resolution_cap) != resolution_cap \
-            or not 16 <= resolution_cap <= 65536:
-        raise ParameterError("resolution_cap", resolution_cap, "an integer 16..65536",
-                             context="uv")
+    if (
+        isinstance(resolution_cap, bool)
+        or int(resolution_cap) != resolution_cap
+        or not 16 <= resolution_cap <= 65536
+    ):
+        raise ParameterError("resolution_cap", resolution_cap, "an integer 16..65536", context="uv")
 
 
-def _run_xatlas(points: np.ndarray, tri: np.ndarray, tpm: float, padding: int,
-                boundary: float | None = None
-                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, xatlas.Atlas]:
+def _run_xatlas(
+    points: np.ndarray, tri: np.ndarray, tpm: float, padding: int, boundary: float | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, xatlas.Atlas]:
     atlas = xatlas.Atlas()
     atlas.add_mesh(points, tri)
     co = xatlas.ChartOptions()
@@ -444,21 +484,28 @@ def unwrap(
             "mesh (fan-triangulate it first)"
         )
     store = _resolve_cache(cache)
-    key = uv_cache_key(mesh, texels_per_metre=texels_per_metre, padding=padding,
-                       resolution_cap=resolution_cap, max_chart_boundary=max_chart_boundary)
+    key = uv_cache_key(
+        mesh,
+        texels_per_metre=texels_per_metre,
+        padding=padding,
+        resolution_cap=resolution_cap,
+        max_chart_boundary=max_chart_boundary,
+    )
     if store is not None:
         hit = store.get(key)
         if hit is not None:
             return hit
-    atlas = _unwrap_uncached(mesh, float(texels_per_metre), int(padding), int(resolution_cap),
-                             max_chart_boundary)
+    atlas = _unwrap_uncached(
+        mesh, float(texels_per_metre), int(padding), int(resolution_cap), max_chart_boundary
+    )
     if store is not None:
         store.put(key, atlas)
     return atlas
 
 
-def _unwrap_uncached(mesh: Mesh, tpm: float, padding: int, cap: int,
-                     boundary: float | None = None) -> UVAtlas:
+def _unwrap_uncached(
+    mesh: Mesh, tpm: float, padding: int, cap: int, boundary: float | None = None
+) -> UVAtlas:
     tri = mesh.triangles
     points = np.ascontiguousarray(mesh.points, dtype=np.float32)
     tri_u = np.ascontiguousarray(tri, dtype=np.uint32)
@@ -486,7 +533,8 @@ def _unwrap_uncached(mesh: Mesh, tpm: float, padding: int, cap: int,
     # USD's st_indices run parallel to face_vertex_indices: this only holds if xatlas kept
     # face i as face i with its corners in the same order
     if indices.shape != tri.shape or not np.array_equal(
-            np.asarray(vmapping, dtype=np.int64)[indices], tri):
+        np.asarray(vmapping, dtype=np.int64)[indices], tri
+    ):
         raise GeometryError(f"unwrap: xatlas reordered the faces of mesh {mesh.name!r}")
     st_px = np.asarray(uvs, dtype=np.float64).reshape(-1, 2) * np.array([xa.width, xa.height])
     return UVAtlas(
@@ -531,8 +579,13 @@ def prefetch(
         mesh, tpm = item[0], item[1]
         boundary = item[2] if len(item) > 2 else None
         _check_options(tpm, padding, resolution_cap)
-        key = uv_cache_key(mesh, texels_per_metre=tpm, padding=padding,
-                           resolution_cap=resolution_cap, max_chart_boundary=boundary)
+        key = uv_cache_key(
+            mesh,
+            texels_per_metre=tpm,
+            padding=padding,
+            resolution_cap=resolution_cap,
+            max_chart_boundary=boundary,
+        )
         if key in todo or key in store._memory:
             continue
         if store.persist and store.path_for(key).is_file():
@@ -574,8 +627,10 @@ def unwrap_parts(
     bnd = chart_boundaries or {}
 
     def run(tpm: float) -> dict[str, UVAtlas]:
-        return {k: unwrap(m, texels_per_metre=tpm, max_chart_boundary=bnd.get(k), **kw)
-                for k, m in meshes.items()}
+        return {
+            k: unwrap(m, texels_per_metre=tpm, max_chart_boundary=bnd.get(k), **kw)
+            for k, m in meshes.items()
+        }
 
     atlases = run(texels_per_metre)
     lowest = min(a.texels_per_metre for a in atlases.values())
@@ -632,8 +687,13 @@ def apply_uvs(
     faces and normals unchanged. A texture of ``S × S`` texels then has the requested
     density on every part.
     """
-    atlases = unwrap_parts(meshes, texels_per_metre=texels_per_metre, padding=padding,
-                           resolution_cap=resolution_cap, cache=cache)
+    atlases = unwrap_parts(
+        meshes,
+        texels_per_metre=texels_per_metre,
+        padding=padding,
+        resolution_cap=resolution_cap,
+        cache=cache,
+    )
     need = common_atlas_size(atlases.values())
     if atlas_size is None:
         size = need
@@ -642,7 +702,8 @@ def apply_uvs(
         longest = max(a.size for a in atlases.values())
         if size < longest:
             raise ParameterError(
-                "atlas_size", atlas_size,
+                "atlas_size",
+                atlas_size,
                 f"an integer >= {longest} (the largest part atlas side at this density)",
                 context="apply_uvs",
             )

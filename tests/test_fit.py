@@ -1,0 +1,183 @@
+"""Automatic fitting: recovers parameters of curves the project generated itself."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import tomllib
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from ionic_usd.column.column import column_params_from_mapping, portunus_column_params
+from ionic_usd.column.volute import VoluteParams, volute_curve
+from ionic_usd.errors import OutputExistsError, ParameterError
+from ionic_usd.evaluate.fit import (
+    BaseLayout,
+    densify,
+    fit_base,
+    fit_shaft,
+    fit_volute,
+    suggest_base_layout,
+)
+from ionic_usd.evaluate.metrics import curve_length, resample
+from ionic_usd.evaluate.reference import align
+from ionic_usd.evaluate.sections import base_section, shaft_silhouette_section, volute_section
+
+V0 = VoluteParams()
+# a volute clearly unlike the Vitruvian start: 10 % larger, tighter, rotated start, fewer turns
+TRUE_VOLUTE = V0.with_(capital_spiral_radius=0.26, c=V0.c * 1.1, d=V0.d * 0.97,
+                       start_angle=100.0, spiral_circuits=2.9)
+
+
+def _roundtrip(res, tmp_path):
+    path = res.write_toml(tmp_path / "fitted.toml")
+    with pytest.raises(OutputExistsError):
+        res.write_toml(path)
+    res.write_toml(path, force=True)
+    return column_params_from_mapping(tomllib.loads(path.read_text("utf-8")))
+
+
+# -- shaft (fast) ---------------------------------------------------------------------------------
+def test_fit_shaft_recovers_parameters(tmp_path):
+    p = portunus_column_params()
+    true = dataclasses.replace(p.shaft, bottom_radius=0.5, top_radius=0.42, height=6.5,
+                               entasis=0.02)
+    ref = shaft_silhouette_section(dataclasses.replace(p, shaft=true)) + [0.0, 0.3]
+    res = fit_shaft(ref[::-1])  # either direction
+    s = res.params
+    assert s.bottom_radius == pytest.approx(0.5, abs=1e-5)
+    assert s.top_radius == pytest.approx(0.42, abs=1e-5)
+    assert s.height == pytest.approx(6.5, abs=1e-4)
+    assert s.entasis == pytest.approx(0.02, abs=1e-4)
+    assert res.before.hausdorff_pct > 1.0
+    assert res.after.hausdorff_pct < 0.01
+    assert res.seconds < 10
+    col = _roundtrip(res, tmp_path)
+    assert col.shaft == res.column.shaft
+
+
+# -- volute ---------------------------------------------------------------------------------------
+def test_fit_volute_noise_free(tmp_path):
+    ref = volute_curve(TRUE_VOLUTE, 400) + np.array([0.3, 1.2])
+    res = fit_volute(ref, initial=V0)
+    assert res.before.hausdorff_pct > 1.0
+    assert res.after.hausdorff_pct < 0.2
+    p = res.params
+    assert p.capital_spiral_radius == pytest.approx(0.26, rel=5e-3)
+    assert p.c == pytest.approx(TRUE_VOLUTE.c, rel=5e-3)
+    assert p.spiral_circuits == pytest.approx(2.9, abs=5e-3)
+    assert (p.a, p.b) == (V0.a, V0.b)  # held: the curve depends on R·a/b and R·d only
+    col = _roundtrip(res, tmp_path)
+    assert col.capital.volute == p
+    # the written column's volute section has the reference's shape
+    _, how = align(ref, volute_section(col, frame="volute", samples=400))
+    assert how.hausdorff_after < 2e-3 * curve_length(ref)
+
+
+@pytest.mark.slow
+def test_fit_volute_with_noise_reaches_noise_level():
+    rng = np.random.default_rng(3)
+    sigma = 5e-4
+    clean = volute_curve(TRUE_VOLUTE, 400)
+    ref = clean + rng.normal(0.0, sigma, clean.shape) + np.array([-0.2, 0.5])
+    res = fit_volute(ref, initial=V0, eye=[-0.2, 0.5])
+    # mean node-to-curve error ≈ E|N(0, σ)| = 0.8 σ; the worst node a few σ
+    assert res.after.average_error < 1.2 * sigma
+    assert res.after.hausdorff < 6 * sigma
+    p = res.params
+    # R, c, d and the start angle trade off against each other (R·a scales, d shifts and the
+    # start angle turns the curve), so under noise each is recovered to a few per cent
+    assert p.capital_spiral_radius == pytest.approx(0.26, rel=3e-2)
+    assert p.c == pytest.approx(TRUE_VOLUTE.c, rel=2e-2)
+    assert p.d == pytest.approx(TRUE_VOLUTE.d, rel=2e-2)
+    assert p.start_angle == pytest.approx(100.0, abs=5.0)
+    assert p.spiral_circuits == pytest.approx(2.9, abs=0.01)
+    # the eye was placed at the spiral origin: the offsets are the origin's fitting error
+    assert math.hypot(p.offset_x, p.offset_y) < 2e-3
+
+
+@pytest.mark.slow
+def test_fit_volute_mirrored_reference_and_other_measure():
+    ref = volute_curve(TRUE_VOLUTE, 300)
+    ref[:, 0] *= -1.0
+    res = fit_volute(ref[::-1], initial=V0, measure="average_error")
+    assert res.alignment.mirrored
+    assert res.after.average_error_pct < 0.05
+
+
+def test_fit_volute_bad_input():
+    with pytest.raises(ParameterError):
+        fit_volute(np.zeros((5, 3)))
+    with pytest.raises(ParameterError):
+        fit_volute(volute_curve(V0, 50), measure="chamfer")
+
+
+# -- base -----------------------------------------------------------------------------------------
+def test_fit_base_noise_free(tmp_path):
+    p = portunus_column_params()
+    target = dataclasses.replace(p, base="attic_bezier")
+    ref = resample(base_section(target), count=300) + [1.0, 2.0]
+    res = fit_base(ref, initial=dataclasses.replace(p, base="G1"))
+    assert res.before.hausdorff_pct > 5
+    assert res.after.hausdorff_pct < 0.2
+    assert res.seconds < 30
+    col = _roundtrip(res, tmp_path)
+    assert col.base == res.params
+    assert col.base_height == pytest.approx(res.column.base_height)
+    # the written column rebuilds the fitted base exactly, and it has the reference's shape
+    assert_allclose(base_section(col), base_section(res.column), atol=1e-9)
+    assert col.base_params().scale == pytest.approx(1.0)
+    # the convention: the top end meets the shaft (radius d), up to the fit error
+    assert base_section(col)[-1, 0] == pytest.approx(p.shaft.bottom_radius,
+                                                     abs=2 * res.after.hausdorff)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("measure", ["average_error", "discrete_frechet"])
+def test_fit_base_given_modules(measure):
+    p = portunus_column_params()
+    ref = base_section(dataclasses.replace(p, base="G2"))
+    res = fit_base(ref, modules=[2, 2, 4, 4, 4, 2, 4, 4, 2, 4, 4, 4, 4], measure=measure,
+                   initial=dataclasses.replace(p, base="G1"))
+    assert res.params.count(",") == 12
+    assert res.after.hausdorff_pct < 0.5
+    assert res.after.percent(measure) < res.before.percent(measure)
+
+
+def test_suggest_base_layout_cuts_at_corner_and_extremum():
+    # a straight vertical run, then a half circle bulging outward (r max in its middle)
+    line = np.column_stack([np.full(50, 1.0), np.linspace(0.0, 1.0, 50)])
+    a = np.linspace(-np.pi / 2, np.pi / 2, 200)
+    arc = np.column_stack([1.0 + 0.5 * np.cos(a), 1.5 + 0.5 * np.sin(a)])
+    prof = np.vstack([line, arc[1:]])
+    lay = suggest_base_layout(prof)
+    assert isinstance(lay, BaseLayout)
+    p = resample(prof, count=400)
+    cuts = p[list(lay.breaks)]
+    # a cut at the corner (1, 1) and one at the outermost point (1.5, 1.5)
+    assert np.min(np.linalg.norm(cuts - [1.0, 1.0], axis=1)) < 0.02
+    assert np.min(np.linalg.norm(cuts - [1.5, 1.5], axis=1)) < 0.02
+    assert lay.points[0] == 2  # the straight run is a 2-point module
+    assert all(n in (2, 4) for n in lay.points)
+
+
+def test_base_layout_validation():
+    with pytest.raises(ParameterError):
+        BaseLayout((0, 5), (2, 4))
+    with pytest.raises(ParameterError):
+        BaseLayout((0, 5, 3), (2, 4))
+    with pytest.raises(ParameterError):
+        fit_base(base_section(portunus_column_params()), modules=[1, 4])
+
+
+def test_densify_keeps_nodes_and_bounds_segments():
+    c = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 0.25]])
+    d = densify(c, 0.3)
+    assert len(d) == 4 + 1 + 1  # 1 → 4 parts of 0.25, 0.25 → 1 part, plus the end node
+    for node in c:
+        assert np.min(np.linalg.norm(d - node, axis=1)) == 0.0
+    assert np.linalg.norm(np.diff(d, axis=0), axis=1).max() <= 0.3
+    with pytest.raises(ParameterError):
+        densify(c, 0.0)
