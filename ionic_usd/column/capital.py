@@ -40,7 +40,6 @@ import math
 from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
-from scipy.interpolate import PchipInterpolator
 
 from ionic_usd.errors import ParameterError
 from ionic_usd.geometry.mesh import Mesh, merge, smooth_normals
@@ -336,6 +335,8 @@ def bolster_profile(p: CapitalParams, length: float, radius: float) -> np.ndarra
             runs.append([k])
         else:
             runs[-1].append(k)
+    from scipy.interpolate import PchipInterpolator
+
     grid = np.linspace(0.0, 1.0, p.bolster_rows + 1)
     nodes: list[tuple[float, float]] = []
     for run in runs:

@@ -10,8 +10,6 @@ exactly the same boundary vertices.
 from __future__ import annotations
 
 import numpy as np
-import shapely
-from scipy.spatial import cKDTree
 
 from ionic_usd.errors import GeometryError
 from ionic_usd.geometry.mesh import Mesh, triangulate_fan
@@ -286,6 +284,9 @@ def _plane_loops(points: np.ndarray, triangles: np.ndarray, on_plane: np.ndarray
 def _cap(points: np.ndarray, tri: np.ndarray, on_plane: np.ndarray, normal: np.ndarray,
          mesh_name: str) -> np.ndarray:
     """(c, 3) int64 cap triangles over the cut outline, wound to face ``−normal``."""
+    import shapely  # optional at import time: the kernel is numpy-only until a cut is made
+    from scipy.spatial import cKDTree
+
     loops = _plane_loops(points, tri, on_plane, normal, mesh_name=mesh_name)
     if not loops:
         return np.empty((0, 3), dtype=np.int64)
