@@ -269,6 +269,10 @@ def build_parser() -> argparse.ArgumentParser:
         description="Procedural Ionic-order columns and temples authored as OpenUSD scenes.",
     )
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    parser.add_argument("-v", "--verbose", action="count", default=0,
+                        help="say what each step does (-vv: debugging detail) on stderr")
+    parser.add_argument("-q", "--quiet", action="store_true",
+                        help="no progress bars and no messages but errors")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     p = sub.add_parser(
@@ -394,6 +398,9 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    from ionic_usd.progress import configure
+
+    configure(-1 if args.quiet else args.verbose)
     try:
         return int(args.func(args) or 0)
     except IonicError as exc:
