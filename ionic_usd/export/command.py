@@ -57,7 +57,9 @@ def cmd_export(args: argparse.Namespace) -> int:
         for s in r.solids:
             ext = " x ".join(f"{1e3 * v:.1f}" for v in s.size)
             print(f"  {s.name}: volume {1e9 * s.volume:,.0f} mm^3, size {ext} mm, "
-                  f"{'closed' if s.closed else 'NOT closed'}, {s.triangles:,} triangles")
+                  f"{'closed' if s.closed else 'NOT closed'}, {s.triangles:,} triangles"
+                  + (f", {s.non_manifold_edges} pinched edges (a part touches itself)"
+                     if s.non_manifold_edges else ""))
         print(f"wrote {res.path}: {len(r.solids)} solids at scale {scale:g}, "
               f"{'all closed' if r.all_closed else 'SOME NOT CLOSED'} ({r.seconds:.2f} s)")
         if not r.all_closed:
