@@ -496,8 +496,8 @@ def write_gltf(
     b.doc.nodes.append(g.Node(name=root_name, children=roots))
     b.doc.scenes.append(g.Scene(name=root_name, nodes=[len(b.doc.nodes) - 1],
                                 extras={"source": Path(scene.source).name,
-                                        "variantSelections": dict(scene.variants),
-                                        **scene.paradata}))
+                                        **scene.paradata,
+                                        "requestedVariants": dict(scene.variants)}))
     b.doc.scene = 0
     b.doc.extensionsUsed = sorted(b.used)
     while len(b.blob) % 4:

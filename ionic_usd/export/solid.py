@@ -83,19 +83,14 @@ def scene_solids(scene: Scene, *, scale: float = 1.0) -> list[Solid]:
     conv = np.eye(4)
     conv[:3, :3] = _Y_TO_Z_UP * (1000.0 * scale)
     out: list[Solid] = []
-    shells: dict[tuple[str, bytes], object] = {}
+    shells: dict[str, object] = {}  # each mesh as a Manifold once, in its own space
     for name, placements in bodies.items():
         parts = []
         for p in placements:
             m = scene.meshes[p.mesh]
-            mat = p.matrix @ conv
-            key = (p.mesh, np.asarray(mat).tobytes())
-            if key not in shells:
+            if p.mesh not in shells:
                 tris = triangulate_fan(m.face_vertex_counts, m.face_vertex_indices)
-                pts = np.c_[m.points, np.ones(len(m.points))] @ mat
-                if np.linalg.det(mat[:3, :3]) < 0:
-                    tris = tris[:, ::-1]
-                mesh = m3.Mesh(vert_properties=np.ascontiguousarray(pts[:, :3], np.float32),
+                mesh = m3.Mesh(vert_properties=np.ascontiguousarray(m.points, np.float32),
                                tri_verts=np.ascontiguousarray(tris, np.uint32))
                 man = m3.Manifold(mesh)
                 if man.status() != m3.Error.NoError:
@@ -104,8 +99,9 @@ def scene_solids(scene: Scene, *, scale: float = 1.0) -> list[Solid]:
                 if man.status() != m3.Error.NoError:
                     raise GeometryError(f"{m.source}: not a closed manifold shell "
                                         f"({man.status().name}); cannot make a printable solid")
-                shells[key] = man
-            parts.append(shells[key])
+                shells[p.mesh] = man
+            mat = p.matrix @ conv  # row-vector; Manifold.transform takes a column-vector 3x4
+            parts.append(shells[p.mesh].transform(np.ascontiguousarray(mat.T[:3, :4])))
         solid = m3.Manifold.batch_boolean(parts, m3.OpType.Add) if len(parts) > 1 else parts[0]
         res = solid.to_mesh()
         verts = np.asarray(res.vert_properties, dtype=np.float64)[:, :3]
@@ -212,9 +208,12 @@ def write_3mf(path: Path, solids: list[Solid], *, title: str = "") -> None:
     """3MF core (a zip of XML): one mesh object per solid, each a build item; millimetres."""
     objects, items = [], []
     for i, s in enumerate(solids, start=1):
-        v = s.vertices.astype(np.float32)
-        verts = "".join(f'<vertex x="{x:.6g}" y="{y:.6g}" z="{z:.6g}"/>' for x, y, z in v)
-        tris = "".join(f'<triangle v1="{a}" v2="{b}" v3="{c}"/>' for a, b, c in s.triangles)
+        # float32 values printed with 9 significant digits read back bit for bit
+        v = s.vertices.astype(np.float32).astype(np.float64).tolist()
+        vfmt = '<vertex x="{:.9g}" y="{:.9g}" z="{:.9g}"/>'.format
+        tfmt = '<triangle v1="{}" v2="{}" v3="{}"/>'.format
+        verts = "".join([vfmt(*r) for r in v])
+        tris = "".join([tfmt(*r) for r in s.triangles.tolist()])
         objects.append(f'<object id="{i}" type="model" name={_xml_attr(s.name)}><mesh>'
                        f"<vertices>{verts}</vertices><triangles>{tris}</triangles></mesh>"
                        "</object>")
