@@ -329,3 +329,36 @@ def test_cli_refuses_to_overwrite_and_bad_scene(tiny_temple, tmp_path, capsys):
     err = capsys.readouterr().err
     assert "exists" in err and "cannot open" in err and "Traceback" not in err
     assert not (tmp_path / "y.glb").exists()
+
+
+def test_draco_compressed_glb_decodes_to_the_same_geometry(tmp_path):
+    import DracoPy
+
+    src = _cubes_stage(tmp_path / "c.usda", [((0, 0, 0), (1, 1, 1)), ((2, 0, 0), (3, 2, 1))])
+    plain, packed = tmp_path / "p.glb", tmp_path / "d.glb"
+    export_scene(src, plain)
+    export_scene(src, packed, compress="draco")
+    gp, gd = pygltflib.GLTF2().load(str(plain)), pygltflib.GLTF2().load(str(packed))
+    assert gd.extensionsRequired == ["KHR_draco_mesh_compression"]
+    for mp, md in zip(gp.meshes, gd.meshes, strict=True):
+        ext = md.primitives[0].extensions["KHR_draco_mesh_compression"]
+        bv = gd.bufferViews[ext["bufferView"]]
+        dec = DracoPy.decode(gd.binary_blob()[bv.byteOffset: bv.byteOffset + bv.byteLength])
+        want = _accessor(gp, mp.primitives[0].attributes.POSITION)
+        tri_p = _canonical(want[_accessor(gp, mp.primitives[0].indices).reshape(-1, 3)])
+        tri_d = _canonical(np.asarray(dec.points)[np.asarray(dec.faces)])
+        assert_allclose(tri_d, tri_p, atol=2e-3)  # 16-bit positions over a 2 m box
+        acc = gd.accessors[md.primitives[0].attributes.POSITION]
+        assert acc.bufferView is None and acc.count == len(dec.points)
+
+
+def _canonical(tris: np.ndarray) -> np.ndarray:
+    """(t, 3, 3) triangles → rows sorted, each rotated (winding kept) to start at its
+    lexicographically smallest corner, rounded to the millimetre."""
+    r = np.round(tris, 3)
+    out = []
+    for t in r:
+        k = min(range(3), key=lambda i: tuple(t[i]))
+        out.append(np.roll(t, -k, axis=0).reshape(-1))
+    out = np.array(out)
+    return out[np.lexsort(out.T[::-1])]

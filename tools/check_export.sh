@@ -56,6 +56,7 @@ cli export "$TEMPLE" -o "$E/temple_nodes.glb" --no-gpu-instancing --force
 cli export "$TEMPLE" -o "$E/temple.gltf" --force
 cli export "$TEMPLE" -o "$E/temple_bare_stone.glb" --variant hyp_finish_bare_stone=alternative --force
 cli export "$TEMPLE" -o "$E/temple_low.glb" --lod low --force
+cli export "$TEMPLE" -o "$E/temple_draco.glb" --compress draco --force
 cli export "$CITY" -o "$E/city.glb" --force
 cli export "$CITY" -o "$E/city_low.glb" --lod low --force
 cli export "$WORK/city/PortunusTemple/IonicColumn/IonicColumn.usda" -o "$E/asset.glb" --force
@@ -72,6 +73,8 @@ step "three.js GLTFLoader in headless Chromium"
 mkdir -p "$(dirname "$PNG")"
 node "$ROOT/tools/node/render.mjs" "$E/temple_bare_stone.glb" "$PNG" --chromium "$CHROMIUM" \
   || fail=1
+node "$ROOT/tools/node/render.mjs" "$E/temple_draco.glb" "$E/temple_draco.png" \
+  --chromium "$CHROMIUM" || fail=1  # Draco decoded by three.js's DRACOLoader
 
 step "Blender import"
 TRIS=$("$PY" -c "from ionic_usd.usd.reader import read_scene; print(read_scene('$TEMPLE').n_triangles)")

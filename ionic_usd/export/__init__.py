@@ -35,6 +35,7 @@ def export_scene(
     variants: Mapping[str, str] | None = None,
     lod: str | None = None,
     gpu_instancing: bool = True,
+    compress: str | None = None,
     scale: float = 1.0,
     force: bool = False,
 ) -> ExportResult:
@@ -47,6 +48,7 @@ def export_scene(
     variants : ``{set: value}`` selected on every prim that has the set (default: authored)
     lod : shorthand for ``variants["lod"]``
     gpu_instancing : glTF only: ``EXT_mesh_gpu_instancing`` for repeated meshes
+    compress : glTF only: None or ``"draco"`` (KHR_draco_mesh_compression, needs DracoPy)
     scale : STL/3MF only: model scale (1:20 → 0.05)
     """
     out = check_export_path(output, force=force)
@@ -56,7 +58,8 @@ def export_scene(
         from ionic_usd.usd.reader import read_scene
 
         s = read_scene(scene, variants=variants, lod=lod)
-        return ExportResult(out, fmt, write_gltf(s, out, gpu_instancing=gpu_instancing))
+        return ExportResult(out, fmt, write_gltf(s, out, gpu_instancing=gpu_instancing,
+                                                 compress=compress))
     if fmt == "usdz":
         from ionic_usd.usd.package import write_usdz
 

@@ -7,9 +7,25 @@ import secrets
 from collections.abc import Callable
 from pathlib import Path
 
-from ionic_usd.errors import OutputExistsError, ParameterError
+from ionic_usd.errors import IonicError, OutputExistsError, ParameterError
 
-__all__ = ["EXPORT_FORMATS", "check_export_path", "atomic_write"]
+__all__ = ["EXPORT_FORMATS", "MissingDependencyError", "check_export_path", "atomic_write",
+           "require"]
+
+
+class MissingDependencyError(IonicError, RuntimeError):
+    """An optional library an export needs is not installed (names what to install)."""
+
+
+def require(module: str, what: str):
+    """Import ``module`` or raise MissingDependencyError naming the ``export`` extra."""
+    import importlib  # noqa: PLC0415
+
+    try:
+        return importlib.import_module(module)
+    except ImportError:
+        raise MissingDependencyError(f"{what} needs the Python package {module!r}: "
+                                     "pip install 'ionic_usd[export]'") from None
 
 EXPORT_FORMATS = (".glb", ".gltf", ".usdz", ".stl", ".3mf")
 

@@ -38,11 +38,18 @@ def cmd_export(args: argparse.Namespace) -> int:
     if scale != 1.0 and fmt not in (".stl", ".3mf"):
         raise ParameterError("--scale", args.scale, "1 unless the output is .stl or .3mf "
                              "(glTF and usdz stay in metres)")
+    if args.compress != "none" and fmt not in (".glb", ".gltf"):
+        raise ParameterError("--compress", args.compress, "none unless the output is glTF")
+    if args.compress == "draco":
+        from ionic_usd.export._io import require
+
+        require("DracoPy", "--compress draco")  # before any work
     check_export_path(args.output, force=args.force)
     if not Path(args.scene).is_file():
         raise ParameterError("scene", str(args.scene), "an existing USD file")
     res = export_scene(args.scene, args.output, variants=variants, lod=args.lod,
-                       gpu_instancing=not args.no_gpu_instancing, scale=scale,
+                       gpu_instancing=not args.no_gpu_instancing,
+                       compress=None if args.compress == "none" else args.compress, scale=scale,
                        force=args.force)
     r = res.report
     if res.format in ("glb", "gltf"):
@@ -87,6 +94,9 @@ def add_parser(sub, parser_class) -> None:
     p.add_argument("--no-gpu-instancing", action="store_true",
                    help="glTF: one plain node per copy instead of EXT_mesh_gpu_instancing "
                    "(meshes are still shared)")
+    p.add_argument("--compress", choices=["none", "draco"], default="none",
+                   help="glTF: compress meshes with Draco (KHR_draco_mesh_compression, a "
+                   "required extension; needs DracoPy) [default none]")
     p.add_argument("--scale", default="1",
                    help="STL/3MF: model scale, a number or ratio (1:20 = 0.05) [default 1]")
     p.add_argument("--force", action="store_true", help="overwrite an existing output file")

@@ -36,8 +36,8 @@ from pathlib import Path
 import numpy as np
 
 from ionic_usd import __version__
-from ionic_usd.errors import GeometryError, IonicError
-from ionic_usd.export._io import atomic_write
+from ionic_usd.errors import GeometryError, IonicError, ParameterError
+from ionic_usd.export._io import atomic_write, require
 from ionic_usd.geometry.mesh import triangulate_fan
 from ionic_usd.usd.reader import MaterialData, Scene, SceneMesh, TextureRef
 
@@ -196,13 +196,13 @@ def trs_decompose(matrix: np.ndarray, tol: float = 1e-5):
 # -- document builder --------------------------------------------------------------------------
 class _Builder:
     def __init__(self) -> None:
-        import pygltflib as g  # noqa: PLC0415
-
+        g = require("pygltflib", "glTF export")
         self.g = g
         self.doc = g.GLTF2(asset=g.Asset(version="2.0",
                                          generator=f"ionic_usd {__version__} (pygltflib)"))
         self.blob = bytearray()
         self.used: set[str] = set()
+        self.required: set[str] = set()
         self._images: dict[str, int] = {}
         self._textures: dict[tuple, int] = {}
         self._samplers: dict[tuple, int] = {}
@@ -397,6 +397,7 @@ def write_gltf(
     *,
     gpu_instancing: bool = True,
     binary: bool | None = None,
+    compress: str | None = None,
 ) -> GltfReport:
     """Write ``scene`` as glTF 2.0 (``.glb`` binary, ``.gltf`` JSON with embedded buffer).
 
@@ -407,7 +408,12 @@ def write_gltf(
     gpu_instancing : keep repeated meshes as ``EXT_mesh_gpu_instancing`` nodes (else one plain
         node per copy, the mesh still shared)
     binary : GLB or JSON (default: from the extension)
+    compress : None, or ``"draco"`` (KHR_draco_mesh_compression, needs DracoPy; see
+        :mod:`ionic_usd.export.draco`)
     """
+    if compress not in (None, "none", "draco"):
+        raise ParameterError("--compress", compress, "none or draco")
+    compress = None if compress == "none" else compress
     t0 = time.perf_counter()
     path = Path(path)
     binary = path.suffix.lower() != ".gltf" if binary is None else binary
@@ -424,15 +430,24 @@ def write_gltf(
         pos, nrm, uv, tan, tris = _streams(m)
         if len(tris) == 0:
             continue
-        attrs = g.Attributes(POSITION=b.accessor(pos, "VEC3", _ARRAY, bounds=True),
-                             NORMAL=b.accessor(nrm, "VEC3", _ARRAY))
-        if uv is not None:
-            attrs.TEXCOORD_0 = b.accessor(uv, "VEC2", _ARRAY)
-            attrs.TANGENT = b.accessor(tan, "VEC4", _ARRAY)
-        itype = np.uint16 if len(pos) < 65536 else np.uint32
-        prim = g.Primitive(attributes=attrs, mode=4,
-                           indices=b.accessor(tris.reshape(-1).astype(itype), "SCALAR",
-                                              _ELEMENTS))
+        if compress == "draco":
+            from ionic_usd.export.draco import DRACO, draco_primitive  # noqa: PLC0415
+
+            attrs, indices, ext, _ = draco_primitive(b, pos, nrm, uv, tan, tris)
+            prim = g.Primitive(attributes=attrs, mode=4, indices=indices,
+                               extensions={DRACO: ext})
+            b.used.add(DRACO)
+            b.required.add(DRACO)
+        else:
+            attrs = g.Attributes(POSITION=b.accessor(pos, "VEC3", _ARRAY, bounds=True),
+                                 NORMAL=b.accessor(nrm, "VEC3", _ARRAY))
+            if uv is not None:
+                attrs.TEXCOORD_0 = b.accessor(uv, "VEC2", _ARRAY)
+                attrs.TANGENT = b.accessor(tan, "VEC4", _ARRAY)
+            itype = np.uint16 if len(pos) < 65536 else np.uint32
+            prim = g.Primitive(attributes=attrs, mode=4,
+                               indices=b.accessor(tris.reshape(-1).astype(itype), "SCALAR",
+                                                  _ELEMENTS))
         if m.material is not None and m.material in scene.materials:
             mk = (m.material, m.double_sided)
             if mk not in mat_index:
@@ -500,6 +515,8 @@ def write_gltf(
                                         "requestedVariants": dict(scene.variants)}))
     b.doc.scene = 0
     b.doc.extensionsUsed = sorted(b.used)
+    if b.required:
+        b.doc.extensionsRequired = sorted(b.required)
     while len(b.blob) % 4:
         b.blob.append(0)
     if binary:

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from ionic_usd.errors import GeometryError, ParameterError
-from ionic_usd.export._io import atomic_write
+from ionic_usd.export._io import atomic_write, require
 from ionic_usd.geometry.mesh import triangulate_fan
 from ionic_usd.usd.reader import Scene
 
@@ -72,8 +72,7 @@ def _body_key(p, root: str) -> str:
 
 def scene_solids(scene: Scene, *, scale: float = 1.0) -> list[Solid]:
     """Union each body's parts (see the module docstring) at ``scale``, in mm, Z up."""
-    import manifold3d as m3  # noqa: PLC0415
-
+    m3 = require("manifold3d", "STL/3MF export (the union of a column's parts)")
     if not (np.isfinite(scale) and scale > 0):
         raise ParameterError("scale", scale, "a finite number > 0")
     root = Path(scene.source).stem

@@ -30,6 +30,7 @@ const page = `<!doctype html><html><head><meta charset="utf-8">
 <body style="margin:0;background:#000"><script type="module">
 import * as THREE from "three";
 import { GLTFLoader } from "three/addons/loaders/GLTFLoader.js";
+import { DRACOLoader } from "three/addons/loaders/DRACOLoader.js";
 import { RoomEnvironment } from "three/addons/environments/RoomEnvironment.js";
 const W = ${width}, H = ${height};
 try {
@@ -45,7 +46,9 @@ try {
   const sun = new THREE.DirectionalLight(0xfff4e0, 2.2);
   sun.position.set(-30, 50, 40);
   scene.add(sun);
-  const gltf = await new GLTFLoader().loadAsync("/model.glb");
+  const loader = new GLTFLoader();
+  loader.setDRACOLoader(new DRACOLoader().setDecoderPath("/three/examples/jsm/libs/draco/gltf/"));
+  const gltf = await loader.loadAsync("/model.glb");
   scene.add(gltf.scene);
   const stats = { meshes: 0, instancedMeshes: 0, instances: 0, triangles: 0, textures: 0,
                   texturesDecoded: 0, extras: Object.keys(gltf.scene.userData || {}).length };
@@ -95,7 +98,7 @@ try {
 }
 </script></body></html>`;
 
-const types = { ".js": "text/javascript", ".mjs": "text/javascript", ".html": "text/html",
+const types = { ".wasm": "application/wasm", ".js": "text/javascript", ".mjs": "text/javascript", ".html": "text/html",
                 ".glb": "model/gltf-binary", ".json": "application/json" };
 const server = http.createServer((req, res) => {
   const url = decodeURIComponent(req.url.split("?")[0]);

@@ -35,9 +35,11 @@ for (const file of files) {
       `${info.totalVertexCount} vertices, ${info.materialCount} materials, ` +
       `extensions: ${(info.extensionsUsed || []).join(", ") || "none"}`
   );
-  for (const m of s.messages) {
-    if (m.severity <= 1) console.log(`  [${m.severity === 0 ? "error" : "warning"}] ${m.code} ${m.pointer || ""}: ${m.message}`);
+  const shown = s.messages.filter((m) => m.severity <= 1);
+  for (const m of shown.slice(0, 12)) {
+    console.log(`  [${m.severity === 0 ? "error" : "warning"}] ${m.code} ${m.pointer || ""}: ${m.message}`);
   }
+  if (shown.length > 12) console.log(`  … ${shown.length - 12} more errors and warnings (--json for all)`);
   if (s.numErrors > 0) failed = true;
 }
 if (jsonOut) fs.writeFileSync(jsonOut, JSON.stringify(reports, null, 1));
