@@ -392,6 +392,9 @@ def build_parser() -> argparse.ArgumentParser:
     from ionic_usd.evaluate.commands import add_parsers
 
     add_parsers(sub, _Parser)
+    from ionic_usd.export import add_export_parser
+
+    add_export_parser(sub, _Parser)
     return parser
 
 
