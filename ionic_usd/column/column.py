@@ -260,7 +260,7 @@ def column_params_from_mapping(data: dict, *, context: str = "column config",
     are errors naming them.
     """
     from ionic_usd.column.volute import VoluteParams
-    from ionic_usd.params import dataclass_from_mapping
+    from ionic_usd.params import check_column_tables, dataclass_from_mapping
 
     cur = base or portunus_column_params()
     unknown = sorted(set(data) - {"column", "shaft", "capital", "volute"})
@@ -270,6 +270,7 @@ def column_params_from_mapping(data: dict, *, context: str = "column config",
     for table in ("column", "shaft", "capital", "volute"):
         if table in data and not isinstance(data[table], dict):
             raise ParameterError(table, data[table], "a table", context=context)
+    check_column_tables(data, context=context)  # types and ranges, at the boundary
     col = dict(data.get("column", {}))
     bad = sorted(set(col) - set(COLUMN_DOCS))
     if bad:
