@@ -44,6 +44,7 @@ __all__ = [
     "check_output_folder",
     "clean_stale_temporaries",
     "generated_files",
+    "recover_folder",
     "replace_folder",
     "sha256_file",
     "verified_cache",
