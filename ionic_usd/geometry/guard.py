@@ -18,7 +18,6 @@ from typing import TypeVar
 import numpy as np
 
 from ionic_usd.errors import IonicError, ParameterError
-from ionic_usd.geometry.analysis import inspect_mesh
 from ionic_usd.geometry.mesh import Mesh
 
 __all__ = ["MAX_EXTENT", "check_solid", "guarded"]
@@ -42,14 +41,22 @@ def solid_problem(mesh: Mesh) -> str | None:
         arr = getattr(mesh, name, None)
         if arr is not None and not np.isfinite(np.asarray(arr)).all():
             return f"its {name} are not finite (degenerate faces)"
-    rep = inspect_mesh(mesh)
-    if not rep.closed:
-        return (f"it is not closed ({rep.boundary_edges} open, {rep.nonmanifold_edges} "
-                "non-manifold edges)")
-    if not rep.consistent:
-        return f"its faces are not consistently wound ({rep.repeated_directed_edges} edges)"
-    if not rep.signed_volume > 0:
-        return f"it is inside out (volume {rep.signed_volume:.3g} m³)"
+    tri = mesh.triangles
+    n = np.int64(mesh.n_points)
+    a = tri.astype(np.int64)
+    b = np.roll(a, -1, axis=1)
+    fwd = np.sort((a * n + b).ravel())  # directed edges as one int64 key each
+    rev = np.sort((b * n + a).ravel())
+    repeated = int(np.count_nonzero(fwd[1:] == fwd[:-1]))
+    if repeated:
+        return f"its faces are not consistently wound or not manifold ({repeated} edges)"
+    if not np.array_equal(fwd, rev):  # every edge must meet its reverse exactly once
+        return f"it is not closed ({int(np.count_nonzero(fwd != rev))} open edges)"
+    p = mesh.points
+    v = float(np.einsum("ij,ij->i", p[tri[:, 0]], np.cross(p[tri[:, 1]], p[tri[:, 2]])).sum()
+              / 6.0)
+    if not v > 0:
+        return f"it is inside out (volume {v:.3g} m³)"
     return None
 
 

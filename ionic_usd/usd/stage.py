@@ -94,9 +94,10 @@ def save_layer(layer: Sdf.Layer, path: str | os.PathLike, *, force: bool = False
         try:
             ok = layer.Export(str(tmp))
         except Exception as exc:  # pxr.Tf.ErrorException: OS errors surface as this
-            raise UsdAuthoringError(f"could not write {p}: {_first_line(exc)}") from None
+            why = _first_line(exc).replace(str(tmp), p.name)
+            raise UsdAuthoringError(f"could not write {p}: {why}{_space_hint(p)}") from None
         if not ok:
-            raise UsdAuthoringError(f"could not write {p}")
+            raise UsdAuthoringError(f"could not write {p}{_space_hint(p)}")
     # a later Sdf.Layer.FindOrOpen of this path must see the new content, not a cached one
     cached = Sdf.Layer.Find(str(p))
     if cached is not None:
@@ -105,8 +106,20 @@ def save_layer(layer: Sdf.Layer, path: str | os.PathLike, *, force: bool = False
 
 
 def _first_line(exc: BaseException) -> str:
+    """The message of a ``Tf.ErrorException`` without its C++ location."""
     lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
-    return lines[-1] if lines else type(exc).__name__
+    text = lines[-1] if lines else type(exc).__name__
+    if text.startswith("Error in ") and " : " in text:
+        text = text.rsplit(" : ", 1)[1].strip("'\" ")
+    return text
+
+
+def _space_hint(p: Path) -> str:
+    try:
+        st = os.statvfs(p.parent)
+    except OSError:
+        return ""
+    return " (No space left on device)" if st.f_bavail * st.f_frsize < (1 << 20) else ""
 
 
 def save_stage(stage: Usd.Stage, path: str | os.PathLike, *, force: bool = False) -> Path:
