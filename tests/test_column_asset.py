@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+import json
 
 import numpy as np
 import pytest
@@ -211,8 +212,17 @@ def test_force_replaces_atomically(tmp_path):
     with pytest.raises(OutputExistsError):
         build_column_asset(dest, opts)
     assert (dest / "stray.txt").exists()
+    # a generated file the next build no longer makes goes; the user's own file stays
+    (dest / "Payload" / "Textures" / "old_generated.png").write_bytes(b"x")
+    from ionic_usd.io import MANIFEST_NAME, generated_files
+
+    listed = generated_files(dest)
+    assert "Payload/Geometry.usdc" in listed and "stray.txt" not in listed
+    (dest / MANIFEST_NAME).write_text(json.dumps(
+        {"files": [*listed, "Payload/Textures/old_generated.png"]}))
     build_column_asset(dest, opts, force=True)
-    assert not (dest / "stray.txt").exists()
+    assert (dest / "stray.txt").read_text() == "from the old asset"
+    assert not (dest / "Payload" / "Textures" / "old_generated.png").exists()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["IonicColumn"]
 
 

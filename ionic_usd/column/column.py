@@ -24,6 +24,7 @@ from ionic_usd.column.base import BaseParams, build_base, load_base_preset
 from ionic_usd.column.capital import CapitalParams, build_capital, capital_height
 from ionic_usd.column.shaft import ShaftParams, build_shaft
 from ionic_usd.errors import ParameterError
+from ionic_usd.geometry.guard import guarded
 from ionic_usd.geometry.mesh import Mesh, merge
 
 __all__ = [
@@ -122,8 +123,11 @@ class ColumnParams:
                 bp = BaseParams(grammar=name, **common)
             else:
                 raise
+        h = guarded(lambda: bp.height, "base", name)
+        if not (math.isfinite(h) and h > 0):
+            raise ParameterError("base", name, "a base grammar with a height > 0 (m)")
         if self.base_height is not None:
-            bp = dataclasses.replace(bp, scale=bp.scale * self.base_height / bp.height)
+            bp = dataclasses.replace(bp, scale=bp.scale * self.base_height / h)
         return bp
 
     def shaft_params(self) -> ShaftParams:
@@ -178,19 +182,29 @@ class Column:
 
 
 def build_base_part(params: ColumnParams, base: str | None = None, **kwargs) -> Mesh:
-    return build_base(params.base_params(base), name="base", **kwargs)
+    """The base as a closed, outward solid (or a ParameterError naming ``base``)."""
+    name = params.base if base is None else base
+    return guarded(lambda: build_base(params.base_params(base), name="base", **kwargs),
+                   "base", name)
 
 
 def build_shaft_part(params: ColumnParams, base_height: float, **kwargs) -> Mesh:
-    return build_shaft(params.shaft_params(), y_offset=base_height, name="shaft", **kwargs)
+    """The shaft lifted by ``base_height`` (a ParameterError naming ``shaft`` if it fails)."""
+    return guarded(lambda: build_shaft(params.shaft_params(), y_offset=base_height,
+                                       name="shaft", **kwargs), "shaft", "parameters")
 
 
 def build_capital_parts(params: ColumnParams, y: float, scroll: str | None = None
                         ) -> tuple[Mesh, Mesh]:
     """(body: abacus, echinus, volutes, canales; scroll: the two bolsters) lifted to ``y``."""
     from ionic_usd.geometry.mesh import transform
+    from ionic_usd.grammar.scroll import scroll_preset_names
 
-    parts = build_capital(params.capital_params(scroll), top_radius=params.shaft.top_radius)
+    cp = params.capital_params(scroll)
+    text = _scroll_text(cp)  # a user's ring grammar is the likely culprit, else the capital
+    parts = guarded(lambda: build_capital(cp, top_radius=params.shaft.top_radius),
+                    "capital" if text in scroll_preset_names() else "scroll", text,
+                    check=lambda c: [c.abacus, c.echinus, *c.volutes, *c.canales, *c.bolsters])
     lift = [[1, 0, 0, 0], [0, 1, 0, y], [0, 0, 1, 0], [0, 0, 0, 1.0]]
     body = merge([parts.abacus, parts.echinus, *parts.volutes, *parts.canales], name="capital")
     scroll_mesh = merge(list(parts.bolsters), name="scroll")
@@ -200,13 +214,20 @@ def build_capital_parts(params: ColumnParams, y: float, scroll: str | None = Non
 def build_column(params: ColumnParams | None = None) -> Column:
     """Build every part of a column at its LOD, stacked on the +Y axis."""
     params = params or portunus_column_params()
-    bp = params.base_params()
-    base = build_base(bp, name="base")
+    bp = guarded(params.base_params, "base", params.base)
+    if not (bp.height > 0 and math.isfinite(bp.height)):
+        raise ParameterError("base", params.base, "a base grammar with a height > 0")
+    base = build_base_part(params)
     shaft = build_shaft_part(params, bp.height)
     y_cap = bp.height + params.shaft.length
     body, scroll = build_capital_parts(params, y_cap)
     return Column(params, base, shaft, body, scroll, bp.height, params.shaft.length,
                   capital_height(params.capital))
+
+
+def _scroll_text(cp: CapitalParams) -> str:
+    s = cp.scroll
+    return s if isinstance(s, str) else s.to_string()
 
 
 def portunus_column_params(
@@ -260,7 +281,7 @@ def column_params_from_mapping(data: dict, *, context: str = "column config",
     are errors naming them.
     """
     from ionic_usd.column.volute import VoluteParams
-    from ionic_usd.params import dataclass_from_mapping
+    from ionic_usd.params import check_column_tables, dataclass_from_mapping
 
     cur = base or portunus_column_params()
     unknown = sorted(set(data) - {"column", "shaft", "capital", "volute"})
@@ -270,6 +291,7 @@ def column_params_from_mapping(data: dict, *, context: str = "column config",
     for table in ("column", "shaft", "capital", "volute"):
         if table in data and not isinstance(data[table], dict):
             raise ParameterError(table, data[table], "a table", context=context)
+    check_column_tables(data, context=context)  # types and ranges, at the boundary
     col = dict(data.get("column", {}))
     bad = sorted(set(col) - set(COLUMN_DOCS))
     if bad:

@@ -184,8 +184,9 @@ class Hypothesis:
 
     def __post_init__(self) -> None:
         ctx = f"hypothesis {self.id!r}"
-        if not isinstance(self.id, str) or not self.id:
-            raise ParameterError("id", self.id, "a non-empty string", context=ctx)
+        from ionic_usd.params import check_identifier
+
+        check_identifier("id", self.id, context=ctx)  # it names a file: never a path
         object.__setattr__(self, "certainty", _enum(Certainty, self.certainty, "certainty", ctx))
         object.__setattr__(self, "sources", tuple(self.sources))
         if not self.changes:
@@ -645,11 +646,16 @@ def build_layout(
     }
     for layer, cs in (extra_cuboids or {}).items():
         groups[Layer(layer)].extend(cs)
-    names = [c.name for cs in groups.values() for c in cs]
-    dup = sorted({n for n in names if names.count(n) > 1})
-    if dup:
-        raise ParameterError("cuboid name", dup[0], "a name not used by another cuboid",
-                             context=f"temple {params.name!r}")
+    from ionic_usd.params import prim_key
+
+    seen: dict[str, str] = {}  # two names that author the same prim would lose a cuboid
+    for c in (c for cs in groups.values() for c in cs):
+        if prim_key(c.name) in seen:
+            other = seen[prim_key(c.name)]
+            raise ParameterError("cuboid name", c.name, f"a name distinct from {other!r} "
+                                 "(both would author the same prim)",
+                                 context=f"temple {params.name!r}")
+        seen[prim_key(c.name)] = c.name
     return TempleLayout(params.name, {k: tuple(v) for k, v in groups.items()},
                         tuple(_columns(params)), params, hyps, applied)
 
@@ -676,10 +682,17 @@ def _hypotheses(entries, context: str) -> tuple[Hypothesis, ...]:
                                   e["certainty"], e["changes"]))
         except ParameterError as exc:
             raise ParameterError(exc.name, exc.value, exc.valid, context=where) from None
-    ids = [h.id for h in out]
-    for h in ids:
-        if ids.count(h) > 1:
-            raise ParameterError("id", h, "an id used once", context=f"{context} [[hypothesis]]")
+    from ionic_usd.params import check_identifier, prim_key
+
+    seen: dict[str, str] = {}  # ids name files and variant sets: hyp_a_b for a-b and a_b
+    for h in out:
+        check_identifier("id", h.id, context=f"{context} [[hypothesis]]")
+        if prim_key(h.id) in seen:
+            other = seen[prim_key(h.id)]
+            raise ParameterError("id", h.id, f"an id distinct from {other!r} (both would name "
+                                 "the same layer file and variant set)",
+                                 context=f"{context} [[hypothesis]]")
+        seen[prim_key(h.id)] = h.id
     return tuple(out)
 
 
@@ -694,7 +707,10 @@ def layout_from_mapping(
     data: Mapping[str, Any], *, context: str = "temple", apply: Iterable[str] = ()
 ) -> TempleLayout:
     """Build a layout from already-parsed TOML tables (see :func:`layout_from_toml`)."""
+    from ionic_usd.params import check_temple_tables
+
     ctx = context
+    check_temple_tables(data, context=ctx)  # types and ranges of every table, at the boundary
     params = params_from_tables(data, context=ctx)
     hyps = _hypotheses(data.get("hypothesis", []), ctx)
     extra = cuboids_from_tables(data.get("cuboid", []), context=ctx)

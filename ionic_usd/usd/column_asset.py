@@ -296,20 +296,20 @@ def copy_stone_textures(folder: Path, style: str, size: int, seed: int, *,
     """
     import shutil
 
-    from ionic_usd.texture.stone import write_stone_textures
+    from ionic_usd.io import verified_cache
+    from ionic_usd.texture.stone import TextureError, write_stone_textures
     from ionic_usd.texture.uv import default_cache_folder
 
     key = f"{style}-{size}-{seed}-{__version__}{'-tx' if make_tx else ''}"
     store = default_cache_folder().parent / "textures" / key
     names = [f"{style}_{r}.{e}" for r in ("basecolor", "roughness", "normal")
              for e in (("png", "tx") if make_tx else ("png",))]
-    if not all((store / n).is_file() for n in names):
-        try:
-            store.mkdir(parents=True, exist_ok=True)
-            write_stone_textures(store, style, size, seed, make_tx=make_tx)
-        except OSError:  # an unwritable cache: write straight into the asset
-            write_stone_textures(folder, style, size, seed, make_tx=make_tx)
-            return [folder / n for n in names]
+    try:  # verified on read (SHA-256 manifest), written atomically, rebuilt when bad
+        store = verified_cache(store, lambda tmp: write_stone_textures(
+            tmp, style, size, seed, make_tx=make_tx))
+    except (OSError, TextureError):  # an unwritable or full cache: write into the asset
+        write_stone_textures(folder, style, size, seed, make_tx=make_tx)
+        return [folder / n for n in names]
     folder.mkdir(parents=True, exist_ok=True)
     out = []
     for n in names:

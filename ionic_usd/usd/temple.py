@@ -267,9 +267,6 @@ def compose_temple(
                                                seed=seed)
     if opts.params != column:
         opts = dataclasses.replace(opts, params=column)
-    user_bytes = None
-    if (dest / OVERRIDES_LAYER).is_file():
-        user_bytes = (dest / OVERRIDES_LAYER).read_bytes()
     base_meshes = _cuboid_meshes(layout)
     hyp_layers = hypothesis_layers(layout)
     baseline_material = FINISHES[BASELINE_FINISH][0]
@@ -314,13 +311,12 @@ def compose_temple(
         spec.customData = {"ionic_usd": {"hypotheses": listing, "temple": layout.name,
                                          "baseline_finish": BASELINE_FINISH}}
         save_layer(root, tmp / ROOT_LAYER)
-        if user_bytes is not None:
-            (tmp / OVERRIDES_LAYER).write_bytes(user_bytes)
-        else:
-            save_layer(_user_overrides_layer(), tmp / OVERRIDES_LAYER)
+        # created only where absent: an existing overrides.usda (or symlink) is never touched
+        save_layer(_user_overrides_layer(), tmp / OVERRIDES_LAYER)
         _check_resolves(tmp / ROOT_LAYER)
 
-    replace_folder(build, dest, force=force)
+    replace_folder(build, dest, force=force, keep_existing=(OVERRIDES_LAYER,),
+                   root_files=(ROOT_LAYER,))
     root_path = dest / ROOT_LAYER
     stage = Usd.Stage.Open(str(root_path))
     if stage is None:
