@@ -49,7 +49,9 @@ class Lod:
     """Sampling of every part for one level of detail.
 
     ``flute_slices``/``fillet_ratio`` are the shaft's $h/$i; ``base_slices`` the rows per curved
-    base floor; ``spiral_samples``, ``ring_segments``, ``bolster_rows`` the capital's.
+    base floor; ``spiral_samples``, ``ring_segments``, ``bolster_rows`` the capital's;
+    ``shaft_rows`` the rows along the fluted body (one row of 7 m long, 2 cm wide triangles is
+    fine for a renderer but poor for displacement, booleans and LOD tools).
     """
 
     flute_slices: int
@@ -58,14 +60,15 @@ class Lod:
     spiral_samples: int
     ring_segments: int
     bolster_rows: int
+    shaft_rows: int = 1
 
 
 # Triangle budgets (default Portunus column, measured by tools/bench_column.py):
 # high ≈ 40k, medium ≈ 14k, low ≈ 6k triangles.
 LODS: dict[str, Lod] = {
-    "high": Lod(8, 4, 8, 192, 48, 32),
-    "medium": Lod(4, 2, 4, 96, 24, 16),
-    "low": Lod(2, 1, 2, 48, 16, 8),
+    "high": Lod(8, 4, 8, 192, 48, 32, 24),  # rows ≈ 0.29 m apart
+    "medium": Lod(4, 2, 4, 96, 24, 16, 8),  # ≈ 0.88 m
+    "low": Lod(2, 1, 2, 48, 16, 8, 3),  # ≈ 2.3 m
 }
 
 
@@ -131,7 +134,8 @@ class ColumnParams:
         if lod is None:
             return self.shaft
         return dataclasses.replace(self.shaft, flute_slices=lod.flute_slices,
-                                   flute_slices_per_fillet_slice=lod.fillet_ratio)
+                                   flute_slices_per_fillet_slice=lod.fillet_ratio,
+                                   body_rows=lod.shaft_rows)
 
     def capital_params(self, scroll: str | None = None) -> CapitalParams:
         lod = _lod(self.lod)
@@ -144,6 +148,24 @@ class ColumnParams:
 
     def with_lod(self, lod: str) -> ColumnParams:
         return dataclasses.replace(self, lod=lod)
+
+    def with_flutes(self, flutes: int) -> ColumnParams:
+        """The same column with another flute count.
+
+        The flute/period ratio is kept; the fluted body $a is re-derived so the shaft keeps its
+        length (wider flutes have taller rounded ends), and the bottom/top rings keep their
+        vertex count, so every base variant fits every flute variant.
+        """
+        sh = self.shaft
+        if flutes == sh.flutes:
+            return self
+        ratio = sh.flute_angle / (360.0 / sh.flutes)
+        probe = dataclasses.replace(sh, flutes=flutes, flute_angle=ratio * 360.0 / flutes,
+                                    ring_vertices=self.shaft_params().ring_segments)
+        height = sh.length - (probe.length - probe.height)
+        if height <= 0:
+            raise ParameterError("flutes", flutes, "a count whose flute ends fit the shaft")
+        return dataclasses.replace(self, shaft=dataclasses.replace(probe, height=height))
 
 
 @dataclass(frozen=True)

@@ -139,10 +139,7 @@ def _engage(mesh: Mesh) -> Mesh:
 
 
 def _flute_params(params: ColumnParams, flutes: int) -> ColumnParams:
-    period = 360.0 / flutes
-    ratio = params.shaft.flute_angle / (360.0 / params.shaft.flutes)
-    shaft = dataclasses.replace(params.shaft, flutes=flutes, flute_angle=ratio * period)
-    return dataclasses.replace(params, shaft=shaft)
+    return params.with_flutes(flutes)
 
 
 def column_asset_meshes(opts: ColumnAssetOptions) -> list[AssetMesh]:
