@@ -20,11 +20,14 @@ import dataclasses
 import math
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from ionic_usd.column.base import BaseParams, build_base, load_base_preset
 from ionic_usd.column.capital import CapitalParams, build_capital, capital_height
 from ionic_usd.column.shaft import ShaftParams, build_shaft
 from ionic_usd.errors import ParameterError
-from ionic_usd.geometry.mesh import Mesh, merge
+from ionic_usd.geometry.boolean import union
+from ionic_usd.geometry.mesh import Mesh
 
 __all__ = [
     "Lod",
@@ -176,7 +179,6 @@ class Column:
     base: Mesh
     shaft: Mesh
     capital_body: Mesh
-    capital_scroll: Mesh
     base_height: float
     shaft_length: float
     capital_height: float
@@ -187,12 +189,12 @@ class Column:
 
     @property
     def capital(self) -> Mesh:
-        return merge([self.capital_body, self.capital_scroll], name="capital")
+        """The capital: one solid (abacus, echinus, volutes, canales and bolsters united)."""
+        return self.capital_body
 
     def parts(self) -> dict[str, Mesh]:
-        """Prim name → mesh: ``Base``, ``Shaft``, ``CapitalBody``, ``CapitalScroll``."""
-        return {"Base": self.base, "Shaft": self.shaft, "CapitalBody": self.capital_body,
-                "CapitalScroll": self.capital_scroll}
+        """Prim name → mesh: ``Base``, ``Shaft``, ``CapitalBody`` (each one closed solid)."""
+        return {"Base": self.base, "Shaft": self.shaft, "CapitalBody": self.capital_body}
 
     @property
     def n_triangles(self) -> int:
@@ -207,16 +209,15 @@ def build_shaft_part(params: ColumnParams, base_height: float, **kwargs) -> Mesh
     return build_shaft(params.shaft_params(), y_offset=base_height, name="shaft", **kwargs)
 
 
-def build_capital_parts(params: ColumnParams, y: float, scroll: str | None = None
-                        ) -> tuple[Mesh, Mesh]:
-    """(body: abacus, echinus, volutes, canales; scroll: the two bolsters) lifted to ``y``."""
-    from ionic_usd.geometry.mesh import transform
-
-    parts = build_capital(params.capital_params(scroll), top_radius=params.shaft.top_radius)
-    lift = [[1, 0, 0, 0], [0, 1, 0, y], [0, 0, 1, 0], [0, 0, 0, 1.0]]
-    body = merge([parts.abacus, parts.echinus, *parts.volutes, *parts.canales], name="capital")
-    scroll_mesh = merge(list(parts.bolsters), name="scroll")
-    return transform(body, lift), transform(scroll_mesh, lift)
+def build_capital_part(params: ColumnParams, y: float, scroll: str | None = None, *,
+                       angle: bool = False) -> Mesh:
+    """The capital lifted to ``y``: abacus, echinus, volutes, canales and the scroll's bolsters
+    united into one closed solid (manifold3d); ``angle`` builds the angle capital."""
+    parts = build_capital(params.capital_params(scroll), top_radius=params.shaft.top_radius,
+                          angle=angle)
+    lifted = [m.with_(points=m.points + np.array([0.0, y, 0.0]))
+              for m in parts.as_dict().values()]
+    return union(lifted, name="capital")
 
 
 def build_column(params: ColumnParams | None = None) -> Column:
@@ -226,8 +227,8 @@ def build_column(params: ColumnParams | None = None) -> Column:
     base = build_base(bp, name="base")
     shaft = build_shaft_part(params, bp.height)
     y_cap = bp.height + params.shaft.length
-    body, scroll = build_capital_parts(params, y_cap)
-    return Column(params, base, shaft, body, scroll, bp.height, params.shaft.length,
+    body = build_capital_part(params, y_cap)
+    return Column(params, base, shaft, body, bp.height, params.shaft.length,
                   capital_height(params.capital))
 
 
