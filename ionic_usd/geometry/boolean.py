@@ -66,8 +66,13 @@ def _corner_normals(mesh: Mesh) -> np.ndarray | None:
     return mesh.normals
 
 
-def _to_manifold(mesh: Mesh):
-    """A manifold3d.Manifold with the corner normals as properties 3..5."""
+def _to_manifold(mesh: Mesh, keep_faces: bool = False):
+    """A manifold3d.Manifold with the corner normals as properties 3..5.
+
+    ``keep_faces``: one face id per triangle, so coplanar neighbours keep their edges (a flat
+    top keeps the ring a shaft welds to); otherwise manifold3d merges coplanar triangles into
+    faces and re-triangulates those it cuts (which also resolves touching coplanar parts).
+    """
     import manifold3d
 
     tri = mesh.triangles.astype(np.int64)
@@ -92,6 +97,7 @@ def _to_manifold(mesh: Mesh):
         tri_verts=np.ascontiguousarray(inv.reshape(-1, 3), dtype=np.uint64),
         merge_from_vert=np.ascontiguousarray(dup, dtype=np.uint64),
         merge_to_vert=np.ascontiguousarray(rep[~head], dtype=np.uint64),
+        face_id=np.arange(len(tri), dtype=np.uint64) if keep_faces else None,
     )
     man = manifold3d.Manifold(mm)
     if man.status() != manifold3d.Error.NoError:
@@ -130,12 +136,14 @@ def difference(mesh: Mesh, cutters: list[Mesh], name: str | None = None) -> Mesh
     """Boolean difference ``mesh − cutters`` (closed meshes), normals carried as in :func:`union`.
 
     The faces left by a cutter get its normals reversed (they face into the cutter's void).
+    The triangulation of faces the cutters do not touch is kept as it was (so a ring another
+    part welds to survives).
     """
     import manifold3d
 
-    ops = [_to_manifold(s) for s in split_shells(mesh)]
+    ops = [_to_manifold(s, keep_faces=True) for s in split_shells(mesh)]
     base = manifold3d.Manifold.batch_boolean(ops, manifold3d.OpType.Add)
-    cut = [_to_manifold(s) for m in cutters for s in split_shells(m)]
+    cut = [_to_manifold(s, keep_faces=True) for m in cutters for s in split_shells(m)]
     res = manifold3d.Manifold.batch_boolean([base, *cut], manifold3d.OpType.Subtract)
     if res.is_empty():
         raise GeometryError(f"difference: nothing of mesh {mesh.name!r} is left")
