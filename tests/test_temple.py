@@ -77,7 +77,8 @@ def test_roof_inclined_by_the_documented_pitch(portunus_temple):
     top = pts[np.argsort(pts[:, 1])[-4:]]
     low = pts[np.argsort(pts[:, 1])[-8:-4]]
     slope = (top[:, 1].mean() - low[:, 1].mean()) / abs(top[:, 0].mean() - low[:, 0].mean())
-    assert math.degrees(math.atan(slope)) == pytest.approx(layout.pitch_deg, abs=1e-6)
+    # float32 points (about 1e-6 m at 14 m) over a 5.5 m run: 1e-4 degrees
+    assert math.degrees(math.atan(slope)) == pytest.approx(layout.pitch_deg, abs=1e-4)
     assert layout.pitch_deg == pytest.approx(math.degrees(math.atan(2 / 9)))
 
 

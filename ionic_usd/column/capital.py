@@ -460,7 +460,7 @@ def build_capital(p: CapitalParams | None = None, *, top_radius: float,
               "abacus")
     ech = _echinus(p, float(top_radius), segs)
     if angle:
-        return _angle_capital(p, lay, ab, ech, fr, fl, rl, front, rear, bl)
+        return _angle_capital(p, lay, ab, ech, fr, fl, rl, canalis_lo, rear, bl)
     parts = [ab, ech, fr, fl, rr, rl, front, rear, br, bl]
     if p.capital_position_y != 0:
         parts = [_rigid(m, eye3, (0.0, p.capital_position_y, 0.0)) for m in parts]
@@ -478,9 +478,11 @@ def _rot_y(deg: float) -> np.ndarray:
 
 
 def _angle_capital(p: CapitalParams, lay: CapitalLayout, ab: Mesh, ech: Mesh, fr: Mesh,
-                   fl: Mesh, rl: Mesh, front: Mesh, rear: Mesh, bl: Mesh) -> CapitalParts:
+                   fl: Mesh, rl: Mesh, canalis_lo: float, rear: Mesh, bl: Mesh
+                   ) -> CapitalParts:
     """The angle capital (see :func:`build_capital`): outer faces +Z and +X."""
     from ionic_usd.geometry.boolean import union
+    from ionic_usd.geometry.clip import clip_mesh
 
     eye = np.array([lay.eye_x, lay.eye_y, lay.face_z])
     # the corner volute: turned 45° about its eye's vertical, its eye moved onto the diagonal;
@@ -490,7 +492,18 @@ def _angle_capital(p: CapitalParams, lay: CapitalLayout, ab: Mesh, ech: Mesh, fr
                   "volute_corner")
     quarter = _rot_y(90.0)  # +Z → +X: the front face's right half becomes the +X face
     side = _rigid(fr, quarter, name="volute_side_rear")
-    side_canalis = _rigid(front, quarter, name="canalis_side")
+    # the two outer canales run from their face's other volute into the corner volute and end
+    # in the plane of its disc's face (under its raised band)
+    slab_front = lay.face_z - p.relief_depth
+    reach = e + lay.total_radius
+    front = _box((-lay.eye_x, canalis_lo, lay.back_z), (reach, lay.abacus_y, slab_front),
+                 "canalis_front")
+    side_canalis = _rigid(_box((-reach, canalis_lo, lay.back_z),
+                               (lay.eye_x, lay.abacus_y, slab_front), "canalis_side"), quarter)
+    diag_n = np.array([-1.0, 0.0, -1.0]) / math.sqrt(2.0)  # keep the side behind the disc face
+    on_face = np.array([e, 0.0, e]) + diag_n * p.relief_depth
+    front = clip_mesh(front, on_face, diag_n, name="canalis_front")
+    side_canalis = clip_mesh(side_canalis, on_face, diag_n, name="canalis_side")
     parts = [ab, ech, fl, diag, side, rl, front, rear, side_canalis, bl]
     if p.capital_position_y != 0:
         parts = [_rigid(m, np.eye(3), (0.0, p.capital_position_y, 0.0)) for m in parts]
