@@ -8,8 +8,8 @@ Folder written by :func:`compose_temple` (all asset paths ``./``-relative)::
     materials.usda       /Temple/Materials: PaintedStucco, Travertine (UsdPreviewSurface)
     podium.usda cella.usda entablature.usda roof.usda
                          cuboid meshes (/Temple/Podium/…, kind = component)
-    colonnade.usda       /Temple/Colonnade/{Free,Engaged}/<name>: instanceable references to
-                         ./IonicColumn/IonicColumn.usda (form = full | engaged)
+    colonnade.usda       /Temple/Colonnade/{Free,Engaged,Corner}/<name>: instanceable references
+                         to ./IonicColumn/IonicColumn.usda (form = full | engaged | corner)
     layers/<id>.usda     one layer per reconstruction hypothesis (overs only)
     IonicColumn/         the column component asset (see :mod:`ionic_usd.usd.column_asset`)
     Textures/            stone maps of the temple's materials
