@@ -131,10 +131,10 @@ def _column_params(args: argparse.Namespace):
 
 
 _PARTS = {
-    "all": ("Base", "Shaft", "CapitalBody", "CapitalScroll"),
+    "all": ("Base", "Shaft", "CapitalBody"),
     "base": ("Base",),
     "shaft": ("Shaft",),
-    "capital": ("CapitalBody", "CapitalScroll"),
+    "capital": ("CapitalBody",),
     "base+shaft": ("Base", "Shaft"),
 }
 

@@ -19,8 +19,9 @@ VARIANTS = {
     "lod": ("high", "medium", "low"),
     "base": ("attic_bezier_plinth", "attic_bezier", "G1", "G2"),
     "scroll": ("S1", "S2"),
+    "capital": ("normal", "angle"),
     "flutes": ("f24", "f20"),
-    "form": ("full", "engaged"),
+    "form": ("full", "engaged", "corner"),
     "finish": ("travertine", "stucco"),
 }
 
@@ -83,22 +84,23 @@ def test_variant_sets_and_validation_per_selection(column_asset):
 def test_every_selection_has_one_mesh_per_part(column_asset):
     stage = open_stage(column_asset)
     vsets = stage.GetDefaultPrim().GetVariantSets()
-    names = ["lod", "base", "scroll", "flutes", "form"]
+    names = ["lod", "base", "scroll", "capital", "flutes", "form"]
     for combo in itertools.product(*(VARIANTS[n] for n in names)):
         for n, v in zip(names, combo, strict=True):
             vsets.GetVariantSet(n).SetVariantSelection(v)
         meshes = active_meshes(stage)
         parts = sorted(p.split("/")[3] for p in meshes)
-        assert parts == ["Base", "CapitalBody", "CapitalScroll", "Shaft"], combo
-        lod = combo[0]
-        assert all(p.endswith(lod) or p.endswith(f"{lod}_engaged") for p in meshes), combo
+        assert parts == ["Base", "CapitalBody", "Shaft"], combo
+        lod, form = combo[0], combo[-1]
+        suffix = lod if form == "full" else f"{lod}_{form}"
+        assert all(p.endswith(suffix) for p in meshes), combo
 
 
 def test_every_mesh_closed_with_uvs_in_unit_square(column_asset):
     layer = Sdf.Layer.FindOrOpen(str(column_asset.path.parent / "Payload/Geometry.usdc"))
     stage = Usd.Stage.Open(layer)
     prims = [p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh)]
-    assert len(prims) == column_asset.meshes == 3 * (4 + 2 + 2 + 1) * 2
+    assert len(prims) == column_asset.meshes == 3 * (4 + 2 + 2 * 2) * 3
     for prim in prims:
         m = mesh_value(prim)
         r = inspect_mesh(m)
@@ -126,9 +128,9 @@ def test_charts_do_not_overlap_in_any_mesh(column_asset):
 def test_switching_variants_changes_exactly_their_part(column_asset):
     stage = open_stage(column_asset)
     vsets = stage.GetDefaultPrim().GetVariantSets()
-    expect = {"lod": {"Base", "Shaft", "CapitalBody", "CapitalScroll"}, "base": {"Base"},
-              "scroll": {"CapitalScroll"}, "flutes": {"Shaft"},
-              "form": {"Base", "Shaft", "CapitalBody", "CapitalScroll"}}
+    expect = {"lod": {"Base", "Shaft", "CapitalBody"}, "base": {"Base"},
+              "scroll": {"CapitalBody"}, "capital": {"CapitalBody"}, "flutes": {"Shaft"},
+              "form": {"Base", "Shaft", "CapitalBody"}}
     for name, parts in expect.items():
         vs = vsets.GetVariantSet(name)
         default = vs.GetVariantSelection()

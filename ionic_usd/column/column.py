@@ -20,12 +20,15 @@ import dataclasses
 import math
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from ionic_usd.column.base import BaseParams, build_base, load_base_preset
 from ionic_usd.column.capital import CapitalParams, build_capital, capital_height
 from ionic_usd.column.shaft import ShaftParams, build_shaft
 from ionic_usd.errors import ParameterError
+from ionic_usd.geometry.boolean import union
 from ionic_usd.geometry.guard import guarded
-from ionic_usd.geometry.mesh import Mesh, merge
+from ionic_usd.geometry.mesh import Mesh
 
 __all__ = [
     "Lod",
@@ -50,7 +53,9 @@ class Lod:
     """Sampling of every part for one level of detail.
 
     ``flute_slices``/``fillet_ratio`` are the shaft's $h/$i; ``base_slices`` the rows per curved
-    base floor; ``spiral_samples``, ``ring_segments``, ``bolster_rows`` the capital's.
+    base floor; ``spiral_samples``, ``ring_segments``, ``bolster_rows`` the capital's;
+    ``shaft_rows`` the rows along the fluted body (one row of 7 m long, 2 cm wide triangles is
+    fine for a renderer but poor for displacement, booleans and LOD tools).
     """
 
     flute_slices: int
@@ -59,14 +64,15 @@ class Lod:
     spiral_samples: int
     ring_segments: int
     bolster_rows: int
+    shaft_rows: int = 1
 
 
 # Triangle budgets (default Portunus column, measured by tools/bench_column.py):
 # high ≈ 40k, medium ≈ 14k, low ≈ 6k triangles.
 LODS: dict[str, Lod] = {
-    "high": Lod(8, 4, 8, 192, 48, 32),
-    "medium": Lod(4, 2, 4, 96, 24, 16),
-    "low": Lod(2, 1, 2, 48, 16, 8),
+    "high": Lod(8, 4, 8, 192, 48, 32, 24),  # rows ≈ 0.29 m apart
+    "medium": Lod(4, 2, 4, 96, 24, 16, 8),  # ≈ 0.88 m
+    "low": Lod(2, 1, 2, 48, 16, 8, 3),  # ≈ 2.3 m
 }
 
 
@@ -135,7 +141,8 @@ class ColumnParams:
         if lod is None:
             return self.shaft
         return dataclasses.replace(self.shaft, flute_slices=lod.flute_slices,
-                                   flute_slices_per_fillet_slice=lod.fillet_ratio)
+                                   flute_slices_per_fillet_slice=lod.fillet_ratio,
+                                   body_rows=lod.shaft_rows)
 
     def capital_params(self, scroll: str | None = None) -> CapitalParams:
         lod = _lod(self.lod)
@@ -149,6 +156,24 @@ class ColumnParams:
     def with_lod(self, lod: str) -> ColumnParams:
         return dataclasses.replace(self, lod=lod)
 
+    def with_flutes(self, flutes: int) -> ColumnParams:
+        """The same column with another flute count.
+
+        The flute/period ratio is kept; the fluted body $a is re-derived so the shaft keeps its
+        length (wider flutes have taller rounded ends), and the bottom/top rings keep their
+        vertex count, so every base variant fits every flute variant.
+        """
+        sh = self.shaft
+        if flutes == sh.flutes:
+            return self
+        ratio = sh.flute_angle / (360.0 / sh.flutes)
+        probe = dataclasses.replace(sh, flutes=flutes, flute_angle=ratio * 360.0 / flutes,
+                                    ring_vertices=self.shaft_params().ring_segments)
+        height = sh.length - (probe.length - probe.height)
+        if height <= 0:
+            raise ParameterError("flutes", flutes, "a count whose flute ends fit the shaft")
+        return dataclasses.replace(self, shaft=dataclasses.replace(probe, height=height))
+
 
 @dataclass(frozen=True)
 class Column:
@@ -158,7 +183,6 @@ class Column:
     base: Mesh
     shaft: Mesh
     capital_body: Mesh
-    capital_scroll: Mesh
     base_height: float
     shaft_length: float
     capital_height: float
@@ -169,12 +193,12 @@ class Column:
 
     @property
     def capital(self) -> Mesh:
-        return merge([self.capital_body, self.capital_scroll], name="capital")
+        """The capital: one solid (abacus, echinus, volutes, canales and bolsters united)."""
+        return self.capital_body
 
     def parts(self) -> dict[str, Mesh]:
-        """Prim name → mesh: ``Base``, ``Shaft``, ``CapitalBody``, ``CapitalScroll``."""
-        return {"Base": self.base, "Shaft": self.shaft, "CapitalBody": self.capital_body,
-                "CapitalScroll": self.capital_scroll}
+        """Prim name → mesh: ``Base``, ``Shaft``, ``CapitalBody`` (each one closed solid)."""
+        return {"Base": self.base, "Shaft": self.shaft, "CapitalBody": self.capital_body}
 
     @property
     def n_triangles(self) -> int:
@@ -194,21 +218,25 @@ def build_shaft_part(params: ColumnParams, base_height: float, **kwargs) -> Mesh
                                        name="shaft", **kwargs), "shaft", "parameters")
 
 
-def build_capital_parts(params: ColumnParams, y: float, scroll: str | None = None
-                        ) -> tuple[Mesh, Mesh]:
-    """(body: abacus, echinus, volutes, canales; scroll: the two bolsters) lifted to ``y``."""
-    from ionic_usd.geometry.mesh import transform
+def build_capital_part(params: ColumnParams, y: float, scroll: str | None = None, *,
+                       angle: bool = False) -> Mesh:
+    """The capital lifted to ``y``: abacus, echinus, volutes, canales and the scroll's bolsters
+    united into one closed solid (manifold3d); ``angle`` builds the angle capital.
+
+    A failure is a ParameterError naming the scroll (a user's ring grammar is the likely
+    culprit) or the capital (for the presets)."""
     from ionic_usd.grammar.scroll import scroll_preset_names
 
     cp = params.capital_params(scroll)
-    text = _scroll_text(cp)  # a user's ring grammar is the likely culprit, else the capital
-    parts = guarded(lambda: build_capital(cp, top_radius=params.shaft.top_radius),
-                    "capital" if text in scroll_preset_names() else "scroll", text,
-                    check=lambda c: [c.abacus, c.echinus, *c.volutes, *c.canales, *c.bolsters])
-    lift = [[1, 0, 0, 0], [0, 1, 0, y], [0, 0, 1, 0], [0, 0, 0, 1.0]]
-    body = merge([parts.abacus, parts.echinus, *parts.volutes, *parts.canales], name="capital")
-    scroll_mesh = merge(list(parts.bolsters), name="scroll")
-    return transform(body, lift), transform(scroll_mesh, lift)
+    text = _scroll_text(cp)
+    lift = np.array([0.0, y, 0.0])
+
+    def build() -> Mesh:
+        parts = build_capital(cp, top_radius=params.shaft.top_radius, angle=angle)
+        return union([m.with_(points=m.points + lift) for m in parts.as_dict().values()],
+                     name="capital")
+
+    return guarded(build, "capital" if text in scroll_preset_names() else "scroll", text)
 
 
 def build_column(params: ColumnParams | None = None) -> Column:
@@ -220,8 +248,8 @@ def build_column(params: ColumnParams | None = None) -> Column:
     base = build_base_part(params)
     shaft = build_shaft_part(params, bp.height)
     y_cap = bp.height + params.shaft.length
-    body, scroll = build_capital_parts(params, y_cap)
-    return Column(params, base, shaft, body, scroll, bp.height, params.shaft.length,
+    body = build_capital_part(params, y_cap)
+    return Column(params, base, shaft, body, bp.height, params.shaft.length,
                   capital_height(params.capital))
 
 

@@ -8,8 +8,8 @@ Folder written by :func:`compose_temple` (all asset paths ``./``-relative)::
     materials.usda       /Temple/Materials: PaintedStucco, Travertine (UsdPreviewSurface)
     podium.usda cella.usda entablature.usda roof.usda
                          cuboid meshes (/Temple/Podium/…, kind = component)
-    colonnade.usda       /Temple/Colonnade/{Free,Engaged}/<name>: instanceable references to
-                         ./IonicColumn/IonicColumn.usda (form = full | engaged)
+    colonnade.usda       /Temple/Colonnade/{Free,Engaged,Corner}/<name>: instanceable references
+                         to ./IonicColumn/IonicColumn.usda (form = full | engaged | corner)
     layers/<id>.usda     one layer per reconstruction hypothesis (overs only)
     IonicColumn/         the column component asset (see :mod:`ionic_usd.usd.column_asset`)
     Textures/            stone maps of the temple's materials
@@ -141,22 +141,31 @@ def _colonnade_layer(layout: TempleLayout) -> Sdf.Layer:
     with Sdf.ChangeBlock():
         col = define_prim(lay, "/Temple/Colonnade", "Xform")
         col.kind = "group"
-        for kind, group in ((ColumnKind.FREE, "Free"), (ColumnKind.ENGAGED, "Engaged")):
+        for kind, group in _GROUPS:
             g = define_prim(lay, f"/Temple/Colonnade/{group}", "Xform")
             g.kind = "group"
             for c in layout.columns_of(kind):
                 spec = define_prim(lay, f"/Temple/Colonnade/{group}/{_ident(c.name)}", "Xform")
                 spec.instanceable = True
                 spec.referenceList.Prepend(Sdf.Reference(f"./{ASSET_NAME}/{ASSET_NAME}.usda"))
-                spec.variantSelections["form"] = "full" if kind is ColumnKind.FREE else "engaged"
+                spec.variantSelections["form"] = _FORM[kind]
                 spec.variantSelections["finish"] = BASELINE_FINISH
                 _set_xform(spec, c.position, c.rotation_deg, c.scale)
     return lay
 
 
+_GROUPS = ((ColumnKind.FREE, "Free"), (ColumnKind.ENGAGED, "Engaged"),
+           (ColumnKind.CORNER, "Corner"))
+_FORM = {ColumnKind.FREE: "full", ColumnKind.ENGAGED: "engaged", ColumnKind.CORNER: "corner"}
+
+
+def _column_path(c) -> str:
+    return f"/Temple/Colonnade/{dict(_GROUPS)[c.kind]}/{_ident(c.name)}"
+
+
 def _column_prims(layout: TempleLayout) -> list[str]:
     out = []
-    for kind, group in ((ColumnKind.FREE, "Free"), (ColumnKind.ENGAGED, "Engaged")):
+    for kind, group in _GROUPS:
         out += [f"/Temple/Colonnade/{group}/{_ident(c.name)}" for c in layout.columns_of(kind)]
     return out
 
@@ -199,6 +208,18 @@ def _hypothesis_layer(h: Hypothesis, layout: TempleLayout, base_meshes) -> Sdf.L
                 for p in _column_prims(layout):
                     spec = _over_path(lay, p)
                     spec.variantSelections["flutes"] = sel
+                    touched.append(spec)
+            elif key == "column.corner_capital":
+                # the colonnade's corner columns get the angle capital, turned so that its two
+                # volute faces (local +Z, +X) face the building's two outer sides
+                for c in layout.columns:
+                    if c.angle_rotation_deg is None:
+                        continue
+                    spec = _over_path(lay, _column_path(c))
+                    spec.variantSelections["capital"] = str(value)
+                    if c.angle_rotation_deg != c.rotation_deg:
+                        Sdf.AttributeSpec(spec, "xformOp:rotateY", Sdf.ValueTypeNames.Float
+                                          ).default = float(c.angle_rotation_deg)
                     touched.append(spec)
             elif key == "material.finish":
                 finish = "travertine" if value in ("bare_stone", "travertine") else "stucco"
