@@ -98,10 +98,11 @@ class ColumnParams:
     height). The LOD overrides the sampling fields of ``shaft`` and ``capital``.
     """
 
-    shaft: ShaftParams = field(default_factory=ShaftParams)
+    # defaults: the Temple of Portunus column, the same as portunus_column_params()
+    shaft: ShaftParams = field(default_factory=lambda: portunus_shaft_params())
     capital: CapitalParams = field(default_factory=CapitalParams)
     base: str = "attic_bezier_plinth"
-    base_height: float | None = None
+    base_height: float | None = PORTUNUS_LOWER_DIAMETER / 2.0
     lod: str = "high"
 
     def __post_init__(self) -> None:
@@ -276,26 +277,38 @@ def portunus_column_params(
     (Vitruvius III.5.14; ``flutes=20`` is the reconstruction hypothesis); capital proportions
     after Vitruvius III.5.5–8 (see :mod:`ionic_usd.column.capital`).
     """
-    d = lower_diameter / 2.0
-    base_h = lower_diameter / 2.0
     cap = CapitalParams()
-    period = 360.0 / flutes
-    probe = ShaftParams(bottom_radius=d, top_radius=d * 6.0 / 7.0, flutes=flutes,
-                        flute_angle=0.8 * period)
-    fixed = probe.length - probe.height  # rings + flute ends
-    shaft_a = height - base_h - capital_height(cap) - fixed
-    if shaft_a <= 0:
-        raise ParameterError("height", height, "tall enough for base, capital and flute ends")
-    shaft = dataclasses.replace(probe, height=shaft_a)
+    shaft = portunus_shaft_params(height=height, lower_diameter=lower_diameter, flutes=flutes,
+                                  capital=cap)
     return ColumnParams(shaft=shaft, capital=cap.with_(scroll=scroll), base=base,
-                        base_height=base_h, lod=lod)
+                        base_height=lower_diameter / 2.0, lod=lod)
+
+
+def portunus_shaft_params(
+    *,
+    height: float = PORTUNUS_HEIGHT,
+    lower_diameter: float = PORTUNUS_LOWER_DIAMETER,
+    flutes: int = 24,
+    capital: CapitalParams | None = None,
+) -> ShaftParams:
+    """The shaft of a column ``height`` m tall from base bottom to abacus top, with a base half
+    a diameter high: top diameter 6/7 of the lower one, flutes of 4/5 of the period."""
+    d = lower_diameter / 2.0
+    cap = capital or CapitalParams()
+    probe = ShaftParams(bottom_radius=d, top_radius=d * 6.0 / 7.0, flutes=flutes,
+                        flute_angle=0.8 * 360.0 / flutes)
+    fixed = probe.length - probe.height  # rings + flute ends
+    shaft_a = height - lower_diameter / 2.0 - capital_height(cap) - fixed
+    if not shaft_a > 0:
+        raise ParameterError("height", height, "tall enough for base, capital and flute ends")
+    return dataclasses.replace(probe, height=shaft_a)
 
 
 COLUMN_DOCS: dict[str, tuple[str, str, str]] = {
     "lod": ("", "name", f"level of detail: {', '.join(LODS)}, or custom (use the sampling "
             "fields of [shaft] and [capital] as given)"),
     "base": ("", "name|grammar", "base preset (G1, G2, attic_bezier, attic_bezier_plinth) or a "
-             "base grammar string (tori v1 or Bézier v2, SPEC §2)"),
+             "base grammar string (tori v1 or Bézier v2, the paper's Tables 2–3)"),
     "base_height": ("", "m", "height every base is scaled to (unset: the grammar's own)"),
     "scroll": ("", "name|grammar", "scroll-body ring grammar: S1, S2 or 'R<r> P<p>, …'"),
 }
