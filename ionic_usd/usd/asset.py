@@ -26,16 +26,17 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
-from pxr import Gf, Sdf, Usd, Vt
+from pxr import Sdf, Usd
 
 from ionic_usd.errors import OutputExistsError, ParameterError
 from ionic_usd.geometry.mesh import Mesh
+from ionic_usd.usd.bounds import author_extents_hints, variant_extents_hints
 from ionic_usd.usd.materials import MaterialTextures, author_preview_material, bind_material
 from ionic_usd.usd.mesh import author_mesh, define_prim
 from ionic_usd.usd.stage import new_layer, save_layer
 
-__all__ = ["AssetMesh", "AssetSpec", "write_asset", "write_asset_layers", "replace_folder"]
+__all__ = ["AssetMesh", "AssetSpec", "class_path", "write_asset", "write_asset_layers",
+           "replace_folder"]
 
 
 @dataclass(frozen=True)
@@ -91,9 +92,9 @@ class AssetSpec:
 def _geometry_layer(spec: AssetSpec) -> Sdf.Layer:
     layer = new_layer(spec.name, kind=None)
     with Sdf.ChangeBlock():
-        define_prim(layer, f"/{spec.name}/Geom", "Xform")
+        define_prim(layer, f"/{spec.name}/Geom", "Scope")
         for m in spec.meshes:
-            define_prim(layer, f"/{spec.name}/Geom/{m.part}", "Xform")
+            define_prim(layer, f"/{spec.name}/Geom/{m.part}", "Scope")
             author_mesh(layer, f"/{spec.name}/Geom/{m.part}/{m.name}", m.mesh)
     return layer
 
@@ -105,7 +106,7 @@ def _materials_layer(spec: AssetSpec) -> Sdf.Layer:
     for mat_name, tex in spec.materials.items():
         author_preview_material(stage, f"/{spec.name}/Materials/{mat_name}", tex,
                                 st_scale=spec.st_scale)
-    geom = stage.DefinePrim(f"/{spec.name}/Geom", "Xform")
+    geom = stage.DefinePrim(f"/{spec.name}/Geom", "Scope")
     bind_material(geom, f"/{spec.name}/Materials/{spec.default_material}")
     return layer
 
@@ -117,16 +118,19 @@ def _contents_layer(spec: AssetSpec) -> Sdf.Layer:
     return layer
 
 
-def _extent_of(meshes: list[Mesh]) -> np.ndarray:
-    lo = np.min([m.extent[0] for m in meshes], axis=0)
-    hi = np.max([m.extent[1] for m in meshes], axis=0)
-    return np.stack([lo, hi])
+def class_path(name: str) -> str:
+    """The class every instance of the asset inherits (``/_class_<name>``): an opinion there
+    changes every instance in a scene at once."""
+    return f"/_class_{name}"
 
 
 def _interface_layer(spec: AssetSpec) -> Sdf.Layer:
     name = spec.name
     layer = new_layer(name, kind="component", comment=spec.documentation)
     root = layer.GetPrimAtPath(f"/{name}")
+    cls = Sdf.CreatePrimInLayer(layer, class_path(name))
+    cls.specifier = Sdf.SpecifierClass
+    root.inheritPathList.Prepend(Sdf.Path(class_path(name)))
     root.assetInfo = {
         "name": name,
         "version": spec.version,
@@ -149,13 +153,6 @@ def _interface_layer(spec: AssetSpec) -> Sdf.Layer:
                         geom = _over(vprim, "Geom")
                         part = _over(geom, m.part)
                         _over(part, m.name).active = False
-                if vset == "lod":
-                    # extentsHint lets a DCC frame the asset before its payload loads
-                    ms = [m.mesh for m in spec.meshes if m.tags.get("lod", v) == v]
-                    ext = _extent_of(ms)
-                    attr = Sdf.AttributeSpec(vprim, "extentsHint", Sdf.ValueTypeNames.Float3Array,
-                                             Sdf.VariabilityUniform)
-                    attr.default = Vt.Vec3fArray([Gf.Vec3f(*ext[0]), Gf.Vec3f(*ext[1])])
                 if vset == "finish" and v in spec.finishes:
                     geom = _over(vprim, "Geom")
                     geom.SetInfo("apiSchemas", Sdf.TokenListOp.Create(
@@ -185,8 +182,17 @@ def write_asset_layers(spec: AssetSpec, folder: Path) -> dict[str, Path]:
         "materials": save_layer(_materials_layer(spec), payload / "Materials.usda", force=True),
         "contents": save_layer(_contents_layer(spec), payload / "Contents.usda", force=True),
     }
-    written["interface"] = save_layer(_interface_layer(spec), folder / f"{spec.name}.usda",
-                                      force=True)
+    interface = _interface_layer(spec)
+    written["interface"] = save_layer(interface, folder / f"{spec.name}.usda", force=True)
+    # extentsHint lets a renderer cull and a DCC frame the asset before its payload loads;
+    # computed on the composed asset for every combination of the sets that switch meshes
+    tagging = {vs: spec.variant_sets[vs] for vs in spec.variant_sets
+               if any(vs in m.tags for m in spec.meshes)}
+    stage = Usd.Stage.Open(str(written["interface"]))
+    hints = variant_extents_hints(stage, f"/{spec.name}", [f"/{spec.name}"], tagging)
+    del stage
+    author_extents_hints(interface, f"/{spec.name}", hints, list(tagging))
+    save_layer(interface, written["interface"], force=True)
     return written
 
 
