@@ -37,6 +37,7 @@ from ionic_usd.errors import ParameterError
 from ionic_usd.geometry.mesh import Mesh
 from ionic_usd.temple.cuboid import cuboid_mesh
 from ionic_usd.temple.layout import (
+    COMPOSER_NAMESPACES,
     ColumnKind,
     ColumnPlacement,
     Hypothesis,
@@ -92,7 +93,7 @@ def column_path(c: ColumnPlacement) -> str:
 
 def temple_keys(h: Hypothesis) -> list[str]:
     """The ``section.key`` changes of ``h`` that reshape the temple layout."""
-    return [k for k in h.changes if k.split(".")[0] not in ("column", "material")]
+    return [k for k in h.changes if k.split(".")[0] not in COMPOSER_NAMESPACES]
 
 
 def cuboid_meshes(layout: TempleLayout, uv_scale: float) -> dict[Layer, dict[str, Mesh]]:
