@@ -21,6 +21,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import subprocess
 import sys
 import venv
@@ -68,7 +69,12 @@ def stage_facts(path: str) -> dict:
     active = [p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh)]
     proto_meshes = sum(1 for pr in stage.GetPrototypes() for p in Usd.PrimRange(pr)
                        if p.IsA(UsdGeom.Mesh))
+    # Blender makes one collection-instance object per instance, nested ones included (an
+    # instance inside a prototype — a column of an instanced temple — is an object of that
+    # prototype's collection), so count the instances inside every prototype too
     instances = sum(1 for p in stage.Traverse() if p.IsInstance())
+    instances += sum(1 for pr in stage.GetPrototypes() for p in Usd.PrimRange(pr)
+                     if p != pr and p.IsInstance())
     return {"variant_selections": selections, "active_meshes": len(active),
             "prototype_meshes": proto_meshes, "instances": instances,
             "prototypes": len(stage.GetPrototypes())}
@@ -127,6 +133,9 @@ def main() -> int:
     for name, images in rep["materials"].items():
         if not images:
             problems.append(f"material {name}: no texture image")
+    dup = [i for i in rep["images"] if re.search(r"\.\d{3}$", i)]
+    if dup:
+        problems.append(f"texture maps loaded more than once: {', '.join(dup)}")
     expected_meshes = facts["active_meshes"] + facts["prototype_meshes"]
     if len(meshes) != expected_meshes:
         problems.append(f"{len(meshes)} mesh objects, the stage has {expected_meshes} active")
