@@ -352,13 +352,18 @@ def test_temple_lod_passes_to_every_column(portunus_temple):
                 for p in stage.Traverse() if p.IsInstance()} == {lod}
         assert temple_triangles(stage) == tris[lod]
     assert tris["high"] > 2 * tris["medium"] > 2 * tris["low"] > 0
-    # the count is by hand: instances × their prototype's triangles + the cuboids (12 each)
+    # the count is by hand: instances × their prototype's rendered triangles + the cuboids
+    # (12 each); the proxy meshes are not drawn with the render purpose
     select(stage, lod="low")
-    per_proto = {}
+    per_proto, proxies = {}, 0
     for proto in stage.GetPrototypes():
+        meshes = [p for p in Usd.PrimRange(proto) if p.IsA(UsdGeom.Mesh)]
+        drawn = [p for p in meshes if UsdGeom.Imageable(p).ComputePurpose() == "render"]
+        proxies += len(meshes) - len(drawn)
         per_proto[proto.GetPath()] = sum(
             int(np.sum(np.array(UsdGeom.Mesh(p).GetFaceVertexCountsAttr().Get()) - 2))
-            for p in Usd.PrimRange(proto) if p.IsA(UsdGeom.Mesh))
+            for p in drawn)
+    assert proxies == 2 * 4  # each prototype: its four low-lod parts as proxy
     inst = sum(per_proto[p.GetPrototype().GetPath()] for p in stage.Traverse()
                if p.IsInstance())
     cuboids = sum(12 for p in stage.Traverse() if p.IsA(UsdGeom.Mesh))

@@ -66,9 +66,13 @@ def stage_facts(path: str) -> dict:
     stage = Usd.Stage.Open(path)
     root = stage.GetDefaultPrim()
     selections = dict(root.GetVariantSets().GetAllVariantSelections())
-    active = [p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh)]
+    def drawn(p) -> bool:  # Blender imports render and default purpose (not proxy, guide)
+        return p.IsA(UsdGeom.Mesh) and UsdGeom.Imageable(p).ComputePurpose() in (
+            UsdGeom.Tokens.default_, UsdGeom.Tokens.render)
+
+    active = [p for p in stage.Traverse() if drawn(p)]
     proto_meshes = sum(1 for pr in stage.GetPrototypes() for p in Usd.PrimRange(pr)
-                       if p.IsA(UsdGeom.Mesh))
+                       if drawn(p))
     # Blender makes one collection-instance object per instance, nested ones included (an
     # instance inside a prototype — a column of an instanced temple — is an object of that
     # prototype's collection), so count the instances inside every prototype too

@@ -31,7 +31,12 @@ from pxr import Sdf, Usd
 from ionic_usd.errors import OutputExistsError, ParameterError
 from ionic_usd.geometry.mesh import Mesh
 from ionic_usd.usd.bounds import author_extents_hints, variant_extents_hints
-from ionic_usd.usd.materials import MaterialTextures, author_preview_material, bind_material
+from ionic_usd.usd.materials import (
+    MaterialTextures,
+    author_preview_material,
+    bind_material,
+    bind_material_spec,
+)
 from ionic_usd.usd.mesh import author_mesh, define_prim
 from ionic_usd.usd.stage import new_layer, save_layer
 
@@ -69,6 +74,7 @@ class AssetSpec:
     st_scale: float | None = None
     custom_data: Mapping[str, object] = field(default_factory=dict)
     documentation: str = ""
+    proxy_lod: str | None = None  # this lod's meshes, always loaded, as the proxy purpose
 
     def __post_init__(self) -> None:
         for vset, variants in self.variant_sets.items():
@@ -80,6 +86,8 @@ class AssetSpec:
                 if vset not in self.variant_sets or v not in self.variant_sets[vset]:
                     raise ParameterError(f"tags of {m.part}/{m.name}", dict(m.tags),
                                          "variant sets and variants declared by the asset")
+        if self.proxy_lod is not None and self.proxy_lod not in self.variant_sets.get("lod", ()):
+            raise ParameterError("proxy_lod", self.proxy_lod, "a variant of the lod set")
         if self.default_material not in self.materials:
             raise ParameterError("default_material", self.default_material,
                                  f"one of {', '.join(self.materials)}")
@@ -92,11 +100,31 @@ class AssetSpec:
 def _geometry_layer(spec: AssetSpec) -> Sdf.Layer:
     layer = new_layer(spec.name, kind=None)
     with Sdf.ChangeBlock():
-        define_prim(layer, f"/{spec.name}/Geom", "Scope")
+        geom = define_prim(layer, f"/{spec.name}/Geom", "Scope")
         for m in spec.meshes:
             define_prim(layer, f"/{spec.name}/Geom/{m.part}", "Scope")
             author_mesh(layer, f"/{spec.name}/Geom/{m.part}/{m.name}", m.mesh)
+        if spec.proxy_lod is not None:
+            # render/proxy split: Geom (the selected lod) renders; Proxy shows the light lod's
+            # meshes in viewports. Each proxy mesh is an internal reference (no second copy
+            # of the arrays), named flat so that part-name lookups under Geom stay unique.
+            _purpose(geom, "render")
+            proxy = define_prim(layer, f"/{spec.name}/Proxy", "Scope")
+            _purpose(proxy, "proxy")
+            for m in _proxy_meshes(spec):
+                ref = define_prim(layer, f"/{spec.name}/Proxy/{m.name}", "Mesh")
+                ref.referenceList.Prepend(Sdf.Reference(
+                    primPath=Sdf.Path(f"/{spec.name}/Geom/{m.part}/{m.name}")))
     return layer
+
+
+def _purpose(spec: Sdf.PrimSpec, purpose: str) -> None:
+    Sdf.AttributeSpec(spec, "purpose", Sdf.ValueTypeNames.Token,
+                      Sdf.VariabilityUniform).default = purpose
+
+
+def _proxy_meshes(spec: AssetSpec) -> list[AssetMesh]:
+    return [m for m in spec.meshes if m.tags.get("lod") == spec.proxy_lod]
 
 
 def _materials_layer(spec: AssetSpec) -> Sdf.Layer:
@@ -108,6 +136,9 @@ def _materials_layer(spec: AssetSpec) -> Sdf.Layer:
                                 st_scale=spec.st_scale)
     geom = stage.DefinePrim(f"/{spec.name}/Geom", "Scope")
     bind_material(geom, f"/{spec.name}/Materials/{spec.default_material}")
+    if spec.proxy_lod is not None:
+        proxy = stage.DefinePrim(f"/{spec.name}/Proxy", "Scope")
+        bind_material(proxy, f"/{spec.name}/Materials/{spec.default_material}")
     return layer
 
 
@@ -153,14 +184,15 @@ def _interface_layer(spec: AssetSpec) -> Sdf.Layer:
                         geom = _over(vprim, "Geom")
                         part = _over(geom, m.part)
                         _over(part, m.name).active = False
+                if vset != "lod":  # the proxy follows every set but lod
+                    for m in _proxy_meshes(spec):
+                        if vset in m.tags and m.tags[vset] != v:
+                            _over(_over(vprim, "Proxy"), m.name).active = False
                 if vset == "finish" and v in spec.finishes:
-                    geom = _over(vprim, "Geom")
-                    geom.SetInfo("apiSchemas", Sdf.TokenListOp.Create(
-                        prependedItems=["MaterialBindingAPI"]))
-                    rel = Sdf.RelationshipSpec(geom, "material:binding", custom=False)
-                    rel.targetPathList.explicitItems = [
-                        Sdf.Path(f"/{name}/Materials/{spec.finishes[v]}")
-                    ]
+                    scopes = ["Geom"] + (["Proxy"] if spec.proxy_lod is not None else [])
+                    for scope in scopes:
+                        bind_material_spec(_over(vprim, scope),
+                                           f"/{name}/Materials/{spec.finishes[v]}")
             root.variantSelections[vset] = spec.defaults[vset]
     return layer
 
