@@ -30,8 +30,32 @@ def open_stage(report) -> Usd.Stage:
     return Usd.Stage.Open(str(report.path))
 
 
-def active_meshes(stage) -> dict[str, Usd.Prim]:
-    return {str(p.GetPath()): p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh)}
+def active_meshes(stage, purpose: str = "render") -> dict[str, Usd.Prim]:
+    """Active meshes of one purpose (render: the selected lod under Geom; proxy: Proxy)."""
+    return {str(p.GetPath()): p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh)
+            and UsdGeom.Imageable(p).ComputePurpose() == purpose}
+
+
+def test_low_lod_is_the_proxy_of_every_selection(column_asset):
+    stage = open_stage(column_asset)
+    vsets = stage.GetDefaultPrim().GetVariantSets()
+    assert not active_meshes(stage, "default")  # every mesh is render or proxy
+    names = ["lod", "base", "scroll", "flutes", "form"]
+    for combo in itertools.product(*(VARIANTS[n] for n in names)):
+        for n, v in zip(names, combo, strict=True):
+            vsets.GetVariantSet(n).SetVariantSelection(v)
+        render = {p.rsplit("/", 1)[1] for p in active_meshes(stage)}
+        proxy = {p.rsplit("/", 1)[1]: prim for p, prim in active_meshes(stage, "proxy").items()}
+        # the proxy is the low lod of the same selection: the render meshes' names, lod low
+        assert set(proxy) == {n.replace(f"_{combo[0]}", "_low") for n in render}, combo
+        for prim in proxy.values():
+            assert UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial()[0], prim.GetPath()
+    layer = Sdf.Layer.FindOrOpen(str(column_asset.path.parent / "Payload/Geometry.usdc"))
+    # proxies are references to the low meshes, not second copies of their arrays
+    spec = layer.GetPrimAtPath("/IonicColumn/Proxy/CapitalBody_low")
+    assert spec is not None and not spec.attributes
+    assert [r.primPath for r in spec.referenceList.prependedItems] == [
+        Sdf.Path("/IonicColumn/Geom/CapitalBody/CapitalBody_low")]
 
 
 def mesh_value(prim) -> Mesh:
@@ -59,7 +83,7 @@ def test_layout_on_disk_and_interface(column_asset):
     for f in root.rglob("*.usd*"):
         lay = Sdf.Layer.FindOrOpen(str(f))
         for dep in lay.GetCompositionAssetDependencies():
-            assert dep.startswith("./"), (f, dep)
+            assert dep == "" or dep.startswith("./"), (f, dep)  # "": internal reference
     mats = (root / "Payload/Materials.usda").read_text()
     assert "@./Textures/" in mats and "@../" not in mats
 
@@ -99,7 +123,8 @@ def test_every_selection_has_one_mesh_per_part(column_asset):
 def test_every_mesh_closed_with_uvs_in_unit_square(column_asset):
     layer = Sdf.Layer.FindOrOpen(str(column_asset.path.parent / "Payload/Geometry.usdc"))
     stage = Usd.Stage.Open(layer)
-    prims = [p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh)]
+    prims = [p for p in stage.Traverse()
+             if p.IsA(UsdGeom.Mesh) and "Proxy" not in str(p.GetPath())]
     assert len(prims) == column_asset.meshes == 3 * (4 + 2 + 2 * 2) * 3
     for prim in prims:
         m = mesh_value(prim)
@@ -117,7 +142,7 @@ def test_charts_do_not_overlap_in_any_mesh(column_asset):
     stage = Usd.Stage.Open(layer)
     res = 2048  # raster of the normalised [0,1] square
     for prim in stage.Traverse():
-        if not prim.IsA(UsdGeom.Mesh):
+        if not prim.IsA(UsdGeom.Mesh) or prim.GetParent().GetName() == "Proxy":
             continue
         m = mesh_value(prim)
         charts = uv_charts(m.st_indices, len(m.st))

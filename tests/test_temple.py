@@ -87,6 +87,8 @@ def composed_values(stage) -> dict[str, tuple]:
     for prim in stage.Traverse():
         vals = []
         for a in prim.GetAttributes():
+            if a.GetName() == "extentsHint":  # per combination; tests/test_bounds.py
+                continue
             v = a.Get()
             vals.append((a.GetName(), np.asarray(v).tobytes() if v is not None and hasattr(
                 v, "__len__") and not isinstance(v, str) else v))
@@ -116,7 +118,8 @@ def test_each_hypothesis_switches_exactly_its_prims(portunus_temple, hid):
     # descendants are instance proxies and are not traversed
     assert changed == named, hid
     for p in named:
-        meta = stage.GetPrimAtPath(p).GetCustomData()["ionic_usd"]["hypothesis"]
+        meta = stage.GetPrimAtPath(p).GetCustomData()["ionic_usd"]["hypotheses"][
+            hid.replace("-", "_")]
         assert meta["id"] == hid and meta["certainty"] in ("high", "medium", "low")
         assert len(meta["sources"]) >= 1
     assert validate_stage(stage) == []
@@ -156,8 +159,8 @@ def test_user_overrides_survive_regeneration(tmp_path):
     user = Sdf.Layer.FindOrOpen(str(folder / "overrides.usda"))
     spec = Sdf.CreatePrimInLayer(user, "/Temple/Colonnade/Free/front_1")
     spec.specifier = Sdf.SpecifierOver
-    a = Sdf.AttributeSpec(spec, "xformOp:rotateY", Sdf.ValueTypeNames.Float)
-    a.default = 33.0
+    a = Sdf.AttributeSpec(spec, "xformOp:rotateXYZ", Sdf.ValueTypeNames.Float3)
+    a.default = Gf.Vec3f(0, 33, 0)
     spec.customData = {"note": "my reading of the plan"}
     user.Save()
     before = (folder / "overrides.usda").read_bytes()
@@ -167,7 +170,7 @@ def test_user_overrides_survive_regeneration(tmp_path):
     assert (folder / "overrides.usda").read_bytes() == before
     stage = Usd.Stage.Open(str(folder / "Temple.usda"))
     prim = stage.GetPrimAtPath("/Temple/Colonnade/Free/front_1")
-    assert prim.GetAttribute("xformOp:rotateY").Get() == 33.0
+    assert prim.GetAttribute("xformOp:rotateXYZ").Get() == Gf.Vec3f(0, 33, 0)
     xf = UsdGeom.Xformable(prim).ComputeLocalToWorldTransform(Usd.TimeCode.Default())
     assert Gf.IsClose(xf.ExtractRotation().GetAxis() * xf.ExtractRotation().GetAngle(),
                       Gf.Vec3d(0, 33, 0), 1e-6)

@@ -30,13 +30,29 @@ def test_shaft_roundtrip_and_validates(tmp_path, ext):
     assert len(geom.GetNormalsAttr().Get()) == mesh.face_vertex_indices.size
     extent = np.array(geom.GetExtentAttr().Get())
     assert_allclose(extent, mesh.extent, atol=1e-6)
-    # every ancestor is typed
-    for p in (stage.GetPrimAtPath("/Shaft"), stage.GetPrimAtPath("/Shaft/Geom")):
-        assert p.GetTypeName() == "Xform"
+    # every ancestor is typed: the model an Xform, the organising Geom a Scope
+    assert stage.GetPrimAtPath("/Shaft").GetTypeName() == "Xform"
+    assert stage.GetPrimAtPath("/Shaft/Geom").GetTypeName() == "Scope"
     # file format follows the extension
     head = path.read_bytes()[:8]
     assert head == (b"#usda 1." if ext == ".usda" else b"PXR-USDC")
     assert validate_stage(stage) == []
+
+
+def test_st_is_an_indexed_primvar_of_distinct_values(tmp_path):
+    from ionic_usd.temple import Cuboid, cuboid_mesh
+
+    # a cuboid: 24 corners, coplanar faces sharing st values along their common edges
+    mesh = cuboid_mesh(Cuboid((0, 0, 0), (2, 1, 3)), uv_scale=0.5)
+    assert mesh.st is not None and len(mesh.st) == 24
+    path = write_meshes(tmp_path / "box.usda", {"Box": mesh}, root="Box")
+    stage = Usd.Stage.Open(str(path))
+    prim = stage.GetPrimAtPath("/Box/Geom/Box")
+    st = UsdGeom.PrimvarsAPI(prim).GetPrimvar("st")
+    assert st.IsIndexed() and st.GetInterpolation() == UsdGeom.Tokens.faceVarying
+    values = np.array(st.Get())
+    assert len(np.unique(values, axis=0)) == len(values) < len(st.GetIndices()) == 24
+    assert_allclose(np.array(st.ComputeFlattened()), mesh.st[mesh.st_indices], atol=1e-6)
 
 
 def test_validator_catches_missing_metadata(tmp_path):

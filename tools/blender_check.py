@@ -21,6 +21,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import subprocess
 import sys
 import venv
@@ -65,10 +66,19 @@ def stage_facts(path: str) -> dict:
     stage = Usd.Stage.Open(path)
     root = stage.GetDefaultPrim()
     selections = dict(root.GetVariantSets().GetAllVariantSelections())
-    active = [p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh)]
+    def drawn(p) -> bool:  # Blender imports render and default purpose (not proxy, guide)
+        return p.IsA(UsdGeom.Mesh) and UsdGeom.Imageable(p).ComputePurpose() in (
+            UsdGeom.Tokens.default_, UsdGeom.Tokens.render)
+
+    active = [p for p in stage.Traverse() if drawn(p)]
     proto_meshes = sum(1 for pr in stage.GetPrototypes() for p in Usd.PrimRange(pr)
-                       if p.IsA(UsdGeom.Mesh))
+                       if drawn(p))
+    # Blender makes one collection-instance object per instance, nested ones included (an
+    # instance inside a prototype — a column of an instanced temple — is an object of that
+    # prototype's collection), so count the instances inside every prototype too
     instances = sum(1 for p in stage.Traverse() if p.IsInstance())
+    instances += sum(1 for pr in stage.GetPrototypes() for p in Usd.PrimRange(pr)
+                     if p != pr and p.IsInstance())
     return {"variant_selections": selections, "active_meshes": len(active),
             "prototype_meshes": proto_meshes, "instances": instances,
             "prototypes": len(stage.GetPrototypes())}
@@ -127,6 +137,9 @@ def main() -> int:
     for name, images in rep["materials"].items():
         if not images:
             problems.append(f"material {name}: no texture image")
+    dup = [i for i in rep["images"] if re.search(r"\.\d{3}$", i)]
+    if dup:
+        problems.append(f"texture maps loaded more than once: {', '.join(dup)}")
     expected_meshes = facts["active_meshes"] + facts["prototype_meshes"]
     if len(meshes) != expected_meshes:
         problems.append(f"{len(meshes)} mesh objects, the stage has {expected_meshes} active")

@@ -89,9 +89,12 @@ __all__ = [
     "portunus_layout",
     "PORTUNUS_TOML",
     "ROOF_BED",
+    "COMPOSER_NAMESPACES",
 ]
 
 PORTUNUS_TOML = "portunus.toml"
+# hypothesis ``changes`` namespaces realised by the composer, not by the layout
+COMPOSER_NAMESPACES = ("column", "material")
 
 
 class Layer(StrEnum):
@@ -368,6 +371,12 @@ def params_from_tables(data: Mapping[str, Any], *, context: str) -> TempleParams
     unknown sections or keys raise :class:`ParameterError` naming them."""
     kw: dict[str, Any] = {}
     temple = data.get("temple", {})
+    if not isinstance(temple, Mapping):
+        raise ParameterError("[temple]", temple, "a table", context=context)
+    for key, value in temple.items():
+        if key != "name":
+            raise ParameterError(f"temple.{key}", value, "name (the only key of [temple])",
+                                 context=context)
     if "name" in temple:
         kw["name"] = temple["name"]
     for sec, table in data.items():
@@ -742,6 +751,16 @@ def _hypotheses(entries, context: str) -> tuple[Hypothesis, ...]:
                                  "the same layer file and variant set)",
                                  context=f"{context} [[hypothesis]]")
         seen[prim_key(h.id)] = h.id
+    for i, h in enumerate(out, 1):
+        for key, value in h.changes.items():
+            sec, k = key.split(".")
+            if sec in COMPOSER_NAMESPACES:
+                continue  # the composer checks these (ionic_usd.usd.hypotheses)
+            if sec not in _SECTIONS or k not in _SECTIONS[sec]:
+                valid = (f"one of {sec}.{', '.join(_SECTIONS[sec])}" if sec in _SECTIONS else
+                         "section.key of the temple TOML, or column.… / material.…")
+                raise ParameterError(key, value, valid,
+                                     context=f"{context} [[hypothesis]] #{i} ({h.id!r})")
     return tuple(out)
 
 

@@ -24,16 +24,22 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
-from pxr import Gf, Sdf, Usd, Vt
+from pxr import Sdf, Usd
 
 from ionic_usd.errors import ParameterError
 from ionic_usd.geometry.mesh import Mesh
-from ionic_usd.usd.materials import MaterialTextures, author_preview_material, bind_material
+from ionic_usd.usd.bounds import author_extents_hints, variant_extents_hints
+from ionic_usd.usd.materials import (
+    MaterialTextures,
+    author_preview_material,
+    bind_material,
+    bind_material_spec,
+)
 from ionic_usd.usd.mesh import author_mesh, define_prim
 from ionic_usd.usd.stage import new_layer, save_layer
 
-__all__ = ["AssetMesh", "AssetSpec", "write_asset", "write_asset_layers", "replace_folder"]
+__all__ = ["AssetMesh", "AssetSpec", "class_path", "write_asset", "write_asset_layers",
+           "replace_folder"]
 
 
 @dataclass(frozen=True)
@@ -66,6 +72,7 @@ class AssetSpec:
     st_scale: float | None = None
     custom_data: Mapping[str, object] = field(default_factory=dict)
     documentation: str = ""
+    proxy_lod: str | None = None  # this lod's meshes, always loaded, as the proxy purpose
 
     def __post_init__(self) -> None:
         for vset, variants in self.variant_sets.items():
@@ -77,6 +84,8 @@ class AssetSpec:
                 if vset not in self.variant_sets or v not in self.variant_sets[vset]:
                     raise ParameterError(f"tags of {m.part}/{m.name}", dict(m.tags),
                                          "variant sets and variants declared by the asset")
+        if self.proxy_lod is not None and self.proxy_lod not in self.variant_sets.get("lod", ()):
+            raise ParameterError("proxy_lod", self.proxy_lod, "a variant of the lod set")
         if self.default_material not in self.materials:
             raise ParameterError("default_material", self.default_material,
                                  f"one of {', '.join(self.materials)}")
@@ -89,11 +98,31 @@ class AssetSpec:
 def _geometry_layer(spec: AssetSpec) -> Sdf.Layer:
     layer = new_layer(spec.name, kind=None)
     with Sdf.ChangeBlock():
-        define_prim(layer, f"/{spec.name}/Geom", "Xform")
+        geom = define_prim(layer, f"/{spec.name}/Geom", "Scope")
         for m in spec.meshes:
-            define_prim(layer, f"/{spec.name}/Geom/{m.part}", "Xform")
+            define_prim(layer, f"/{spec.name}/Geom/{m.part}", "Scope")
             author_mesh(layer, f"/{spec.name}/Geom/{m.part}/{m.name}", m.mesh)
+        if spec.proxy_lod is not None:
+            # render/proxy split: Geom (the selected lod) renders; Proxy shows the light lod's
+            # meshes in viewports. Each proxy mesh is an internal reference (no second copy
+            # of the arrays), named flat so that part-name lookups under Geom stay unique.
+            _purpose(geom, "render")
+            proxy = define_prim(layer, f"/{spec.name}/Proxy", "Scope")
+            _purpose(proxy, "proxy")
+            for m in _proxy_meshes(spec):
+                ref = define_prim(layer, f"/{spec.name}/Proxy/{m.name}", "Mesh")
+                ref.referenceList.Prepend(Sdf.Reference(
+                    primPath=Sdf.Path(f"/{spec.name}/Geom/{m.part}/{m.name}")))
     return layer
+
+
+def _purpose(spec: Sdf.PrimSpec, purpose: str) -> None:
+    Sdf.AttributeSpec(spec, "purpose", Sdf.ValueTypeNames.Token,
+                      Sdf.VariabilityUniform).default = purpose
+
+
+def _proxy_meshes(spec: AssetSpec) -> list[AssetMesh]:
+    return [m for m in spec.meshes if m.tags.get("lod") == spec.proxy_lod]
 
 
 def _materials_layer(spec: AssetSpec) -> Sdf.Layer:
@@ -103,8 +132,11 @@ def _materials_layer(spec: AssetSpec) -> Sdf.Layer:
     for mat_name, tex in spec.materials.items():
         author_preview_material(stage, f"/{spec.name}/Materials/{mat_name}", tex,
                                 st_scale=spec.st_scale)
-    geom = stage.DefinePrim(f"/{spec.name}/Geom", "Xform")
+    geom = stage.DefinePrim(f"/{spec.name}/Geom", "Scope")
     bind_material(geom, f"/{spec.name}/Materials/{spec.default_material}")
+    if spec.proxy_lod is not None:
+        proxy = stage.DefinePrim(f"/{spec.name}/Proxy", "Scope")
+        bind_material(proxy, f"/{spec.name}/Materials/{spec.default_material}")
     return layer
 
 
@@ -115,16 +147,19 @@ def _contents_layer(spec: AssetSpec) -> Sdf.Layer:
     return layer
 
 
-def _extent_of(meshes: list[Mesh]) -> np.ndarray:
-    lo = np.min([m.extent[0] for m in meshes], axis=0)
-    hi = np.max([m.extent[1] for m in meshes], axis=0)
-    return np.stack([lo, hi])
+def class_path(name: str) -> str:
+    """The class every instance of the asset inherits (``/_class_<name>``): an opinion there
+    changes every instance in a scene at once."""
+    return f"/_class_{name}"
 
 
 def _interface_layer(spec: AssetSpec) -> Sdf.Layer:
     name = spec.name
     layer = new_layer(name, kind="component", comment=spec.documentation)
     root = layer.GetPrimAtPath(f"/{name}")
+    cls = Sdf.CreatePrimInLayer(layer, class_path(name))
+    cls.specifier = Sdf.SpecifierClass
+    root.inheritPathList.Prepend(Sdf.Path(class_path(name)))
     root.assetInfo = {
         "name": name,
         "version": spec.version,
@@ -147,21 +182,15 @@ def _interface_layer(spec: AssetSpec) -> Sdf.Layer:
                         geom = _over(vprim, "Geom")
                         part = _over(geom, m.part)
                         _over(part, m.name).active = False
-                if vset == "lod":
-                    # extentsHint lets a DCC frame the asset before its payload loads
-                    ms = [m.mesh for m in spec.meshes if m.tags.get("lod", v) == v]
-                    ext = _extent_of(ms)
-                    attr = Sdf.AttributeSpec(vprim, "extentsHint", Sdf.ValueTypeNames.Float3Array,
-                                             Sdf.VariabilityUniform)
-                    attr.default = Vt.Vec3fArray([Gf.Vec3f(*ext[0]), Gf.Vec3f(*ext[1])])
+                if vset != "lod":  # the proxy follows every set but lod
+                    for m in _proxy_meshes(spec):
+                        if vset in m.tags and m.tags[vset] != v:
+                            _over(_over(vprim, "Proxy"), m.name).active = False
                 if vset == "finish" and v in spec.finishes:
-                    geom = _over(vprim, "Geom")
-                    geom.SetInfo("apiSchemas", Sdf.TokenListOp.Create(
-                        prependedItems=["MaterialBindingAPI"]))
-                    rel = Sdf.RelationshipSpec(geom, "material:binding", custom=False)
-                    rel.targetPathList.explicitItems = [
-                        Sdf.Path(f"/{name}/Materials/{spec.finishes[v]}")
-                    ]
+                    scopes = ["Geom"] + (["Proxy"] if spec.proxy_lod is not None else [])
+                    for scope in scopes:
+                        bind_material_spec(_over(vprim, scope),
+                                           f"/{name}/Materials/{spec.finishes[v]}")
             root.variantSelections[vset] = spec.defaults[vset]
     return layer
 
@@ -183,8 +212,17 @@ def write_asset_layers(spec: AssetSpec, folder: Path) -> dict[str, Path]:
         "materials": save_layer(_materials_layer(spec), payload / "Materials.usda", force=True),
         "contents": save_layer(_contents_layer(spec), payload / "Contents.usda", force=True),
     }
-    written["interface"] = save_layer(_interface_layer(spec), folder / f"{spec.name}.usda",
-                                      force=True)
+    interface = _interface_layer(spec)
+    written["interface"] = save_layer(interface, folder / f"{spec.name}.usda", force=True)
+    # extentsHint lets a renderer cull and a DCC frame the asset before its payload loads;
+    # computed on the composed asset for every combination of the sets that switch meshes
+    tagging = {vs: spec.variant_sets[vs] for vs in spec.variant_sets
+               if any(vs in m.tags for m in spec.meshes)}
+    stage = Usd.Stage.Open(str(written["interface"]))
+    hints = variant_extents_hints(stage, f"/{spec.name}", [f"/{spec.name}"], tagging)
+    del stage
+    author_extents_hints(interface, f"/{spec.name}", hints, list(tagging))
+    save_layer(interface, written["interface"], force=True)
     return written
 
 

@@ -301,6 +301,7 @@ def build_column_asset(
         "after Konečný, Syllaiou & Liarokapis 2016; variant sets: lod, base, scroll, capital, "
         "flutes, form, finish.",
         st_scale=UV_SPAN / TILE_METRES,
+        proxy_lod="low" if "low" in opts.lods and len(opts.lods) > 1 else None,
     )
     path = write_asset(spec, dest, populate=populate, force=force)
     tris: dict[str, int] = {}

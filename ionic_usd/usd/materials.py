@@ -6,7 +6,17 @@ from dataclasses import dataclass
 
 from pxr import Gf, Sdf, Usd, UsdShade
 
-__all__ = ["MaterialTextures", "author_preview_material", "bind_material"]
+__all__ = ["FALLBACKS", "MaterialTextures", "author_preview_material", "bind_material",
+           "bind_material_spec"]
+
+
+# UsdUVTexture ``inputs:fallback`` per map, in the map's own encoding: a mid stone colour, a
+# matte roughness, and the flat tangent-space normal (0.5, 0.5, 1) that decodes to (0, 0, 1)
+FALLBACKS = {
+    "BaseColor": Gf.Vec4f(0.62, 0.58, 0.52, 1.0),
+    "Roughness": Gf.Vec4f(0.8, 0.8, 0.8, 1.0),
+    "Normal": Gf.Vec4f(0.5, 0.5, 1.0, 1.0),
+}
 
 
 @dataclass(frozen=True)
@@ -63,6 +73,8 @@ def author_preview_material(
         tex = UsdShade.Shader.Define(stage, f"{path}/{name}")
         tex.CreateIdAttr("UsdUVTexture")
         tex.CreateInput("file", Sdf.ValueTypeNames.Asset).Set(Sdf.AssetPath(file))
+        # what a renderer shows when the map is missing (UsdUVTexture's default is black)
+        tex.CreateInput("fallback", Sdf.ValueTypeNames.Float4).Set(FALLBACKS[name])
         tex.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(st_out)
         tex.CreateInput("sourceColorSpace", Sdf.ValueTypeNames.Token).Set(colour_space)
         tex.CreateInput("wrapS", Sdf.ValueTypeNames.Token).Set("repeat")
@@ -96,3 +108,12 @@ def bind_material(prim: Usd.Prim, material: UsdShade.Material | str) -> None:
         rel.SetTargets([Sdf.Path(material)])
     else:
         api.Bind(material)
+
+
+def bind_material_spec(spec: Sdf.PrimSpec, material: str) -> None:
+    """The Sdf form of :func:`bind_material`: apply MaterialBindingAPI to a prim spec and set
+    its direct binding to the material path (no stage needed, nothing resolved)."""
+    spec.SetInfo("apiSchemas", Sdf.TokenListOp.Create(prependedItems=["MaterialBindingAPI"]))
+    rel = spec.relationships.get("material:binding") or Sdf.RelationshipSpec(
+        spec, "material:binding", custom=False)
+    rel.targetPathList.explicitItems = [Sdf.Path(material)]

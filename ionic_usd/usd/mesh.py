@@ -12,7 +12,7 @@ from pxr import Sdf, Vt
 from ionic_usd.geometry.mesh import Mesh
 from ionic_usd.usd.stage import ensure_typed_ancestors
 
-__all__ = ["author_mesh", "define_prim", "mesh_extent", "write_meshes"]
+__all__ = ["author_mesh", "define_prim", "indexed_st", "mesh_extent", "write_meshes"]
 
 _T = Sdf.ValueTypeNames
 
@@ -74,12 +74,31 @@ def author_mesh(
               Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(mesh.normals, dtype=np.float32)),
               interpolation=mesh.normals_interpolation)
     if mesh.st is not None:
-        _attr(spec, "primvars:st", _T.TexCoord2fArray,
-              Vt.Vec2fArray.FromNumpy(np.ascontiguousarray(mesh.st, dtype=np.float32)),
+        values, indices = indexed_st(mesh.st, mesh.st_indices)
+        _attr(spec, "primvars:st", _T.TexCoord2fArray, Vt.Vec2fArray.FromNumpy(values),
               interpolation="faceVarying")
-        _attr(spec, "primvars:st:indices", _T.IntArray,
-              Vt.IntArray.FromNumpy(np.ascontiguousarray(mesh.st_indices, dtype=np.int32)))
+        _attr(spec, "primvars:st:indices", _T.IntArray, Vt.IntArray.FromNumpy(indices))
     return spec
+
+
+def indexed_st(st: np.ndarray, indices: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+    """``st`` as an indexed primvar: each distinct (float32) value once, corners index it.
+
+    Parameters
+    ----------
+    st : (u, 2) float
+    indices : (k,) int or None (None: one value per corner, ``k = u``)
+
+    Returns
+    -------
+    values : (w, 2) float32, ``w ≤ u``, distinct rows
+    corner_indices : (k,) int32 with ``values[corner_indices] == st[indices]``
+    """
+    st32 = np.ascontiguousarray(st, dtype=np.float32).reshape(-1, 2)
+    idx = np.arange(len(st32)) if indices is None else np.asarray(indices).reshape(-1)
+    values, inverse = np.unique(st32, axis=0, return_inverse=True)
+    return (np.ascontiguousarray(values, dtype=np.float32),
+            np.ascontiguousarray(inverse.reshape(-1)[idx], dtype=np.int32))
 
 
 def write_meshes(
@@ -100,7 +119,7 @@ def write_meshes(
     check_output_path(path, force=force)
     layer = new_layer(root, kind=kind, comment=comment)
     with Sdf.ChangeBlock():
-        define_prim(layer, f"/{root}/Geom", "Xform")
+        define_prim(layer, f"/{root}/Geom", "Scope")
         for name, mesh in meshes.items():
             author_mesh(layer, f"/{root}/Geom/{name}", mesh)
     return save_layer(layer, path, force=force)

@@ -1,75 +1,113 @@
 """The temple composer: an assembly of layers that instances the column asset.
 
-Folder written by :func:`compose_temple` (all asset paths ``./``-relative)::
+Folder written by :func:`compose_temple` (all asset paths relative)::
 
-    Temple.usda          root layer: /Temple (Xform, kind = assembly); sublayer ./overrides.usda;
-                         references the part layers; one variant set per reconstruction hypothesis
-    overrides.usda       the user's layer — created empty once, never written again
-    materials.usda       /Temple/Materials: PaintedStucco, Travertine (UsdPreviewSurface)
+    Temple.usda          the root: stage metadata and two sublayers, nothing else —
+                           ./overrides.usda (yours, strongest) over ./generated.usda
+    overrides.usda       the user's layer — created once, never written again
+    generated.usda       /Temple (Xform, kind = assembly, inherits /_class_Temple): references
+                         the part layers; variant sets ``lod`` (high/medium/low, passed to every
+                         column) and ``hyp_<id>`` per reconstruction hypothesis; extentsHint
+                         per combination that changes bounds (nested variants)
+    materials.usda       /Temple/Materials: a reference to the column asset's material library
+                         (./IonicColumn/Payload/Materials.usda) — one library, one copy of maps
     podium.usda cella.usda entablature.usda roof.usda
-                         cuboid meshes (/Temple/Podium/…, kind = component)
-    colonnade.usda       /Temple/Colonnade/{Free,Engaged,Corner}/<name>: instanceable references
-                         to ./IonicColumn/IonicColumn.usda (form = full | engaged | corner)
-    layers/<id>.usda     one layer per reconstruction hypothesis (overs only)
+                         cuboid meshes (/Temple/Podium/…, kind = component); each sublayers
+                         ./materials.usda, so its material binding resolves when opened alone
+    colonnade.usda       /Temple/Colonnade (group)/{Free,Engaged,Corner} (group)/<name>:
+                         instanceable references to ./IonicColumn/IonicColumn.usda
+                         (form = full | engaged | corner)
+    layers/<id>.usda     one layer per realised hypothesis (see :mod:`ionic_usd.usd.hypotheses`)
+    layers/<a>+<b>.usda  combined values of hypotheses that interact (only when needed)
     IonicColumn/         the column component asset (see :mod:`ionic_usd.usd.column_asset`)
-    Textures/            stone maps of the temple's materials
 
-Strength, strongest first (USD's LIVRPS): the user's ``overrides.usda`` (a local sublayer), the
-selected hypothesis layers (references inside variants of /Temple), then the part layers
-(references of /Temple). So a hypothesis overrides the baseline and the user overrides both;
-regenerating the temple rewrites every file but ``overrides.usda``, which is kept byte for byte.
+Every layer opened alone is a valid stage: ``defaultPrim`` /Temple (a typed Xform, kind =
+assembly), ``upAxis`` Y, ``metersPerUnit`` 1.
+
+Strength, strongest first: ``overrides.usda`` (a stronger sublayer of the root, so a variant
+selection, a visibility or a new prim authored there wins over everything generated),
+``generated.usda`` (its variant selections are the defaults), the selected hypothesis layers
+(references inside variants of /Temple), the part layers (references of /Temple). Rebuilding
+rewrites every file but ``overrides.usda``, which is kept byte for byte.
 
 Reconstruction hypotheses (London Charter, principles 4 and 6 — intellectual transparency): each
 ``[[hypothesis]]`` of the temple description becomes the variant set ``hyp_<id>`` on /Temple with
-the variants ``baseline`` (no opinion) and ``alternative`` (references ``layers/<id>.usda``). Every
-prim a hypothesis layer touches carries ``customData["ionic_usd"]["hypothesis"]`` with its id,
-description, certainty and sources, and /Temple's customData lists all hypotheses — those the
-generator cannot realise yet are listed with ``realised = false`` and get no layer. Hypotheses
-are authored independently against the baseline: selecting two that override the same prim
-gives the stronger variant set's opinion (variant sets are evaluated in the listed order).
+the variants ``baseline`` and ``alternative``. Any combination may be selected: every
+combination is composed at build time and compared with the layout built with those
+hypotheses applied. /Temple's customData lists all hypotheses; those the generator cannot
+realise yet are listed with ``realised = false`` and get no layer.
+
+``class`` prims: /_class_Temple (inherited by /Temple) and /_class_IonicColumn (inherited by
+every column through the asset): an opinion authored on a class in ``overrides.usda`` changes
+every temple or column of the scene at once.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import os
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from pxr import Gf, Sdf, Tf, Usd, UsdGeom, Vt
+from pxr import Gf, Sdf, Usd, UsdGeom, Vt
 
 from ionic_usd import __version__
-from ionic_usd.column.column import ColumnParams, portunus_column_params
-from ionic_usd.errors import OutputExistsError, UsdAuthoringError
-from ionic_usd.geometry.mesh import Mesh
-from ionic_usd.temple.cuboid import cuboid_mesh
-from ionic_usd.temple.layout import ColumnKind, Hypothesis, Layer, TempleLayout, build_layout
-from ionic_usd.usd.asset import replace_folder
+from ionic_usd.column.column import LODS, ColumnParams, portunus_column_params
+from ionic_usd.errors import OutputExistsError, ParameterError, UsdAuthoringError
+from ionic_usd.temple.layout import Hypothesis, Layer, TempleLayout, build_layout
+from ionic_usd.usd.asset import class_path, replace_folder
+from ionic_usd.usd.bounds import author_extents_hints, variant_extents_hints
 from ionic_usd.usd.column_asset import (
     ASSET_NAME,
     FINISHES,
-    TILE_METRES,
+    FLUTE_VARIANTS,
+    UV_SPAN,
     ColumnAssetOptions,
     build_column_asset,
-    copy_stone_textures,
 )
-from ionic_usd.usd.materials import MaterialTextures, author_preview_material, bind_material
+from ionic_usd.usd.hypotheses import (
+    FORMS,
+    GROUPS,
+    PART_PRIMS,
+    HypothesisChanges,
+    add_paradata,
+    check_composer_changes,
+    column_path,
+    column_xform,
+    cuboid_meshes,
+    hyp_ident,
+    hyp_set,
+    hypothesis_layer,
+    hypothesis_paradata,
+    temple_keys,
+)
+from ionic_usd.usd.materials import bind_material_spec
 from ionic_usd.usd.mesh import author_mesh, define_prim
 from ionic_usd.usd.stage import new_layer, save_layer
 
-__all__ = ["TempleReport", "compose_temple", "hypothesis_layers", "ROOT_LAYER",
-           "OVERRIDES_LAYER", "PART_LAYERS"]
+__all__ = ["TempleReport", "compose_temple", "hypothesis_layers", "temple_triangles",
+           "ROOT_LAYER", "GENERATED_LAYER", "OVERRIDES_LAYER", "MATERIALS_LAYER",
+           "PART_LAYERS", "COLONNADE_LAYER", "TEMPLE_CLASS"]
 
 ROOT_LAYER = "Temple.usda"
+GENERATED_LAYER = "generated.usda"
 OVERRIDES_LAYER = "overrides.usda"
+MATERIALS_LAYER = "materials.usda"
+COLONNADE_LAYER = "colonnade.usda"
 PART_LAYERS = {Layer.PODIUM: "podium.usda", Layer.CELLA: "cella.usda",
                Layer.ENTABLATURE: "entablature.usda", Layer.ROOF: "roof.usda"}
-_PRIM = {Layer.PODIUM: "Podium", Layer.CELLA: "Cella", Layer.ENTABLATURE: "Entablature",
-         Layer.ROOF: "Roof"}
+TEMPLE_CLASS = "/_class_Temple"
+ASSET_REF = f"./{ASSET_NAME}/{ASSET_NAME}.usda"
 # baseline finish: the ancient painted stucco (see portunus.toml); bare stone is a hypothesis
 BASELINE_FINISH = "stucco"
+# the cuboids' st share the column asset's convention: UV_SPAN metres per unit of st
+CUBOID_UV_SCALE = 1.0 / UV_SPAN
+# temple keys the composer cannot realise: the column asset is built once per temple
+_COLUMN_SHAPE_KEYS = ("columns.lower_diameter", "columns.upper_diameter_ratio")
 
 
 @dataclass(frozen=True)
@@ -82,177 +120,148 @@ class TempleReport:
     triangles: int
     hypotheses: tuple[str, ...]
     seconds: float
+    triangles_per_lod: dict[str, int] = dataclasses.field(default_factory=dict)
+    combination_layers: tuple[str, ...] = ()
 
 
-def _ident(name: str) -> str:
-    return Tf.MakeValidIdentifier(name)
+def _finish_materials() -> dict[str, str]:
+    return {fin: mat for fin, (mat, _) in FINISHES.items()}
 
 
-def _hyp_set(h: Hypothesis) -> str:
-    return "hyp_" + _ident(h.id)
+def _changes(layout: TempleLayout, opts: ColumnAssetOptions) -> dict[str, HypothesisChanges]:
+    flutes = {k: v for k, v in FLUTE_VARIANTS.items() if k in opts.flutes}
+    out = {}
+    for h in layout.hypotheses:
+        for key in temple_keys(h):
+            if key in _COLUMN_SHAPE_KEYS:
+                raise ParameterError(key, h.changes[key], "a key the composer can realise "
+                                     "(the column asset is built once; change [columns] "
+                                     "instead)", context=f"hypothesis {h.id!r}")
+        out[h.id] = check_composer_changes(h, flutes, FINISHES, opts.capitals)
+    return out
 
 
-def _hyp_meta(h: Hypothesis) -> dict:
-    return {"hypothesis": {"id": h.id, "description": " ".join(h.description.split()),
-                           "certainty": str(h.certainty),
-                           "sources": Vt.StringArray(list(h.sources))}}
+def hypothesis_layers(
+    layout: TempleLayout, opts: ColumnAssetOptions | None = None
+) -> dict[str, Sdf.Layer | None]:
+    """Hypothesis id → the anonymous layer that realises it (None: not realisable).
+
+    Raises :class:`ParameterError` for a change the generator cannot realise.
+    """
+    opts = opts or ColumnAssetOptions()
+    changes = _changes(layout, opts)
+    return {h.id: hypothesis_layer(
+        [h], layout, changes=changes, uv_scale=CUBOID_UV_SCALE, asset_ref=ASSET_REF.replace(
+            "./", "../", 1), materials_ref=f"../{MATERIALS_LAYER}",
+        finish_materials=_finish_materials(), column_height=layout.params.columns_height)
+        for h in layout.hypotheses}
 
 
-def _cuboid_meshes(layout: TempleLayout) -> dict[Layer, dict[str, Mesh]]:
-    return {layer: {_ident(c.name): cuboid_mesh(c, uv_scale=1.0 / TILE_METRES)
-                    for c in cs} for layer, cs in layout.cuboids.items()}
+def _materials_layer() -> Sdf.Layer:
+    lay = new_layer("Temple", kind="assembly", comment="the temple's materials: the column "
+                    "asset's material library (one copy of every texture map)")
+    spec = define_prim(lay, "/Temple/Materials", "Scope")
+    spec.referenceList.Prepend(Sdf.Reference(f"./{ASSET_NAME}/Payload/Materials.usda",
+                                             Sdf.Path(f"/{ASSET_NAME}/Materials")))
+    return lay
 
 
-def _part_layer(layer: Layer, meshes: dict[str, Mesh], material: str) -> Sdf.Layer:
-    lay = new_layer("Temple", kind=None)
-    root = f"/Temple/{_PRIM[layer]}"
+def _part_layer(layer: Layer, meshes: dict, material: str) -> Sdf.Layer:
+    lay = new_layer("Temple", kind="assembly")
+    lay.subLayerPaths.append(f"./{MATERIALS_LAYER}")
+    root = f"/Temple/{PART_PRIMS[layer]}"
     with Sdf.ChangeBlock():
         spec = define_prim(lay, root, "Xform")
         spec.kind = "component"
         for name, m in meshes.items():
             author_mesh(lay, f"{root}/{name}", m)
-    stage = Usd.Stage.Open(lay)
-    bind_material(stage.GetPrimAtPath(root), f"/Temple/Materials/{material}")
+        bind_material_spec(spec, f"/Temple/Materials/{material}")
     return lay
-
-
-def _materials_layer() -> Sdf.Layer:
-    lay = new_layer("Temple", kind=None)
-    stage = Usd.Stage.Open(lay)
-    stage.DefinePrim("/Temple/Materials", "Scope")
-    for mat, style in FINISHES.values():
-        tex = MaterialTextures(*(f"./Textures/{style}_{r}.png"
-                                 for r in ("basecolor", "roughness", "normal")))
-        author_preview_material(stage, f"/Temple/Materials/{mat}", tex)
-    return lay
-
-
-def _set_xform(spec: Sdf.PrimSpec, pos, rot_deg: float, scale: float) -> None:
-    T = Sdf.ValueTypeNames
-    Sdf.AttributeSpec(spec, "xformOp:translate", T.Double3).default = Gf.Vec3d(*pos)
-    Sdf.AttributeSpec(spec, "xformOp:rotateY", T.Float).default = float(rot_deg)
-    Sdf.AttributeSpec(spec, "xformOp:scale", T.Float3).default = Gf.Vec3f(scale, scale, scale)
-    Sdf.AttributeSpec(spec, "xformOpOrder", T.TokenArray, Sdf.VariabilityUniform).default = \
-        Vt.TokenArray(["xformOp:translate", "xformOp:rotateY", "xformOp:scale"])
 
 
 def _colonnade_layer(layout: TempleLayout) -> Sdf.Layer:
-    lay = new_layer("Temple", kind=None)
+    lay = new_layer("Temple", kind="assembly")
     with Sdf.ChangeBlock():
         col = define_prim(lay, "/Temple/Colonnade", "Xform")
         col.kind = "group"
-        for kind, group in _GROUPS:
+        for kind, group in GROUPS.items():
             g = define_prim(lay, f"/Temple/Colonnade/{group}", "Xform")
             g.kind = "group"
             for c in layout.columns_of(kind):
-                spec = define_prim(lay, f"/Temple/Colonnade/{group}/{_ident(c.name)}", "Xform")
+                spec = define_prim(lay, column_path(c), "Xform")
                 spec.instanceable = True
-                spec.referenceList.Prepend(Sdf.Reference(f"./{ASSET_NAME}/{ASSET_NAME}.usda"))
-                spec.variantSelections["form"] = _FORM[kind]
+                spec.referenceList.Prepend(Sdf.Reference(ASSET_REF))
+                spec.variantSelections["form"] = FORMS[kind]
                 spec.variantSelections["finish"] = BASELINE_FINISH
-                _set_xform(spec, c.position, c.rotation_deg, c.scale)
+                column_xform(spec, c.position, c.rotation_deg, c.scale)
     return lay
 
 
-_GROUPS = ((ColumnKind.FREE, "Free"), (ColumnKind.ENGAGED, "Engaged"),
-           (ColumnKind.CORNER, "Corner"))
-_FORM = {ColumnKind.FREE: "full", ColumnKind.ENGAGED: "engaged", ColumnKind.CORNER: "corner"}
-
-
-def _column_path(c) -> str:
-    return f"/Temple/Colonnade/{dict(_GROUPS)[c.kind]}/{_ident(c.name)}"
-
-
-def _column_prims(layout: TempleLayout) -> list[str]:
-    out = []
-    for kind, group in _GROUPS:
-        out += [f"/Temple/Colonnade/{group}/{_ident(c.name)}" for c in layout.columns_of(kind)]
-    return out
-
-
-def _over_path(lay: Sdf.Layer, path: str) -> Sdf.PrimSpec:
-    spec = lay.GetPrimAtPath(path)
-    if spec is None:
-        spec = Sdf.CreatePrimInLayer(lay, path)
-        spec.specifier = Sdf.SpecifierOver
-    return spec
-
-
-def _hypothesis_layer(h: Hypothesis, layout: TempleLayout, base_meshes) -> Sdf.Layer | None:
-    """The overs that realise ``h`` against the baseline, or None if nothing is realisable."""
+def _root_layer(name: str) -> Sdf.Layer:
+    """Temple.usda: stage metadata and the two sublayers, user's first (strongest)."""
     lay = Sdf.Layer.CreateAnonymous(".usda")
     lay.defaultPrim = "Temple"
-    top = Sdf.CreatePrimInLayer(lay, "/Temple")
-    top.specifier = Sdf.SpecifierOver
-    touched: list[Sdf.PrimSpec] = []
-    temple_keys = [k for k in h.changes if k.split(".")[0] not in ("column", "material")]
-    with Sdf.ChangeBlock():
-        if temple_keys:
-            alt = build_layout(layout.params, hypotheses=layout.hypotheses, apply=[h.id])
-            alt_meshes = _cuboid_meshes(alt)
-            for layer, meshes in alt_meshes.items():
-                for name, m in meshes.items():
-                    old = base_meshes[layer].get(name)
-                    if old is not None and np.allclose(old.points, m.points, atol=1e-9):
-                        continue
-                    path = f"/Temple/{_PRIM[layer]}/{name}"
-                    spec = _over_path(lay, path)
-                    if old is None:
-                        spec.specifier = Sdf.SpecifierDef
-                    author_mesh(lay, path, m)
-                    spec.specifier = Sdf.SpecifierOver if old is not None else Sdf.SpecifierDef
-                    touched.append(spec)
-        for key, value in h.changes.items():
-            if key == "column.flute_count":
-                sel = f"f{int(value)}"
-                for p in _column_prims(layout):
-                    spec = _over_path(lay, p)
-                    spec.variantSelections["flutes"] = sel
-                    touched.append(spec)
-            elif key == "column.corner_capital":
-                # the colonnade's corner columns get the angle capital, turned so that its two
-                # volute faces (local +Z, +X) face the building's two outer sides
-                for c in layout.columns:
-                    if c.angle_rotation_deg is None:
-                        continue
-                    spec = _over_path(lay, _column_path(c))
-                    spec.variantSelections["capital"] = str(value)
-                    if c.angle_rotation_deg != c.rotation_deg:
-                        Sdf.AttributeSpec(spec, "xformOp:rotateY", Sdf.ValueTypeNames.Float
-                                          ).default = float(c.angle_rotation_deg)
-                    touched.append(spec)
-            elif key == "material.finish":
-                finish = "travertine" if value in ("bare_stone", "travertine") else "stucco"
-                for p in _column_prims(layout):
-                    spec = _over_path(lay, p)
-                    spec.variantSelections["finish"] = finish
-                    touched.append(spec)
-                for layer in layout.cuboids:
-                    spec = _over_path(lay, f"/Temple/{_PRIM[layer]}")
-                    rel = Sdf.RelationshipSpec(spec, "material:binding", custom=False)
-                    rel.targetPathList.explicitItems = [
-                        Sdf.Path(f"/Temple/Materials/{FINISHES[finish][0]}")]
-                    spec.SetInfo("apiSchemas", Sdf.TokenListOp.Create(
-                        prependedItems=["MaterialBindingAPI"]))
-                    touched.append(spec)
-    if not touched:
-        return None
-    meta = _hyp_meta(h)
-    for spec in {s.path: s for s in touched}.values():
-        spec.customData = {"ionic_usd": meta}
+    lay.pseudoRoot.SetInfo("upAxis", "Y")
+    lay.pseudoRoot.SetInfo("metersPerUnit", 1.0)
+    lay.comment = (f"{name}, composed by ionic_usd {__version__}. Put your edits in "
+                   f"{OVERRIDES_LAYER} (the strongest layer, never rewritten).")
+    lay.subLayerPaths.append(f"./{OVERRIDES_LAYER}")
+    lay.subLayerPaths.append(f"./{GENERATED_LAYER}")
     return lay
-
-
-def hypothesis_layers(layout: TempleLayout) -> dict[str, Sdf.Layer | None]:
-    """Hypothesis id → the anonymous layer of overs that realises it (None: not realisable)."""
-    base_meshes = _cuboid_meshes(layout)
-    return {h.id: _hypothesis_layer(h, layout, base_meshes) for h in layout.hypotheses}
 
 
 def _user_overrides_layer() -> Sdf.Layer:
-    lay = Sdf.Layer.CreateAnonymous(".usda")
-    lay.comment = ("Your overrides: the strongest layer of the temple. ionic_usd creates this "
-                   "file once and never writes it again.")
+    lay = new_layer("Temple", kind=None, comment=(
+        "Your overrides: the strongest layer of the temple. ionic_usd creates this file once "
+        "and never writes it again. Author `over` opinions below /Temple, or on "
+        "/_class_IonicColumn to change every column at once."))
+    return lay
+
+
+def _generated_layer(layout: TempleLayout, hyp_layers: dict[str, Sdf.Layer | None],
+                     lods: Sequence[str]) -> Sdf.Layer:
+    lay = new_layer("Temple", kind="assembly",
+                    comment=f"{layout.name}, generated by ionic_usd {__version__}; "
+                    f"do not edit (rewritten on every build): edit {OVERRIDES_LAYER}")
+    spec = lay.GetPrimAtPath("/Temple")
+    spec.assetInfo = {"name": hyp_ident(layout.name), "version": __version__,
+                      "identifier": Sdf.AssetPath(f"./{ROOT_LAYER}")}
+    cls = Sdf.CreatePrimInLayer(lay, TEMPLE_CLASS)
+    cls.specifier = Sdf.SpecifierClass
+    spec.inheritPathList.Prepend(Sdf.Path(TEMPLE_CLASS))
+    col_cls = Sdf.CreatePrimInLayer(lay, class_path(ASSET_NAME))
+    col_cls.specifier = Sdf.SpecifierClass
+    for ref in [f"./{MATERIALS_LAYER}", *(f"./{PART_LAYERS[la]}" for la in layout.cuboids),
+                f"./{COLONNADE_LAYER}"]:
+        spec.referenceList.Append(Sdf.Reference(ref))
+    # lod: one selection on /Temple passes to every column (a far temple is light)
+    vs = Sdf.VariantSetSpec(spec, "lod")
+    spec.variantSetNameList.Append("lod")
+    for lod in lods:
+        var = Sdf.VariantSpec(vs, lod)
+        for c in layout.columns:
+            over = Sdf.CreatePrimInLayer(lay, var.path.AppendPath(
+                Sdf.Path(column_path(c)).MakeRelativePath(Sdf.Path("/Temple"))))
+            over.specifier = Sdf.SpecifierOver
+            over.variantSelections["lod"] = lod
+    spec.variantSelections["lod"] = lods[0]
+    listing = {}
+    for h in layout.hypotheses:
+        realised = hyp_layers[h.id] is not None
+        entry = dict(hypothesis_paradata(h))
+        entry["realised"] = realised
+        entry["variantSet"] = hyp_set(h.id) if realised else ""
+        listing[hyp_ident(h.id)] = entry
+        if not realised:
+            continue
+        vs = Sdf.VariantSetSpec(spec, hyp_set(h.id))
+        spec.variantSetNameList.Append(hyp_set(h.id))
+        Sdf.VariantSpec(vs, "baseline")
+        alt = Sdf.VariantSpec(vs, "alternative")
+        alt.primSpec.referenceList.Prepend(Sdf.Reference(f"./layers/{h.id}.usda"))
+        spec.variantSelections[hyp_set(h.id)] = "baseline"
+    spec.customData = {"ionic_usd": {"hypotheses": listing, "temple": layout.name,
+                                     "baseline_finish": BASELINE_FINISH}}
     return lay
 
 
@@ -275,6 +284,9 @@ def compose_temple(
     layout : the temple (e.g. :func:`ionic_usd.temple.portunus_layout`)
     column : column parameters (default: Portunus proportions at the layout's column height and
         lower diameter)
+
+    Hypothesis changes the generator cannot realise raise :class:`ParameterError` before
+    anything is written.
     """
     t0 = time.perf_counter()
     dest = Path(folder)
@@ -288,52 +300,38 @@ def compose_temple(
                                                seed=seed)
     if opts.params != column:
         opts = dataclasses.replace(opts, params=column)
-    base_meshes = _cuboid_meshes(layout)
-    hyp_layers = hypothesis_layers(layout)
+    hyp_layers = hypothesis_layers(layout, opts)  # validates every hypothesis first
+    base_meshes = cuboid_meshes(layout, CUBOID_UV_SCALE)
     baseline_material = FINISHES[BASELINE_FINISH][0]
+    lods = tuple(lod for lod in LODS if lod in opts.lods)
     stats: dict[str, object] = {}
 
     def build(tmp: Path) -> None:
-        rep = build_column_asset(tmp / ASSET_NAME, opts)
-        stats["asset"] = rep
-        for _, style in FINISHES.values():
-            copy_stone_textures(tmp / "Textures", style, opts.texture_size, opts.seed)
-        save_layer(_materials_layer(), tmp / "materials.usda")
+        stats["asset"] = build_column_asset(tmp / ASSET_NAME, opts)
+        save_layer(_materials_layer(), tmp / MATERIALS_LAYER)
         for layer, meshes in base_meshes.items():
             save_layer(_part_layer(layer, meshes, baseline_material), tmp / PART_LAYERS[layer])
-        save_layer(_colonnade_layer(layout), tmp / "colonnade.usda")
+        save_layer(_colonnade_layer(layout), tmp / COLONNADE_LAYER)
         for hid, lay in hyp_layers.items():
             if lay is not None:
                 save_layer(lay, tmp / "layers" / f"{hid}.usda")
-        root = new_layer("Temple", kind="assembly",
-                         comment=f"{layout.name}, composed by ionic_usd {__version__}")
-        root.subLayerPaths.append(f"./{OVERRIDES_LAYER}")
-        spec = root.GetPrimAtPath("/Temple")
-        spec.assetInfo = {"name": _ident(layout.name), "version": __version__,
-                          "identifier": Sdf.AssetPath(f"./{ROOT_LAYER}")}
-        for ref in ["./materials.usda", *(f"./{PART_LAYERS[la]}" for la in base_meshes),
-                    "./colonnade.usda"]:
-            spec.referenceList.Append(Sdf.Reference(ref))
-        listing = {}
-        for h in layout.hypotheses:
-            realised = hyp_layers[h.id] is not None
-            entry = dict(_hyp_meta(h)["hypothesis"])
-            entry["realised"] = realised
-            entry["variantSet"] = _hyp_set(h) if realised else ""
-            listing[_ident(h.id)] = entry
-            if not realised:
-                continue
-            vs = Sdf.VariantSetSpec(spec, _hyp_set(h))
-            spec.variantSetNameList.Append(_hyp_set(h))
-            Sdf.VariantSpec(vs, "baseline")
-            alt = Sdf.VariantSpec(vs, "alternative")
-            alt.primSpec.referenceList.Prepend(Sdf.Reference(f"./layers/{h.id}.usda"))
-            spec.variantSelections[_hyp_set(h)] = "baseline"
-        spec.customData = {"ionic_usd": {"hypotheses": listing, "temple": layout.name,
-                                         "baseline_finish": BASELINE_FINISH}}
-        save_layer(root, tmp / ROOT_LAYER)
+        save_layer(_generated_layer(layout, hyp_layers, lods), tmp / GENERATED_LAYER)
+        save_layer(_root_layer(layout.name), tmp / ROOT_LAYER)
         # created only where absent: an existing overrides.usda (or symlink) is never touched
         save_layer(_user_overrides_layer(), tmp / OVERRIDES_LAYER)
+        # checks and hints on the generated layer alone: the user's opinions are theirs
+        gen = Usd.Stage.Open(str(tmp / GENERATED_LAYER))
+        realised = [h for h in layout.hypotheses if hyp_layers[h.id] is not None]
+        stats["combos"] = _realise_combinations(gen, tmp, layout, realised)
+        stats["lod_triangles"] = {lod: _triangles_with(gen, {"lod": lod}) for lod in lods}
+        vsets = {"lod": lods, **{hyp_set(h.id): ("baseline", "alternative") for h in realised}}
+        parts = ["/Temple", *(f"/Temple/{PART_PRIMS[la]}" for la in layout.cuboids),
+                 "/Temple/Colonnade"]
+        hints = variant_extents_hints(gen, "/Temple", parts, vsets)
+        gen_layer = gen.GetRootLayer()
+        author_extents_hints(gen_layer, "/Temple", hints, list(vsets))
+        gen_layer.Save()
+        del gen
         _check_resolves(tmp / ROOT_LAYER)
 
     replace_folder(build, dest, force=force, keep_existing=(OVERRIDES_LAYER,),
@@ -342,7 +340,174 @@ def compose_temple(
     stage = Usd.Stage.Open(str(root_path))
     if stage is None:
         raise UsdAuthoringError(f"cannot open the temple written at {root_path}")
-    return _report(stage, dest, layout, time.perf_counter() - t0)
+    rep = _report(stage, dest, layout, time.perf_counter() - t0)
+    return dataclasses.replace(rep, triangles_per_lod=dict(stats["lod_triangles"]),
+                               combination_layers=tuple(stats["combos"]))
+
+
+# ---------------------------------------------------------------------------------------------
+# every combination of hypotheses, checked against the layout and corrected where they interact
+
+
+def _select(stage: Usd.Stage, selections: dict[str, str]) -> None:
+    """Variant selections on /Temple in the session layer (cleared first)."""
+    session = stage.GetSessionLayer()
+    session.Clear()
+    with Usd.EditContext(stage, session), Sdf.ChangeBlock():
+        prim = stage.GetPrimAtPath("/Temple")
+        for vs, v in selections.items():
+            prim.GetVariantSet(vs).SetVariantSelection(v)
+
+
+def _expected_column(c, ratio: float) -> Gf.Matrix4d:
+    s = c.scale * ratio
+    return (Gf.Matrix4d().SetScale(Gf.Vec3d(s, s, s))
+            * Gf.Matrix4d().SetRotate(Gf.Rotation(Gf.Vec3d(0, 1, 0), c.rotation_deg))
+            * Gf.Matrix4d().SetTranslate(Gf.Vec3d(*c.position)))
+
+
+def _mismatches(stage: Usd.Stage, expected: TempleLayout, column_height: float,
+                atol: float = 1e-6) -> dict[str, object]:
+    """Prims whose composed values differ from ``expected``: path → the expected Mesh, column
+    placement, or None (the prim should not be there)."""
+    cache = UsdGeom.XformCache()
+    out: dict[str, object] = {}
+    meshes = cuboid_meshes(expected, CUBOID_UV_SCALE)
+    seen = set()
+    for layer, ms in meshes.items():
+        for name, m in ms.items():
+            path = f"/Temple/{PART_PRIMS[layer]}/{name}"
+            seen.add(path)
+            prim = stage.GetPrimAtPath(path)
+            if not prim or not prim.IsActive():
+                out[path] = m
+                continue
+            pts = np.array(UsdGeom.Mesh(prim).GetPointsAttr().Get(), dtype=np.float64)
+            xf = np.array(cache.GetLocalToWorldTransform(prim))
+            world = pts @ xf[:3, :3] + xf[3, :3]
+            if world.shape != m.points.shape or not np.allclose(world, m.points, atol=atol):
+                out[path] = m
+    for part in PART_PRIMS.values():
+        prim = stage.GetPrimAtPath(f"/Temple/{part}")
+        for child in (prim.GetChildren() if prim else []):
+            if child.IsA(UsdGeom.Mesh) and str(child.GetPath()) not in seen:
+                out[str(child.GetPath())] = None
+    ratio = expected.params.columns_height / column_height
+    want = {column_path(c): c for c in expected.columns}
+    for path, c in want.items():
+        prim = stage.GetPrimAtPath(path)
+        if not prim or not prim.IsActive() or not Gf.IsClose(
+                cache.GetLocalToWorldTransform(prim), _expected_column(c, ratio), atol):
+            out[path] = c
+    for group in GROUPS.values():
+        prim = stage.GetPrimAtPath(f"/Temple/Colonnade/{group}")
+        for child in (prim.GetChildren() if prim else []):
+            if str(child.GetPath()) not in want:
+                out[str(child.GetPath())] = None
+    return out
+
+
+def _correction_layer(stage: Usd.Stage, fixes: dict[str, object], hyps: Sequence[Hypothesis],
+                      ratio: float) -> Sdf.Layer:
+    """Absolute values for the prims the selected hypotheses do not compose right."""
+    lay = new_layer("Temple", kind="assembly", comment="combined values of the hypotheses "
+                    + ", ".join(h.id for h in hyps) + " (they interact)")
+    cache = UsdGeom.XformCache()
+    with Sdf.ChangeBlock():
+        for path, want in fixes.items():
+            parent = stage.GetPrimAtPath(Sdf.Path(path).GetParentPath())
+            to_parent = np.array(cache.GetLocalToWorldTransform(parent).GetInverse())
+            if want is None:
+                spec = Sdf.CreatePrimInLayer(lay, path)
+                spec.specifier = Sdf.SpecifierOver
+                spec.active = False
+            elif hasattr(want, "points"):
+                local = want.points @ to_parent[:3, :3] + to_parent[3, :3]
+                exists = bool(stage.GetPrimAtPath(path))
+                spec = author_mesh(lay, path, want.with_(points=local))
+                if exists:
+                    spec.specifier = Sdf.SpecifierOver
+                    spec.active = True
+                Sdf.AttributeSpec(spec, "xformOpOrder", Sdf.ValueTypeNames.TokenArray,
+                                  Sdf.VariabilityUniform).default = Vt.TokenArray([])
+            else:
+                m = _expected_column(want, ratio) * Gf.Matrix4d(to_parent)
+                spec = Sdf.CreatePrimInLayer(lay, path)
+                spec.specifier = Sdf.SpecifierOver
+                spec.active = True
+                t = Gf.Transform(m)
+                column_xform(spec, t.GetTranslation(), want.rotation_deg,
+                             want.scale * ratio)
+            for anc in Sdf.Path(path).GetParentPath().GetPrefixes():
+                a = lay.GetPrimAtPath(anc)
+                if a is not None and a.specifier == Sdf.SpecifierDef and anc != "/Temple":
+                    a.specifier = Sdf.SpecifierOver
+                    a.typeName = ""
+            add_paradata(spec, hyps)
+    return lay
+
+
+def _nest(gen: Sdf.Layer, hyps: Sequence[Hypothesis], ref: str) -> None:
+    """Reference ``ref`` from the variant ``alternative`` of every ``hyp_<id>`` of ``hyps``,
+    nested in that order inside /Temple's variant sets."""
+    spec = gen.GetPrimAtPath("/Temple")
+    for i, h in enumerate(hyps):
+        name = hyp_set(h.id)
+        vs = spec.variantSets.get(name)
+        if vs is None:
+            vs = Sdf.VariantSetSpec(spec, name)
+            spec.variantSetNameList.Prepend(name)
+        for v in ("baseline", "alternative"):
+            if v not in vs.variants:
+                Sdf.VariantSpec(vs, v)
+        spec = vs.variants["alternative"].primSpec
+        if i == len(hyps) - 1:
+            spec.referenceList.Prepend(Sdf.Reference(ref))
+
+
+def _realise_combinations(gen: Usd.Stage, folder: Path, layout: TempleLayout,
+                          realised: Sequence[Hypothesis]) -> list[str]:
+    """Compose every combination of the realised hypotheses that reshape the temple, compare it
+    with :func:`build_layout` of that combination, and write a combination layer (nested
+    variants) where they interact. Returns the combination layers written."""
+    shape = [h for h in realised if temple_keys(h)]
+    off = {hyp_set(h.id): "baseline" for h in realised}
+    height = layout.params.columns_height
+    written: list[str] = []
+    try:
+        for size in range(len(shape) + 1):
+            for subset in itertools.combinations(shape, size):
+                sel = dict(off) | {hyp_set(h.id): "alternative" for h in subset}
+                _select(gen, sel)
+                ids = [h.id for h in subset]
+                want = build_layout(layout.params, hypotheses=layout.hypotheses, apply=ids)
+                bad = _mismatches(gen, want, height)
+                if not bad:
+                    continue
+                if size < 2:
+                    raise UsdAuthoringError(
+                        f"hypotheses {ids or '(none)'} compose to other geometry than the "
+                        f"layout at {', '.join(sorted(bad))}")
+                name = "+".join(ids)
+                ratio = want.params.columns_height / height
+                save_layer(_correction_layer(gen, bad, subset, ratio),
+                           folder / "layers" / f"{name}.usda")
+                _nest(gen.GetRootLayer(), subset, f"./layers/{name}.usda")
+                written.append(name)
+                _select(gen, sel)
+                still = _mismatches(gen, want, height)
+                if still:
+                    raise UsdAuthoringError(f"hypotheses {ids} still compose wrongly at "
+                                            f"{', '.join(sorted(still))}")
+    finally:
+        gen.GetSessionLayer().Clear()
+    if written:
+        gen.GetRootLayer().Save()
+    return written
+
+
+# ---------------------------------------------------------------------------------------------
+# checks and report
 
 
 def _check_resolves(root: Path) -> None:
@@ -361,24 +526,47 @@ def _check_resolves(root: Path) -> None:
                 raise UsdAuthoringError(f"column instance {inst.GetPath()} composed to nothing")
 
 
-def _report(stage: Usd.Stage, dest: Path, layout: TempleLayout, seconds: float) -> TempleReport:
-    prims = instances = tris = 0
-    proto_tris: dict[str, int] = {}
-    for proto in stage.GetPrototypes():
+def temple_triangles(stage: Usd.Stage) -> int:
+    """Triangles drawn by the composed stage (instances counted once per instance, nested
+    instances included; default and render purpose, active and visible-by-default)."""
+    memo: dict[Sdf.Path, int] = {}
+
+    def count(root: Usd.Prim) -> int:
         n = 0
-        for prim in Usd.PrimRange(proto):
+        it = iter(Usd.PrimRange(root))
+        for prim in it:
+            if prim != root and prim.IsInstance():
+                proto = prim.GetPrototype().GetPath()
+                if proto not in memo:
+                    memo[proto] = count(prim.GetPrototype())
+                n += memo[proto]
+                it.PruneChildren()
+                continue
+            img = UsdGeom.Imageable(prim)
+            if img and img.GetPurposeAttr().Get() in ("proxy", "guide"):
+                it.PruneChildren()
+                continue
             if prim.IsA(UsdGeom.Mesh):
                 counts = UsdGeom.Mesh(prim).GetFaceVertexCountsAttr().Get()
-                n += int(np.sum(np.asarray(counts) - 2)) if counts is not None else 0
-        proto_tris[str(proto.GetPath())] = n
-    for prim in stage.Traverse():
-        prims += 1
-        if prim.IsInstance():
-            instances += 1
-            tris += proto_tris.get(str(prim.GetPrototype().GetPath()), 0)
-        elif prim.IsA(UsdGeom.Mesh):
-            counts = UsdGeom.Mesh(prim).GetFaceVertexCountsAttr().Get()
-            tris += int(np.sum(np.asarray(counts) - 2))
+                if counts is not None and len(counts):
+                    n += int(np.sum(np.asarray(counts) - 2))
+        return n
+
+    return count(stage.GetPseudoRoot())
+
+
+def _triangles_with(stage: Usd.Stage, selections: dict[str, str]) -> int:
+    try:
+        _select(stage, selections)
+        return temple_triangles(stage)
+    finally:
+        stage.GetSessionLayer().Clear()
+
+
+def _report(stage: Usd.Stage, dest: Path, layout: TempleLayout, seconds: float) -> TempleReport:
+    prims = sum(1 for _ in stage.Traverse())
+    instances = sum(1 for p in stage.Traverse() if p.IsInstance())
     files = sum(1 for f in dest.rglob("*") if f.is_file())
-    return TempleReport(dest / ROOT_LAYER, files, prims, instances, len(proto_tris), tris,
-                        tuple(h.id for h in layout.hypotheses), seconds)
+    return TempleReport(dest / ROOT_LAYER, files, prims, instances, len(stage.GetPrototypes()),
+                        temple_triangles(stage), tuple(h.id for h in layout.hypotheses),
+                        seconds)

@@ -1,0 +1,140 @@
+"""True ``extentsHint`` values per variant combination (``UsdGeom.ModelAPI.ComputeExtentsHint``).
+
+A model's bounds depend on some of its variant sets (the column's ``lod``, ``base``, ``form``;
+the temple's ``lod`` and the hypotheses that reshape it) and not on others (``finish``). One
+hint per prim would be wrong for every combination but the default, so the hints are computed
+on the composed stage for every combination of the candidate sets, the sets that never change
+any hint are dropped, and the rest are authored as *nested* variant sets of the same names
+inside the first relevant set's variants: ``lod{high}`` › ``form{engaged}`` › ``base{G1}`` ›
+``extentsHint``. A nested variant set with the name of a prim's variant set follows that
+set's selection (Pcp looks selections up by name), so the composed hint is always the one of
+the current combination.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+from pxr import Sdf, Usd, UsdGeom, Vt
+
+__all__ = ["variant_extents_hints", "author_extents_hints", "relevant_sets"]
+
+Combo = tuple[str, ...]
+
+
+def variant_extents_hints(
+    stage: Usd.Stage, root: str, prims: Sequence[str], vsets: Mapping[str, Sequence[str]]
+) -> dict[Combo, dict[str, np.ndarray]]:
+    """Hints of ``prims`` for every combination of ``vsets`` selected on ``root``.
+
+    Selections are made in the stage's session layer, which is cleared afterwards.
+
+    Returns
+    -------
+    combination (one variant per set, in ``vsets`` order) → prim path → (2·p, 3) float
+    hint (p purposes, as ``ComputeExtentsHint`` returns them)
+    """
+    session = stage.GetSessionLayer()
+    names = list(vsets)
+    out: dict[Combo, dict[str, np.ndarray]] = {}
+    with Usd.EditContext(stage, session):
+        prim = stage.GetPrimAtPath(root)
+        try:
+            for combo in itertools.product(*(vsets[n] for n in names)):
+                with Sdf.ChangeBlock():
+                    for n, v in zip(names, combo, strict=True):
+                        prim.GetVariantSet(n).SetVariantSelection(v)
+                cache = UsdGeom.BBoxCache(Usd.TimeCode.Default(),
+                                          UsdGeom.Imageable.GetOrderedPurposeTokens())
+                out[combo] = {
+                    p: np.array(UsdGeom.ModelAPI(stage.GetPrimAtPath(p)).ComputeExtentsHint(
+                        cache), dtype=np.float64).reshape(-1, 3)
+                    for p in prims
+                }
+        finally:
+            session.Clear()
+    return out
+
+
+def _same(a: dict[str, np.ndarray], b: dict[str, np.ndarray], tol: float) -> bool:
+    return all(a[k].shape == b[k].shape and np.allclose(a[k], b[k], atol=tol, rtol=0)
+               for k in a)
+
+
+def relevant_sets(
+    hints: Mapping[Combo, dict[str, np.ndarray]], names: Sequence[str], *, tol: float = 1e-6
+) -> list[str]:
+    """The sets whose selection changes some hint (the others are dropped one by one, each
+    only if the hints stay a function of the remaining sets)."""
+    keep = list(range(len(names)))
+    for i in range(len(names)):
+        trial = [k for k in keep if k != i]
+        groups: dict[Combo, dict[str, np.ndarray]] = {}
+        ok = True
+        for combo, h in hints.items():
+            key = tuple(combo[k] for k in trial)
+            if key in groups:
+                if not _same(groups[key], h, tol):
+                    ok = False
+                    break
+            else:
+                groups[key] = h
+        if ok:
+            keep = trial
+    return [names[k] for k in keep]
+
+
+def _variant_prim(spec: Sdf.PrimSpec, vset: str, variant: str) -> Sdf.PrimSpec:
+    vs = spec.variantSets.get(vset)
+    if vs is None:
+        vs = Sdf.VariantSetSpec(spec, vset)
+        spec.variantSetNameList.Prepend(vset)
+    var = vs.variants.get(variant)
+    if var is None:
+        var = Sdf.VariantSpec(vs, variant)
+    return var.primSpec
+
+
+def _author_hint(spec: Sdf.PrimSpec, rel: Sdf.Path, hint: np.ndarray) -> None:
+    target = spec
+    for name in ([] if rel == Sdf.Path(".") else rel.pathString.split("/")):
+        child = target.nameChildren.get(name)
+        if child is None:
+            child = Sdf.PrimSpec(target, name, Sdf.SpecifierOver)
+        target = child
+    attr = target.attributes.get("extentsHint")
+    if attr is None:
+        attr = Sdf.AttributeSpec(target, "extentsHint", Sdf.ValueTypeNames.Float3Array,
+                                 Sdf.VariabilityUniform)
+    attr.default = Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(hint, dtype=np.float32))
+
+
+def author_extents_hints(
+    layer: Sdf.Layer,
+    root: str,
+    hints: Mapping[Combo, dict[str, np.ndarray]],
+    names: Sequence[str],
+    *,
+    tol: float = 1e-6,
+) -> list[str]:
+    """Author ``hints`` (from :func:`variant_extents_hints`) into ``layer`` on ``root`` and its
+    descendants, nested in the relevant variant sets; returns those sets (outermost first)."""
+    rel_sets = relevant_sets(hints, names, tol=tol)
+    idx = [list(names).index(n) for n in rel_sets]
+    root_path = Sdf.Path(root)
+    root_spec = layer.GetPrimAtPath(root_path)
+    done: set[Combo] = set()
+    with Sdf.ChangeBlock():
+        for combo, h in hints.items():
+            key = tuple(combo[i] for i in idx)
+            if key in done:
+                continue
+            done.add(key)
+            spec = root_spec
+            for n, v in zip(rel_sets, key, strict=True):
+                spec = _variant_prim(spec, n, v)
+            for path, hint in h.items():
+                _author_hint(spec, Sdf.Path(path).MakeRelativePath(root_path), hint)
+    return rel_sets

@@ -1,0 +1,344 @@
+"""Reconstruction hypotheses as layers that combine: relative opinions, paradata by id.
+
+Each realised hypothesis of a temple becomes one layer of opinions *relative to what it
+changes*, so that any set of hypotheses can be selected at once:
+
+* a cuboid that only moves (the cornice and the roof under a lower frieze) gets a
+  ``xformOp:translate`` — on its part (``/Temple/Roof``) when the whole part moves alike, else on
+  the mesh; its points stay those of the baseline, so another hypothesis may reshape them;
+* a cuboid that changes shape (the roof slabs under another pitch) gets new points, normals and
+  ``st`` at the baseline position, so a translation from another hypothesis still applies;
+* a column that moves or is rescaled gets its XformCommonAPI ops; ``column.flute_count`` and
+  ``material.finish`` become variant selections and material bindings.
+
+Where two or more hypotheses still interact (both reshape one mesh, or both move one prim), the
+composer writes a *combination* layer (``layers/<a>+<b>.usda``) with the combined values and
+references it from a nested variant set ``hyp_<b>`` inside ``hyp_<a>``'s ``alternative``, which
+Pcp selects by name with the prim's own ``hyp_<b>`` selection; see
+:func:`ionic_usd.usd.temple.compose_temple`, which checks every combination against
+:func:`ionic_usd.temple.layout.build_layout` and writes only the combination layers needed.
+
+Paradata (London Charter principles 4 and 6) is keyed by hypothesis id, so a prim that several
+selected hypotheses touch lists them all (``customData`` dictionaries merge across layers):
+``customData["ionic_usd"]["hypotheses"][<id>] = {id, description, certainty, sources}``, and
+the same as ``userProperties:ionic_usd:<id>:…`` string attributes, which Blender's USD importer
+turns into custom properties.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from pxr import Sdf, Tf, Vt
+
+from ionic_usd.errors import ParameterError
+from ionic_usd.geometry.mesh import Mesh
+from ionic_usd.temple.cuboid import cuboid_mesh
+from ionic_usd.temple.layout import (
+    COMPOSER_NAMESPACES,
+    ColumnKind,
+    ColumnPlacement,
+    Hypothesis,
+    Layer,
+    TempleLayout,
+    build_layout,
+)
+from ionic_usd.usd.materials import bind_material_spec
+from ionic_usd.usd.mesh import author_mesh
+from ionic_usd.usd.stage import new_layer
+
+__all__ = [
+    "FINISH_VALUES",
+    "GROUPS",
+    "FORMS",
+    "PART_PRIMS",
+    "HypothesisChanges",
+    "column_path",
+    "cuboid_meshes",
+    "hyp_ident",
+    "hyp_set",
+    "hypothesis_paradata",
+    "add_paradata",
+    "check_composer_changes",
+    "column_xform",
+    "temple_keys",
+    "hypothesis_layer",
+]
+
+PART_PRIMS = {Layer.PODIUM: "Podium", Layer.CELLA: "Cella", Layer.ENTABLATURE: "Entablature",
+              Layer.ROOF: "Roof"}
+GROUPS = {ColumnKind.FREE: "Free", ColumnKind.ENGAGED: "Engaged", ColumnKind.CORNER: "Corner"}
+# the column asset's form variant of each kind of column
+FORMS = {ColumnKind.FREE: "full", ColumnKind.ENGAGED: "engaged", ColumnKind.CORNER: "corner"}
+# material.finish value -> the column asset's finish variant
+FINISH_VALUES = {"bare_stone": "travertine", "travertine": "travertine",
+                 "stucco": "stucco", "painted_stucco": "stucco"}
+# composer keys recorded for the future (listed with realised = false, never an error)
+RECORDED_ONLY: dict[str, tuple[str, ...]] = {}
+_T = Sdf.ValueTypeNames
+_TOL = 1e-9
+
+
+def hyp_ident(hid: str) -> str:
+    return Tf.MakeValidIdentifier(hid)
+
+
+def hyp_set(hid: str) -> str:
+    """The variant set of a hypothesis on /Temple."""
+    return "hyp_" + hyp_ident(hid)
+
+
+def column_path(c: ColumnPlacement) -> str:
+    return f"/Temple/Colonnade/{GROUPS[c.kind]}/{Tf.MakeValidIdentifier(c.name)}"
+
+
+def temple_keys(h: Hypothesis) -> list[str]:
+    """The ``section.key`` changes of ``h`` that reshape the temple layout."""
+    return [k for k in h.changes if k.split(".")[0] not in COMPOSER_NAMESPACES]
+
+
+def cuboid_meshes(layout: TempleLayout, uv_scale: float) -> dict[Layer, dict[str, Mesh]]:
+    """Meshes of every cuboid, by layer and prim name (``st`` at ``uv_scale`` per metre)."""
+    return {layer: {Tf.MakeValidIdentifier(c.name): cuboid_mesh(c, uv_scale=uv_scale)
+                    for c in cs} for layer, cs in layout.cuboids.items()}
+
+
+@dataclass(frozen=True)
+class HypothesisChanges:
+    """What the composer will author for one hypothesis (``None`` members: nothing)."""
+
+    flutes: str | None = None  # the column asset's flutes variant
+    finish: str | None = None  # the column asset's finish variant
+    capital: str | None = None  # the column asset's capital variant on the corner columns
+    realised: bool = True
+
+
+def check_composer_changes(
+    h: Hypothesis, flute_variants: Mapping[str, int], finishes: Iterable[str],
+    capitals: Iterable[str] = ("normal", "angle"),
+) -> HypothesisChanges:
+    """Validate the ``column.…``/``material.…`` changes of ``h`` against what the generator can
+    realise; unknown keys or values raise :class:`ParameterError` naming them."""
+    ctx = f"hypothesis {h.id!r}"
+    flutes = finish = capital = None
+    realised = bool(temple_keys(h))
+    for key, value in h.changes.items():
+        if key.split(".")[0] not in ("column", "material"):
+            continue
+        if key == "column.flute_count":
+            by_count = {n: name for name, n in flute_variants.items()}
+            if isinstance(value, bool) or value not in by_count:
+                raise ParameterError(key, value, "one of " + ", ".join(
+                    str(n) for n in sorted(by_count)), context=ctx)
+            flutes, realised = by_count[value], True
+        elif key == "material.finish":
+            valid = [k for k, v in FINISH_VALUES.items() if v in set(finishes)]
+            if value not in valid:
+                raise ParameterError(key, value, "one of " + ", ".join(valid), context=ctx)
+            finish, realised = FINISH_VALUES[value], True
+        elif key == "column.corner_capital":
+            valid_caps = [c for c in capitals if c != "normal"]
+            if value not in valid_caps:
+                raise ParameterError(key, value, "one of " + ", ".join(valid_caps), context=ctx)
+            capital, realised = value, True
+        elif key in RECORDED_ONLY:
+            if value not in RECORDED_ONLY[key]:
+                raise ParameterError(key, value, "one of " + ", ".join(RECORDED_ONLY[key]),
+                                     context=ctx)
+        else:
+            known = ["column.flute_count", "material.finish", "column.corner_capital",
+                     *RECORDED_ONLY]
+            raise ParameterError(key, value, "a temple key (section.key) or one of "
+                                 + ", ".join(known), context=ctx)
+    return HypothesisChanges(flutes, finish, capital, realised)
+
+
+def hypothesis_paradata(h: Hypothesis) -> dict:
+    """``{id, description, certainty, sources}`` of ``h`` (customData values)."""
+    return {"id": h.id, "description": " ".join(h.description.split()),
+            "certainty": str(h.certainty), "sources": Vt.StringArray(list(h.sources))}
+
+
+def add_paradata(spec: Sdf.PrimSpec, hyps: Sequence[Hypothesis]) -> None:
+    """Record ``hyps`` on ``spec``: customData keyed by id, and ``userProperties:`` strings."""
+    custom = dict(spec.customData)
+    top = dict(custom.get("ionic_usd", {}))
+    listed = dict(top.get("hypotheses", {}))
+    for h in hyps:
+        ident = hyp_ident(h.id)
+        listed[ident] = hypothesis_paradata(h)
+        values = {"id": h.id, "description": listed[ident]["description"],
+                  "certainty": str(h.certainty), "sources": "; ".join(h.sources)}
+        for field, value in values.items():
+            name = f"userProperties:ionic_usd:{ident}:{field}"
+            attr = spec.attributes.get(name) or Sdf.AttributeSpec(
+                spec, name, _T.String, Sdf.VariabilityUniform, declaresCustom=True)
+            attr.default = value
+    top["hypotheses"] = listed
+    custom["ionic_usd"] = top
+    spec.customData = custom
+
+
+def column_xform(spec: Sdf.PrimSpec, pos: Sequence[float], rot_y_deg: float,
+                 scale: float) -> None:
+    """Translate, rotateXYZ and scale ops in XformCommonAPI's order (no pivot)."""
+    def put(name: str, type_name, value) -> None:
+        attr = spec.attributes.get(name) or Sdf.AttributeSpec(spec, name, type_name)
+        attr.default = value
+
+    from pxr import Gf  # noqa: PLC0415 - local: keeps the module's import list short
+
+    put("xformOp:translate", _T.Double3, Gf.Vec3d(*map(float, pos)))
+    put("xformOp:rotateXYZ", _T.Float3, Gf.Vec3f(0.0, float(rot_y_deg), 0.0))
+    put("xformOp:scale", _T.Float3, Gf.Vec3f(float(scale), float(scale), float(scale)))
+    order = spec.attributes.get("xformOpOrder") or Sdf.AttributeSpec(
+        spec, "xformOpOrder", _T.TokenArray, Sdf.VariabilityUniform)
+    order.default = Vt.TokenArray(["xformOp:translate", "xformOp:rotateXYZ", "xformOp:scale"])
+
+
+def _over(layer: Sdf.Layer, path: str) -> Sdf.PrimSpec:
+    spec = layer.GetPrimAtPath(path)
+    if spec is None:
+        spec = Sdf.CreatePrimInLayer(layer, path)
+        spec.specifier = Sdf.SpecifierOver
+    return spec
+
+
+def _translate(spec: Sdf.PrimSpec, offset: np.ndarray) -> None:
+    from pxr import Gf  # noqa: PLC0415
+
+    attr = spec.attributes.get("xformOp:translate") or Sdf.AttributeSpec(
+        spec, "xformOp:translate", _T.Double3)
+    attr.default = Gf.Vec3d(*map(float, offset))
+    order = spec.attributes.get("xformOpOrder") or Sdf.AttributeSpec(
+        spec, "xformOpOrder", _T.TokenArray, Sdf.VariabilityUniform)
+    order.default = Vt.TokenArray(["xformOp:translate"])
+
+
+def _offset(old: Mesh, new: Mesh) -> np.ndarray | None:
+    """The constant translation from ``old`` to ``new`` (None: the shape changed)."""
+    if old.points.shape != new.points.shape:
+        return None
+    d = np.asarray(new.points, dtype=np.float64) - np.asarray(old.points, dtype=np.float64)
+    return d[0] if np.allclose(d, d[0], atol=_TOL, rtol=0) else None
+
+
+def _shape_opinions(lay: Sdf.Layer, base: TempleLayout, alt: TempleLayout, uv_scale: float,
+                    asset_ref: str, touched: list[Sdf.PrimSpec], *,
+                    column_height: float) -> None:
+    """Relative opinions that turn ``base`` into ``alt`` (cuboids and column placements)."""
+    old_m, new_m = cuboid_meshes(base, uv_scale), cuboid_meshes(alt, uv_scale)
+    for layer in sorted(set(old_m) | set(new_m)):
+        part = f"/Temple/{PART_PRIMS[layer]}"
+        olds, news = old_m.get(layer, {}), new_m.get(layer, {})
+        moves = {n: _offset(olds[n], news[n]) for n in olds if n in news}
+        same_move = (set(olds) == set(news) and all(v is not None for v in moves.values())
+                     and len({tuple(np.round(v, 12)) for v in moves.values()}) == 1)
+        if same_move and np.any(np.abs(next(iter(moves.values()))) > _TOL):
+            spec = _over(lay, part)
+            _translate(spec, next(iter(moves.values())))
+            touched.append(spec)
+            continue
+        for name in sorted(set(olds) | set(news)):
+            path = f"{part}/{name}"
+            if name not in news:
+                spec = _over(lay, path)
+                spec.active = False
+            elif name not in olds:
+                author_mesh(lay, path, news[name])
+                spec = lay.GetPrimAtPath(path)
+            else:
+                off = moves[name]
+                if off is not None and not np.any(np.abs(off) > _TOL):
+                    continue
+                spec = _over(lay, path)
+                if off is not None:
+                    _translate(spec, off)
+                else:
+                    author_mesh(lay, path, news[name])
+                    spec.specifier = Sdf.SpecifierOver
+            touched.append(spec)
+    ratio = alt.params.columns_height / column_height
+    olds_c = {column_path(c): c for c in base.columns}
+    for c in alt.columns:
+        path = column_path(c)
+        o = olds_c.pop(path, None)
+        scale = c.scale * ratio
+        if o is not None and np.allclose(o.position, c.position, atol=_TOL, rtol=0) and \
+                abs(o.rotation_deg - c.rotation_deg) < _TOL and abs(o.scale - scale) < _TOL:
+            continue
+        spec = _over(lay, path)
+        if o is None:
+            spec.specifier = Sdf.SpecifierDef
+            spec.typeName = "Xform"
+            spec.instanceable = True
+            spec.referenceList.Prepend(Sdf.Reference(asset_ref))
+            spec.variantSelections["form"] = FORMS[c.kind]
+        column_xform(spec, c.position, c.rotation_deg, scale)
+        touched.append(spec)
+    for path in olds_c:
+        spec = _over(lay, path)
+        spec.active = False
+        touched.append(spec)
+
+
+def hypothesis_layer(
+    hyps: Sequence[Hypothesis],
+    layout: TempleLayout,
+    *,
+    changes: Mapping[str, HypothesisChanges],
+    uv_scale: float,
+    asset_ref: str,
+    materials_ref: str,
+    finish_materials: Mapping[str, str],
+    column_height: float,
+) -> Sdf.Layer | None:
+    """The layer that realises one hypothesis (``len(hyps) == 1``) against the baseline.
+
+    Returns None when the hypothesis changes nothing the generator can realise.
+    """
+    (h,) = hyps
+    lay = new_layer("Temple", kind="assembly",
+                    comment=f"reconstruction hypothesis {h.id!r} (ionic_usd)")
+    touched: list[Sdf.PrimSpec] = []
+    ch = changes[h.id]
+    with Sdf.ChangeBlock():
+        if temple_keys(h):
+            alt = build_layout(layout.params, hypotheses=layout.hypotheses, apply=[h.id])
+            _shape_opinions(lay, layout, alt, uv_scale, asset_ref, touched,
+                            column_height=column_height)
+        columns = [column_path(c) for c in layout.columns]
+        if ch.flutes is not None:
+            for p in columns:
+                spec = _over(lay, p)
+                spec.variantSelections["flutes"] = ch.flutes
+                touched.append(spec)
+        if ch.capital is not None:
+            # the colonnade's corner columns get the angle capital, turned so that its two
+            # volute faces show on the building's two outer sides
+            ratio = layout.params.columns_height / column_height
+            for c in layout.columns:
+                if c.angle_rotation_deg is None:
+                    continue
+                spec = _over(lay, column_path(c))
+                spec.variantSelections["capital"] = ch.capital
+                if abs(c.angle_rotation_deg - c.rotation_deg) > _TOL:
+                    column_xform(spec, c.position, c.angle_rotation_deg, c.scale * ratio)
+                touched.append(spec)
+        if ch.finish is not None:
+            lay.subLayerPaths.append(materials_ref)  # the bindings resolve in this layer alone
+            for p in columns:
+                spec = _over(lay, p)
+                spec.variantSelections["finish"] = ch.finish
+                touched.append(spec)
+            for layer in layout.cuboids:
+                spec = _over(lay, f"/Temple/{PART_PRIMS[layer]}")
+                bind_material_spec(spec, f"/Temple/Materials/{finish_materials[ch.finish]}")
+                touched.append(spec)
+        if not touched:
+            return None
+        for spec in {s.path: s for s in touched}.values():
+            add_paradata(spec, [h])
+    return lay

@@ -1,0 +1,141 @@
+"""extentsHint: authored per variant combination, equal to BBoxCache of the composed geometry."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+from pxr import Sdf, Usd, UsdGeom
+
+from ionic_usd.usd.bounds import author_extents_hints, relevant_sets, variant_extents_hints
+
+PURPOSES = [UsdGeom.Tokens.default_, UsdGeom.Tokens.render, UsdGeom.Tokens.proxy,
+            UsdGeom.Tokens.guide]
+
+
+def bound_per_purpose(prim: Usd.Prim, brute: bool = True) -> list[np.ndarray | None]:
+    """(2, 3) untransformed bound of each purpose: by brute force over the meshes' points, or
+    (``brute=False``) from ``UsdGeom.BBoxCache``."""
+    out: list[np.ndarray | None] = []
+    if not brute:
+        for purpose in PURPOSES:
+            r = UsdGeom.BBoxCache(Usd.TimeCode.Default(), [purpose]).ComputeUntransformedBound(
+                prim).ComputeAlignedRange()
+            out.append(None if r.IsEmpty() else np.array([r.GetMin(), r.GetMax()]))
+        return out
+    xf = UsdGeom.XformCache()
+    root_inv = np.array(xf.GetLocalToWorldTransform(prim).GetInverse())
+    for purpose in PURPOSES:
+        pts = []
+        for p in Usd.PrimRange(prim, Usd.TraverseInstanceProxies()):
+            if not p.IsA(UsdGeom.Mesh):
+                continue
+            img = UsdGeom.Imageable(p)
+            if img.ComputeVisibility() == "invisible" or img.ComputePurpose() != purpose:
+                continue
+            m = np.array(xf.GetLocalToWorldTransform(p)) @ root_inv
+            v = np.array(UsdGeom.Mesh(p).GetPointsAttr().Get(), dtype=np.float64)
+            pts.append(v @ m[:3, :3] + m[3, :3])
+        if pts:
+            allp = np.concatenate(pts)
+            out.append(np.stack([allp.min(axis=0), allp.max(axis=0)]))
+        else:
+            out.append(None)
+    return out
+
+
+def check_hint(prim: Usd.Prim, where, brute: bool = True) -> None:
+    hint = UsdGeom.ModelAPI(prim).GetExtentsHint()
+    assert hint is not None and len(hint) >= 2, where
+    hint = np.array(hint, dtype=np.float64).reshape(-1, 2, 3)
+    truth = bound_per_purpose(prim, brute)
+    for i, h in enumerate(hint):
+        if truth[i] is None:  # an empty purpose is written as an empty (inverted) box
+            assert (h[0] > h[1]).all(), (where, PURPOSES[i])
+        else:
+            np.testing.assert_allclose(h, truth[i], atol=1e-4, err_msg=str((where, i)))
+    for i in range(len(hint), 4):
+        assert truth[i] is None, (where, PURPOSES[i])
+    # and what Hydra reads: BBoxCache of the composed geometry for default + render
+    cache = UsdGeom.BBoxCache(Usd.TimeCode.Default(), PURPOSES[:2])
+    r = cache.ComputeUntransformedBound(prim).ComputeAlignedRange()
+    drawn = [h for h in hint[:2] if (h[0] <= h[1]).all()]  # default and render, if not empty
+    lo = np.min([h[0] for h in drawn], axis=0)
+    hi = np.max([h[1] for h in drawn], axis=0)
+    np.testing.assert_allclose([r.GetMin(), r.GetMax()], [lo, hi], atol=1e-4,
+                               err_msg=str(where))
+
+
+def every_combination(stage, root, sets):
+    prim = stage.GetPrimAtPath(root)
+    names = list(sets)
+    with Usd.EditContext(stage, stage.GetSessionLayer()):
+        for combo in itertools.product(*(sets[n] for n in names)):
+            for n, v in zip(names, combo, strict=True):
+                prim.GetVariantSet(n).SetVariantSelection(v)
+            yield dict(zip(names, combo, strict=True))
+
+
+def test_column_hints_match_every_combination(column_asset):
+    stage = Usd.Stage.Open(str(column_asset.path))
+    root = stage.GetDefaultPrim()
+    vsets = root.GetVariantSets()
+    sets = {n: vsets.GetVariantSet(n).GetVariantNames() for n in vsets.GetNames()
+            if n != "finish"}
+    seen = set()
+    for sel in every_combination(stage, "/IonicColumn", sets):
+        check_hint(root, sel)
+        seen.add(tuple(np.array(UsdGeom.ModelAPI(root).GetExtentsHint()).ravel()))
+    assert len(seen) > 3  # the hint does change with the selection (form, base)
+    # the engaged column's box (render and proxy purposes) stops at the wall plane
+    with Usd.EditContext(stage, stage.GetSessionLayer()):
+        root.GetVariantSet("form").SetVariantSelection("engaged")
+    hint = np.array(UsdGeom.ModelAPI(root).GetExtentsHint())
+    assert len(hint) == 6 and (hint[0] > hint[1]).all()  # default purpose: empty
+    assert hint[2][2] == pytest.approx(-0.05, abs=1e-6) == hint[4][2]
+
+
+def test_temple_hints_match_every_combination(portunus_temple):
+    stage = Usd.Stage.Open(str(portunus_temple.root))
+    root = stage.GetDefaultPrim()
+    vsets = root.GetVariantSets()
+    sets = {n: vsets.GetVariantSet(n).GetVariantNames() for n in vsets.GetNames()}
+    assert "lod" in sets and len(sets) == 5
+    parts = ["/Temple", "/Temple/Podium", "/Temple/Cella", "/Temple/Entablature",
+             "/Temple/Roof", "/Temple/Colonnade"]
+    tops = set()
+    for sel in every_combination(stage, "/Temple", sets):
+        for p in parts:
+            check_hint(stage.GetPrimAtPath(p), (p, sel), brute=sel["lod"] == "low")
+        tops.add(round(float(UsdGeom.ModelAPI(root).GetExtentsHint()[1][1]), 4))
+    assert len(tops) == 4  # roof pitch × frieze height
+
+
+def test_relevant_sets_and_nesting():
+    """A toy: the hint depends on a and c, not on b; authored nested a › c."""
+    hints = {}
+    for a, b, c in itertools.product("xy", "pq", "mn"):
+        hints[(a, b, c)] = {"/R": np.array([[0, 0, 0], [1 + (a == "y"), 1, 1 + (c == "n")]],
+                                           dtype=float)}
+    assert relevant_sets(hints, ["a", "b", "c"]) == ["a", "c"]
+    layer = Sdf.Layer.CreateAnonymous(".usda")
+    spec = Sdf.CreatePrimInLayer(layer, "/R")
+    spec.specifier, spec.typeName = Sdf.SpecifierDef, "Xform"
+    for n, vs in (("a", "xy"), ("b", "pq"), ("c", "mn")):
+        vset = Sdf.VariantSetSpec(spec, n)
+        spec.variantSetNameList.Append(n)
+        for v in vs:
+            Sdf.VariantSpec(vset, v)
+        spec.variantSelections[n] = vs[0]
+    assert author_extents_hints(layer, "/R", hints, ["a", "b", "c"]) == ["a", "c"]
+    stage = Usd.Stage.Open(layer)
+    got = variant_extents_hints(stage, "/R", ["/R"], {"a": "xy", "b": "pq", "c": "mn"})
+    assert set(got) == set(hints)
+    prim = stage.GetPrimAtPath("/R")
+    for sel, want in hints.items():
+        with Usd.EditContext(stage, stage.GetSessionLayer()):
+            for n, v in zip("abc", sel, strict=True):
+                prim.GetVariantSet(n).SetVariantSelection(v)
+        np.testing.assert_allclose(np.array(UsdGeom.ModelAPI(prim).GetExtentsHint()),
+                                   want["/R"])

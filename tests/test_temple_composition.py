@@ -1,0 +1,370 @@
+"""Temple composition that holds in production: every layer alone, model hierarchy, one material
+library, the user's layer strongest, hypotheses in every combination, classes, xform ops, lod."""
+
+from __future__ import annotations
+
+import itertools
+from pathlib import Path
+
+import numpy as np
+import pytest
+from pxr import Gf, Sdf, Usd, UsdGeom, UsdShade
+
+from ionic_usd.cli import main
+from ionic_usd.errors import ParameterError
+from ionic_usd.params import load_toml
+from ionic_usd.temple.layout import layout_from_mapping, portunus_layout
+from ionic_usd.usd import validate_stage
+from ionic_usd.usd.column_asset import UV_SPAN
+from ionic_usd.usd.temple import compose_temple, hypothesis_layers, temple_triangles
+
+EVERYTHING = Usd.TraverseInstanceProxies(Usd.PrimAllPrimsPredicate)
+
+
+def folder_of(report) -> Path:
+    return report.root.parent
+
+
+def layer_files(folder: Path) -> list[Path]:
+    return sorted(f for f in folder.rglob("*") if f.suffix in (".usda", ".usdc", ".usd"))
+
+
+def select(stage: Usd.Stage, **selections: str) -> None:
+    with Usd.EditContext(stage, stage.GetSessionLayer()):
+        for vs, v in selections.items():
+            stage.GetPrimAtPath("/Temple").GetVariantSet(vs).SetVariantSelection(v)
+
+
+def assert_contiguous_models(stage: Usd.Stage, where: str) -> None:
+    for prim in Usd.PrimRange(stage.GetPseudoRoot(), EVERYTHING):
+        if prim.IsPseudoRoot() or not prim.IsModel():
+            continue
+        parent = prim.GetParent()
+        assert parent.IsPseudoRoot() or parent.IsGroup(), (where, str(prim.GetPath()))
+
+
+def test_every_layer_alone_is_a_valid_stage(portunus_temple):
+    folder = folder_of(portunus_temple)
+    files = layer_files(folder)
+    names = {f.relative_to(folder).as_posix() for f in files}
+    assert {"Temple.usda", "generated.usda", "overrides.usda", "materials.usda", "podium.usda",
+            "cella.usda", "entablature.usda", "roof.usda", "colonnade.usda",
+            "IonicColumn/IonicColumn.usda", "IonicColumn/Payload/Geometry.usdc",
+            "layers/roof-pitch-15.usda"} <= names
+    for f in files:
+        layer = Sdf.Layer.FindOrOpen(str(f))
+        where = f.relative_to(folder).as_posix()
+        assert layer.pseudoRoot.GetInfo("upAxis") == "Y", where
+        assert layer.pseudoRoot.GetInfo("metersPerUnit") == 1.0, where
+        assert layer.defaultPrim, where
+        spec = layer.GetPrimAtPath("/" + layer.defaultPrim)
+        if spec is not None:  # Temple.usda holds sublayers only
+            assert spec.specifier == Sdf.SpecifierDef and spec.typeName == "Xform", where
+        stage = Usd.Stage.Open(layer)
+        prim = stage.GetDefaultPrim()
+        assert prim.IsDefined() and prim.GetTypeName() == "Xform", where
+        assert validate_stage(stage) == [], where
+        assert_contiguous_models(stage, where)
+        # material bindings resolve in the layer alone
+        for p in stage.Traverse():
+            rel = UsdShade.MaterialBindingAPI(p).GetDirectBindingRel()
+            for target in (rel.GetTargets() if rel else []):
+                assert UsdShade.Material(stage.GetPrimAtPath(target)), (where, target)
+    # big arrays live in crate files: no text layer holds an array of over 1,000 values
+    for f in files:
+        if f.suffix != ".usda":
+            continue
+        layer = Sdf.Layer.FindOrOpen(str(f))
+        sizes = []
+
+        def visit(path, layer=layer, sizes=sizes):
+            if path.IsPropertyPath():
+                spec = layer.GetPropertyAtPath(path)
+                value = getattr(spec, "default", None)
+                if value is not None and hasattr(value, "__len__") and not isinstance(
+                        value, str):
+                    sizes.append(len(value))
+
+        layer.Traverse(layer.pseudoRoot.path, visit)
+        assert max(sizes, default=0) <= 1000, f
+
+
+def test_model_hierarchy_and_scopes(portunus_temple):
+    stage = Usd.Stage.Open(str(portunus_temple.root))
+    assert_contiguous_models(stage, "Temple.usda")
+    root = stage.GetDefaultPrim()
+    assert Usd.ModelAPI(root).GetKind() == "assembly"
+    kinds = {p.GetName(): Usd.ModelAPI(p).GetKind() for p in root.GetChildren()}
+    assert kinds["Colonnade"] == "group" and kinds["Podium"] == "component"
+    assert root.GetChild("Materials").GetTypeName() == "Scope"
+    columns = [p for p in stage.Traverse() if p.IsInstance()]
+    assert len(columns) == 18
+    for col in columns:
+        assert col.IsModel() and Usd.ModelAPI(col).GetKind() == "component"
+        proto = col.GetPrototype()
+        assert proto.GetChild("Geom").GetTypeName() == "Scope"
+        assert {c.GetTypeName() for c in proto.GetChild("Geom").GetChildren()} == {"Scope"}
+    # every Xform either is a model or carries transform ops: organising prims are Scopes
+    for p in Usd.PrimRange(stage.GetPseudoRoot(), EVERYTHING):
+        if p.GetTypeName() == "Xform" and not p.IsModel():
+            assert UsdGeom.Xformable(p).GetOrderedXformOps(), p.GetPath()
+
+
+def test_one_material_library_one_copy_of_the_maps(portunus_temple):
+    folder = folder_of(portunus_temple)
+    assert not (folder / "Textures").exists()
+    pngs = sorted(folder.rglob("*.png"))
+    assert {p.parent for p in pngs} == {folder / "IonicColumn" / "Payload" / "Textures"}
+    stage = Usd.Stage.Open(str(portunus_temple.root))
+    used = set()
+    for p in Usd.PrimRange(stage.GetPseudoRoot(), EVERYTHING):
+        shader = UsdShade.Shader(p)
+        if not shader or shader.GetIdAttr().Get() != "UsdUVTexture":
+            continue
+        file = shader.GetInput("file").Get()
+        used.add(Path(file.resolvedPath))
+        fallback = shader.GetInput("fallback")
+        assert fallback and fallback.Get() is not None, p.GetPath()
+        space = shader.GetInput("sourceColorSpace").Get()
+        assert space == ("sRGB" if p.GetName() == "BaseColor" else "raw"), p.GetPath()
+        # st comes through the material's UsdTransform2d (the shared tiling)
+        src = shader.GetInput("st").GetConnectedSources()[0][0].source
+        assert UsdShade.Shader(src.GetPrim()).GetIdAttr().Get() == "UsdTransform2d"
+    assert used == {p.resolve() for p in pngs} and len(used) == 6
+    # the temple's parts bind the library's materials, and their st follow its convention
+    part = stage.GetPrimAtPath("/Temple/Podium")
+    mat, _ = UsdShade.MaterialBindingAPI(part).ComputeBoundMaterial()
+    assert mat.GetPath() == Sdf.Path("/Temple/Materials/PaintedStucco")
+    die = stage.GetPrimAtPath("/Temple/Podium/die")
+    st = np.array(UsdGeom.PrimvarsAPI(die).GetPrimvar("st").ComputeFlattened())
+    pts = np.array(UsdGeom.Mesh(die).GetPointsAttr().Get())
+    assert np.ptp(st) * UV_SPAN == pytest.approx(np.ptp(pts, axis=0).max(), abs=1e-3)
+
+
+def test_overrides_are_strongest_and_survive_a_rebuild(tmp_path):
+    folder = tmp_path / "T"
+    layout = portunus_layout()
+    compose_temple(folder, layout, texture_size=16)
+    user = Sdf.Layer.FindOrOpen(str(folder / "overrides.usda"))
+    temple = user.GetPrimAtPath("/Temple")
+    temple.variantSelections["hyp_roof_pitch_15"] = "alternative"
+    temple.variantSelections["lod"] = "low"
+    podium = Sdf.CreatePrimInLayer(user, "/Temple/Podium")
+    podium.specifier = Sdf.SpecifierOver
+    Sdf.AttributeSpec(podium, "visibility", Sdf.ValueTypeNames.Token,
+                      Sdf.VariabilityUniform).default = "invisible"
+    altar = Sdf.CreatePrimInLayer(user, "/Temple/Altar")
+    altar.specifier, altar.typeName = Sdf.SpecifierDef, "Cube"
+    col = Sdf.CreatePrimInLayer(user, "/Temple/Colonnade/Free/front_2")
+    col.specifier = Sdf.SpecifierOver
+    col.variantSelections["lod"] = "medium"
+    user.Save()
+    before = (folder / "overrides.usda").read_bytes()
+
+    def check() -> None:
+        stage = Usd.Stage.Open(str(folder / "Temple.usda"))
+        root = stage.GetDefaultPrim()
+        assert root.GetVariantSet("hyp_roof_pitch_15").GetVariantSelection() == "alternative"
+        pitch = stage.GetPrimAtPath("/Temple/Roof/roof_left").GetCustomData()["ionic_usd"]
+        assert "roof_pitch_15" in pitch["hypotheses"]
+        assert UsdGeom.Imageable(stage.GetPrimAtPath("/Temple/Podium")).ComputeVisibility() \
+            == UsdGeom.Tokens.invisible
+        assert stage.GetPrimAtPath("/Temple/Altar").GetTypeName() == "Cube"
+        lods = {p.GetName(): p.GetVariantSet("lod").GetVariantSelection()
+                for p in stage.Traverse() if p.IsInstance()}
+        assert lods.pop("front_2") == "medium" and set(lods.values()) == {"low"}
+        assert validate_stage(stage) == []
+
+    check()
+    compose_temple(folder, layout, texture_size=16, force=True)
+    assert (folder / "overrides.usda").read_bytes() == before
+    check()
+
+
+def layer_paradata(folder: Path) -> dict[str, dict[str, set[str]]]:
+    """Layer file stem → prim path → hypothesis idents recorded there."""
+    out: dict[str, dict[str, set[str]]] = {}
+    for f in (folder / "layers").glob("*.usda"):
+        layer = Sdf.Layer.FindOrOpen(str(f))
+        found: dict[str, set[str]] = {}
+
+        def visit(path, layer=layer, found=found):
+            if path.IsPrimPath():
+                hyps = layer.GetPrimAtPath(path).customData.get("ionic_usd", {}).get(
+                    "hypotheses")
+                if hyps:
+                    found[str(path)] = set(hyps)
+
+        layer.Traverse(Sdf.Path("/Temple"), visit)
+        out[f.stem] = found
+    return out
+
+
+def test_every_combination_of_hypotheses_composes(portunus_temple):
+    folder = folder_of(portunus_temple)
+    stage = Usd.Stage.Open(str(portunus_temple.root))
+    root = stage.GetDefaultPrim()
+    hyps = sorted(n for n in root.GetVariantSets().GetNames() if n.startswith("hyp_"))
+    assert len(hyps) == 4
+    recorded = layer_paradata(folder)
+    layout = portunus_layout()
+    cache_purposes = [UsdGeom.Tokens.default_, UsdGeom.Tokens.render]
+    for bits in itertools.product((0, 1), repeat=len(hyps)):
+        chosen = [h for h, b in zip(hyps, bits, strict=True) if b]
+        select(stage, **{h: ("alternative" if h in chosen else "baseline") for h in hyps})
+        bbox = UsdGeom.BBoxCache(Usd.TimeCode.Default(), cache_purposes)
+
+        def world(path: str, bbox=bbox) -> Gf.Range3d:
+            return bbox.ComputeWorldBound(stage.GetPrimAtPath(path)).ComputeAlignedRange()
+
+        cornice_top = world("/Temple/Entablature/cornice").GetMax()[1]
+        for slab in ("roof_left", "roof_right", "pediment_left", "pediment_right"):
+            assert world(f"/Temple/Roof/{slab}").GetMin()[1] == pytest.approx(
+                cornice_top, abs=1e-3), (chosen, slab)
+        stylobate = world("/Temple/Podium/die").GetMax()[1]
+        architrave = world("/Temple/Entablature/architrave").GetMin()[1]
+        assert stylobate == pytest.approx(layout.stylobate_height, abs=1e-6)
+        columns = [p for p in stage.Traverse() if p.IsInstance()]
+        assert len(columns) == 18
+        for c in columns:
+            r = bbox.ComputeWorldBound(c).ComputeAlignedRange()
+            assert r.GetMin()[1] == pytest.approx(stylobate, abs=1e-3), (chosen, c.GetPath())
+            assert r.GetMax()[1] == pytest.approx(architrave, abs=1e-3), (chosen, c.GetPath())
+        # finite geometry, and every prim lists every selected hypothesis that touches it
+        expected: dict[str, set[str]] = {}
+        for stem, found in recorded.items():
+            ids = {("hyp_" + i) for i in stem.replace("-", "_").split("+")}
+            if ids <= set(chosen):
+                for path, idents in found.items():
+                    expected.setdefault(path, set()).update(idents)
+        for p in stage.Traverse():
+            if p.IsA(UsdGeom.Mesh):
+                assert np.isfinite(np.array(p.GetAttribute("points").Get())).all()
+            listed = set(p.GetCustomData().get("ionic_usd", {}).get("hypotheses", {}))
+            if str(p.GetPath()) == "/Temple":
+                continue  # the listing of all hypotheses
+            assert listed == expected.get(str(p.GetPath()), set()), (chosen, p.GetPath())
+            for ident in listed:
+                assert p.GetAttribute(f"userProperties:ionic_usd:{ident}:id").Get()
+        assert validate_stage(stage) == []
+
+
+def test_interacting_hypotheses_get_a_combination_layer(tmp_path):
+    """Two hypotheses that both reshape the roof: the composer writes their combined values
+    and every combination composes to the layout built with those hypotheses."""
+    from ionic_usd.temple.layout import build_layout
+    from ionic_usd.usd.temple import _mismatches
+
+    data = load_toml(Path(__file__).resolve().parent.parent / "ionic_usd/data/portunus.toml")
+    data["hypothesis"] = [h for h in data["hypothesis"] if h["id"] == "roof-pitch-15"] + [{
+        "id": "deep-cornice", "description": "a cornice projecting 1.6 times its height",
+        "sources": ["test"], "certainty": "low",
+        "changes": {"entablature.cornice_projection_ratio": 1.6}}]
+    layout = layout_from_mapping(data, context="test")
+    rep = compose_temple(tmp_path / "T", layout, texture_size=16)
+    assert rep.combination_layers == ("roof-pitch-15+deep-cornice",)
+    folder = tmp_path / "T"
+    assert (folder / "layers" / "roof-pitch-15+deep-cornice.usda").is_file()
+    stage = Usd.Stage.Open(str(folder / "Temple.usda"))
+    for a, b in itertools.product(("baseline", "alternative"), repeat=2):
+        select(stage, hyp_roof_pitch_15=a, hyp_deep_cornice=b)
+        ids = [i for i, s in (("roof-pitch-15", a), ("deep-cornice", b)) if s == "alternative"]
+        want = build_layout(layout.params, hypotheses=layout.hypotheses, apply=ids)
+        assert _mismatches(stage, want, layout.params.columns_height) == {}, ids
+        assert validate_stage(stage) == []
+    listed = stage.GetPrimAtPath("/Temple/Roof/roof_left").GetCustomData()["ionic_usd"]
+    assert set(listed["hypotheses"]) == {"roof_pitch_15", "deep_cornice"}
+    for f in layer_files(folder):
+        assert validate_stage(Usd.Stage.Open(str(f))) == [], f
+
+
+@pytest.mark.parametrize(("changes", "key"), [
+    ({"column.flute_count": 7}, "column.flute_count"),
+    ({"material.finish": "gold"}, "material.finish"),
+    ({"column.volute_turns": 4}, "column.volute_turns"),
+    ({"roof.colour": 1}, "roof.colour"),
+    ({"columns.lower_diameter": 1.2}, "columns.lower_diameter"),
+])
+def test_unrealisable_hypothesis_changes_are_errors(tmp_path, changes, key):
+    data = load_toml(Path(__file__).resolve().parent.parent / "ionic_usd/data/portunus.toml")
+    data["hypothesis"] = [{"id": "bad", "description": "x", "sources": ["y"],
+                           "certainty": "low", "changes": changes}]
+    with pytest.raises(ParameterError, match=key.replace(".", r"\.")):
+        hypothesis_layers(layout_from_mapping(data, context="t.toml"))
+    with pytest.raises(ParameterError):
+        compose_temple(tmp_path / "T", layout_from_mapping(data, context="t.toml"))
+    assert not (tmp_path / "T").exists()
+
+
+def test_cli_rejects_unknown_temple_key_and_bad_change(tmp_path, capsys):
+    cfg = tmp_path / "t.toml"
+    cfg.write_text('[temple]\nname = "x"\ncolour = "red"\n')
+    assert main(["temple", "--config", str(cfg), "-o", str(tmp_path / "a")]) == 2
+    err = capsys.readouterr().err
+    assert "temple.colour" in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+    cfg.write_text('[[hypothesis]]\nid = "h"\ndescription = "d"\nsources = ["s"]\n'
+                   'certainty = "low"\nchanges = { "column.flute_count" = 7 }\n')
+    assert main(["temple", "--config", str(cfg), "-o", str(tmp_path / "b")]) == 2
+    err = capsys.readouterr().err
+    assert "column.flute_count" in err and "7" in err and "Traceback" not in err
+    assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
+
+
+def test_one_edit_in_a_class_changes_every_instance(portunus_temple):
+    stage = Usd.Stage.Open(str(portunus_temple.root))
+    columns = [p for p in stage.Traverse() if p.IsInstance()]
+    assert len(columns) == 18
+    assert all(UsdGeom.Imageable(c).ComputeVisibility() == "inherited" for c in columns)
+    cls = stage.GetPrimAtPath("/_class_IonicColumn")
+    assert cls and cls.IsAbstract()
+    with Usd.EditContext(stage, stage.GetSessionLayer()):
+        UsdGeom.Imageable(stage.OverridePrim("/_class_IonicColumn")).CreateVisibilityAttr(
+            "invisible")
+        stage.OverridePrim("/_class_Temple").CreateAttribute(
+            "userProperties:note", Sdf.ValueTypeNames.String).Set("checked")
+    assert all(UsdGeom.Imageable(c).ComputeVisibility() == "invisible" for c in columns)
+    assert stage.GetPrimAtPath("/Temple").GetAttribute("userProperties:note").Get() == "checked"
+    assert UsdGeom.Imageable(stage.GetPrimAtPath("/Temple/Podium")).ComputeVisibility() \
+        == "inherited"
+
+
+def test_column_xform_ops_are_xform_common_api_compatible(portunus_temple):
+    stage = Usd.Stage.Open(str(portunus_temple.root))
+    placements = {c.name: c for c in portunus_layout().columns}
+    for prim in (p for p in stage.Traverse() if p.IsInstance()):
+        api = UsdGeom.XformCommonAPI(prim)
+        assert api, prim.GetPath()
+        t, r, s, pivot, order = api.GetXformVectors(Usd.TimeCode.Default())
+        c = placements[prim.GetName()]
+        assert np.allclose(t, c.position) and np.allclose(r, (0, c.rotation_deg, 0))
+        assert np.allclose(s, (c.scale,) * 3) and np.allclose(pivot, 0)
+
+
+def test_temple_lod_passes_to_every_column(portunus_temple):
+    stage = Usd.Stage.Open(str(portunus_temple.root))
+    root = stage.GetDefaultPrim()
+    assert root.GetVariantSet("lod").GetVariantNames() == ["high", "low", "medium"]
+    tris = portunus_temple.triangles_per_lod
+    assert tris["high"] == portunus_temple.triangles == temple_triangles(stage)
+    for lod in ("high", "medium", "low"):
+        select(stage, lod=lod)
+        assert {p.GetVariantSet("lod").GetVariantSelection()
+                for p in stage.Traverse() if p.IsInstance()} == {lod}
+        assert temple_triangles(stage) == tris[lod]
+    assert tris["high"] > 2 * tris["medium"] > 2 * tris["low"] > 0
+    # the count is by hand: instances × their prototype's rendered triangles + the cuboids
+    # (12 each); the proxy meshes are not drawn with the render purpose
+    select(stage, lod="low")
+    per_proto, proxies = {}, 0
+    for proto in stage.GetPrototypes():
+        meshes = [p for p in Usd.PrimRange(proto) if p.IsA(UsdGeom.Mesh)]
+        drawn = [p for p in meshes if UsdGeom.Imageable(p).ComputePurpose() == "render"]
+        proxies += len(meshes) - len(drawn)
+        per_proto[proto.GetPath()] = sum(
+            int(np.sum(np.array(UsdGeom.Mesh(p).GetFaceVertexCountsAttr().Get()) - 2))
+            for p in drawn)
+    assert proxies == 2 * 4  # each prototype: its four low-lod parts as proxy
+    inst = sum(per_proto[p.GetPrototype().GetPath()] for p in stage.Traverse()
+               if p.IsInstance())
+    cuboids = sum(12 for p in stage.Traverse() if p.IsA(UsdGeom.Mesh))
+    assert temple_triangles(stage) == inst + cuboids
