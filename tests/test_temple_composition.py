@@ -13,7 +13,7 @@ from pxr import Gf, Sdf, Usd, UsdGeom, UsdShade
 from ionic_usd.cli import main
 from ionic_usd.errors import ParameterError
 from ionic_usd.params import load_toml
-from ionic_usd.temple.layout import layout_from_mapping, portunus_layout
+from ionic_usd.temple.layout import ROOF_BED, layout_from_mapping, portunus_layout
 from ionic_usd.usd import validate_stage
 from ionic_usd.usd.column_asset import UV_SPAN
 from ionic_usd.usd.temple import compose_temple, hypothesis_layers, temple_triangles
@@ -205,7 +205,7 @@ def test_every_combination_of_hypotheses_composes(portunus_temple):
     stage = Usd.Stage.Open(str(portunus_temple.root))
     root = stage.GetDefaultPrim()
     hyps = sorted(n for n in root.GetVariantSets().GetNames() if n.startswith("hyp_"))
-    assert len(hyps) == 4
+    assert len(hyps) == 5  # every hypothesis of portunus.toml is realised
     recorded = layer_paradata(folder)
     layout = portunus_layout()
     cache_purposes = [UsdGeom.Tokens.default_, UsdGeom.Tokens.render]
@@ -218,9 +218,11 @@ def test_every_combination_of_hypotheses_composes(portunus_temple):
             return bbox.ComputeWorldBound(stage.GetPrimAtPath(path)).ComputeAlignedRange()
 
         cornice_top = world("/Temple/Entablature/cornice").GetMax()[1]
-        for slab in ("roof_left", "roof_right", "pediment_left", "pediment_right"):
+        # the gable wedges sit on the cornice; the slabs rest on their bed at the eaves
+        for slab, bed in (("roof_left", ROOF_BED), ("roof_right", ROOF_BED),
+                          ("pediment_left", 0.0), ("pediment_right", 0.0)):
             assert world(f"/Temple/Roof/{slab}").GetMin()[1] == pytest.approx(
-                cornice_top, abs=1e-3), (chosen, slab)
+                cornice_top + bed, abs=1e-3), (chosen, slab)
         stylobate = world("/Temple/Podium/die").GetMax()[1]
         architrave = world("/Temple/Entablature/architrave").GetMin()[1]
         assert stylobate == pytest.approx(layout.stylobate_height, abs=1e-6)
@@ -301,7 +303,8 @@ def test_cli_rejects_unknown_temple_key_and_bad_change(tmp_path, capsys):
     cfg.write_text('[temple]\nname = "x"\ncolour = "red"\n')
     assert main(["temple", "--config", str(cfg), "-o", str(tmp_path / "a")]) == 2
     err = capsys.readouterr().err
-    assert "temple.colour" in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+    assert "[temple]" in err and "colour" in err and "Traceback" not in err
+    assert len(err.strip().splitlines()) == 1
     cfg.write_text('[[hypothesis]]\nid = "h"\ndescription = "d"\nsources = ["s"]\n'
                    'certainty = "low"\nchanges = { "column.flute_count" = 7 }\n')
     assert main(["temple", "--config", str(cfg), "-o", str(tmp_path / "b")]) == 2
@@ -363,7 +366,8 @@ def test_temple_lod_passes_to_every_column(portunus_temple):
         per_proto[proto.GetPath()] = sum(
             int(np.sum(np.array(UsdGeom.Mesh(p).GetFaceVertexCountsAttr().Get()) - 2))
             for p in drawn)
-    assert proxies == 2 * 4  # each prototype: its four low-lod parts as proxy
+    # each prototype (form full, engaged, corner): its three low-lod parts as proxy
+    assert len(stage.GetPrototypes()) == 3 and proxies == 3 * 3
     inst = sum(per_proto[p.GetPrototype().GetPath()] for p in stage.Traverse()
                if p.IsInstance())
     cuboids = sum(12 for p in stage.Traverse() if p.IsA(UsdGeom.Mesh))
