@@ -48,6 +48,7 @@ IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_-]{0,63}")
 UNIT_LIMITS: dict[str, float] = {"m": 1000.0, "deg": 36000.0, "count": 1_000_000}
 _DEFAULT_LIMIT = 10_000.0  # ratios, spiral units and other dimensionless numbers
 _MAX_TOML_BYTES = 16 << 20
+_TINY = 1e-9  # below any physical resolution here (a nanometre, a nano-degree)
 
 
 def load_toml(path: str | os.PathLike) -> dict[str, Any]:
@@ -182,6 +183,8 @@ def _number(key: str, v: Any, spec: FieldSpec, context: str, *, integer: bool) -
         v = int(v)
     if not math.isfinite(v):
         raise ParameterError(key, v, "a finite number", context=context)
+    if v != 0 and abs(v) < _TINY:  # subnormal-like values overflow the first division
+        raise ParameterError(key, v, f"0 or a magnitude of at least {_TINY:g}", context=context)
     if not spec.lo <= v <= spec.hi:
         unit = f" {spec.unit}" if spec.unit and spec.unit not in ("count",) else ""
         raise ParameterError(key, v, f"a value in [{spec.lo:g}, {spec.hi:g}]{unit}",

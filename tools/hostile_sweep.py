@@ -219,8 +219,8 @@ def main(argv: list[str] | None = None) -> int:
     for i, (cmd, files) in enumerate(todo, 1):
         kind, detail = run_case(cmd, files)
         counts[kind] += 1
-        if kind == "other":
-            print(f"OTHER {cmd}: {detail}", flush=True)
+        if kind != "refused":
+            print(f"{kind.upper()} {cmd}: {detail}", flush=True)
         if i % 50 == 0:
             print(f"... {i}/{len(todo)} {dict(counts)}", file=sys.stderr, flush=True)
     print(f"cases {len(todo)}: refused cleanly {counts['refused']}, accepted (valid, finite) "
