@@ -194,6 +194,7 @@ def atomic_path(path: str | os.PathLike, *,
     the temporary file is removed and ``path`` is untouched.
     """
     p = Path(path)
+    clean_stale_temporaries(p.parent, p.name)  # left by a killed earlier write of this file
     tmp = _tmp_sibling(p)
     try:
         yield tmp

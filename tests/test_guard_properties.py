@@ -23,7 +23,7 @@ from ionic_usd.errors import GrammarError, ParameterError
 from ionic_usd.geometry.analysis import inspect_mesh
 from ionic_usd.geometry.mesh import Mesh
 
-FAST = settings(max_examples=30, deadline=None, derandomize=True,
+FAST = settings(max_examples=20, deadline=None, derandomize=True,
                 suppress_health_check=[HealthCheck.too_slow])
 SWEEP = settings(max_examples=600, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 
