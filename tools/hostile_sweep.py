@@ -209,6 +209,56 @@ def cases(quick: bool) -> list[tuple[list[str], dict[str, bytes | None]]]:
     return out
 
 
+def fault_cases() -> list[tuple[list[str], dict[str, bytes | None]]]:
+    """Outputs onto a read-only and onto a full file system ({RO}, {FULL}; root only)."""
+    outs = [["shaft", "-o", "{D}/s.usda"], ["column", "--lod", "low", "-o", "{D}/c.usda"],
+            ["column", "--lod", "low", "-o", "{D}/c.usdc"],
+            ["temple", "-o", "{D}/T", "--texture-size", "16"],
+            ["asset", "-o", "{D}/A", "--texture-size", "16"],
+            ["preview", "s.usda", "-o", "{D}/p.png", "--width", "64", "--height", "64"],
+            ["city", "{D}"],
+            ["evaluate", "--part", "base", "--reference", "r.csv", "--json", "{D}/e.json"],
+            ["fit", "shaft", "--reference", "r.csv", "-o", "{D}/f.toml"]]
+    files: dict[str, bytes | None] = {"s.usda": _SCENE, "r.csv": b"0,0\n0.1,0.05\n0.2,0.1\n"}
+    return [([a.replace("{D}", d) for a in argv], files) for d in ("{RO}", "{FULL}")
+            for argv in outs]
+
+
+_SCENE = (b'#usda 1.0\n(defaultPrim = "C")\ndef Mesh "C" {\n  int[] faceVertexCounts = [3, 3, 3, 3]'
+          b"\n  int[] faceVertexIndices = [0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3]\n"
+          b"  point3f[] points = [(0,0,0), (1,0,0), (0,1,0), (0,0,1)]\n}\n")
+
+
+@contextlib.contextmanager
+def fault_mounts():
+    """(ro, full) tmpfs folders, or None when not root."""
+    import subprocess
+
+    if not hasattr(os, "geteuid") or os.geteuid() != 0:
+        yield None
+        return
+    base = Path(tempfile.mkdtemp(prefix="sweep-mounts-"))
+    ro, full = base / "ro", base / "full"
+    ro.mkdir()
+    full.mkdir()
+    try:
+        subprocess.run(["mount", "-t", "tmpfs", "-o", "size=1m", "tmpfs", str(ro)], check=True)
+        subprocess.run(["mount", "-o", "remount,ro", str(ro)], check=True)
+        subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(full)],
+                       check=True)
+        st = os.statvfs(full)  # leave 2 kB: even a small JSON or TOML does not fit
+        with contextlib.suppress(OSError), open(full / "filler", "wb") as fh:
+            fh.write(b"\0" * max(0, st.f_bavail * st.f_frsize - 2048))
+        yield ro, full
+    finally:
+        for m in (ro, full):
+            subprocess.run(["umount", "-l", str(m)], capture_output=True)
+        with contextlib.suppress(OSError):
+            ro.rmdir()
+            full.rmdir()
+            base.rmdir()
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="fewer cases (about a third)")
@@ -216,6 +266,22 @@ def main(argv: list[str] | None = None) -> int:
     os.environ.pop("IONIC_USD_DEBUG", None)
     todo = cases(args.quick)
     counts: Counter[str] = Counter()
+    with fault_mounts() as mounts:
+        if mounts is None:
+            print("not root: the read-only / full-disk cases are skipped", file=sys.stderr)
+        else:
+            for cmd, files in fault_cases():
+                folder = mounts[0] if "{RO}" in cmd[-1] + " ".join(cmd) else mounts[1]
+                cmd = [a.replace("{RO}", str(mounts[0])).replace("{FULL}", str(mounts[1]))
+                       for a in cmd]
+                before = _listing(folder)
+                kind, detail = run_case(cmd, files)
+                if kind == "refused" and _listing(folder) != before:
+                    kind, detail = "other", f"wrote into {folder}: {_listing(folder)}"
+                counts[kind] += 1
+                counts["fault cases"] += 1
+                if kind != "refused":
+                    print(f"{kind.upper()} {cmd}: {detail}", flush=True)
     for i, (cmd, files) in enumerate(todo, 1):
         kind, detail = run_case(cmd, files)
         counts[kind] += 1
@@ -223,8 +289,10 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{kind.upper()} {cmd}: {detail}", flush=True)
         if i % 50 == 0:
             print(f"... {i}/{len(todo)} {dict(counts)}", file=sys.stderr, flush=True)
-    print(f"cases {len(todo)}: refused cleanly {counts['refused']}, accepted (valid, finite) "
-          f"{counts['accepted']}, anything else {counts['other']}")
+    total = len(todo) + counts["fault cases"]
+    print(f"cases {total} ({counts['fault cases']} on read-only/full file systems): refused "
+          f"cleanly {counts['refused']}, accepted (valid, finite) {counts['accepted']}, "
+          f"anything else {counts['other']}")
     return 1 if counts["other"] else 0
 
 
