@@ -187,7 +187,7 @@ def cmd_asset(args: argparse.Namespace) -> int:
     params = _column_params(args)
     user = None
     if args.texture:
-        user = {}
+        user: dict[str, str] = {}
         roles = ("basecolor", "roughness", "normal")
         for item in args.texture:
             role, sep, path = item.partition("=")

@@ -227,7 +227,7 @@ def clean_stale_temporaries(folder: str | os.PathLike, name: str | None = None) 
     """
     removed: list[Path] = []
     try:
-        entries = list(os.scandir(folder))
+        entries = list(os.scandir(os.fspath(folder)))
     except OSError:
         return removed
     for e in entries:
@@ -406,7 +406,7 @@ def replace_folder(build: Callable[[Path], object], dest: str | os.PathLike, *,
     return result
 
 
-def verified_cache(entry: str | os.PathLike, produce: Callable[[Path], None],
+def verified_cache(entry: str | os.PathLike, produce: Callable[[Path], object],
                    verify: Callable[[Path], None] | None = None) -> Path:
     """A cache entry folder that is complete and intact, producing it when it is not.
 

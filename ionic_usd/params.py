@@ -377,10 +377,10 @@ def check_temple_tables(data: Mapping[str, Any], *, context: str) -> None:
         raise ParameterError("document", data, "TOML tables", context=context)
     dims = dataclass_schema(TempleParams)
     sections: dict[str, dict[str, FieldSpec]] = {}
-    for name, spec in dims.items():
+    for name, dim in dims.items():
         if name != "name":
             sec, key = name.split("_", 1)
-            sections.setdefault(sec, {})[key] = spec
+            sections.setdefault(sec, {})[key] = dim
     column_tables = {"column", "shaft", "capital", "volute"}
     for sec, table in data.items():
         if sec == "temple":
@@ -412,8 +412,8 @@ def check_temple_tables(data: Mapping[str, Any], *, context: str) -> None:
                         _HYPOTHESIS, context=where)
         for key, value in e.get("changes", {}).items():
             # column.* / material.* record alternatives the generator may not realise yet
-            spec = changes_schema.get(key)
-            if spec is None and str(key).split(".")[0] in ("column", "material"):
-                spec = FieldSpec("scalar")
-            check_table({key: value}, {key: spec} if spec else changes_schema,
+            change: FieldSpec | None = changes_schema.get(key)
+            if change is None and str(key).split(".")[0] in ("column", "material"):
+                change = FieldSpec("scalar")
+            check_table({key: value}, {key: change} if change else changes_schema,
                         context=f"{where} changes")
