@@ -105,7 +105,10 @@ def cmd_shaft(args: argparse.Namespace) -> int:
     out = check_output_path(args.output, force=args.force)
     _check_memory("the shaft", shaft_triangle_estimate(params), args)
     t0 = time.perf_counter()
-    mesh = build_shaft(params, max_triangles=args.max_triangles)
+    from ionic_usd.geometry.guard import guarded
+
+    mesh = guarded(lambda: build_shaft(params, max_triangles=args.max_triangles), "shaft",
+                   "parameters")
     t1 = time.perf_counter()
     write_meshes(out, {"Shaft": mesh}, root="Shaft", force=args.force)
     t2 = time.perf_counter()
@@ -184,7 +187,7 @@ def cmd_asset(args: argparse.Namespace) -> int:
     params = _column_params(args)
     user = None
     if args.texture:
-        user = {}
+        user: dict[str, str] = {}
         roles = ("basecolor", "roughness", "normal")
         for item in args.texture:
             role, sep, path = item.partition("=")

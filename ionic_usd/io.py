@@ -194,6 +194,7 @@ def atomic_path(path: str | os.PathLike, *,
     the temporary file is removed and ``path`` is untouched.
     """
     p = Path(path)
+    clean_stale_temporaries(p.parent, p.name)  # left by a killed earlier write of this file
     tmp = _tmp_sibling(p)
     try:
         yield tmp
@@ -226,7 +227,7 @@ def clean_stale_temporaries(folder: str | os.PathLike, name: str | None = None) 
     """
     removed: list[Path] = []
     try:
-        entries = list(os.scandir(folder))
+        entries = list(os.scandir(os.fspath(folder)))
     except OSError:
         return removed
     for e in entries:
@@ -405,7 +406,7 @@ def replace_folder(build: Callable[[Path], object], dest: str | os.PathLike, *,
     return result
 
 
-def verified_cache(entry: str | os.PathLike, produce: Callable[[Path], None],
+def verified_cache(entry: str | os.PathLike, produce: Callable[[Path], object],
                    verify: Callable[[Path], None] | None = None) -> Path:
     """A cache entry folder that is complete and intact, producing it when it is not.
 

@@ -48,6 +48,7 @@ IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_-]{0,63}")
 UNIT_LIMITS: dict[str, float] = {"m": 1000.0, "deg": 36000.0, "count": 1_000_000}
 _DEFAULT_LIMIT = 10_000.0  # ratios, spiral units and other dimensionless numbers
 _MAX_TOML_BYTES = 16 << 20
+_TINY = 1e-9  # below any physical resolution here (a nanometre, a nano-degree)
 
 
 def load_toml(path: str | os.PathLike) -> dict[str, Any]:
@@ -182,6 +183,8 @@ def _number(key: str, v: Any, spec: FieldSpec, context: str, *, integer: bool) -
         v = int(v)
     if not math.isfinite(v):
         raise ParameterError(key, v, "a finite number", context=context)
+    if v != 0 and abs(v) < _TINY:  # subnormal-like values overflow the first division
+        raise ParameterError(key, v, f"0 or a magnitude of at least {_TINY:g}", context=context)
     if not spec.lo <= v <= spec.hi:
         unit = f" {spec.unit}" if spec.unit and spec.unit not in ("count",) else ""
         raise ParameterError(key, v, f"a value in [{spec.lo:g}, {spec.hi:g}]{unit}",
@@ -374,10 +377,10 @@ def check_temple_tables(data: Mapping[str, Any], *, context: str) -> None:
         raise ParameterError("document", data, "TOML tables", context=context)
     dims = dataclass_schema(TempleParams)
     sections: dict[str, dict[str, FieldSpec]] = {}
-    for name, spec in dims.items():
+    for name, dim in dims.items():
         if name != "name":
             sec, key = name.split("_", 1)
-            sections.setdefault(sec, {})[key] = spec
+            sections.setdefault(sec, {})[key] = dim
     column_tables = {"column", "shaft", "capital", "volute"}
     for sec, table in data.items():
         if sec == "temple":
@@ -409,8 +412,8 @@ def check_temple_tables(data: Mapping[str, Any], *, context: str) -> None:
                         _HYPOTHESIS, context=where)
         for key, value in e.get("changes", {}).items():
             # column.* / material.* record alternatives the generator may not realise yet
-            spec = changes_schema.get(key)
-            if spec is None and str(key).split(".")[0] in ("column", "material"):
-                spec = FieldSpec("scalar")
-            check_table({key: value}, {key: spec} if spec else changes_schema,
+            change: FieldSpec | None = changes_schema.get(key)
+            if change is None and str(key).split(".")[0] in ("column", "material"):
+                change = FieldSpec("scalar")
+            check_table({key: value}, {key: change} if change else changes_schema,
                         context=f"{where} changes")

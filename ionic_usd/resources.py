@@ -93,19 +93,27 @@ def check_estimate(est: Estimate, max_memory_gb: float | None = None) -> Estimat
 
 
 # -- triangles from parameters (nothing is built) --------------------------------------------
-def capital_triangle_estimate(spiral_samples: int, ring_segments: int, bolster_rows: int
-                              ) -> int:
-    """Triangles of a capital (body + bolsters); exact for the named LODs (fit of
-    low/medium/high: body 48·spiral + 16·ring, bolsters 4·ring·(rows + 5)), an upper bound
-    elsewhere within a few percent."""
-    return 48 * spiral_samples + 16 * ring_segments + 4 * ring_segments * (bolster_rows + 5)
+def _capital_parts(spiral_samples: int, ring_segments: int, bolster_rows: int,
+                   scroll_rings: int) -> tuple[int, int]:
+    # fit of low/medium/high with S1 and S2: body 48·spiral + 16·ring, bolsters
+    # 4·ring·(rows + scroll rings)
+    return (48 * spiral_samples + 16 * ring_segments,
+            4 * ring_segments * (bolster_rows + scroll_rings))
+
+
+def capital_triangle_estimate(spiral_samples: int, ring_segments: int, bolster_rows: int,
+                              scroll_rings: int = 5) -> int:
+    """Triangles of a capital (body + bolsters); exact for the named LODs with the S1 and S2
+    scrolls, an upper bound within a few percent elsewhere (tests/test_resources.py)."""
+    return sum(_capital_parts(spiral_samples, ring_segments, bolster_rows, scroll_rings))
 
 
 def _part_triangles(params: ColumnParams, *, base: str | None = None,
-                    scroll: str | None = None) -> tuple[int, int, int]:
-    """(base, shaft, capital) triangles for ``params`` — from parameters alone."""
+                    scroll: str | None = None) -> tuple[int, int, int, int]:
+    """(base, shaft, capital body, bolsters) triangles for ``params`` — from parameters."""
     from ionic_usd.column.base import base_triangle_estimate
     from ionic_usd.column.shaft import shaft_triangle_estimate
+    from ionic_usd.grammar.scroll import resolve_scroll
 
     shaft = params.shaft_params()
     shaft_t = shaft_triangle_estimate(shaft)
@@ -116,8 +124,9 @@ def _part_triangles(params: ColumnParams, *, base: str | None = None,
     else:
         base_t = base_triangle_estimate(params.base_params(base))
     cap = params.capital_params(scroll)
-    cap_t = capital_triangle_estimate(cap.spiral_samples, cap.ring_segments, cap.bolster_rows)
-    return base_t, shaft_t, cap_t
+    body, bolsters = _capital_parts(cap.spiral_samples, cap.ring_segments, cap.bolster_rows,
+                                    len(resolve_scroll(cap.scroll).rings))
+    return base_t, shaft_t, body, bolsters
 
 
 def column_triangle_estimate(params: ColumnParams, *, base: str | None = None,
@@ -138,8 +147,9 @@ def _texture_bytes(size: int) -> tuple[int, int]:
 def estimate_asset(params: ColumnParams, texture_size: int, *, lods=None, bases=None,
                    scrolls=None, flutes=None, forms: int = 2, what: str = "the asset"
                    ) -> Estimate:
-    """Every mesh of the column asset (each LOD x base, shaft x flute count, capital x
-    scroll, twice for the engaged form) and one stone texture set at a time."""
+    """Every mesh of the column asset (per LOD: each base, a shaft per flute count, the
+    capital body, bolsters per scroll; ``forms`` times, the engaged form counted as a full
+    one, an upper bound) and one stone texture set at a time."""
     from ionic_usd.column.column import LODS
     from ionic_usd.usd.column_asset import BASE_VARIANTS, FLUTE_VARIANTS, SCROLL_VARIANTS
 
@@ -150,7 +160,8 @@ def estimate_asset(params: ColumnParams, texture_size: int, *, lods=None, bases=
         for n in flutes or tuple(FLUTE_VARIANTS.values()):
             shaft = dataclasses.replace(p.shaft, flutes=n, flute_angle=0.8 * 360.0 / n)
             tris += _part_triangles(dataclasses.replace(p, shaft=shaft))[1]
-        tris += sum(_part_triangles(p, scroll=s)[2] for s in scrolls or SCROLL_VARIANTS)
+        tris += _part_triangles(p)[2]  # one capital body, one bolster pair per scroll
+        tris += sum(_part_triangles(p, scroll=s)[3] for s in scrolls or SCROLL_VARIANTS)
     tris *= forms
     px, tex = _texture_bytes(texture_size)
     return Estimate(what, tris, 3 * px, BASELINE_BYTES + 2 * BYTES_PER_TRIANGLE * tris + tex)

@@ -80,6 +80,13 @@ def test_full_disk_refused_cleanly(tmp_path, capsys):
         _one_line_refusal(code, err)
         assert "No space left" in err or "disk full" in err, err
         assert _listing(full) == []  # no temporaries, no truncated layer
+    # a folder build: OpenUSD reports success for a truncated Geometry.usdc; the read-back
+    # check catches it, and the staging folder goes
+    with tmpfs(tmp_path / "full2", "3m") as full:
+        code, out, err = _run(["asset", "-o", str(full / "A"), "--texture-size", "16"], capsys)
+        _one_line_refusal(code, err)
+        assert "No space left" in err, err
+        assert _listing(full) == []
 
 
 @pytest.mark.skipif(_can_mount() is not None, reason=str(_can_mount()))
@@ -177,7 +184,11 @@ def _kill_rebuilds(tmp_path: Path, kills: int, *, final_run: bool) -> None:
     assert main(cmd[3:]) == 0  # the first build in-process (no interpreter start-up)
     full = time.perf_counter() - t0 + 4.0  # + a new interpreter's imports
     (x / "notes.txt").write_text("my notes")
-    (x / "overrides.usda").write_text("#usda 1.0\n(\n    doc = \"my edits\"\n)\n")
+    (x / "Textures" / "my_decal.png").write_bytes(b"decal")
+    shared = tmp_path / "X" / "shared_overrides.usda"  # the user's layer, linked in
+    shared.write_text("#usda 1.0\n(\n    doc = \"my edits\"\n)\n")
+    (x / "overrides.usda").unlink()
+    (x / "overrides.usda").symlink_to(shared.name)
     rng = random.Random(11)
     for _ in range(kills):
         p = subprocess.Popen([*cmd, "--force"], env=env, stdout=subprocess.DEVNULL,
@@ -188,6 +199,8 @@ def _kill_rebuilds(tmp_path: Path, kills: int, *, final_run: bool) -> None:
         assert x.is_dir()
         _temple_ok(x)
         assert (x / "notes.txt").read_text() == "my notes"
+        assert (x / "Textures" / "my_decal.png").read_bytes() == b"decal"
+        assert (x / "overrides.usda").is_symlink()
         assert "my edits" in (x / "overrides.usda").read_text()
     if not final_run:  # what the next run does first, without its 10 s of building
         from ionic_usd.io import recover_folder
@@ -199,6 +212,7 @@ def _kill_rebuilds(tmp_path: Path, kills: int, *, final_run: bool) -> None:
     assert sorted(p.name for p in tmp_path.iterdir()) == ["X"]
     _temple_ok(x)
     assert (x / "notes.txt").read_text() == "my notes"
+    assert (x / "overrides.usda").is_symlink() and (x / "Textures" / "my_decal.png").exists()
 
 
 def test_kill_during_temple_rebuild(tmp_path):

@@ -90,7 +90,7 @@ CASES: list[tuple[list[str], dict[str, bytes | None], str]] = [
     (["shaft", "--ring-bottom", "1e308"], {}, "ring_bottom"),
     (["shaft", "--height", "nan"], {}, "height"),
     (["column", "--base", "R1e308 H1 R0 H2", "-o", "c.usda"], {}, "base"),
-    (["column", "--base", "R0.074 H4 R0.074 H0.05", "-o", "c.usda"], {}, "inside out"),
+    (["column", "--base", "R0.074 H4 R0.074 H0.05", "-o", "c.usda"], {}, "inside out or flat"),
     # resources: refused with the estimate and the limit, before any allocation
     (["shaft", "--flute-slices", "100000"], {}, "triangles"),
     (["column", "--config", "a.toml"],

@@ -180,7 +180,13 @@ def test_legacy_temporaries_are_recovered_and_cleaned(tmp_path):
 
 def test_atomic_path_keeps_target_on_failure(tmp_path):
     p = tmp_path / "a.txt"
+    stale = tmp_path / ".a.txt.ionic-tmp-999999999-0123abcd.txt"  # a killed writer's
+    stale.write_bytes(b"half")
+    live = tmp_path / f".a.txt.ionic-tmp-{os.getpid()}-0123abcd.txt"  # a running one's
+    live.write_bytes(b"busy")
     atomic_write_bytes(p, b"one")
+    assert not stale.exists() and live.exists()
+    live.unlink()
     with pytest.raises(RuntimeError), atomic_path(p) as tmp:
         tmp.write_bytes(b"two, half")
         raise RuntimeError("disk full")

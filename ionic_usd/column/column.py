@@ -255,8 +255,10 @@ def build_column(params: ColumnParams | None = None) -> Column:
 
 
 def _scroll_text(cp: CapitalParams) -> str:
+    from ionic_usd.grammar.scroll import format_scroll
+
     s = cp.scroll
-    return s if isinstance(s, str) else s.to_string()
+    return s if isinstance(s, str) else format_scroll(s)
 
 
 def portunus_column_params(

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ionic_usd.errors import OutputExistsError, ParameterError
+from ionic_usd.errors import ParameterError
 
 __all__ = ["add_parsers", "cmd_evaluate", "cmd_fit"]
 
@@ -31,12 +31,14 @@ def _column(config: Path | None):
 def _check_out(path: Path | None, force: bool, suffix: str, flag: str) -> None:
     if path is None:
         return
+    from ionic_usd.io import check_output_file
+
     if path.suffix.lower() != suffix:
         raise ParameterError(flag, str(path), f"a file ending in {suffix}")
-    if path.exists() and not force:
-        raise OutputExistsError(f"{path} exists; pass --force to overwrite it")
     if not path.parent.is_dir() and str(path.parent):
         raise ParameterError(flag, str(path), "a path in an existing folder")
+    # before any work: a read-only folder or a bad name is found now, not after a long fit
+    check_output_file(path, force=force, what=flag)
 
 
 def _variants(items: list[str] | None) -> dict[str, str]:
@@ -49,9 +51,24 @@ def _variants(items: list[str] | None) -> dict[str, str]:
     return out
 
 
+#: reference files larger than this are refused before reading (a 2,000,000-row CSV is ~30 MB;
+#: a measured profile has thousands of nodes, not millions)
+MAX_REFERENCE_BYTES = {".svg": 4 << 20}
+MAX_REFERENCE_BYTES_DEFAULT = 16 << 20
+#: nodes after resampling at --spacing (both curves together)
+MAX_RESAMPLED_NODES = 2_000_000
+
+
 def _reference(args: argparse.Namespace) -> np.ndarray:
     from ionic_usd.evaluate.reference import read_reference
 
+    if not (np.isfinite(args.scale) and args.scale > 0):
+        raise ParameterError("--scale", args.scale, "a finite number > 0 (m per unit)")
+    p = Path(args.reference)
+    limit = MAX_REFERENCE_BYTES.get(p.suffix.lower(), MAX_REFERENCE_BYTES_DEFAULT)
+    if p.is_file() and p.stat().st_size > limit:
+        raise ParameterError("--reference", str(p), f"a curve file under {limit >> 20} MB "
+                             f"(this one has {p.stat().st_size / 1e6:.0f} MB)")
     return read_reference(args.reference, scale=args.scale, flip_y=args.flip_y,
                           element_id=args.element_id)
 
@@ -85,10 +102,17 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         raise ParameterError("--variant", args.variant, "used only with --usd")
     _check_out(args.json, args.force, ".json", "--json")
     _check_out(args.plot, args.force, ".png", "--plot")
-    if args.spacing is not None and not args.spacing > 0:
-        raise ParameterError("--spacing", args.spacing, "a length > 0 (m)")
+    if args.spacing is not None and not (np.isfinite(args.spacing) and args.spacing > 0):
+        raise ParameterError("--spacing", args.spacing, "a finite length > 0 (m)")
     ref = _reference(args)
     gen, source = _generated(args)
+    if args.spacing is not None:  # the resampled node count, before any allocation
+        length = sum(float(np.linalg.norm(np.diff(c, axis=0), axis=1).sum()) for c in (ref, gen))
+        nodes = length / args.spacing
+        if nodes > MAX_RESAMPLED_NODES:
+            raise ParameterError("--spacing", args.spacing, f"a spacing giving at most "
+                                 f"{MAX_RESAMPLED_NODES:,} nodes (curves {length:.3g} m long "
+                                 f"would give {nodes:,.0f})")
     moved, how = align(ref, gen, allow_mirror=args.mirror)
     moved = orient_like(ref, moved)
     result = compare(ref, moved, spacing=args.spacing)
@@ -133,10 +157,11 @@ def cmd_fit(args: argparse.Namespace) -> int:
 
     out = args.output
     if out is not None:
+        from ionic_usd.io import check_output_file
+
         if out.suffix.lower() != ".toml":
             raise ParameterError("--output", str(out), "a file ending in .toml")
-        if out.exists() and not args.force:
-            raise OutputExistsError(f"{out} exists; pass --force to overwrite it")
+        check_output_file(out, force=args.force, what="--output")  # before the whole fit
     _check_out(args.plot, args.force, ".png", "--plot")
     if args.modules is not None and args.part != "base":
         raise ParameterError("--modules", args.modules, "used only with `fit base`")

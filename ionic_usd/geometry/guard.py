@@ -17,7 +17,7 @@ from typing import TypeVar
 
 import numpy as np
 
-from ionic_usd.errors import IonicError, ParameterError
+from ionic_usd.errors import BudgetError, GrammarError, IonicError, ParameterError
 from ionic_usd.geometry.mesh import Mesh
 
 __all__ = ["MAX_EXTENT", "check_solid", "guarded"]
@@ -55,8 +55,9 @@ def solid_problem(mesh: Mesh) -> str | None:
     p = mesh.points
     v = float(np.einsum("ij,ij->i", p[tri[:, 0]], np.cross(p[tri[:, 1]], p[tri[:, 2]])).sum()
               / 6.0)
-    if not v > 0:
-        return f"it is inside out (volume {v:.3g} m³)"
+    diag = float(np.linalg.norm(np.ptp(p, axis=0)))
+    if not v > 1e-9 * diag**3:  # a flat (zero-volume) solid is as wrong as an inverted one
+        return f"it is inside out or flat (volume {v:.3g} m³)"
     return None
 
 
@@ -84,9 +85,9 @@ def guarded(build: Callable[[], T], param: str, value: object, *, context: str =
     try:
         with np.errstate(over="raise", divide="raise", invalid="raise"):
             result = build()
-    except IonicError:
+    except (ParameterError, GrammarError, BudgetError):
         raise
-    except (ArithmeticError, ValueError, IndexError) as exc:
+    except (IonicError, ArithmeticError, ValueError, IndexError) as exc:  # GeometryError too
         msg = " ".join(str(exc).split())[:120] or type(exc).__name__
         raise ParameterError(param, _short(value), f"a shape that can be built (it fails "
                              f"with {type(exc).__name__}: {msg})", context=context) from None
