@@ -362,3 +362,13 @@ def _canonical(tris: np.ndarray) -> np.ndarray:
         out.append(np.roll(t, -k, axis=0).reshape(-1))
     out = np.array(out)
     return out[np.lexsort(out.T[::-1])]
+
+
+def test_shared_paradata_is_stored_once():
+    from ionic_usd.export.gltf import _split_common
+
+    a = {"path": "/a", "ionic_usd": {"temple": "T", "hypothesis": {"id": "h1"}}, "x": 1}
+    b = {"path": "/b", "ionic_usd": {"temple": "T"}, "x": 1}
+    common, rest = _split_common([a, b])
+    assert common == {"ionic_usd": {"temple": "T"}, "x": 1}
+    assert rest == [{"path": "/a", "ionic_usd": {"hypothesis": {"id": "h1"}}}, {"path": "/b"}]

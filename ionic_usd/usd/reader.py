@@ -489,10 +489,11 @@ class _Reader:
         self._materials: dict[str, str | None] = {}
 
     def walk(self, root: Usd.Prim, relative: bool, chain: dict
-             ) -> list[tuple[str, np.ndarray, str, dict]]:
-        """``(mesh key, matrix, path, paradata)`` per drawable under ``root``; matrices are
-        relative to ``root`` when ``relative``, else local-to-world."""
-        out: list[tuple[str, np.ndarray, str, dict]] = []
+             ) -> list[tuple[str, np.ndarray, str, dict, bool]]:
+        """``(mesh key, matrix, path, paradata, instanced)`` per drawable under ``root``;
+        matrices are relative to ``root`` when ``relative``, else local-to-world; ``path`` is
+        the placing instance's path (an instance proxy path when nested) or the mesh's."""
+        out: list[tuple[str, np.ndarray, str, dict, bool]] = []
         purposes: dict[Sdf.Path, str] = {}
         para: dict[Sdf.Path, dict] = {root.GetPath().GetParentPath(): chain}
         it = iter(Usd.PrimRange(root, Usd.PrimDefaultPredicate))
@@ -527,15 +528,18 @@ class _Reader:
                 m = np.array(self.xfc.GetLocalToWorldTransform(prim)).reshape(4, 4)
             if prim.IsInstance():
                 it.PruneChildren()
-                for k, rel, _, pd in self._prototype(prim.GetPrototype()):
-                    out.append((k, rel @ m, str(path), _merge(para[path], pd)))
+                proto = prim.GetPrototype()
+                n = len(str(proto.GetPath()))
+                for k, rel, ip, pd, via in self._prototype(proto):
+                    out.append((k, rel @ m, str(path) + (ip[n:] if via else ""),
+                                _merge(para[path], pd), True))
             elif prim.IsA(UsdGeom.PointInstancer):
                 it.PruneChildren()
                 out.extend(self._point_instancer(UsdGeom.PointInstancer(prim), m, para[path]))
             else:
                 key = self._mesh(prim, para[path] if relative else {})
                 if key is not None:
-                    out.append((key, m, str(path), {} if relative else para[path]))
+                    out.append((key, m, str(path), {} if relative else para[path], False))
         return out
 
     def _material(self, prim: Usd.Prim) -> str | None:
@@ -568,7 +572,7 @@ class _Reader:
                 paradata=paradata)
         return key
 
-    def _prototype(self, root: Usd.Prim) -> list[tuple[str, np.ndarray, str, dict]]:
+    def _prototype(self, root: Usd.Prim) -> list[tuple[str, np.ndarray, str, dict, bool]]:
         key = str(root.GetPath())
         if key not in self._protos:
             self._protos[key] = self.walk(root, relative=True, chain={})  # type: ignore[assignment]
@@ -598,9 +602,12 @@ class _Reader:
             if not proto or len(sel) == 0:
                 continue
             # the prototype's transform is in ``mats``: walk it relative to itself
-            for k, rel, _, pd in self._prototype(proto):
+            n = len(str(proto.GetPath()))
+            for k, rel, ip, pd, via in self._prototype(proto):
+                tail = ip[n:] if via else ""
                 for i in sel:
-                    out.append((k, rel @ full[i] @ world, f"{base}[{i}]", _merge(chain, pd)))
+                    out.append((k, rel @ full[i] @ world, f"{base}[{i}]{tail}",
+                                _merge(chain, pd), True))
         return out
 
 
@@ -637,9 +644,9 @@ def read_scene(
                                                for n in vs.GetNames()}
     conv = _root_matrix(stage)
     reader = _Reader(stage, t, scene)
-    for key, m, ppath, pd in reader.walk(stage.GetPseudoRoot(), relative=False, chain={}):
+    for key, m, ppath, pd, via in reader.walk(stage.GetPseudoRoot(), relative=False, chain={}):
         # through an instance, an instancer, or a second prim of equal content
-        instanced = ppath != scene.meshes[key].source
+        instanced = via or ppath != scene.meshes[key].source
         scene.placements.append(Placement(key, m @ conv, ppath, instanced, pd))
     if not scene.placements:
         raise GeometryError(f"{path}: the scene has no visible mesh")
