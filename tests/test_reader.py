@@ -143,3 +143,14 @@ def test_city_placements_name_nested_instances_and_instancer_entries(tiny_city):
     assert len(got) == 4  # base, shaft, capital body, bolsters: no local transforms
     for m in got:
         assert_allclose(m, want, atol=1e-9)
+
+
+def test_non_finite_transform_is_refused(tmp_path):
+    path = _quad_stage(tmp_path / "q.usda", "vertex")
+    stage = Usd.Stage.Open(str(path))
+    UsdGeom.Xformable(stage.GetPrimAtPath("/R")).AddTranslateOp().Set((float("nan"), 0, 0))
+    stage.Save()
+    from ionic_usd.errors import GeometryError
+
+    with pytest.raises(GeometryError, match="/R/Q: its transform is not finite"):
+        read_scene(path)
