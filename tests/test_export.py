@@ -308,10 +308,16 @@ def test_cli_export_formats(tiny_temple, tmp_path, capsys):
     (["-o", "{tmp}/x.stl", "--scale", "1:0"], "--scale"),
     (["-o", "{tmp}/x.glb", "--scale", "1:20"], "--scale"),
     (["-o", "{tmp}/nodir/x.glb"], "does not exist"),
+    (["-o", "{tmp}/x.stl", "--compress", "draco"], "--compress"),
+    (["-o", "{tmp}/x.glb", "--compress", "zip"], "invalid choice"),
 ])
 def test_cli_errors_are_one_line_and_write_nothing(tiny_temple, tmp_path, capsys, args, needle):
     args = [a.replace("{tmp}", str(tmp_path)) for a in args]
-    assert main(["export", str(tiny_temple.root), *args]) == 2
+    try:
+        status = main(["export", str(tiny_temple.root), *args])
+    except SystemExit as exc:  # argparse's own errors: same one line, same status
+        status = exc.code
+    assert status == 2
     err = capsys.readouterr().err.strip()
     assert needle in err and len(err.splitlines()) == 1 and "Traceback" not in err
     assert sorted(p.name for p in tmp_path.iterdir()) == []
@@ -329,6 +335,8 @@ def test_cli_refuses_to_overwrite_and_bad_scene(tiny_temple, tmp_path, capsys):
     err = capsys.readouterr().err
     assert "exists" in err and "cannot open" in err and "Traceback" not in err
     assert not (tmp_path / "y.glb").exists()
+    assert main(["export", str(out), "-o", str(out), "--force"]) == 2  # never over its input
+    assert out.read_bytes() == b"mine"
 
 
 def test_draco_compressed_glb_decodes_to_the_same_geometry(tmp_path):
