@@ -24,6 +24,15 @@ from ionic_usd.usd.column_asset import TILE_METRES, UV_SPAN
 from ionic_usd.usd.reader import TextureRef, read_scene
 
 
+def usd_mesh_copies(stage: Usd.Stage) -> list[int]:
+    """For every mesh of every native prototype: how many instances draw it."""
+    out = []
+    for proto in stage.GetPrototypes():
+        n = len(proto.GetInstances())
+        out += [n] * sum(1 for p in Usd.PrimRange(proto) if p.IsA(UsdGeom.Mesh))
+    return out
+
+
 def _accessor(g: pygltflib.GLTF2, i: int) -> np.ndarray:
     acc = g.accessors[i]
     bv = g.bufferViews[acc.bufferView]
@@ -59,11 +68,12 @@ def test_glb_keeps_instancing_as_gpu_instances(temple_glb, tiny_temple):
     assert "EXT_mesh_gpu_instancing" in g.extensionsUsed
     assert not g.extensionsRequired  # every extension has a fallback
     inst_nodes = [n for n in g.nodes if n.extensions.get("EXT_mesh_gpu_instancing")]
-    assert len(inst_nodes) == 8  # 4 parts x (free, engaged)
-    copies = sorted(len(n.extras["instances"]) for n in inst_nodes)
-    assert copies == [6] * 4 + [12] * 4
-    # the instance translations are the columns' USD positions (read with UsdGeom directly)
+    # one instanced node per mesh of each prototype that several columns share, with as many
+    # copies as the prototype has instances (counted on the stage with Usd directly)
     stage = Usd.Stage.Open(str(tiny_temple.root))
+    want = sorted(n for n in usd_mesh_copies(stage) if n > 1)
+    assert sorted(len(n.extras["instances"]) for n in inst_nodes) == want
+    # the instance translations are the columns' USD positions (read with UsdGeom directly)
     xfc = UsdGeom.XformCache()
     for n in inst_nodes:
         attrs = n.extensions["EXT_mesh_gpu_instancing"]["attributes"]
@@ -279,8 +289,8 @@ def test_temple_stl_one_closed_solid_per_column(tiny_temple, tmp_path):
     rep = export_scene(tiny_temple.root, out, scale=0.01).report
     assert len(rep.solids) == 18 + 1  # every column, and the building
     assert rep.all_closed
-    cols = [s for s in rep.solids if s.parts == 4]
-    assert len(cols) == 18
+    cols = [s for s in rep.solids if s.name != "Temple"]  # "Temple": what is not instanced
+    assert len(cols) == 18 and all(s.parts >= 2 for s in cols)  # parts unioned
     free = [s for s in cols if s.name.startswith("front")]
     # a free column at 1:100 stands its height (8.22 m -> 82.2 mm) tall, Z up
     assert_allclose([s.size[2] for s in free], 0.0822, rtol=1e-3)
@@ -302,16 +312,22 @@ def test_cli_export_formats(tiny_temple, tmp_path, capsys):
 @pytest.mark.parametrize("args,needle", [
     (["-o", "{tmp}/x.obj"], "one of .glb"),
     (["-o", "{tmp}/x.glb", "--variant", "lod"], "SET=VALUE"),
-    (["-o", "{tmp}/x.glb", "--variant", "form=sideways"], "one of engaged, full"),
+    (["-o", "{tmp}/x.glb", "--variant", "form=sideways"], "engaged, full"),
     (["-o", "{tmp}/x.glb", "--lod", "ultra"], "--variant lod"),
     (["-o", "{tmp}/x.stl", "--scale", "0"], "--scale"),
     (["-o", "{tmp}/x.stl", "--scale", "1:0"], "--scale"),
     (["-o", "{tmp}/x.glb", "--scale", "1:20"], "--scale"),
     (["-o", "{tmp}/nodir/x.glb"], "does not exist"),
+    (["-o", "{tmp}/x.stl", "--compress", "draco"], "--compress"),
+    (["-o", "{tmp}/x.glb", "--compress", "zip"], "invalid choice"),
 ])
 def test_cli_errors_are_one_line_and_write_nothing(tiny_temple, tmp_path, capsys, args, needle):
     args = [a.replace("{tmp}", str(tmp_path)) for a in args]
-    assert main(["export", str(tiny_temple.root), *args]) == 2
+    try:
+        status = main(["export", str(tiny_temple.root), *args])
+    except SystemExit as exc:  # argparse's own errors: same one line, same status
+        status = exc.code
+    assert status == 2
     err = capsys.readouterr().err.strip()
     assert needle in err and len(err.splitlines()) == 1 and "Traceback" not in err
     assert sorted(p.name for p in tmp_path.iterdir()) == []
@@ -329,6 +345,8 @@ def test_cli_refuses_to_overwrite_and_bad_scene(tiny_temple, tmp_path, capsys):
     err = capsys.readouterr().err
     assert "exists" in err and "cannot open" in err and "Traceback" not in err
     assert not (tmp_path / "y.glb").exists()
+    assert main(["export", str(out), "-o", str(out), "--force"]) == 2  # never over its input
+    assert out.read_bytes() == b"mine"
 
 
 def test_draco_compressed_glb_decodes_to_the_same_geometry(tmp_path):
@@ -362,3 +380,13 @@ def _canonical(tris: np.ndarray) -> np.ndarray:
         out.append(np.roll(t, -k, axis=0).reshape(-1))
     out = np.array(out)
     return out[np.lexsort(out.T[::-1])]
+
+
+def test_shared_paradata_is_stored_once():
+    from ionic_usd.export.gltf import _split_common
+
+    a = {"path": "/a", "ionic_usd": {"temple": "T", "hypothesis": {"id": "h1"}}, "x": 1}
+    b = {"path": "/b", "ionic_usd": {"temple": "T"}, "x": 1}
+    common, rest = _split_common([a, b])
+    assert common == {"ionic_usd": {"temple": "T"}, "x": 1}
+    assert rest == [{"path": "/a", "ionic_usd": {"hypothesis": {"id": "h1"}}}, {"path": "/b"}]

@@ -47,6 +47,8 @@ def cmd_export(args: argparse.Namespace) -> int:
     check_export_path(args.output, force=args.force)
     if not Path(args.scene).is_file():
         raise ParameterError("scene", str(args.scene), "an existing USD file")
+    if Path(args.output).resolve() == Path(args.scene).resolve():
+        raise ParameterError("--output", args.output, "a file other than the scene read")
     res = export_scene(args.scene, args.output, variants=variants, lod=args.lod,
                        gpu_instancing=not args.no_gpu_instancing,
                        compress=None if args.compress == "none" else args.compress, scale=scale,

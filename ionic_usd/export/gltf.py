@@ -159,14 +159,35 @@ def _tangents(pos: np.ndarray, nrm: np.ndarray, st: np.ndarray, tris: np.ndarray
     return out
 
 
-def _common(dicts: list[dict]) -> dict:
-    """The items equal in every dict (compared as JSON)."""
+def _split_common(dicts: list[dict]) -> tuple[dict, list[dict]]:
+    """``(common, residuals)``: what every dict holds (recursively, compared as JSON), and
+    what is left of each. Paradata shared by all copies of a mesh is then stored once."""
     def j(v: object) -> str:
         return json.dumps(v, sort_keys=True, default=str)
 
-    first = dicts[0]
-    return {k: v for k, v in first.items()
-            if all(k in d and j(d[k]) == j(v) for d in dicts[1:])}
+    common: dict = {}
+    rest = [dict(d) for d in dicts]
+    for k, v in dicts[0].items():
+        vals = [d.get(k, _MISSING) for d in dicts]
+        if any(x is _MISSING for x in vals):
+            continue
+        if all(j(x) == j(v) for x in vals[1:]):
+            common[k] = v
+            for r in rest:
+                del r[k]
+        elif all(isinstance(x, dict) for x in vals):
+            sub, subrest = _split_common(vals)
+            if sub:
+                common[k] = sub
+                for r, sr in zip(rest, subrest, strict=True):
+                    if sr:
+                        r[k] = sr
+                    else:
+                        del r[k]
+    return common, rest
+
+
+_MISSING = object()
 
 
 def trs_decompose(matrix: np.ndarray, tol: float = 1e-5):
@@ -470,8 +491,7 @@ def write_gltf(
         trs = [trs_decompose(p.matrix) for p in placements] if gpu_instancing else []
         # paradata every copy shares goes on the node once; the rest per copy
         each = [{"path": p.path, **p.paradata} for p in placements]
-        common = _common(each) if len(each) > 1 else {}
-        each = [{k: v for k, v in e.items() if k not in common} for e in each]
+        common, each = _split_common(each) if len(each) > 1 else ({}, each)
         name = scene.meshes[key].name
         if gpu_instancing and len(placements) > 1 and all(t is not None for t in trs):
             t_arr = np.array([t[0] for t in trs], dtype=np.float32)  # type: ignore[index]

@@ -27,9 +27,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from pxr import Gf, Sdf, Usd, UsdGeom, UsdShade, Vt
+from pxr import Sdf, Usd, UsdGeom, UsdShade
 
 from ionic_usd.errors import GeometryError, ParameterError, UsdAuthoringError
+from ionic_usd.usd.surface import MaterialData, TextureRef, read_material
 
 __all__ = [
     "TextureRef",
@@ -48,50 +49,6 @@ _SKIP_PURPOSES = ("proxy", "guide")
 
 
 # -- values ------------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class TextureRef:
-    """A UsdUVTexture as a glTF-like texture reference.
-
-    ``path`` is the resolved file; ``channels`` the output read (``"rgb"``, ``"r"``, …);
-    ``scale``/``bias`` (4,) UsdUVTexture's decode; ``st_scale``/``st_rotation`` (degrees,
-    counter-clockwise)/``st_translation`` a UsdTransform2d on the ``st`` input, or None.
-    """
-
-    path: str
-    channels: str
-    colour_space: str
-    wrap_s: str = "repeat"
-    wrap_t: str = "repeat"
-    scale: tuple[float, float, float, float] = (1.0, 1.0, 1.0, 1.0)
-    bias: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
-    st_scale: tuple[float, float] | None = None
-    st_rotation: float = 0.0
-    st_translation: tuple[float, float] = (0.0, 0.0)
-
-
-@dataclass(frozen=True)
-class MaterialData:
-    """A UsdPreviewSurface: constant inputs and, where connected, their textures."""
-
-    name: str
-    path: str
-    diffuse: tuple[float, float, float] = (0.18, 0.18, 0.18)
-    diffuse_texture: TextureRef | None = None
-    roughness: float = 0.5
-    roughness_texture: TextureRef | None = None
-    metallic: float = 0.0
-    metallic_texture: TextureRef | None = None
-    normal_texture: TextureRef | None = None
-    emissive: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    opacity: float = 1.0
-
-    @property
-    def key(self) -> str:
-        """A content key: equal materials found under different prototypes share it."""
-        d = {k: v for k, v in self.__dict__.items() if k not in ("name", "path")}
-        return hashlib.blake2b(repr(sorted(d.items())).encode(), digest_size=8).hexdigest()
-
-
 @dataclass(frozen=True, eq=False)
 class SceneMesh:
     """One distinct mesh.
@@ -311,76 +268,6 @@ def _root_matrix(stage: Usd.Stage) -> np.ndarray:
     return m
 
 
-# -- materials ---------------------------------------------------------------------------------
-def _input_value(shader: UsdShade.Shader, name: str):
-    inp = shader.GetInput(name)
-    return inp.Get() if inp else None
-
-
-def _source(inp: UsdShade.Input) -> tuple[UsdShade.Shader, str] | None:
-    if not inp or not inp.HasConnectedSource():
-        return None
-    src, out_name, _ = inp.GetConnectedSource()
-    return UsdShade.Shader(src.GetPrim()), str(out_name)
-
-
-def _texture(shader: UsdShade.Shader, channels: str) -> TextureRef | None:
-    if _input_value(shader, "file") is None:
-        return None
-    asset = _input_value(shader, "file")
-    path = asset.resolvedPath if isinstance(asset, Sdf.AssetPath) else ""
-    if not path:
-        raise UsdAuthoringError(f"{shader.GetPath()}: texture {asset} does not resolve")
-    space = _input_value(shader, "sourceColorSpace") or "auto"
-    kw: dict = {}
-    for name in ("scale", "bias"):
-        v = _input_value(shader, name)
-        if v is not None:
-            kw[name] = tuple(float(x) for x in v)
-    for name, key in (("wrapS", "wrap_s"), ("wrapT", "wrap_t")):
-        v = _input_value(shader, name)
-        if v:
-            kw[key] = str(v)
-    st = _source(shader.GetInput("st"))
-    if st is not None and st[0].GetIdAttr().Get() == "UsdTransform2d":
-        xf = st[0]
-        sc = _input_value(xf, "scale")
-        kw["st_scale"] = (float(sc[0]), float(sc[1])) if sc is not None else (1.0, 1.0)
-        kw["st_rotation"] = float(_input_value(xf, "rotation") or 0.0)
-        tr = _input_value(xf, "translation")
-        kw["st_translation"] = (float(tr[0]), float(tr[1])) if tr is not None else (0.0, 0.0)
-    return TextureRef(path=path, channels=channels, colour_space=str(space), **kw)
-
-
-def read_material(mat: UsdShade.Material) -> MaterialData | None:
-    """A bound material's UsdPreviewSurface as :class:`MaterialData` (None: not a preview
-    surface)."""
-    src = mat.ComputeSurfaceSource()
-    shader = src[0] if isinstance(src, tuple) else src
-    if not shader or shader.GetIdAttr().Get() != "UsdPreviewSurface":
-        return None
-    kw: dict = {}
-    for name, key, tex_key in (("diffuseColor", "diffuse", "diffuse_texture"),
-                               ("roughness", "roughness", "roughness_texture"),
-                               ("metallic", "metallic", "metallic_texture"),
-                               ("normal", None, "normal_texture"),
-                               ("emissiveColor", "emissive", None),
-                               ("opacity", "opacity", None)):
-        inp = shader.GetInput(name)
-        if not inp:
-            continue
-        conn = _source(inp)
-        if conn is not None and conn[0].GetIdAttr().Get() == "UsdUVTexture" and tex_key:
-            tex = _texture(conn[0], conn[1])
-            if tex is not None:
-                kw[tex_key] = tex
-                continue
-        v = inp.Get()
-        if v is not None and key is not None:
-            kw[key] = tuple(float(x) for x in v) if hasattr(v, "__len__") else float(v)
-    return MaterialData(name=mat.GetPrim().GetName(), path=str(mat.GetPath()), **kw)
-
-
 # -- meshes ------------------------------------------------------------------------------------
 def _np(value, dtype) -> np.ndarray:
     return np.asarray(value if value is not None else [], dtype=dtype)
@@ -489,10 +376,11 @@ class _Reader:
         self._materials: dict[str, str | None] = {}
 
     def walk(self, root: Usd.Prim, relative: bool, chain: dict
-             ) -> list[tuple[str, np.ndarray, str, dict]]:
-        """``(mesh key, matrix, path, paradata)`` per drawable under ``root``; matrices are
-        relative to ``root`` when ``relative``, else local-to-world."""
-        out: list[tuple[str, np.ndarray, str, dict]] = []
+             ) -> list[tuple[str, np.ndarray, str, dict, bool]]:
+        """``(mesh key, matrix, path, paradata, instanced)`` per drawable under ``root``;
+        matrices are relative to ``root`` when ``relative``, else local-to-world; ``path`` is
+        the placing instance's path (an instance proxy path when nested) or the mesh's."""
+        out: list[tuple[str, np.ndarray, str, dict, bool]] = []
         purposes: dict[Sdf.Path, str] = {}
         para: dict[Sdf.Path, dict] = {root.GetPath().GetParentPath(): chain}
         it = iter(Usd.PrimRange(root, Usd.PrimDefaultPredicate))
@@ -527,15 +415,18 @@ class _Reader:
                 m = np.array(self.xfc.GetLocalToWorldTransform(prim)).reshape(4, 4)
             if prim.IsInstance():
                 it.PruneChildren()
-                for k, rel, _, pd in self._prototype(prim.GetPrototype()):
-                    out.append((k, rel @ m, str(path), _merge(para[path], pd)))
+                proto = prim.GetPrototype()
+                n = len(str(proto.GetPath()))
+                for k, rel, ip, pd, via in self._prototype(proto):
+                    out.append((k, rel @ m, str(path) + (ip[n:] if via else ""),
+                                _merge(para[path], pd), True))
             elif prim.IsA(UsdGeom.PointInstancer):
                 it.PruneChildren()
                 out.extend(self._point_instancer(UsdGeom.PointInstancer(prim), m, para[path]))
             else:
                 key = self._mesh(prim, para[path] if relative else {})
                 if key is not None:
-                    out.append((key, m, str(path), {} if relative else para[path]))
+                    out.append((key, m, str(path), {} if relative else para[path], False))
         return out
 
     def _material(self, prim: Usd.Prim) -> str | None:
@@ -568,7 +459,7 @@ class _Reader:
                 paradata=paradata)
         return key
 
-    def _prototype(self, root: Usd.Prim) -> list[tuple[str, np.ndarray, str, dict]]:
+    def _prototype(self, root: Usd.Prim) -> list[tuple[str, np.ndarray, str, dict, bool]]:
         key = str(root.GetPath())
         if key not in self._protos:
             self._protos[key] = self.walk(root, relative=True, chain={})  # type: ignore[assignment]
@@ -598,9 +489,12 @@ class _Reader:
             if not proto or len(sel) == 0:
                 continue
             # the prototype's transform is in ``mats``: walk it relative to itself
-            for k, rel, _, pd in self._prototype(proto):
+            n = len(str(proto.GetPath()))
+            for k, rel, ip, pd, via in self._prototype(proto):
+                tail = ip[n:] if via else ""
                 for i in sel:
-                    out.append((k, rel @ full[i] @ world, f"{base}[{i}]", _merge(chain, pd)))
+                    out.append((k, rel @ full[i] @ world, f"{base}[{i}]{tail}",
+                                _merge(chain, pd), True))
         return out
 
 
@@ -637,13 +531,13 @@ def read_scene(
                                                for n in vs.GetNames()}
     conv = _root_matrix(stage)
     reader = _Reader(stage, t, scene)
-    for key, m, ppath, pd in reader.walk(stage.GetPseudoRoot(), relative=False, chain={}):
+    for key, m, ppath, pd, via in reader.walk(stage.GetPseudoRoot(), relative=False, chain={}):
         # through an instance, an instancer, or a second prim of equal content
-        instanced = ppath != scene.meshes[key].source
+        instanced = via or ppath != scene.meshes[key].source
+        if not np.all(np.isfinite(m)):
+            raise GeometryError(f"{ppath}: its transform is not finite")
         scene.placements.append(Placement(key, m @ conv, ppath, instanced, pd))
     if not scene.placements:
         raise GeometryError(f"{path}: the scene has no visible mesh")
     return scene
 
-
-_ = (Gf, Vt)
