@@ -77,6 +77,7 @@ from ionic_usd.usd.hypotheses import (
     column_path,
     column_xform,
     cuboid_meshes,
+    define_overs,
     hyp_ident,
     hyp_set,
     hypothesis_layer,
@@ -440,12 +441,8 @@ def _correction_layer(stage: Usd.Stage, fixes: dict[str, object], hyps: Sequence
                 t = Gf.Transform(m)
                 column_xform(spec, t.GetTranslation(), want.rotation_deg,
                              want.scale * ratio)
-            for anc in Sdf.Path(path).GetParentPath().GetPrefixes():
-                a = lay.GetPrimAtPath(anc)
-                if a is not None and a.specifier == Sdf.SpecifierDef and anc != "/Temple":
-                    a.specifier = Sdf.SpecifierOver
-                    a.typeName = ""
             add_paradata(spec, hyps)
+        define_overs(lay)
     return lay
 
 
