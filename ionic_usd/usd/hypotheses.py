@@ -224,11 +224,12 @@ def _shape_opinions(lay: Sdf.Layer, base: TempleLayout, alt: TempleLayout, uv_sc
         part = f"/Temple/{PART_PRIMS[layer]}"
         olds, news = old_m.get(layer, {}), new_m.get(layer, {})
         moves = {n: _offset(olds[n], news[n]) for n in olds if n in news}
-        same_move = (set(olds) == set(news) and all(v is not None for v in moves.values())
-                     and len({tuple(np.round(v, 12)) for v in moves.values()}) == 1)
-        if same_move and np.any(np.abs(next(iter(moves.values()))) > _TOL):
+        shifts = [v for v in moves.values() if v is not None]
+        same_move = (set(olds) == set(news) and len(shifts) == len(moves) > 0
+                     and len({tuple(np.round(v, 12)) for v in shifts}) == 1)
+        if same_move and np.any(np.abs(shifts[0]) > _TOL):
             spec = _over(lay, part)
-            _translate(spec, next(iter(moves.values())))
+            _translate(spec, shifts[0])
             touched.append(spec)
             continue
         for name in sorted(set(olds) | set(news)):

@@ -50,6 +50,7 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from pxr import Gf, Sdf, Usd, UsdGeom, Vt
@@ -57,7 +58,15 @@ from pxr import Gf, Sdf, Usd, UsdGeom, Vt
 from ionic_usd import __version__
 from ionic_usd.column.column import LODS, ColumnParams, portunus_column_params
 from ionic_usd.errors import OutputExistsError, ParameterError, UsdAuthoringError
-from ionic_usd.temple.layout import ColumnKind, Hypothesis, Layer, TempleLayout, build_layout
+from ionic_usd.geometry.mesh import Mesh
+from ionic_usd.temple.layout import (
+    ColumnKind,
+    ColumnPlacement,
+    Hypothesis,
+    Layer,
+    TempleLayout,
+    build_layout,
+)
 from ionic_usd.usd.asset import class_path, replace_folder
 from ionic_usd.usd.bounds import author_extents_hints, variant_extents_hints
 from ionic_usd.usd.column_asset import (
@@ -105,6 +114,9 @@ ASSET_REF = f"./{ASSET_NAME}/{ASSET_NAME}.usda"
 BASELINE_FINISH = "stucco"
 # the cuboids' st share the column asset's convention: UV_SPAN metres per unit of st
 CUBOID_UV_SCALE = 1.0 / UV_SPAN
+# what a prim should be, for the combination check: a cuboid's mesh, a column's placement,
+# or None (the prim should not be there)
+Fix = Mesh | ColumnPlacement | None
 # temple keys the composer cannot realise: the column asset is built once per temple
 _COLUMN_SHAPE_KEYS = ("columns.lower_diameter", "columns.upper_diameter_ratio")
 
@@ -306,7 +318,7 @@ def compose_temple(
     base_meshes = cuboid_meshes(layout, CUBOID_UV_SCALE)
     baseline_material = FINISHES[BASELINE_FINISH][0]
     lods = tuple(lod for lod in LODS if lod in opts.lods)
-    stats: dict[str, object] = {}
+    stats: dict[str, Any] = {}
 
     def build(tmp: Path) -> None:
         stats["asset"] = build_column_asset(tmp / ASSET_NAME, opts)
@@ -370,11 +382,11 @@ def _expected_column(c, ratio: float) -> Gf.Matrix4d:
 
 
 def _mismatches(stage: Usd.Stage, expected: TempleLayout, column_height: float,
-                atol: float = 1e-6) -> dict[str, object]:
+                atol: float = 1e-6) -> dict[str, Fix]:
     """Prims whose composed values differ from ``expected``: path → the expected Mesh, column
     placement, or None (the prim should not be there)."""
     cache = UsdGeom.XformCache()
-    out: dict[str, object] = {}
+    out: dict[str, Fix] = {}
     meshes = cuboid_meshes(expected, CUBOID_UV_SCALE)
     seen = set()
     for layer, ms in meshes.items():
@@ -410,7 +422,7 @@ def _mismatches(stage: Usd.Stage, expected: TempleLayout, column_height: float,
     return out
 
 
-def _correction_layer(stage: Usd.Stage, fixes: dict[str, object], hyps: Sequence[Hypothesis],
+def _correction_layer(stage: Usd.Stage, fixes: dict[str, Fix], hyps: Sequence[Hypothesis],
                       ratio: float) -> Sdf.Layer:
     """Absolute values for the prims the selected hypotheses do not compose right."""
     lay = new_layer("Temple", kind="assembly", comment="combined values of the hypotheses "
@@ -424,7 +436,7 @@ def _correction_layer(stage: Usd.Stage, fixes: dict[str, object], hyps: Sequence
                 spec = Sdf.CreatePrimInLayer(lay, path)
                 spec.specifier = Sdf.SpecifierOver
                 spec.active = False
-            elif hasattr(want, "points"):
+            elif isinstance(want, Mesh):
                 local = want.points @ to_parent[:3, :3] + to_parent[3, :3]
                 exists = bool(stage.GetPrimAtPath(path))
                 spec = author_mesh(lay, path, want.with_(points=local))
