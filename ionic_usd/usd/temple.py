@@ -348,7 +348,7 @@ def compose_temple(
         author_extents_hints(gen_layer, "/Temple", hints, list(vsets))
         gen_layer.Save()
         del gen
-        _check_resolves(tmp / ROOT_LAYER)
+        _check_resolves(tmp / ROOT_LAYER, tmp / GENERATED_LAYER)
 
     replace_folder(build, dest, force=force)
     root_path = dest / ROOT_LAYER
@@ -521,16 +521,19 @@ def _realise_combinations(gen: Usd.Stage, folder: Path, layout: TempleLayout,
 # checks and report
 
 
-def _check_resolves(root: Path) -> None:
+def _check_resolves(root: Path, generated: Path) -> None:
     """Every layer and asset the temple refers to must resolve (before it is moved in place):
-    an unresolved column reference would otherwise compose to an empty colonnade."""
+    an unresolved column reference would otherwise compose to an empty colonnade. The columns
+    are checked in the generated layer (what the user's layer does to them is theirs)."""
     from pxr import UsdUtils
 
-    _, _, unresolved = UsdUtils.ComputeAllDependencies(Sdf.AssetPath(str(root)))
+    _, _, unresolved = UsdUtils.ComputeAllDependencies(Sdf.AssetPath(str(generated)))
+    unresolved += [p for p in (OVERRIDES_LAYER, GENERATED_LAYER)
+                   if not (root.parent / p).is_file()]
     if unresolved:
         raise UsdAuthoringError(f"the temple refers to files that do not resolve: "
                                 f"{', '.join(sorted(unresolved))}")
-    stage = Usd.Stage.Open(str(root))
+    stage = Usd.Stage.Open(str(generated))
     for prim in stage.GetPrimAtPath("/Temple/Colonnade").GetAllChildren():
         for inst in prim.GetChildren():
             if not inst.IsInstance() or not inst.GetPrototype().GetChildren():
