@@ -372,3 +372,22 @@ def test_temple_lod_passes_to_every_column(portunus_temple):
                if p.IsInstance())
     cuboids = sum(12 for p in stage.Traverse() if p.IsA(UsdGeom.Mesh))
     assert temple_triangles(stage) == inst + cuboids
+
+
+def test_a_rebuild_is_not_blocked_by_the_users_edits(tmp_path):
+    """The user's layer may de-instance a column or reference a file of their own that is not
+    there yet: the build checks what it generates, and keeps the user's layer as it is."""
+    folder = tmp_path / "T"
+    compose_temple(folder, portunus_layout(), texture_size=16)
+    user = Sdf.Layer.FindOrOpen(str(folder / "overrides.usda"))
+    col = Sdf.CreatePrimInLayer(user, "/Temple/Colonnade/Free/front_1")
+    col.specifier = Sdf.SpecifierOver
+    col.instanceable = False
+    extra = Sdf.CreatePrimInLayer(user, "/Temple/Statue")
+    extra.specifier, extra.typeName = Sdf.SpecifierDef, "Xform"
+    extra.referenceList.Prepend(Sdf.Reference("./statue.usda"))
+    user.Save()
+    before = (folder / "overrides.usda").read_bytes()
+    rep = compose_temple(folder, portunus_layout(), texture_size=16, force=True)
+    assert (folder / "overrides.usda").read_bytes() == before
+    assert rep.instances == 17  # front_1 is the user's own, de-instanced, column

@@ -62,6 +62,7 @@ __all__ = [
     "hypothesis_paradata",
     "add_paradata",
     "check_composer_changes",
+    "define_overs",
     "column_xform",
     "temple_keys",
     "hypothesis_layer",
@@ -234,11 +235,12 @@ def _shape_opinions(lay: Sdf.Layer, base: TempleLayout, alt: TempleLayout, uv_sc
         part = f"/Temple/{PART_PRIMS[layer]}"
         olds, news = old_m.get(layer, {}), new_m.get(layer, {})
         moves = {n: _offset(olds[n], news[n]) for n in olds if n in news}
-        same_move = (set(olds) == set(news) and all(v is not None for v in moves.values())
-                     and len({tuple(np.round(v, 12)) for v in moves.values()}) == 1)
-        if same_move and np.any(np.abs(next(iter(moves.values()))) > _TOL):
+        shifts = [v for v in moves.values() if v is not None]
+        same_move = (set(olds) == set(news) and len(shifts) == len(moves) > 0
+                     and len({tuple(np.round(v, 12)) for v in shifts}) == 1)
+        if same_move and np.any(np.abs(shifts[0]) > _TOL):
             spec = _over(lay, part)
-            _translate(spec, next(iter(moves.values())))
+            _translate(spec, shifts[0])
             touched.append(spec)
             continue
         for name in sorted(set(olds) | set(news)):
@@ -253,12 +255,11 @@ def _shape_opinions(lay: Sdf.Layer, base: TempleLayout, alt: TempleLayout, uv_sc
                 off = moves[name]
                 if off is not None and not np.any(np.abs(off) > _TOL):
                     continue
-                spec = _over(lay, path)
+                # a moved mesh keeps its baseline data beside the translate, so that the layer
+                # alone holds a whole mesh (NVIDIA's checks); the values equal the part layer's
+                spec = author_mesh(lay, path, olds[name] if off is not None else news[name])
                 if off is not None:
                     _translate(spec, off)
-                else:
-                    author_mesh(lay, path, news[name])
-                    spec.specifier = Sdf.SpecifierOver
             touched.append(spec)
     ratio = alt.params.columns_height / column_height
     olds_c = {column_path(c): c for c in base.columns}
@@ -341,4 +342,26 @@ def hypothesis_layer(
             return None
         for spec in {s.path: s for s in touched}.values():
             add_paradata(spec, [h])
+        define_overs(lay)
     return lay
+
+
+def define_overs(lay: Sdf.Layer) -> None:
+    """Turn every ``over`` of a temple delta layer into a typed ``def`` (the type the prim has
+    in the generated layers: Mesh for a cuboid of a part, else Xform), so the layer opened
+    alone has no dangling overs; in composition the opinions are the same."""
+    parts = set(PART_PRIMS.values())
+
+    def visit(path: Sdf.Path) -> None:
+        if not path.IsPrimPath() or path.IsPrimVariantSelectionPath():
+            return
+        spec = lay.GetPrimAtPath(path)
+        if spec is None or spec.specifier != Sdf.SpecifierOver:
+            return
+        spec.specifier = Sdf.SpecifierDef
+        if not spec.typeName:
+            names = path.pathString.split("/")
+            mesh = len(names) == 4 and names[1] == "Temple" and names[2] in parts
+            spec.typeName = "Mesh" if mesh else "Xform"
+
+    lay.Traverse(Sdf.Path.absoluteRootPath, visit)

@@ -51,6 +51,7 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from pxr import Gf, Sdf, Usd, UsdGeom, Vt
@@ -58,7 +59,14 @@ from pxr import Gf, Sdf, Usd, UsdGeom, Vt
 from ionic_usd import __version__
 from ionic_usd.column.column import LODS, ColumnParams, portunus_column_params
 from ionic_usd.errors import OutputExistsError, ParameterError, UsdAuthoringError
-from ionic_usd.temple.layout import Hypothesis, Layer, TempleLayout, build_layout
+from ionic_usd.geometry.mesh import Mesh
+from ionic_usd.temple.layout import (
+    ColumnPlacement,
+    Hypothesis,
+    Layer,
+    TempleLayout,
+    build_layout,
+)
 from ionic_usd.usd.asset import class_path, replace_folder
 from ionic_usd.usd.bounds import author_extents_hints, variant_extents_hints
 from ionic_usd.usd.column_asset import (
@@ -79,6 +87,7 @@ from ionic_usd.usd.hypotheses import (
     column_path,
     column_xform,
     cuboid_meshes,
+    define_overs,
     hyp_ident,
     hyp_set,
     hypothesis_layer,
@@ -106,6 +115,9 @@ ASSET_REF = f"./{ASSET_NAME}/{ASSET_NAME}.usda"
 BASELINE_FINISH = "stucco"
 # the cuboids' st share the column asset's convention: UV_SPAN metres per unit of st
 CUBOID_UV_SCALE = 1.0 / UV_SPAN
+# what a prim should be, for the combination check: a cuboid's mesh, a column's placement,
+# or None (the prim should not be there)
+Fix = Mesh | ColumnPlacement | None
 # temple keys the composer cannot realise: the column asset is built once per temple
 _COLUMN_SHAPE_KEYS = ("columns.lower_diameter", "columns.upper_diameter_ratio")
 
@@ -304,7 +316,7 @@ def compose_temple(
     base_meshes = cuboid_meshes(layout, CUBOID_UV_SCALE)
     baseline_material = FINISHES[BASELINE_FINISH][0]
     lods = tuple(lod for lod in LODS if lod in opts.lods)
-    stats: dict[str, object] = {}
+    stats: dict[str, Any] = {}
 
     def build(tmp: Path) -> None:
         stats["asset"] = build_column_asset(tmp / ASSET_NAME, opts)
@@ -332,7 +344,7 @@ def compose_temple(
         author_extents_hints(gen_layer, "/Temple", hints, list(vsets))
         gen_layer.Save()
         del gen
-        _check_resolves(tmp / ROOT_LAYER)
+        _check_resolves(tmp / ROOT_LAYER, tmp / GENERATED_LAYER)
 
     replace_folder(build, dest, force=force, keep_existing=(OVERRIDES_LAYER,),
                    root_files=(ROOT_LAYER,))
@@ -367,11 +379,11 @@ def _expected_column(c, ratio: float) -> Gf.Matrix4d:
 
 
 def _mismatches(stage: Usd.Stage, expected: TempleLayout, column_height: float,
-                atol: float = 1e-6) -> dict[str, object]:
+                atol: float = 1e-6) -> dict[str, Fix]:
     """Prims whose composed values differ from ``expected``: path → the expected Mesh, column
     placement, or None (the prim should not be there)."""
     cache = UsdGeom.XformCache()
-    out: dict[str, object] = {}
+    out: dict[str, Fix] = {}
     meshes = cuboid_meshes(expected, CUBOID_UV_SCALE)
     seen = set()
     for layer, ms in meshes.items():
@@ -407,7 +419,7 @@ def _mismatches(stage: Usd.Stage, expected: TempleLayout, column_height: float,
     return out
 
 
-def _correction_layer(stage: Usd.Stage, fixes: dict[str, object], hyps: Sequence[Hypothesis],
+def _correction_layer(stage: Usd.Stage, fixes: dict[str, Fix], hyps: Sequence[Hypothesis],
                       ratio: float) -> Sdf.Layer:
     """Absolute values for the prims the selected hypotheses do not compose right."""
     lay = new_layer("Temple", kind="assembly", comment="combined values of the hypotheses "
@@ -421,7 +433,7 @@ def _correction_layer(stage: Usd.Stage, fixes: dict[str, object], hyps: Sequence
                 spec = Sdf.CreatePrimInLayer(lay, path)
                 spec.specifier = Sdf.SpecifierOver
                 spec.active = False
-            elif hasattr(want, "points"):
+            elif isinstance(want, Mesh):
                 local = want.points @ to_parent[:3, :3] + to_parent[3, :3]
                 exists = bool(stage.GetPrimAtPath(path))
                 spec = author_mesh(lay, path, want.with_(points=local))
@@ -438,12 +450,8 @@ def _correction_layer(stage: Usd.Stage, fixes: dict[str, object], hyps: Sequence
                 t = Gf.Transform(m)
                 column_xform(spec, t.GetTranslation(), want.rotation_deg,
                              want.scale * ratio)
-            for anc in Sdf.Path(path).GetParentPath().GetPrefixes():
-                a = lay.GetPrimAtPath(anc)
-                if a is not None and a.specifier == Sdf.SpecifierDef and anc != "/Temple":
-                    a.specifier = Sdf.SpecifierOver
-                    a.typeName = ""
             add_paradata(spec, hyps)
+        define_overs(lay)
     return lay
 
 
@@ -510,16 +518,19 @@ def _realise_combinations(gen: Usd.Stage, folder: Path, layout: TempleLayout,
 # checks and report
 
 
-def _check_resolves(root: Path) -> None:
+def _check_resolves(root: Path, generated: Path) -> None:
     """Every layer and asset the temple refers to must resolve (before it is moved in place):
-    an unresolved column reference would otherwise compose to an empty colonnade."""
+    an unresolved column reference would otherwise compose to an empty colonnade. The columns
+    are checked in the generated layer (what the user's layer does to them is theirs)."""
     from pxr import UsdUtils
 
-    _, _, unresolved = UsdUtils.ComputeAllDependencies(Sdf.AssetPath(str(root)))
+    _, _, unresolved = UsdUtils.ComputeAllDependencies(Sdf.AssetPath(str(generated)))
+    unresolved += [p for p in (OVERRIDES_LAYER, GENERATED_LAYER)
+                   if not (root.parent / p).is_file()]
     if unresolved:
         raise UsdAuthoringError(f"the temple refers to files that do not resolve: "
                                 f"{', '.join(sorted(unresolved))}")
-    stage = Usd.Stage.Open(str(root))
+    stage = Usd.Stage.Open(str(generated))
     for prim in stage.GetPrimAtPath("/Temple/Colonnade").GetAllChildren():
         for inst in prim.GetChildren():
             if not inst.IsInstance() or not inst.GetPrototype().GetChildren():
