@@ -237,3 +237,15 @@ def test_angle_capital_shows_volutes_on_two_faces():
     # and the corner volute faces the diagonal
     e = 0.5 * (lay.eye_x + lay.face_z)
     assert facing(angle, (1, 0, 1), math.sqrt(2) * e) > 0.005
+
+
+# -- the temple's own meshes ----------------------------------------------------------------------
+def test_every_temple_cuboid_is_a_solid():
+    from ionic_usd.temple.cuboid import cuboid_mesh
+
+    layout = portunus_layout()
+    for c in layout.all_cuboids():
+        m = cuboid_mesh(c)
+        r = solid_report(m)
+        assert r.solid, (c.name, r)
+        assert manifold_status(m)[0] == "NoError", c.name

@@ -469,6 +469,9 @@ def build_capital(p: CapitalParams | None = None, *, top_radius: float,
     return CapitalParts(ab, ech, (fr, fl, rr, rl), (front, rear), (br, bl))
 
 
+CANALIS_BURY = 0.5  # how deep (fraction of the disc) the angle capital's canales end in it
+
+
 def _rot_y(deg: float) -> np.ndarray:
     """Rotation about +Y taking +Z to (sin θ, 0, cos θ)."""
     t = math.radians(deg)
@@ -489,20 +492,25 @@ def _angle_capital(p: CapitalParams, lay: CapitalLayout, ab: Mesh, ech: Mesh, fr
     # the corner volute: turned 45° about its eye's vertical, its eye moved onto the diagonal;
     # its band, eye and disc are united first, where their touching faces are exactly coplanar
     e = 0.5 * (lay.eye_x + lay.face_z)
-    diag = _rigid(union([_rigid(fr, np.eye(3), -eye)]), _rot_y(45.0), (e, lay.eye_y, e),
+    # it is lifted 1 mm into the abacus: an overlap, not a tangent touch of its disc's top
+    # with the abacus and canales (which leaves a pinch vertex in the union)
+    diag = _rigid(union([_rigid(fr, np.eye(3), -eye)]), _rot_y(45.0), (e, lay.eye_y + 1e-3, e),
                   "volute_corner")
     quarter = _rot_y(90.0)  # +Z → +X: the front face's right half becomes the +X face
     side = _rigid(fr, quarter, name="volute_side_rear")
-    # the two outer canales run from their face's other volute into the corner volute and end
-    # in the plane of its disc's face (under its raised band)
+    # the two outer canales run from their face's other volute into the corner volute's disc
     slab_front = lay.face_z - p.relief_depth
     reach = e + lay.total_radius
     front = _box((-lay.eye_x, canalis_lo, lay.back_z), (reach, lay.abacus_y, slab_front),
                  "canalis_front")
+    # (into the side volute's disc by 1 cm: an overlap, not an edge touching its band's end)
     side_canalis = _rigid(_box((-reach, canalis_lo, lay.back_z),
-                               (lay.eye_x, lay.abacus_y, slab_front), "canalis_side"), quarter)
-    diag_n = np.array([-1.0, 0.0, -1.0]) / math.sqrt(2.0)  # keep the side behind the disc face
-    on_face = np.array([e, 0.0, e]) + diag_n * p.relief_depth
+                               (lay.eye_x + 0.01, lay.abacus_y, slab_front), "canalis_side"),
+                          quarter)
+    # keep the side behind the disc's mid-plane: the ends are buried in the disc (an end flush
+    # with the disc's face would leave coplanar slivers in the union)
+    diag_n = np.array([-1.0, 0.0, -1.0]) / math.sqrt(2.0)
+    on_face = np.array([e, 0.0, e]) + diag_n * (p.relief_depth + CANALIS_BURY * p.slab_depth)
     front = clip_mesh(front, on_face, diag_n, name="canalis_front")
     side_canalis = clip_mesh(side_canalis, on_face, diag_n, name="canalis_side")
     parts = [ab, ech, fl, diag, side, rl, front, rear, side_canalis, bl]

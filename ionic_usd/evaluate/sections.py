@@ -36,7 +36,7 @@ import numpy as np
 
 from ionic_usd.column.base import base_profile
 from ionic_usd.column.capital import capital_layout
-from ionic_usd.column.column import ColumnParams
+from ionic_usd.column.column import LODS, ColumnParams
 from ionic_usd.column.shaft import shaft_cross_section, shaft_radius_at
 from ionic_usd.column.volute import volute_curve
 from ionic_usd.errors import GeometryError, ParameterError
@@ -451,6 +451,9 @@ def _params_from_stage(path: Path) -> ColumnParams | None:
     stage = Usd.Stage.Open(str(path), Usd.Stage.LoadNone)
     prim = stage.GetDefaultPrim() if stage else None
     data = dict(prim.GetCustomData()) if prim else {}
+    nested = data.get("ionic_usd", {})
+    if hasattr(nested, "get") and hasattr(nested.get("parameters"), "items"):
+        data = dict(nested["parameters"])  # where ``ionic-usd asset`` keeps them
     tables = {k: dict(v) for k, v in data.items() if k in ("column", "shaft", "capital",
                                                            "volute") and hasattr(v, "items")}
     if not tables:
@@ -514,12 +517,62 @@ def section_from_usd(
     if plane_z is None:
         if params is None:
             params = _params_from_stage(path)
+            if params is not None and variants and variants.get("lod") in LODS:
+                params = params.with_lod(variants["lod"])  # the selected LOD's sampling
         plane_z = _volute_plane_z(pts, params)
     loops = slice_mesh(pts, tris, np.array([0.0, 0.0, plane_z]), np.array([0.0, 0.0, 1.0]))
     cands = [c[:, :2] for c in loops
              if np.allclose(c[0], c[-1]) and c[:, 0].min() > 0 and len(c) >= 8]
+    eye = None
+    if not cands:  # a capital united into one solid: the band joins its neighbours
+        cands, eye = _united_band(loops, pts, params)
     if not cands:
         raise GeometryError(f"{path}: no volute band in the capital's section at z = {plane_z:g}")
     band = max(cands, key=len)
-    return _outer_chain(band)
+    chain = _outer_chain(band)
+    if eye is not None:  # start where the outer edge leaves the eye boss
+        import shapely
+
+        on_eye = shapely.distance(shapely.points(chain), shapely.LinearRing(eye)) < 1e-6
+        k = 0
+        while k + 1 < len(chain) and on_eye[k + 1]:
+            k += 1
+        chain = chain[k:]
+    return chain
+
+
+def _united_band(loops: list[np.ndarray], pts: np.ndarray, params: ColumnParams | None
+                 ) -> tuple[list[np.ndarray], np.ndarray | None]:
+    """The front-right band's outline out of the section of a united capital.
+
+    There the band's cut joins the abacus above it, the left volute's band (their margins
+    meet at x = 0) and its eye boss: keep the part right of x = 0 below the abacus (found from
+    the mesh: the top slab's corner edges), and take the eye's disc away when the parameters
+    are known (without them the outline keeps a piece of the eye's arc).
+    """
+    import shapely
+
+    top = pts[:, 1].max()
+    on = pts[np.abs(pts[:, 1] - top) < 1e-6]
+    hx, hz = np.abs(on[:, 0]).max(), np.abs(on[:, 2]).max()
+    edge = pts[(np.abs(np.abs(pts[:, 0]) - hx) < 1e-6) & (np.abs(np.abs(pts[:, 2]) - hz) < 1e-6)]
+    abacus = float(edge[:, 1].min()) if len(edge) else float(top)
+    polys = [shapely.Polygon(c[:, :2]) for c in loops if np.allclose(c[0], c[-1]) and len(c) >= 4]
+    if not polys:
+        return [], None
+    part = shapely.union_all(polys).intersection(shapely.box(0.0, -1e30, 1e30, abacus))
+    eye = None
+    if params is not None:
+        cap = params.capital_params()
+        from ionic_usd.column.volute import volute_eye
+
+        # the eye boss as modelled: the eye's circle at the capital's ring segments
+        eye = volute_eye(cap.volute, cap.ring_segments) + _volute_origin(params)
+        part = part.difference(shapely.Polygon(eye))
+    # float32 points: drop the µm jitter the clipping leaves on straight runs
+    part = shapely.simplify(part, 1e-6)
+    geoms = [g for g in getattr(part, "geoms", [part]) if g.geom_type == "Polygon"]
+    if not geoms:
+        return [], eye
+    return [np.asarray(max(geoms, key=lambda g: g.area).exterior.coords)], eye
 

@@ -132,7 +132,8 @@ def union(meshes: list[Mesh], name: str = "mesh") -> Mesh:
     return _from_manifold(res, name)
 
 
-def difference(mesh: Mesh, cutters: list[Mesh], name: str | None = None) -> Mesh:
+def difference(mesh: Mesh, cutters: list[Mesh], name: str | None = None, *,
+               simplify: bool = False) -> Mesh:
     """Boolean difference ``mesh − cutters`` (closed meshes), normals carried as in :func:`union`.
 
     The faces left by a cutter get its normals reversed (they face into the cutter's void).
@@ -147,17 +148,20 @@ def difference(mesh: Mesh, cutters: list[Mesh], name: str | None = None) -> Mesh
     res = manifold3d.Manifold.batch_boolean([base, *cut], manifold3d.OpType.Subtract)
     if res.is_empty():
         raise GeometryError(f"difference: nothing of mesh {mesh.name!r} is left")
-    return _from_manifold(res, mesh.name if name is None else name)
+    # no simplification by default: a cut must not depend on the mesh's size, so two parts
+    # cut by the same plane keep the same vertices where they meet (base and shaft)
+    return _from_manifold(res, mesh.name if name is None else name, simplify=simplify)
 
 
-def _from_manifold(res, name: str) -> Mesh:
+def _from_manifold(res, name: str, simplify: bool = True) -> Mesh:
     """A Mesh from a manifold3d result whose properties 3..5 are corner normals.
 
-    Edges shorter than 1e-7 × the bounding box diagonal (slivers where faces met almost
-    coplanar) are collapsed first (``Manifold.simplify``).
+    ``simplify``: edges shorter than 1e-7 × the bounding box diagonal (slivers where faces
+    met almost coplanar) are collapsed first (``Manifold.simplify``).
     """
-    box = np.asarray(res.bounding_box(), dtype=np.float64).reshape(2, 3)
-    res = res.simplify(1e-7 * float(np.linalg.norm(box[1] - box[0])))
+    if simplify:
+        box = np.asarray(res.bounding_box(), dtype=np.float64).reshape(2, 3)
+        res = res.simplify(1e-7 * float(np.linalg.norm(box[1] - box[0])))
     out = res.to_mesh64()
     props = np.asarray(out.vert_properties, dtype=np.float64)
     tri = np.asarray(out.tri_verts, dtype=np.int64)

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ionic_usd.geometry.analysis import signed_volume
-from ionic_usd.geometry.mesh import Mesh, face_normals, weld
+from ionic_usd.geometry.mesh import Mesh, face_normals, triangulate_fan, weld
 
 __all__ = [
     "SolidReport",
@@ -127,10 +127,10 @@ def normals_against_winding(mesh: Mesh) -> int:
     fn, area = face_normals(mesh.points, tri)
     if mesh.normals_interpolation == "vertex":
         cn = mesh.normals[tri].astype(np.float64)
-    else:
-        if not np.all(mesh.face_vertex_counts == 3):
-            raise ValueError("faceVarying normals check needs a triangle mesh")
-        cn = mesh.normals.reshape(-1, 3, 3).astype(np.float64)
+    else:  # corners of the fan triangles, in the order ``triangles`` uses
+        corners = triangulate_fan(mesh.face_vertex_counts,
+                                  np.arange(len(mesh.face_vertex_indices)))
+        cn = mesh.normals[corners].astype(np.float64)
     dots = np.einsum("ikj,ij->ik", cn, fn).min(axis=1)
     return int(((dots < 0) & (area > 0)).sum())
 

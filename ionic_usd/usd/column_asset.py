@@ -23,7 +23,7 @@ finish      travertine, stucco                          the material bound to Ge
 Every mesh is one closed solid: the capital's abacus, echinus, volutes, canales and bolsters are
 united (manifold3d), so the capital mesh depends on the scroll and capital variants. Each mesh
 is authored once: the shaft does not depend on the base. Triangle budgets of the default
-column (three parts, form = full): high ≈ 48k, medium ≈ 19k, low ≈ 9.5k.
+column (three parts, form = full): high ≈ 40.7k, medium ≈ 15.9k, low ≈ 7.9k.
 
 Texture coordinates come from xatlas, one chart set per part and LOD, at one texel density per
 LOD (``ASSET_TEXELS_PER_METRE``); every LOD's pixel coordinates are divided by
@@ -54,7 +54,7 @@ from ionic_usd.column.column import (
     column_params_to_tables,
     portunus_column_params,
 )
-from ionic_usd.errors import ParameterError
+from ionic_usd.errors import GeometryError, ParameterError
 from ionic_usd.geometry.mesh import Mesh
 from ionic_usd.texture.uv import UVCache, attach_uvs, unwrap_parts
 from ionic_usd.usd.asset import AssetMesh, AssetSpec, write_asset
@@ -144,23 +144,43 @@ class AssetReport:
     bytes_on_disk: int
 
 
-def _engage(mesh: Mesh) -> Mesh:
-    from ionic_usd.geometry.clip import clip_mesh
-
-    return clip_mesh(mesh, (0.0, 0.0, -ENGAGED_INSET), (0.0, 0.0, 1.0), name=mesh.name)
-
-
-def _corner(mesh: Mesh) -> Mesh:
-    """The three-quarter column: the quadrant x, z < −ENGAGED_INSET (inside the walls of a
-    corner whose outer faces hold the axis) removed by a boolean difference."""
+def _wall_cut(mesh: Mesh, x_max: float | None, simplify: bool = False) -> Mesh:
+    """``mesh`` minus the wall block z < −ENGAGED_INSET (and x < ``x_max`` if given), by a
+    robust boolean difference (manifold3d): the cut faces are exact planar caps."""
     from ionic_usd.geometry.boolean import difference
     from ionic_usd.temple.cuboid import Cuboid, cuboid_mesh
 
     lo, hi = mesh.extent
     big = float(np.abs(np.concatenate([lo, hi])).max()) + 1.0
-    block = cuboid_mesh(Cuboid((-big, lo[1] - 1.0, -big),
-                               (-ENGAGED_INSET, hi[1] + 1.0, -ENGAGED_INSET), name="wall"))
-    return difference(mesh, [block], name=mesh.name)
+    x1 = big if x_max is None else x_max
+    block = cuboid_mesh(Cuboid((-big, lo[1] - 1.0, -big), (x1, hi[1] + 1.0, -ENGAGED_INSET),
+                               name="wall"))
+    return difference(mesh, [block], name=mesh.name, simplify=simplify)
+
+
+def _engage(mesh: Mesh, part: str = "") -> Mesh:
+    """The half column: the part behind the wall plane z = −ENGAGED_INSET removed.
+
+    A plane clip capped by a constrained Delaunay triangulation (base and shaft cut faces meet
+    along the same vertices, so they still weld); for a capital whose united surface has
+    slivers the triangulation chokes on, the boolean difference.
+    """
+    import shapely
+
+    from ionic_usd.geometry.clip import clip_mesh
+
+    try:
+        return clip_mesh(mesh, (0.0, 0.0, -ENGAGED_INSET), (0.0, 0.0, 1.0), name=mesh.name)
+    except (GeometryError, shapely.errors.GEOSException):
+        if part != "CapitalBody":
+            raise
+        return _wall_cut(mesh, None, simplify=True)
+
+
+def _corner(mesh: Mesh, part: str = "") -> Mesh:
+    """The three-quarter column: the quadrant x, z < −ENGAGED_INSET (inside the walls of a
+    corner whose outer faces hold the axis) removed."""
+    return _wall_cut(mesh, -ENGAGED_INSET, simplify=part == "CapitalBody")
 
 
 _FORM_CUT = {"full": None, "engaged": _engage, "corner": _corner}
@@ -192,7 +212,7 @@ def column_asset_meshes(opts: ColumnAssetOptions) -> list[AssetMesh]:
         for part, name, mesh, tags in groups:
             for form in opts.forms:
                 cut = _FORM_CUT[form]
-                m = mesh if cut is None else cut(mesh)
+                m = mesh if cut is None else cut(mesh, part)
                 suffix = "" if form == "full" else f"_{form}"
                 t = {"lod": lod, **tags}
                 if len(opts.forms) > 1:
