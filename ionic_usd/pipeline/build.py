@@ -39,6 +39,7 @@ __all__ = ["PrototypeCache", "BuildResult", "build_temple_files", "build_prototy
            "default_prototype_cache"]
 
 _MANIFEST = "manifest.json"
+CONNECT_TIMEOUT = "10s"  # to reach an existing scheduler
 
 
 def default_prototype_cache() -> Path:
@@ -201,11 +202,11 @@ def build_prototypes(specs: Sequence[TempleSpec], *, cache: PrototypeCache | Non
         if scheduler is None:
             n = n_workers or os.cpu_count() or 1
             cluster = LocalCluster(n_workers=min(n, len(todo)), threads_per_worker=1,
-                                   processes=True, dashboard_address=None)
+                                   processes=True, host="127.0.0.1", dashboard_address=None)
             client = Client(cluster)
         else:
             try:
-                client = Client(scheduler, timeout="20s")
+                client = Client(scheduler, timeout=CONNECT_TIMEOUT)
             except (OSError, TimeoutError, ValueError, TypeError) as exc:
                 raise ParameterError("--scheduler", scheduler, f"a reachable Dask scheduler "
                                      f"tcp://HOST:PORT ({type(exc).__name__}: {exc})") from None
