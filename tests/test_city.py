@@ -205,3 +205,30 @@ def test_cli_city_json_and_errors(grid_city, tmp_path, capsys):
         main(["city", str(tmp_path / "y"), "--focus", "1"])
     with pytest.raises(ParameterError):
         CityOptions(lod_distances=(100.0, 10.0))
+
+
+@pytest.mark.parametrize("n, scaled", [(500, False), (500, True), (20_000, False)])
+def test_instance_bounds_match_brute_force(n, scaled):
+    from ionic_usd.usd.city import _instance_bounds
+
+    rng = np.random.default_rng(n + scaled)
+    lo = np.array([[-1.0, 0.0, -2.0], [-3.0, 0.5, -1.0]])
+    hi = np.array([[1.0, 5.0, 2.5], [2.0, 9.0, 1.0]])
+    idx = rng.integers(0, 2, n)
+    xz, yaw = rng.random((n, 2)) * 500, rng.random(n) * 360
+    s = rng.random(n) + 0.5 if scaled else None
+    got = _instance_bounds(lo, hi, idx, xz, yaw, s)
+    a = np.radians(yaw)
+    S = np.ones(n) if s is None else s
+    pts = []
+    for ix in (0, 1):  # every corner of every placed box
+        for iy in (0, 1):
+            for iz in (0, 1):
+                px = np.where(ix, hi[idx, 0], lo[idx, 0]) * S
+                py = np.where(iy, hi[idx, 1], lo[idx, 1]) * S
+                pz = np.where(iz, hi[idx, 2], lo[idx, 2]) * S
+                pts.append(np.stack([px * np.cos(a) + pz * np.sin(a) + xz[:, 0], py,
+                                     -px * np.sin(a) + pz * np.cos(a) + xz[:, 1]], axis=1))
+    pts = np.concatenate(pts)
+    np.testing.assert_allclose(got[0], pts.min(axis=0), atol=1e-9)
+    np.testing.assert_allclose(got[1], pts.max(axis=0), atol=1e-9)

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ionic_usd.city.plan import Lot, Porticus
-from ionic_usd.errors import ParameterError
+from ionic_usd.errors import IonicError, ParameterError
 
 __all__ = ["Footprint", "TempleFit", "fit_temple", "porticus_columns", "extra_columns",
            "drop_inside", "lod_by_distance", "LOD_NAMES", "yaw_quaternions"]
@@ -65,6 +65,15 @@ class TempleFit:
         return np.stack([world[0] + self.x, -(world[1] + self.z)], axis=1)
 
 
+def _shapely():
+    """shapely, or an error naming the extra that installs it."""
+    try:
+        import shapely
+    except ImportError:
+        raise IonicError("the city needs shapely: pip install 'ionic_usd[city]'") from None
+    return shapely
+
+
 def _rot(yaw_deg: float) -> np.ndarray:
     """(2, 2) rotation about +Y acting on (x, z) column vectors."""
     c, s = math.cos(math.radians(yaw_deg)), math.sin(math.radians(yaw_deg))
@@ -91,7 +100,7 @@ def fit_temple(lot: Lot, fp: Footprint, *, scale_range: tuple[float, float],
     scale_range : (min, max) uniform scale
     toward : (2,) plan point the front should face when the lot gives no orientation
     """
-    import shapely
+    shapely = _shapely()
     from shapely.ops import polylabel
 
     poly = shapely.Polygon(lot.outline)
@@ -118,22 +127,24 @@ def fit_temple(lot: Lot, fp: Footprint, *, scale_range: tuple[float, float],
     lo, hi = local.min(axis=1), local.max(axis=1)
     s = min(smax, (hi[0] - lo[0]) / fp.width, (hi[1] - lo[1]) / fp.length)
     fp_c = np.array([(fp.x0 + fp.x1) / 2, (fp.z0 + fp.z1) / 2])
-    centres = [(lo + hi) / 2]
-    label = polylabel(poly, tolerance=0.05).coords[0]
-    centres.append(R.T @ np.array([label[0], -label[1]]))
-    inner = poly.buffer(1e-6)
+    inside = _containment(poly, lot.outline)
+
+    def centres():
+        yield (lo + hi) / 2
+        label = polylabel(poly, tolerance=0.05).coords[0]  # only when the box centre fails
+        yield R.T @ np.array([label[0], -label[1]])
 
     def place(scale: float, c_local: np.ndarray) -> TempleFit | None:
         o = R @ (c_local - scale * fp_c)
         fit = TempleFit(float(o[0]), float(o[1]), yaw, float(scale))
-        return fit if inner.contains(shapely.Polygon(fit.footprint_plan(fp))) else None
+        return fit if inside(fit.footprint_plan(fp)) else None
 
     if s >= smin:
-        for c in centres:
+        for c in centres():
             if (fit := place(s, c)) is not None:
                 return fit
         lo_s, hi_s, best = smin, s, None
-        for c in centres:
+        for c in centres():
             if place(smin, c) is None:
                 continue
             for _ in range(30):  # bisection on the scale: containment is monotone in s
@@ -150,6 +161,29 @@ def fit_temple(lot: Lot, fp: Footprint, *, scale_range: tuple[float, float],
                          f"a lot that holds the temple at scale >= {smin:g} (facing "
                          f"{az:.0f}°); enlarge the lot, lower its scale minimum or turn it",
                          context=ctx)
+
+
+def _containment(poly, ring: np.ndarray):
+    """A test ``(4, 2) corners → bool``: is the quadrilateral inside the lot (1 mm slack)?
+    Convex lots (the usual case) use half-planes in numpy; others shapely."""
+    shapely = _shapely()
+    if poly.convex_hull.area - poly.area <= 1e-9 * poly.area:
+        pts = ring if shapely.is_ccw(shapely.LinearRing(ring)) else ring[::-1]
+        edge = np.roll(pts, -1, axis=0) - pts
+        length = np.hypot(edge[:, 0], edge[:, 1])
+        keep = length > 1e-12
+        pts, edge, length = pts[keep], edge[keep], length[keep]
+
+        def convex(corners: np.ndarray) -> bool:
+            rel = corners[:, None, :] - pts[None, :, :]
+            cross = edge[None, :, 0] * rel[..., 1] - edge[None, :, 1] * rel[..., 0]
+            return bool((cross / length >= -1e-3).all())
+        return convex
+    grown = poly.buffer(1e-3)
+
+    def general(corners: np.ndarray) -> bool:
+        return bool(grown.contains(shapely.Polygon(corners)))
+    return general
 
 
 def _sample_polyline(line: np.ndarray, spacing: float, closed: bool) -> tuple[np.ndarray,
@@ -186,8 +220,7 @@ def porticus_columns(p: Porticus, spacing: float) -> tuple[np.ndarray, np.ndarra
     xz : (n, 2) float — USD (x, z) of each column
     yaw : (n,) float — rotation about Y (degrees): each column faces the line it lines
     """
-    import shapely
-
+    shapely = _shapely()
     spacing = p.spacing or spacing
     if not (math.isfinite(spacing) and spacing > 0):
         raise ParameterError("spacing", spacing, "a length > 0 (m)", context=f"porticus {p.id}")
@@ -239,14 +272,16 @@ def drop_inside(xz: np.ndarray, footprints: Sequence[np.ndarray], margin: float 
                 ) -> np.ndarray:
     """(n,) bool — which columns stand clear of every temple footprint (plan (m, 2) corner
     arrays, grown by ``margin`` m)."""
-    import shapely
-
     if not footprints or len(xz) == 0:
         return np.ones(len(xz), dtype=bool)
-    union = shapely.union_all([shapely.Polygon(f).buffer(margin, join_style="mitre")
-                               for f in footprints])
-    shapely.prepare(union)
-    return ~shapely.contains_xy(union, xz[:, 0], -xz[:, 1])
+    shapely = _shapely()
+    tree = shapely.STRtree([shapely.Polygon(f).buffer(margin, join_style="mitre")
+                            for f in footprints])
+    pts = shapely.points(xz[:, 0], -xz[:, 1])
+    hit = tree.query(pts, predicate="intersects")[0]
+    keep = np.ones(len(xz), dtype=bool)
+    keep[hit] = False
+    return keep
 
 
 def lod_by_distance(xz: np.ndarray, focus: Sequence[float] | None,

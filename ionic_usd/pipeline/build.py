@@ -32,7 +32,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ionic_usd.errors import ParameterError, UsdAuthoringError
+from ionic_usd.errors import IonicError, ParameterError, UsdAuthoringError
 from ionic_usd.pipeline.spec import TempleSpec
 
 __all__ = ["PrototypeCache", "BuildResult", "build_temple_files", "build_prototypes",
@@ -195,7 +195,11 @@ def build_prototypes(specs: Sequence[TempleSpec], *, cache: PrototypeCache | Non
         cache.put(todo[0], files)
         return BuildResult((todo[0].key,), reused, ("in-process",), 0,
                            time.perf_counter() - t0, {todo[0].key: round(secs, 3)})
-    from distributed import Client, LocalCluster, as_completed
+    try:
+        from distributed import Client, LocalCluster, as_completed
+    except ImportError:
+        raise IonicError("building prototypes on Dask needs distributed: pip install "
+                         "'ionic_usd[city]'") from None
 
     cluster = None
     try:

@@ -19,7 +19,7 @@ import json
 import os
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -39,14 +39,15 @@ from ionic_usd.pipeline.spec import TempleSpec, temple_spec
 
 __all__ = ["CityOptions", "build_city", "estimate_memory", "footprint_of", "write_summary"]
 
-# measured (tools/bench_city.py): bytes of peak memory per street column, per temple
-# authored as an instanceable reference / as a PointInstancer entry, plus the process base
-_BASE_BYTES = 450e6
-_PER_COLUMN = 260.0
-_PER_REFERENCE = 40e3
-_PER_POINT = 400.0
-_PER_BUILD = 120e6
-
+# measured (tools/bench_city.py, peak RSS of the build process; rounded up): the process with
+# pxr/shapely/numpy loaded, each street column (arrays + their Vt copies + temporaries), each
+# temple as an instanceable reference or as a PointInstancer entry, each temple build held
+# by the client while it is written to the cache
+_BASE_BYTES = 300e6
+_PER_COLUMN = 200.0
+_PER_REFERENCE = 10e3
+_PER_POINT = 1e3
+_PER_BUILD = 40e6
 
 @dataclass(frozen=True)
 class CityOptions:
@@ -175,8 +176,22 @@ def build_city(out: str | os.PathLike, opts: CityOptions, *,
     fps = [footprint_of(s) for s in specs]
     centre = (np.mean([lot.outline.mean(axis=0) for lot in plan.lots], axis=0)
               if plan.lots else None)
-    fits = [fit_temple(lot, fps[build[i]], scale_range=opts.scale_range, toward=centre)
-            for i, lot in enumerate(plan.lots)]
+    fits = []
+    same_shape: dict[tuple, object] = {}  # a grid's lots differ by a translation only
+    for i, lot in enumerate(plan.lots):
+        key = None
+        if lot.orientation is not None:
+            key = (int(build[i]), lot.orientation, lot.scale,
+                   (lot.outline - lot.outline[0]).round(9).tobytes())
+        if key is not None and key in same_shape:
+            f0, o0 = same_shape[key]
+            d = lot.outline[0] - o0
+            fits.append(replace(f0, x=f0.x + float(d[0]), z=f0.z - float(d[1])))
+            continue
+        fit = fit_temple(lot, fps[build[i]], scale_range=opts.scale_range, toward=centre)
+        if key is not None:
+            same_shape[key] = (fit, lot.outline[0])
+        fits.append(fit)
     placed = [f.footprint_plan(fps[build[i]]) for i, f in enumerate(fits)]
     parts = [porticus_columns(p, opts.column_spacing) for p in plan.porticoes]
     cxz = np.concatenate([p[0] for p in parts]) if parts else np.zeros((0, 2))

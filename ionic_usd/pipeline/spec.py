@@ -14,6 +14,7 @@ import json
 import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass
+from functools import cached_property
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -43,7 +44,7 @@ class TempleSpec:
     texture_size: int = 1024
     seed: int = 7
 
-    @property
+    @cached_property
     def key(self) -> str:
         """SHA-256 (hex) of everything the build's bytes depend on."""
         from ionic_usd import __version__
