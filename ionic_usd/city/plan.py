@@ -18,10 +18,12 @@ Polygon, ``type = "temple"``
     built with variety off), ``column`` (``{"height": m, "lower_diameter": m}``), ``scale``
     (``[min, max]``: the uniform scales the temple may take to fit its lot), ``id``.
 LineString / MultiLineString, ``type = "porticus"``
-    a colonnade along the street: ``spacing`` (m between column axes), ``sides`` (1: on the line;
-    2: on both sides of it), ``offset`` (m from the line to each side's column axes).
+    a colonnade along the street: ``spacing`` (m between column axes), ``sides`` (1: on the line,
+    the columns facing to its right as drawn; 2: on both sides of it, facing the street),
+    ``offset`` (m from the line to each side's column axes).
 Polygon, ``type = "porticus"``
-    a colonnaded square: columns along its outline (``spacing``).
+    a colonnaded square: columns along its outline (``spacing``), facing in when the ring is
+    drawn clockwise.
 Polygon, ``type = "plaza"``
     open ground (accepted, nothing is built).
 

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import logging
 import os
 import shutil
 import tempfile
@@ -206,7 +207,8 @@ def build_prototypes(specs: Sequence[TempleSpec], *, cache: PrototypeCache | Non
         if scheduler is None:
             n = n_workers or os.cpu_count() or 1
             cluster = LocalCluster(n_workers=min(n, len(todo)), threads_per_worker=1,
-                                   processes=True, host="127.0.0.1", dashboard_address=None)
+                                   processes=True, host="127.0.0.1", dashboard_address=None,
+                                   silence_logs=logging.ERROR)
             client = Client(cluster)
         else:
             try:

@@ -92,6 +92,14 @@ class CityOptions:
             raise ParameterError("--focus", self.focus, "finite X,Y (plan metres)")
         if not (np.isfinite(self.memory_limit_gb) and self.memory_limit_gb > 0):
             raise ParameterError("--memory-limit", self.memory_limit_gb, "GB > 0")
+        ts = self.texture_size
+        if isinstance(ts, bool) or not isinstance(ts, int) or not 16 <= ts <= 8192 or ts & (
+                ts - 1):
+            raise ParameterError("--texture-size", ts, "a power of two in [16, 8192]")
+        if self.scheduler is not None and not (isinstance(self.scheduler, str) and
+                                               "://" in self.scheduler):
+            raise ParameterError("--scheduler", self.scheduler, "an address like "
+                                 "tcp://HOST:PORT")
         if self.workers is not None and (not isinstance(self.workers, int) or self.workers < 1):
             raise ParameterError("--workers", self.workers, "an integer >= 1")
 

@@ -358,12 +358,16 @@ def compose_city(folder: str | os.PathLike, temples: TempleInstances,
     Sdf.AttributeSpec(city, "extentsHint", _T.Float3Array).default = Vt.Vec3fArray(
         [Gf.Vec3f(*map(float, lo)), Gf.Vec3f(*map(float, hi))])
     counts = np.bincount(proto_of, minlength=len(protos))
-    ccounts = np.bincount(cidx, minlength=len(col_lods)) if len(columns) else np.zeros(0, int)
+    ccounts = np.bincount(cidx, minlength=len(col_lods))
     triangles = {}
     for s in ("as authored", *LOD_NAMES):
-        col = (int(sum(col_tri[LOD_NAMES[li]] * int(c) for li, c in zip(col_lods, ccounts,
-                                                                        strict=True)))
-               if s == "as authored" else int(col_tri.get(s, 0)) * len(columns))
+        if not len(columns):
+            col = 0
+        elif s == "as authored":
+            col = int(sum(col_tri[LOD_NAMES[li]] * int(c)
+                          for li, c in zip(col_lods, ccounts, strict=True)))
+        else:
+            col = col_tri[s] * len(columns)
         triangles[s] = int(np.dot(counts, ttri[s])) + col
     if summary is not None:
         city.customData = {"ionic_usd": _vt_dict(summary)}
