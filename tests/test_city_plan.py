@@ -190,3 +190,13 @@ def test_city_packages_import_without_pxr():
             "import ionic_usd.city, ionic_usd.city.plan, ionic_usd.city.layout\n"
             "import ionic_usd.pipeline.spec, ionic_usd.pipeline.build\n")
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_unknown_hypothesis_in_a_plan_is_an_error(tmp_path):
+    from ionic_usd.pipeline.city import CityOptions, build_city
+
+    doc = _fc(_feature({"type": "temple", "id": "t", "hypotheses": {"roof-flat": "alternative"}},
+                       "Polygon", [[[0, 0], [30, 0], [30, 40], [0, 40]]]))
+    with pytest.raises(ParameterError, match=r"lot t: hypotheses = \['roof-flat'\].*flutes-20"):
+        build_city(tmp_path / "c", CityOptions(plan=str(_write(tmp_path, doc))))
+    assert not (tmp_path / "c").exists()

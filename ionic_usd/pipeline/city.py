@@ -151,6 +151,8 @@ def build_city(out: str | os.PathLike, opts: CityOptions, *,
     spec_index: dict[str, int] = {}
     build = np.zeros(len(plan.lots), dtype=np.int32)
     base_specs: dict[str, TempleSpec] = {}
+    variants: dict[tuple, TempleSpec] = {}
+    diameters: dict[str, float] = {}
     for i, lot in enumerate(plan.lots):
         ctx = f"{plan.source} lot {lot.id}"
         base = base_specs.get(lot.temple) or temple_spec(
@@ -158,20 +160,33 @@ def build_city(out: str | os.PathLike, opts: CityOptions, *,
         base_specs[lot.temple] = base
         column = dict(lot.column)
         if not column and opts.column_variety > 1:
-            d0 = base.layout().params.columns_lower_diameter
+            if lot.temple not in diameters:
+                diameters[lot.temple] = base.layout().params.columns_lower_diameter
+            d0 = diameters[lot.temple]
             levels = np.linspace(0.95 * d0, 1.05 * d0, opts.column_variety)
             column = {"lower_diameter": round(float(levels[rng.integers(opts.column_variety)]),
                                               4)}
-        spec = (temple_spec(lot.temple, column, base_dir=plan.base_dir,
-                            texture_size=opts.texture_size, context=ctx) if column else base)
+        spec = base
+        if column:
+            vkey = (lot.temple, tuple(sorted(column.items())))
+            if vkey not in variants:
+                variants[vkey] = temple_spec(lot.temple, column, base_dir=plan.base_dir,
+                                             texture_size=opts.texture_size, context=ctx)
+            spec = variants[vkey]
         build[i] = spec_index.setdefault(spec.key, len(spec_index))
         if build[i] == len(specs):
             specs.append(spec)
     hyp_ids = {s.key: [h.id for h in s.layout().hypotheses] for s in specs}
     selections = []
     for i, lot in enumerate(plan.lots):
+        known = hyp_ids[specs[build[i]].key]
+        unknown = sorted(set(lot.hypotheses) - set(known))
+        if unknown:
+            raise ParameterError("hypotheses", unknown, f"ids of the temple's hypotheses: "
+                                 f"{', '.join(known) or 'none'}",
+                                 context=f"{plan.source} lot {lot.id}")
         sel = {}
-        for h in hyp_ids[specs[build[i]].key]:
+        for h in known:
             draw = rng.random()  # drawn for every id, so plan choices do not shift the others
             if h in lot.hypotheses:
                 sel[h] = lot.hypotheses[h]
