@@ -109,8 +109,8 @@ class CityPlan:
 
 
 def _num(value: object, name: str, ctx: str, *, positive: bool = False) -> float:
-    ok = isinstance(value, (int, float)) and not isinstance(value, bool)
-    if not ok or not math.isfinite(value) or (positive and value <= 0):
+    if (not isinstance(value, (int, float)) or isinstance(value, bool)
+            or not math.isfinite(value) or (positive and value <= 0)):
         raise ParameterError(name, value, "a finite number" + (" > 0" if positive else ""),
                              context=ctx)
     return float(value)
@@ -263,10 +263,10 @@ def grid_plan(rows: int = 4, cols: int = 4, block: float = 60.0, *, street: floa
     Lot (i, j) is centred at easting ``j·block``, northing ``i·block``; each lot is the block
     minus the street (``block − street`` square).
     """
-    for name, v in (("rows", rows), ("cols", cols)):
-        if isinstance(v, bool) or not isinstance(v, int) or v < 1:
-            raise ParameterError(name, v, "an integer >= 1")
-    for name, v in (("block", block), ("street", street), ("column spacing", spacing)):
+    for name, n in (("--rows", rows), ("--cols", cols)):
+        if isinstance(n, bool) or not isinstance(n, int) or n < 1:
+            raise ParameterError(name, n, "an integer >= 1")
+    for name, v in (("--block", block), ("street", street), ("--column-spacing", spacing)):
         _num(v, name, "grid", positive=True)
     if street >= block:
         raise ParameterError("block", block, f"more than the street width ({street} m)")

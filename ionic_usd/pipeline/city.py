@@ -26,6 +26,7 @@ import numpy as np
 
 from ionic_usd.city.layout import (
     Footprint,
+    TempleFit,
     drop_inside,
     extra_columns,
     fit_temple,
@@ -199,8 +200,9 @@ def build_city(out: str | os.PathLike, opts: CityOptions, *,
     fps = [footprint_of(s) for s in specs]
     centre = (np.mean([lot.outline.mean(axis=0) for lot in plan.lots], axis=0)
               if plan.lots else None)
-    fits = []
-    same_shape: dict[tuple, object] = {}  # a grid's lots differ by a translation only
+    fits: list[TempleFit] = []
+    # a grid's lots differ by a translation only: fit one, move the others
+    same_shape: dict[tuple, tuple[TempleFit, np.ndarray]] = {}
     for i, lot in enumerate(plan.lots):
         key = None
         if lot.orientation is not None:
