@@ -252,35 +252,6 @@ def cmd_temple(args: argparse.Namespace) -> int:
     return 0
 
 
-def cmd_city(args: argparse.Namespace) -> int:
-    import math
-
-    from ionic_usd.errors import ParameterError
-    from ionic_usd.io import check_output_file
-    from ionic_usd.params import check_identifier
-    from ionic_usd.resources import check_estimate, estimate_city
-
-    for flag, v, lo, hi in (("--rows", args.rows, 1, 10_000), ("--cols", args.cols, 1, 10_000),
-                            ("--seed", args.seed, 0, 2**63 - 1)):
-        if not lo <= v <= hi:
-            raise ParameterError(flag, v, f"an integer in [{lo}, {hi:,}]")
-    if not (math.isfinite(args.block) and 1.0 <= args.block <= 10_000.0):
-        raise ParameterError("--block", args.block, "a spacing in [1, 10000] m")
-    check_identifier("--temple", args.temple)  # a folder name inside FOLDER, not a path
-    check_output_file(args.folder / "City.usda", force=args.force)
-    # street colonnades: about two lines of columns per block edge, 3 m apart
-    street = 2 * (args.rows + 1) * (args.cols + 1) * int(args.block / 3.0 + 1)
-    check_estimate(estimate_city(args.rows, args.cols, street), args.max_memory)
-    from ionic_usd.usd.city import compose_city
-
-    rep = compose_city(args.folder, args.temple, rows=args.rows, cols=args.cols,
-                       block=args.block, variety=not args.baseline, seed=args.seed,
-                       force=args.force)
-    print(f"wrote {rep.path}: {rep.temples} temples ({rep.temple_prototypes} prototypes), "
-          f"{rep.street_columns:,} street columns in one PointInstancer ({rep.seconds:.2f} s)")
-    return 0
-
-
 def cmd_preview(args: argparse.Namespace) -> int:
     from ionic_usd.errors import ParameterError
     from ionic_usd.preview import render_preview
@@ -399,23 +370,9 @@ def build_parser() -> argparse.ArgumentParser:
     _add_memory_flag(p)
     p.set_defaults(func=cmd_temple)
 
-    p = sub.add_parser(
-        "city",
-        help="lay many instances of a written temple on a grid, with street colonnades",
-        description="Write FOLDER/City.usda: instanceable references to FOLDER/TEMPLE/Temple.usda "
-        "on a grid (each picking reconstruction hypotheses at random unless --baseline) and a "
-        "PointInstancer of the column asset along the streets.",
-    )
-    p.add_argument("folder", type=Path, help="folder holding the temple folder")
-    p.add_argument("--temple", default="PortunusTemple", help="temple folder name")
-    p.add_argument("--rows", type=int, default=4)
-    p.add_argument("--cols", type=int, default=4)
-    p.add_argument("--block", type=float, default=60.0, help="grid spacing (m)")
-    p.add_argument("--baseline", action="store_true", help="every temple at the baseline")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--force", action="store_true", help="overwrite City.usda")
-    _add_memory_flag(p)
-    p.set_defaults(func=cmd_city)
+    from ionic_usd.pipeline.commands import add_city_parser
+
+    add_city_parser(sub, _Parser)
 
     p = sub.add_parser(
         "asset",

@@ -1,43 +1,270 @@
-"""City scale: instanced temples sharing prototypes, a PointInstancer of columns."""
+"""City scale: the city build (plan and grid), prototype sharing, hierarchy, layers, LOD."""
 
 from __future__ import annotations
 
-import shutil
+import json
+from pathlib import Path
 
 import numpy as np
 import pytest
-from pxr import Usd, UsdGeom
+import shapely
+from pxr import Sdf, Usd, UsdGeom
 
-from ionic_usd.errors import OutputExistsError, UsdAuthoringError
+from ionic_usd.city.plan import read_geojson
+from ionic_usd.cli import main
+from ionic_usd.errors import BudgetError, OutputExistsError, ParameterError
+from ionic_usd.pipeline.city import CityOptions, build_city
 from ionic_usd.usd import validate_stage
-from ionic_usd.usd.city import compose_city
+
+FORUM = Path(__file__).resolve().parents[1] / "examples" / "forum.geojson"
+TEX = 64
 
 
-def test_city_instances_temples_and_columns(portunus_temple, tmp_path):
-    shutil.copytree(portunus_temple.root.parent, tmp_path / "PortunusTemple")
-    rep = compose_city(tmp_path, rows=3, cols=4, seed=1)
-    stage = Usd.Stage.Open(str(rep.path))
+def _files(folder: Path) -> dict[str, bytes]:
+    return {f.relative_to(folder).as_posix(): f.read_bytes()
+            for f in sorted(folder.rglob("*")) if f.is_file()}
+
+
+def _validate_each_layer(folder: Path) -> None:
+    """Every layer the city writes is valid on its own, and the composed city too."""
+    assert validate_stage(Usd.Stage.Open(str(folder / "Instances.usdc"))) == []
+    # the root without its sublayer, saved beside it so relative paths anchor the same way
+    alone = folder / "_root_alone.usda"
+    layer = Sdf.Layer.OpenAsAnonymous(str(folder / "City.usda"))
+    layer.subLayerPaths.clear()
+    layer.Export(str(alone))
+    try:
+        assert validate_stage(Usd.Stage.Open(str(alone))) == []
+    finally:
+        alone.unlink()
+    assert validate_stage(Usd.Stage.Open(str(folder / "City.usda"))) == []
+
+
+def _model_hierarchy_ok(stage: Usd.Stage) -> list[str]:
+    bad = []
+    for prim in stage.Traverse():
+        if Usd.ModelAPI(prim).GetKind():
+            parent = prim.GetParent()
+            if not (parent.IsPseudoRoot() or parent.IsModel()):
+                bad.append(str(prim.GetPath()))
+    return bad
+
+
+@pytest.fixture(scope="module")
+def grid_city(tmp_path_factory):
+    out = tmp_path_factory.mktemp("grid") / "city"
+    opts = CityOptions(rows=3, cols=3, texture_size=TEX, seed=1)
+    return out, build_city(out, opts), opts
+
+
+def test_grid_city_instances_share_prototypes(grid_city):
+    out, s, _ = grid_city
+    stage = Usd.Stage.Open(str(out / "City.usda"))
     temples = stage.GetPrimAtPath("/City/Temples").GetChildren()
-    assert len(temples) == 12 and all(t.IsInstance() for t in temples)
-    # temples with equal hypothesis selections share a prototype
+    assert len(temples) == 9 == s["temples"] and all(t.IsInstance() for t in temples)
     sels = {tuple(sorted(t.GetVariantSets().GetAllVariantSelections().items()))
             for t in temples}
-    assert rep.temple_prototypes == len(sels) == len({t.GetPrototype() for t in temples})
+    assert s["temple_prototypes"] == len(sels) == len({t.GetPrototype() for t in temples})
+    assert 1 < len(sels) < 9  # seeded variety, and equal choices share a prototype
     pi = UsdGeom.PointInstancer(stage.GetPrimAtPath("/City/Porticus"))
-    pos = np.array(pi.GetPositionsAttr().Get())
-    assert len(pos) == rep.street_columns > 100
-    assert set(np.asarray(pi.GetProtoIndicesAttr().Get()).tolist()) == {0}
+    idx = np.asarray(pi.GetProtoIndicesAttr().Get())
+    # 2 streets × 2 sides × columns every 3 m along 3 blocks of 60 m (the ends included)
+    assert len(idx) == s["columns"] == 2 * 2 * (int(180 / 3) + 1)
     proto = stage.GetPrimAtPath(pi.GetPrototypesRel().GetTargets()[0])
     assert proto.GetVariantSets().GetVariantSet("lod").GetVariantSelection() == "low"
-    assert any(p.IsA(UsdGeom.Mesh) for p in Usd.PrimRange(proto))
-    assert validate_stage(stage) == []
-    base = compose_city(tmp_path, rows=3, cols=4, variety=False, force=True)
-    assert base.temple_prototypes == 1
+    assert proto.IsModel() and any(p.IsA(UsdGeom.Mesh) for p in Usd.PrimRange(proto))
+    assert s["unique_prototypes"] == s["temple_prototypes"] + 1
+
+
+def test_grid_city_layers_hierarchy_and_bounds(grid_city):
+    out, s, _ = grid_city
+    _validate_each_layer(out)
+    assert (out / "Instances.usdc").read_bytes()[:8] == b"PXR-USDC"
+    stage = Usd.Stage.Open(str(out / "City.usda"))
+    assert _model_hierarchy_ok(stage) == []
+    assert Usd.ModelAPI(stage.GetPrimAtPath("/City")).GetKind() == "assembly"
+    hint = UsdGeom.ModelAPI(stage.GetPrimAtPath("/City")).GetExtentsHintAttr().Get()
+    box = UsdGeom.BBoxCache(Usd.TimeCode.Default(), ["default", "render"]).ComputeWorldBound(
+        stage.GetPrimAtPath("/City")).ComputeAlignedRange()
+    np.testing.assert_allclose(np.array(hint[0]), np.array(box.GetMin()), atol=1e-3)
+    np.testing.assert_allclose(np.array(hint[1]), np.array(box.GetMax()), atol=1e-3)
+
+
+def test_rebuild_reuses_and_is_byte_identical(grid_city, tmp_path):
+    out, s, opts = grid_city
+    again = build_city(tmp_path / "again", opts)
+    assert again["prototypes_built"] == 0 and again["prototypes_reused"] == s["builds"]
+    assert _files(tmp_path / "again") == _files(out)
     with pytest.raises(OutputExistsError):
-        compose_city(tmp_path)
+        build_city(out, opts)
 
 
-def test_city_needs_a_temple(tmp_path):
-    with pytest.raises(UsdAuthoringError, match="no temple"):
-        compose_city(tmp_path)
-    assert not (tmp_path / "City.usda").exists()
+def test_temples_as_point_instancer_draw_the_same(grid_city, tmp_path):
+    out, s, opts = grid_city
+    from dataclasses import replace
+
+    pi_city = build_city(tmp_path / "pi", replace(opts, instancer_threshold=0))
+    assert pi_city["temples_as"] == "point-instancer"
+    assert pi_city["triangles"] == s["triangles"]
+    assert pi_city["temple_prototypes"] == s["temple_prototypes"]
+    stage = Usd.Stage.Open(str(tmp_path / "pi" / "City.usda"))
+    field = UsdGeom.PointInstancer(stage.GetPrimAtPath("/City/Temples/Field"))
+    assert len(field.GetProtoIndicesAttr().Get()) == 9
+    assert len(field.GetPrototypesRel().GetTargets()) == s["temple_prototypes"]
+    assert _model_hierarchy_ok(stage) == []
+    _validate_each_layer(tmp_path / "pi")
+    ref = Usd.Stage.Open(str(out / "City.usda"))
+    cache = UsdGeom.BBoxCache(Usd.TimeCode.Default(), ["default", "render"])
+    a = cache.ComputeWorldBound(ref.GetPrimAtPath("/City/Temples")).ComputeAlignedRange()
+    cache.Clear()
+    b = cache.ComputeWorldBound(stage.GetPrimAtPath("/City/Temples")).ComputeAlignedRange()
+    np.testing.assert_allclose(np.array(a.GetMin()), np.array(b.GetMin()), atol=1e-3)
+    np.testing.assert_allclose(np.array(a.GetMax()), np.array(b.GetMax()), atol=1e-3)
+
+
+def test_plan_city_buildings_on_lots_porticoes_on_lines(tmp_path):
+    out = tmp_path / "forum"
+    s = build_city(out, CityOptions(plan=str(FORUM), texture_size=TEX, focus=(0.0, 0.0),
+                                    lod_distances=(60.0, 120.0)))
+    plan = read_geojson(FORUM)
+    stage = Usd.Stage.Open(str(out / "City.usda"))
+    assert s["builds"] == 2  # the east temple's thinner columns are a build of their own
+    for lot in plan.lots:
+        prim = stage.GetPrimAtPath(f"/City/Temples/Temple_{lot.id}")
+        assert prim.IsInstance()
+        # the corners of the temple's composed bounds (its prototype: its own frame),
+        # placed by the temple's transform, land inside the lot
+        rng = UsdGeom.BBoxCache(Usd.TimeCode.Default(), ["default", "render"]
+                                ).ComputeWorldBound(prim.GetPrototype()).ComputeAlignedRange()
+        m = UsdGeom.Xformable(prim).ComputeLocalToWorldTransform(Usd.TimeCode.Default())
+        lo, hi = rng.GetMin(), rng.GetMax()
+        corners = [m.Transform((x, 0.0, z)) for x in (lo[0], hi[0]) for z in (lo[2], hi[2])]
+        pts = shapely.points([(c[0], -c[2]) for c in corners])
+        lot_poly = shapely.Polygon(lot.outline).buffer(0.05)
+        assert shapely.contains(lot_poly, pts).all(), lot.id
+    east = stage.GetPrimAtPath("/City/Temples/Temple_aedes_east")
+    assert east.GetVariantSets().GetVariantSet("hyp_flutes_20").GetVariantSelection() == \
+        "alternative"
+    pi = UsdGeom.PointInstancer(stage.GetPrimAtPath("/City/Porticus"))
+    pos = np.asarray(pi.GetPositionsAttr().Get(), dtype=float)
+    plan_pts = shapely.points(np.stack([pos[:, 0], -pos[:, 2]], axis=1))
+    lines = []
+    for p in plan.porticoes:
+        g = shapely.LinearRing(p.line) if p.closed else shapely.LineString(p.line)
+        lines.append((g, p.offset if p.sides == 2 else 0.0))
+    d = np.min([np.abs(shapely.distance(g, plan_pts) - off) for g, off in lines], axis=0)
+    assert (d < 1e-3).mean() > 0.97 and (d < 3.0).all()  # on their lines (mitred corners)
+    assert len(pos) == s["columns"] > 300
+    # LOD by distance from the focus: near columns high, far ones low
+    idx = np.asarray(pi.GetProtoIndicesAttr().Get())
+    names = [t.name for t in pi.GetPrototypesRel().GetTargets()]
+    lods = np.array([names[i].split("_")[1] for i in idx])
+    r = np.hypot(pos[:, 0], pos[:, 2])
+    assert (lods[r < 59] == "high").all() and (lods[r > 121] == "low").all()
+    assert s["triangles"]["high"] > s["triangles"]["as authored"] > s["triangles"]["low"]
+    _validate_each_layer(out)
+    assert _model_hierarchy_ok(stage) == []
+
+
+def test_memory_estimate_refuses_before_writing(tmp_path):
+    with pytest.raises(BudgetError, match="GB"):
+        build_city(tmp_path / "big", CityOptions(columns=10_000_000, memory_limit_gb=1.0,
+                                                 texture_size=TEX))
+    assert not (tmp_path / "big").exists()
+
+
+def test_million_columns_arrays(grid_city, tmp_path):
+    out, s, opts = grid_city
+    from dataclasses import replace
+
+    big = build_city(tmp_path / "m", replace(opts, columns=200_000))
+    assert big["columns"] == 200_000
+    stage = Usd.Stage.Open(str(tmp_path / "m" / "City.usda"))
+    pi = UsdGeom.PointInstancer(stage.GetPrimAtPath("/City/Porticus"))
+    pos = np.asarray(pi.GetPositionsAttr().Get())
+    assert len(pos) == 200_000 and np.isfinite(pos).all()
+    assert len(np.unique(pos.round(3), axis=0)) == 200_000
+    q = np.asarray(pi.GetOrientationsAttr().Get(), dtype=float)
+    np.testing.assert_allclose(np.linalg.norm(q, axis=1), 1.0, atol=2e-3)
+
+
+def test_cli_city_json_and_errors(grid_city, tmp_path, capsys):
+    out, s, _ = grid_city
+    summary = tmp_path / "s.json"
+    assert main(["city", str(tmp_path / "c"), "--rows", "3", "--cols", "3", "--seed", "1",
+                 "--texture-size", str(TEX), "--json", str(summary)]) == 0
+    d = json.loads(summary.read_text())
+    assert d["prototypes_reused"] == 1 and d["workers"] == []
+    assert d["instances"] == 9 + d["columns"] and "timings" in d
+    capsys.readouterr()
+    assert main(["city", str(tmp_path / "x"), "--plan", str(tmp_path / "none.geojson")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "none.geojson" in err
+    assert not (tmp_path / "x").exists()
+    with pytest.raises(SystemExit):
+        main(["city", str(tmp_path / "y"), "--focus", "1"])
+    with pytest.raises(ParameterError):
+        CityOptions(lod_distances=(100.0, 10.0))
+
+
+@pytest.mark.parametrize("n, scaled", [(500, False), (500, True), (20_000, False)])
+def test_instance_bounds_match_brute_force(n, scaled):
+    from ionic_usd.usd.city import _instance_bounds
+
+    rng = np.random.default_rng(n + scaled)
+    lo = np.array([[-1.0, 0.0, -2.0], [-3.0, 0.5, -1.0]])
+    hi = np.array([[1.0, 5.0, 2.5], [2.0, 9.0, 1.0]])
+    idx = rng.integers(0, 2, n)
+    xz, yaw = rng.random((n, 2)) * 500, rng.random(n) * 360
+    s = rng.random(n) + 0.5 if scaled else None
+    got = _instance_bounds(lo, hi, idx, xz, yaw, s)
+    a = np.radians(yaw)
+    S = np.ones(n) if s is None else s
+    pts = []
+    for ix in (0, 1):  # every corner of every placed box
+        for iy in (0, 1):
+            for iz in (0, 1):
+                px = np.where(ix, hi[idx, 0], lo[idx, 0]) * S
+                py = np.where(iy, hi[idx, 1], lo[idx, 1]) * S
+                pz = np.where(iz, hi[idx, 2], lo[idx, 2]) * S
+                pts.append(np.stack([px * np.cos(a) + pz * np.sin(a) + xz[:, 0], py,
+                                     -px * np.sin(a) + pz * np.cos(a) + xz[:, 1]], axis=1))
+    pts = np.concatenate(pts)
+    np.testing.assert_allclose(got[0], pts.min(axis=0), atol=1e-9)
+    np.testing.assert_allclose(got[1], pts.max(axis=0), atol=1e-9)
+
+
+def test_lod_by_distance_selects_the_temple_lod_set_when_it_exists(grid_city, tmp_path):
+    """Before the temple has a ``lod`` set the city selects none; once it has one, each
+    temple gets the LOD of its distance from the focus."""
+    import shutil
+
+    from ionic_usd.usd.city import ColumnInstances, TempleInstances, compose_city
+
+    out, s, _ = grid_city
+    src = next((out / "Temples").iterdir())
+    shutil.copytree(src, tmp_path / "Temples" / src.name)
+    xz = np.array([[0.0, 0.0], [200.0, 0.0], [600.0, 0.0]])
+    temples = TempleInstances([f"Temples/{src.name}"], np.zeros(3, dtype=np.int32),
+                              ["a", "b", "c"], xz, np.zeros(3), np.ones(3), [{}, {}, {}],
+                              lod=np.array([0, 1, 2], dtype=np.int8))
+    columns = ColumnInstances(f"Temples/{src.name}/IonicColumn/IonicColumn.usda",
+                              np.zeros((0, 2)), np.zeros(0))
+    rep = compose_city(tmp_path, temples, columns)
+    stage = Usd.Stage.Open(str(rep.path))
+    prims = stage.GetPrimAtPath("/City/Temples").GetChildren()
+    assert all(not p.GetVariantSets().HasVariantSet("lod") for p in prims)
+    assert rep.temple_prototypes == 1
+    # give the temple a lod set (as the temple composer will), then compose again
+    layer = Sdf.Layer.FindOrOpen(str(tmp_path / "Temples" / src.name / "Temple.usda"))
+    spec = layer.GetPrimAtPath("/Temple")
+    vs = Sdf.VariantSetSpec(spec, "lod")
+    for name in ("high", "medium", "low"):
+        Sdf.VariantSpec(vs, name)
+    spec.variantSetNameList.Append("lod")
+    layer.Save()
+    rep = compose_city(tmp_path, temples, columns, force=True)
+    stage = Usd.Stage.Open(str(rep.path))
+    got = [stage.GetPrimAtPath(f"/City/Temples/Temple_{n}").GetVariantSets()
+           .GetVariantSet("lod").GetVariantSelection() for n in "abc"]
+    assert got == ["high", "medium", "low"] and rep.temple_prototypes == 3

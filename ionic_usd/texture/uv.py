@@ -585,7 +585,9 @@ def prefetch(
     if not todo:
         return 0
     n = workers or os.cpu_count() or 1
-    if n <= 1 or len(todo) < 4:
+    # a daemonic process (a Dask worker) may not fork a pool: there the cluster is the
+    # parallelism (one prototype per worker, see ionic_usd.pipeline), so unwrap in-process
+    if n <= 1 or len(todo) < 4 or mp.current_process().daemon:
         results = [_unwrap_job(job) for job in todo.values()]
     else:
         ctx = mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")

@@ -1,36 +1,97 @@
-"""City scale: many temples as instanceable references, street colonnades as a PointInstancer.
+"""City scale: temples and street colonnades authored from numpy arrays into crate layers.
 
-``compose_city`` writes ``City.usda`` beside (or around) a temple folder written by
-:func:`ionic_usd.usd.temple.compose_temple`::
+Files written into the city folder by :func:`compose_city` (the temple folders under
+``Temples/`` come from :mod:`ionic_usd.pipeline`)::
 
-    <folder>/City.usda           /City (kind = assembly)
-      /City/Temples/Temple_<i>_<j>   instanceable references to ./<temple>/Temple.usda, on a
-                                     grid; each may select its own reconstruction hypotheses
-      /City/Porticus             a UsdGeom.PointInstancer of the column asset (lod = low) lining
-                                 the streets between the blocks: thousands of columns, one
-                                 prototype, arrays instead of prims
-    <folder>/<temple>/           the temple (and its column asset)
+    City.usda        the root (text, small): /City (Xform, kind = assembly) with the build summary
+                     in customData and the city's extentsHint; sublayers ./Instances.usdc
+    Instances.usdc   every instance, in crate: /City (assembly)
+      /City/Temples            Xform, kind = group, holding either
+        Temple_<lot>           instanceable references to ./Temples/<build>/Temple.usda with the
+                               lot's variant selections (hypotheses, lod), translate/rotateXYZ/
+                               scale (XformCommonAPI ops) — up to ``instancer_threshold`` temples
+        Field                  or a UsdGeom.PointInstancer (kind = group) whose prototypes
+                               (Prototypes, Scope, kind = group) are the unique temple choices
+      /City/Porticus           UsdGeom.PointInstancer (kind = group) of the column asset, one
+                               prototype per LOD used (Prototypes/Column_<lod>, components)
+    Temples/<name>-<key>/      one folder per unique temple build (content-addressed)
 
-Temples that make the same variant selections share one prototype, so a city of N temples
-with k different hypothesis combinations composes k temple prototypes (plus the column
-prototypes inside them).
+Every model's parent is a model (assembly › group › component/assembly). Instance arrays are
+built with ``Vt.*Array.FromNumpy`` — no per-instance Python object — and nothing re-opens the
+city to check it: prototype counts, bounds and drawn triangles come from the arrays and from
+the prototypes' own (small) stages.
 """
 
 from __future__ import annotations
 
 import os
 import time
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from pxr import Gf, Sdf, Usd, Vt
+from pxr import Gf, Sdf, Tf, Usd, UsdGeom, Vt
 
+from ionic_usd.city.layout import LOD_NAMES, yaw_quaternions
 from ionic_usd.errors import OutputExistsError, ParameterError, UsdAuthoringError
-from ionic_usd.usd.column_asset import ASSET_NAME
 from ionic_usd.usd.stage import new_layer, save_layer
 
-__all__ = ["CityReport", "compose_city"]
+__all__ = ["CityReport", "TempleInstances", "ColumnInstances", "compose_city", "ROOT_LAYER",
+           "INSTANCES_LAYER", "DEFAULT_INSTANCER_THRESHOLD", "temple_variant_sets"]
+
+ROOT_LAYER = "City.usda"
+INSTANCES_LAYER = "Instances.usdc"
+# above this many temples the city uses a PointInstancer of temple prototypes instead of
+# instanceable references. Measured (tools/bench_city.py): opening and counting a city of
+# 2,500 temple references takes 2.9-3.8 s against 0.4-0.5 s as a PointInstancer, 10,000 take
+# 12-18 s against 0.3-0.6 s (authoring 17 s against 0.8-2.5 s), on 2 busy cores: references
+# grow ~1.5 ms each, so past a few hundred they cost more than the whole instancer; below,
+# each temple stays a prim of its own
+DEFAULT_INSTANCER_THRESHOLD = 500
+_T = Sdf.ValueTypeNames
+
+
+@dataclass(frozen=True)
+class TempleInstances:
+    """Temples of a city as arrays (n temples, b builds).
+
+    Attributes
+    ----------
+    folders : (b,) build folders relative to the city (``Temples/<name>-<key>``)
+    build : (n,) int — build of each temple
+    names : (n,) lot ids
+    xz : (n, 2) float — USD x, z translation; yaw : (n,) degrees about +Y; scale : (n,)
+    selections : (n,) hypothesis id → "baseline" | "alternative" per temple (ids the build
+        does not realise are ignored)
+    lod : (n,) int8 index into LOD_NAMES, or None (no lod selection)
+    """
+
+    folders: Sequence[str]
+    build: np.ndarray
+    names: Sequence[str]
+    xz: np.ndarray
+    yaw: np.ndarray
+    scale: np.ndarray
+    selections: Sequence[Mapping[str, str]]
+    lod: np.ndarray | None = None
+
+    def __len__(self) -> int:
+        return len(self.build)
+
+
+@dataclass(frozen=True)
+class ColumnInstances:
+    """Street columns as arrays: ``asset`` (city-relative path of the column asset folder's
+    root layer), ``xz`` (m, 2), ``yaw`` (m,) degrees, ``lod`` (m,) int8 (None: all low)."""
+
+    asset: str
+    xz: np.ndarray
+    yaw: np.ndarray
+    lod: np.ndarray | None = None
+
+    def __len__(self) -> int:
+        return len(self.xz)
 
 
 @dataclass(frozen=True)
@@ -38,110 +99,304 @@ class CityReport:
     path: Path
     temples: int
     temple_prototypes: int
+    temple_builds: int
     street_columns: int
-    seconds: float
+    column_prototypes: int
+    temples_as: str                      # "references" or "point-instancer"
+    triangles: dict[str, int]            # LOD setting → triangles drawn
+    extent: tuple[tuple[float, ...], tuple[float, ...]]
+    seconds: dict[str, float] = field(default_factory=dict)
 
 
-def compose_city(
-    folder: str | os.PathLike,
-    temple: str = "PortunusTemple",
-    *,
-    rows: int = 4,
-    cols: int = 4,
-    block: float = 60.0,
-    column_spacing: float = 3.0,
-    variety: bool = True,
-    seed: int = 0,
-    force: bool = False,
-) -> CityReport:
-    """Write ``<folder>/City.usda`` around an existing temple folder ``<folder>/<temple>``.
+def temple_variant_sets(temple_root: Path) -> dict[str, tuple[str, ...]]:
+    """Variant set → its variants, on /Temple of a temple root layer (read with Sdf only)."""
+    layer = Sdf.Layer.FindOrOpen(str(temple_root))
+    if layer is None:
+        raise UsdAuthoringError(f"cannot open {temple_root}")
+    spec = layer.GetPrimAtPath(layer.defaultPrim and f"/{layer.defaultPrim}" or "/Temple")
+    if spec is None:
+        raise UsdAuthoringError(f"{temple_root} has no default prim")
+    return {name: tuple(vs.variants.keys()) for name, vs in spec.variantSets.items()}
+
+
+def _stats(stage: Usd.Stage, root: str, selections: Mapping[str, str]
+           ) -> tuple[np.ndarray, np.ndarray, int]:
+    """Bounds (lo (3,), hi (3,)) and drawn triangles of ``root`` with ``selections`` made in
+    the stage's session layer (default + render purposes, visible prims only)."""
+    prim = stage.GetPrimAtPath(root)
+    with Usd.EditContext(stage, stage.GetSessionLayer()):
+        for name, value in selections.items():
+            prim.GetVariantSet(name).SetVariantSelection(value)
+    cache = UsdGeom.BBoxCache(Usd.TimeCode.Default(), [UsdGeom.Tokens.default_,
+                                                       UsdGeom.Tokens.render])
+    rng = cache.ComputeWorldBound(prim).ComputeAlignedRange()
+    tris = 0
+    counted: dict[str, int] = {}
+    it = iter(Usd.PrimRange(prim, Usd.TraverseInstanceProxies()))
+    for p in it:
+        img = UsdGeom.Imageable(p)
+        if img and (img.ComputeVisibility() == UsdGeom.Tokens.invisible
+                    or img.ComputePurpose() in (UsdGeom.Tokens.proxy, UsdGeom.Tokens.guide)):
+            it.PruneChildren()
+            continue
+        if p.IsA(UsdGeom.Mesh):
+            # instance proxies of one prototype share their arrays: count each source once
+            src = str(p.GetPrimInPrototype().GetPath()) if p.IsInstanceProxy() else str(
+                p.GetPath())
+            if src not in counted:
+                counts = UsdGeom.Mesh(p).GetFaceVertexCountsAttr().Get()
+                counted[src] = int(np.sum(np.asarray(counts) - 2)) if counts else 0
+            tris += counted[src]
+    return np.array(rng.GetMin()), np.array(rng.GetMax()), tris
+
+
+def _ident(name: str) -> str:
+    return Tf.MakeValidIdentifier(str(name))
+
+
+def _set_xform(spec: Sdf.PrimSpec, x: float, z: float, yaw: float, scale: float) -> None:
+    Sdf.AttributeSpec(spec, "xformOp:translate", _T.Double3).default = Gf.Vec3d(x, 0.0, z)
+    Sdf.AttributeSpec(spec, "xformOp:rotateXYZ", _T.Float3).default = Gf.Vec3f(0.0, yaw, 0.0)
+    Sdf.AttributeSpec(spec, "xformOp:scale", _T.Float3).default = Gf.Vec3f(scale, scale, scale)
+    Sdf.AttributeSpec(spec, "xformOpOrder", _T.TokenArray, Sdf.VariabilityUniform).default = \
+        Vt.TokenArray(["xformOp:translate", "xformOp:rotateXYZ", "xformOp:scale"])
+
+
+def _group(layer: Sdf.Layer, path: str, type_name: str = "Xform") -> Sdf.PrimSpec:
+    spec = Sdf.CreatePrimInLayer(layer, path)
+    spec.specifier, spec.typeName, spec.kind = Sdf.SpecifierDef, type_name, "group"
+    return spec
+
+
+def _instancer(layer: Sdf.Layer, path: str, protos: list[tuple[str, str, dict[str, str]]],
+               index: np.ndarray, xz: np.ndarray, yaw: np.ndarray, scale: np.ndarray | None,
+               extent: tuple[np.ndarray, np.ndarray]) -> None:
+    """A PointInstancer (kind = group) with prototypes (name, reference, selections)."""
+    pi = _group(layer, path, "PointInstancer")
+    _group(layer, f"{path}/Prototypes", "Scope")
+    targets = []
+    for name, ref, sel in protos:
+        spec = Sdf.CreatePrimInLayer(layer, f"{path}/Prototypes/{name}")
+        spec.specifier, spec.typeName = Sdf.SpecifierDef, "Xform"
+        spec.referenceList.Prepend(Sdf.Reference(ref))
+        for k, v in sorted(sel.items()):
+            spec.variantSelections[k] = v
+        targets.append(spec.path)
+    Sdf.RelationshipSpec(pi, "prototypes", custom=False).targetPathList.explicitItems = targets
+    n = len(index)
+    pos = np.zeros((n, 3), dtype=np.float32)
+    pos[:, 0], pos[:, 2] = xz[:, 0], xz[:, 1]
+    Sdf.AttributeSpec(pi, "positions", _T.Point3fArray).default = Vt.Vec3fArray.FromNumpy(pos)
+    del pos
+    Sdf.AttributeSpec(pi, "protoIndices", _T.IntArray).default = Vt.IntArray.FromNumpy(
+        np.ascontiguousarray(index, dtype=np.int32))
+    Sdf.AttributeSpec(pi, "orientations", _T.QuathArray).default = Vt.QuathArray.FromNumpy(
+        yaw_quaternions(yaw))
+    if scale is not None:
+        s = np.repeat(np.asarray(scale, dtype=np.float32)[:, None], 3, axis=1)
+        Sdf.AttributeSpec(pi, "scales", _T.Float3Array).default = Vt.Vec3fArray.FromNumpy(s)
+    Sdf.AttributeSpec(pi, "extent", _T.Float3Array).default = Vt.Vec3fArray(
+        [Gf.Vec3f(*map(float, extent[0])), Gf.Vec3f(*map(float, extent[1]))])
+
+
+def _instance_bounds(lo: np.ndarray, hi: np.ndarray, index: np.ndarray, xz: np.ndarray,
+                     yaw: np.ndarray, scale: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+    """Axis-aligned bounds of every placed prototype box (boxes (p, 3) lo/hi), exact for
+    rotations about Y: the rotated box's half-widths are |cos|·hx + |sin|·hz and the like."""
+    if len(index) == 0:
+        return np.zeros(3), np.zeros(3)
+    # only instances near the extremes of the positions can bound the whole: with r the
+    # largest horizontal reach of any placed box from its pivot, an instance more than 2r
+    # inside the positions' extremes cannot hold an extreme (its box starts beyond one that
+    # does); so the exact computation runs on a thin rim (1M columns: a few thousand)
+    smax = 1.0 if scale is None else float(np.max(scale))
+    reach = np.hypot(np.maximum(np.abs(lo[:, 0]), np.abs(hi[:, 0])),
+                     np.maximum(np.abs(lo[:, 2]), np.abs(hi[:, 2]))).max() * smax
+    x, z = xz[:, 0], xz[:, 1]
+    rim = ((x <= x.min() + 2 * reach) | (x >= x.max() - 2 * reach)
+           | (z <= z.min() + 2 * reach) | (z >= z.max() - 2 * reach))
+    # heights do not depend on position: every instance counts (scale = 1 or per instance)
+    if scale is None:
+        used = np.bincount(index, minlength=len(lo)) > 0
+        y_lo, y_hi = lo[used, 1].min(), hi[used, 1].max()
+    else:
+        sc = np.asarray(scale, dtype=float)
+        y_lo = min((lo[index, 1] * sc).min(), (hi[index, 1] * sc).min())
+        y_hi = max((lo[index, 1] * sc).max(), (hi[index, 1] * sc).max())
+    index, xz, yaw = index[rim], xz[rim], np.asarray(yaw)[rim]
+    scale = None if scale is None else np.asarray(scale)[rim]
+    s = np.ones(len(index)) if scale is None else np.asarray(scale, dtype=float)
+    c = (lo + hi) / 2
+    h = (hi - lo) / 2
+    ci, hi_ = c[index] * s[:, None], h[index] * s[:, None]
+    a = np.radians(np.asarray(yaw, dtype=float))
+    cs, sn = np.cos(a), np.sin(a)
+    cx = ci[:, 0] * cs + ci[:, 2] * sn + xz[:, 0]
+    cz = -ci[:, 0] * sn + ci[:, 2] * cs + xz[:, 1]
+    hx = np.abs(cs) * hi_[:, 0] + np.abs(sn) * hi_[:, 2]
+    hz = np.abs(sn) * hi_[:, 0] + np.abs(cs) * hi_[:, 2]
+    out_lo = np.array([(cx - hx).min(), y_lo, (cz - hz).min()])
+    out_hi = np.array([(cx + hx).max(), y_hi, (cz + hz).max()])
+    return out_lo, out_hi
+
+
+def compose_city(folder: str | os.PathLike, temples: TempleInstances,
+                 columns: ColumnInstances, *,
+                 instancer_threshold: int = DEFAULT_INSTANCER_THRESHOLD,
+                 finish: str = "stucco", summary: Mapping | None = None,
+                 force: bool = False) -> CityReport:
+    """Write ``City.usda`` + ``Instances.usdc`` into ``folder`` (its ``Temples/`` must hold
+    the builds named in ``temples.folders``).
 
     Parameters
     ----------
-    rows, cols : temples on the grid (each ≥ 1)
-    block : grid spacing (m); streets run halfway between the blocks
-    column_spacing : axial spacing of the street colonnades (m)
-    variety : give each temple a random choice among its realised hypotheses (seeded), so the
-        city shows alternative readings side by side; off: every temple at the baseline
+    instancer_threshold : temples above this count go into a PointInstancer
+    finish : the street columns' finish variant
+    summary : JSON-able build summary stored in /City's customData (``ionic_usd``)
     """
     t0 = time.perf_counter()
     folder = Path(folder)
-    root_temple = folder / temple / "Temple.usda"
-    if not root_temple.is_file():
-        raise UsdAuthoringError(f"no temple at {root_temple}: write one first "
-                                f"(ionic-usd temple -o {folder / temple})")
-    for name, v in (("rows", rows), ("cols", cols)):
-        if not isinstance(v, int) or v < 1:
-            raise ParameterError(name, v, "an integer >= 1")
-    if not (block > 0 and column_spacing > 0):
-        raise ParameterError("block/column_spacing", (block, column_spacing), "lengths > 0")
-    out = folder / "City.usda"
-    if out.exists() and not force:
-        raise OutputExistsError(f"{out} exists; pass --force (force=True) to overwrite it")
+    root_path, body_path = folder / ROOT_LAYER, folder / INSTANCES_LAYER
+    if not force:
+        for p in (root_path, body_path):
+            if p.exists():
+                raise OutputExistsError(f"{p} exists; pass --force to overwrite it")
+    if not isinstance(instancer_threshold, int) or instancer_threshold < 0:
+        raise ParameterError("instancer threshold", instancer_threshold, "an integer >= 0")
+    secs: dict[str, float] = {}
 
-    temple_stage = Usd.Stage.Open(str(root_temple))
-    vsets = temple_stage.GetDefaultPrim().GetVariantSets()
-    hyps = [n for n in vsets.GetNames() if n.startswith("hyp_")]
-    rng = np.random.default_rng(seed)
+    # -- temple prototypes: unique (build, realised selections, lod) ---------------------------
+    vsets = [temple_variant_sets(folder / f / "Temple.usda") for f in temples.folders]
+    keys: dict[tuple, int] = {}
+    proto_of = np.zeros(len(temples), dtype=np.int32)
+    for i in range(len(temples)):
+        b = int(temples.build[i])
+        sel = {f"hyp_{_ident(h)}": v for h, v in temples.selections[i].items()
+               if f"hyp_{_ident(h)}" in vsets[b]}
+        if temples.lod is not None and "lod" in vsets[b]:
+            sel["lod"] = LOD_NAMES[int(temples.lod[i])]
+        key = (b, tuple(sorted(sel.items())))
+        proto_of[i] = keys.setdefault(key, len(keys))
+    protos = list(keys)
 
-    layer = new_layer("City", kind="assembly")
+    # per-prototype bounds and triangles, from each build's own stage (not the city)
+    t1 = time.perf_counter()
+    tlo, thi = np.zeros((len(protos), 3)), np.zeros((len(protos), 3))
+    ttri: dict[str, np.ndarray] = {s: np.zeros(len(protos), dtype=np.int64)
+                                   for s in ("as authored", *LOD_NAMES)}
+    stages: dict[int, Usd.Stage] = {}
+    for k, (b, sel) in enumerate(protos):
+        stage = stages.get(b) or Usd.Stage.Open(str(folder / temples.folders[b] / "Temple.usda"))
+        stages[b] = stage
+        lo, hi, ttri["as authored"][k] = _stats(stage, "/Temple", dict(sel))
+        tlo[k], thi[k] = lo, hi
+        for lod in LOD_NAMES:
+            if "lod" in vsets[b]:
+                ttri[lod][k] = _stats(stage, "/Temple", {**dict(sel), "lod": lod})[2]
+            else:  # before the temple has a lod set its columns draw as authored
+                ttri[lod][k] = ttri["as authored"][k]
+    # the street columns' prototypes: the column asset at each LOD used
+    col_lods = sorted(set(np.unique(columns.lod).tolist())) if columns.lod is not None else [2]
+    cidx = (np.searchsorted(col_lods, columns.lod).astype(np.int32) if columns.lod is not None
+            else np.zeros(len(columns), dtype=np.int32))
+    clo, chi = np.zeros((len(col_lods), 3)), np.zeros((len(col_lods), 3))
+    col_tri = {}
+    if len(columns):
+        cstage = Usd.Stage.Open(str(folder / columns.asset))
+        if cstage is None:
+            raise UsdAuthoringError(f"cannot open the column asset {folder / columns.asset}")
+        root = str(cstage.GetDefaultPrim().GetPath())
+        for k, li in enumerate(col_lods):
+            clo[k], chi[k], _ = _stats(cstage, root, {"lod": LOD_NAMES[li], "form": "full",
+                                                      "finish": finish})
+        for lod in LOD_NAMES:
+            col_tri[lod] = _stats(cstage, root, {"lod": lod, "form": "full",
+                                                 "finish": finish})[2]
+    secs["prototype stats"] = time.perf_counter() - t1
+
+    # -- author ----------------------------------------------------------------------------------
+    t2 = time.perf_counter()
+    as_instancer = len(temples) > instancer_threshold
+    t_ext = _instance_bounds(tlo, thi, proto_of, temples.xz, temples.yaw, temples.scale)
+    c_ext = _instance_bounds(clo, chi, cidx, columns.xz, columns.yaw, None)
+    body = new_layer("City", kind="assembly")
     with Sdf.ChangeBlock():
-        grp = Sdf.CreatePrimInLayer(layer, "/City/Temples")
-        grp.specifier, grp.typeName, grp.kind = Sdf.SpecifierDef, "Xform", "group"
-        for i in range(rows):
-            for j in range(cols):
-                spec = Sdf.CreatePrimInLayer(layer, f"/City/Temples/Temple_{i}_{j}")
+        _group(body, "/City/Temples")
+        refs = [f"./{temples.folders[b]}/Temple.usda" for b, _ in protos]
+        if as_instancer:
+            _instancer(body, "/City/Temples/Field",
+                       [(f"Temple_{k}", refs[k], dict(sel)) for k, (_, sel) in
+                        enumerate(protos)], proto_of, temples.xz, temples.yaw, temples.scale,
+                       t_ext)
+        else:
+            used: set[str] = set()
+            for i in range(len(temples)):
+                name = _ident(f"Temple_{temples.names[i]}")
+                while name in used:
+                    name += "_"
+                used.add(name)
+                spec = Sdf.CreatePrimInLayer(body, f"/City/Temples/{name}")
                 spec.specifier, spec.typeName = Sdf.SpecifierDef, "Xform"
                 spec.instanceable = True
-                spec.referenceList.Prepend(Sdf.Reference(f"./{temple}/Temple.usda"))
-                for h in hyps:
-                    alt = variety and rng.random() < 0.3
-                    spec.variantSelections[h] = "alternative" if alt else "baseline"
-                T = Sdf.ValueTypeNames
-                Sdf.AttributeSpec(spec, "xformOp:translate", T.Double3).default = Gf.Vec3d(
-                    j * block, 0.0, -i * block)
-                Sdf.AttributeSpec(spec, "xformOpOrder", T.TokenArray,
-                                  Sdf.VariabilityUniform).default = Vt.TokenArray(
-                    ["xformOp:translate"])
-    # Sdf API throughout: a Usd.Stage on the unsaved layer would try to resolve the relative
-    # references before the file exists
-    pos = _street_columns(rows, cols, block, column_spacing)
-    T = Sdf.ValueTypeNames
-    with Sdf.ChangeBlock():
-        pi = Sdf.CreatePrimInLayer(layer, "/City/Porticus")
-        pi.specifier, pi.typeName = Sdf.SpecifierDef, "PointInstancer"
-        protos = Sdf.CreatePrimInLayer(layer, "/City/Porticus/Prototypes")
-        protos.specifier, protos.typeName = Sdf.SpecifierDef, "Scope"
-        col = Sdf.CreatePrimInLayer(layer, "/City/Porticus/Prototypes/Column")
-        col.specifier, col.typeName = Sdf.SpecifierDef, "Xform"
-        col.referenceList.Prepend(Sdf.Reference(f"./{temple}/{ASSET_NAME}/{ASSET_NAME}.usda"))
-        col.variantSelections["lod"] = "low"
-        rel = Sdf.RelationshipSpec(pi, "prototypes", custom=False)
-        rel.targetPathList.explicitItems = [col.path]
-        Sdf.AttributeSpec(pi, "positions", T.Point3fArray).default = Vt.Vec3fArray.FromNumpy(
-            pos.astype(np.float32))
-        Sdf.AttributeSpec(pi, "protoIndices", T.IntArray).default = Vt.IntArray.FromNumpy(
-            np.zeros(len(pos), dtype=np.int32))
-        Sdf.AttributeSpec(pi, "orientations", T.QuathArray).default = Vt.QuathArray(
-            [Gf.Quath(1, 0, 0, 0)] * len(pos))
-        lo, hi = pos.min(axis=0) - 1.0, pos.max(axis=0) + np.array([1.0, 9.0, 1.0])
-        Sdf.AttributeSpec(pi, "extent", T.Float3Array).default = Vt.Vec3fArray(
-            [Gf.Vec3f(*lo), Gf.Vec3f(*hi)])
-    save_layer(layer, out, force=force)
-    check = Usd.Stage.Open(str(out))
-    protos = {p.GetPrototype() for p in check.GetPrimAtPath("/City/Temples").GetChildren()}
-    return CityReport(out, rows * cols, len(protos), len(pos), time.perf_counter() - t0)
+                k = int(proto_of[i])
+                spec.referenceList.Prepend(Sdf.Reference(refs[k]))
+                for vs, v in protos[k][1]:
+                    spec.variantSelections[vs] = v
+                _set_xform(spec, float(temples.xz[i, 0]), float(temples.xz[i, 1]),
+                           float(temples.yaw[i]), float(temples.scale[i]))
+        if len(columns):
+            _instancer(body, "/City/Porticus",
+                       [(f"Column_{LOD_NAMES[li]}", f"./{columns.asset}",
+                         {"lod": LOD_NAMES[li], "form": "full", "finish": finish})
+                        for li in col_lods], cidx, columns.xz, columns.yaw, None, c_ext)
+    have = [e for e, n in ((t_ext, len(temples)), (c_ext, len(columns))) if n]
+    lo = np.min([e[0] for e in have], axis=0) if have else np.zeros(3)
+    hi = np.max([e[1] for e in have], axis=0) if have else np.zeros(3)
+    root = new_layer("City", kind="assembly", comment="A city of Ionic temples, composed by "
+                     "ionic_usd; the instances live in ./Instances.usdc")
+    root.subLayerPaths.append(f"./{INSTANCES_LAYER}")
+    city = root.GetPrimAtPath("/City")
+    Sdf.AttributeSpec(city, "extentsHint", _T.Float3Array).default = Vt.Vec3fArray(
+        [Gf.Vec3f(*map(float, lo)), Gf.Vec3f(*map(float, hi))])
+    counts = np.bincount(proto_of, minlength=len(protos))
+    ccounts = np.bincount(cidx, minlength=len(col_lods))
+    triangles = {}
+    for s in ("as authored", *LOD_NAMES):
+        if not len(columns):
+            col = 0
+        elif s == "as authored":
+            col = int(sum(col_tri[LOD_NAMES[li]] * int(c)
+                          for li, c in zip(col_lods, ccounts, strict=True)))
+        else:
+            col = col_tri[s] * len(columns)
+        triangles[s] = int(np.dot(counts, ttri[s])) + col
+    if summary is not None:
+        city.customData = {"ionic_usd": _vt_dict(summary)}
+    secs["author"] = time.perf_counter() - t2
+    t3 = time.perf_counter()
+    folder.mkdir(parents=True, exist_ok=True)
+    save_layer(body, body_path, force=True)
+    save_layer(root, root_path, force=True)
+    secs["save"] = time.perf_counter() - t3
+    secs["total"] = time.perf_counter() - t0
+    return CityReport(root_path, len(temples), len(protos), len(temples.folders), len(columns),
+                      len(col_lods) if len(columns) else 0,
+                      "point-instancer" if as_instancer else "references", triangles,
+                      (tuple(map(float, lo)), tuple(map(float, hi))), secs)
 
 
-def _street_columns(rows: int, cols: int, block: float, spacing: float) -> np.ndarray:
-    """(n, 3) column positions on both sides of the streets running along x between rows."""
-    x0, x1 = -block / 2, (cols - 0.5) * block
-    xs = np.arange(x0, x1 + 1e-9, spacing)
-    zs = []
-    for i in range(rows - 1):
-        mid = -(i + 0.5) * block
-        zs += [mid - 4.0, mid + 4.0]  # an 8 m street with a colonnade on each side
-    if not zs:
-        zs = [block / 2 - 4.0]
-    xx, zz = np.meshgrid(xs, np.array(zs))
-    return np.stack([xx.ravel(), np.zeros(xx.size), zz.ravel()], axis=1)
+def _vt_dict(d: Mapping) -> dict:
+    """A JSON-like mapping as USD customData (lists of strings/numbers as arrays)."""
+    out: dict = {}
+    for k, v in d.items():
+        if isinstance(v, Mapping):
+            out[str(k)] = _vt_dict(v)
+        elif isinstance(v, (list, tuple)):
+            if all(isinstance(x, str) for x in v):
+                out[str(k)] = Vt.StringArray([str(x) for x in v])
+            else:
+                out[str(k)] = Vt.DoubleArray([float(x) for x in v])
+        elif isinstance(v, bool) or isinstance(v, (int, float, str)):
+            out[str(k)] = v
+    return out
+

@@ -1,0 +1,313 @@
+"""The city build: plan → temple builds (Dask, cached) → instance arrays → USD layers.
+
+:func:`build_city` is what ``ionic-usd city`` runs. Steps, each timed in the summary:
+
+1. the plan (GeoJSON, or the default grid) and per-lot choices — the temple description and
+   column parameters (a build), hypothesis selections, LOD by distance from a focus point;
+2. fitting each temple to its lot and laying the colonnades (numpy/shapely, no USD);
+3. a memory estimate, refused above ``memory_limit`` before anything is written;
+4. the unique builds, from the content-addressed prototype cache or built on Dask;
+5. ``City.usda`` + ``Instances.usdc`` (:func:`ionic_usd.usd.city.compose_city`).
+
+Output bytes depend only on the inputs: the same city is written whether the temples were
+built locally, on a cluster, by any number of workers, or taken from the cache.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from ionic_usd.city.layout import (
+    Footprint,
+    TempleFit,
+    drop_inside,
+    extra_columns,
+    fit_temple,
+    lod_by_distance,
+    porticus_columns,
+)
+from ionic_usd.city.plan import CityPlan, grid_plan, read_geojson
+from ionic_usd.errors import BudgetError, OutputExistsError, ParameterError
+from ionic_usd.pipeline.build import PrototypeCache, build_prototypes
+from ionic_usd.pipeline.spec import TempleSpec, temple_spec
+
+__all__ = ["CityOptions", "build_city", "estimate_memory", "footprint_of", "write_summary"]
+
+# measured (tools/bench_city.py, peak RSS of the build process; rounded up): the process with
+# pxr/shapely/numpy loaded, each street column (arrays + their Vt copies + temporaries), each
+# temple as an instanceable reference or as a PointInstancer entry, each temple build held
+# by the client while it is written to the cache
+_BASE_BYTES = 300e6
+_PER_COLUMN = 200.0
+_PER_REFERENCE = 10e3
+_PER_POINT = 1e3
+_PER_BUILD = 40e6
+
+@dataclass(frozen=True)
+class CityOptions:
+    """What ``ionic-usd city`` can set (defaults = the CLI's)."""
+
+    plan: str | None = None
+    rows: int = 4
+    cols: int = 4
+    block: float = 60.0
+    columns: int | None = None
+    column_spacing: float = 3.0
+    variety: bool = True
+    column_variety: int = 1
+    seed: int = 0
+    focus: tuple[float, float] | None = None
+    lod_distances: tuple[float, float] = (150.0, 400.0)
+    scale_range: tuple[float, float] = (0.6, 1.4)
+    texture_size: int = 1024
+    instancer_threshold: int | None = None
+    scheduler: str | None = None
+    workers: int | None = None
+    memory_limit_gb: float = 8.0
+    force: bool = False
+    prototype_cache: str | None = None  # default: $IONIC_USD_CACHE/prototypes
+
+    def __post_init__(self) -> None:
+        if self.columns is not None and (isinstance(self.columns, bool)
+                                         or not isinstance(self.columns, int)
+                                         or self.columns < 0):
+            raise ParameterError("--columns", self.columns, "an integer >= 0")
+        if not (isinstance(self.column_variety, int) and 1 <= self.column_variety <= 16):
+            raise ParameterError("--column-variety", self.column_variety, "an integer 1-16")
+        near, far = self.lod_distances
+        if not (np.isfinite([near, far]).all() and 0 < near <= far):
+            raise ParameterError("--lod-distances", self.lod_distances, "NEAR,FAR with "
+                                 "0 < NEAR <= FAR (m)")
+        lo, hi = self.scale_range
+        if not (np.isfinite([lo, hi]).all() and 0 < lo <= hi):
+            raise ParameterError("--scale-range", self.scale_range, "MIN,MAX with "
+                                 "0 < MIN <= MAX")
+        if self.focus is not None and not np.isfinite(self.focus).all():
+            raise ParameterError("--focus", self.focus, "finite X,Y (plan metres)")
+        if not (np.isfinite(self.memory_limit_gb) and self.memory_limit_gb > 0):
+            raise ParameterError("--memory-limit", self.memory_limit_gb, "GB > 0")
+        ts = self.texture_size
+        if isinstance(ts, bool) or not isinstance(ts, int) or not 16 <= ts <= 8192 or ts & (
+                ts - 1):
+            raise ParameterError("--texture-size", ts, "a power of two in [16, 8192]")
+        if self.scheduler is not None and not (isinstance(self.scheduler, str) and
+                                               "://" in self.scheduler):
+            raise ParameterError("--scheduler", self.scheduler, "an address like "
+                                 "tcp://HOST:PORT")
+        if self.workers is not None and (not isinstance(self.workers, int) or self.workers < 1):
+            raise ParameterError("--workers", self.workers, "an integer >= 1")
+
+
+def footprint_of(spec: TempleSpec) -> Footprint:
+    """The temple's plan box (its own frame) and height, from its cuboids."""
+    lay = spec.layout()
+    lo = np.min([c.min for c in lay.all_cuboids()], axis=0)
+    hi = np.max([np.asarray(c.max) + [0, max(c.rise, 0), 0] for c in lay.all_cuboids()],
+                axis=0)
+    return Footprint(float(lo[0]), float(hi[0]), float(lo[2]), float(hi[2]), float(hi[1]))
+
+
+def estimate_memory(temples: int, columns: int, builds: int, threshold: int) -> float:
+    """Peak bytes the city build is expected to need (linear model, measured constants)."""
+    per_temple = _PER_POINT if temples > threshold else _PER_REFERENCE
+    return _BASE_BYTES + columns * _PER_COLUMN + temples * per_temple + builds * _PER_BUILD
+
+
+def build_city(out: str | os.PathLike, opts: CityOptions, *,
+               progress: Callable[[str], None] | None = None) -> dict:
+    """Build the city into ``out`` (see the module docstring); returns the summary (JSON)."""
+    from ionic_usd.usd.city import (
+        DEFAULT_INSTANCER_THRESHOLD,
+        INSTANCES_LAYER,
+        ROOT_LAYER,
+        ColumnInstances,
+        TempleInstances,
+        compose_city,
+    )
+    from ionic_usd.usd.column_asset import ASSET_NAME
+
+    t0 = time.perf_counter()
+    timings: dict[str, float] = {}
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise ParameterError("output", str(out), "a folder (or a new path)")
+    for name in (ROOT_LAYER, INSTANCES_LAYER):
+        if (out / name).exists() and not opts.force:
+            raise OutputExistsError(f"{out / name} exists; pass --force to rebuild the city")
+    threshold = (DEFAULT_INSTANCER_THRESHOLD if opts.instancer_threshold is None
+                 else opts.instancer_threshold)
+    plan: CityPlan = (read_geojson(opts.plan) if opts.plan else
+                      grid_plan(opts.rows, opts.cols, opts.block, spacing=opts.column_spacing))
+    rng = np.random.default_rng(opts.seed)
+
+    # -- 1. builds and per-lot choices -------------------------------------------------------
+    specs: list[TempleSpec] = []
+    spec_index: dict[str, int] = {}
+    build = np.zeros(len(plan.lots), dtype=np.int32)
+    base_specs: dict[str, TempleSpec] = {}
+    variants: dict[tuple, TempleSpec] = {}
+    diameters: dict[str, float] = {}
+    for i, lot in enumerate(plan.lots):
+        ctx = f"{plan.source} lot {lot.id}"
+        base = base_specs.get(lot.temple) or temple_spec(
+            lot.temple, base_dir=plan.base_dir, texture_size=opts.texture_size, context=ctx)
+        base_specs[lot.temple] = base
+        column = dict(lot.column)
+        if not column and opts.column_variety > 1:
+            if lot.temple not in diameters:
+                diameters[lot.temple] = base.layout().params.columns_lower_diameter
+            d0 = diameters[lot.temple]
+            levels = np.linspace(0.95 * d0, 1.05 * d0, opts.column_variety)
+            column = {"lower_diameter": round(float(levels[rng.integers(opts.column_variety)]),
+                                              4)}
+        spec = base
+        if column:
+            vkey = (lot.temple, tuple(sorted(column.items())))
+            if vkey not in variants:
+                variants[vkey] = temple_spec(lot.temple, column, base_dir=plan.base_dir,
+                                             texture_size=opts.texture_size, context=ctx)
+            spec = variants[vkey]
+        build[i] = spec_index.setdefault(spec.key, len(spec_index))
+        if build[i] == len(specs):
+            specs.append(spec)
+    hyp_ids = {s.key: [h.id for h in s.layout().hypotheses] for s in specs}
+    selections = []
+    for i, lot in enumerate(plan.lots):
+        known = hyp_ids[specs[build[i]].key]
+        unknown = sorted(set(lot.hypotheses) - set(known))
+        if unknown:
+            raise ParameterError("hypotheses", unknown, f"ids of the temple's hypotheses: "
+                                 f"{', '.join(known) or 'none'}",
+                                 context=f"{plan.source} lot {lot.id}")
+        sel = {}
+        for h in known:
+            draw = rng.random()  # drawn for every id, so plan choices do not shift the others
+            if h in lot.hypotheses:
+                sel[h] = lot.hypotheses[h]
+            else:
+                sel[h] = "alternative" if opts.variety and draw < 0.3 else "baseline"
+        selections.append(sel)
+
+    # -- 2. fitting and colonnades ----------------------------------------------------------
+    t1 = time.perf_counter()
+    fps = [footprint_of(s) for s in specs]
+    centre = (np.mean([lot.outline.mean(axis=0) for lot in plan.lots], axis=0)
+              if plan.lots else None)
+    fits: list[TempleFit] = []
+    # a grid's lots differ by a translation only: fit one, move the others
+    same_shape: dict[tuple, tuple[TempleFit, np.ndarray]] = {}
+    for i, lot in enumerate(plan.lots):
+        key = None
+        if lot.orientation is not None:
+            key = (int(build[i]), lot.orientation, lot.scale,
+                   (lot.outline - lot.outline[0]).round(9).tobytes())
+        if key is not None and key in same_shape:
+            f0, o0 = same_shape[key]
+            d = lot.outline[0] - o0
+            fits.append(replace(f0, x=f0.x + float(d[0]), z=f0.z - float(d[1])))
+            continue
+        fit = fit_temple(lot, fps[build[i]], scale_range=opts.scale_range, toward=centre)
+        if key is not None:
+            same_shape[key] = (fit, lot.outline[0])
+        fits.append(fit)
+    placed = [f.footprint_plan(fps[build[i]]) for i, f in enumerate(fits)]
+    parts = [porticus_columns(p, opts.column_spacing) for p in plan.porticoes]
+    cxz = np.concatenate([p[0] for p in parts]) if parts else np.zeros((0, 2))
+    cyaw = np.concatenate([p[1] for p in parts]) if parts else np.zeros(0)
+    clear = drop_inside(cxz, placed)
+    dropped = int((~clear).sum())
+    cxz, cyaw = cxz[clear], cyaw[clear]
+    if opts.columns is not None:
+        if opts.columns <= len(cxz):
+            cxz, cyaw = cxz[:opts.columns], cyaw[:opts.columns]
+        else:
+            pts = np.concatenate([np.concatenate(placed) * [1, -1] if placed else
+                                  np.zeros((0, 2)), cxz])
+            bounds = ((*pts.min(axis=0), *pts.max(axis=0)) if len(pts) else (0.0, 0.0, 0.0,
+                                                                                0.0))
+            exz, eyaw = extra_columns(opts.columns - len(cxz), bounds, opts.column_spacing)
+            cxz, cyaw = np.concatenate([cxz, exz]), np.concatenate([cyaw, eyaw])
+    txz = np.array([[f.x, f.z] for f in fits]).reshape(-1, 2)
+    focus = opts.focus
+    tlod = lod_by_distance(txz, focus, opts.lod_distances) if focus is not None else None
+    clod = lod_by_distance(cxz, focus, opts.lod_distances) if focus is not None else None
+    timings["layout"] = time.perf_counter() - t1
+
+    # -- 3. memory estimate ------------------------------------------------------------------
+    est = estimate_memory(len(plan.lots), len(cxz), len(specs), threshold)
+    if est > opts.memory_limit_gb * 1e9:
+        raise BudgetError(f"this city needs about {est / 1e9:.1f} GB ({len(plan.lots):,} "
+                          f"temples, {len(cxz):,} columns), above --memory-limit "
+                          f"{opts.memory_limit_gb:g} GB; raise the limit to build it anyway")
+    if not plan.lots and not len(cxz):
+        raise ParameterError("city", "empty", "at least one temple or column")
+
+    # -- 4. builds ------------------------------------------------------------------------
+    t2 = time.perf_counter()
+    needed = specs or [base_specs.get("portunus") or temple_spec(
+        "portunus", texture_size=opts.texture_size)]
+    cache = PrototypeCache(Path(opts.prototype_cache)) if opts.prototype_cache else \
+        PrototypeCache()
+    res = build_prototypes(needed, cache=cache, scheduler=opts.scheduler,
+                           n_workers=opts.workers, progress=progress)
+    for s in needed:
+        cache.install(s, out / "Temples" / s.folder)
+    timings["build"] = time.perf_counter() - t2
+
+    # -- 5. USD ---------------------------------------------------------------------------
+    temples = TempleInstances(
+        folders=[f"Temples/{s.folder}" for s in specs], build=build,
+        names=[lot.id for lot in plan.lots], xz=txz,
+        yaw=np.array([f.yaw_deg for f in fits]), scale=np.array([f.scale for f in fits]),
+        selections=selections, lod=tlod)
+    columns = ColumnInstances(f"Temples/{needed[0].folder}/{ASSET_NAME}/{ASSET_NAME}.usda",
+                              cxz, cyaw, clod)
+    # what the file records depends on the inputs only (not on who built what, or when)
+    summary = {
+        "plan": Path(plan.source).name if opts.plan else "grid",
+        "temples": len(plan.lots), "columns": int(len(cxz)),
+        "columns_dropped_inside_temples": dropped,
+        "builds": len(needed),
+    }
+    rep = compose_city(out, temples, columns, instancer_threshold=threshold,
+                       summary=summary, force=True)
+    timings.update({f"usd {k}": v for k, v in rep.seconds.items()})
+    timings["total"] = time.perf_counter() - t0
+    summary.update({
+        "city": str(rep.path),
+        "prototypes_built": len(res.built), "prototypes_reused": len(res.reused),
+        "workers": list(res.workers),
+        "temples_as": rep.temples_as,
+        "temple_prototypes": rep.temple_prototypes,
+        "column_prototypes": rep.column_prototypes,
+        "unique_prototypes": rep.temple_prototypes + rep.column_prototypes,
+        "instances": len(plan.lots) + int(len(cxz)),
+        "triangles": rep.triangles,
+        "extent": [list(rep.extent[0]), list(rep.extent[1])],
+        "memory_estimate_gb": round(est / 1e9, 3),
+        "cluster_workers": res.n_workers,
+        "scheduler": opts.scheduler or ("local" if res.n_workers else "none (all cached)"),
+        "build_task_seconds": res.task_seconds,
+        "timings": {k: round(v, 3) for k, v in timings.items()},
+    })
+    return summary
+
+
+def write_summary(summary: dict, path: str | os.PathLike) -> None:
+    """Write the summary as JSON atomically."""
+    p = Path(path)
+    tmp = p.with_name(f".{p.name}.{os.getpid()}.tmp")
+    try:
+        tmp.write_text(json.dumps(summary, indent=2, sort_keys=True) + "\n", encoding="utf-8")
+        os.replace(tmp, p)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+

@@ -1,0 +1,108 @@
+"""The ``ionic-usd city`` subcommand: flags and the thin wrapper over :func:`build_city`."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from ionic_usd.errors import ParameterError
+
+__all__ = ["add_city_parser", "cmd_city"]
+
+
+def _pair(flag: str):
+    def parse(text: str) -> tuple[float, float]:
+        try:
+            a, b = (float(x) for x in text.split(","))
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{flag} expects two numbers A,B, got {text!r}"
+                                             ) from None
+        return a, b
+    return parse
+
+
+def cmd_city(args: argparse.Namespace) -> int:
+    from ionic_usd.pipeline.city import CityOptions, build_city, write_summary
+
+    if args.json is not None and args.json.suffix.lower() != ".json":
+        raise ParameterError("--json", str(args.json), "a path ending in .json")
+    if args.json is not None and args.json.exists() and not args.force:
+        raise ParameterError("--json", str(args.json), "a new file (or pass --force)")
+    opts = CityOptions(
+        plan=str(args.plan) if args.plan else None, rows=args.rows, cols=args.cols,
+        block=args.block, columns=args.columns, column_spacing=args.column_spacing,
+        variety=not args.baseline, column_variety=args.column_variety, seed=args.seed,
+        focus=args.focus, lod_distances=args.lod_distances, scale_range=args.scale_range,
+        texture_size=args.texture_size, instancer_threshold=args.instancer_threshold,
+        scheduler=args.scheduler, workers=args.workers, memory_limit_gb=args.memory_limit,
+        force=args.force)
+    quiet = not sys.stderr.isatty()
+    s = build_city(args.folder, opts,
+                   progress=None if quiet else (lambda m: print(m, file=sys.stderr)))
+    if args.json is not None:
+        write_summary(s, args.json)
+    tri = s["triangles"]
+    print(f"wrote {s['city']}: {s['temples']:,} temples ({s['temples_as']}, "
+          f"{s['temple_prototypes']} prototypes of {s['builds']} builds), {s['columns']:,} "
+          f"street columns ({s['column_prototypes']} prototypes); builds: "
+          f"{s['prototypes_built']} built, {s['prototypes_reused']} reused; "
+          f"{s['timings']['total']:.2f} s")
+    print("  triangles drawn: " + ", ".join(f"{k} {v:,}" for k, v in tri.items()))
+    return 0
+
+
+def add_city_parser(sub, parser_class) -> None:
+    """Add ``city`` to the CLI's subparsers (``parser_class``: the CLI's one-line-error
+    parser)."""
+    from ionic_usd.usd.city import DEFAULT_INSTANCER_THRESHOLD
+
+    p = sub.add_parser(
+        "city",
+        help="build a city of temples and colonnades (grid, or a GeoJSON plan)",
+        description="Build FOLDER/City.usda (+ Instances.usdc, crate): temples fitted to their "
+        "lots and colonnades along the streets, from a GeoJSON plan (--plan; metres in a local "
+        "projected frame, easting/northing) or a grid. The temples it needs are built (on Dask: "
+        "a local cluster, or --scheduler) into FOLDER/Temples through a content-addressed "
+        "cache, so a rebuild builds only what changed.",
+    )
+    p.add_argument("folder", type=Path, help="output folder (created if missing)")
+    p.add_argument("--plan", type=Path, help="GeoJSON FeatureCollection (see examples/"
+                   "forum.geojson); default: a grid")
+    p.add_argument("--rows", type=int, default=4, help="grid rows [default 4]")
+    p.add_argument("--cols", type=int, default=4, help="grid columns [default 4]")
+    p.add_argument("--block", type=float, default=60.0, help="grid spacing (m) [default 60]")
+    p.add_argument("--columns", type=int, help="street columns in all (more than the streets "
+                   "hold: extra colonnades south of the city) [default: what the streets hold]")
+    p.add_argument("--column-spacing", type=float, default=3.0,
+                   help="axial spacing of colonnades (m) [default 3]")
+    p.add_argument("--baseline", action="store_true",
+                   help="no per-lot variety: every temple at the baseline hypotheses")
+    p.add_argument("--column-variety", type=int, default=1, metavar="K",
+                   help="draw each lot's column lower diameter from K levels within ±5%% of "
+                   "the description's (each level is a temple build) [default 1]")
+    p.add_argument("--seed", type=int, default=0, help="seed of the per-lot choices [default 0]")
+    p.add_argument("--focus", type=_pair("--focus"), metavar="X,Y",
+                   help="plan point (m) for LOD by distance; default: no LOD selection")
+    p.add_argument("--lod-distances", type=_pair("--lod-distances"), default=(150.0, 400.0),
+                   metavar="NEAR,FAR", help="high within NEAR, medium within FAR, low beyond "
+                   "(m) [default 150,400]")
+    p.add_argument("--scale-range", type=_pair("--scale-range"), default=(0.6, 1.4),
+                   metavar="MIN,MAX", help="uniform scales a temple may take to fit its lot "
+                   "[default 0.6,1.4]")
+    p.add_argument("--texture-size", type=int, default=1024, help="texture resolution (px) "
+                   "[default 1024]")
+    p.add_argument("--instancer-threshold", type=int, default=None, metavar="N",
+                   help="above N temples use a PointInstancer of temple prototypes instead of "
+                   f"instanceable references [default {DEFAULT_INSTANCER_THRESHOLD}]")
+    p.add_argument("--scheduler", metavar="tcp://HOST:PORT",
+                   help="build on this Dask scheduler's workers (they return bytes; this "
+                   "process writes) [default: a local cluster on this machine's cores]")
+    p.add_argument("--workers", type=int, help="local cluster size [default: cores]")
+    p.add_argument("--memory-limit", type=float, default=8.0, metavar="GB",
+                   help="refuse a city estimated to need more memory [default 8]")
+    p.add_argument("--json", type=Path, metavar="SUMMARY",
+                   help="write the build summary (prototypes built/reused, instances, "
+                   "timings, workers) as JSON")
+    p.add_argument("--force", action="store_true", help="rebuild an existing city")
+    p.set_defaults(func=cmd_city)

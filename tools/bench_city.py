@@ -1,0 +1,185 @@
+"""City cost story: instances vs author/save/open time and memory, with a raw usd-core anchor.
+
+Every case runs in a fresh subprocess (so peak memory is that case's alone):
+
+* ``ionic-usd city`` with 1k / 100k / 1M street columns (4 × 4 temples), and 100 × 100
+  temples as a PointInstancer and as instanceable references — author+save, whole build,
+  peak RSS, file size, then ``Usd.Stage.Open`` + counting instances in another process;
+* the anchor: a raw usd-core PointInstancer of N instances of one cube, arrays from numpy,
+  saved as .usdc, opened and counted the same way;
+* the prototype build on Dask: a city needing two temple builds (``--column-variety 2``)
+  from an empty prototype cache on a LocalCluster of 1 and of 2 workers (the UV cache is
+  warmed first, so both do the same work).
+
+Usage: ``python tools/bench_city.py [--quick] [--json out.json]`` (run from the repository
+with PYTHONPATH set to it). Prints a Markdown table. Uses a private cache in a temporary
+folder (its first build is cold).
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import os
+import resource
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+TEX = "64"
+
+
+def _child(argv: list[str]) -> dict:
+    out = subprocess.run([sys.executable, __file__, *argv], capture_output=True, text=True,
+                         env=os.environ, check=False)
+    if out.returncode != 0:
+        raise SystemExit(f"bench case {argv} failed:\n{out.stderr[-3000:]}")
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def _peak_mib() -> float:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+
+
+def case_city(folder: str, *args: str) -> dict:
+    from ionic_usd.cli import main
+
+    summary = Path(folder + ".json")
+    t0 = time.perf_counter()
+    rc = main(["city", folder, "--texture-size", TEX, "--json", str(summary), "--force",
+               *args])
+    wall = time.perf_counter() - t0
+    s = json.loads(summary.read_text())
+    t = s["timings"]
+    size = sum(f.stat().st_size for f in Path(folder).glob("*.usd*"))
+    digest = hashlib.sha256()
+    for f in sorted(Path(folder).rglob("*")):
+        if f.is_file():
+            digest.update(f.relative_to(folder).as_posix().encode() + b"\0" + f.read_bytes())
+    return {"rc": rc, "wall": wall, "author_save": t["usd author"] + t["usd save"],
+            "build": t["build"], "peak_mib": _peak_mib(), "bytes": size,
+            "columns": s["columns"], "temples": s["temples"], "temples_as": s["temples_as"],
+            "built": s["prototypes_built"], "workers": s["workers"],
+            "cluster_workers": s["cluster_workers"], "digest": digest.hexdigest()[:16]}
+
+
+def case_open(path: str) -> dict:
+    t0 = time.perf_counter()
+    from pxr import Usd, UsdGeom
+
+    t1 = time.perf_counter()
+    stage = Usd.Stage.Open(path)
+    n = 0
+    it = iter(stage.Traverse())
+    for prim in it:
+        if prim.IsA(UsdGeom.PointInstancer):
+            n += len(UsdGeom.PointInstancer(prim).GetProtoIndicesAttr().Get())
+            it.PruneChildren()  # its prototypes are not instances of the scene
+        elif prim.IsInstance():
+            n += 1
+    t2 = time.perf_counter()
+    return {"open_count": t2 - t1, "import": t1 - t0, "instances": n, "peak_mib": _peak_mib()}
+
+
+def case_raw(n: int, path: str) -> dict:
+    import numpy as np
+    from pxr import Gf, Sdf, Usd, UsdGeom, Vt
+
+    t0 = time.perf_counter()
+    stage = Usd.Stage.CreateNew(path)
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.y)
+    pi = UsdGeom.PointInstancer.Define(stage, "/World/Instancer")
+    UsdGeom.Cube.Define(stage, "/World/Instancer/Prototypes/Cube")
+    pi.CreatePrototypesRel().SetTargets([Sdf.Path("/World/Instancer/Prototypes/Cube")])
+    rng = np.random.default_rng(0)
+    pos = (rng.random((n, 3)) * 1000).astype(np.float32)
+    yaw = rng.random(n) * np.pi
+    q = np.zeros((n, 4), dtype=np.float16)
+    q[:, 1], q[:, 3] = np.sin(yaw / 2), np.cos(yaw / 2)
+    pi.CreatePositionsAttr().Set(Vt.Vec3fArray.FromNumpy(pos))
+    pi.CreateOrientationsAttr().Set(Vt.QuathArray.FromNumpy(q))
+    pi.CreateProtoIndicesAttr().Set(Vt.IntArray.FromNumpy(np.zeros(n, dtype=np.int32)))
+    pi.CreateExtentAttr().Set(Vt.Vec3fArray([Gf.Vec3f(-1, -1, -1), Gf.Vec3f(1001, 1001,
+                                                                          1001)]))
+    stage.GetRootLayer().Save()
+    t1 = time.perf_counter()
+    return {"author_save": t1 - t0, "peak_mib": _peak_mib(), "bytes": Path(path).stat().st_size}
+
+
+def _row(name: str, c: dict, o: dict) -> str:
+    return (f"| {name} | {c.get('instances', o['instances']):,} | {c['author_save']:.2f} | "
+            f"{c.get('wall', float('nan')):.2f} | {c['peak_mib']:.0f} | {o['open_count']:.3f} | "
+            f"{c['bytes'] / 1e6:.1f} |")
+
+
+def main() -> None:
+    if len(sys.argv) > 1 and sys.argv[1].startswith("_"):
+        fn = {"_city": case_city, "_open": case_open,
+              "_raw": lambda n, p: case_raw(int(n), p)}[sys.argv[1]]
+        print(json.dumps(fn(*sys.argv[2:])))
+        return
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="skip the 1M and 100×100 cases")
+    ap.add_argument("--json", type=Path, help="also write the raw numbers here")
+    ap.add_argument("--skip-workers", action="store_true", help="skip the Dask comparison")
+    args = ap.parse_args()
+    tmp = Path(tempfile.mkdtemp(prefix="bench_city_"))
+    # a private cache: the runs below delete its prototypes, never the user's
+    os.environ["IONIC_USD_CACHE"] = str(tmp / "cache")
+    results: dict[str, dict] = {}
+    rows = ["| case | instances | author+save s | whole build s | peak MiB | open+count s | "
+            "MB on disk |", "|---|---:|---:|---:|---:|---:|---:|"]
+    try:
+        _child(["_city", str(tmp / "warm")])  # builds (or reuses) the temple once
+        counts = [1000, 100_000] + ([] if args.quick else [1_000_000])
+        cases = [("default city (4×4 temples)", [])]
+        cases += [(f"4×4 temples + {n:,} columns", ["--columns", str(n)]) for n in counts]
+        if not args.quick:
+            cases += [("100×100 temples, PointInstancer", ["--rows", "100", "--cols", "100"]),
+                      ("100×100 temples, references",
+                       ["--rows", "100", "--cols", "100", "--instancer-threshold", "100000"]),
+                      ("50×50 temples, PointInstancer",
+                       ["--rows", "50", "--cols", "50", "--instancer-threshold", "0"]),
+                      ("50×50 temples, references",
+                       ["--rows", "50", "--cols", "50", "--instancer-threshold", "100000"])]
+        for name, extra in cases:
+            folder = tmp / f"c{len(results)}"
+            c = _child(["_city", str(folder), *extra])
+            o = _child(["_open", str(folder / "City.usda")])
+            results[name] = {"city": c, "open": o}
+            rows.append(_row(name, {**c, "instances": o["instances"]}, o))
+            print(rows[-1], file=sys.stderr)
+            shutil.rmtree(folder, ignore_errors=True)
+        for n in counts:
+            path = tmp / f"raw{n}.usdc"
+            r = _child(["_raw", str(n), str(path)])
+            o = _child(["_open", str(path)])
+            results[f"raw {n}"] = {"raw": r, "open": o}
+            rows.append(_row(f"raw usd-core PointInstancer, {n:,}", r, o))
+            print(rows[-1], file=sys.stderr)
+        if not args.skip_workers:
+            rows += ["", "| prototype build (2 temple builds, empty prototype cache) | workers |"
+                     " build s | whole s | output digest |", "|---|---:|---:|---:|---|"]
+            variety = ["--column-variety", "2", "--rows", "2", "--cols", "2", "--seed", "3"]
+            proto = Path(os.environ["IONIC_USD_CACHE"]) / "prototypes"
+            _child(["_city", str(tmp / "wwarm"), *variety])  # warms the UV/texture caches
+            for w in (1, 2):
+                shutil.rmtree(proto, ignore_errors=True)  # each run builds both temples
+                c = _child(["_city", str(tmp / f"w{w}"), *variety, "--workers", str(w)])
+                results[f"workers {w}"] = {"city": c}
+                rows.append(f"| local cluster | {c['cluster_workers']} | {c['build']:.1f} | "
+                            f"{c['wall']:.1f} | {c['digest']} |")
+                print(rows[-1], file=sys.stderr)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    print("\n".join(rows))
+    if args.json:
+        args.json.write_text(json.dumps(results, indent=1))
+
+
+if __name__ == "__main__":
+    main()
