@@ -243,3 +243,34 @@ def test_densify_keeps_nodes_and_bounds_segments():
     assert np.linalg.norm(np.diff(d, axis=0), axis=1).max() <= 0.3
     with pytest.raises(ParameterError):
         densify(c, 0.0)
+
+
+# -- shaft cross-section ---------------------------------------------------------------------------
+@pytest.mark.parametrize("diameter", [0.6, 0.95, 1.2])
+def test_fit_shaft_section_any_scale_with_rotation(diameter):
+    from ionic_usd.evaluate.fit_shaft import fit_shaft_section
+    from ionic_usd.evaluate.sections import shaft_cross_section_at
+
+    p = portunus_column_params(lower_diameter=diameter)
+    true = dataclasses.replace(p.shaft, flutes=20, flute_angle=14.0, flute_depth=0.8)
+    p = dataclasses.replace(p, shaft=true)
+    y = p.base_params().height + 1.0
+    sec = shaft_cross_section_at(p, y)
+    r_true = float(np.hypot(*sec[:-1].T).max())
+    ref = _turned(sec, 31.0, [3.0, -1.0])[::-1]
+    res = fit_shaft_section(ref)
+    assert res.model == "section" and res.values["flutes"] == 20
+    assert res.values["radius"] == pytest.approx(r_true, rel=1e-3)
+    assert res.values["flute_angle"] == pytest.approx(14.0, abs=0.1)
+    assert res.values["flute_depth"] == pytest.approx(0.8, abs=0.02)
+    assert res.values["rotation_deg"] % 18.0 == pytest.approx(31.0 % 18.0, abs=0.05)
+    assert res.after.hausdorff_pct < 0.2 and res.after.discrete_frechet_pct < 0.2
+    assert res.diameter == pytest.approx(2 * r_true, rel=1e-3)
+    assert res.seconds < 30
+
+
+def test_fit_shaft_refuses_a_closed_curve():
+    from ionic_usd.evaluate.sections import shaft_cross_section_at
+
+    with pytest.raises(ParameterError, match="cross-section"):
+        fit_shaft(shaft_cross_section_at(portunus_column_params(), 1.0))
