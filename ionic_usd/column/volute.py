@@ -42,7 +42,6 @@ from ionic_usd.geometry.stitch import stitch
 __all__ = [
     "VOLUTE_MODELS",
     "VoluteParams",
-    "arc_centres",
     "VOLUTE_PARAMETER_DOCS",
     "vitruvian_coefficients",
     "vitruvian_volute",
@@ -196,7 +195,9 @@ class VoluteParams:
                 f"for spiral_circuits = {self.spiral_circuits:g}", context=ctx,
             )
         if self.volute_model == "centred_arcs":
-            _check_arcs(self)
+            from ionic_usd.column.volute_arcs import check_arcs
+
+            check_arcs(self)
             return
         self._check_shape()
 
@@ -294,73 +295,6 @@ def _check_band(p: VoluteParams) -> None:
         k += 1
 
 
-def _check_arcs(p: VoluteParams) -> None:
-    """Refuse centred-arc parameters that give no volute or a band crossing itself.
-
-    Turns are compared along rays from the eye centre, as for the spiral: the band's inner
-    edge one turn out must clear the outer edge of the turn inside it.
-    """
-    ctx = "volute (centred_arcs)"
-    if p.arc_square <= 0:
-        raise ParameterError("arc_square", p.arc_square, "a length > 0", context=ctx)
-    if not 0 < p.arc_ratio <= 4:
-        raise ParameterError("arc_ratio", p.arc_ratio, "a ratio in (0, 4]", context=ctx)
-    span = p.theta_end - p.theta_start
-    if span <= 2 * math.pi:
-        return
-    n = int(math.ceil((span - 2 * math.pi) / (2 * math.pi) * _CHECK_PER_TURN)) + 2
-    th = np.linspace(p.theta_start, p.theta_end - 2 * math.pi, n)
-    o = np.linalg.norm(_arc_points(p, th, 0.0) - p.eye_center, axis=1)
-    i2 = np.linalg.norm(_arc_points(p, th + 2 * math.pi, 1.0) - p.eye_center, axis=1)
-    gap = i2 - o
-    if gap.min() <= 0:
-        j = int(np.argmin(gap))
-        raise GeometryError(
-            "volute (centred_arcs): the band crosses itself at θ = "
-            f"{math.degrees(th[j]):.1f} deg (inner edge {i2[j]:.4g} m from the eye centre, "
-            f"the turn inside it {o[j]:.4g} m); reduce thickness or widen arc_square"
-        )
-
-
-def arc_centres(p: VoluteParams) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Centres, radii and start angles of the quarter-circle arcs (``centred_arcs``).
-
-    Arc ``j`` turns from θ_j = start + j·90° to θ_{j+1} (the last one may be shorter) about
-    centre ``C_j`` with radius ``ρ_j``. ``ρ_0`` is the eye's radius; the radius grows by a step
-    ``e_j`` from arc to arc, the steps linear from ``arc_ratio·arc_square`` (innermost) to
-    ``arc_square`` (outermost). Tangent continuity puts ``C_{j+1} = C_j − e_j·u(θ_{j+1})``:
-    the centres walk a square spiral, shrinking towards the eye — the Vitruvian construction
-    as Alberti, Serlio, Vignola and Palladio draw it (three turns, twelve centres on the eye's
-    square). The centres' centroid is the eye centre.
-
-    Returns
-    -------
-    centres : (k, 2) float, metres from the spiral origin
-    radii : (k,) float, metres
-    theta0 : (k,) float, radians where each arc starts
-    """
-    span = p.theta_end - p.theta_start
-    k = max(1, int(math.ceil(span / (0.5 * math.pi) - 1e-9)))
-    th0 = p.theta_start + 0.5 * math.pi * np.arange(k)
-    steps = (p.arc_square * np.linspace(p.arc_ratio, 1.0, k - 1) if k > 1
-             else np.zeros(0))
-    radii = p.capital_circle_radius + np.concatenate([[0.0], np.cumsum(steps)])
-    u = np.stack([np.cos(th0[1:]), np.sin(th0[1:])], axis=1)
-    centres = np.vstack([[0.0, 0.0], -np.cumsum(steps[:, None] * u, axis=0)])
-    centres += p.eye_center - centres.mean(axis=0)
-    return centres, radii, th0
-
-
-def _arc_points(p: VoluteParams, theta: np.ndarray, inner: float) -> np.ndarray:
-    """Points of the centred-arc curve at θ; ``inner`` = 1 gives the band's inner edge."""
-    th = np.asarray(theta, dtype=np.float64)
-    centres, radii, _ = arc_centres(p)
-    j = np.clip(np.floor((th - p.theta_start) / (0.5 * math.pi) + 1e-12).astype(np.int64),
-                0, len(radii) - 1)
-    rho = radii[j] - inner * p.capital_spiral_radius * volute_thickness(p, th)
-    return centres[j] + rho[:, None] * np.stack([np.cos(th), np.sin(th)], axis=1)
-
-
 def vitruvian_volute(lower_diameter: float = _D_PORTUNUS, **overrides) -> VoluteParams:
     """The Vitruvian volute for a column of lower diameter ``lower_diameter`` (m).
 
@@ -415,7 +349,9 @@ def volute_curve(p: VoluteParams, samples: int = 192) -> np.ndarray:
     """
     th = volute_theta(p, samples)
     if p.volute_model == "centred_arcs":
-        return _arc_points(p, th, 0.0)
+        from ionic_usd.column.volute_arcs import arc_points
+
+        return arc_points(p, th, 0.0)
     return _polar(p, volute_radius(p, th), th)
 
 
@@ -428,7 +364,9 @@ def volute_inner_curve(p: VoluteParams, samples: int = 192) -> np.ndarray:
     """
     th = volute_theta(p, samples)
     if p.volute_model == "centred_arcs":
-        return _arc_points(p, th, 1.0)
+        from ionic_usd.column.volute_arcs import arc_points
+
+        return arc_points(p, th, 1.0)
     return _polar(p, volute_radius(p, th) - volute_thickness(p, th), th)
 
 
@@ -622,8 +560,12 @@ def build_volute_backing(
         hi = p.theta_start + turn
         th = np.concatenate([band_th[band_th < hi - 1e-9], [hi]])
     m = len(th)
-    ring = (_arc_points(p, th, 0.0) if p.volute_model == "centred_arcs"
-            else _polar(p, volute_radius(p, th), th))
+    if p.volute_model == "centred_arcs":
+        from ionic_usd.column.volute_arcs import arc_points
+
+        ring = arc_points(p, th, 0.0)
+    else:
+        ring = _polar(p, volute_radius(p, th), th)
     pts = np.vstack([ring, [[0.0, 0.0]]])
     o = m
     i = np.arange(m - 1)
