@@ -78,6 +78,19 @@ def _rotate(curve: np.ndarray, deg: float) -> np.ndarray:
     return curve @ rot.T
 
 
+class _ArcShape:
+    """The attributes :func:`~ionic_usd.column.volute_arcs.arc_points` reads, unvalidated."""
+
+    def __init__(self, x: np.ndarray, start: float, end: float, shape: VoluteParams) -> None:
+        self.theta_start, self.theta_end = start, end
+        self.capital_circle_radius, self.arc_square, self.arc_ratio = x[0], x[1], x[2]
+        self.eye_center = shape.eye_center
+        self.capital_spiral_radius = shape.capital_spiral_radius
+        self.thickness, self.min_thickness = shape.thickness, shape.min_thickness
+        self.increasing_max = shape.increasing_max
+        self.start_angle = math.degrees(start)
+
+
 class _Model:
     """One volute model's parameter vector (without the pose) and bounds."""
 
@@ -124,6 +137,29 @@ class _Model:
                                 arc_ratio=float(x[2]), start_angle=float(x[3]),
                                 spiral_circuits=float(x[4]))
 
+    def curve(self, x: np.ndarray, samples: int) -> np.ndarray | None:
+        """The outer edge for parameters ``x`` without building (and validating) a
+        VoluteParams — the fit's inner loop; None when the curve is not a volute (r <= 0 or
+        not monotone). The result is validated once at the end (:meth:`finish`)."""
+        start, circuits = math.radians(x[3]), x[4]
+        end = 2.5 * math.pi + 2.0 * math.pi * (circuits - 1.0)
+        if not (circuits >= 1.0 and end > start):
+            return None
+        th = np.linspace(start, end, samples)
+        if self.name == "log_spiral":
+            s = self.shape
+            r = s.a / (s.b * np.exp(x[1] * th)) - x[2]
+            dr = np.diff(r)
+            if r.min() <= 0 or not (np.all(dr > 0) or np.all(dr < 0)):
+                return None
+            return x[0] * np.column_stack([r * np.cos(th), r * np.sin(th)])
+        from ionic_usd.column.volute_arcs import arc_points
+
+        if x[0] <= 0 or x[1] <= 0 or not 0 < x[2] <= 4:
+            return None
+        fast = _ArcShape(x, start, end, self.shape)
+        return arc_points(fast, th, 0.0)
+
     def finish(self, fitted: VoluteParams) -> tuple[VoluteParams, str | None]:
         """The fitted outer edge with the initial band thickness, thinned until valid."""
         t, t_min = self.v0.thickness, self.v0.min_thickness
@@ -144,7 +180,9 @@ def _fit_one(ref: np.ndarray, model: _Model, *, measure: str, samples: int, seed
              ) -> tuple[VoluteParams, np.ndarray, tuple[str, ...], dict[str, float], Alignment,
                         np.ndarray, int, int]:
     first = volute_curve(model.params(model.x0), samples)
-    _, how = align(ref, first, allow_mirror=allow_mirror, allow_rotation=True)
+    # the pose of the scaled start: coarse copies are enough (the fit refines it)
+    _, how = align(resample(ref, count=96), resample(first, count=96),
+                   allow_mirror=allow_mirror, allow_rotation=True)
     sign = -1.0 if how.mirrored else 1.0
     # a rotation of the model is exactly a change of its start angle and circuits (the θ
     # range turns with it), so the pose's rotation moves into those and is not fitted
@@ -156,7 +194,7 @@ def _fit_one(ref: np.ndarray, model: _Model, *, measure: str, samples: int, seed
     model.hi[4] = model.hi[4] + turn / 360.0
     first = volute_curve(model.params(model.x0), samples)
     first[:, 0] *= sign
-    _, how = align(ref, first)
+    _, how = align(resample(ref, count=200), resample(first, count=200))
     diag = float(np.linalg.norm(np.ptp(ref, axis=0)))
     t0 = np.asarray(how.translation)
     x0 = np.concatenate([model.x0, t0])
@@ -166,14 +204,14 @@ def _fit_one(ref: np.ndarray, model: _Model, *, measure: str, samples: int, seed
 
     def make(u: np.ndarray) -> np.ndarray | None:
         x = box.x(u)
-        try:
-            curve = volute_curve(model.params(x), samples)
-        except IonicError:
+        curve = model.curve(x, samples)
+        if curve is None:
             return None
         curve[:, 0] *= sign
         return curve + x[5:7]
 
-    obj = _Objective(ref_o, measure)
+    # the objective on at most 400 reference nodes (arc-length resampled); reports use all
+    obj = _Objective(ref_o if len(ref_o) <= 400 else resample(ref_o, count=400), measure)
     stages = _Stages(make, obj, penalty=10.0 * diag)
     stages.run(box.u(x0), seed=seed, global_stage=True, popsize=popsize, maxiter=maxiter,
                polish_evals=polish_evals)
