@@ -13,13 +13,30 @@ from ionic_usd.errors import ReferenceCurveError
 from ionic_usd.evaluate.scan_io import read_scan, synthetic_scan
 
 
-def _scan(diameter: float, n: int, seed: int):
+def _scan(diameter: float, n: int, seed: int, y_range=None, holes: int = 4):
     p = portunus_column_params(lower_diameter=diameter)
     bh, length = p.base_params().height, p.shaft_params().length
     hidden = ((0.0, 99.0), (bh, 9.0), (bh + length, 9.0))  # the ground and the joints
-    pts, rot, t = synthetic_scan(build_column(p).parts(), n=n, noise=5e-4, holes=4,
-                                 missing_sector=(40.0, 100.0), hidden=hidden, seed=seed)
+    pts, rot, t = synthetic_scan(build_column(p).parts(), n=n, noise=5e-4, holes=holes,
+                                 missing_sector=(40.0, 100.0), hidden=hidden, seed=seed,
+                                 y_range=y_range, hole_radius=0.05)
     return p, pts, rot, t
+
+
+def test_fit_a_fragment_base_with_a_drum():
+    from ionic_usd.evaluate.fit_scan import fit_column_scan
+
+    p, pts, rot, t = _scan(1.2, 12_000, seed=3, y_range=(0.0, 1.6), holes=2)
+    fit = fit_column_scan(pts)
+    s = fit.summary()
+    assert s["parts_found"] == ["base", "shaft"]
+    assert s["flutes"] == 24
+    # a short drum (1.2 m) leaves the axis less certain than a whole column: measured
+    # D +0.5 %, axis 0.8°, deviation rms 16 mm, p95 37 mm (whole columns: 2–4 mm, 0.0005°)
+    assert s["diameter"] == pytest.approx(1.2, rel=0.02)
+    assert math.degrees(math.acos(min(1.0, abs(fit.frame.direction @ rot[:, 1])))) < 1.5
+    assert fit.frame.direction @ rot[:, 1] > 0  # the base at the bottom
+    assert s["deviation"]["p95"] < 0.05 and np.all(np.isfinite(fit.deviation))
 
 
 def _write_ply(path, pts):
@@ -31,6 +48,7 @@ def _write_ply(path, pts):
     return path
 
 
+@pytest.mark.slow
 def test_fit_column_from_a_noisy_posed_scan_with_holes(tmp_path, capsys):
     from pxr import Usd, UsdGeom
 
@@ -48,8 +66,8 @@ def test_fit_column_from_a_noisy_posed_scan_with_holes(tmp_path, capsys):
     axis = np.asarray(doc["axis"]["direction"])
     assert math.degrees(math.acos(min(1.0, abs(axis @ rot[:, 1])))) < 0.5
     dev = doc["deviation"]
-    # 0.5 mm noise, 60° of the shaft missing, a fitted (not the true) model: measured 3–10 mm
-    assert dev["rms"] < 0.015 and dev["p95"] < 0.025
+    # 0.5 mm noise, 60° missing, holes, a fitted (not the true) model: measured 2.1 / 3.6 mm
+    assert dev["rms"] < 0.006 and dev["p95"] < 0.012
     assert dev["rms"] <= dev["p95"] <= dev["max"]
     # USD: the scan as points with a deviation primvar and colours; the column in its frame
     stage = Usd.Stage.Open(str(out / "scan_deviation.usdc"))

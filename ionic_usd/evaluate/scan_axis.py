@@ -191,8 +191,8 @@ def find_parts(points: np.ndarray, direction: np.ndarray, point: np.ndarray) -> 
         r_shaft = float(np.nanpercentile(r95, 25))
         narrow = ok & (r95 < 1.1 * r_shaft)
         wide = ok & (r95 > 1.15 * r_shaft)
-        lo_end = _end_run(wide, from_start=True)
-        hi_end = _end_run(wide, from_start=False)
+        lo_end = _end_run(wide, ok, from_start=True)
+        hi_end = _end_run(wide, ok, from_start=False)
         parts: dict[str, tuple[float, float]] = {}
         kinds = {}
         for name, run in (("low", lo_end), ("high", hi_end)):
@@ -218,11 +218,15 @@ def find_parts(points: np.ndarray, direction: np.ndarray, point: np.ndarray) -> 
     raise GeometryError("cannot orient the column: base and capital both at one end")
 
 
-def _end_run(mask: np.ndarray, *, from_start: bool) -> tuple[int, int] | None:
-    """The run of True at one end of ``mask`` (a few False bins tolerated), at least 2 long."""
+def _end_run(mask: np.ndarray, ok: np.ndarray, *, from_start: bool
+             ) -> tuple[int, int] | None:
+    """The run of True at one end of ``mask`` (a few False bins tolerated, empty bins —
+    not ``ok`` — skipped), at least 2 long."""
     idx = np.arange(len(mask)) if from_start else np.arange(len(mask))[::-1]
     run, gap = [], 0
     for i in idx:
+        if not ok[i]:
+            continue
         if mask[i]:
             run.append(i)
             gap = 0
