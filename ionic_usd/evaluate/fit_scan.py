@@ -244,7 +244,8 @@ def fit_column_scan(points: np.ndarray, *, seed: int = 0, max_fit_points: int = 
             if "shaft" not in frame.parts:
                 raise GeometryError("the shaft band was lost after refining the axis")
     hs = s0 + (s1 - s0) / 3.0
-    e, sec, slab, half = _section_at(loc, hs, s0, s1, ra, rb, e)
+    # the flute count is chosen again in the refined frame (a tilted slab blurs flutes)
+    e, sec, slab, half = _section_at(loc, hs, s0, s1, ra, rb, None)
     notes.append(f"axis through the centres of sections {s0 + 0.25 * (s1 - s0):.3f} and "
                  f"{s0 + 0.75 * (s1 - s0):.3f} m up; section from {len(slab)} points within "
                  f"±{half * 1000:.3g} mm of {hs:.3f} m")
