@@ -268,7 +268,7 @@ def plot_overlay(
         k = int(np.argmax(ra)) if ra.max() >= rb.max() else int(np.argmax(rb))
         at = a[k] if ra.max() >= rb.max() else b[k]
         half = max(6.0 * worst, 1e-6 * extent)
-        inset = right.inset_axes([0.58, 0.58, 0.4, 0.4])
+        inset = right.inset_axes([0.58, 0.5, 0.4, 0.4])
         inset.plot(a[:, 0], a[:, 1], "-o", color=colours[0], lw=1.2, ms=2)
         inset.plot(b[:, 0], b[:, 1], "-o", color=colours[1], lw=1.0, ms=2)
         inset.set_xlim(at[0] - half, at[0] + half)
