@@ -136,3 +136,81 @@ def test_fit_command_errors(tmp_path):
         run(["fit", "capital", "--reference", str(ref)])
     with pytest.raises(SystemExit):
         run(["fit", "volute", "--reference", str(ref), "--measure", "chamfer"])
+
+
+# -- cross-sections, several references, machine-readable output ----------------------------------
+def _closed_section(diameter: float, turn_deg: float, shift) -> np.ndarray:
+    from ionic_usd.evaluate.sections import shaft_cross_section_at
+
+    p = portunus_column_params(lower_diameter=diameter)
+    sec = shaft_cross_section_at(p, p.base_params().height + 1.0)
+    a = np.radians(turn_deg)
+    rot = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+    return sec @ rot.T + np.asarray(shift)
+
+
+def test_closed_curve_without_section_is_refused_by_the_cli(tmp_path, capsys):
+    from ionic_usd.cli import main
+
+    ref = _csv(tmp_path / "sec.csv", _closed_section(0.95, 7.0, [2.0, 1.0]))
+    for argv in (["fit", "shaft", "--reference", str(ref)],
+                 ["evaluate", "--part", "shaft", "--reference", str(ref)]):
+        capsys.readouterr()
+        assert main(argv) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "--section" in err[0] and "closed" in err[0]
+
+
+def test_fit_shaft_section_command_json_and_curves(tmp_path, capsys):
+    ref = _csv(tmp_path / "sec.csv", _closed_section(0.95, 7.0, [2.0, 1.0]))
+    out, js, cv = tmp_path / "f.toml", tmp_path / "f.json", tmp_path / "f.csv"
+    assert run(["fit", "shaft", "--section", "--reference", str(ref), "-o", str(out),
+                "--json", str(js), "--curves", str(cv)]) == 0
+    doc = json.loads(js.read_text("utf-8"))
+    assert doc["schema"] == "ionic_usd.evaluate/1"
+    part = doc["parts"]["shaft"]
+    assert part["model"] == "section" and part["parameters"]["flutes"] == 24
+    assert part["hausdorff_pct"] < 0.2 and part["discrete_frechet_pct"] < 0.2
+    assert part["hausdorff"] == pytest.approx(part["hausdorff_pct"] / 100 * part["mean_length"])
+    assert part["alignment"]["rotation_deg"] == pytest.approx(7.0 % 15.0, abs=0.05)
+    assert part["bounds_hit"] == []
+    rows = cv.read_text("utf-8").splitlines()
+    assert rows[0] == "part,curve,index,x,y"
+    assert {r.split(",")[1] for r in rows[1:]} == {"reference", "fitted"}
+    col = column_params_from_mapping(tomllib.loads(out.read_text("utf-8")))
+    assert col.shaft.flutes == 24
+    assert col.shaft.bottom_radius == pytest.approx(part["parameters"]["radius"])
+
+
+def test_evaluate_identical_curves_read_zero_and_several_references(tmp_path, capsys):
+    p = portunus_column_params()
+    from ionic_usd.evaluate.fit_core import densify
+
+    base = _csv(tmp_path / "b.csv", densify(base_section(p), 0.003))  # more nodes, same curve
+    shaft = _csv(tmp_path / "s.csv", shaft_silhouette_section(p, samples=57))
+    js = tmp_path / "t6.json"
+    assert run(["evaluate", "--reference", f"base={base}", "--reference", f"shaft={shaft}",
+                "--json", str(js)]) == 0
+    text = capsys.readouterr().out
+    assert "resampled at" in text and "node-to-node" in text
+    doc = json.loads(js.read_text("utf-8"))
+    assert set(doc["parts"]) == {"base", "shaft"}
+    for part in doc["parts"].values():
+        # identical curves, differently sampled: resampled by default, no measure reads %
+        assert part["node_hausdorff_pct"] < 1e-6 and part["hausdorff_pct"] < 1e-6
+
+
+def test_evaluate_shaft_section(tmp_path, capsys):
+    p = portunus_column_params()
+    y = p.base_params().height + 2.0
+    from ionic_usd.evaluate.sections import shaft_cross_section_at
+
+    sec = shaft_cross_section_at(p, y)
+    a = np.radians(40.0)
+    rot = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+    ref = _csv(tmp_path / "s.csv", sec @ rot.T + [1.0, 1.0])
+    js = tmp_path / "e.json"
+    assert run(["evaluate", "--part", "shaft", "--section", "--height", str(y),
+                "--reference", str(ref), "--json", str(js)]) == 0
+    part = json.loads(js.read_text("utf-8"))["parts"]["shaft"]
+    assert part["hausdorff"] < 1e-6 and part["discrete_frechet"] < 1e-3

@@ -191,3 +191,20 @@ def test_usd_errors(tmp_path, column_usd):
 def test_usd_unknown_variant(small_asset):
     with pytest.raises(ParameterError, match="ultra"):
         section_from_usd(small_asset[0], "base", variants={"lod": "ultra"})
+
+
+def test_band_picked_by_length_even_touching_x0():
+    """Regression: a band whose minimum x is exactly 0.0 lost to the eye loop (issue 14)."""
+    from ionic_usd.column.volute import volute_eye, volute_inner_curve
+    from ionic_usd.evaluate.sections import pick_band
+
+    v = portunus_column_params().capital.volute
+    outer, inner = volute_curve(v, 200), volute_inner_curve(v, 200)
+    band = np.vstack([outer, inner[::-1], outer[:1]])
+    band[:, 0] -= band[:, 0].min()  # the band's min x exactly 0.0
+    assert band[:, 0].min() == 0.0
+    eye = volute_eye(v, 47) + [0.2, 0.0]
+    eye = np.vstack([eye, eye[:1]])
+    left = band * [-1.0, 1.0]  # the front-left volute: longer than the eye, but on -x
+    assert pick_band([eye, left, band]) is band
+    assert pick_band([eye[:5]]) is None

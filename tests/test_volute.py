@@ -238,3 +238,58 @@ def test_errors_are_package_errors():
         build_volute(VoluteParams(), relief_depth=0.0)
     with pytest.raises(ParameterError):
         volute_theta(VoluteParams(), 1)
+
+
+# -- centred arcs ----------------------------------------------------------------------------------
+ARCS = VoluteParams(volute_model="centred_arcs")
+
+
+def test_centred_arcs_are_quarter_circles_joined_tangentially():
+    from ionic_usd.column.volute_arcs import arc_centres
+
+    centres, radii, th0 = arc_centres(ARCS)
+    assert len(radii) == 12 and np.all(np.diff(radii) > 0)  # 3 turns, growing outward
+    assert radii[0] == pytest.approx(ARCS.capital_circle_radius)
+    assert_allclose(centres.mean(axis=0), ARCS.eye_center, atol=1e-12)
+    # every node of arc j lies on its circle; consecutive arcs share their junction point and
+    # its tangent (the junction is on the line through both centres)
+    for j in range(11):
+        t = th0[j + 1]
+        u = np.array([math.cos(t), math.sin(t)])
+        assert_allclose(centres[j] + radii[j] * u, centres[j + 1] + radii[j + 1] * u,
+                        atol=1e-12)
+    curve = volute_curve(ARCS, 12 * 64 + 1)
+    th = np.linspace(ARCS.theta_start, ARCS.theta_end, len(curve))
+    j = np.minimum(((th - ARCS.theta_start) // (math.pi / 2)).astype(int), 11)
+    assert_allclose(np.linalg.norm(curve - centres[j], axis=1), radii[j], atol=1e-12)
+
+
+def test_centred_arcs_shells_watertight_and_in_a_column(tmp_path):
+    import dataclasses
+    import tomllib
+
+    from ionic_usd.column.column import (
+        build_column,
+        column_params_from_mapping,
+        column_params_to_tables,
+        portunus_column_params,
+    )
+    from ionic_usd.params import to_toml
+
+    _shell_ok(build_volute(ARCS))
+    p = portunus_column_params()
+    col = dataclasses.replace(p, capital=p.capital.with_(volute=ARCS))
+    built = build_column(col)
+    assert np.all(np.isfinite(built.capital_body.points))
+    text = to_toml(column_params_to_tables(col))
+    back = column_params_from_mapping(tomllib.loads(text))
+    assert back.capital.volute == ARCS
+
+
+def test_centred_arcs_errors():
+    with pytest.raises(ParameterError, match="volute_model"):
+        VoluteParams(volute_model="spiral")
+    with pytest.raises(ParameterError, match="arc_square"):
+        VoluteParams(volute_model="centred_arcs", arc_square=0.0)
+    with pytest.raises(GeometryError, match="crosses itself"):
+        VoluteParams(volute_model="centred_arcs", thickness=0.5, min_thickness=0.5)

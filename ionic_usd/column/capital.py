@@ -45,7 +45,13 @@ from ionic_usd.errors import ParameterError
 from ionic_usd.geometry.mesh import Mesh, merge, smooth_normals
 from ionic_usd.grammar.scroll import ScrollGrammar, resolve_scroll
 
-from .volute import VoluteParams, build_volute, volute_extent, volute_total_radius
+from .volute import (
+    VoluteParams,
+    build_volute,
+    volute_curve,
+    volute_extent,
+    volute_total_radius,
+)
 
 __all__ = [
     "CapitalParams",
@@ -198,9 +204,7 @@ def capital_layout(p: CapitalParams) -> CapitalLayout:
 
 def _top_end_dx(v: VoluteParams) -> float:
     """X of the band's top end relative to the eye centre."""
-    th = v.theta_end
-    r = v.a / (v.b * math.exp(v.c * th)) - v.d
-    return v.capital_spiral_radius * r * math.cos(th) - v.offset_x
+    return float(volute_curve(v, 2)[-1, 0]) - v.offset_x  # either volute model
 
 
 def capital_height(p: CapitalParams) -> float:

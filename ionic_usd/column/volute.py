@@ -40,6 +40,7 @@ from ionic_usd.geometry.mesh import Mesh, merge
 from ionic_usd.geometry.stitch import stitch
 
 __all__ = [
+    "VOLUTE_MODELS",
     "VoluteParams",
     "VOLUTE_PARAMETER_DOCS",
     "vitruvian_coefficients",
@@ -75,7 +76,16 @@ VOLUTE_PARAMETER_DOCS: dict[str, tuple[str, str, str]] = {
     "b": ("b", "", "r = a / (b e^{cθ}) − d, b ≠ 0"),
     "c": ("c", "1/rad", "r = a / (b e^{cθ}) − d; c < 0: r grows with θ"),
     "d": ("d", "spiral units", "r = a / (b e^{cθ}) − d"),
+    "volute_model": ("volute model", "", "log_spiral (paper, formula 3) or centred_arcs "
+                     "(quarter circles about centres in the eye)"),
+    "arc_square": ("arc square", "m", "centred_arcs: side of the outermost square of arc "
+                   "centres (radius step between the last two arcs)"),
+    "arc_ratio": ("arc ratio", "", "centred_arcs: innermost / outermost square side (steps "
+                  "linear in between)"),
 }
+
+#: The volute curve constructions (``VoluteParams.volute_model``).
+VOLUTE_MODELS = ("log_spiral", "centred_arcs")
 
 #: θ samples per turn used by the validity checks (exact 2π pairing, see ``_check_band``)
 _CHECK_PER_TURN = 720
@@ -141,10 +151,18 @@ class VoluteParams:
     b: float = _VB
     c: float = _VC
     d: float = _VD
+    volute_model: str = "log_spiral"
+    arc_square: float = _D_PORTUNUS / 18.0 * 6.0 / 11.0
+    arc_ratio: float = 1.0 / 3.0
 
     def __post_init__(self) -> None:
         ctx = "volute"
+        if self.volute_model not in VOLUTE_MODELS:
+            raise ParameterError("volute_model", self.volute_model,
+                                 f"one of {', '.join(VOLUTE_MODELS)}", context=ctx)
         for f in fields(self):
+            if f.name == "volute_model":
+                continue
             v = getattr(self, f.name)
             if isinstance(v, bool) or not isinstance(v, int | float):
                 raise ParameterError(f.name, v, "a number", context=ctx)
@@ -176,6 +194,11 @@ class VoluteParams:
                 f"an angle below the spiral limit 2.5π + 2π(n − 1) = {limit:g} deg "
                 f"for spiral_circuits = {self.spiral_circuits:g}", context=ctx,
             )
+        if self.volute_model == "centred_arcs":
+            from ionic_usd.column.volute_arcs import check_arcs
+
+            check_arcs(self)
+            return
         self._check_shape()
 
     # -- derived ------------------------------------------------------------------------
@@ -197,6 +220,8 @@ class VoluteParams:
     @property
     def grows_outward(self) -> bool:
         """True when r grows with θ (the start angle lies at the eye)."""
+        if self.volute_model == "centred_arcs":
+            return True
         return bool(volute_radius(self, self.theta_end) > volute_radius(self, self.theta_start))
 
     def with_(self, **changes) -> VoluteParams:
@@ -280,7 +305,8 @@ def vitruvian_volute(lower_diameter: float = _D_PORTUNUS, **overrides) -> Volute
             and lower_diameter > 0):
         raise ParameterError("lower_diameter", lower_diameter, "a length > 0", context="volute")
     kw = dict(capital_spiral_radius=lower_diameter / 4.0,
-              capital_circle_radius=lower_diameter / 36.0)
+              capital_circle_radius=lower_diameter / 36.0,
+              arc_square=lower_diameter / 18.0 * 6.0 / 11.0)
     kw.update(overrides)
     return VoluteParams(**kw)
 
@@ -322,6 +348,10 @@ def volute_curve(p: VoluteParams, samples: int = 192) -> np.ndarray:
     (samples, 2) float: metres, relative to the spiral origin, at :func:`volute_theta`.
     """
     th = volute_theta(p, samples)
+    if p.volute_model == "centred_arcs":
+        from ionic_usd.column.volute_arcs import arc_points
+
+        return arc_points(p, th, 0.0)
     return _polar(p, volute_radius(p, th), th)
 
 
@@ -333,6 +363,10 @@ def volute_inner_curve(p: VoluteParams, samples: int = 192) -> np.ndarray:
     (samples, 2) float, metres, relative to the spiral origin.
     """
     th = volute_theta(p, samples)
+    if p.volute_model == "centred_arcs":
+        from ionic_usd.column.volute_arcs import arc_points
+
+        return arc_points(p, th, 1.0)
     return _polar(p, volute_radius(p, th) - volute_thickness(p, th), th)
 
 
@@ -526,7 +560,12 @@ def build_volute_backing(
         hi = p.theta_start + turn
         th = np.concatenate([band_th[band_th < hi - 1e-9], [hi]])
     m = len(th)
-    ring = _polar(p, volute_radius(p, th), th)
+    if p.volute_model == "centred_arcs":
+        from ionic_usd.column.volute_arcs import arc_points
+
+        ring = arc_points(p, th, 0.0)
+    else:
+        ring = _polar(p, volute_radius(p, th), th)
     pts = np.vstack([ring, [[0.0, 0.0]]])
     o = m
     i = np.arange(m - 1)

@@ -13,6 +13,8 @@ from ionic_usd.evaluate.fit import (
     fit_volute,
     suggest_base_layout,
 )
+from ionic_usd.evaluate.fit_scan import ScanFit, fit_column_scan
+from ionic_usd.evaluate.fit_shaft import fit_shaft_section, fluted_section
 from ionic_usd.evaluate.metrics import (
     CurveComparison,
     average_error,
@@ -36,6 +38,7 @@ from ionic_usd.evaluate.reference import (
     read_svg_curve,
 )
 from ionic_usd.evaluate.report import format_table, plot_overlay, write_json
+from ionic_usd.evaluate.scan_io import read_scan
 from ionic_usd.evaluate.sections import (
     base_section,
     section_from_usd,
@@ -53,6 +56,11 @@ __all__ = [
     "fit_base",
     "fit_shaft",
     "fit_volute",
+    "fit_shaft_section",
+    "fluted_section",
+    "fit_column_scan",
+    "ScanFit",
+    "read_scan",
     "suggest_base_layout",
     "base_section",
     "section_from_usd",

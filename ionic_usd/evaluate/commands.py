@@ -41,6 +41,14 @@ def _check_out(path: Path | None, force: bool, suffix: str, flag: str) -> None:
     check_output_file(path, force=force, what=flag)
 
 
+#: reference files larger than this are refused before reading (a 2,000,000-row CSV is ~30 MB;
+#: a measured profile has thousands of nodes, not millions)
+MAX_REFERENCE_BYTES = {".svg": 4 << 20}
+MAX_REFERENCE_BYTES_DEFAULT = 16 << 20
+#: nodes after resampling at --spacing (both curves together)
+MAX_RESAMPLED_NODES = 2_000_000
+
+
 def _variants(items: list[str] | None) -> dict[str, str]:
     out = {}
     for item in items or []:
@@ -51,48 +59,104 @@ def _variants(items: list[str] | None) -> dict[str, str]:
     return out
 
 
-#: reference files larger than this are refused before reading (a 2,000,000-row CSV is ~30 MB;
-#: a measured profile has thousands of nodes, not millions)
-MAX_REFERENCE_BYTES = {".svg": 4 << 20}
-MAX_REFERENCE_BYTES_DEFAULT = 16 << 20
-#: nodes after resampling at --spacing (both curves together)
-MAX_RESAMPLED_NODES = 2_000_000
-
-
-def _reference(args: argparse.Namespace) -> np.ndarray:
+def _read(path: Path, args: argparse.Namespace) -> np.ndarray:
     from ionic_usd.evaluate.reference import read_reference
 
     if not (np.isfinite(args.scale) and args.scale > 0):
         raise ParameterError("--scale", args.scale, "a finite number > 0 (m per unit)")
-    p = Path(args.reference)
+    p = Path(path)
     limit = MAX_REFERENCE_BYTES.get(p.suffix.lower(), MAX_REFERENCE_BYTES_DEFAULT)
     if p.is_file() and p.stat().st_size > limit:
         raise ParameterError("--reference", str(p), f"a curve file under {limit >> 20} MB "
                              f"(this one has {p.stat().st_size / 1e6:.0f} MB)")
-    return read_reference(args.reference, scale=args.scale, flip_y=args.flip_y,
-                          element_id=args.element_id)
+    ref = read_reference(path, scale=args.scale, flip_y=args.flip_y,
+                         element_id=args.element_id)
+    spacing = getattr(args, "spacing", None)
+    if spacing is not None:  # the resampled node count, before any allocation
+        nodes = 2.0 * float(np.linalg.norm(np.diff(ref, axis=0), axis=1).sum()) / spacing
+        if nodes > MAX_RESAMPLED_NODES:
+            raise ParameterError("--spacing", spacing, f"a spacing giving at most "
+                                 f"{MAX_RESAMPLED_NODES:,} nodes (about {nodes:,.0f} here)")
+    return ref
 
 
-def _generated(args: argparse.Namespace) -> tuple[np.ndarray, str]:
+def _reference(args: argparse.Namespace) -> np.ndarray:
+    return _read(args.reference, args)
+
+
+def _references(args: argparse.Namespace) -> list[tuple[str, Path]]:
+    """``--reference`` items as (part, file): ``PART=FILE``, or a plain FILE with --part."""
+    from ionic_usd.evaluate.sections import PARTS
+
+    out = []
+    for item in args.reference:
+        name, sep, file = str(item).partition("=")
+        if sep and name in PARTS:
+            out.append((name, Path(file)))
+        elif args.part is not None:
+            out.append((args.part, Path(item)))
+        else:
+            raise ParameterError("--reference", str(item),
+                                 f"PART=FILE (PART one of {', '.join(PARTS)}) or --part")
+    parts = [p for p, _ in out]
+    if len(set(parts)) != len(parts):
+        raise ParameterError("--reference", [str(i) for i in args.reference],
+                             "one reference per part")
+    return out
+
+
+def _generated(args: argparse.Namespace, part: str, section_y: float | None
+               ) -> tuple[np.ndarray, str]:
     from ionic_usd.evaluate import sections
 
     if args.usd is not None:
-        curve = sections.section_from_usd(args.usd, args.part, variants=_variants(args.variant))
+        curve = sections.section_from_usd(args.usd, part, variants=_variants(args.variant),
+                                          y=section_y)
         return curve, f"section of {args.usd}"
     params = _column(args.config)
     src = f"parameters from {args.config}" if args.config else "the Portunus column parameters"
-    if args.part == "base":
+    if part == "base":
         return sections.base_section(params), src
-    if args.part == "shaft":
+    if part == "shaft":
+        if section_y is not None:
+            return sections.shaft_cross_section_at(params, section_y), src
         return sections.shaft_silhouette_section(params), src
     return sections.volute_section(params), src
 
 
-def cmd_evaluate(args: argparse.Namespace) -> int:
-    """Compare a section of the model with a reference; print the table, write JSON/PNG."""
-    from ionic_usd.evaluate.fit import orient_like
-    from ionic_usd.evaluate.metrics import compare
+def _section_height(args: argparse.Namespace) -> float:
+    """Column height of the shaft cross-section: --height, else 1/3 up the fluted body."""
+    if args.height is not None:
+        return float(args.height)
+    params = _column(args.config)
+    sp = params.shaft_params()
+    return params.base_params().height + sp.length / 3.0
+
+
+def _compare_one(args: argparse.Namespace, part: str, ref: np.ndarray):
+    """Align and compare one part; returns (comparison, alignment, a, b, source, spacing)."""
+    from ionic_usd.evaluate.fit_core import orient_like
+    from ionic_usd.evaluate.fit_shaft import _closed_like, is_closed_curve
+    from ionic_usd.evaluate.metrics import compare, curve_length, resample
     from ionic_usd.evaluate.reference import align
+
+    section = part == "shaft" and args.section
+    if is_closed_curve(ref) and not section:
+        raise ParameterError("--reference", f"{part}: a closed curve",
+                             "an open profile; a closed shaft cross-section needs --section")
+    if args.section and part != "shaft":
+        raise ParameterError("--section", part, "used only with the shaft")
+    gen, source = _generated(args, part, _section_height(args) if section else None)
+    moved, how = align(ref, gen, allow_mirror=args.mirror, allow_rotation=args.rotate or
+                       bool(section))
+    moved = _closed_like(ref, moved) if section else orient_like(ref, moved)
+    spacing = args.spacing if args.spacing is not None else curve_length(ref) / 2000.0
+    a, b = resample(ref, spacing=spacing), resample(moved, spacing=spacing)
+    return compare(a, b), how, a, b, source, spacing, len(gen)
+
+
+def cmd_evaluate(args: argparse.Namespace) -> int:
+    """Compare sections of the model with references; print Table 6, write JSON/PNG/CSV."""
     from ionic_usd.evaluate.report import format_table, plot_overlay, write_json
 
     if args.usd is not None and args.config is not None:
@@ -102,38 +166,38 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         raise ParameterError("--variant", args.variant, "used only with --usd")
     _check_out(args.json, args.force, ".json", "--json")
     _check_out(args.plot, args.force, ".png", "--plot")
+    _check_out(args.curves, args.force, ".csv", "--curves")
     if args.spacing is not None and not (np.isfinite(args.spacing) and args.spacing > 0):
         raise ParameterError("--spacing", args.spacing, "a finite length > 0 (m)")
-    ref = _reference(args)
-    gen, source = _generated(args)
-    if args.spacing is not None:  # the resampled node count, before any allocation
-        length = sum(float(np.linalg.norm(np.diff(c, axis=0), axis=1).sum()) for c in (ref, gen))
-        nodes = length / args.spacing
-        if nodes > MAX_RESAMPLED_NODES:
-            raise ParameterError("--spacing", args.spacing, f"a spacing giving at most "
-                                 f"{MAX_RESAMPLED_NODES:,} nodes (curves {length:.3g} m long "
-                                 f"would give {nodes:,.0f})")
-    moved, how = align(ref, gen, allow_mirror=args.mirror)
-    moved = orient_like(ref, moved)
-    result = compare(ref, moved, spacing=args.spacing)
-    print(f"reference: {args.reference} ({len(ref)} nodes, scale {args.scale:g} m/unit"
-          f"{', y flipped' if args.flip_y else ''})")
-    print(f"generated: {args.part}, {source} ({len(gen)} nodes)")
-    print(f"alignment: {how.describe()}")
-    if args.spacing is not None:
-        print(f"both curves resampled at {args.spacing:g} m spacing")
-    print(format_table({args.part: result}))
-    meta = {"reference": str(args.reference), "generated": source, "part": args.part,
-            "scale": args.scale, "flip_y": args.flip_y, "spacing": args.spacing}
+    refs = _references(args)
+    if args.plot is not None and len(refs) > 1:
+        raise ParameterError("--plot", str(args.plot), "one --reference (one part) per plot")
+    rows, aligns, curves, meta = {}, {}, {}, {}
+    for part, path in refs:
+        ref = _read(path, args)
+        result, how, a, b, source, spacing, n_gen = _compare_one(args, part, ref)
+        rows[part], aligns[part], curves[part] = result, how, (a, b)
+        print(f"{part}: reference {path} ({len(ref)} nodes, scale {args.scale:g} m/unit"
+              f"{', y flipped' if args.flip_y else ''}); generated: {source} ({n_gen} nodes)")
+        print(f"  alignment: {how.describe()}")
+        how_chosen = (" (the reference's length / 2000; --spacing to change)"
+                      if args.spacing is None else "")
+        print(f"  both curves resampled at {spacing:.6g} m spacing{how_chosen}")
+        meta[part] = {"reference": str(path), "generated": source, "spacing": spacing}
+    print(format_table(rows))
+    meta_all = {"scale": args.scale, "flip_y": args.flip_y, "parts": meta}
     if args.json is not None:
-        write_json(args.json, {args.part: result}, alignments={args.part: how}, metadata=meta)
+        write_json(args.json, rows, alignments=aligns, metadata=meta_all)
         print(f"wrote {args.json}")
-    if args.plot is not None:
-        from ionic_usd.evaluate.metrics import resample
+    if args.curves is not None:
+        from ionic_usd.evaluate.report import write_curves_csv
 
-        a = ref if args.spacing is None else resample(ref, spacing=args.spacing)
-        b = moved if args.spacing is None else resample(moved, spacing=args.spacing)
-        plot_overlay(a, b, args.plot, title=f"{args.part}: reference vs generated")
+        write_curves_csv(args.curves, {p: {"reference": c[0], "generated": c[1]}
+                                       for p, c in curves.items()})
+        print(f"wrote {args.curves}")
+    if args.plot is not None:
+        (part, (a, b)), = curves.items()
+        plot_overlay(a, b, args.plot, title=f"{part}: reference vs generated")
         print(f"wrote {args.plot}")
     return 0
 
@@ -150,11 +214,41 @@ def _floats(text: str | None, n: int, flag: str) -> list[float] | None:
     return vals
 
 
+def _fit_part(args: argparse.Namespace, column, ref: np.ndarray):
+    from ionic_usd.evaluate import fit as F
+    from ionic_usd.evaluate.fit_shaft import fit_shaft_section, is_closed_curve
+
+    if args.part == "volute":
+        return F.fit_volute(ref, column=column, measure=args.measure, seed=args.seed,
+                            eye=_floats(args.eye, 2, "--eye"), models=args.model)
+    if args.part == "base":
+        mods = None
+        if args.modules is not None:
+            try:
+                mods = [int(m) for m in args.modules.split(",")]
+            except ValueError:
+                raise ParameterError("--modules", args.modules,
+                                     "comma-separated control-point counts, e.g. 2,4,4") from None
+        return F.fit_base(ref, modules=mods, initial=None if args.config is None else column,
+                          measure=args.measure, seed=args.seed)
+    if args.section:
+        return fit_shaft_section(ref, initial=column, measure=args.measure, seed=args.seed)
+    if is_closed_curve(ref):
+        raise ParameterError("--reference", f"{args.reference}: a closed curve",
+                             "a shaft silhouette; fit a closed cross-section with --section")
+    return F.fit_shaft(ref, initial=column, measure=args.measure, seed=args.seed)
+
+
 def cmd_fit(args: argparse.Namespace) -> int:
     """Fit a part to a reference; print before/after tables; write (or print) TOML."""
-    from ionic_usd.evaluate import fit as F
     from ionic_usd.evaluate.report import format_table, plot_overlay
 
+    if args.part == "column":
+        from ionic_usd.evaluate.fit_scan import cmd_fit_column
+
+        return cmd_fit_column(args)
+    if args.reference is None:
+        raise ParameterError("--reference", None, f"a reference curve for `fit {args.part}`")
     out = args.output
     if out is not None:
         from ionic_usd.io import check_output_file
@@ -163,39 +257,51 @@ def cmd_fit(args: argparse.Namespace) -> int:
             raise ParameterError("--output", str(out), "a file ending in .toml")
         check_output_file(out, force=args.force, what="--output")  # before the whole fit
     _check_out(args.plot, args.force, ".png", "--plot")
+    _check_out(args.json, args.force, ".json", "--json")
+    _check_out(args.curves, args.force, ".csv", "--curves")
     if args.modules is not None and args.part != "base":
         raise ParameterError("--modules", args.modules, "used only with `fit base`")
     if args.eye is not None and args.part != "volute":
         raise ParameterError("--eye", args.eye, "used only with `fit volute`")
+    if args.model is not None and args.part != "volute":
+        raise ParameterError("--model", args.model, "used only with `fit volute`")
+    if args.section and args.part != "shaft":
+        raise ParameterError("--section", args.part, "used only with `fit shaft`")
+    if args.scan is not None:
+        raise ParameterError("--scan", str(args.scan), "used only with `fit column`")
     column = _column(args.config)
     ref = _reference(args)
-    if args.part == "volute":
-        res = F.fit_volute(ref, column=column, measure=args.measure, seed=args.seed,
-                           eye=_floats(args.eye, 2, "--eye"))
-    elif args.part == "base":
-        mods = None
-        if args.modules is not None:
-            try:
-                mods = [int(m) for m in args.modules.split(",")]
-            except ValueError:
-                raise ParameterError("--modules", args.modules,
-                                     "comma-separated control-point counts, e.g. 2,4,4") from None
-        res = F.fit_base(ref, modules=mods, initial=column, measure=args.measure,
-                         seed=args.seed)
-    else:
-        res = F.fit_shaft(ref, initial=column, measure=args.measure, seed=args.seed)
+    res = _fit_part(args, column, ref)
     print(f"reference: {args.reference} ({len(ref)} nodes)")
-    print(f"fit {args.part}: minimised {args.measure}; {res.iterations} iterations, "
-          f"{res.evaluations} curve evaluations, {res.seconds:.2f} s")
+    print(f"fit {args.part} ({res.model}): minimised {args.measure}; {res.iterations} "
+          f"iterations, {res.evaluations} curve evaluations, {res.seconds:.2f} s")
     for note in res.notes:
         print(f"  {note}")
     print(f"alignment after the fit: {res.alignment.describe()}")
+    print(f"measures on both curves densified to segments <= {res.spacing:.6g} m")
     print(format_table({"before": res.before, "after": res.after}))
+    if res.alternatives:
+        rows = {r.model: r.after for r in (res, *res.alternatives)}
+        print(f"volute models side by side (best first; chosen: {res.model}):")
+        print(format_table(rows))
     if out is not None:
         res.write_toml(out, force=args.force)
         print(f"wrote {out} (use: ionic-usd column --config {out})")
     else:
         sys.stdout.write(res.to_toml())
+    if args.json is not None:
+        from ionic_usd.evaluate.report import write_fit_json
+
+        write_fit_json(args.json, {args.part: res},
+                       metadata={"reference": str(args.reference), "scale": args.scale,
+                                 "flip_y": args.flip_y, "seed": args.seed})
+        print(f"wrote {args.json}")
+    if args.curves is not None:
+        from ionic_usd.evaluate.report import write_curves_csv
+
+        write_curves_csv(args.curves, {args.part: {"reference": res.reference,
+                                                   "fitted": res.fitted}})
+        print(f"wrote {args.curves}")
     if args.plot is not None:
         plot_overlay(res.reference, res.fitted, args.plot, title=f"fitted {args.part}",
                      labels=("reference", "fitted"))
@@ -203,9 +309,15 @@ def cmd_fit(args: argparse.Namespace) -> int:
     return 0
 
 
-def _reference_flags(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--reference", type=Path, required=True,
-                   help="reference curve: .csv/.txt (x,y per line) or .svg (a <path>)")
+def _reference_flags(p: argparse.ArgumentParser, *, multiple: bool = False,
+                     required: bool = True) -> None:
+    if multiple:
+        p.add_argument("--reference", required=True, action="append", metavar="[PART=]FILE",
+                       help="reference curve .csv/.txt (x,y per line) or .svg (a <path>); "
+                       "repeat as PART=FILE to evaluate several parts (Table 6)")
+    else:
+        p.add_argument("--reference", type=Path, required=required,
+                       help="reference curve: .csv/.txt (x,y per line) or .svg (a <path>)")
     p.add_argument("--scale", type=float, default=1.0,
                    help="metres per reference unit [default 1]")
     p.add_argument("--flip-y", action="store_true",
@@ -223,6 +335,7 @@ def add_parsers(subparsers, parser_class=argparse.ArgumentParser) -> None:
         already makes every subparser of that class (kept for the lead's call signature)
     """
     del parser_class
+    from ionic_usd.column.volute import VOLUTE_MODELS
     from ionic_usd.evaluate.fit import FIT_MEASURES
     from ionic_usd.evaluate.sections import PARTS
 
@@ -236,18 +349,27 @@ def add_parsers(subparsers, parser_class=argparse.ArgumentParser) -> None:
         "length. Sections: base half-profile (r, y), shaft silhouette (r, y), the front-right "
         "volute's outer spiral (x, y) on the front face.",
     )
-    p.add_argument("--part", choices=PARTS, required=True, help="which section")
+    p.add_argument("--part", choices=PARTS,
+                   help="which section, for --reference FILE (else --reference PART=FILE)")
     src = p.add_mutually_exclusive_group()
     src.add_argument("--usd", type=Path, help="USD file from `ionic-usd column` or `asset`")
     src.add_argument("--config", type=Path, help="column TOML (see ionic-usd column "
                      "--print-config)")
     p.add_argument("--variant", action="append", metavar="SET=VALUE",
                    help="with --usd: select a variant (e.g. lod=high, base=G2); repeatable")
-    _reference_flags(p)
+    _reference_flags(p, multiple=True)
     p.add_argument("--mirror", action="store_true",
                    help="also try the mirrored section (the drawing's handedness is arbitrary)")
+    p.add_argument("--rotate", action="store_true",
+                   help="also fit a rotation (always on with --section)")
+    p.add_argument("--section", action="store_true",
+                   help="shaft: compare a closed cross-section (at --height) not the silhouette")
+    p.add_argument("--height", type=float,
+                   help="--section: column height y (m) of the cut [default 1/3 up the shaft]")
     p.add_argument("--spacing", type=float,
-                   help="resample both curves at this node spacing (m) first, as the paper")
+                   help="resample both curves at this node spacing (m) [default: the "
+                   "reference's length / 2000], as the paper")
+    p.add_argument("--curves", type=Path, help="write the compared curves as CSV")
     p.add_argument("--json", type=Path, help="write the measures as JSON")
     p.add_argument("--plot", type=Path, help="write an overlay plot (PNG)")
     p.add_argument("--force", action="store_true", help="overwrite existing --json/--plot files")
@@ -262,12 +384,14 @@ def add_parsers(subparsers, parser_class=argparse.ArgumentParser) -> None:
         "evolution, then least squares, then Nelder-Mead on --measure. Prints the measures "
         "before and after and writes TOML for `ionic-usd column --config`.",
     )
-    p.add_argument("part", choices=PARTS, help="what to fit")
-    _reference_flags(p)
+    p.add_argument("part", choices=(*PARTS, "column"),
+                   help="what to fit (column: a whole column from --scan)")
+    _reference_flags(p, required=False)
     p.add_argument("--measure", choices=FIT_MEASURES, default="hausdorff",
                    help="what to minimise [default hausdorff: the paper's 'weak Fréchet']")
     p.add_argument("-o", "--output", type=Path,
-                   help="TOML file to write (default: print the TOML)")
+                   help="TOML file to write (default: print the TOML); `fit column`: the "
+                   "output folder (fitted column USD, scan points USD, PNG)")
     p.add_argument("--force", action="store_true", help="overwrite existing output files")
     p.add_argument("--seed", type=int, default=0, help="seed of the global stage [default 0]")
     p.add_argument("--config", type=Path,
@@ -276,4 +400,13 @@ def add_parsers(subparsers, parser_class=argparse.ArgumentParser) -> None:
     p.add_argument("--eye", help="volute: the eye centre X,Y in metres in the reference's "
                    "frame (after --scale/--flip-y); sets the offsets")
     p.add_argument("--plot", type=Path, help="write an overlay of the fitted curve (PNG)")
+    p.add_argument("--json", type=Path, help="write the fit (schema ionic_usd.evaluate/1)")
+    p.add_argument("--curves", type=Path, help="write the aligned reference and fitted "
+                   "curves as CSV (part, curve, index, x, y)")
+    p.add_argument("--model", choices=VOLUTE_MODELS,
+                   help="volute: fit only this model [default: every model, best chosen]")
+    p.add_argument("--section", action="store_true",
+                   help="shaft: the reference is a closed fluted cross-section")
+    p.add_argument("--scan", type=Path,
+                   help="column: point cloud or mesh (.ply, .obj, .xyz, .csv), metres")
     p.set_defaults(func=cmd_fit)

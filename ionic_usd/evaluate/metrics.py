@@ -256,6 +256,35 @@ class _PolylineIndex:
         return out
 
 
+@njit(cache=True)
+def _closest(points, poly):  # pragma: no cover - compiled
+    # exact closest point on the polyline for each point (all segments; fit-sized curves):
+    # distance, segment index and parameter t on that segment
+    n, m = points.shape[0], poly.shape[0]
+    dist = np.empty(n)
+    seg = np.zeros(n, dtype=np.int64)
+    par = np.zeros(n)
+    for i in range(n):
+        px, py = points[i, 0], points[i, 1]
+        best = np.inf
+        for j in range(max(m - 1, 1)):
+            ox, oy = poly[j, 0], poly[j, 1]
+            vx, vy = 0.0, 0.0
+            if m > 1:
+                vx, vy = poly[j + 1, 0] - ox, poly[j + 1, 1] - oy
+            l2 = vx * vx + vy * vy
+            t = ((px - ox) * vx + (py - oy) * vy) / l2 if l2 > 0.0 else 0.0
+            t = min(max(t, 0.0), 1.0)
+            dx, dy = px - ox - t * vx, py - oy - t * vy
+            d2 = dx * dx + dy * dy
+            if d2 < best:
+                best = d2
+                seg[i] = j
+                par[i] = t
+        dist[i] = math.sqrt(best)
+    return dist, seg, par
+
+
 def point_to_polyline_distances(points: np.ndarray, polyline: np.ndarray) -> np.ndarray:
     """Exact distance from each point to a polyline, points on its edges included.
 

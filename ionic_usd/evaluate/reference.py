@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from ionic_usd.errors import ParameterError, ReferenceCurveError
-from ionic_usd.evaluate.metrics import _as_curve, _PolylineIndex, hausdorff_distance
+from ionic_usd.evaluate.metrics import _as_curve, _closest, _PolylineIndex, hausdorff_distance
 
 __all__ = [
     "Alignment",
@@ -299,21 +299,28 @@ def read_reference(
 class Alignment:
     """What :func:`align` did to the generated curve, so reports can say so.
 
+    The generated curve ``g`` becomes ``R(rotation) · M g + translation`` where ``M`` negates x
+    when ``mirrored`` and ``R`` turns counter-clockwise by ``rotation`` degrees about the
+    origin (2D only).
+
     Attributes
     ----------
     translation : tuple of float
-        Added to the (possibly mirrored) generated curve, length d.
+        Added to the (possibly mirrored and rotated) generated curve, length d.
     mirrored : bool
-        Whether x was negated (handedness flipped) before translating.
+        Whether x was negated (handedness flipped) first.
     hausdorff_before, hausdorff_after : float
         :func:`~ionic_usd.evaluate.metrics.hausdorff_distance` to the reference before and
         after; ``after <= before``.
+    rotation : float
+        Degrees, counter-clockwise, applied after the mirror (0 unless rotation was allowed).
     """
 
     translation: tuple[float, ...]
     mirrored: bool
     hausdorff_before: float
     hausdorff_after: float
+    rotation: float = 0.0
 
     def __post_init__(self) -> None:
         if len(self.translation) not in (2, 3) or not all(
@@ -324,20 +331,44 @@ class Alignment:
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0):
                 raise ParameterError(name, value, "a finite number >= 0")
+        if not math.isfinite(self.rotation) or (self.rotation and len(self.translation) != 2):
+            raise ParameterError("rotation", self.rotation, "finite degrees, 2D curves only")
+
+    def apply(self, curve: np.ndarray) -> np.ndarray:
+        """The moved curve: mirror, rotate, translate.
+
+        Parameters
+        ----------
+        curve : (n, d) float
+
+        Returns
+        -------
+        (n, d) float
+        """
+        c = np.array(curve, dtype=np.float64)
+        if self.mirrored:
+            c[:, 0] = -c[:, 0]
+        if self.rotation:
+            a = math.radians(self.rotation)
+            rot = np.array([[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]])
+            c = c @ rot.T
+        return c + np.asarray(self.translation)
 
     def describe(self) -> str:
         """One sentence for a report."""
-        shift = ", ".join(f"{v:+.6g}" for v in self.translation)
-        mirror = "mirrored in x, then " if self.mirrored else ""
+        shift = ", ".join(f"{v:+.9g}" for v in self.translation)
+        mirror = "mirrored in x, " if self.mirrored else ""
+        turn = f"rotated {self.rotation:+.6g} deg, " if self.rotation else ""
         return (
-            f"generated curve {mirror}translated by ({shift}); Hausdorff "
-            f"{self.hausdorff_before:.6g} -> {self.hausdorff_after:.6g}"
+            f"generated curve {mirror}{turn}translated by ({shift}) m; Hausdorff "
+            f"{self.hausdorff_before:.6g} -> {self.hausdorff_after:.6g} m"
         )
 
     def as_dict(self) -> dict[str, object]:
         return {
             "translation": list(self.translation),
             "mirrored": self.mirrored,
+            "rotation_deg": self.rotation,
             "hausdorff_before": self.hausdorff_before,
             "hausdorff_after": self.hausdorff_after,
         }
@@ -352,16 +383,111 @@ def _arc_centroid(c: np.ndarray) -> np.ndarray:
     return (mid * seg[:, None]).sum(axis=0) / seg.sum()
 
 
-def align(
-    reference: np.ndarray, generated: np.ndarray, *, allow_mirror: bool = False
-) -> tuple[np.ndarray, Alignment]:
-    """Move the generated curve onto the reference (translation, optionally a mirror).
+def _rot(deg: float) -> np.ndarray:
+    a = math.radians(deg)
+    return np.array([[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]])
 
-    The centroids (arc-length weighted) are matched, then the translation is refined by
-    minimising :func:`~ionic_usd.evaluate.metrics.hausdorff_distance` with Nelder–Mead
-    (it is not differentiable). The untouched position is a candidate too, so the result is
-    never worse than the input. With ``allow_mirror`` the generated curve with x negated is
-    also tried and kept if it fits better (the handedness of a traced drawing is arbitrary).
+
+class _Brute:
+    """Exact node-to-polyline distances by brute force (the index's interface)."""
+
+    def __init__(self, poly: np.ndarray) -> None:
+        self.poly = np.ascontiguousarray(poly, dtype=np.float64)
+
+    def distances(self, points: np.ndarray) -> np.ndarray:
+        return _closest(np.ascontiguousarray(points, dtype=np.float64), self.poly)[0]
+
+
+def _search(ref: np.ndarray, gen: np.ndarray, mirrored: bool, ang: float | None,
+            before: float, start: np.ndarray | None = None, maxiter: int = 800,
+            ) -> tuple[float, Alignment]:
+    """Nelder–Mead on the Hausdorff distance over translation (and rotation if ``ang``)."""
+    from scipy.optimize import minimize
+
+    dim = ref.shape[1]
+    g = gen.copy()
+    if mirrored:
+        g[:, 0] = -g[:, 0]
+    if len(ref) * len(g) <= 250_000:  # brute force (numba) beats the index on small curves
+        ref_index, g_index = _Brute(ref), _Brute(g)
+    else:
+        ref_index, g_index = _PolylineIndex(ref), _PolylineIndex(g)
+    cg, cr = _arc_centroid(g), _arc_centroid(ref)
+    rotate = ang is not None
+
+    def pose(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        # rotate about the generated centroid, then translate: g -> R (g - cg) + cg + t
+        if rotate:
+            rot = _rot(float(x[2]))
+            return rot, cg - rot @ cg + x[:2]
+        return np.eye(dim), np.asarray(x[:dim])
+
+    def cost(x: np.ndarray) -> float:
+        rot, t = pose(x)
+        # d(ref node, R g + t) = d(R^T (ref node - t), g): both indexes are built once
+        return float(max(ref_index.distances(g @ rot.T + t).max(),
+                         g_index.distances((ref - t) @ rot).max()))
+
+    if start is not None:
+        starts = [start]
+    else:
+        starts = [cr - cg] if mirrored else [cr - cg, np.zeros(dim)]
+        if rotate:
+            starts = [np.append(s, ang) for s in starts]
+    x0 = min(starts, key=cost)
+    f0 = cost(x0)
+    span_r = float(np.linalg.norm(np.ptp(ref, axis=0))) or 1.0
+    step = max(f0, 1e-9 * (1.0 + float(np.abs(ref).max())))
+    steps = np.full(len(x0), step)
+    if rotate:
+        span = float(np.linalg.norm(np.ptp(g, axis=0))) or 1.0
+        steps[2] = min(math.degrees(step / span) * 2.0, 20.0)
+    simplex = np.vstack([x0, x0 + np.diag(steps)])
+    res = minimize(cost, x0, method="Nelder-Mead", options={
+        "initial_simplex": simplex, "xatol": 1e-7 * span_r,
+        "fatol": 1e-9 * span_r, "maxiter": maxiter * len(x0)})
+    x, fx = (res.x, float(res.fun)) if res.fun <= f0 else (x0, f0)
+    rot, t = pose(x)
+    deg = 0.0
+    if rotate:
+        deg = float(x[2]) % 360.0
+        deg = deg - 360.0 if deg > 180.0 else deg
+    return fx, Alignment(tuple(float(v) for v in t), mirrored, before, max(fx, 0.0), deg)
+
+
+def _refine(ref: np.ndarray, gen: np.ndarray, before: float, rough: Alignment
+            ) -> tuple[np.ndarray, Alignment]:
+    """Polish a coarse pose on the full curves (translation and rotation)."""
+    g = gen.copy()
+    if rough.mirrored:
+        g[:, 0] = -g[:, 0]
+    cg = _arc_centroid(g)
+    rot = _rot(rough.rotation)
+    # translation t about the centroid that reproduces the rough pose: T = cg - R cg + t
+    t = np.asarray(rough.translation) - (cg - rot @ cg)
+    fx, how = _search(ref, gen, rough.mirrored, rough.rotation, before,
+                      start=np.append(t, rough.rotation), maxiter=300)
+    if fx >= before:
+        how = Alignment(tuple(0.0 for _ in range(ref.shape[1])), False, before, before)
+    aligned = how.apply(gen)
+    after = hausdorff_distance(ref, aligned)
+    return aligned, Alignment(how.translation, how.mirrored, before, min(after, before),
+                              how.rotation)
+
+
+def align(
+    reference: np.ndarray, generated: np.ndarray, *, allow_mirror: bool = False,
+    allow_rotation: bool = False, rotation_starts: int = 8,
+) -> tuple[np.ndarray, Alignment]:
+    """Move the generated curve onto the reference (translation; optionally mirror, rotation).
+
+    The centroids (arc-length weighted) are matched, then the pose is refined by minimising
+    :func:`~ionic_usd.evaluate.metrics.hausdorff_distance` with Nelder–Mead (it is not
+    differentiable). The untouched position is a candidate too, so the result is never worse
+    than the input. With ``allow_mirror`` the generated curve with x negated is also tried and
+    kept if it fits better (the handedness of a traced drawing is arbitrary). With
+    ``allow_rotation`` (2D) the angle joins the search, started from ``rotation_starts`` angles
+    evenly round the circle (the curves' own orientation is arbitrary in a scan or a drawing).
 
     Parameters
     ----------
@@ -374,59 +500,39 @@ def align(
         The moved generated curve.
     alignment : Alignment
     """
-    from scipy.optimize import minimize
-
     ref = _as_curve(reference, "reference", min_nodes=2)
     gen = _as_curve(generated, "generated", min_nodes=2)
     if ref.shape[1] != gen.shape[1]:
         raise ParameterError("generated", f"dimension {gen.shape[1]}", f"{ref.shape[1]}")
-    ref_index = _PolylineIndex(ref)
+    if allow_rotation and ref.shape[1] != 2:
+        raise ParameterError("allow_rotation", True, "2D curves only")
     before = hausdorff_distance(ref, gen)
+    dim = ref.shape[1]
+    if allow_rotation and min(len(ref), len(gen)) > 160:
+        # coarse pose on 96-node copies from every start, then one refinement on the curves
+        from ionic_usd.evaluate.metrics import resample
 
-    best: tuple[float, np.ndarray, bool] | None = None
+        r96, g96 = resample(ref, count=96), resample(gen, count=96)
+        h96 = hausdorff_distance(r96, g96)
+        rough: tuple[float, Alignment | None] = (h96, None)
+        for mirrored in (False, True) if allow_mirror else (False,):
+            for ang in np.arange(rotation_starts) * 360.0 / rotation_starts:
+                fx, how = _search(r96, g96, mirrored, float(ang), h96, maxiter=40)
+                if fx < rough[0]:
+                    rough = (fx, how)
+        if rough[1] is None:
+            return _refine(ref, gen, before, Alignment((0.0, 0.0), False, before, before))
+        return _refine(ref, gen, before, rough[1])
+    best: tuple[float, Alignment | None] = (before, None)
     for mirrored in (False, True) if allow_mirror else (False,):
-        g = gen.copy()
-        if mirrored:
-            g[:, 0] = -g[:, 0]
-        g_index = _PolylineIndex(g)
-
-        def cost(t: np.ndarray, g=g, g_index=g_index) -> float:
-            # d(ref node, g + t) = d(ref node - t, g): both indexes are built once.
-            return float(max(ref_index.distances(g + t).max(), g_index.distances(ref - t).max()))
-
-        starts = [_arc_centroid(ref) - _arc_centroid(g)]
-        if not mirrored:
-            starts.append(np.zeros(ref.shape[1]))
-        x0 = min(starts, key=cost)
-        f0 = cost(x0)
-        step = max(f0, 1e-9 * (1.0 + float(np.abs(ref).max())))
-        simplex = np.vstack([x0, x0 + step * np.eye(ref.shape[1])])
-        res = minimize(
-            cost,
-            x0,
-            method="Nelder-Mead",
-            options={
-                "initial_simplex": simplex,
-                "xatol": 1e-9 * (1.0 + step),
-                "fatol": 1e-12 * (1.0 + f0),
-                "maxiter": 200 * ref.shape[1] * 4,
-            },
-        )
-        x, fx = (res.x, float(res.fun)) if res.fun <= f0 else (x0, f0)
-        if best is None or fx < best[0]:
-            best = (fx, np.asarray(x, dtype=np.float64), mirrored)
-    assert best is not None
-    fx, t, mirrored = best
-    if fx >= before:  # no improvement: leave the curve where it was
-        t, mirrored = np.zeros(ref.shape[1]), False
-    aligned = gen.copy()
-    if mirrored:
-        aligned[:, 0] = -aligned[:, 0]
-    aligned += t
+        angles = (np.arange(rotation_starts) * 360.0 / rotation_starts if allow_rotation
+                  else [None])
+        for ang in angles:
+            fx, how = _search(ref, gen, mirrored, ang, before)
+            if fx < best[0]:
+                best = (fx, how)
+    how = best[1] or Alignment(tuple(0.0 for _ in range(dim)), False, before, before)
+    aligned = how.apply(gen)
     after = hausdorff_distance(ref, aligned)
-    return aligned, Alignment(
-        translation=tuple(float(v) for v in t),
-        mirrored=mirrored,
-        hausdorff_before=before,
-        hausdorff_after=after,
-    )
+    how = Alignment(how.translation, how.mirrored, before, min(after, before), how.rotation)
+    return aligned, how

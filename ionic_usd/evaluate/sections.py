@@ -50,6 +50,7 @@ __all__ = [
     "slice_mesh",
     "section_from_usd",
     "usd_part_triangles",
+    "pick_band",
 ]
 
 #: Part names accepted by :func:`section_from_usd` and the ``evaluate`` command.
@@ -261,71 +262,18 @@ def usd_part_triangles(
 ) -> tuple[np.ndarray, np.ndarray]:
     """World-space triangles (metres) of a part's active meshes in a composed USD stage.
 
-    Parameters
-    ----------
-    path : USD file written by ``ionic-usd column`` or ``ionic-usd asset``
-    part : one of :data:`PARTS` (``volute`` reads the capital body)
-    variants : variant selections to set on every prim that has the set (e.g.
-        ``{"lod": "high", "base": "G2"}``); default: the file's own selections
+    See :func:`ionic_usd.usd.sections_reader.part_triangles` (pxr lives under ``usd/``).
 
     Returns
     -------
     points : (n, 3) float
     triangles : (t, 3) int
     """
-    from pxr import Usd, UsdGeom
+    from ionic_usd.usd.sections_reader import part_triangles
 
     if part not in PARTS:
         raise ParameterError("part", part, f"one of {', '.join(PARTS)}")
-    path = Path(path)
-    if not path.is_file():
-        raise ParameterError("usd", str(path), "an existing USD file")
-    stage = Usd.Stage.Open(str(path))
-    if stage is None:
-        raise GeometryError(f"{path}: cannot open as a USD stage")
-    if variants:
-        for prim in stage.Traverse():
-            vsets = prim.GetVariantSets()
-            for name, value in variants.items():
-                if vsets.HasVariantSet(name):
-                    vs = vsets.GetVariantSet(name)
-                    if value not in vs.GetVariantNames():
-                        raise ParameterError(f"variant {name}", value,
-                                             f"one of {', '.join(vs.GetVariantNames())}")
-                    vs.SetVariantSelection(value)
-    mpu = UsdGeom.GetStageMetersPerUnit(stage) or 1.0
-    name = _PART_PRIMS[part]
-    cache = UsdGeom.XformCache(Usd.TimeCode.Default())
-    all_pts, all_tris, offset = [], [], 0
-    for prim in stage.Traverse():
-        if not prim.IsA(UsdGeom.Mesh) or name not in prim.GetPath().pathString.split("/"):
-            continue
-        mesh = UsdGeom.Mesh(prim)
-        pts = np.asarray(mesh.GetPointsAttr().Get(), dtype=np.float64).reshape(-1, 3)
-        counts = np.asarray(mesh.GetFaceVertexCountsAttr().Get(), dtype=np.int64)
-        idx = np.asarray(mesh.GetFaceVertexIndicesAttr().Get(), dtype=np.int64)
-        if pts.size == 0 or counts.size == 0:
-            continue
-        m = np.asarray(cache.GetLocalToWorldTransform(prim), dtype=np.float64)
-        pts = (np.column_stack([pts, np.ones(len(pts))]) @ m)[:, :3] * mpu
-        all_pts.append(pts)
-        all_tris.append(_fan(counts, idx) + offset)
-        offset += len(pts)
-    if not all_pts:
-        raise GeometryError(f"{path}: no active mesh of part {part!r} (a prim named {name!r})")
-    return np.concatenate(all_pts), np.concatenate(all_tris)
-
-
-def _fan(counts: np.ndarray, idx: np.ndarray) -> np.ndarray:
-    """Triangles of polygons given as USD face counts/indices (fan triangulation)."""
-    if np.all(counts == 3):
-        return idx.reshape(-1, 3)
-    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    n_tri = np.maximum(counts - 2, 0)
-    face = np.repeat(np.arange(len(counts)), n_tri)
-    k = np.arange(n_tri.sum()) - np.repeat(np.cumsum(n_tri) - n_tri, n_tri)
-    s = starts[face]
-    return np.stack([idx[s], idx[s + k + 1], idx[s + k + 2]], axis=1)
+    return part_triangles(path, _PART_PRIMS[part], variants=variants)
 
 
 def _outline(loops2d: list[np.ndarray]):
@@ -444,18 +392,10 @@ def _volute_plane_z(points: np.ndarray, params: ColumnParams | None) -> float:
 
 def _params_from_stage(path: Path) -> ColumnParams | None:
     """ColumnParams from an asset's root customData (``ionic-usd asset`` stores them)."""
-    from pxr import Usd
-
     from ionic_usd.column.column import column_params_from_mapping
+    from ionic_usd.usd.sections_reader import stored_tables
 
-    stage = Usd.Stage.Open(str(path), Usd.Stage.LoadNone)
-    prim = stage.GetDefaultPrim() if stage else None
-    data = dict(prim.GetCustomData()) if prim else {}
-    nested = data.get("ionic_usd", {})
-    if hasattr(nested, "get") and hasattr(nested.get("parameters"), "items"):
-        data = dict(nested["parameters"])  # where ``ionic-usd asset`` keeps them
-    tables = {k: dict(v) for k, v in data.items() if k in ("column", "shaft", "capital",
-                                                           "volute") and hasattr(v, "items")}
+    tables = stored_tables(path, ("column", "shaft", "capital", "volute"))
     if not tables:
         return None
     try:
@@ -521,14 +461,15 @@ def section_from_usd(
                 params = params.with_lod(variants["lod"])  # the selected LOD's sampling
         plane_z = _volute_plane_z(pts, params)
     loops = slice_mesh(pts, tris, np.array([0.0, 0.0, plane_z]), np.array([0.0, 0.0, 1.0]))
-    cands = [c[:, :2] for c in loops
-             if np.allclose(c[0], c[-1]) and c[:, 0].min() > 0 and len(c) >= 8]
+    # a band on its own (it may touch x = 0 exactly: picked by length and side, not by a sign
+    # test on its nodes); in a capital united into one solid the band joins its neighbours
+    band = pick_band([c[:, :2] for c in loops if c[:, 0].min() >= -1e-9])
     eye = None
-    if not cands:  # a capital united into one solid: the band joins its neighbours
+    if band is None:
         cands, eye = _united_band(loops, pts, params)
-    if not cands:
+        band = max(cands, key=len) if cands else None
+    if band is None:
         raise GeometryError(f"{path}: no volute band in the capital's section at z = {plane_z:g}")
-    band = max(cands, key=len)
     chain = _outer_chain(band)
     if eye is not None:  # start where the outer edge leaves the eye boss
         import shapely
@@ -575,4 +516,32 @@ def _united_band(loops: list[np.ndarray], pts: np.ndarray, params: ColumnParams 
     if not geoms:
         return [], eye
     return [np.asarray(max(geoms, key=lambda g: g.area).exterior.coords)], eye
+
+
+def pick_band(loops: list[np.ndarray]) -> np.ndarray | None:
+    """The front-right volute band's outline among the section's loops.
+
+    The band is the longest closed loop on the +x side (by its length-weighted centroid, not
+    by a sign test on its nodes: a band may touch x = 0 exactly), with at least 8 nodes; the
+    eye's circle and the canalis are shorter.
+
+    Parameters
+    ----------
+    loops : list of (k, 2) float
+
+    Returns
+    -------
+    (k, 2) float, or None when no loop qualifies
+    """
+    def length(c: np.ndarray) -> float:
+        return float(np.linalg.norm(np.diff(c, axis=0), axis=1).sum())
+
+    def centre_x(c: np.ndarray) -> float:
+        seg = np.linalg.norm(np.diff(c, axis=0), axis=1)
+        mid = 0.5 * (c[1:, 0] + c[:-1, 0])
+        return float((mid * seg).sum() / max(seg.sum(), 1e-300))
+
+    cands = [c for c in loops
+             if len(c) >= 8 and np.allclose(c[0], c[-1]) and centre_x(c) > 0]
+    return max(cands, key=length) if cands else None
 

@@ -1,0 +1,478 @@
+"""Whole columns (or fragments) from scans: axis, parts, sections, fits, deviations.
+
+:func:`fit_column_scan` runs the chain on an ``(n, 3)`` point set:
+
+1. the axis and the parts along it (:mod:`.scan_axis`);
+2. the shaft: a slab of points a third of the way up the narrow band gives the cross-section;
+   the flute count is the strongest harmonic of the outer radius round the axis, then radius,
+   flute angle, depth, rotation and centre are fitted by robust least squares (``soft_l1``) on
+   the distances from the slab's points to the model section (:func:`.fit_shaft.fluted_section`)
+   — points against the model, so missing sectors cost nothing; the outer radius of every bin
+   gives the taper (robust line), hence the lower diameter at the shaft's bottom;
+3. the base: its outer profile (r, h) — the outer radius of thin bins — is measured; with
+   ``fit_base_grammar`` it is fitted with :func:`.fit_base.fit_base` on the axis (round
+   plinths only), else the base is the Vitruvian one at the fitted diameter;
+4. the capital is detected (asymmetric wide bins) and rebuilt from the Vitruvian proportions
+   at the fitted diameter (a scanned volute is not fitted yet);
+5. deviations: every scan point's distance to the fitted surfaces — exact to the fitted
+   shaft section (scaled by the taper at the point's height), and to the base and capital
+   by the nearest of dense surface samples (about 1 mm apart).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ionic_usd.column.column import ColumnParams, build_column, portunus_column_params
+from ionic_usd.errors import GeometryError
+from ionic_usd.evaluate.fit_core import FitResult
+from ionic_usd.evaluate.metrics import _closest, _PolylineIndex
+from ionic_usd.evaluate.scan_axis import ColumnFrame, estimate_axis, find_parts
+
+__all__ = ["ScanFit", "fit_column_scan", "cmd_fit_column"]
+
+
+@dataclass(eq=False)
+class ScanFit:
+    """Outcome of :func:`fit_column_scan` (lengths in metres, in the scan's frame).
+
+    Attributes
+    ----------
+    column : the fitted ColumnParams
+    frame : the axis, section basis and parts' heights
+    matrix : (4, 4) column coordinates → scan (row vectors, as USD)
+    diameter : lower shaft diameter
+    flutes : flute count
+    section : fitted section values (radius, flute_angle, flute_depth, rotation_deg, …)
+    base : the base's FitResult, or None
+    deviation : (n,) per point
+    notes : what was inferred, assumed or skipped
+    """
+
+    column: ColumnParams
+    frame: ColumnFrame
+    matrix: np.ndarray
+    diameter: float
+    flutes: int
+    section: dict[str, float]
+    base: FitResult | None
+    deviation: np.ndarray
+    seconds: float
+    slab: np.ndarray = field(repr=False)
+    profile: np.ndarray | None = field(default=None, repr=False)
+    notes: list[str] = field(default_factory=list)
+
+    def summary(self) -> dict[str, object]:
+        """The R.json keys: diameter, flutes, axis, parts_found, deviation, …"""
+        d = self.deviation
+        return {
+            "diameter": self.diameter, "flutes": self.flutes,
+            "axis": {"point": self.frame.origin.tolist(),
+                     "direction": self.frame.direction.tolist()},
+            "parts_found": sorted(self.frame.parts),
+            "part_heights": {k: list(v) for k, v in self.frame.parts.items()},
+            "deviation": {"rms": float(np.sqrt(np.mean(d**2))),
+                          "p95": float(np.percentile(d, 95)), "max": float(d.max())},
+            "points": int(len(d)), "section": self.section, "seconds": self.seconds,
+            "notes": self.notes,
+        }
+
+
+def _flutes_from_points(xy: np.ndarray) -> tuple[int, float]:
+    """Flute count and a flute centre's angle (deg) from the outer radius round the centre."""
+    ang = np.arctan2(xy[:, 1], xy[:, 0])
+    rad = np.hypot(xy[:, 0], xy[:, 1])
+    nb = 720
+    idx = ((ang + np.pi) / (2 * np.pi) * nb).astype(int) % nb
+    prof = np.full(nb, np.nan)
+    np.fmax.at(prof, idx, rad)
+    ok = np.isfinite(prof)
+    prof = np.interp(np.arange(nb), np.flatnonzero(ok), prof[ok], period=nb)
+    spec = np.fft.rfft(prof - prof.mean())
+    k = int(np.argmax(np.abs(spec[6:65]))) + 6
+    phase = float(np.angle(spec[k]))
+    # prof ≈ A cos(kθ' + phase) with θ' = θ + π: lowest (a flute centre) at kθ' + phase = π
+    centre = (np.pi - phase) / k - np.pi
+    return k, math.degrees(centre)
+
+
+def _fit_section_e(xy: np.ndarray, r0: float, e: int, centre_deg: float):
+    """Fluted section with ``e`` flutes through scattered points (points → model, robust)."""
+    from scipy.optimize import least_squares
+
+    from ionic_usd.evaluate.fit_shaft import fluted_section
+
+    period = 360.0 / e
+    rot0 = (centre_deg - 0.5 * period) % period  # fluted_section centres flutes at (k+½)p
+    pts = np.ascontiguousarray(xy)
+    lo = np.array([0.8 * r0, 0.2 * period, 0.05, rot0 - 0.5 * period, -0.1 * r0, -0.1 * r0])
+    hi = np.array([1.2 * r0, 0.98 * period, 1.6, rot0 + 0.5 * period, 0.1 * r0, 0.1 * r0])
+
+    def res(x: np.ndarray) -> np.ndarray:
+        poly = fluted_section(x[0], e, x[1], x[2], x[3], x[4:6], slices=12)
+        return _closest(pts, np.ascontiguousarray(poly))[0]
+
+    best = None
+    for f0 in (0.6, 0.8):
+        x0 = np.array([r0, f0 * period, 1.0, rot0, 0.0, 0.0])
+        sol = least_squares(res, x0, bounds=(lo, hi), loss="soft_l1", f_scale=0.002 * r0,
+                            x_scale=hi - lo, max_nfev=300)
+        if best is None or sol.cost < best.cost:
+            best = sol
+    x = best.x
+    return e, best.cost, x, lo, hi
+
+
+def _fit_section(xy: np.ndarray, r0: float, flutes: int | None = None
+                 ) -> tuple[int, dict[str, float]]:
+    """Fluted section through scattered points: the harmonic's flute count and its two
+    neighbours are each fitted (a missing sector blurs the spectrum); the lowest cost wins."""
+    e0, centre_deg = _flutes_from_points(xy)
+    counts = (e0 - 1, e0, e0 + 1) if flutes is None else (flutes,)
+    fits = [_fit_section_e(xy, r0, e, centre_deg) for e in counts if e >= 4]
+    e, _, x, lo, hi = min(fits, key=lambda f: f[1])
+    names = ("radius", "flute_angle", "flute_depth", "rotation_deg", "centre_u", "centre_v")
+    vals = dict(zip(names, (float(v) for v in x), strict=True))
+    vals["flutes"] = float(e)
+    span = hi - lo
+    vals["bounds_hit"] = [n for n, u in zip(names, (x - lo) / span, strict=True)
+                          if u < 1e-3 or u > 1 - 1e-3]  # type: ignore[assignment]
+    return e, vals
+
+
+def _taper(loc: np.ndarray, s0: float, s1: float) -> tuple[float, float]:
+    """Outer radius along the shaft band (ends trimmed) as a robust line r = a + b h."""
+    prof = _outer_profile(loc, s0 + 0.05 * (s1 - s0), s1 - 0.05 * (s1 - s0),
+                          max((s1 - s0) / 40, 0.004))
+    if len(prof) < 3:
+        raise GeometryError("too few points along the shaft to measure its taper")
+    return _robust_line(prof[:, 1], prof[:, 0])
+
+
+def _section_at(loc: np.ndarray, h: float, s0: float, s1: float, ra: float, rb: float,
+                flutes: int | None) -> tuple[int, dict[str, float], np.ndarray, float]:
+    """Fit the section through a slab at height ``h``, thick enough for ~1500 points, each
+    point scaled radially to the slab's middle by the taper."""
+    in_band = np.count_nonzero((loc[:, 2] >= s0) & (loc[:, 2] <= s1))
+    half = min(max(0.004, 0.5 * (s1 - s0) * 1500.0 / max(in_band, 1)), 0.15 * (s1 - s0))
+    sel = np.abs(loc[:, 2] - h) < half
+    if np.count_nonzero(sel) < 200:
+        raise GeometryError(f"too few points ({np.count_nonzero(sel)}) at the shaft section "
+                            f"{h:.3f} m up the axis")
+    sl = loc[sel]
+    k = (ra + rb * h) / (ra + rb * sl[:, 2])
+    slab = (sl[:, :2] * k[:, None])[:4000]
+    e, sec = _fit_section(slab, ra + rb * h, flutes)
+    return e, sec, slab, half
+
+
+def _robust_line(h: np.ndarray, r: np.ndarray) -> tuple[float, float]:
+    """r ≈ a + b h, Huber-weighted (outer radius per bin; noisy bins and holes)."""
+    w = np.ones_like(r)
+    a, b = float(np.median(r)), 0.0
+    for _ in range(8):
+        A = np.column_stack([np.ones_like(h), h]) * w[:, None]
+        (a, b), *_ = np.linalg.lstsq(A, r * w, rcond=None)
+        res = np.abs(r - a - b * h)
+        s = 1.4826 * np.median(res) + 1e-9
+        w = np.minimum(1.0, 2.0 * s / np.maximum(res, 1e-12))
+    return float(a), float(b)
+
+
+def _outer_profile(loc: np.ndarray, h0: float, h1: float, width: float) -> np.ndarray:
+    """(r, h) polyline: the 95th percentile radius of thin bins between h0 and h1."""
+    r = np.hypot(loc[:, 0], loc[:, 1])
+    edges = np.arange(h0, h1 + 0.5 * width, width)
+    out = []
+    for a, b in zip(edges[:-1], edges[1:], strict=True):
+        sel = (loc[:, 2] >= a) & (loc[:, 2] < b)
+        if np.count_nonzero(sel) >= 8:
+            out.append((float(np.percentile(r[sel], 95)), 0.5 * (a + b)))
+    return np.asarray(out)
+
+
+def fit_column_scan(points: np.ndarray, *, seed: int = 0, max_fit_points: int = 60_000,
+                    fit_base_grammar: bool = False) -> ScanFit:
+    """Fit a column to a scan (module docstring).
+
+    Parameters
+    ----------
+    points : (n, 3) float, metres, any pose
+    max_fit_points : the axis and the fits use a random subset of at most this many points;
+        the deviations cover every point
+    fit_base_grammar : fit a lathe base grammar to the base's outer profile (round plinths)
+
+    Returns
+    -------
+    ScanFit
+    """
+    from ionic_usd.evaluate.fit_base import fit_base
+
+    t0 = time.perf_counter()
+    pts = np.asarray(points, dtype=np.float64)
+    rng = np.random.default_rng(seed)
+    sub = pts if len(pts) <= max_fit_points else pts[rng.choice(len(pts), max_fit_points,
+                                                                replace=False)]
+    a, c, resid = estimate_axis(sub, seed=seed)
+    frame = find_parts(sub, a, c)
+    notes = [f"axis: normal lines meet it within {resid * 1000:.3g} mm (median)"]
+    if "shaft" not in frame.parts:
+        raise GeometryError("no shaft in the scan: a narrow band of at least three bins along "
+                            "the axis is needed to set the diameter")
+    # two sections, a quarter and three quarters up the shaft band: their centres set the
+    # axis far better than the normals (a 1 mm error over 4 m is 0.015°); then the final
+    # section a third of the way up in the corrected frame
+    e = None
+    for stage in range(3):  # refine twice: a tilted first axis blurs the first slabs
+        loc = frame.local(sub)
+        s0, s1 = frame.parts["shaft"]
+        ra, rb = _taper(loc, s0, s1)
+        if stage < 2:
+            cs = []
+            for frac in (0.25, 0.75):
+                h = s0 + frac * (s1 - s0)
+                e, sec1, _, _ = _section_at(loc, h, s0, s1, ra, rb, e)
+                cs.append(frame.origin + sec1["centre_u"] * frame.u
+                          + sec1["centre_v"] * frame.v + h * frame.direction)
+            a_new = cs[1] - cs[0]
+            frame = find_parts(sub, a_new / np.linalg.norm(a_new), cs[0])
+            if "shaft" not in frame.parts:
+                raise GeometryError("the shaft band was lost after refining the axis")
+    hs = s0 + (s1 - s0) / 3.0
+    # the flute count is chosen again in the refined frame (a tilted slab blurs flutes)
+    e, sec, slab, half = _section_at(loc, hs, s0, s1, ra, rb, None)
+    notes.append(f"axis through the centres of sections {s0 + 0.25 * (s1 - s0):.3f} and "
+                 f"{s0 + 0.75 * (s1 - s0):.3f} m up; section from {len(slab)} points within "
+                 f"±{half * 1000:.3g} mm of {hs:.3f} m")
+    # recentre the axis on the fitted section centre
+    shift = sec["centre_u"] * frame.u + sec["centre_v"] * frame.v
+    frame = dataclasses.replace(frame, origin=frame.origin + shift)
+    loc = frame.local(sub)
+    scale = sec["radius"] / (ra + rb * hs)  # the fillet radius vs the bins' outer radius
+    r_bottom = (ra + rb * s0) * scale
+    diameter = 2.0 * r_bottom
+    col = portunus_column_params(lower_diameter=diameter, flutes=e)
+    sh = col.shaft
+    top_ratio = sh.top_radius / sh.bottom_radius
+    has_base, has_cap = "base" in frame.parts, "capital" in frame.parts
+    if has_base and has_cap:
+        # the capital's volutes hang below the shaft's top: measure the hang on the model
+        built = build_column(col)
+        hang = built.base_height + built.shaft_length - float(
+            np.min([m.points[:, 1].min() for k, m in built.parts().items()
+                    if k.startswith("Capital")]))
+        length = frame.parts["capital"][0] + hang - frame.parts["base"][1]
+        r_top = (ra + rb * frame.parts["capital"][0]) * scale
+        top_ratio = r_top / r_bottom
+        notes.append("whole column: shaft length and top radius measured")
+        sh = dataclasses.replace(sh, height=max(length - sh.length + sh.height, 0.1))
+    else:
+        notes.append("fragment: shaft length and top ratio kept from the Vitruvian column")
+    sh = dataclasses.replace(sh, bottom_radius=r_bottom, top_radius=r_bottom * top_ratio,
+                             flutes=e, flute_angle=sec["flute_angle"],
+                             flute_depth=sec["flute_depth"])
+    col = dataclasses.replace(col, shaft=sh)
+    base_fit, bprof = None, None
+    if has_base:
+        b0, b1 = frame.parts["base"]
+        bprof = _outer_profile(loc, b0, b1, max((b1 - b0) / 80, 0.002))
+        if fit_base_grammar and len(bprof) >= 8:
+            base_fit = fit_base(bprof, initial=col, axis_x=0.0, polish_evals=300)
+            col = base_fit.column
+            notes.append(f"base fitted to its outer profile ({len(bprof)} bins)")
+        else:
+            notes.append("base found; kept from the Vitruvian column at the diameter (its "
+                         "outer profile is in the PNG; a square plinth is not a lathe "
+                         "profile, so it is not fitted as one)")
+    else:
+        notes.append("no base in the scan: the column's base is the Vitruvian one")
+    if has_cap:
+        notes.append("capital found; rebuilt from Vitruvius' proportions at the diameter "
+                     "(scanned volutes are not fitted yet)")
+    # column coordinates → scan: y along the axis, x at the flutes' angle 0
+    h_col0 = _column_zero(frame, col, s0)
+    # the flutes fix the turn about the axis up to a flute period; the plinth and the
+    # volutes (180° symmetric) choose among the periods: the one nearest the scan wins
+    tree = _other_parts_tree(col)
+    probe = sub[rng.choice(len(sub), min(len(sub), 5000), replace=False)]
+    best = None
+    for j in range(e // 2 if (has_base or has_cap) else 1):
+        m = _matrix(frame, sec["rotation_deg"] + j * 360.0 / e, h_col0)
+        d = scan_deviation(probe, col, m, tree=tree)
+        score = float(np.sqrt(np.mean(d**2)))
+        if best is None or score < best[0]:
+            best = (score, m, j)
+    m = best[1]
+    sec["rotation_deg"] += best[2] * 360.0 / e
+    dev = scan_deviation(pts, col, m, tree=tree)
+    return ScanFit(col, frame, m, diameter, e, sec, base_fit, dev, time.perf_counter() - t0,
+                   slab, bprof, notes)
+
+
+def _matrix(frame: ColumnFrame, rotation_deg: float, h0: float) -> np.ndarray:
+    """(4, 4) column → scan: y along the axis, x at the flutes' angle 0, y = 0 at h0."""
+    rot = math.radians(rotation_deg)
+    x_ax = math.cos(rot) * frame.u + math.sin(rot) * frame.v
+    m = np.eye(4)
+    m[0, :3], m[1, :3], m[2, :3] = x_ax, frame.direction, np.cross(x_ax, frame.direction)
+    m[3, :3] = frame.origin + h0 * frame.direction
+    return m
+
+
+def _column_zero(frame: ColumnFrame, col: ColumnParams, shaft_start: float) -> float:
+    """Height along the axis (frame heights) of the column's y = 0 (the base's bottom)."""
+    if "base" in frame.parts:
+        return frame.parts["base"][0]
+    bh = col.base_params().height
+    if "capital" in frame.parts:
+        built = build_column(col)
+        low = float(np.min([m.points[:, 1].min() for k, m in built.parts().items()
+                            if k.startswith("Capital")]))
+        return frame.parts["capital"][0] - low
+    return shaft_start - bh
+
+
+def _other_parts_tree(col: ColumnParams):
+    """kd-tree of dense samples (about 1 mm apart) of every part but the shaft."""
+    from scipy.spatial import cKDTree
+
+    from ionic_usd.evaluate.scan_io import sample_surface
+
+    meshes = build_column(col).parts()
+    allp, allt, off = [], [], 0
+    for n, mesh in meshes.items():
+        if n.lower() == "shaft":
+            continue
+        allp.append(mesh.points)
+        allt.append(_triangles(mesh) + off)
+        off += len(mesh.points)
+    P, T = np.concatenate(allp), np.concatenate(allt)
+    pp = P[T]
+    area = 0.5 * np.linalg.norm(np.cross(pp[:, 1] - pp[:, 0], pp[:, 2] - pp[:, 0]),
+                                axis=1).sum()
+    n = int(min(1_500_000, max(50_000, area / 1e-6)))
+    samples, _ = sample_surface(P, T, n, seed=1)
+    return cKDTree(samples)
+
+
+def scan_deviation(points: np.ndarray, col: ColumnParams, matrix: np.ndarray, *,
+                   tree=None) -> np.ndarray:
+    """Distance (m) of every scan point from the fitted column's surface.
+
+    Parameters
+    ----------
+    points : (n, 3) float, scan frame
+    col : ColumnParams
+    matrix : (4, 4) column → scan (row vectors)
+
+    Returns
+    -------
+    (n,) float, finite
+    """
+
+    from ionic_usd.column.shaft import shaft_radius_at
+    from ionic_usd.evaluate.fit_shaft import fluted_section
+    inv = np.linalg.inv(matrix)
+    q = np.column_stack([points, np.ones(len(points))]) @ inv
+    x, y, z = q[:, 0], q[:, 1], q[:, 2]
+    bp = col.base_params()
+    sp = col.shaft_params()
+    y_shaft0, y_cap = bp.height, bp.height + sp.length
+    dev = np.full(len(points), np.inf)
+    r = np.hypot(x, z)
+    # shaft: the fitted section scaled to the radius at the point's height
+    in_shaft = (y >= y_shaft0) & (y <= y_cap)
+    if in_shaft.any():
+        sec = fluted_section(1.0, sp.flutes, sp.flute_angle, sp.flute_depth, slices=64)
+        k = shaft_radius_at(sp, np.clip(y[in_shaft] - y_shaft0, 0, sp.length))
+        xy = np.column_stack([x[in_shaft], -z[in_shaft]]) / k[:, None]
+        dev[in_shaft] = _PolylineIndex(sec).distances(xy) * k
+        # the plain rings at both ends are circles, not fluted
+        ring = ((y[in_shaft] - y_shaft0 < sp.ring_bottom)
+                | (y_cap - y[in_shaft] < sp.ring_top))
+        idx = np.flatnonzero(in_shaft)[ring]
+        dev[idx] = np.abs(r[idx] - k[ring])
+    # the capital's volutes hang below the shaft's top: the upper half of the shaft band is
+    # also measured against the other parts, and the nearer surface counts
+    rest = ~in_shaft | (y > y_shaft0 + 0.5 * sp.length)
+    if rest.any():
+        tree = tree if tree is not None else _other_parts_tree(col)
+        d, _ = tree.query(np.column_stack([x, y, z])[rest])
+        dev[rest] = np.minimum(dev[rest], d)
+    return dev
+
+
+def _triangles(mesh) -> np.ndarray:
+    counts = np.asarray(mesh.face_vertex_counts)
+    idx = np.asarray(mesh.face_vertex_indices)
+    if np.all(counts == 3):
+        return idx.reshape(-1, 3)
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    n_tri = counts - 2
+    face = np.repeat(np.arange(len(counts)), n_tri)
+    k = np.arange(n_tri.sum()) - np.repeat(np.cumsum(n_tri) - n_tri, n_tri)
+    s = starts[face]
+    return np.stack([idx[s], idx[s + k + 1], idx[s + k + 2]], axis=1)
+
+
+def heat_colours(dev: np.ndarray, vmax: float) -> np.ndarray:
+    """(n, 3) colours: blue (0) → green → yellow → red (≥ vmax)."""
+    t = np.clip(dev / max(vmax, 1e-12), 0.0, 1.0)
+    stops = np.array([[0.1, 0.2, 0.9], [0.1, 0.8, 0.3], [0.95, 0.9, 0.1], [0.9, 0.1, 0.1]])
+    x = t * 3
+    i = np.minimum(x.astype(int), 2)
+    f = (x - i)[:, None]
+    return stops[i] * (1 - f) + stops[i + 1] * f
+
+
+def cmd_fit_column(args) -> int:
+    """``ionic-usd fit column --scan FILE -o OUTDIR [--json R.json]``."""
+    from pathlib import Path
+
+    from ionic_usd.errors import OutputExistsError, ParameterError
+    from ionic_usd.evaluate.scan_io import read_scan
+
+    if args.scan is None:
+        raise ParameterError("--scan", None, "a scan file for `fit column`")
+    if args.output is None:
+        raise ParameterError("-o", None, "an output folder for `fit column`")
+    out = Path(args.output)
+    if out.exists() and not out.is_dir():
+        raise ParameterError("-o", str(out), "a folder (created if missing)")
+    files = {k: out / n for k, n in (("column", "fitted_column.usda"),
+                                     ("scan", "scan_deviation.usdc"),
+                                     ("png", "scan_fit.png"), ("toml", "fitted_column.toml"))}
+    clash = [str(p) for p in files.values() if p.exists()]
+    if clash and not args.force:
+        raise OutputExistsError(f"{clash[0]} exists; pass --force to overwrite it")
+    if args.json is not None:
+        if args.json.suffix.lower() != ".json":
+            raise ParameterError("--json", str(args.json), "a file ending in .json")
+        if args.json.exists() and not args.force:
+            raise OutputExistsError(f"{args.json} exists; pass --force to overwrite it")
+    pts = read_scan(args.scan, scale=args.scale)
+    fit = fit_column_scan(pts, seed=args.seed)
+    summary = fit.summary()
+    out.mkdir(parents=True, exist_ok=True)
+    from ionic_usd.evaluate.scan_report import write_outputs
+
+    write_outputs(fit, pts, files, args, summary)
+    dev = summary["deviation"]
+    print(f"scan {args.scan}: {len(pts):,} points; parts {', '.join(summary['parts_found'])}")
+    print(f"  diameter {fit.diameter:.4f} m, {fit.flutes} flutes; axis "
+          f"{np.round(fit.frame.direction, 5).tolist()} through "
+          f"{np.round(fit.frame.origin, 4).tolist()}")
+    print(f"  deviation rms {dev['rms'] * 1000:.3g} mm, p95 {dev['p95'] * 1000:.3g} mm, max "
+          f"{dev['max'] * 1000:.3g} mm; {fit.seconds:.1f} s")
+    for note in fit.notes:
+        print(f"  {note}")
+    for p in files.values():
+        print(f"wrote {p}")
+    if args.json is not None:
+        print(f"wrote {args.json}")
+    return 0
