@@ -28,8 +28,21 @@ def open_stage(report) -> Usd.Stage:
     return Usd.Stage.Open(str(report.path))
 
 
+def _prototype_of_instancer(p: Usd.Prim) -> bool:
+    return any(a.IsA(UsdGeom.PointInstancer) for a in _ancestors(p))
+
+
+def _ancestors(p: Usd.Prim):
+    p = p.GetParent()
+    while p and not p.IsPseudoRoot():
+        yield p
+        p = p.GetParent()
+
+
 def active_meshes(stage) -> dict[str, Usd.Prim]:
-    return {str(p.GetPath()): p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh)}
+    """The asset's part meshes (not the ornament prototypes under PointInstancers)."""
+    return {str(p.GetPath()): p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh)
+            and not _prototype_of_instancer(p)}
 
 
 def mesh_value(prim) -> Mesh:
@@ -96,7 +109,8 @@ def test_every_selection_has_one_mesh_per_part(column_asset):
 def test_every_mesh_closed_with_uvs_in_unit_square(column_asset):
     layer = Sdf.Layer.FindOrOpen(str(column_asset.path.parent / "Payload/Geometry.usdc"))
     stage = Usd.Stage.Open(layer)
-    prims = [p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh)]
+    prims = [p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh)
+             and not _prototype_of_instancer(p)]
     assert len(prims) == column_asset.meshes == 3 * (4 + 2 + 2 + 1) * 2
     for prim in prims:
         m = mesh_value(prim)
@@ -114,7 +128,7 @@ def test_charts_do_not_overlap_in_any_mesh(column_asset):
     stage = Usd.Stage.Open(layer)
     res = 2048  # raster of the normalised [0,1] square
     for prim in stage.Traverse():
-        if not prim.IsA(UsdGeom.Mesh):
+        if not prim.IsA(UsdGeom.Mesh) or _prototype_of_instancer(prim):
             continue
         m = mesh_value(prim)
         charts = uv_charts(m.st_indices, len(m.st))

@@ -50,6 +50,7 @@ from ionic_usd.errors import ParameterError
 from ionic_usd.geometry.mesh import Mesh
 from ionic_usd.texture.uv import UVCache, attach_uvs, unwrap_parts
 from ionic_usd.usd.asset import AssetMesh, AssetSpec, write_asset
+from ionic_usd.usd.detail import column_ornament
 from ionic_usd.usd.materials import MaterialTextures
 
 __all__ = [
@@ -274,6 +275,7 @@ def build_column_asset(
         "after Konečný, Syllaiou & Liarokapis 2016; variant sets: lod, base, scroll, flutes, "
         "form, finish.",
         st_scale=UV_SPAN / TILE_METRES,
+        instancers=column_ornament(opts),  # carved echinus and astragal in the high LOD
     )
     path = write_asset(spec, dest, populate=populate, force=force)
     tris: dict[str, int] = {}

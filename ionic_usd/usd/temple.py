@@ -55,6 +55,7 @@ from ionic_usd.usd.column_asset import (
     build_column_asset,
     copy_stone_textures,
 )
+from ionic_usd.usd.detail import add_detail
 from ionic_usd.usd.materials import MaterialTextures, author_preview_material, bind_material
 from ionic_usd.usd.mesh import author_mesh, define_prim
 from ionic_usd.usd.stage import new_layer, save_layer
@@ -313,6 +314,7 @@ def compose_temple(
             spec.variantSelections[_hyp_set(h)] = "baseline"
         spec.customData = {"ionic_usd": {"hypotheses": listing, "temple": layout.name,
                                          "baseline_finish": BASELINE_FINISH}}
+        add_detail(tmp, root, layout, texture_size=opts.texture_size, seed=opts.seed)
         save_layer(root, tmp / ROOT_LAYER)
         if user_bytes is not None:
             (tmp / OVERRIDES_LAYER).write_bytes(user_bytes)
