@@ -325,7 +325,7 @@ def capital_ornament(
     tang /= np.linalg.norm(tang)
     spacing = 2 * math.pi * r0 / eggs
     egg_h = 0.9 * h
-    egg = egg_prototype(egg_h, 0.62 * spacing, 0.5 * min(w, 0.62 * spacing))
+    egg = egg_prototype(egg_h, 0.62 * spacing, 0.8 * min(w, 0.62 * spacing))
     dart = dart_prototype(0.75 * egg_h, 0.22 * spacing, 0.35 * min(w, 0.62 * spacing))
     out_parts = []
     for k, (proto, phase) in enumerate(((egg, 0.0), (dart, math.pi / eggs))):
