@@ -196,9 +196,12 @@ def cmd_temple(args: argparse.Namespace) -> int:
     from ionic_usd.temple.layout import layout_from_mapping, portunus_layout
     from ionic_usd.usd.temple import compose_temple
 
-    column = None
+    column = mouldings = None
     if args.config:
         data = load_toml(args.config)
+        from ionic_usd.temple.mouldings import mouldings_from_tables
+
+        mouldings = mouldings_from_tables(data, context=str(args.config))
         col_tables = {k: data.pop(k) for k in ("column", "shaft", "capital", "volute")
                       if k in data}
         layout = layout_from_mapping(data, context=str(args.config))
@@ -218,7 +221,8 @@ def cmd_temple(args: argparse.Namespace) -> int:
     if col_tables:
         column = column_params_from_mapping(col_tables, context=str(args.config), base=base)
     rep = compose_temple(args.output, layout, column, force=args.force,
-                         texture_size=args.texture_size, seed=args.seed)
+                         texture_size=args.texture_size, seed=args.seed,
+                         detail=args.detail, mouldings=mouldings)
     print(f"wrote {rep.root} ({layout.name}): {rep.files} files, {rep.prims} prims, "
           f"{rep.instances} column instances of {rep.prototypes} prototypes, "
           f"{rep.triangles:,} triangles, {len(rep.hypotheses)} hypotheses, {rep.seconds:.2f} s")
@@ -323,6 +327,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--layout", default="portunus", help="built-in temple layout (portunus)")
     p.add_argument("--texture-size", type=int, default=1024, help="texture resolution (px)")
     p.add_argument("--seed", type=int, default=7, help="seed of the procedural stone")
+    p.add_argument("--detail", choices=("plain", "moulded", "carved"), default="carved",
+                   help="selected level of architectural detail (all three are written)")
     p.add_argument("--force", action="store_true",
                    help="rebuild an existing folder (atomically; overrides.usda is kept)")
     p.set_defaults(func=cmd_temple)

@@ -133,3 +133,29 @@ def test_column_high_lod_carries_the_carved_capital(portunus_temple):
             assert inst == [], lod
     layer = Sdf.Layer.FindOrOpen(str(path.parent / "Payload" / "Geometry.usdc"))
     assert layer.GetPrimAtPath("/IonicColumn/Geom/Ornament/EggAndDart_high/Prototypes/Egg")
+
+
+def test_selected_variant_is_a_choice(tmp_path):
+    from ionic_usd.errors import ParameterError
+    from ionic_usd.usd.detail import add_detail
+    from ionic_usd.usd.stage import new_layer
+
+    root = new_layer("Temple", kind="assembly")
+    add_detail(tmp_path, root, portunus_layout(), texture_size=32, default="plain")
+    assert root.GetPrimAtPath("/Temple").variantSelections["detail"] == "plain"
+    detail = Sdf.Layer.FindOrOpen(str(tmp_path / "detail.usda"))
+    assert detail.GetPrimAtPath("/Temple").variantSelections["detail"] == "plain"
+    with pytest.raises(ParameterError, match="detail"):
+        add_detail(tmp_path / "x", new_layer("Temple"), portunus_layout(), default="fancy")
+
+
+def test_cli_bad_moulding_section_names_file_and_key(tmp_path, capsys):
+    from ionic_usd.cli import main
+
+    cfg = tmp_path / "t.toml"
+    cfg.write_text('[mouldings]\ncornice = "R0 H0 Rx H1"\n')
+    out = tmp_path / "out"
+    assert main(["temple", "--config", str(cfg), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "t.toml" in err and "mouldings.cornice" in err and "Traceback" not in err
+    assert not out.exists()

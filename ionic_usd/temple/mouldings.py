@@ -34,7 +34,7 @@ from typing import Any
 
 import numpy as np
 
-from ionic_usd.errors import ParameterError
+from ionic_usd.errors import GrammarError, ParameterError
 from ionic_usd.geometry.mesh import Mesh
 from ionic_usd.geometry.sweep import sweep
 from ionic_usd.params import load_toml
@@ -124,6 +124,9 @@ def moulding_section(grammar: str, scale: float, *, slices: int = 6,
                        profile_slices=slices, scale=scale)
     except ParameterError as exc:
         raise ParameterError(name, exc.value, exc.valid) from None
+    except GrammarError as exc:  # name the moulding: "mouldings.cornice (base v2) error …"
+        raise GrammarError(exc.message, exc.source, exc.offset, length=exc.length,
+                           module=exc.module, grammar=f"{name} ({exc.grammar})") from None
     out = base_profile(p).copy()
     out[:, 0] -= d * max(1.0, scale)
     return out
@@ -174,6 +177,9 @@ def mouldings_from_tables(data: Mapping[str, Any], *, context: str = "temple") -
         return MouldingParams(**table)
     except ParameterError as exc:
         raise ParameterError(exc.name, exc.value, exc.valid, context=context) from None
+    except GrammarError as exc:
+        raise GrammarError(exc.message, exc.source, exc.offset, length=exc.length,
+                           module=exc.module, grammar=f"{context}: {exc.grammar}") from None
 
 
 def portunus_mouldings() -> MouldingParams:

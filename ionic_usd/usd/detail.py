@@ -35,6 +35,7 @@ from pathlib import Path
 from pxr import Sdf, Tf, Usd, Vt
 
 from ionic_usd.column.ornament import Instances, capital_ornament
+from ionic_usd.errors import ParameterError
 from ionic_usd.geometry.mesh import Mesh
 from ionic_usd.temple.layout import Hypothesis, Layer, TempleLayout, build_layout
 from ionic_usd.temple.mouldings import (
@@ -147,7 +148,7 @@ def _over(lay: Sdf.Layer | Sdf.PrimSpec, path: str) -> Sdf.PrimSpec:
     return spec
 
 
-def _detail_layer(geom: DetailGeometry) -> Sdf.Layer:
+def _detail_layer(geom: DetailGeometry, default: str) -> Sdf.Layer:
     from ionic_usd.usd.column_asset import FINISHES
     from ionic_usd.usd.materials import MaterialTextures, author_preview_material
 
@@ -181,7 +182,7 @@ def _detail_layer(geom: DetailGeometry) -> Sdf.Layer:
             bind_spec(_over(prim, f"Podium/{name}"), travertine)
         if "Podium" in geom.mouldings:
             bind_spec(_over(prim, "Podium/Mouldings"), travertine)
-    temple.variantSelections[DETAIL_SET] = DEFAULT_DETAIL
+    temple.variantSelections[DETAIL_SET] = default
     return lay
 
 
@@ -246,7 +247,8 @@ def _frieze_layer(h: Hypothesis) -> Sdf.Layer:
 
 def add_detail(folder: Path, root: Sdf.Layer, layout: TempleLayout, *,
                texture_size: int = 1024, seed: int = 7,
-               mouldings: MouldingParams | None = None) -> DetailGeometry:
+               mouldings: MouldingParams | None = None,
+               default: str = DEFAULT_DETAIL) -> DetailGeometry:
     """Write the detail layers into a temple folder being built and wire them into its root.
 
     Parameters
@@ -255,19 +257,23 @@ def add_detail(folder: Path, root: Sdf.Layer, layout: TempleLayout, *,
     root : the temple's root layer (not yet saved): gets the reference to ``detail.usda``, the
         ``detail`` selection, and the variants of the hypotheses realised here
     layout : the temple
+    mouldings : the sections (default: those of ``portunus.toml``)
+    default : the selected ``detail`` variant (plain, moulded, carved)
     """
     from ionic_usd.usd.column_asset import copy_stone_textures
 
+    if default not in DETAIL_VARIANTS:
+        raise ParameterError("detail", default, f"one of {', '.join(DETAIL_VARIANTS)}")
     mp = mouldings or portunus_mouldings()
     geom = detail_geometry(layout, mp)
     # tiles repeat their map every metre (stone: every TILE_METRES = 2 m): half the size keeps
     # the texel density and saves ~3 s of a cold build
     copy_stone_textures(folder / "Textures", TERRACOTTA[1], max(16, texture_size // 2), seed)
     save_layer(_geom_layer(geom), folder / DETAIL_GEOM, force=True)
-    save_layer(_detail_layer(geom), folder / DETAIL_LAYER, force=True)
+    save_layer(_detail_layer(geom, default), folder / DETAIL_LAYER, force=True)
     spec = root.GetPrimAtPath("/Temple")
     spec.referenceList.Append(Sdf.Reference(f"./{DETAIL_LAYER}"))
-    spec.variantSelections[DETAIL_SET] = DEFAULT_DETAIL
+    spec.variantSelections[DETAIL_SET] = default
     data = dict(spec.customData.get("ionic_usd", {}))
     listing = {k: dict(v) for k, v in data.get("hypotheses", {}).items()}
     for h in layout.hypotheses:
@@ -295,8 +301,7 @@ def add_detail(folder: Path, root: Sdf.Layer, layout: TempleLayout, *,
         spec.variantSets[vset].variants["alternative"].primSpec.referenceList.Append(
             Sdf.Reference(f"./layers/{name}"))
     data["hypotheses"] = listing
-    data["detail"] = {"variants": Vt.StringArray(list(DETAIL_VARIANTS)),
-                      "default": DEFAULT_DETAIL}
+    data["detail"] = {"variants": Vt.StringArray(list(DETAIL_VARIANTS)), "default": default}
     spec.customData = {"ionic_usd": data}
     return geom
 

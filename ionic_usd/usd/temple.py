@@ -245,6 +245,8 @@ def compose_temple(
     texture_size: int = 1024,
     seed: int = 7,
     asset_options: ColumnAssetOptions | None = None,
+    detail: str = "carved",
+    mouldings=None,
 ) -> TempleReport:
     """Write the temple folder (see the module docstring) atomically.
 
@@ -314,7 +316,8 @@ def compose_temple(
             spec.variantSelections[_hyp_set(h)] = "baseline"
         spec.customData = {"ionic_usd": {"hypotheses": listing, "temple": layout.name,
                                          "baseline_finish": BASELINE_FINISH}}
-        add_detail(tmp, root, layout, texture_size=opts.texture_size, seed=opts.seed)
+        add_detail(tmp, root, layout, texture_size=opts.texture_size, seed=opts.seed,
+                   mouldings=mouldings, default=detail)  # ionic_usd.usd.detail
         save_layer(root, tmp / ROOT_LAYER)
         if user_bytes is not None:
             (tmp / OVERRIDES_LAYER).write_bytes(user_bytes)
