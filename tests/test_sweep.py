@@ -115,3 +115,15 @@ def test_bad_paths_raise(path, err):
 def test_polygon_area_sign():
     sq = np.array([[0, 0], [1, 0], [1, 1], [0, 1.0]])
     assert polygon_area(sq) == 1.0 and polygon_area(sq[::-1]) == -1.0
+
+
+@pytest.mark.parametrize("closed", [True, False])
+def test_section_deeper_than_the_outline_is_refused(closed):
+    # a section reaching 2.5 m inside a 4 m wide rectangle would turn its mitres inside out
+    sec = np.array([[-2.5, 0.0], [0.1, 0.0], [0.1, 0.3], [-2.5, 0.3]])
+    path = RECT if closed else RECT[:3][::-1]  # open: u > 0 = cross(tangent, +Y) = outward
+    with pytest.raises(GeometryError, match="cut through itself|crosses itself"):
+        sweep(sec, path, closed=closed)
+    # 1.9 m still fits (the inner rectangle is 0.2 × 2.2 m)
+    ok = sweep(sec + [0.6, 0.0], path, closed=closed)
+    assert signed_volume(ok.points, ok.triangles) > 0

@@ -119,6 +119,31 @@ def _check(profile, path, axis, closed) -> tuple[np.ndarray, np.ndarray, np.ndar
     return prof, pts, ax
 
 
+def _check_offsets(pts: np.ndarray, mit: np.ndarray, us: tuple[float, float], ax: np.ndarray,
+                   closed: bool) -> None:
+    """Refuse sections that reach so far that the sweep would cut through itself.
+
+    The sweep is the union of the offset copies of the path for ``u`` in the section's range;
+    it is free of self-intersections when no offset copy at the extreme ``u`` reverses a
+    segment (a mitre overtaking its neighbour) or crosses itself.
+    """
+    import shapely
+
+    seg = (np.roll(pts, -1, axis=0) - pts) if closed else np.diff(pts, axis=0)
+    e1 = seg[0] / np.linalg.norm(seg[0])
+    e2 = np.cross(ax, e1)
+    for u in us:
+        off = pts + u * mit
+        oseg = (np.roll(off, -1, axis=0) - off) if closed else np.diff(off, axis=0)
+        if np.any(np.einsum("ij,ij->i", oseg, seg) <= 0):
+            raise GeometryError(f"sweep: the section reaches u = {u:g}, past where a mitre "
+                                "overtakes its neighbour (it would cut through itself)")
+        flat = np.stack([off @ e1, off @ e2], axis=1)
+        line = shapely.LinearRing(flat) if closed else shapely.LineString(flat)
+        if not line.is_simple:
+            raise GeometryError(f"sweep: at u = {u:g} the offset path crosses itself")
+
+
 def _cap_triangles(prof: np.ndarray) -> np.ndarray:
     """(t, 3) indices into ``prof`` triangulating the (simple) section polygon."""
     import shapely
@@ -182,6 +207,9 @@ def sweep(
     k, m = len(prof), len(pts)
     sides = side_normals(pts, ax, closed)
     mit = mitre_vectors(sides, closed)
+    if len(pts) > 2:
+        _check_offsets(pts, mit, (float(prof[:, 0].min()), float(prof[:, 0].max())), ax,
+                       closed)
     verts = (pts[:, None, :] + prof[None, :, 0, None] * mit[:, None, :]
              + prof[None, :, 1, None] * ax[None, None, :])  # (m, k, 3)
     points = verts.reshape(-1, 3)
