@@ -117,13 +117,15 @@ def test_polygon_area_sign():
     assert polygon_area(sq) == 1.0 and polygon_area(sq[::-1]) == -1.0
 
 
-@pytest.mark.parametrize("closed", [True, False])
-def test_section_deeper_than_the_outline_is_refused(closed):
-    # a section reaching 2.5 m inside a 4 m wide rectangle would turn its mitres inside out
-    sec = np.array([[-2.5, 0.0], [0.1, 0.0], [0.1, 0.3], [-2.5, 0.3]])
-    path = RECT if closed else RECT[:3][::-1]  # open: u > 0 = cross(tangent, +Y) = outward
+@pytest.mark.parametrize("closed, bad, good", [(True, 2.5, 1.9), (False, 3.2, 2.5)])
+def test_section_deeper_than_the_outline_is_refused(closed, bad, good):
+    # closed 4 × 6 m rectangle: the 4 m sides vanish at 2 m inside; open U round the same
+    # rectangle (u > 0 = cross(tangent, +Y) = outward): its 6 m middle vanishes at 3 m
+    def sec(depth):
+        return np.array([[-depth, 0.0], [0.1, 0.0], [0.1, 0.3], [-depth, 0.3]])
+
+    path = RECT if closed else RECT[::-1]
     with pytest.raises(GeometryError, match="cut through itself|crosses itself"):
-        sweep(sec, path, closed=closed)
-    # 1.9 m still fits (the inner rectangle is 0.2 × 2.2 m)
-    ok = sweep(sec + [0.6, 0.0], path, closed=closed)
+        sweep(sec(bad), path, closed=closed)
+    ok = sweep(sec(good), path, closed=closed)
     assert signed_volume(ok.points, ok.triangles) > 0
