@@ -245,7 +245,7 @@ def frieze_garlands(layout: TempleLayout) -> Instances:
     s = layout.axial_spacing / 2  # a candelabrum on every column axis and mid-bay
     relief = min(0.08, 0.1 * fh)
     cand = _candelabrum_prototype(0.8 * fh, 2 * relief)
-    garland = _garland_prototype(0.8 * s, 0.3 * fh, relief)
+    garland = _garland_prototype(0.9 * s, 0.35 * fh, 1.6 * relief)  # a fat swag
     pos, xs, idx = [], [], []
     for _, nrm, along, off, half in _side_frames(lv["xe"], lv["ze"]):
         # candelabra at k·s from the centre of the side, garlands between them
@@ -254,7 +254,7 @@ def frieze_garlands(layout: TempleLayout) -> Instances:
             np.arange(-n + 1, n) * s
         tg = 0.5 * (tc[1:] + tc[:-1])
         for proto_i, ts, y in ((0, tc, lv["y_frieze"] + 0.1 * fh),
-                               (1, tg, lv["y_frieze"] + 0.78 * fh)):
+                               (1, tg, lv["y_frieze"] + 0.8 * fh)):
             p = ts[:, None] * along + (off * nrm + y * _UP)[None]
             pos.append(p)
             xs.append(np.tile(along, (len(ts), 1)))
