@@ -56,9 +56,9 @@ def test_architrave_volume_by_pappus_for_a_mitred_rectangle(members):
     area, ubar = _centroid_u(sec)
     want = area * (4 * lv["xe"] + 4 * lv["ze"] + 8 * ubar)
     m = members["architrave"].mesh
-    from ionic_usd.geometry.sweep import signed_volume
+    from ionic_usd.geometry.analysis import signed_volume
 
-    assert_allclose(signed_volume(m.points, m.triangles), want, rtol=1e-9)
+    assert_allclose(signed_volume(m), want, rtol=1e-9)
 
 
 def test_sections_follow_vitruvius(members):

@@ -7,7 +7,8 @@ import pytest
 from numpy.testing import assert_allclose
 
 from ionic_usd.errors import GeometryError
-from ionic_usd.geometry.sweep import polygon_area, signed_volume, sweep
+from ionic_usd.geometry.analysis import signed_volume
+from ionic_usd.geometry.sweep import polygon_area, sweep
 
 
 def _manifold(mesh):
@@ -41,7 +42,7 @@ def test_closed_box_section_volume_and_shell(reverse, flip_section):
     assert str(man.status()) == "Error.NoError"
     assert man.genus() == 1
     assert_allclose(man.volume(), want, rtol=1e-5)
-    assert_allclose(signed_volume(m.points, m.triangles), want, rtol=1e-12)
+    assert_allclose(signed_volume(m), want, rtol=1e-12)
     assert _directed_edges_unique(m)
     # outward: the extent reaches +u1 beyond the path, never +|u0|
     assert_allclose(m.extent[1, 0], 2 + u1)
@@ -66,7 +67,7 @@ def test_sloped_open_path_with_concave_section_is_closed():
     m = sweep(sec, path, axis=(0, 0, 1), closed=False)
     man = _manifold(m)
     assert str(man.status()) == "Error.NoError"
-    assert man.volume() > 0 and signed_volume(m.points, m.triangles) > 0
+    assert man.volume() > 0 and signed_volume(m) > 0
 
 
 def test_uvs_are_metres_along_rows_and_section():
@@ -128,4 +129,4 @@ def test_section_deeper_than_the_outline_is_refused(closed, bad, good):
     with pytest.raises(GeometryError, match="cut through itself|crosses itself"):
         sweep(sec(bad), path, closed=closed)
     ok = sweep(sec(good), path, closed=closed)
-    assert signed_volume(ok.points, ok.triangles) > 0
+    assert signed_volume(ok) > 0

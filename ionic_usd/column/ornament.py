@@ -19,8 +19,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ionic_usd.errors import GeometryError, ParameterError
+from ionic_usd.geometry.analysis import signed_volume
 from ionic_usd.geometry.mesh import Mesh, smooth_normals
-from ionic_usd.geometry.sweep import signed_volume, sweep
+from ionic_usd.geometry.sweep import sweep
 
 __all__ = [
     "Instances",
@@ -206,7 +207,7 @@ def lathe_closed(profile: np.ndarray, segments: int, *, axis: str = "y",
     last = 1 + (nr - 1) * n
     tris.append(np.stack([np.full(n, top), last + j, last + j1], 1))
     tri = np.concatenate(tris)
-    if signed_volume(pts, tri) < 0:
+    if signed_volume(Mesh(pts, np.full(len(tri), 3), tri.reshape(-1))) < 0:
         tri = tri[:, ::-1]
     if axis == "x":
         pts = pts[:, [1, 0, 2]]

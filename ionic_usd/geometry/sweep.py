@@ -27,7 +27,7 @@ import numpy as np
 from ionic_usd.errors import GeometryError
 from ionic_usd.geometry.mesh import Mesh
 
-__all__ = ["sweep", "side_normals", "mitre_vectors", "signed_volume", "polygon_area"]
+__all__ = ["sweep", "side_normals", "mitre_vectors", "polygon_area"]
 
 
 def polygon_area(poly: np.ndarray) -> float:
@@ -42,15 +42,11 @@ def polygon_area(poly: np.ndarray) -> float:
     return 0.5 * float(np.sum(p[:, 0] * q[:, 1] - q[:, 0] * p[:, 1]))
 
 
-def signed_volume(points: np.ndarray, triangles: np.ndarray) -> float:
-    """Signed volume enclosed by triangles (positive for an outward-wound closed shell).
-
-    Parameters
-    ----------
-    points : (n, 3) float
-    triangles : (t, 3) int
-    """
-    p = np.asarray(points, dtype=np.float64)[np.asarray(triangles)]
+def _signed_volume(points: np.ndarray, triangles: np.ndarray) -> float:
+    """Signed volume of triangles (n, 3) indexing points (n, 3); see
+    :func:`ionic_usd.geometry.analysis.signed_volume` (this one needs no Mesh yet)."""
+    pts = np.asarray(points, dtype=np.float64)
+    p = (pts - pts.mean(axis=0))[np.asarray(triangles)]
     return float(np.einsum("ij,ij->i", p[:, 0], np.cross(p[:, 1], p[:, 2])).sum() / 6.0)
 
 
@@ -231,7 +227,7 @@ def sweep(
         caps = np.vstack([ct, ct[:, ::-1] + (m - 1) * k])
     tris = np.concatenate([quads[..., [0, 1, 2]].reshape(-1, 3),
                            quads[..., [0, 2, 3]].reshape(-1, 3), caps])
-    if signed_volume(points, tris) < 0:
+    if _signed_volume(points, tris) < 0:
         quads = quads[..., ::-1]
         caps = caps[:, ::-1]
     # -- normals: flat per quad, smoothed across gentle section corners ---------------------
