@@ -28,8 +28,8 @@ def members():
 def test_every_member_is_a_closed_outward_solid(members):
     import manifold3d as m3
 
-    assert set(members) == {"architrave", "cornice", "podium_base", "podium_crown",
-                            "raking_cornice_front", "raking_cornice_rear"}
+    assert set(members) == {"architrave", "cornice", "sima_left", "sima_right", "podium_base",
+                            "podium_crown", "raking_cornice_front", "raking_cornice_rear"}
     for m in members.values():
         man = m3.Manifold(m3.Mesh(vert_properties=m.mesh.points.astype(np.float32),
                                   tri_verts=m.mesh.triangles.astype(np.uint32)))
@@ -69,13 +69,22 @@ def test_sections_follow_vitruvius(members):
     # cymatium 1/7 of the architrave, projecting its own height beyond the third fascia
     assert_allclose(arch[-1, 0] - 0.06 * a, a / 7, rtol=2e-3)
     cor = moulding_section(MouldingParams().cornice, c)
-    assert_allclose(cor[-1, 1], c)
-    assert_allclose(cor[:, 0].max(), c * lay.params.entablature_cornice_projection_ratio)
+    sima = moulding_section(MouldingParams().sima, c)
+    assert_allclose(cor[-1, 1] + sima[-1, 1], c)  # corona top + sima = the cornice height
+    assert_allclose(sima[-1, 1] / (cor[-1, 1] - cor[-2, 1]), 9 / 8, rtol=2e-3)  # III.5.12
+    assert_allclose(sima[:, 0].max(), c * lay.params.entablature_cornice_projection_ratio)
     # the members sit where the plain cuboids were: cornice from the frieze top to its top
     ext = members["cornice"].mesh.extent
     lv = cornice_levels(lay)
     assert_allclose([ext[0, 1], ext[1, 1]], [lv["y_cornice"], lv["y_top"]])
-    assert_allclose(ext[1, 0], lv["xe"] + lv["projection"])
+    # the sima crowns the flanks only, out to the cornice projection, ending at the corona's
+    # front and rear faces
+    for side, sgn in (("sima_left", -1), ("sima_right", 1)):
+        e = members[side].mesh.extent
+        assert_allclose(e[1 if sgn > 0 else 0, 0], sgn * (lv["xe"] + lv["projection"]))
+        assert_allclose([e[0, 2], e[1, 2]], [-lv["ze"] - lv["projection"],
+                                             lv["ze"] + lv["projection"]])
+        assert_allclose(e[1, 1], lv["y_top"])
     # raking cornice: under the roof slab's soffit, projecting as far as the cornice
     rk = members["raking_cornice_front"].mesh.extent
     assert_allclose(rk[1, 2], lv["ze"] + lv["projection"])

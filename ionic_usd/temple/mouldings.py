@@ -13,9 +13,14 @@ Members and where they are swept (frame of :mod:`ionic_usd.temple.layout`):
 ``architrave``      closed loop round the architrave's outer faces (``±xe``, ``±ze``); the
                     section reaches ``back`` = the upper diameter behind the face (the stone
                     beam itself), so it *replaces* the plain ``architrave`` cuboid.
-``cornice``         closed loop round the frieze faces at the cornice's bottom; replaces the
-                    plain ``cornice`` cuboid (whose projection it keeps: its ``r`` reaches
-                    ``cornice_projection_ratio``).
+``cornice``         closed loop round the frieze faces at the cornice's bottom, up to the
+                    corona's top; behind the frieze face (``r ≤ 0``) it rises to the cornice's
+                    full height, the floor of the pediments; replaces the plain ``cornice``
+                    cuboid together with
+``sima``            the crowning cyma recta on the flanks only (open paths along the long
+                    sides, ending flush with the front and rear corona): the horizontal cornice
+                    under a pediment has no sima, the raking cornice carries it (Vitruvius
+                    III.5.12–13). Its ``r`` reaches ``cornice_projection_ratio``.
 ``raking_cornice``  open paths along the pediments' slopes (front and rear), under the roof
                     slabs' soffit, projecting from the tympanum face; Vitruvius IV.3.5/IV.2.5:
                     no dentils on the raking cornice.
@@ -59,8 +64,8 @@ _ARCHITRAVE = ("R0 H0 R0 H0.2143, R0 H0 R0.03 H0, R0.03 H0 R0.03 H0.2857, R0.03 
                "R0.06 H0 R0.06 H0.3571, "
                "R0.06 H0 R0.06 H0.0714 R0.2029 H0.0714 R0.2029 H0.1429")
 _CORNICE = ("R0 H0 R0.16 H0 R0.16 H0.16, R0.16 H0 R0.16 H0.255, R0.16 H0 R0.415 H0, "
-            "R0.415 H0 R0.458 H0 R0.458 H0.043, R0.458 H0 R0.85 H0, R0.85 H0 R0.85 H0.255, "
-            "R0.85 H0 R0.87 H0, R0.87 H0 R0.87 H0.15 R1.0 H0.137 R1.0 H0.287")
+            "R0.415 H0 R0.458 H0 R0.458 H0.043, R0.458 H0 R0.85 H0, R0.85 H0 R0.85 H0.255")
+_SIMA = "R0 H0 R0.87 H0, R0.87 H0 R0.87 H0.15 R1.0 H0.137 R1.0 H0.287"
 _RAKING = ("R0 H0 R0.85 H0, R0.85 H0 R0.85 H0.255, R0.85 H0 R0.87 H0, "
            "R0.87 H0 R0.87 H0.15 R1.0 H0.137 R1.0 H0.287")
 _PODIUM_BASE = ("R0.45 H0 R0.45 H0.15, R0.45 H0 R0.52 H0.15 R0.3 H0.3, R0.3 H0 R0.22 H0, "
@@ -80,6 +85,7 @@ class MouldingParams:
 
     architrave: str = _ARCHITRAVE
     cornice: str = _CORNICE
+    sima: str = _SIMA
     raking_cornice: str = _RAKING
     podium_base: str = _PODIUM_BASE
     podium_crown: str = _PODIUM_CROWN
@@ -132,13 +138,17 @@ def moulding_section(grammar: str, scale: float, *, slices: int = 6,
     return out
 
 
-def _close(curve: np.ndarray, back: float, *, chamfer: bool) -> np.ndarray:
+def _close(curve: np.ndarray, back: float, *, chamfer: bool,
+           top: float | None = None) -> np.ndarray:
     """Close an outer curve into a section polygon reaching ``back`` behind the face (u < 0).
 
     ``chamfer``: the back corners are cut at 45° so that the section touches the face plane
     (u = 0) only along its bottom and top edges (no face coplanar with the cuboid behind).
+    ``top``: the back part (u ≤ 0) rises to this height, above the curve's end.
     """
     h = float(curve[-1, 1])
+    if top is not None and not chamfer and top > h:
+        return _close(np.vstack([curve, [[0.0, h], [0.0, top]]]), back, chamfer=False)
     pts: list[tuple[float, float]] = []
     if chamfer:
         b = min(back, 0.45 * h)
@@ -222,12 +232,13 @@ def _rect(x: float, z: float, y: float) -> np.ndarray:
     return np.array([[-x, y, -z], [x, y, -z], [x, y, z], [-x, y, z]], dtype=np.float64)
 
 
-def _outward(path: np.ndarray, axis: np.ndarray) -> np.ndarray:
+def _outward(path: np.ndarray, axis: np.ndarray, inside: np.ndarray | None = None) -> np.ndarray:
     """Orient an open path so that ``cross(tangent, axis)`` of its first segment points away
-    from the path's centroid (the side the moulding projects to)."""
+    from ``inside`` (default: the path's centroid) — the side the moulding projects to."""
     side = np.cross(path[1] - path[0], axis)
     mid = 0.5 * (path[0] + path[1])
-    return path if np.dot(side, mid - path.mean(axis=0)) > 0 else path[::-1].copy()
+    ref = path.mean(axis=0) if inside is None else inside
+    return path if np.dot(side, mid - ref) > 0 else path[::-1].copy()
 
 
 def moulding_meshes(layout: TempleLayout, mp: MouldingParams | None = None, *,
@@ -242,20 +253,32 @@ def moulding_meshes(layout: TempleLayout, mp: MouldingParams | None = None, *,
     out: list[MouldedMember] = []
 
     def member(name, grammar, scale, path, *, closed, chamfer, back, axis=up, swap=False,
-               replaces=None):
-        curve = moulding_section(grammar, scale, slices=mp.slices, name=f"mouldings.{name}")
-        sec = _close(curve, back, chamfer=chamfer)
+               replaces=None, top=None, key=None, inside=None):
+        curve = moulding_section(grammar, scale, slices=mp.slices,
+                                 name=f"mouldings.{key or name}")
+        sec = _close(curve, back, chamfer=chamfer, top=top)
         if swap:  # raking: the section's height runs along the slope normal, downward
             sec = np.stack([sec[:, 1] - curve[-1, 1], sec[:, 0]], axis=1)
         if not closed:
-            path = _outward(path, np.asarray(axis, dtype=np.float64))
+            path = _outward(path, np.asarray(axis, dtype=np.float64), inside)
         m = sweep(sec, path, axis=axis, closed=closed, uv_scale=uv_scale, name=name)
         out.append(MouldedMember(name, m, replaces))
 
     member("architrave", mp.architrave, a, _rect(lv["xe"], lv["ze"], lv["y_architrave"]),
            closed=True, chamfer=False, back=back, replaces="architrave")
     member("cornice", mp.cornice, c, _rect(lv["xe"], lv["ze"], lv["y_cornice"]),
-           closed=True, chamfer=False, back=back, replaces="cornice")
+           closed=True, chamfer=False, back=back, replaces="cornice", top=c)
+    y_sima = lv["y_cornice"] + float(moulding_section(mp.cornice, c)[-1, 1])
+    zc = lv["ze"] + lv["projection"]
+    for name, sgn in (("sima_left", -1.0), ("sima_right", 1.0)):
+        x = sgn * lv["xe"]
+        path = np.array([[x, y_sima, -zc], [x, y_sima, zc]])
+        if abs(y_sima + float(moulding_section(mp.sima, c)[-1, 1]) - lv["y_top"]) > 1e-6 * c:
+            raise ParameterError("mouldings.sima", mp.sima,
+                                 "heights that, added to the cornice's, make the cornice height",
+                                 context=p.name)
+        member(name, mp.sima, c, path, closed=False, chamfer=False, back=0.0, key="sima",
+               inside=np.array([0.0, y_sima, 0.0]))
     # podium: round the die and the cheek walls, stopping at the stairs
     w2, l2, cw = p.stylobate_width / 2, p.stylobate_length / 2, p.podium_cheek_wall_width
     front = l2 + p.stair_run

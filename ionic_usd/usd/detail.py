@@ -72,7 +72,7 @@ DETAIL_GEOM = "detail_geom.usdc"
 FRIEZE_KEY = "detail.frieze"  # a hypothesis change key realised here ("garlands")
 TERRACOTTA = ("Terracotta", "terracotta")
 _PART = {"podium": "Podium", "architrave": "Entablature", "cornice": "Entablature",
-         "raking": "Roof"}
+         "sima": "Entablature", "raking": "Roof"}
 
 
 @dataclass(frozen=True, eq=False)
