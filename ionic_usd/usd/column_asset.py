@@ -15,6 +15,10 @@ form        full, engaged                               every part (engaged: cut
 finish      travertine, stucco                          the material bound to Geom
 ==========  ==========================================  ===================================
 
+The ``high`` LOD also carries the carved capital: egg-and-dart on the echinus and bead-and-reel
+on the astragal, two PointInstancers under ``Geom/Ornament`` (4 prototypes, 90 copies, 8.8k
+triangles drawn; :func:`ionic_usd.usd.detail.column_ornament`), tagged ``lod = high``.
+
 Each mesh is authored once: the shaft does not depend on the base, the capital body not on the
 scroll. Triangle budgets of the default column (all four parts, form = full): high ≈ 37k,
 medium ≈ 16k, low ≈ 8.5k (``tools/bench_asset.py`` prints them).
