@@ -86,7 +86,11 @@ def _shaft_params(args: argparse.Namespace):
 
 
 def cmd_shaft(args: argparse.Namespace) -> int:
-    from ionic_usd.column.shaft import SHAFT_PARAMETER_DOCS, build_shaft
+    from ionic_usd.column.shaft import (
+        SHAFT_PARAMETER_DOCS,
+        build_shaft,
+        shaft_triangle_estimate,
+    )
     from ionic_usd.params import to_toml
 
     params = _shaft_params(args)
@@ -99,6 +103,7 @@ def cmd_shaft(args: argparse.Namespace) -> int:
     from ionic_usd.usd import check_output_path, write_meshes
 
     out = check_output_path(args.output, force=args.force)
+    _check_memory("the shaft", shaft_triangle_estimate(params), args)
     t0 = time.perf_counter()
     mesh = build_shaft(params, max_triangles=args.max_triangles)
     t1 = time.perf_counter()
@@ -126,10 +131,10 @@ def _column_params(args: argparse.Namespace):
 
 
 _PARTS = {
-    "all": ("Base", "Shaft", "CapitalBody", "CapitalScroll"),
+    "all": ("Base", "Shaft", "CapitalBody"),
     "base": ("Base",),
     "shaft": ("Shaft",),
-    "capital": ("CapitalBody", "CapitalScroll"),
+    "capital": ("CapitalBody",),
     "base+shaft": ("Base", "Shaft"),
 }
 
@@ -153,6 +158,9 @@ def cmd_column(args: argparse.Namespace) -> int:
     from ionic_usd.usd import check_output_path, write_meshes
 
     out = check_output_path(args.output, force=args.force)
+    from ionic_usd.resources import check_estimate, estimate_column
+
+    check_estimate(estimate_column(params), args.max_memory)
     t0 = time.perf_counter()
     col = build_column(params)
     t1 = time.perf_counter()
@@ -167,20 +175,27 @@ def cmd_column(args: argparse.Namespace) -> int:
 
 
 def cmd_asset(args: argparse.Namespace) -> int:
+    from ionic_usd.errors import ParameterError
+    from ionic_usd.io import check_output_folder
+    from ionic_usd.resources import check_estimate, estimate_asset
     from ionic_usd.usd.column_asset import ColumnAssetOptions, build_column_asset
 
+    check_output_folder(args.output, force=args.force)
     params = _column_params(args)
     user = None
     if args.texture:
         user = {}
+        roles = ("basecolor", "roughness", "normal")
         for item in args.texture:
             role, sep, path = item.partition("=")
-            if not sep:
-                from ionic_usd.errors import ParameterError
-
+            if not sep or role not in roles or not path:
                 raise ParameterError("--texture", item, "ROLE=FILE with ROLE basecolor, "
                                      "roughness or normal")
+            if role in user:  # the last one silently winning would hide a typo
+                raise ParameterError("--texture", item, f"each role once ({role} is also "
+                                     f"{user[role]!r})")
             user[role] = path
+    check_estimate(estimate_asset(params, args.texture_size), args.max_memory)
     opts = ColumnAssetOptions(params=params, texture_size=args.texture_size, seed=args.seed,
                               make_tx=args.tx, user_textures=user)
     rep = build_column_asset(args.output, opts, force=args.force)
@@ -192,10 +207,12 @@ def cmd_asset(args: argparse.Namespace) -> int:
 
 def cmd_temple(args: argparse.Namespace) -> int:
     from ionic_usd.column.column import column_params_from_mapping, portunus_column_params
+    from ionic_usd.io import check_output_folder
     from ionic_usd.params import load_toml
     from ionic_usd.temple.layout import layout_from_mapping, portunus_layout
     from ionic_usd.usd.temple import compose_temple
 
+    check_output_folder(args.output, force=args.force)
     column = mouldings = None
     if args.config:
         data = load_toml(args.config)
@@ -220,6 +237,11 @@ def cmd_temple(args: argparse.Namespace) -> int:
                                   lower_diameter=p.columns_lower_diameter)
     if col_tables:
         column = column_params_from_mapping(col_tables, context=str(args.config), base=base)
+    from ionic_usd.resources import check_estimate, estimate_temple
+
+    n_cuboids = sum(len(c) for c in layout.cuboids.values())
+    check_estimate(estimate_temple(column or base, args.texture_size, n_cuboids),
+                   args.max_memory)
     rep = compose_temple(args.output, layout, column, force=args.force,
                          texture_size=args.texture_size, seed=args.seed,
                          detail=args.detail, mouldings=mouldings)
@@ -232,6 +254,24 @@ def cmd_temple(args: argparse.Namespace) -> int:
 
 
 def cmd_city(args: argparse.Namespace) -> int:
+    import math
+
+    from ionic_usd.errors import ParameterError
+    from ionic_usd.io import check_output_file
+    from ionic_usd.params import check_identifier
+    from ionic_usd.resources import check_estimate, estimate_city
+
+    for flag, v, lo, hi in (("--rows", args.rows, 1, 10_000), ("--cols", args.cols, 1, 10_000),
+                            ("--seed", args.seed, 0, 2**63 - 1)):
+        if not lo <= v <= hi:
+            raise ParameterError(flag, v, f"an integer in [{lo}, {hi:,}]")
+    if not (math.isfinite(args.block) and 1.0 <= args.block <= 10_000.0):
+        raise ParameterError("--block", args.block, "a spacing in [1, 10000] m")
+    check_identifier("--temple", args.temple)  # a folder name inside FOLDER, not a path
+    check_output_file(args.folder / "City.usda", force=args.force)
+    # street colonnades: about two lines of columns per block edge, 3 m apart
+    street = 2 * (args.rows + 1) * (args.cols + 1) * int(args.block / 3.0 + 1)
+    check_estimate(estimate_city(args.rows, args.cols, street), args.max_memory)
     from ionic_usd.usd.city import compose_city
 
     rep = compose_city(args.folder, args.temple, rows=args.rows, cols=args.cols,
@@ -258,6 +298,26 @@ def cmd_preview(args: argparse.Namespace) -> int:
     return 0
 
 
+def _check_memory(what: str, triangles: int, args: argparse.Namespace) -> None:
+    from ionic_usd.resources import (
+        BASELINE_BYTES,
+        BYTES_PER_TRIANGLE,
+        Estimate,
+        check_estimate,
+    )
+
+    check_estimate(Estimate(what, triangles, 0, BASELINE_BYTES + BYTES_PER_TRIANGLE * triangles),
+                   args.max_memory)
+
+
+def _add_memory_flag(p: argparse.ArgumentParser) -> None:
+    from ionic_usd.resources import DEFAULT_MAX_MEMORY_GB
+
+    p.add_argument("--max-memory", type=float, metavar="GB", default=None,
+                   help="refuse work whose estimated peak memory exceeds this "
+                   f"[default {DEFAULT_MAX_MEMORY_GB:g} GB]")
+
+
 # -- parser --------------------------------------------------------------------------------------
 class _Parser(argparse.ArgumentParser):
     def error(self, message: str):  # one line, status 2 (argparse's own convention)
@@ -273,6 +333,10 @@ def build_parser() -> argparse.ArgumentParser:
         description="Procedural Ionic-order columns and temples authored as OpenUSD scenes.",
     )
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    parser.add_argument("-v", "--verbose", action="count", default=0,
+                        help="say what each step does (-vv: debugging detail) on stderr")
+    parser.add_argument("-q", "--quiet", action="store_true",
+                        help="no progress bars and no messages but errors")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     p = sub.add_parser(
@@ -291,6 +355,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="refuse a level of detail above this triangle count "
                    f"[default {DEFAULT_TRIANGLE_BUDGET:,}]")
     add_dataclass_flags(p, ShaftParams, SHAFT_PARAMETER_DOCS, title="shaft parameters")
+    _add_memory_flag(p)
     p.set_defaults(func=cmd_shaft)
 
     p = sub.add_parser(
@@ -311,6 +376,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--base", help="base preset (G1, G2, attic_bezier, attic_bezier_plinth) or "
                    "a base grammar string")
     p.add_argument("--scroll", help="scroll preset (S1, S2) or ring grammar 'R0.7 P0.05, …'")
+    _add_memory_flag(p)
     p.set_defaults(func=cmd_column)
 
     p = sub.add_parser(
@@ -325,12 +391,15 @@ def build_parser() -> argparse.ArgumentParser:
                    help="temple TOML (schema of ionic_usd/data/portunus.toml; may add [column], "
                    "[shaft], [capital], [volute] tables for the column)")
     p.add_argument("--layout", default="portunus", help="built-in temple layout (portunus)")
-    p.add_argument("--texture-size", type=int, default=1024, help="texture resolution (px)")
+    p.add_argument("--texture-size", type=int, default=1024,
+                   help="texture resolution (px): a power of two, 16-4096 within the default "
+                   "memory limit; 8192 needs about 10 GB (--max-memory 10)")
     p.add_argument("--seed", type=int, default=7, help="seed of the procedural stone")
     p.add_argument("--detail", choices=("plain", "moulded", "carved"), default="carved",
                    help="selected level of architectural detail (all three are written)")
     p.add_argument("--force", action="store_true",
                    help="rebuild an existing folder (atomically; overrides.usda is kept)")
+    _add_memory_flag(p)
     p.set_defaults(func=cmd_temple)
 
     p = sub.add_parser(
@@ -348,6 +417,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--baseline", action="store_true", help="every temple at the baseline")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--force", action="store_true", help="overwrite City.usda")
+    _add_memory_flag(p)
     p.set_defaults(func=cmd_city)
 
     p = sub.add_parser(
@@ -363,7 +433,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--scroll", help=argparse.SUPPRESS)
     p.add_argument("--lod", help=argparse.SUPPRESS)
     p.add_argument("--texture-size", type=int, default=1024,
-                   help="texture resolution in pixels (a power of two, 16-8192)")
+                   help="texture resolution in pixels: a power of two, 16-4096 within the "
+                   "default memory limit; 8192 needs about 10 GB (--max-memory 10)")
     p.add_argument("--seed", type=int, default=7, help="seed of the procedural stone")
     p.add_argument("--tx", action="store_true", help="also write mipmapped .tx textures")
     p.add_argument("--texture", action="append", metavar="ROLE=FILE",
@@ -371,6 +442,7 @@ def build_parser() -> argparse.ArgumentParser:
                    "or normal; give all three")
     p.add_argument("--force", action="store_true",
                    help="replace an existing asset folder (atomically)")
+    _add_memory_flag(p)
     p.set_defaults(func=cmd_asset)
 
     p = sub.add_parser(
@@ -394,18 +466,86 @@ def build_parser() -> argparse.ArgumentParser:
     from ionic_usd.evaluate.commands import add_parsers
 
     add_parsers(sub, _Parser)
+    from ionic_usd.export import add_export_parser
+
+    add_export_parser(sub, _Parser)
     return parser
 
 
+def _one_line(text: str) -> str:
+    return " ".join(text.split())
+
+
+def _os_message(exc: OSError) -> str:
+    """An OS error as the user needs it: what failed, on which path."""
+    import errno
+
+    what = exc.strerror or _one_line(str(exc)) or type(exc).__name__
+    hint = {errno.ENOSPC: " (free some space or write elsewhere)",
+            errno.EROFS: " (write elsewhere)",
+            errno.EACCES: " (check the folder's permissions)",
+            errno.ENAMETOOLONG: " (use a shorter name)"}.get(exc.errno or 0, "")
+    where = f": {exc.filename}" if exc.filename else ""
+    if getattr(exc, "filename2", None):
+        where += f" -> {exc.filename2}"
+    return f"{what}{where}{hint}"
+
+
+def _library_error(exc: Exception) -> str | None:
+    """The message of an error raised inside OpenUSD (``pxr.Tf.ErrorException``), else None.
+
+    Recognised by its type, without importing ``pxr`` here (only ``ionic_usd.usd`` does).
+    """
+    t = type(exc)
+    if t.__module__.startswith("pxr") or (t.__name__ == "ArgumentError" \
+            and "Boost" in t.__module__):
+        lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
+        return "OpenUSD: " + (lines[-1] if lines else t.__name__)
+    return None
+
+
+def _fail(message: str, status: int = 2) -> int:
+    print(f"ionic-usd: error: {message}", file=sys.stderr)
+    return status
+
+
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    """Run the command line; returns the exit status (2 for any refused input or OS fault).
+
+    Every failure prints one line on stderr (a grammar error adds its source with a caret):
+    the package's own errors, OS errors (full disk, read-only folder, a name too long), and
+    errors from OpenUSD. An unexpected exception is a bug: one line, status 70, and the
+    traceback only with ``IONIC_USD_DEBUG=1``.
+    """
+    import os
+
     try:
+        parser = build_parser()
+        args = parser.parse_args(argv)
+        from ionic_usd.progress import configure
+
+        configure(-1 if args.quiet else args.verbose)
         return int(args.func(args) or 0)
     except IonicError as exc:
         # one line; a grammar error adds its source line with a caret under the token
-        print(f"ionic-usd: error: {exc}", file=sys.stderr)
-        return 2
+        return _fail(str(exc))
+    except RecursionError:
+        return _fail("input nested too deeply to read")
+    except MemoryError:
+        return _fail("out of memory; lower the level of detail or texture size, or run on a "
+                     "machine with more memory (see --max-memory)")
+    except OSError as exc:
+        return _fail(_os_message(exc))
+    except KeyboardInterrupt:
+        return _fail("interrupted", 130)
+    except Exception as exc:
+        msg = _library_error(exc)
+        if msg is not None:
+            return _fail(_one_line(msg))
+        if os.environ.get("IONIC_USD_DEBUG"):
+            raise
+        return _fail(f"internal error, please report it: {type(exc).__name__}: "
+                     f"{_one_line(str(exc))[:300]} (IONIC_USD_DEBUG=1 shows the traceback)", 70)
 
 
 if __name__ == "__main__":  # pragma: no cover

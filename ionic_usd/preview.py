@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import math
 import os
-import secrets
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -25,7 +24,6 @@ from pxr import Sdf, Usd, UsdGeom, UsdShade
 from ionic_usd.errors import (
     GeometryError,
     IonicError,
-    OutputExistsError,
     ParameterError,
     UsdAuthoringError,
 )
@@ -619,20 +617,25 @@ def _gl_mat(m: np.ndarray) -> bytes:
 def _write_png(pixels: np.ndarray, out: Path) -> None:
     import OpenImageIO as oiio  # noqa: PLC0415
 
-    tmp = out.with_name(f".{out.stem}.{secrets.token_hex(4)}.tmp.png")
-    try:
+    from ionic_usd.io import atomic_path  # noqa: PLC0415
+    from ionic_usd.texture.stone import TextureError, verify_image  # noqa: PLC0415
+
+    def check(tmp: Path) -> None:  # a full disk can leave a truncated PNG after "success"
+        try:
+            verify_image(tmp)
+        except TextureError:
+            raise UsdAuthoringError(f"cannot write {out}: the written PNG is incomplete "
+                                    "(is the disk full?)") from None
+
+    with atomic_path(out, verify=check) as tmp:
         h, w, c = pixels.shape
         img = oiio.ImageOutput.create(str(tmp))
         if img is None or not img.open(str(tmp), oiio.ImageSpec(w, h, c, oiio.UINT8)):
             raise UsdAuthoringError(f"cannot write {out}: {oiio.geterror()}")
         ok = img.write_image(np.ascontiguousarray(pixels))
-        img.close()
-        if not ok:
-            raise UsdAuthoringError(f"cannot write {out}: {oiio.geterror()}")
-        os.replace(tmp, out)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
+        closed = img.close()  # the encoder flushes here: its result counts too
+        if not (ok and closed):
+            raise UsdAuthoringError(f"cannot write {out}: {img.geterror() or oiio.geterror()}")
 
 
 def _validate(width, height, camera, samples, background, out: Path, force: bool) -> None:
@@ -648,8 +651,9 @@ def _validate(width, height, camera, samples, background, out: Path, force: bool
         raise ParameterError("background", background, "three sRGB components in [0, 1]")
     if out.suffix.lower() != ".png":
         raise ParameterError("out_png", str(out), "a file ending in .png")
-    if out.exists() and not force:
-        raise OutputExistsError(f"{out} exists; pass --force (force=True) to overwrite it")
+    from ionic_usd.io import check_output_file  # noqa: PLC0415
+
+    check_output_file(out, force=force)  # a name, a writable folder, not a folder itself
 
 
 def render_preview(

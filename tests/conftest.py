@@ -36,3 +36,29 @@ def portunus_temple(tmp_path_factory):
 
     folder = tmp_path_factory.mktemp("temple") / "PortunusTemple"
     return compose_temple(folder, portunus_layout(), texture_size=64)
+
+
+@pytest.fixture(scope="session")
+def tiny_temple(tmp_path_factory):
+    """The Portunus temple with a one-LOD column asset (low, one base, one scroll) and 16 px
+    textures: every kind of composition the full temple has, in a few seconds."""
+    from ionic_usd.temple.layout import portunus_layout
+    from ionic_usd.usd.column_asset import ColumnAssetOptions
+    from ionic_usd.usd.temple import compose_temple
+
+    folder = tmp_path_factory.mktemp("tiny") / "TinyTemple"
+    opts = ColumnAssetOptions(lods=("low",), bases=("attic_bezier_plinth",), scrolls=("S1",),
+                              texture_size=16)
+    # detail = plain: the cuboid temple the export and reader tests count (the detail
+    # variants are tested in test_detail.py)
+    return compose_temple(folder, portunus_layout(), texture_size=16, asset_options=opts,
+                          detail="plain")
+
+
+@pytest.fixture(scope="session")
+def tiny_city(tiny_temple):
+    """A 2 x 2 city of the tiny temple (instanced temples + a PointInstancer of columns)."""
+    from ionic_usd.usd.city import compose_city
+
+    return compose_city(tiny_temple.root.parent.parent, tiny_temple.root.parent.name,
+                        rows=2, cols=2).path

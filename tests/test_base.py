@@ -288,10 +288,14 @@ def test_square_plinth_slab():
     assert_allclose(np.abs(low[:, [0, 2]]), D + 0.12, atol=1e-15)  # a square of half-side d+r
     assert len(low) == 4
     # the slab's height is the first module's
-    slab = m.points[:8]
+    slab = m.points[-8:]
     assert_allclose(np.unique(slab[:, 1]), [0.0, 0.12])
     # nothing of the revolved part lies below the slab top
-    assert m.points[8:, 1].min() == pytest.approx(0.12)
+    assert m.points[:-8, 1].min() == pytest.approx(0.12)
+    # one shell: the revolved part stands in a hole of the slab's top face
+    from ionic_usd.geometry.check import solid_report
+
+    assert solid_report(m).solid
     # open bottom: only the box's bottom square is open
     assert len(boundary_edges(build_base(p, cap_bottom=False))) == 4
 

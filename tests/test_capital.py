@@ -182,8 +182,8 @@ def test_lod_changes_triangle_count():
 
 @pytest.mark.parametrize("dy", [-0.05, 0.0, 0.1])
 def test_capital_position_lifts_everything(dy):
-    base = capital_mesh(CapitalParams(), top_radius=C)
-    moved = capital_mesh(CapitalParams(capital_position_y=dy), top_radius=C)
+    base = build_capital(CapitalParams(), top_radius=C).merged()
+    moved = build_capital(CapitalParams(capital_position_y=dy), top_radius=C).merged()
     assert_allclose(moved.points, base.points + [0, dy, 0], atol=1e-12)
     assert capital_height(CapitalParams(capital_position_y=dy)) == pytest.approx(
         moved.extent[1, 1])

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+import json
 
 import numpy as np
 import pytest
@@ -18,8 +19,9 @@ VARIANTS = {
     "lod": ("high", "medium", "low"),
     "base": ("attic_bezier_plinth", "attic_bezier", "G1", "G2"),
     "scroll": ("S1", "S2"),
+    "capital": ("normal", "angle"),
     "flutes": ("f24", "f20"),
-    "form": ("full", "engaged"),
+    "form": ("full", "engaged", "corner"),
     "finish": ("travertine", "stucco"),
 }
 
@@ -95,15 +97,16 @@ def test_variant_sets_and_validation_per_selection(column_asset):
 def test_every_selection_has_one_mesh_per_part(column_asset):
     stage = open_stage(column_asset)
     vsets = stage.GetDefaultPrim().GetVariantSets()
-    names = ["lod", "base", "scroll", "flutes", "form"]
+    names = ["lod", "base", "scroll", "capital", "flutes", "form"]
     for combo in itertools.product(*(VARIANTS[n] for n in names)):
         for n, v in zip(names, combo, strict=True):
             vsets.GetVariantSet(n).SetVariantSelection(v)
         meshes = active_meshes(stage)
         parts = sorted(p.split("/")[3] for p in meshes)
-        assert parts == ["Base", "CapitalBody", "CapitalScroll", "Shaft"], combo
-        lod = combo[0]
-        assert all(p.endswith(lod) or p.endswith(f"{lod}_engaged") for p in meshes), combo
+        assert parts == ["Base", "CapitalBody", "Shaft"], combo
+        lod, form = combo[0], combo[-1]
+        suffix = lod if form == "full" else f"{lod}_{form}"
+        assert all(p.endswith(suffix) for p in meshes), combo
 
 
 def test_every_mesh_closed_with_uvs_in_unit_square(column_asset):
@@ -111,7 +114,7 @@ def test_every_mesh_closed_with_uvs_in_unit_square(column_asset):
     stage = Usd.Stage.Open(layer)
     prims = [p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh)
              and not _prototype_of_instancer(p)]
-    assert len(prims) == column_asset.meshes == 3 * (4 + 2 + 2 + 1) * 2
+    assert len(prims) == column_asset.meshes == 3 * (4 + 2 + 2 * 2) * 3
     for prim in prims:
         m = mesh_value(prim)
         r = inspect_mesh(m)
@@ -139,9 +142,9 @@ def test_charts_do_not_overlap_in_any_mesh(column_asset):
 def test_switching_variants_changes_exactly_their_part(column_asset):
     stage = open_stage(column_asset)
     vsets = stage.GetDefaultPrim().GetVariantSets()
-    expect = {"lod": {"Base", "Shaft", "CapitalBody", "CapitalScroll"}, "base": {"Base"},
-              "scroll": {"CapitalScroll"}, "flutes": {"Shaft"},
-              "form": {"Base", "Shaft", "CapitalBody", "CapitalScroll"}}
+    expect = {"lod": {"Base", "Shaft", "CapitalBody"}, "base": {"Base"},
+              "scroll": {"CapitalBody"}, "capital": {"CapitalBody"}, "flutes": {"Shaft"},
+              "form": {"Base", "Shaft", "CapitalBody"}}
     for name, parts in expect.items():
         vs = vsets.GetVariantSet(name)
         default = vs.GetVariantSelection()
@@ -225,8 +228,17 @@ def test_force_replaces_atomically(tmp_path):
     with pytest.raises(OutputExistsError):
         build_column_asset(dest, opts)
     assert (dest / "stray.txt").exists()
+    # a generated file the next build no longer makes goes; the user's own file stays
+    (dest / "Payload" / "Textures" / "old_generated.png").write_bytes(b"x")
+    from ionic_usd.io import MANIFEST_NAME, generated_files
+
+    listed = generated_files(dest)
+    assert "Payload/Geometry.usdc" in listed and "stray.txt" not in listed
+    (dest / MANIFEST_NAME).write_text(json.dumps(
+        {"files": [*listed, "Payload/Textures/old_generated.png"]}))
     build_column_asset(dest, opts, force=True)
-    assert not (dest / "stray.txt").exists()
+    assert (dest / "stray.txt").read_text() == "from the old asset"
+    assert not (dest / "Payload" / "Textures" / "old_generated.png").exists()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["IonicColumn"]
 
 

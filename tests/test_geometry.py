@@ -142,3 +142,18 @@ def test_revolve_cylinder_volume(segments):
     assert [len(x) for x in rows] == [1, segments, segments, 1]
     with pytest.raises(GeometryError):
         revolve(np.array([[-1.0, 0.0], [1.0, 1.0]]), 8)
+
+
+def test_replace_never_keeps_stale_triangles():
+    import dataclasses
+
+    m = cube()
+    before = m.triangles.copy()
+    flipped = m.face_vertex_indices.reshape(-1, 4)[:, ::-1].reshape(-1)
+    from ionic_usd.geometry.mesh import triangulate_fan
+
+    expected = triangulate_fan(m.face_vertex_counts, flipped)
+    for other in (dataclasses.replace(m, face_vertex_indices=flipped),
+                  m.with_(face_vertex_indices=flipped)):
+        np.testing.assert_array_equal(other.triangles, expected)
+        assert not np.array_equal(other.triangles, before)

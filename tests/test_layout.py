@@ -30,6 +30,7 @@ from ionic_usd.temple import (
     load_cuboids_toml,
     portunus_layout,
 )
+from ionic_usd.temple.layout import ROOF_BED
 
 W, L, H_COL, D = 10.50, 19.30, 8.22, 0.95  # the brief's figures, restated independently
 PODIUM_H = 2.40
@@ -79,7 +80,10 @@ def test_layout_imports_without_pxr():
 
 def test_column_counts(lay):
     assert len(lay.columns_of("free")) == 6
-    assert len(lay.columns_of("engaged")) == 12
+    assert len(lay.columns_of("engaged")) == 8
+    # three-quarter columns on the cella's four wall corners
+    assert sorted(c.name for c in lay.columns_of("corner")) == [
+        "left_3", "rear_1", "rear_4", "right_3"]
     pos = np.array([c.position for c in lay.columns])
     assert len(np.unique(np.round(pos, 6), axis=0)) == 18  # no column placed twice
     # 4 x 7 perimeter: 2 * (4 + 7) - 4 = 18 axes
@@ -141,10 +145,10 @@ def test_roof_pitch_from_vertex_heights(lay):
         dx = piece.max[0] - piece.min[0]
         expect = math.tan(phi) * dx * (1 if piece is left else -1)
         assert_allclose(dy, expect)
-    # the ridge is cornice width / 9 above the cornice top (Vitruvius III.5.12)
+    # the soffit rises cornice width / 9 to the ridge (Vitruvius III.5.12), from its bed
     ridge = cuboid_points(left)[:, 1].max() - left.max[1] + left.min[1]
     width = cornice.max[0] - cornice.min[0]
-    assert_allclose(ridge - cornice.max[1], width / 9)
+    assert_allclose(ridge - cornice.max[1], width / 9 + ROOF_BED)
     assert_allclose([left.min[0], right.max[0]], [cornice.min[0], cornice.max[0]])
 
 
@@ -159,6 +163,11 @@ def test_roof_halves_meet_at_ridge_and_pediment_fills_gable(lay):
         xs = np.linspace(ped.min[0], ped.max[0], 7)
         assert_allclose(ped.top_at(xs), slab.bottom_at(xs), atol=1e-9)  # touching, no gap
         assert_allclose(ped.min[1], lay.cuboid("cornice").max[1])
+        # as wide as the cornice: nothing between the cornice top and the slabs
+        cornice = lay.cuboid("cornice")
+        assert_allclose(sorted([abs(ped.min[0]), abs(ped.max[0])]), [0.0, cornice.max[0]])
+        assert_allclose(ped.top_at(cornice.max[0] * np.sign(ped.max[0] + ped.min[0])),
+                        cornice.max[1] + ROOF_BED)
 
 
 def test_all_cuboid_meshes_watertight(lay):

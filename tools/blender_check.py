@@ -4,7 +4,7 @@ Blender as a Python module (``bpy==5.0.1``, Python 3.11) pins its own numpy, so 
 separate virtual environment. Run from the project's environment::
 
     python tools/blender_check.py IonicColumn/IonicColumn.usda          # the column asset
-    python tools/blender_check.py PortunusTemple/Temple.usda --instances 18 --prototypes 2
+    python tools/blender_check.py PortunusTemple/Temple.usda --instances 18 --prototypes 3
 
 The driver reads the composed stage with pxr (variant selections, expected meshes), then runs
 this same file inside the Blender environment (``--blender-python``, ``$IONIC_USD_BPY_PYTHON``,

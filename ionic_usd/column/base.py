@@ -54,7 +54,7 @@ import numpy as np
 
 from ionic_usd.errors import GeometryError, GrammarError, ParameterError
 from ionic_usd.geometry.curves import bezier, revolve
-from ionic_usd.geometry.mesh import Mesh, merge, smooth_normals
+from ionic_usd.geometry.mesh import Mesh, face_normals, smooth_normals
 from ionic_usd.grammar.base import (
     BaseGrammar,
     BezierBase,
@@ -293,8 +293,14 @@ def _closed_profile(
     """The profile to revolve (axis → outside → top) and its segment groups."""
     outer, seg, half, ptop, tol = _layout(p)
     d = p.shaft_radius
+    if p.plinth_modules:
+        # a flat run on the plinth's top is the slab's own top face: start after it
+        k = 0
+        while k + 1 < len(outer) and outer[k + 1, 1] == outer[0, 1]:
+            k += 1
+        outer, seg = outer[k:], seg[k:]
     pr = _Profile([], [])
-    if cap_bottom or p.plinth_modules:
+    if cap_bottom and not p.plinth_modules:
         pr.nodes.append((0.0, float(outer[0, 1])))
         pr.groups.append(_BOTTOM)
         _append(pr, float(outer[0, 0]), float(outer[0, 1]), _BOTTOM, tol)
@@ -305,11 +311,14 @@ def _closed_profile(
         _append(pr, float(r), float(y), int(gid), tol)
     h = float(outer[-1, 1])
     _append(pr, d, h, _TOP, tol)
+    # the ring of radius d is kept even inside a flat top: it is the shaft's bottom ring, and
+    # the disc inside it is exactly the shaft's bottom cap (remove both and they weld)
+    last = len(pr.nodes) - 1
     if cap_top:
-        _append(pr, 0.0, h, _TOP, tol)
+        pr.nodes.append((0.0, h))
+        pr.groups.append(_TOP)
     nodes = np.array(pr.nodes, dtype=np.float64)
-    if not cap_top:
-        nodes[-1] = (d, h)  # exactly the shaft's ring
+    nodes[last] = (d, h)
     return nodes, np.array(pr.groups[1:], dtype=np.int64), half, ptop
 
 
@@ -335,8 +344,8 @@ def base_profile(p: BaseParams | None = None, *, closed: bool = False) -> np.nda
     p = p or BaseParams()
     if closed:
         nodes, _, half, ptop = _closed_profile(p, cap_bottom=True, cap_top=True)
-        if p.plinth_modules:
-            nodes = np.vstack([[[0.0, 0.0], [half, 0.0], [half, ptop]], nodes[1:]])
+        if p.plinth_modules:  # the slab's outline, then the revolved rest from its ring
+            nodes = np.vstack([[[0.0, 0.0], [half, 0.0], [half, ptop]], nodes])
         return nodes
     outer, _, half, ptop, tol = _layout(p)
     if p.plinth_modules:
@@ -355,21 +364,55 @@ def base_triangle_estimate(p: BaseParams, *, cap_bottom: bool = True,
     n = p.segments
     band = np.where(on_axis[:-1] | on_axis[1:], n, 2 * n)
     band[on_axis[:-1] & on_axis[1:]] = 0
-    box = 12 - (0 if cap_bottom else 2) if p.plinth_modules else 0
+    box = 8 + (2 if cap_bottom else 0) + n + 4 if p.plinth_modules else 0
     return int(band.sum()) + box
 
 
-def _plinth_box(half: float, top: float, cap_bottom: bool) -> Mesh:
-    """A closed square slab (open at the bottom without ``cap_bottom``) with crisp normals."""
-    s = half
-    pts = np.array([[x, y, z] for y in (0.0, top) for z in (s, -s) for x in (-s, s)])
-    # corners: 0..3 bottom (-x+z, +x+z, -x-z, +x-z), 4..7 top; quads wound CCW from outside
-    quads = [(4, 5, 7, 6), (0, 1, 5, 4), (1, 3, 7, 5), (3, 2, 6, 7), (2, 0, 4, 6)]
+def _plinth_box(half: float, top: float, ring: np.ndarray, ring_pts: np.ndarray,
+                cap_bottom: bool, first: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The square plinth around the revolved part's open bottom ring, as one shell with it.
+
+    Its top face is the square minus the ring's disc (constrained Delaunay, shapely).
+
+    Parameters
+    ----------
+    half, top : half-side and height of the slab (m)
+    ring : (s,) int vertex indices of the revolved part's bottom ring (counter-clockwise
+        about +Y, vertex 0 at +X), at y = ``top``
+    ring_pts : (s, 3) float their positions
+    first : index the slab's 8 corners start at
+
+    Returns
+    -------
+    points (8, 3), triangles (t, 3) int, corner normals (t, 3, 3) float32
+    """
+    h = half
+    # corners by angle θ = atan2(−z, x): 45°, 135°, 225°, 315°; bottom ones first
+    cxz = np.array([[h, -h], [-h, -h], [-h, h], [h, h]])
+    pts = np.array([[x, y, z] for y in (0.0, top) for x, z in cxz])
+    bot = first + np.arange(4)
+    tp = first + 4 + np.arange(4)
+    tris = []
+    # the top face: a constrained Delaunay triangulation of the square with the ring as a
+    # hole adds no vertex, so it shares exactly the ring's edges
+    import shapely
+    from scipy.spatial import cKDTree
+
+    xy = np.concatenate([cxz, ring_pts[:, [0, 2]]])
+    poly = shapely.Polygon(cxz, [ring_pts[:, [0, 2]]])
+    coords = shapely.get_coordinates(shapely.constrained_delaunay_triangles(poly))
+    dist, jj = cKDTree(xy).query(coords.reshape(-1, 4, 2)[:, :3].reshape(-1, 2))
+    if np.any(dist > 1e-9 * h):
+        raise GeometryError("build_base: the plinth's top triangulation added vertices")
+    ids = np.concatenate([tp, ring])
+    tris = [tuple(t) for t in ids[jj].reshape(-1, 3)]
+    for k in range(4):  # sides: corners k → k+1 go clockwise seen from above
+        k1 = (k + 1) % 4
+        tris += [(bot[k], bot[k1], tp[k1]), (bot[k], tp[k1], tp[k])]
     if cap_bottom:
-        quads.append((0, 2, 3, 1))
-    tri = np.array([t for q in quads for t in ((q[0], q[1], q[2]), (q[0], q[2], q[3]))])
-    mesh = Mesh(pts, np.full(len(tri), 3, np.int32), tri.reshape(-1), name="plinth")
-    return smooth_normals(mesh, np.repeat(np.arange(len(quads)), 2))
+        tris += [(bot[0], bot[3], bot[2]), (bot[0], bot[2], bot[1])]
+    tri = np.array(tris, dtype=np.int64)
+    return pts, tri, np.zeros((len(tri), 3, 3), dtype=np.float32)
 
 
 def build_base(
@@ -406,10 +449,34 @@ def build_base(
         raise GeometryError("build_base: revolve's band layout changed")
     mesh = smooth_normals(mesh, groups - groups.min())
     if p.plinth_modules:
-        mesh = merge([_plinth_box(half, ptop, cap_bottom), mesh], name=name)
+        mesh = _with_plinth(mesh, rows[0], half, ptop, cap_bottom, name)
     if y_offset:
         mesh = mesh.with_(points=mesh.points + np.array([0.0, y_offset, 0.0]))
     return mesh
+
+
+def _with_plinth(mesh: Mesh, ring: np.ndarray, half: float, top: float, cap_bottom: bool,
+                 name: str) -> Mesh:
+    """Close the revolved part's bottom ring with the square plinth (one shell, flat normals)."""
+    if len(ring) == 1 or half <= float(np.linalg.norm(mesh.points[ring[0]][[0, 2]])):
+        raise GeometryError("build_base: the plinth must be wider than the moulding on it")
+    pts, tri, _ = _plinth_box(half, top, ring, mesh.points[ring], cap_bottom, mesh.n_points)
+    points = np.concatenate([mesh.points, pts])
+    fn, _ = face_normals(points, tri)
+    # orient every slab triangle outward by construction check: flip any facing inward
+    centre = np.array([0.0, top / 2, 0.0])
+    cen = points[tri].mean(axis=1)
+    out = np.einsum("ij,ij->i", fn, cen - centre)
+    flat_top = np.abs(points[tri][:, :, 1] - top).max(axis=1) < 1e-12
+    out = np.where(flat_top, fn[:, 1], out)
+    flip = out < 0
+    tri[flip] = tri[flip][:, [0, 2, 1]]
+    fn[flip] = -fn[flip]
+    normals = np.concatenate([mesh.normals.reshape(-1, 3),
+                              np.repeat(fn.astype(np.float32), 3, axis=0)])
+    idx = np.concatenate([mesh.face_vertex_indices, tri.reshape(-1)])
+    return Mesh(points, np.full(len(idx) // 3, 3, np.int32), idx, normals, "faceVarying",
+                name=name)
 
 
 # -- presets --------------------------------------------------------------------------------

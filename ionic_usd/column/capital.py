@@ -376,9 +376,9 @@ class CapitalParts:
 
     abacus: Mesh
     echinus: Mesh
-    volutes: tuple[Mesh, Mesh, Mesh, Mesh]
-    canales: tuple[Mesh, Mesh]
-    bolsters: tuple[Mesh, Mesh]
+    volutes: tuple[Mesh, ...]
+    canales: tuple[Mesh, ...]
+    bolsters: tuple[Mesh, ...]
 
     def as_dict(self) -> dict[str, Mesh]:
         """Name → mesh, in a stable order (names are valid USD prim names)."""
@@ -414,13 +414,19 @@ _MIRROR_X = np.diag([-1.0, 1.0, 1.0])
 _MIRROR_Z = np.diag([1.0, 1.0, -1.0])
 
 
-def build_capital(p: CapitalParams | None = None, *, top_radius: float) -> CapitalParts:
+def build_capital(p: CapitalParams | None = None, *, top_radius: float,
+                  angle: bool = False) -> CapitalParts:
     """Build the Ionic capital's parts.
 
     Parameters
     ----------
     p : CapitalParams (defaults: Vitruvius / Portunus)
     top_radius : radius of the shaft's top circle $c (m), where the echinus starts
+    angle : an angle (corner) capital whose two outer faces, +Z and +X, both show volutes:
+        the corner volute is turned 45° outward onto the diagonal, the +X face gets its own
+        canalis and rear volute (the front-right volute turned 90°), and only the left bolster
+        is kept (the inner faces −X and −Z). ``volutes``: front-left, corner, side-rear,
+        rear-left; ``canales``: front, rear, side; ``bolsters``: left only.
 
     Returns
     -------
@@ -442,7 +448,9 @@ def build_capital(p: CapitalParams | None = None, *, top_radius: float) -> Capit
     rr = _rigid(fr, _MIRROR_Z, name="volute_rear_right")
     rl = _rigid(fl, _MIRROR_Z, name="volute_rear_left")
     slab_front = lay.face_z - p.relief_depth
-    canalis_lo = min(lay.eye_y, lay.abacus_y - 1e-3)
+    # the canalis hangs between the volutes down to the echinus' top, so the echinus runs
+    # under it as a moulding (from the eye down it would cut the ovolo's top off flat)
+    canalis_lo = min(max(lay.eye_y, p.echinus_height), lay.abacus_y - 1e-3)
     front = _box((-lay.eye_x, canalis_lo, lay.back_z), (lay.eye_x, lay.abacus_y, slab_front),
                  "canalis_front")
     rear = _rigid(front, _MIRROR_Z, name="canalis_rear")
@@ -452,6 +460,8 @@ def build_capital(p: CapitalParams | None = None, *, top_radius: float) -> Capit
               (p.abacus_length / 2, lay.abacus_y + p.abacus_height, p.abacus_width / 2),
               "abacus")
     ech = _echinus(p, float(top_radius), segs)
+    if angle:
+        return _angle_capital(p, lay, ab, ech, fr, fl, rl, canalis_lo, rear, bl)
     parts = [ab, ech, fr, fl, rr, rl, front, rear, br, bl]
     if p.capital_position_y != 0:
         parts = [_rigid(m, eye3, (0.0, p.capital_position_y, 0.0)) for m in parts]
@@ -459,7 +469,53 @@ def build_capital(p: CapitalParams | None = None, *, top_radius: float) -> Capit
     return CapitalParts(ab, ech, (fr, fl, rr, rl), (front, rear), (br, bl))
 
 
+def _rot_y(deg: float) -> np.ndarray:
+    """Rotation about +Y taking +Z to (sin θ, 0, cos θ)."""
+    t = math.radians(deg)
+    # exact for quarter turns, so faces coplanar before the turn stay exactly coplanar
+    c, s = (round(math.cos(t)), round(math.sin(t))) if deg % 90 == 0 else \
+        (math.cos(t), math.sin(t))
+    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+
+
+def _angle_capital(p: CapitalParams, lay: CapitalLayout, ab: Mesh, ech: Mesh, fr: Mesh,
+                   fl: Mesh, rl: Mesh, canalis_lo: float, rear: Mesh, bl: Mesh
+                   ) -> CapitalParts:
+    """The angle capital (see :func:`build_capital`): outer faces +Z and +X."""
+    from ionic_usd.geometry.boolean import union
+    from ionic_usd.geometry.clip import clip_mesh
+
+    eye = np.array([lay.eye_x, lay.eye_y, lay.face_z])
+    # the corner volute: turned 45° about its eye's vertical, its eye moved onto the diagonal;
+    # its band, eye and disc are united first, where their touching faces are exactly coplanar
+    e = 0.5 * (lay.eye_x + lay.face_z)
+    diag = _rigid(union([_rigid(fr, np.eye(3), -eye)]), _rot_y(45.0), (e, lay.eye_y, e),
+                  "volute_corner")
+    quarter = _rot_y(90.0)  # +Z → +X: the front face's right half becomes the +X face
+    side = _rigid(fr, quarter, name="volute_side_rear")
+    # the two outer canales run from their face's other volute into the corner volute and end
+    # in the plane of its disc's face (under its raised band)
+    slab_front = lay.face_z - p.relief_depth
+    reach = e + lay.total_radius
+    front = _box((-lay.eye_x, canalis_lo, lay.back_z), (reach, lay.abacus_y, slab_front),
+                 "canalis_front")
+    side_canalis = _rigid(_box((-reach, canalis_lo, lay.back_z),
+                               (lay.eye_x, lay.abacus_y, slab_front), "canalis_side"), quarter)
+    diag_n = np.array([-1.0, 0.0, -1.0]) / math.sqrt(2.0)  # keep the side behind the disc face
+    on_face = np.array([e, 0.0, e]) + diag_n * p.relief_depth
+    front = clip_mesh(front, on_face, diag_n, name="canalis_front")
+    side_canalis = clip_mesh(side_canalis, on_face, diag_n, name="canalis_side")
+    parts = [ab, ech, fl, diag, side, rl, front, rear, side_canalis, bl]
+    if p.capital_position_y != 0:
+        parts = [_rigid(m, np.eye(3), (0.0, p.capital_position_y, 0.0)) for m in parts]
+    ab, ech, fl, diag, side, rl, front, rear, side_canalis, bl = parts
+    return CapitalParts(ab, ech, (fl, diag, side, rl), (front, rear, side_canalis), (bl,))
+
+
 def capital_mesh(p: CapitalParams | None = None, *, top_radius: float,
-                 name: str = "capital") -> Mesh:
-    """All capital parts merged into one mesh (separate closed shells)."""
-    return build_capital(p, top_radius=top_radius).merged(name)
+                 name: str = "capital", angle: bool = False) -> Mesh:
+    """All capital parts united into one closed solid (manifold3d boolean union)."""
+    from ionic_usd.geometry.boolean import union
+
+    parts = build_capital(p, top_radius=top_radius, angle=angle)
+    return union(list(parts.as_dict().values()), name=name)

@@ -20,11 +20,15 @@ import dataclasses
 import math
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from ionic_usd.column.base import BaseParams, build_base, load_base_preset
 from ionic_usd.column.capital import CapitalParams, build_capital, capital_height
 from ionic_usd.column.shaft import ShaftParams, build_shaft
 from ionic_usd.errors import ParameterError
-from ionic_usd.geometry.mesh import Mesh, merge
+from ionic_usd.geometry.boolean import union
+from ionic_usd.geometry.guard import guarded
+from ionic_usd.geometry.mesh import Mesh
 
 __all__ = [
     "Lod",
@@ -49,7 +53,9 @@ class Lod:
     """Sampling of every part for one level of detail.
 
     ``flute_slices``/``fillet_ratio`` are the shaft's $h/$i; ``base_slices`` the rows per curved
-    base floor; ``spiral_samples``, ``ring_segments``, ``bolster_rows`` the capital's.
+    base floor; ``spiral_samples``, ``ring_segments``, ``bolster_rows`` the capital's;
+    ``shaft_rows`` the rows along the fluted body (one row of 7 m long, 2 cm wide triangles is
+    fine for a renderer but poor for displacement, booleans and LOD tools).
     """
 
     flute_slices: int
@@ -58,14 +64,15 @@ class Lod:
     spiral_samples: int
     ring_segments: int
     bolster_rows: int
+    shaft_rows: int = 1
 
 
 # Triangle budgets (default Portunus column, measured by tools/bench_column.py):
 # high ≈ 40k, medium ≈ 14k, low ≈ 6k triangles.
 LODS: dict[str, Lod] = {
-    "high": Lod(8, 4, 8, 192, 48, 32),
-    "medium": Lod(4, 2, 4, 96, 24, 16),
-    "low": Lod(2, 1, 2, 48, 16, 8),
+    "high": Lod(8, 4, 8, 192, 48, 32, 24),  # rows ≈ 0.29 m apart
+    "medium": Lod(4, 2, 4, 96, 24, 16, 8),  # ≈ 0.88 m
+    "low": Lod(2, 1, 2, 48, 16, 8, 3),  # ≈ 2.3 m
 }
 
 
@@ -91,10 +98,11 @@ class ColumnParams:
     height). The LOD overrides the sampling fields of ``shaft`` and ``capital``.
     """
 
-    shaft: ShaftParams = field(default_factory=ShaftParams)
+    # defaults: the Temple of Portunus column, the same as portunus_column_params()
+    shaft: ShaftParams = field(default_factory=lambda: portunus_shaft_params())
     capital: CapitalParams = field(default_factory=CapitalParams)
     base: str = "attic_bezier_plinth"
-    base_height: float | None = None
+    base_height: float | None = PORTUNUS_LOWER_DIAMETER / 2.0
     lod: str = "high"
 
     def __post_init__(self) -> None:
@@ -122,8 +130,11 @@ class ColumnParams:
                 bp = BaseParams(grammar=name, **common)
             else:
                 raise
+        h = guarded(lambda: bp.height, "base", name)
+        if not (math.isfinite(h) and h > 0):
+            raise ParameterError("base", name, "a base grammar with a height > 0 (m)")
         if self.base_height is not None:
-            bp = dataclasses.replace(bp, scale=bp.scale * self.base_height / bp.height)
+            bp = dataclasses.replace(bp, scale=bp.scale * self.base_height / h)
         return bp
 
     def shaft_params(self) -> ShaftParams:
@@ -131,7 +142,8 @@ class ColumnParams:
         if lod is None:
             return self.shaft
         return dataclasses.replace(self.shaft, flute_slices=lod.flute_slices,
-                                   flute_slices_per_fillet_slice=lod.fillet_ratio)
+                                   flute_slices_per_fillet_slice=lod.fillet_ratio,
+                                   body_rows=lod.shaft_rows)
 
     def capital_params(self, scroll: str | None = None) -> CapitalParams:
         lod = _lod(self.lod)
@@ -145,6 +157,24 @@ class ColumnParams:
     def with_lod(self, lod: str) -> ColumnParams:
         return dataclasses.replace(self, lod=lod)
 
+    def with_flutes(self, flutes: int) -> ColumnParams:
+        """The same column with another flute count.
+
+        The flute/period ratio is kept; the fluted body $a is re-derived so the shaft keeps its
+        length (wider flutes have taller rounded ends), and the bottom/top rings keep their
+        vertex count, so every base variant fits every flute variant.
+        """
+        sh = self.shaft
+        if flutes == sh.flutes:
+            return self
+        ratio = sh.flute_angle / (360.0 / sh.flutes)
+        probe = dataclasses.replace(sh, flutes=flutes, flute_angle=ratio * 360.0 / flutes,
+                                    ring_vertices=self.shaft_params().ring_segments)
+        height = sh.length - (probe.length - probe.height)
+        if height <= 0:
+            raise ParameterError("flutes", flutes, "a count whose flute ends fit the shaft")
+        return dataclasses.replace(self, shaft=dataclasses.replace(probe, height=height))
+
 
 @dataclass(frozen=True)
 class Column:
@@ -154,7 +184,6 @@ class Column:
     base: Mesh
     shaft: Mesh
     capital_body: Mesh
-    capital_scroll: Mesh
     base_height: float
     shaft_length: float
     capital_height: float
@@ -165,12 +194,12 @@ class Column:
 
     @property
     def capital(self) -> Mesh:
-        return merge([self.capital_body, self.capital_scroll], name="capital")
+        """The capital: one solid (abacus, echinus, volutes, canales and bolsters united)."""
+        return self.capital_body
 
     def parts(self) -> dict[str, Mesh]:
-        """Prim name → mesh: ``Base``, ``Shaft``, ``CapitalBody``, ``CapitalScroll``."""
-        return {"Base": self.base, "Shaft": self.shaft, "CapitalBody": self.capital_body,
-                "CapitalScroll": self.capital_scroll}
+        """Prim name → mesh: ``Base``, ``Shaft``, ``CapitalBody`` (each one closed solid)."""
+        return {"Base": self.base, "Shaft": self.shaft, "CapitalBody": self.capital_body}
 
     @property
     def n_triangles(self) -> int:
@@ -178,35 +207,56 @@ class Column:
 
 
 def build_base_part(params: ColumnParams, base: str | None = None, **kwargs) -> Mesh:
-    return build_base(params.base_params(base), name="base", **kwargs)
+    """The base as a closed, outward solid (or a ParameterError naming ``base``)."""
+    name = params.base if base is None else base
+    return guarded(lambda: build_base(params.base_params(base), name="base", **kwargs),
+                   "base", name)
 
 
 def build_shaft_part(params: ColumnParams, base_height: float, **kwargs) -> Mesh:
-    return build_shaft(params.shaft_params(), y_offset=base_height, name="shaft", **kwargs)
+    """The shaft lifted by ``base_height`` (a ParameterError naming ``shaft`` if it fails)."""
+    return guarded(lambda: build_shaft(params.shaft_params(), y_offset=base_height,
+                                       name="shaft", **kwargs), "shaft", "parameters")
 
 
-def build_capital_parts(params: ColumnParams, y: float, scroll: str | None = None
-                        ) -> tuple[Mesh, Mesh]:
-    """(body: abacus, echinus, volutes, canales; scroll: the two bolsters) lifted to ``y``."""
-    from ionic_usd.geometry.mesh import transform
+def build_capital_part(params: ColumnParams, y: float, scroll: str | None = None, *,
+                       angle: bool = False) -> Mesh:
+    """The capital lifted to ``y``: abacus, echinus, volutes, canales and the scroll's bolsters
+    united into one closed solid (manifold3d); ``angle`` builds the angle capital.
 
-    parts = build_capital(params.capital_params(scroll), top_radius=params.shaft.top_radius)
-    lift = [[1, 0, 0, 0], [0, 1, 0, y], [0, 0, 1, 0], [0, 0, 0, 1.0]]
-    body = merge([parts.abacus, parts.echinus, *parts.volutes, *parts.canales], name="capital")
-    scroll_mesh = merge(list(parts.bolsters), name="scroll")
-    return transform(body, lift), transform(scroll_mesh, lift)
+    A failure is a ParameterError naming the scroll (a user's ring grammar is the likely
+    culprit) or the capital (for the presets)."""
+    from ionic_usd.grammar.scroll import scroll_preset_names
+
+    cp = params.capital_params(scroll)
+    text = _scroll_text(cp)
+    lift = np.array([0.0, y, 0.0])
+
+    def build() -> Mesh:
+        parts = build_capital(cp, top_radius=params.shaft.top_radius, angle=angle)
+        return union([m.with_(points=m.points + lift) for m in parts.as_dict().values()],
+                     name="capital")
+
+    return guarded(build, "capital" if text in scroll_preset_names() else "scroll", text)
 
 
 def build_column(params: ColumnParams | None = None) -> Column:
     """Build every part of a column at its LOD, stacked on the +Y axis."""
     params = params or portunus_column_params()
-    bp = params.base_params()
-    base = build_base(bp, name="base")
+    bp = guarded(params.base_params, "base", params.base)
+    if not (bp.height > 0 and math.isfinite(bp.height)):
+        raise ParameterError("base", params.base, "a base grammar with a height > 0")
+    base = build_base_part(params)
     shaft = build_shaft_part(params, bp.height)
     y_cap = bp.height + params.shaft.length
-    body, scroll = build_capital_parts(params, y_cap)
-    return Column(params, base, shaft, body, scroll, bp.height, params.shaft.length,
+    body = build_capital_part(params, y_cap)
+    return Column(params, base, shaft, body, bp.height, params.shaft.length,
                   capital_height(params.capital))
+
+
+def _scroll_text(cp: CapitalParams) -> str:
+    s = cp.scroll
+    return s if isinstance(s, str) else s.to_string()
 
 
 def portunus_column_params(
@@ -227,26 +277,38 @@ def portunus_column_params(
     (Vitruvius III.5.14; ``flutes=20`` is the reconstruction hypothesis); capital proportions
     after Vitruvius III.5.5–8 (see :mod:`ionic_usd.column.capital`).
     """
-    d = lower_diameter / 2.0
-    base_h = lower_diameter / 2.0
     cap = CapitalParams()
-    period = 360.0 / flutes
-    probe = ShaftParams(bottom_radius=d, top_radius=d * 6.0 / 7.0, flutes=flutes,
-                        flute_angle=0.8 * period)
-    fixed = probe.length - probe.height  # rings + flute ends
-    shaft_a = height - base_h - capital_height(cap) - fixed
-    if shaft_a <= 0:
-        raise ParameterError("height", height, "tall enough for base, capital and flute ends")
-    shaft = dataclasses.replace(probe, height=shaft_a)
+    shaft = portunus_shaft_params(height=height, lower_diameter=lower_diameter, flutes=flutes,
+                                  capital=cap)
     return ColumnParams(shaft=shaft, capital=cap.with_(scroll=scroll), base=base,
-                        base_height=base_h, lod=lod)
+                        base_height=lower_diameter / 2.0, lod=lod)
+
+
+def portunus_shaft_params(
+    *,
+    height: float = PORTUNUS_HEIGHT,
+    lower_diameter: float = PORTUNUS_LOWER_DIAMETER,
+    flutes: int = 24,
+    capital: CapitalParams | None = None,
+) -> ShaftParams:
+    """The shaft of a column ``height`` m tall from base bottom to abacus top, with a base half
+    a diameter high: top diameter 6/7 of the lower one, flutes of 4/5 of the period."""
+    d = lower_diameter / 2.0
+    cap = capital or CapitalParams()
+    probe = ShaftParams(bottom_radius=d, top_radius=d * 6.0 / 7.0, flutes=flutes,
+                        flute_angle=0.8 * 360.0 / flutes)
+    fixed = probe.length - probe.height  # rings + flute ends
+    shaft_a = height - lower_diameter / 2.0 - capital_height(cap) - fixed
+    if not shaft_a > 0:
+        raise ParameterError("height", height, "tall enough for base, capital and flute ends")
+    return dataclasses.replace(probe, height=shaft_a)
 
 
 COLUMN_DOCS: dict[str, tuple[str, str, str]] = {
     "lod": ("", "name", f"level of detail: {', '.join(LODS)}, or custom (use the sampling "
             "fields of [shaft] and [capital] as given)"),
     "base": ("", "name|grammar", "base preset (G1, G2, attic_bezier, attic_bezier_plinth) or a "
-             "base grammar string (tori v1 or Bézier v2, SPEC §2)"),
+             "base grammar string (tori v1 or Bézier v2, the paper's Tables 2–3)"),
     "base_height": ("", "m", "height every base is scaled to (unset: the grammar's own)"),
     "scroll": ("", "name|grammar", "scroll-body ring grammar: S1, S2 or 'R<r> P<p>, …'"),
 }
@@ -260,7 +322,7 @@ def column_params_from_mapping(data: dict, *, context: str = "column config",
     are errors naming them.
     """
     from ionic_usd.column.volute import VoluteParams
-    from ionic_usd.params import dataclass_from_mapping
+    from ionic_usd.params import check_column_tables, dataclass_from_mapping
 
     cur = base or portunus_column_params()
     unknown = sorted(set(data) - {"column", "shaft", "capital", "volute"})
@@ -270,6 +332,7 @@ def column_params_from_mapping(data: dict, *, context: str = "column config",
     for table in ("column", "shaft", "capital", "volute"):
         if table in data and not isinstance(data[table], dict):
             raise ParameterError(table, data[table], "a table", context=context)
+    check_column_tables(data, context=context)  # types and ranges, at the boundary
     col = dict(data.get("column", {}))
     bad = sorted(set(col) - set(COLUMN_DOCS))
     if bad:

@@ -70,6 +70,9 @@ SHAFT_PARAMETER_DOCS: dict[str, tuple[str, str, str]] = {
     "ring_top": ("", "m", "height of the plain ring above the flutes"),
     "entasis": ("", "ratio", "entasis amplitude as a fraction of the bottom radius (0 = none)"),
     "entasis_rows": ("", "count", "rows along the fluted body when entasis > 0"),
+    "body_rows": ("", "count", "rows along the fluted body (at least; entasis_rows with entasis)"),
+    "ring_vertices": ("", "count", "vertices of the bottom/top rings (0: from the fillet step); "
+                      "the column sets one count for every flute variant so bases fit all"),
 }
 
 
@@ -95,6 +98,8 @@ class ShaftParams:
     ring_top: float = 0.06
     entasis: float = 0.0
     entasis_rows: int = 16
+    body_rows: int = 1
+    ring_vertices: int = 0
 
     def __post_init__(self) -> None:
         ctx = "shaft"
@@ -104,7 +109,8 @@ class ShaftParams:
                 raise ParameterError(f.name, v, "a number", context=ctx)
             if not math.isfinite(v):
                 raise ParameterError(f.name, v, "a finite number", context=ctx)
-        for name in ("flutes", "flute_slices", "flute_slices_per_fillet_slice", "entasis_rows"):
+        for name in ("flutes", "flute_slices", "flute_slices_per_fillet_slice", "entasis_rows",
+                     "body_rows", "ring_vertices"):
             if int(getattr(self, name)) != getattr(self, name):
                 raise ParameterError(name, getattr(self, name), "an integer", context=ctx)
             object.__setattr__(self, name, int(getattr(self, name)))
@@ -142,6 +148,11 @@ class ShaftParams:
         if self.entasis_rows < 1:
             raise ParameterError("entasis_rows", self.entasis_rows, "an integer >= 1",
                                  context=ctx)
+        if self.body_rows < 1:
+            raise ParameterError("body_rows", self.body_rows, "an integer >= 1", context=ctx)
+        if self.ring_vertices != 0 and self.ring_vertices < 3:
+            raise ParameterError("ring_vertices", self.ring_vertices, "0 (automatic) or an "
+                                 "integer >= 3", context=ctx)
         # the flutes must not cut through the axis: chord distance minus depth stays > 0
         for name, r in (("bottom_radius ($d)", self.bottom_radius),
                         ("top_radius ($c)", self.top_radius)):
@@ -164,6 +175,8 @@ class ShaftParams:
     @property
     def ring_segments(self) -> int:
         """Vertices in a plain-ring row (the bottom/top rings the base and capital meet)."""
+        if self.ring_vertices:
+            return self.ring_vertices
         step = self.fillet_angle / self.fillet_slices
         per = max(1, round((360.0 / self.flutes) / step))
         return self.flutes * max(per, 2 if self.flutes < 8 else 1)
@@ -213,7 +226,7 @@ def _row_layout(p: ShaftParams) -> tuple[np.ndarray, np.ndarray]:
 
     sb, kb = end(ab)
     st, kt = end(at)
-    body_rows = p.entasis_rows if p.entasis != 0 else 1
+    body_rows = max(p.body_rows, p.entasis_rows if p.entasis != 0 else 1)
     y_body = y0 + ab + p.height * np.arange(1, body_rows) / body_rows
     ys = np.concatenate([y0 + ab * (1.0 - sb), y_body, y0 + ab + p.height + at * st[::-1]])
     ks = np.concatenate([kb, np.ones(len(y_body)), kt[::-1]])
@@ -257,7 +270,7 @@ def shaft_triangle_estimate(p: ShaftParams, *, caps: int = 2) -> int:
     """Triangles :func:`build_shaft` will emit (computed without building)."""
     ys, _ = _row_layout(p)
     n, m = p.fluted_segments, p.ring_segments
-    rings = 2 * m * ((p.ring_bottom > 0) + (p.ring_top > 0))
+    rings = 2 * n * ((p.ring_bottom > 0) + (p.ring_top > 0))
     return 2 * n * (len(ys) - 1) + 2 * (n + m) + rings + caps * m
 
 
@@ -297,17 +310,26 @@ def build_shaft(
     fl_pts, fl_ang = _fluted_rows(p, ys, ks)
     nrows = len(ys)
     L = p.length
-    ring_ys = np.array([0.0, p.ring_bottom, L - p.ring_top, L])
+    # plain rows: the bottom and top rings (m vertices, vertex 0 at +X) and, where a plain
+    # ring has a height, its other row on the circle at the angles of the adjacent fluted
+    # row, so the flute ends meet the ring in regular quads (a stitched fan from the coarse
+    # ring into a narrow flute tip folds against the spoon's normals) and the stitch between
+    # different vertex counts lies on the plain cylinder
     ring_ang = np.arange(m) * (2 * np.pi / m)
-    ring_r = shaft_radius_at(p, ring_ys)[:, None]
-    ring_pts = np.stack([ring_r * np.cos(ring_ang), np.broadcast_to(ring_ys[:, None], (4, m)),
-                         -ring_r * np.sin(ring_ang)], axis=2)
-    # vertex layout: [4 plain rows][fluted rows][2 cap centres]
-    base_fl = 4 * m
-    points = np.concatenate([ring_pts.reshape(-1, 3), fl_pts.reshape(-1, 3),
-                             [[0.0, 0.0, 0.0], [0.0, L, 0.0]]])
+    rows_ang = [ring_ang, fl_ang[0], fl_ang[-1], ring_ang]
+    ring_ys = [0.0, p.ring_bottom, L - p.ring_top, L]
+    ring_rows = []
+    for yv, ang in zip(ring_ys, rows_ang, strict=True):
+        r = float(shaft_radius_at(p, np.array([yv]))[0])
+        ring_rows.append(np.stack([r * np.cos(ang), np.full(len(ang), yv), -r * np.sin(ang)],
+                                  axis=1))
+    sizes = [len(x) for x in ring_rows]
+    starts = np.concatenate([[0], np.cumsum(sizes)])
+    base_fl = int(starts[-1])
+    points = np.concatenate(ring_rows + [fl_pts.reshape(-1, 3),
+                                         np.array([[0.0, 0.0, 0.0], [0.0, L, 0.0]])])
     c_bot, c_top = base_fl + nrows * n, base_fl + nrows * n + 1
-    plain = [np.arange(k * m, (k + 1) * m) for k in range(4)]
+    plain = [np.arange(starts[k], starts[k + 1]) for k in range(4)]
 
     # groups: 0 = fillets and plain rings (one smooth cylinder), 1..e = flutes, e+1/e+2 caps
     col = np.arange(n) % (h + nf)
@@ -325,26 +347,30 @@ def build_shaft(
         b0, b1 = a0 + n, a1 + n
         grid_tri = np.stack([a0, a1, b0, a1, b1, b0], axis=-1).reshape(-1, 3)
         grid_normals = _grid_normals(fl_pts, col, h)
-    # plain rings and their stitching to the narrowed flute ends (angle parameters)
-    if p.ring_bottom == 0:
-        plain[1] = plain[0]
-    if p.ring_top == 0:
-        plain[2] = plain[3]
     u_ring = ring_ang / (2 * np.pi)
+    u_bot, u_top = fl_ang[0] / (2 * np.pi), fl_ang[-1] / (2 * np.pi)
     first_fl = base_fl + np.arange(n)
     last_fl = base_fl + (nrows - 1) * n + np.arange(n)
-    seq_bot = auto_sequence(u_ring, fl_ang[0] / (2 * np.pi), True)  # ring below flute row
-    seq_top = auto_sequence(fl_ang[-1] / (2 * np.pi), u_ring, True)
-    # a stitch triangle touching a flute's interior vertex continues that flute's spoon end
-    interior = (col > 0) & (col < h)
-    bands = [(plain[1], first_fl, seq_bot), (last_fl, plain[2], seq_top)]
+    quads = np.full(n, 2, dtype=np.int64)  # equal rows: one quad per column
+    bands = []
     if p.ring_bottom > 0:
-        bands.insert(0, (plain[0], plain[1], None))
+        bands += [(plain[0], plain[1], auto_sequence(u_ring, u_bot, True)),
+                  (plain[1], first_fl, quads)]
+    else:
+        bands.append((plain[0], first_fl, auto_sequence(u_ring, u_bot, True)))
     if p.ring_top > 0:
-        bands.append((plain[2], plain[3], None))
+        bands += [(last_fl, plain[2], quads),
+                  (plain[2], plain[3], auto_sequence(u_top, u_ring, True))]
+    else:
+        bands.append((last_fl, plain[3], auto_sequence(u_top, u_ring, True)))
+    # a band triangle touching a flute's interior vertex continues that flute's spoon end
+    interior = (col > 0) & (col < h)
     for lo, hi, seq in bands:
         t = stitch(lo, hi, is_closed=True, sequence=seq)
         fl_col = np.where(t >= base_fl, (t - base_fl) % n, -1)
+        for k in (1, 2):  # the plain rows at the flute angles carry the flute columns too
+            on = (t >= starts[k]) & (t < starts[k + 1])
+            fl_col = np.where(on, t - starts[k], fl_col)
         touch = np.where(fl_col >= 0, interior[np.maximum(fl_col, 0)], False)
         g = np.zeros(len(t), dtype=np.int64)
         hit = touch.any(axis=1)
@@ -371,9 +397,9 @@ def build_shaft(
     keep = np.ones(len(points), dtype=bool)
     keep[[c_bot, c_top]] = [cap_bottom, cap_top]
     if p.ring_bottom == 0:
-        keep[m:2 * m] = False
+        keep[plain[1]] = False
     if p.ring_top == 0:
-        keep[2 * m:3 * m] = False
+        keep[plain[2]] = False
     if not keep.all():
         remap = (np.cumsum(keep) - 1).astype(np.int32)
         tri = remap[tri]

@@ -61,7 +61,9 @@ class Mesh:
     st: np.ndarray | None = None
     st_indices: np.ndarray | None = None
     name: str = "mesh"
-    _cache: dict = field(default_factory=dict, repr=False, compare=False)
+    # derived data (the fan triangulation): not an init field, so dataclasses.replace() and
+    # with_() always start a fresh cache and can never carry stale triangles over
+    _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         pts = np.asarray(self.points, dtype=np.float64).reshape(-1, 3)
@@ -132,7 +134,6 @@ class Mesh:
 
     def with_(self, **changes) -> Mesh:
         """A copy with some fields replaced (the cache is not carried over)."""
-        changes.setdefault("_cache", {})
         return replace(self, **changes)
 
 

@@ -22,9 +22,11 @@ Derived geometry (documented here, tested in ``tests/test_layout.py``):
 * Rows are numbered k = 0 (front) … side − 1 (rear). Rows k < ``columns.porch_depth`` are the
   porch: the whole front row and, in the further porch rows, the two flank columns stand free.
   The cella's front wall face lies on row ``porch_depth``; from there back every flank column,
-  and the whole rear row, is engaged. Counting for Portunus (front 4, side 7, porch 2):
-  free = 4 + 2·(2 − 1) = 6; engaged = 5 per flank (rows 2…6, the rear corners included) +
-  4 on the rear wall (both corners included) − 2 corners counted twice = 12.
+  and the whole rear row, stands on a wall: on a wall corner (the cella's two rear corners and
+  the two front ends of the flank walls, where the front wall meets them) a three-quarter
+  ``corner`` column, elsewhere an ``engaged`` half column, so no cut face is in view. Counting
+  for Portunus (front 4, side 7, porch 2): free = 4 + 2·(2 − 1) = 6; corner = 4; engaged =
+  2·3 on the flanks + 2 on the rear wall = 8.
 * Engaged columns sit with their axis on the outer wall-face line (a half column stands
   proud of the wall). ``rotation_deg`` turns the column's local +Z (its capital's volute face)
   to ``(sin θ, 0, cos θ)``: 0 faces the front, ±90 the right/left flank, 180 the rear. Front-row
@@ -43,8 +45,11 @@ Derived geometry (documented here, tested in ``tests/test_layout.py``):
 * Roof: pitch ``atan(2 / tympanum_ratio)`` (Vitruvius III.5.12: tympanum height = cornice
   width / 9, so tan φ = (W/9)/(W/2) = 2/9, φ = 12.53°). Two sheared slabs (the paper's two
   inclined cuboids) run from the cornice edges up to the ridge at x = 0; under them two wedge
-  cuboids over the frieze footprint fill the gable exactly (their tops meet the slab soffits),
-  so the front face of the wedge pair is the pediment.
+  cuboids as wide as the cornice and as long as the frieze fill the gable exactly (their tops
+  meet the slab soffits, their bottoms sit on the cornice), so the front face of the wedge pair
+  is the pediment, set back behind the cornice, and no void runs under the slabs. A cuboid
+  cannot taper to nothing, so the slabs rest on a bed ``ROOF_BED`` thick at the eaves (the
+  wedges' outer faces): the ridge is ``width / tympanum_ratio + ROOF_BED`` above the cornice.
 """
 
 from __future__ import annotations
@@ -83,6 +88,7 @@ __all__ = [
     "layout_from_toml",
     "portunus_layout",
     "PORTUNUS_TOML",
+    "ROOF_BED",
 ]
 
 PORTUNUS_TOML = "portunus.toml"
@@ -98,8 +104,13 @@ class Layer(StrEnum):
 
 
 class ColumnKind(StrEnum):
+    """How a column meets the walls: ``free``; ``engaged`` (a half column, its local −Z half
+    in a wall); ``corner`` (a three-quarter column at a wall corner, its local quadrant
+    x < 0, z < 0 in the walls, so its outer faces are local +Z and +X)."""
+
     FREE = "free"
     ENGAGED = "engaged"
+    CORNER = "corner"
 
 
 class Certainty(StrEnum):
@@ -137,11 +148,15 @@ class ColumnPlacement:
     rotation_deg : float
         Rotation about +Y; the column's local +Z ends up along ``(sin θ, 0, cos θ)``.
     kind : ColumnKind or str
-        ``"free"`` or ``"engaged"`` (a half column set against a wall: its axis is on the
-        wall's outer face and its local −Z half is inside the wall).
+        ``"free"``, ``"engaged"`` (a half column set against a wall: its axis is on the
+        wall's outer face and its local −Z half is inside the wall) or ``"corner"`` (a
+        three-quarter column on a wall corner, its local −X/−Z quadrant inside the walls).
     scale : float
         Uniform scale of the column asset (built at the layout's column height), > 0.
     name : str
+    angle_rotation_deg : float or None
+        For a corner of the colonnade: the rotation that turns an angle capital's two volute
+        faces (local +Z and +X) to the building's two outer sides (None elsewhere).
     """
 
     position: tuple[float, float, float]
@@ -149,6 +164,7 @@ class ColumnPlacement:
     kind: ColumnKind = ColumnKind.FREE
     scale: float = 1.0
     name: str = "column"
+    angle_rotation_deg: float | None = None
 
     def __post_init__(self) -> None:
         ctx = f"column {self.name!r}"
@@ -159,6 +175,9 @@ class ColumnPlacement:
         object.__setattr__(self, "rotation_deg", _finite("rotation_deg", self.rotation_deg, ctx))
         object.__setattr__(self, "scale", _finite("scale", self.scale, ctx, positive=True))
         object.__setattr__(self, "kind", _enum(ColumnKind, self.kind, "kind", ctx))
+        if self.angle_rotation_deg is not None:
+            object.__setattr__(self, "angle_rotation_deg",
+                               _finite("angle_rotation_deg", self.angle_rotation_deg, ctx))
 
     @property
     def facing(self) -> np.ndarray:
@@ -184,8 +203,9 @@ class Hypothesis:
 
     def __post_init__(self) -> None:
         ctx = f"hypothesis {self.id!r}"
-        if not isinstance(self.id, str) or not self.id:
-            raise ParameterError("id", self.id, "a non-empty string", context=ctx)
+        from ionic_usd.params import check_identifier
+
+        check_identifier("id", self.id, context=ctx)  # it names a file: never a path
         object.__setattr__(self, "certainty", _enum(Certainty, self.certainty, "certainty", ctx))
         object.__setattr__(self, "sources", tuple(self.sources))
         if not self.changes:
@@ -570,36 +590,66 @@ def _entablature(p: TempleParams) -> tuple[list[Cuboid], float, float, float, fl
     return out, y + a + f + c, xe, ze, proj
 
 
+# (!) assumption: the roof's bed on the cornice at the eaves (mortar and tile bedding), so the
+# gable wedges have an outer face there; 5 cm.
+ROOF_BED = 0.05
+
+
 def _roof(p: TempleParams, y: float, xe: float, ze: float, proj: float) -> list[Cuboid]:
     tan = 2.0 / p.roof_tympanum_ratio
     xc, zc = xe + proj, ze + proj
-    h = xc * tan  # ridge height above the cornice top = cornice width / tympanum_ratio
+    h = xc * tan  # the slab soffit's rise from the eaves to the ridge = width / tympanum_ratio
     s = p.roof_slab_thickness
-    b = proj * tan  # the slab soffit's height above the cornice at the frieze face
+    yb = y + ROOF_BED
     return [
-        _box("roof_left", -xc, y, -zc, 0.0, y + s, zc, h),
-        _box("roof_right", 0.0, y + h, -zc, xc, y + h + s, zc, -h),
-        _box("pediment_left", -xe, y, -ze, 0.0, y + b, ze, h - b, Incline.WEDGE),
-        _box("pediment_right", 0.0, y, -ze, xe, y + h, ze, -(h - b), Incline.WEDGE),
+        _box("roof_left", -xc, yb, -zc, 0.0, yb + s, zc, h),
+        _box("roof_right", 0.0, yb + h, -zc, xc, yb + h + s, zc, -h),
+        _box("pediment_left", -xc, y, -ze, 0.0, yb, ze, h, Incline.WEDGE),
+        _box("pediment_right", 0.0, y, -ze, xc, yb + h, ze, -h, Incline.WEDGE),
     ]
 
 
+def _outer_rotation(sx: float, sz: float) -> float:
+    """The quarter-turn rotation taking local +Z and +X to the outer sides ``(sx, 0, 0)`` and
+    ``(0, 0, sz)`` (signs ±1) of a corner, in one order or the other."""
+    for deg in (0.0, 90.0, 180.0, -90.0):
+        t = math.radians(deg)
+        facing = (round(math.sin(t)), round(math.cos(t)))  # local +Z as (x, z)
+        xaxis = (round(math.cos(t)), round(-math.sin(t)))  # local +X as (x, z)
+        if {facing, xaxis} == {(int(sx), 0), (0, int(sz))}:
+            return deg
+    raise AssertionError("unreachable: two perpendicular sides have a quarter turn")
+
+
 def _columns(p: TempleParams) -> list[ColumnPlacement]:
+    """Column placements. Forms: free in the porch; on the cella walls engaged (a half column)
+    except on a wall corner — the cella's rear corners and the ends of the flank walls at the
+    cella's front wall — where a three-quarter ``corner`` column shows no cut face."""
     y, xa, zf, s = p.podium_height, p.x_axis, p.z_front_axis, p.axial_spacing
     nf, ns, porch = p.columns_front, p.columns_side, p.columns_porch_depth
     out: list[ColumnPlacement] = []
     front = colonnade_positions((-xa, y, zf), (xa, y, zf), nf)
     rear = colonnade_positions((-xa, y, -zf), (xa, y, -zf), nf)
     for j, pos in enumerate(front):
-        out.append(ColumnPlacement(tuple(pos), 0.0, ColumnKind.FREE, name=f"front_{j + 1}"))
+        corner = _outer_rotation(np.sign(pos[0]), 1.0) if j in (0, nf - 1) else None
+        out.append(ColumnPlacement(tuple(pos), 0.0, ColumnKind.FREE, name=f"front_{j + 1}",
+                                   angle_rotation_deg=corner))
     for side, sgn in (("left", -1.0), ("right", 1.0)):
         flank = colonnade_positions((sgn * xa, y, zf), (sgn * xa, y, zf - (ns - 1) * s), ns)
         for k in range(1, ns - 1):
-            kind = ColumnKind.FREE if k < porch else ColumnKind.ENGAGED
-            out.append(ColumnPlacement(tuple(flank[k]), sgn * 90.0, kind,
-                                       name=f"{side}_{k + 1}"))
+            kind, rot = ColumnKind.ENGAGED, sgn * 90.0
+            if k < porch:
+                kind = ColumnKind.FREE
+            elif k == porch:  # the flank wall starts here, at the cella's front wall
+                kind, rot = ColumnKind.CORNER, _outer_rotation(sgn, 1.0)
+            out.append(ColumnPlacement(tuple(flank[k]), rot, kind, name=f"{side}_{k + 1}"))
     for j, pos in enumerate(rear):
-        out.append(ColumnPlacement(tuple(pos), 180.0, ColumnKind.ENGAGED, name=f"rear_{j + 1}"))
+        kind, rot, corner = ColumnKind.ENGAGED, 180.0, None
+        if j in (0, nf - 1):
+            kind = ColumnKind.CORNER
+            rot = corner = _outer_rotation(np.sign(pos[0]), -1.0)
+        out.append(ColumnPlacement(tuple(pos), rot, kind, name=f"rear_{j + 1}",
+                                   angle_rotation_deg=corner))
     return out
 
 
@@ -645,11 +695,16 @@ def build_layout(
     }
     for layer, cs in (extra_cuboids or {}).items():
         groups[Layer(layer)].extend(cs)
-    names = [c.name for cs in groups.values() for c in cs]
-    dup = sorted({n for n in names if names.count(n) > 1})
-    if dup:
-        raise ParameterError("cuboid name", dup[0], "a name not used by another cuboid",
-                             context=f"temple {params.name!r}")
+    from ionic_usd.params import prim_key
+
+    seen: dict[str, str] = {}  # two names that author the same prim would lose a cuboid
+    for c in (c for cs in groups.values() for c in cs):
+        if prim_key(c.name) in seen:
+            other = seen[prim_key(c.name)]
+            raise ParameterError("cuboid name", c.name, f"a name distinct from {other!r} "
+                                 "(both would author the same prim)",
+                                 context=f"temple {params.name!r}")
+        seen[prim_key(c.name)] = c.name
     return TempleLayout(params.name, {k: tuple(v) for k, v in groups.items()},
                         tuple(_columns(params)), params, hyps, applied)
 
@@ -676,10 +731,17 @@ def _hypotheses(entries, context: str) -> tuple[Hypothesis, ...]:
                                   e["certainty"], e["changes"]))
         except ParameterError as exc:
             raise ParameterError(exc.name, exc.value, exc.valid, context=where) from None
-    ids = [h.id for h in out]
-    for h in ids:
-        if ids.count(h) > 1:
-            raise ParameterError("id", h, "an id used once", context=f"{context} [[hypothesis]]")
+    from ionic_usd.params import check_identifier, prim_key
+
+    seen: dict[str, str] = {}  # ids name files and variant sets: hyp_a_b for a-b and a_b
+    for h in out:
+        check_identifier("id", h.id, context=f"{context} [[hypothesis]]")
+        if prim_key(h.id) in seen:
+            other = seen[prim_key(h.id)]
+            raise ParameterError("id", h.id, f"an id distinct from {other!r} (both would name "
+                                 "the same layer file and variant set)",
+                                 context=f"{context} [[hypothesis]]")
+        seen[prim_key(h.id)] = h.id
     return tuple(out)
 
 
@@ -694,7 +756,10 @@ def layout_from_mapping(
     data: Mapping[str, Any], *, context: str = "temple", apply: Iterable[str] = ()
 ) -> TempleLayout:
     """Build a layout from already-parsed TOML tables (see :func:`layout_from_toml`)."""
+    from ionic_usd.params import check_temple_tables
+
     ctx = context
+    check_temple_tables(data, context=ctx)  # types and ranges of every table, at the boundary
     params = params_from_tables(data, context=ctx)
     hyps = _hypotheses(data.get("hypothesis", []), ctx)
     extra = cuboids_from_tables(data.get("cuboid", []), context=ctx)

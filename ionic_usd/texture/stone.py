@@ -25,7 +25,6 @@ import functools
 import math
 import os
 import shutil
-import tempfile
 from collections.abc import Mapping
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -46,6 +45,8 @@ __all__ = [
     "STONE_STYLES",
     "MIN_TEXTURE_SIZE",
     "MAX_TEXTURE_SIZE",
+    "MAX_USER_TEXTURE_SIZE",
+    "verify_image",
     "USDZ_TEXTURE_FORMATS",
     "get_stone_style",
     "generate_stone_maps",
@@ -59,6 +60,7 @@ __all__ = [
 
 MIN_TEXTURE_SIZE = 16
 MAX_TEXTURE_SIZE = 8192
+MAX_USER_TEXTURE_SIZE = 16384  # pixels per side of a user texture, checked before decoding
 
 #: OpenImageIO format names allowed inside a USDZ package, with the file extensions that
 #: must go with them (USD's image plugins choose the reader by extension).
@@ -607,12 +609,6 @@ def _to_uint8(a: np.ndarray) -> np.ndarray:
     return np.round(np.clip(a, 0.0, 1.0) * 255.0).astype(np.uint8)
 
 
-def _atomic_tmp(folder: Path, final: Path) -> Path:
-    fd, tmp = tempfile.mkstemp(prefix=f".{final.name}.", suffix=".tmp", dir=folder)
-    os.close(fd)
-    return Path(tmp)
-
-
 def _write_png(buf: object, path: Path) -> None:
     import OpenImageIO as oiio
 
@@ -623,13 +619,32 @@ def _write_png(buf: object, path: Path) -> None:
     # filters) and no larger on noisy images.
     buf.specmod().attribute("png:compressionLevel", 3)
     buf.specmod().attribute("png:filter", 64)
-    tmp = _atomic_tmp(path.parent, path)
-    try:
+    from ionic_usd.io import atomic_path
+
+    with atomic_path(path, verify=verify_image) as tmp:
         if not buf.write(str(tmp), oiio.UINT8, "png"):
             raise TextureError(path, f"OpenImageIO could not write it: {oiio.geterror()}")
-        os.replace(tmp, path)
+
+
+def verify_image(path: Path) -> None:
+    """Decode every pixel of an image file; raise :class:`TextureError` if it is incomplete.
+
+    OpenImageIO's writers can report success on a full disk and leave a truncated file.
+    """
+    import OpenImageIO as oiio
+
+    inp = oiio.ImageInput.open(str(path))
+    if inp is None:
+        raise TextureError(path, f"written image does not read back ({_one_line(oiio.geterror())})"
+                           "; is the disk full?")
+    try:
+        spec = inp.spec()
+        ok = inp.read_image(0, 0, 0, spec.nchannels, oiio.UINT8) is not None \
+            and not inp.has_error
     finally:
-        tmp.unlink(missing_ok=True)
+        inp.close()
+    if not ok:
+        raise TextureError(path, "written image is incomplete; is the disk full?")
 
 
 def _write_tx(buf: object, path: Path) -> None:
@@ -644,13 +659,11 @@ def _write_tx(buf: object, path: Path) -> None:
     config.attribute("compression", "zip")
     # No maketx:incolorspace / outcolorspace: texels are copied unconverted (colour stays
     # sRGB-encoded and tagged so; roughness and normals stay raw data).
-    tmp = _atomic_tmp(path.parent, path)
-    try:
+    from ionic_usd.io import atomic_path
+
+    with atomic_path(path, verify=verify_image) as tmp:
         if not oiio.ImageBufAlgo.make_texture(oiio.MakeTxTexture, buf, str(tmp), config):
             raise TextureError(path, f"OpenImageIO make_texture failed: {oiio.geterror()}")
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
 
 
 def write_stone_textures(
@@ -757,6 +770,10 @@ def validate_user_texture(path: str | os.PathLike[str]) -> Path:
             )
         if spec.width <= 0 or spec.height <= 0:
             raise TextureError(p, "image has no pixels")
+        # the header's dimensions, before any pixel is decoded (a small PNG can hold 20000²)
+        if max(spec.width, spec.height) > MAX_USER_TEXTURE_SIZE or spec.depth > 1:
+            raise TextureError(p, f"image is {spec.width}x{spec.height}x{spec.depth} pixels; "
+                               f"the limit is {MAX_USER_TEXTURE_SIZE} per side, 2-D")
         # Opening only parses the header; decode the pixels to catch truncated files.
         pixels = inp.read_image(0, 0, 0, spec.nchannels, oiio.UINT8)
         if pixels is None:
@@ -803,11 +820,9 @@ def copy_user_textures(
     for role, src in sources.items():
         dest = out / src.name
         if not (dest.exists() and dest.samefile(src)):
-            tmp = _atomic_tmp(out, dest)
-            try:
+            from ionic_usd.io import atomic_path
+
+            with atomic_path(dest) as tmp:
                 shutil.copyfile(src, tmp)
-                os.replace(tmp, dest)
-            finally:
-                tmp.unlink(missing_ok=True)
         copied[role] = dest
     return copied

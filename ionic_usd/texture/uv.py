@@ -53,7 +53,6 @@ from __future__ import annotations
 import hashlib
 import math
 import os
-import tempfile
 import time
 import zipfile
 from collections.abc import Iterable, Mapping
@@ -306,11 +305,11 @@ class UVCache:
             return None
 
     def _write(self, key: str, atlas: UVAtlas) -> None:
-        tmp_name = None
+        from ionic_usd.io import atomic_path
+
         try:
             self.folder.mkdir(parents=True, exist_ok=True)
-            fd, tmp_name = tempfile.mkstemp(prefix=f".{key[:16]}.", suffix=".tmp", dir=self.folder)
-            with os.fdopen(fd, "wb") as f:
+            with atomic_path(self.path_for(key)) as tmp, open(tmp, "wb") as f:
                 np.savez(
                     f,
                     key=np.array(key),
@@ -320,16 +319,8 @@ class UVCache:
                     utilisation=np.array(atlas.utilisation),
                     texels_per_metre=np.array(atlas.texels_per_metre),
                 )
-            os.replace(tmp_name, self.path_for(key))
-            tmp_name = None
         except OSError:
             pass  # a read-only or full disk must not stop geometry from being built
-        finally:
-            if tmp_name is not None:
-                try:
-                    os.unlink(tmp_name)
-                except OSError:
-                    pass
 
 
 _DEFAULT_CACHES: dict[Path, UVCache] = {}

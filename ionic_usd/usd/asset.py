@@ -20,8 +20,6 @@ and switching one set changes exactly the meshes tagged by it.
 from __future__ import annotations
 
 import os
-import shutil
-import tempfile
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -29,7 +27,7 @@ from pathlib import Path
 import numpy as np
 from pxr import Gf, Sdf, Usd, Vt
 
-from ionic_usd.errors import OutputExistsError, ParameterError
+from ionic_usd.errors import ParameterError
 from ionic_usd.geometry.mesh import Mesh
 from ionic_usd.usd.materials import MaterialTextures, author_preview_material, bind_material
 from ionic_usd.usd.mesh import author_mesh, define_prim
@@ -210,34 +208,20 @@ def write_asset_layers(spec: AssetSpec, folder: Path) -> dict[str, Path]:
     return written
 
 
-def replace_folder(build: Callable[[Path], object], dest: Path, *, force: bool = False):
-    """Build a folder in a temporary sibling, then move it into place atomically.
+def replace_folder(build: Callable[[Path], object], dest: Path, *, force: bool = False,
+                   keep_existing: tuple[str, ...] = (), root_files: tuple[str, ...] = ()):
+    """Build a folder in a staging sibling and move it into place kill-safely.
 
-    An existing ``dest`` is refused unless ``force``; with ``force`` it is swapped out by
-    renames (so readers never see a half-written asset) and deleted afterwards. Returns what
+    See :func:`ionic_usd.io.replace_folder`: an existing ``dest`` is refused unless ``force``;
+    only files the previous build generated are replaced or deleted (the user's own files
+    stay), and a process killed at any instant is recovered by the next run. Returns what
     ``build`` returned.
     """
+    from ionic_usd.io import replace_folder as _replace
+
     dest = Path(dest)
-    if dest.exists() and not force:
-        raise OutputExistsError(f"{dest} exists; pass --force (force=True) to replace it")
-    dest.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{dest.name}.", dir=dest.parent))
-    old = None
-    done = False
-    try:
-        result = build(tmp)
-        if dest.exists():
-            old = dest.with_name(f".{dest.name}.old-{os.getpid()}")
-            os.replace(dest, old)
-        os.replace(tmp, dest)
-        done = True
-    finally:
-        if not done:  # nothing half-written stays behind; the previous asset is restored
-            shutil.rmtree(tmp, ignore_errors=True)
-            if old is not None and not dest.exists():
-                os.replace(old, dest)
-    if old is not None:
-        shutil.rmtree(old, ignore_errors=True)
+    result = _replace(build, dest, force=force, keep_existing=keep_existing,
+                      root_files=root_files)
     # layers cached under the old content must be re-read
     for layer in Sdf.Layer.GetLoadedLayers():
         real = layer.realPath
@@ -262,5 +246,5 @@ def write_asset(
             populate(tmp)
         write_asset_layers(spec, tmp)
 
-    replace_folder(build, dest, force=force)
+    replace_folder(build, dest, force=force, root_files=(f"{spec.name}.usda",))
     return dest / f"{spec.name}.usda"

@@ -7,11 +7,16 @@ set         variants                                    meshes it switches
 ==========  ==========================================  ===================================
 lod         high, medium, low                           every part
 base        attic_bezier_plinth, attic_bezier, G1, G2   Base
-scroll      S1, S2                                      CapitalScroll (the bolsters)
+scroll      S1, S2                                      CapitalBody (its bolsters)
+capital     normal, angle                               CapitalBody (angle: the corner volute
+                                                        turned 45° onto the diagonal, volutes
+                                                        on the +Z and +X faces)
 flutes      f24, f20                                    Shaft (f20: a reconstruction
                                                         hypothesis for the Portunus shafts)
-form        full, engaged                               every part (engaged: cut by the wall
-                                                        plane z = −``ENGAGED_INSET``, capped)
+form        full, engaged, corner                       every part (engaged: cut by the wall
+                                                        plane z = −``ENGAGED_INSET``, capped;
+                                                        corner: the quadrant x, z < −inset
+                                                        removed, a three-quarter column)
 finish      travertine, stucco                          the material bound to Geom
 ==========  ==========================================  ===================================
 
@@ -19,9 +24,10 @@ The ``high`` LOD also carries the carved capital: egg-and-dart on the echinus an
 on the astragal, two PointInstancers under ``Geom/Ornament`` (4 prototypes, 90 copies, 8.8k
 triangles drawn; :func:`ionic_usd.usd.detail.column_ornament`), tagged ``lod = high``.
 
-Each mesh is authored once: the shaft does not depend on the base, the capital body not on the
-scroll. Triangle budgets of the default column (all four parts, form = full): high ≈ 37k,
-medium ≈ 16k, low ≈ 8.5k (``tools/bench_asset.py`` prints them).
+Every mesh is one closed solid: the capital's abacus, echinus, volutes, canales and bolsters are
+united (manifold3d), so the capital mesh depends on the scroll and capital variants. Each mesh
+is authored once: the shaft does not depend on the base. Triangle budgets of the default
+column (three parts, form = full): high ≈ 48k, medium ≈ 19k, low ≈ 9.5k.
 
 Texture coordinates come from xatlas, one chart set per part and LOD, at one texel density per
 LOD (``ASSET_TEXELS_PER_METRE``); every LOD's pixel coordinates are divided by
@@ -40,12 +46,14 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 from ionic_usd import __version__
 from ionic_usd.column.column import (
     LODS,
     ColumnParams,
     build_base_part,
-    build_capital_parts,
+    build_capital_part,
     build_shaft_part,
     column_params_to_tables,
     portunus_column_params,
@@ -67,6 +75,7 @@ __all__ = [
     "SCROLL_VARIANTS",
     "FLUTE_VARIANTS",
     "FORM_VARIANTS",
+    "CAPITAL_VARIANTS",
     "FINISHES",
     "ENGAGED_INSET",
     "UV_SPAN",
@@ -77,7 +86,8 @@ ASSET_NAME = "IonicColumn"
 BASE_VARIANTS = ("attic_bezier_plinth", "attic_bezier", "G1", "G2")
 SCROLL_VARIANTS = ("S1", "S2")
 FLUTE_VARIANTS = {"f24": 24, "f20": 20}
-FORM_VARIANTS = ("full", "engaged")
+FORM_VARIANTS = ("full", "engaged", "corner")
+CAPITAL_VARIANTS = ("normal", "angle")
 # finish variant -> (material prim name, stone style of its textures)
 FINISHES = {"travertine": ("Travertine", "travertine"),
             "stucco": ("PaintedStucco", "stucco_painted")}
@@ -102,6 +112,7 @@ class ColumnAssetOptions:
     scrolls: tuple[str, ...] = SCROLL_VARIANTS
     flutes: tuple[str, ...] = tuple(FLUTE_VARIANTS)
     forms: tuple[str, ...] = FORM_VARIANTS
+    capitals: tuple[str, ...] = CAPITAL_VARIANTS
     texture_size: int = 1024
     seed: int = 7
     make_tx: bool = False
@@ -120,6 +131,7 @@ class ColumnAssetOptions:
         check("scroll", self.scrolls, SCROLL_VARIANTS)
         check("flutes", self.flutes, tuple(FLUTE_VARIANTS))
         check("form", self.forms, FORM_VARIANTS)
+        check("capital", self.capitals, CAPITAL_VARIANTS)
         if self.user_textures is not None:
             roles = {"basecolor", "roughness", "normal"}
             if set(self.user_textures) != roles:
@@ -143,11 +155,24 @@ def _engage(mesh: Mesh) -> Mesh:
     return clip_mesh(mesh, (0.0, 0.0, -ENGAGED_INSET), (0.0, 0.0, 1.0), name=mesh.name)
 
 
+def _corner(mesh: Mesh) -> Mesh:
+    """The three-quarter column: the quadrant x, z < −ENGAGED_INSET (inside the walls of a
+    corner whose outer faces hold the axis) removed by a boolean difference."""
+    from ionic_usd.geometry.boolean import difference
+    from ionic_usd.temple.cuboid import Cuboid, cuboid_mesh
+
+    lo, hi = mesh.extent
+    big = float(np.abs(np.concatenate([lo, hi])).max()) + 1.0
+    block = cuboid_mesh(Cuboid((-big, lo[1] - 1.0, -big),
+                               (-ENGAGED_INSET, hi[1] + 1.0, -ENGAGED_INSET), name="wall"))
+    return difference(mesh, [block], name=mesh.name)
+
+
+_FORM_CUT = {"full": None, "engaged": _engage, "corner": _corner}
+
+
 def _flute_params(params: ColumnParams, flutes: int) -> ColumnParams:
-    period = 360.0 / flutes
-    ratio = params.shaft.flute_angle / (360.0 / params.shaft.flutes)
-    shaft = dataclasses.replace(params.shaft, flutes=flutes, flute_angle=ratio * period)
-    return dataclasses.replace(params, shaft=shaft)
+    return params.with_flutes(flutes)
 
 
 def column_asset_meshes(opts: ColumnAssetOptions) -> list[AssetMesh]:
@@ -164,15 +189,16 @@ def column_asset_meshes(opts: ColumnAssetOptions) -> list[AssetMesh]:
             groups.append(("Shaft", f"Shaft_{fname}", build_shaft_part(fp, base_h),
                            {"flutes": fname}))
         y_cap = base_h + p.shaft.length
-        body = None
         for s in opts.scrolls:
-            body, scroll = build_capital_parts(p, y_cap, scroll=s)
-            groups.append(("CapitalScroll", f"Scroll_{s}", scroll, {"scroll": s}))
-        groups.append(("CapitalBody", "CapitalBody", body, {}))
+            for c in opts.capitals:
+                body = build_capital_part(p, y_cap, scroll=s, angle=c == "angle")
+                tag = {"scroll": s, "capital": c}
+                groups.append(("CapitalBody", f"Capital_{s}_{c}", body, tag))
         for part, name, mesh, tags in groups:
             for form in opts.forms:
-                m = mesh if form == "full" else _engage(mesh)
-                suffix = "" if form == "full" else "_engaged"
+                cut = _FORM_CUT[form]
+                m = mesh if cut is None else cut(mesh)
+                suffix = "" if form == "full" else f"_{form}"
                 t = {"lod": lod, **tags}
                 if len(opts.forms) > 1:
                     t["form"] = form
@@ -262,7 +288,8 @@ def build_column_asset(
                                     make_tx=opts.make_tx)
 
     variant_sets = {"lod": opts.lods, "base": opts.bases, "scroll": opts.scrolls,
-                    "flutes": opts.flutes, "form": opts.forms, "finish": tuple(FINISHES)}
+                    "capital": opts.capitals, "flutes": opts.flutes, "form": opts.forms,
+                    "finish": tuple(FINISHES)}
     custom = {"ionic_usd": {"version": __version__,
                             "parameters": _flatten(column_params_to_tables(opts.params))}}
     spec = AssetSpec(
@@ -276,8 +303,8 @@ def build_column_asset(
         finishes={k: v[0] for k, v in FINISHES.items()},
         custom_data=custom,
         documentation="Ionic column (Temple of Portunus proportions) generated by ionic_usd "
-        "after Konečný, Syllaiou & Liarokapis 2016; variant sets: lod, base, scroll, flutes, "
-        "form, finish.",
+        "after Konečný, Syllaiou & Liarokapis 2016; variant sets: lod, base, scroll, capital, "
+        "flutes, form, finish.",
         st_scale=UV_SPAN / TILE_METRES,
         instancers=column_ornament(opts),  # carved echinus and astragal in the high LOD
     )
@@ -287,6 +314,7 @@ def build_column_asset(
         sel = [m for m in meshes if m.tags["lod"] == lod and m.tags.get("form", "full") == "full"
                and m.tags.get("base", opts.bases[0]) == opts.bases[0]
                and m.tags.get("scroll", opts.scrolls[0]) == opts.scrolls[0]
+               and m.tags.get("capital", opts.capitals[0]) == opts.capitals[0]
                and m.tags.get("flutes", opts.flutes[0]) == opts.flutes[0]]
         tris[lod] = sum(m.mesh.n_triangles for m in sel)
     size = sum(f.stat().st_size for f in dest.rglob("*") if f.is_file())
@@ -302,20 +330,20 @@ def copy_stone_textures(folder: Path, style: str, size: int, seed: int, *,
     """
     import shutil
 
-    from ionic_usd.texture.stone import write_stone_textures
+    from ionic_usd.io import verified_cache
+    from ionic_usd.texture.stone import TextureError, write_stone_textures
     from ionic_usd.texture.uv import default_cache_folder
 
     key = f"{style}-{size}-{seed}-{__version__}{'-tx' if make_tx else ''}"
     store = default_cache_folder().parent / "textures" / key
     names = [f"{style}_{r}.{e}" for r in ("basecolor", "roughness", "normal")
              for e in (("png", "tx") if make_tx else ("png",))]
-    if not all((store / n).is_file() for n in names):
-        try:
-            store.mkdir(parents=True, exist_ok=True)
-            write_stone_textures(store, style, size, seed, make_tx=make_tx)
-        except OSError:  # an unwritable cache: write straight into the asset
-            write_stone_textures(folder, style, size, seed, make_tx=make_tx)
-            return [folder / n for n in names]
+    try:  # verified on read (SHA-256 manifest), written atomically, rebuilt when bad
+        store = verified_cache(store, lambda tmp: write_stone_textures(
+            tmp, style, size, seed, make_tx=make_tx))
+    except (OSError, TextureError):  # an unwritable or full cache: write into the asset
+        write_stone_textures(folder, style, size, seed, make_tx=make_tx)
+        return [folder / n for n in names]
     folder.mkdir(parents=True, exist_ok=True)
     out = []
     for n in names:

@@ -14,12 +14,12 @@ through it.
 from __future__ import annotations
 
 import numpy as np
-from pxr import Gf, Sdf, Vt
+from pxr import Gf, Sdf, Usd, UsdGeom, Vt
 
 from ionic_usd.column.ornament import Instances
 from ionic_usd.usd.mesh import author_mesh, define_prim
 
-__all__ = ["author_point_instancer", "instances_extent", "bind_spec"]
+__all__ = ["author_point_instancer", "instances_extent", "bind_spec", "drawn_triangles"]
 
 _T = Sdf.ValueTypeNames
 
@@ -41,6 +41,34 @@ def instances_extent(inst: Instances) -> np.ndarray:
         boxes.append(pts.reshape(-1, 3))
     allp = np.concatenate(boxes)
     return np.stack([allp.min(axis=0), allp.max(axis=0)])
+
+
+def drawn_triangles(root: Usd.Prim, _memo: dict | None = None) -> int:
+    """Triangles drawn under ``root``: meshes once, every copy of a native instance or a
+    PointInstancer counted (prototypes under an instancer are drawn only through it)."""
+    memo = {} if _memo is None else _memo
+    total = 0
+    it = iter(Usd.PrimRange(root))
+    for prim in it:
+        if prim.IsInstance():
+            it.PruneChildren()
+            proto = prim.GetPrototype()
+            key = str(proto.GetPath())
+            if key not in memo:
+                memo[key] = drawn_triangles(proto, memo)
+            total += memo[key]
+        elif prim.IsA(UsdGeom.PointInstancer):
+            it.PruneChildren()
+            pi = UsdGeom.PointInstancer(prim)
+            idx = np.asarray(pi.GetProtoIndicesAttr().Get() or [], dtype=np.int64)
+            per = [drawn_triangles(prim.GetStage().GetPrimAtPath(t), memo)
+                   for t in pi.GetPrototypesRel().GetForwardedTargets()]
+            if len(idx) and per:
+                total += int(np.asarray(per)[idx[idx < len(per)]].sum())
+        elif prim.IsA(UsdGeom.Mesh):
+            counts = UsdGeom.Mesh(prim).GetFaceVertexCountsAttr().Get()
+            total += int(np.sum(np.asarray(counts) - 2)) if counts is not None else 0
+    return total
 
 
 def bind_spec(spec: Sdf.PrimSpec, material_path: str) -> None:

@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 import os
-import secrets
 from collections.abc import Iterable
 from pathlib import Path
 
 from pxr import Kind, Sdf, Usd, UsdGeom
 
-from ionic_usd.errors import OutputExistsError, ParameterError, UsdAuthoringError
+from ionic_usd.errors import ParameterError, UsdAuthoringError
 
 __all__ = [
     "USD_EXTENSIONS",
@@ -28,13 +27,13 @@ _KINDS = ("component", "assembly", "group", "subcomponent", "model")
 
 def check_output_path(path: str | os.PathLike, *, force: bool = False) -> Path:
     """Validate an output path: a USD extension, and no existing file unless ``force``."""
+    from ionic_usd.io import check_output_file
+
     p = Path(path)
     if p.suffix.lower() not in USD_EXTENSIONS:
         raise ParameterError("output", str(p),
                              f"a file ending in one of {', '.join(USD_EXTENSIONS)}")
-    if p.exists() and not force:
-        raise OutputExistsError(f"{p} exists; pass --force (force=True) to overwrite it")
-    return p
+    return check_output_file(p, force=force)
 
 
 def new_layer(
@@ -81,21 +80,46 @@ def save_layer(layer: Sdf.Layer, path: str | os.PathLike, *, force: bool = False
 
     The file format follows the extension (``.usda`` text, ``.usdc``/``.usd`` crate).
     """
+    from ionic_usd.io import atomic_path
+
     p = check_output_path(path, force=force)
     p.parent.mkdir(parents=True, exist_ok=True)
-    tmp = p.with_name(f".{p.stem}.{secrets.token_hex(4)}.tmp{p.suffix}")
-    try:
-        if not layer.Export(str(tmp)):
-            raise UsdAuthoringError(f"could not write {p}")
-        os.replace(tmp, p)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
+
+    def readable(tmp: Path) -> None:  # a full disk can leave a truncated layer behind
+        if Sdf.Layer.OpenAsAnonymous(str(tmp)) is None:
+            raise UsdAuthoringError(f"could not write {p} (the written layer does not read "
+                                    "back; is the disk full?)")
+
+    with atomic_path(p, verify=readable) as tmp:
+        try:
+            ok = layer.Export(str(tmp))
+        except Exception as exc:  # pxr.Tf.ErrorException: OS errors surface as this
+            why = _first_line(exc).replace(str(tmp), p.name)
+            raise UsdAuthoringError(f"could not write {p}: {why}{_space_hint(p)}") from None
+        if not ok:
+            raise UsdAuthoringError(f"could not write {p}{_space_hint(p)}")
     # a later Sdf.Layer.FindOrOpen of this path must see the new content, not a cached one
     cached = Sdf.Layer.Find(str(p))
     if cached is not None:
         cached.Reload(force=True)
     return p
+
+
+def _first_line(exc: BaseException) -> str:
+    """The message of a ``Tf.ErrorException`` without its C++ location."""
+    lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
+    text = lines[-1] if lines else type(exc).__name__
+    if text.startswith("Error in ") and " : " in text:
+        text = text.rsplit(" : ", 1)[1].strip("'\" ")
+    return text
+
+
+def _space_hint(p: Path) -> str:
+    try:
+        st = os.statvfs(p.parent)
+    except OSError:
+        return ""
+    return " (No space left on device)" if st.f_bavail * st.f_frsize < (1 << 20) else ""
 
 
 def save_stage(stage: Usd.Stage, path: str | os.PathLike, *, force: bool = False) -> Path:

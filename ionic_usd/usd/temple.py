@@ -8,8 +8,8 @@ Folder written by :func:`compose_temple` (all asset paths ``./``-relative)::
     materials.usda       /Temple/Materials: PaintedStucco, Travertine (UsdPreviewSurface)
     podium.usda cella.usda entablature.usda roof.usda
                          cuboid meshes (/Temple/Podium/…, kind = component)
-    colonnade.usda       /Temple/Colonnade/{Free,Engaged}/<name>: instanceable references to
-                         ./IonicColumn/IonicColumn.usda (form = full | engaged)
+    colonnade.usda       /Temple/Colonnade/{Free,Engaged,Corner}/<name>: instanceable references
+                         to ./IonicColumn/IonicColumn.usda (form = full | engaged | corner)
     layers/<id>.usda     one layer per reconstruction hypothesis (overs only)
     IonicColumn/         the column component asset (see :mod:`ionic_usd.usd.column_asset`)
     Textures/            stone maps of the temple's materials
@@ -38,7 +38,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from pxr import Gf, Sdf, Tf, Usd, UsdGeom, Vt
+from pxr import Gf, Sdf, Tf, Usd, Vt
 
 from ionic_usd import __version__
 from ionic_usd.column.column import ColumnParams, portunus_column_params
@@ -142,22 +142,31 @@ def _colonnade_layer(layout: TempleLayout) -> Sdf.Layer:
     with Sdf.ChangeBlock():
         col = define_prim(lay, "/Temple/Colonnade", "Xform")
         col.kind = "group"
-        for kind, group in ((ColumnKind.FREE, "Free"), (ColumnKind.ENGAGED, "Engaged")):
+        for kind, group in _GROUPS:
             g = define_prim(lay, f"/Temple/Colonnade/{group}", "Xform")
             g.kind = "group"
             for c in layout.columns_of(kind):
                 spec = define_prim(lay, f"/Temple/Colonnade/{group}/{_ident(c.name)}", "Xform")
                 spec.instanceable = True
                 spec.referenceList.Prepend(Sdf.Reference(f"./{ASSET_NAME}/{ASSET_NAME}.usda"))
-                spec.variantSelections["form"] = "full" if kind is ColumnKind.FREE else "engaged"
+                spec.variantSelections["form"] = _FORM[kind]
                 spec.variantSelections["finish"] = BASELINE_FINISH
                 _set_xform(spec, c.position, c.rotation_deg, c.scale)
     return lay
 
 
+_GROUPS = ((ColumnKind.FREE, "Free"), (ColumnKind.ENGAGED, "Engaged"),
+           (ColumnKind.CORNER, "Corner"))
+_FORM = {ColumnKind.FREE: "full", ColumnKind.ENGAGED: "engaged", ColumnKind.CORNER: "corner"}
+
+
+def _column_path(c) -> str:
+    return f"/Temple/Colonnade/{dict(_GROUPS)[c.kind]}/{_ident(c.name)}"
+
+
 def _column_prims(layout: TempleLayout) -> list[str]:
     out = []
-    for kind, group in ((ColumnKind.FREE, "Free"), (ColumnKind.ENGAGED, "Engaged")):
+    for kind, group in _GROUPS:
         out += [f"/Temple/Colonnade/{group}/{_ident(c.name)}" for c in layout.columns_of(kind)]
     return out
 
@@ -200,6 +209,18 @@ def _hypothesis_layer(h: Hypothesis, layout: TempleLayout, base_meshes) -> Sdf.L
                 for p in _column_prims(layout):
                     spec = _over_path(lay, p)
                     spec.variantSelections["flutes"] = sel
+                    touched.append(spec)
+            elif key == "column.corner_capital":
+                # the colonnade's corner columns get the angle capital, turned so that its two
+                # volute faces (local +Z, +X) face the building's two outer sides
+                for c in layout.columns:
+                    if c.angle_rotation_deg is None:
+                        continue
+                    spec = _over_path(lay, _column_path(c))
+                    spec.variantSelections["capital"] = str(value)
+                    if c.angle_rotation_deg != c.rotation_deg:
+                        Sdf.AttributeSpec(spec, "xformOp:rotateY", Sdf.ValueTypeNames.Float
+                                          ).default = float(c.angle_rotation_deg)
                     touched.append(spec)
             elif key == "material.finish":
                 finish = "travertine" if value in ("bare_stone", "travertine") else "stucco"
@@ -270,9 +291,6 @@ def compose_temple(
                                                seed=seed)
     if opts.params != column:
         opts = dataclasses.replace(opts, params=column)
-    user_bytes = None
-    if (dest / OVERRIDES_LAYER).is_file():
-        user_bytes = (dest / OVERRIDES_LAYER).read_bytes()
     base_meshes = _cuboid_meshes(layout)
     hyp_layers = hypothesis_layers(layout)
     baseline_material = FINISHES[BASELINE_FINISH][0]
@@ -319,13 +337,12 @@ def compose_temple(
         add_detail(tmp, root, layout, texture_size=opts.texture_size, seed=opts.seed,
                    mouldings=mouldings, default=detail)  # ionic_usd.usd.detail
         save_layer(root, tmp / ROOT_LAYER)
-        if user_bytes is not None:
-            (tmp / OVERRIDES_LAYER).write_bytes(user_bytes)
-        else:
-            save_layer(_user_overrides_layer(), tmp / OVERRIDES_LAYER)
+        # created only where absent: an existing overrides.usda (or symlink) is never touched
+        save_layer(_user_overrides_layer(), tmp / OVERRIDES_LAYER)
         _check_resolves(tmp / ROOT_LAYER)
 
-    replace_folder(build, dest, force=force)
+    replace_folder(build, dest, force=force, keep_existing=(OVERRIDES_LAYER,),
+                   root_files=(ROOT_LAYER,))
     root_path = dest / ROOT_LAYER
     stage = Usd.Stage.Open(str(root_path))
     if stage is None:
@@ -352,21 +369,15 @@ def _check_resolves(root: Path) -> None:
 def _report(stage: Usd.Stage, dest: Path, layout: TempleLayout, seconds: float) -> TempleReport:
     prims = instances = tris = 0
     proto_tris: dict[str, int] = {}
+    from ionic_usd.usd.instancer import drawn_triangles  # PointInstancer copies counted
+
     for proto in stage.GetPrototypes():
-        n = 0
-        for prim in Usd.PrimRange(proto):
-            if prim.IsA(UsdGeom.Mesh):
-                counts = UsdGeom.Mesh(prim).GetFaceVertexCountsAttr().Get()
-                n += int(np.sum(np.asarray(counts) - 2)) if counts is not None else 0
-        proto_tris[str(proto.GetPath())] = n
+        proto_tris[str(proto.GetPath())] = 0
     for prim in stage.Traverse():
         prims += 1
         if prim.IsInstance():
             instances += 1
-            tris += proto_tris.get(str(prim.GetPrototype().GetPath()), 0)
-        elif prim.IsA(UsdGeom.Mesh):
-            counts = UsdGeom.Mesh(prim).GetFaceVertexCountsAttr().Get()
-            tris += int(np.sum(np.asarray(counts) - 2))
+    tris = drawn_triangles(stage.GetPseudoRoot())
     files = sum(1 for f in dest.rglob("*") if f.is_file())
     return TempleReport(dest / ROOT_LAYER, files, prims, instances, len(proto_tris), tris,
                         tuple(h.id for h in layout.hypotheses), seconds)

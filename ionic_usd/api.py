@@ -1,0 +1,137 @@
+"""The few objects a user needs, in front of the generators and the USD authoring.
+
+>>> import tempfile, pathlib
+>>> import ionic_usd as iu
+>>> col = iu.portunus_column(lod="low")
+>>> round(col.height, 2), sorted(col.parts())
+(8.22, ['Base', 'CapitalBody', 'Shaft'])
+>>> col.save(pathlib.Path(tempfile.mkdtemp()) / "column.usda").name
+'column.usda'
+
+A temple in five lines (the default scene of ``ionic-usd temple``)::
+
+    import ionic_usd as iu
+    temple = iu.Temple.portunus()                    # the Temple of Portunus, Rome
+    temple = temple.with_hypotheses("flutes-20")     # optional: apply a hypothesis in the layout
+    report = temple.save("PortunusTemple")           # Temple.usda, layers, the column asset
+    print(report.triangles, report.instances)
+
+Everything here forwards to the modules that do the work (:mod:`ionic_usd.column`,
+:mod:`ionic_usd.temple`, :mod:`ionic_usd.usd`); it adds no behaviour of its own.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:  # imported lazily at run time: `import ionic_usd` stays light
+    from ionic_usd.column.column import Column as _BuiltColumn
+    from ionic_usd.column.column import ColumnParams
+    from ionic_usd.geometry.mesh import Mesh
+    from ionic_usd.temple.layout import TempleLayout
+
+__all__ = ["Column", "Temple", "portunus_column", "column"]
+
+
+@dataclass(frozen=True)
+class Column:
+    """A built column: its parameters and part meshes, ready to save as USD.
+
+    Attributes
+    ----------
+    built : ionic_usd.column.column.Column
+        The generator's result (part meshes in column coordinates, stacking heights in m).
+    """
+
+    built: _BuiltColumn
+
+    @property
+    def params(self) -> ColumnParams:
+        return self.built.params
+
+    @property
+    def height(self) -> float:
+        """Height from the base bottom to the abacus top (m)."""
+        return self.built.height
+
+    @property
+    def n_triangles(self) -> int:
+        return self.built.n_triangles
+
+    def parts(self) -> dict[str, Mesh]:
+        """Prim name → closed part mesh (``Base``, ``Shaft``, ``CapitalBody``)."""
+        return self.built.parts()
+
+    def save(self, path: str | os.PathLike, *, force: bool = False) -> Path:
+        """Write the parts as ``/Column/Geom/<Part>`` into one USD file (atomically).
+
+        The format follows the extension (``.usda`` text, ``.usdc``/``.usd`` binary); an
+        existing file needs ``force``. Returns the written path.
+        """
+        from ionic_usd.usd import check_output_path, write_meshes
+
+        out = check_output_path(path, force=force)
+        return Path(write_meshes(out, self.parts(), root="Column", force=force,
+                                 comment=f"ionic_usd column ({self.params.lod}, "
+                                 f"base {self.params.base})"))
+
+
+def column(params: ColumnParams | None = None) -> Column:
+    """Build a column from :class:`ionic_usd.column.column.ColumnParams` (default: Portunus)."""
+    from ionic_usd.column.column import build_column
+
+    return Column(build_column(params))
+
+
+def portunus_column(**options: Any) -> Column:
+    """The Temple of Portunus column (8.22 m, lower diameter 0.95 m, Attic base, 24 flutes).
+
+    ``options`` are those of :func:`ionic_usd.column.column.portunus_column_params`:
+    ``lod`` (high, medium, low), ``base`` (a preset name or a base grammar), ``flutes``,
+    ``height``, ``lower_diameter``, ``scroll``.
+    """
+    from ionic_usd.column.column import portunus_column_params
+
+    return column(portunus_column_params(**options))
+
+
+@dataclass(frozen=True)
+class Temple:
+    """A temple description (cuboids, colonnade, hypotheses), ready to compose as USD."""
+
+    layout: TempleLayout
+    column: ColumnParams | None = None
+
+    @classmethod
+    def portunus(cls) -> Temple:
+        """The Temple of Portunus (Forum Boarium, Rome), every dimension cited in
+        ``ionic_usd/data/portunus.toml``."""
+        from ionic_usd.temple.layout import portunus_layout
+
+        return cls(portunus_layout())
+
+    @classmethod
+    def from_toml(cls, path: str | os.PathLike) -> Temple:
+        """A temple described in TOML with the schema of ``ionic_usd/data/portunus.toml``."""
+        from ionic_usd.temple.layout import layout_from_toml
+
+        return cls(layout_from_toml(path))
+
+    def with_hypotheses(self, *ids: str) -> Temple:
+        """The Portunus layout with the named hypotheses applied in the geometry itself."""
+        from ionic_usd.temple.layout import portunus_layout
+
+        return Temple(portunus_layout(apply=ids), self.column)
+
+    def save(self, folder: str | os.PathLike, *, force: bool = False, **options: Any):
+        """Compose the temple folder (``Temple.usda`` + layers + the column asset).
+
+        ``options`` go to :func:`ionic_usd.usd.temple.compose_temple` (``texture_size``,
+        ``seed``). Returns its :class:`~ionic_usd.usd.temple.TempleReport`.
+        """
+        from ionic_usd.usd.temple import compose_temple
+
+        return compose_temple(folder, self.layout, self.column, force=force, **options)

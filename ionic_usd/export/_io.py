@@ -1,0 +1,62 @@
+"""Output paths and atomic writes shared by the exporters."""
+
+from __future__ import annotations
+
+import os
+import secrets
+from collections.abc import Callable
+from pathlib import Path
+
+from ionic_usd.errors import IonicError, OutputExistsError, ParameterError
+
+__all__ = ["EXPORT_FORMATS", "MissingDependencyError", "check_export_path", "atomic_write",
+           "require"]
+
+
+class MissingDependencyError(IonicError, RuntimeError):
+    """An optional library an export needs is not installed (names what to install)."""
+
+
+def require(module: str, what: str):
+    """Import ``module`` or raise MissingDependencyError naming the ``export`` extra."""
+    import importlib  # noqa: PLC0415
+
+    try:
+        return importlib.import_module(module)
+    except ImportError:
+        raise MissingDependencyError(f"{what} needs the Python package {module!r}: "
+                                     "pip install 'ionic_usd[export]'") from None
+
+EXPORT_FORMATS = (".glb", ".gltf", ".usdz", ".stl", ".3mf")
+
+
+def check_export_path(path: str | os.PathLike, *, force: bool = False) -> Path:
+    """An export path: a known extension, an existing folder, no file unless ``force``."""
+    p = Path(path)
+    if p.suffix.lower() not in EXPORT_FORMATS:
+        raise ParameterError("--output", str(p),
+                             f"a file ending in one of {', '.join(EXPORT_FORMATS)}")
+    if p.is_dir():
+        raise ParameterError("--output", str(p), "a file name, not a folder")
+    if p.exists() and not force:
+        raise OutputExistsError(f"{p} exists; pass --force to overwrite it")
+    if not p.parent.is_dir():
+        raise ParameterError("--output", str(p), f"a file in an existing folder ({p.parent} "
+                             "does not exist)")
+    return p
+
+
+def atomic_write(path: Path, write: Callable[[Path], None]) -> Path:
+    """Call ``write(tmp)`` on a temporary sibling of ``path``, then rename it into place.
+
+    A failure leaves no partial file and the previous ``path`` (if any) untouched.
+    """
+    path = Path(path)
+    tmp = path.with_name(f".{path.stem}.{secrets.token_hex(4)}.tmp{path.suffix}")
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+    return path

@@ -1,0 +1,455 @@
+"""Safe writing: one atomic file writer, one kill-safe folder update, one verified cache.
+
+Every module that writes goes through here, so the guarantees hold everywhere:
+
+* :func:`atomic_path` / :func:`atomic_write_bytes` — a file appears whole or not at all: it is
+  written to a temporary sibling (same extension, so writers pick the format by it), flushed to
+  disk (``fsync``), optionally verified, then renamed over the target and the folder synced.
+* :func:`replace_folder` — (re)build a generated folder without losing anything: a build runs
+  in a staging sibling; a journal written into the staging folder then lists what moves in
+  (leaves first, the root layer last) and which previously generated files are obsolete. Only
+  files this package generated (listed in the folder's manifest) are ever replaced or deleted;
+  the user's own files (``notes.txt``, ``Textures/my_decal.png``, a symlinked
+  ``overrides.usda``) are left alone and never read. A process killed at any instant leaves
+  either the old folder, or a journal that the next run rolls forward; staging folders of dead
+  runs are removed.
+* :func:`verified_cache` — a cache entry is a folder with a SHA-256 manifest written last;
+  reading verifies every file and rebuilds on any mismatch, writing is atomic (rename of a
+  complete folder).
+* :func:`check_output_file` / :func:`check_output_folder` — refuse unusable outputs before any
+  work: an empty name (``.``), a name too long for the file system, a parent that is a file, a
+  read-only or missing-permission folder.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import errno
+import hashlib
+import json
+import os
+import re
+import secrets
+import shutil
+from collections.abc import Callable, Iterable, Iterator
+from pathlib import Path
+
+from ionic_usd.errors import OutputExistsError, ParameterError
+
+__all__ = [
+    "MANIFEST_NAME",
+    "atomic_path",
+    "atomic_write_bytes",
+    "check_output_file",
+    "check_output_folder",
+    "clean_stale_temporaries",
+    "generated_files",
+    "recover_folder",
+    "replace_folder",
+    "sha256_file",
+    "verified_cache",
+]
+
+MANIFEST_NAME = ".ionic_usd-manifest.json"  # the files a folder's last build generated
+_JOURNAL = ".ionic_usd-journal.json"  # in a staging folder: written when the build is complete
+_TMP_TAG = "ionic-tmp"
+_STAGE_TAG = "ionic-build"
+# temporaries of this package: .<name>.ionic-tmp-<pid>-<hex><suffix> (files) and
+# .<name>.ionic-build-<pid>-<hex> (staging folders)
+_OURS = re.compile(rf"^\.(?P<name>.+)\.(?P<tag>{_TMP_TAG}|{_STAGE_TAG})-(?P<pid>\d+)-[0-9a-f]{{8}}")
+# temporaries of ionic_usd < 0.2 (tempfile.mkdtemp(prefix=".X.") and ".X.old-PID")
+_LEGACY = re.compile(r"^\.(?P<name>.+)\.(?:old-(?P<pid>\d+)|[a-z0-9_]{8})$")
+
+
+# -- small helpers ---------------------------------------------------------------------------
+def _pid_alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def _fsync_dir(folder: Path) -> None:
+    try:
+        fd = os.open(folder, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass  # some file systems cannot sync a directory; the rename is still atomic
+    finally:
+        os.close(fd)
+
+
+def _fsync_file(path: Path) -> None:
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+def _tmp_sibling(path: Path, tag: str = _TMP_TAG) -> Path:
+    # keep the extension: USD and OpenImageIO choose the format by it
+    stem = path.name[:100]
+    return path.with_name(f".{stem}.{tag}-{os.getpid()}-{secrets.token_hex(4)}{path.suffix}")
+
+
+def sha256_file(path: str | os.PathLike) -> str:
+    """Hex SHA-256 of a file's bytes."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for chunk in iter(lambda: fh.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+# -- output checks -----------------------------------------------------------------------------
+def _name_max(folder: Path) -> int:
+    try:
+        return int(os.pathconf(folder, "PC_NAME_MAX"))
+    except (OSError, ValueError):
+        return 255
+
+
+def _existing_ancestor(p: Path) -> Path:
+    q = p
+    while not q.exists() and q != q.parent:
+        q = q.parent
+    return q
+
+
+def _check_target(p: Path, what: str) -> Path:
+    name = p.name
+    if name in ("", ".", "..") or p.parts[-1:] in ((".",), ("..",)):
+        raise ParameterError(what, str(p), "a path ending in a file or folder name (not '.', "
+                             "'..' or '/')")
+    parent = p.parent
+    anc = _existing_ancestor(parent)
+    if not anc.is_dir():
+        raise ParameterError(what, str(p), f"a path inside a folder ({anc} is a file)")
+    limit = _name_max(anc)
+    for part in p.parts:
+        if len(os.fsencode(part)) > limit:
+            raise ParameterError(what, str(p)[:60] + "…", f"names of at most {limit} bytes "
+                                 f"(one has {len(os.fsencode(part))})")
+    if not os.access(anc, os.W_OK | os.X_OK):
+        reason = "read-only file system" if _read_only_fs(anc) else "permission denied"
+        raise ParameterError(what, str(p), f"a writable location ({anc}: {reason})")
+    return p
+
+
+def _read_only_fs(folder: Path) -> bool:
+    try:
+        return bool(os.statvfs(folder).f_flag & os.ST_RDONLY)
+    except OSError:
+        return False
+
+
+def check_output_file(path: str | os.PathLike, *, force: bool = False,
+                      what: str = "output") -> Path:
+    """Refuse an output file that cannot be written, before any work is done.
+
+    Refused: a name that is empty, ``.`` or ``..``; a name longer than the file system allows;
+    a parent that is a file; a location that is read-only; an existing folder; an existing file
+    unless ``force``.
+    """
+    p = _check_target(Path(path), what)
+    if p.is_dir():
+        raise ParameterError(what, str(p), "a file path (this is an existing folder)")
+    if p.exists() and not force:
+        raise OutputExistsError(f"{p} exists; pass --force (force=True) to overwrite it")
+    return p
+
+
+def check_output_folder(path: str | os.PathLike, *, force: bool = False,
+                        what: str = "output") -> Path:
+    """Refuse an output folder that cannot be written (as :func:`check_output_file`).
+
+    An existing folder needs ``force``; an existing file of that name is always refused.
+    """
+    p = _check_target(Path(path), what)
+    if p.exists() and not p.is_dir():
+        raise ParameterError(what, str(p), "a folder path (this is an existing file)")
+    if p.exists() and not force:
+        raise OutputExistsError(f"{p} exists; pass --force (force=True) to rebuild it")
+    return p
+
+
+# -- one atomic file writer ------------------------------------------------------------------
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike, *,
+                verify: Callable[[Path], None] | None = None) -> Iterator[Path]:
+    """Yield a temporary sibling of ``path`` to write; on success it replaces ``path``.
+
+    The temporary file keeps ``path``'s extension. After the block: the file is synced to
+    disk, ``verify(tmp)`` runs (it raises to reject what was written — e.g. a PNG truncated by
+    a full disk), then the file is renamed over ``path`` and the folder synced. On any error
+    the temporary file is removed and ``path`` is untouched.
+    """
+    p = Path(path)
+    tmp = _tmp_sibling(p)
+    try:
+        yield tmp
+        if not tmp.is_file():
+            raise OSError(errno.EIO, "nothing was written", str(p))
+        _fsync_file(tmp)
+        if verify is not None:
+            verify(tmp)
+        os.replace(tmp, p)
+        _fsync_dir(p.parent)
+    finally:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+
+
+def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> Path:
+    """Write ``data`` to ``path`` atomically (see :func:`atomic_path`)."""
+    p = Path(path)
+    with atomic_path(p) as tmp, open(tmp, "wb") as fh:
+        fh.write(data)
+    return p
+
+
+def clean_stale_temporaries(folder: str | os.PathLike, name: str | None = None) -> list[Path]:
+    """Remove this package's temporary files/folders in ``folder`` left by dead processes.
+
+    ``name`` restricts to temporaries of that entry. Staging folders holding a complete
+    journal are not removed here (:func:`replace_folder` rolls them forward). Returns what was
+    removed.
+    """
+    removed: list[Path] = []
+    try:
+        entries = list(os.scandir(folder))
+    except OSError:
+        return removed
+    for e in entries:
+        m = _OURS.match(e.name)
+        if not m or (name is not None and m["name"] != name[:100]):
+            continue
+        if _pid_alive(int(m["pid"])):
+            continue
+        p = Path(e.path)
+        if e.is_dir(follow_symlinks=False):
+            if (p / _JOURNAL).is_file():
+                continue
+            shutil.rmtree(p, ignore_errors=True)
+        else:
+            with contextlib.suppress(OSError):
+                p.unlink()
+        removed.append(p)
+    return removed
+
+
+# -- one kill-safe folder update -------------------------------------------------------------
+def generated_files(folder: str | os.PathLike) -> list[str]:
+    """The relative paths the last build generated in ``folder`` (from its manifest)."""
+    try:
+        data = json.loads((Path(folder) / MANIFEST_NAME).read_text("utf-8"))
+        files = data["files"]
+        if isinstance(files, list) and all(isinstance(f, str) for f in files):
+            return [f for f in files if _safe_rel(f)]
+    except (OSError, ValueError, KeyError, TypeError):
+        pass
+    return []
+
+
+def _safe_rel(rel: str) -> bool:
+    parts = Path(rel).parts
+    return bool(parts) and not Path(rel).is_absolute() and ".." not in parts
+
+
+def _list_files(root: Path) -> list[str]:
+    out = []
+    for dirpath, _dirs, files in os.walk(root):
+        for f in files:
+            rel = os.path.relpath(os.path.join(dirpath, f), root)
+            if rel not in (_JOURNAL, MANIFEST_NAME):
+                out.append(rel)
+    return out
+
+
+def _move_order(rels: Iterable[str], root_files: Iterable[str]) -> list[str]:
+    """Deepest files first, the root layers last: a reader sees the new root only when every
+    file it refers to is in place."""
+    last = set(root_files)
+    return sorted(rels, key=lambda r: (r in last, -r.count(os.sep), r))
+
+
+def _roll_forward(stage: Path, dest: Path) -> None:
+    """Finish a committed update: idempotent, so a kill during it is finished next time."""
+    journal = json.loads((stage / _JOURNAL).read_text("utf-8"))
+    dest.mkdir(parents=True, exist_ok=True)
+    for rel in journal["move"]:
+        src, dst = stage / rel, dest / rel
+        if not os.path.lexists(src):
+            continue  # moved before a kill
+        dst.parent.mkdir(parents=True, exist_ok=True)
+        if rel in journal["keep_existing"]:
+            # never replace the user's file (or symlink); link() fails if it exists
+            with contextlib.suppress(FileExistsError):
+                os.link(src, dst)
+            os.unlink(src)
+            continue
+        if os.path.isdir(dst) and not os.path.islink(dst):
+            raise OSError(errno.EISDIR, "a folder is in the way of a generated file", str(dst))
+        os.replace(src, dst)
+    for rel in journal["obsolete"]:
+        p = dest / rel
+        if os.path.lexists(p) and not os.path.isdir(p):
+            with contextlib.suppress(OSError):
+                p.unlink()
+            if p.parent != dest:  # a folder it emptied goes too (rmdir refuses a full one)
+                with contextlib.suppress(OSError):
+                    p.parent.rmdir()
+    atomic_write_bytes(dest / MANIFEST_NAME, json.dumps({"files": journal["files"]},
+                                                        indent=1).encode())
+    _fsync_dir(dest)
+    shutil.rmtree(stage, ignore_errors=True)
+
+
+def recover_folder(dest: str | os.PathLike) -> None:
+    """Finish or discard interrupted updates of ``dest`` and remove stale temporaries."""
+    dest = Path(dest)
+    parent = dest.parent if str(dest.parent) else Path(".")
+    try:
+        entries = list(os.scandir(parent))
+    except OSError:
+        return
+    for e in entries:
+        m = _OURS.match(e.name)
+        if m and m["name"] == dest.name[:100] and m["tag"] == _STAGE_TAG \
+                and not _pid_alive(int(m["pid"])) and (Path(e.path) / _JOURNAL).is_file():
+            _roll_forward(Path(e.path), dest)
+        legacy = _LEGACY.match(e.name)
+        if legacy and legacy["name"] == dest.name and e.is_dir(follow_symlinks=False):
+            pid = legacy["pid"]
+            if pid is not None and _pid_alive(int(pid)):
+                continue
+            p = Path(e.path)
+            if pid is not None and not dest.exists():
+                os.replace(p, dest)  # killed between the two renames of ionic_usd < 0.2
+            elif pid is not None or _looks_generated(p):
+                shutil.rmtree(p, ignore_errors=True)
+    clean_stale_temporaries(parent, dest.name)
+
+
+def _looks_generated(p: Path) -> bool:
+    try:
+        names = {c.name for c in p.iterdir()}
+    except OSError:
+        return False
+    return not names or bool(names & {"Temple.usda", "Payload", "IonicColumn"}) \
+        or any(n.endswith(".usda") for n in names)
+
+
+def replace_folder(build: Callable[[Path], object], dest: str | os.PathLike, *,
+                   force: bool = False, keep_existing: Iterable[str] = (),
+                   root_files: Iterable[str] = ()):
+    """Build a generated folder in a staging sibling and move it into ``dest`` kill-safely.
+
+    Parameters
+    ----------
+    build : ``build(stage_folder)`` writes every generated file; its result is returned
+    dest : the output folder; an existing one needs ``force``
+    keep_existing : relative paths created only when absent (the user's layer): an existing
+        file or symlink there is never read, replaced or deleted
+    root_files : relative paths moved last (the layers a user opens)
+
+    Files in ``dest`` that the previous build did not generate are never touched; files the
+    previous build generated and this one does not are deleted.
+    """
+    dest = Path(dest)
+    check_output_folder(dest, force=True)
+    parent = dest.parent
+    parent.mkdir(parents=True, exist_ok=True)
+    recover_folder(dest)
+    if dest.exists() and not force:
+        raise OutputExistsError(f"{dest} exists; pass --force (force=True) to replace it")
+    if dest.exists() and not dest.is_dir():
+        raise ParameterError("output", str(dest), "a folder path (this is an existing file)")
+    stage = _tmp_sibling(dest, _STAGE_TAG)
+    stage.mkdir()
+    try:
+        result = build(stage)
+        files = _list_files(stage)
+        for rel in files:
+            _fsync_file(stage / rel)
+        keep = [k for k in keep_existing if k in files]
+        if not dest.exists():
+            # a new folder appears whole with one rename
+            atomic_write_bytes(stage / MANIFEST_NAME,
+                               json.dumps({"files": sorted(set(files) - set(keep))},
+                                          indent=1).encode())
+            _fsync_dir(stage)
+            os.replace(stage, dest)
+            _fsync_dir(parent)
+            return result
+        new = sorted(set(files) - set(keep))
+        old = generated_files(dest)
+        journal = {"move": _move_order(files, root_files), "keep_existing": keep,
+                   "obsolete": sorted(set(old) - set(new) - set(keep)), "files": new}
+        atomic_write_bytes(stage / _JOURNAL, json.dumps(journal, indent=1).encode())
+        _fsync_dir(stage)
+    except BaseException:
+        shutil.rmtree(stage, ignore_errors=True)
+        raise
+    # committed: from here on a kill is finished by the next run (recover_folder)
+    _roll_forward(stage, dest)
+    return result
+
+
+def verified_cache(entry: str | os.PathLike, produce: Callable[[Path], None],
+                   verify: Callable[[Path], None] | None = None) -> Path:
+    """A cache entry folder that is complete and intact, producing it when it is not.
+
+    ``produce(folder)`` writes the entry's files. They are checked with ``verify(file)`` (which
+    raises on a bad file), hashed into a manifest written last, and the folder is renamed into
+    place. Reading re-hashes every file against the manifest: a truncated, edited or garbage
+    entry is discarded and produced again. Raises ``OSError`` when the cache cannot be written.
+    """
+    entry = Path(entry)
+    if _cache_ok(entry):
+        return entry
+    entry.parent.mkdir(parents=True, exist_ok=True)
+    clean_stale_temporaries(entry.parent, entry.name)
+    stage = _tmp_sibling(entry, _STAGE_TAG)
+    stage.mkdir()
+    try:
+        produce(stage)
+        sums = {}
+        for rel in sorted(_list_files(stage)):
+            _fsync_file(stage / rel)
+            if verify is not None:
+                verify(stage / rel)
+            sums[rel] = sha256_file(stage / rel)
+        atomic_write_bytes(stage / MANIFEST_NAME, json.dumps({"sha256": sums}).encode())
+        _fsync_dir(stage)
+        if os.path.lexists(entry):  # a bad entry: move it aside, then delete it
+            aside = _tmp_sibling(entry, _STAGE_TAG)
+            os.replace(entry, aside)
+            shutil.rmtree(aside, ignore_errors=True)
+        os.replace(stage, entry)
+        _fsync_dir(entry.parent)
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
+    return entry
+
+
+def _cache_ok(entry: Path) -> bool:
+    try:
+        sums = json.loads((entry / MANIFEST_NAME).read_text("utf-8"))["sha256"]
+        if not sums:
+            return False
+        on_disk = set(_list_files(entry))
+        if on_disk != set(sums):
+            return False
+        return all(sha256_file(entry / rel) == h for rel, h in sums.items())
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
+        return False

@@ -1,0 +1,649 @@
+"""The one scene reader: a composed USD stage as plain numpy data for exporters and viewers.
+
+:func:`read_scene` opens a stage, applies variant selections (``--variant set=value``,
+``--lod``), and walks it once. Each drawable mesh is read once and deduplicated by content
+(geometry + material + paradata), so a mesh repeated by native instancing (instanceable prims,
+nested at any depth), by a ``UsdGeom.PointInstancer`` or simply authored twice becomes one
+:class:`SceneMesh` with several :class:`Placement` values — the instancing a glTF writer keeps.
+
+All matrices are row-vector (USD's ``Gf.Matrix4d`` layout: ``p_world = p_local @ M``), already
+converted to Y-up metres (``upAxis`` and ``metersPerUnit`` of the stage are applied).
+
+Paradata: ``customData`` and ``userProperties:*`` attributes are gathered as JSON-ready values —
+the default prim's on :attr:`Scene.paradata`, a mesh's own and its ancestors' inside its
+prototype on :attr:`SceneMesh.paradata`, and an instance's chain outside the prototype on
+:attr:`Placement.paradata`.
+
+``pxr`` stays in this module: callers get numpy arrays, strings and dicts.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from pxr import Gf, Sdf, Usd, UsdGeom, UsdShade, Vt
+
+from ionic_usd.errors import GeometryError, ParameterError, UsdAuthoringError
+
+__all__ = [
+    "TextureRef",
+    "MaterialData",
+    "SceneMesh",
+    "Placement",
+    "Scene",
+    "read_scene",
+    "open_stage",
+    "select_variants",
+    "parse_variant_args",
+    "to_json_value",
+]
+
+_SKIP_PURPOSES = ("proxy", "guide")
+
+
+# -- values ------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class TextureRef:
+    """A UsdUVTexture as a glTF-like texture reference.
+
+    ``path`` is the resolved file; ``channels`` the output read (``"rgb"``, ``"r"``, …);
+    ``scale``/``bias`` (4,) UsdUVTexture's decode; ``st_scale``/``st_rotation`` (degrees,
+    counter-clockwise)/``st_translation`` a UsdTransform2d on the ``st`` input, or None.
+    """
+
+    path: str
+    channels: str
+    colour_space: str
+    wrap_s: str = "repeat"
+    wrap_t: str = "repeat"
+    scale: tuple[float, float, float, float] = (1.0, 1.0, 1.0, 1.0)
+    bias: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+    st_scale: tuple[float, float] | None = None
+    st_rotation: float = 0.0
+    st_translation: tuple[float, float] = (0.0, 0.0)
+
+
+@dataclass(frozen=True)
+class MaterialData:
+    """A UsdPreviewSurface: constant inputs and, where connected, their textures."""
+
+    name: str
+    path: str
+    diffuse: tuple[float, float, float] = (0.18, 0.18, 0.18)
+    diffuse_texture: TextureRef | None = None
+    roughness: float = 0.5
+    roughness_texture: TextureRef | None = None
+    metallic: float = 0.0
+    metallic_texture: TextureRef | None = None
+    normal_texture: TextureRef | None = None
+    emissive: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    opacity: float = 1.0
+
+    @property
+    def key(self) -> str:
+        """A content key: equal materials found under different prototypes share it."""
+        d = {k: v for k, v in self.__dict__.items() if k not in ("name", "path")}
+        return hashlib.blake2b(repr(sorted(d.items())).encode(), digest_size=8).hexdigest()
+
+
+@dataclass(frozen=True, eq=False)
+class SceneMesh:
+    """One distinct mesh.
+
+    Parameters
+    ----------
+    key : content key (unique in the scene)
+    name : prim name of its first occurrence; ``source`` that prim's path
+    points : (n, 3) float64, in the mesh's own space
+    face_vertex_counts : (f,) int64
+    face_vertex_indices : (k,) int64, counter-clockwise seen from outside
+    normals : (n, 3) ('vertex') or (k, 3) ('faceVarying') float64, or None
+    st : (k, 2) float64 texture coordinates per face corner (flattened), or None
+    material : key into :attr:`Scene.materials`, or None
+    """
+
+    key: str
+    name: str
+    source: str
+    points: np.ndarray
+    face_vertex_counts: np.ndarray
+    face_vertex_indices: np.ndarray
+    normals: np.ndarray | None
+    normals_interpolation: str
+    st: np.ndarray | None
+    material: str | None
+    double_sided: bool = False
+    paradata: dict = field(default_factory=dict)
+
+    @property
+    def n_triangles(self) -> int:
+        return int(np.sum(self.face_vertex_counts - 2))
+
+
+@dataclass(frozen=True, eq=False)
+class Placement:
+    """A mesh placed in the world: ``matrix`` (4, 4) row-vector, Y-up metres.
+
+    ``path`` names the prim it came from (an instance's path, or ``instancer[i]``); ``instanced``
+    is True when the placement came through native instancing or a PointInstancer.
+    """
+
+    mesh: str
+    matrix: np.ndarray
+    path: str
+    instanced: bool = False
+    paradata: dict = field(default_factory=dict)
+
+
+@dataclass
+class Scene:
+    """What :func:`read_scene` returns."""
+
+    source: str
+    meshes: dict[str, SceneMesh] = field(default_factory=dict)
+    materials: dict[str, MaterialData] = field(default_factory=dict)
+    placements: list[Placement] = field(default_factory=list)
+    paradata: dict = field(default_factory=dict)
+    variants: dict[str, str] = field(default_factory=dict)
+
+    def placements_of(self, key: str) -> list[Placement]:
+        return [p for p in self.placements if p.mesh == key]
+
+    @property
+    def n_triangles(self) -> int:
+        """Triangles drawn, every placement counted."""
+        return sum(self.meshes[p.mesh].n_triangles for p in self.placements)
+
+
+# -- JSON paradata -----------------------------------------------------------------------------
+def to_json_value(v: object) -> object:
+    """A USD value (dictionary, Vt array, Gf vector, asset path…) as plain JSON data."""
+    if isinstance(v, Mapping):
+        return {str(k): to_json_value(x) for k, x in v.items()}
+    if isinstance(v, (bool, int, str)) or v is None:
+        return v
+    if isinstance(v, float):
+        return v if np.isfinite(v) else None
+    if isinstance(v, Sdf.AssetPath):
+        return v.path
+    if isinstance(v, (Sdf.Path, Sdf.AssetPath)):
+        return str(v)
+    if isinstance(v, (list, tuple)) or hasattr(v, "__len__") and not isinstance(v, bytes):
+        try:
+            return [to_json_value(x) for x in v]
+        except TypeError:
+            pass
+    if isinstance(v, (np.integer,)):
+        return int(v)
+    if isinstance(v, (np.floating,)):
+        return to_json_value(float(v))
+    return str(v)
+
+
+def _prim_paradata(prim: Usd.Prim) -> dict:
+    out: dict = {}
+    cd = prim.GetAllAuthoredMetadata().get("customData")  # not the schemas' userDocBrief
+    if cd:
+        out.update(to_json_value(dict(cd)))  # type: ignore[arg-type]
+    props = {}
+    for attr in prim.GetAuthoredAttributes():
+        name = attr.GetName()
+        if name.startswith("userProperties:"):
+            props[name.split(":", 1)[1]] = to_json_value(attr.Get())
+    if props:
+        out["userProperties"] = props
+    return out
+
+
+def _merge(outer: dict, inner: dict) -> dict:
+    out = dict(outer)
+    for k, v in inner.items():
+        out[k] = _merge(out[k], v) if isinstance(v, dict) and isinstance(out.get(k), dict) else v
+    return out
+
+
+# -- stage and variants ------------------------------------------------------------------------
+def open_stage(path: str | os.PathLike) -> Usd.Stage:
+    """Open a USD file with every payload loaded; errors name the file."""
+    p = Path(path)
+    if not p.is_file():
+        raise ParameterError("scene", str(p), "an existing USD file (.usd, .usda, .usdc, .usdz)")
+    try:
+        stage = Usd.Stage.Open(str(p), Usd.Stage.LoadAll)
+    except Exception as exc:  # pxr raises Tf.ErrorException carrying the parser's message
+        msg = " ".join(str(exc).split())[:300]
+        raise UsdAuthoringError(f"{p}: cannot open as a USD stage: {msg}") from None
+    if stage is None:
+        raise UsdAuthoringError(f"{p}: cannot open as a USD stage")
+    return stage
+
+
+def parse_variant_args(items: Sequence[str] | None) -> dict[str, str]:
+    """``["lod=low", "finish=stucco"]`` → ``{"lod": "low", "finish": "stucco"}``."""
+    out: dict[str, str] = {}
+    for item in items or ():
+        name, sep, value = item.partition("=")
+        if not sep or not name.strip() or not value.strip():
+            raise ParameterError("--variant", item, "SET=VALUE, e.g. lod=low")
+        out[name.strip()] = value.strip()
+    return out
+
+
+def _outermost_instance(prim: Usd.Prim) -> Usd.Prim:
+    """The instance prim (not a proxy) that makes ``prim`` an instance proxy."""
+    p = prim
+    while p and (p.IsInstanceProxy() or not p.IsInstance()):
+        p = p.GetParent()
+    return p
+
+
+def select_variants(stage: Usd.Stage, selections: Mapping[str, str]) -> dict[str, str]:
+    """Select ``set=value`` on every prim that has the set, in the session layer.
+
+    Prims reached only through instancing (instance proxies) cannot carry a selection, so the
+    instance above them is made non-instanceable in the session layer first (its nested
+    instances stay instanced). Repeats until stable, because a selection can compose in prims
+    with variant sets of their own. Raises ParameterError for a set no prim has, or a value a
+    prim's set does not offer (listing the valid ones).
+    """
+    found: set[str] = set()
+    session = stage.GetSessionLayer()
+    with Usd.EditContext(stage, session):
+        for _ in range(64):
+            deinstance: dict[str, Usd.Prim] = {}
+            select: list[tuple[Usd.Prim, str, str]] = []
+            for prim in Usd.PrimRange(stage.GetPseudoRoot(), Usd.TraverseInstanceProxies()):
+                if not prim.HasVariantSets():
+                    continue
+                vsets = prim.GetVariantSets()
+                names = vsets.GetNames()
+                for vset_name, value in selections.items():
+                    if vset_name not in names:
+                        continue
+                    found.add(vset_name)
+                    vset = vsets.GetVariantSet(vset_name)
+                    valid = vset.GetVariantNames()
+                    if value not in valid:
+                        raise ParameterError(f"--variant {vset_name}", value,
+                                             f"one of {', '.join(valid)}",
+                                             context=str(prim.GetPath()))
+                    if vset.GetVariantSelection() == value:
+                        continue
+                    if prim.IsInstanceProxy():
+                        inst = _outermost_instance(prim)
+                        deinstance[str(inst.GetPath())] = inst
+                    else:
+                        select.append((prim, vset_name, value))
+            if not deinstance and not select:
+                break
+            with Sdf.ChangeBlock():
+                for inst in deinstance.values():
+                    inst.SetInstanceable(False)
+                for prim, vset_name, value in select:
+                    prim.GetVariantSets().GetVariantSet(vset_name).SetVariantSelection(value)
+        else:  # pragma: no cover - would need a pathological stage
+            raise UsdAuthoringError("variant selections did not settle after 64 passes")
+    missing = [s for s in selections if s not in found]
+    if missing:
+        sets: set[str] = set()
+        for prim in Usd.PrimRange(stage.GetPseudoRoot(), Usd.TraverseInstanceProxies()):
+            if prim.HasVariantSets():
+                sets.update(prim.GetVariantSets().GetNames())
+        valid = ", ".join(sorted(sets)) or "none: the scene has no variant sets"
+        raise ParameterError("--variant", missing[0], f"a variant set of the scene ({valid})")
+    return dict(selections)
+
+
+def _root_matrix(stage: Usd.Stage) -> np.ndarray:
+    """Row-vector matrix taking stage coordinates to Y-up metres."""
+    s = float(UsdGeom.GetStageMetersPerUnit(stage)) or 1.0
+    m = np.eye(4)
+    m[:3, :3] *= s
+    if UsdGeom.GetStageUpAxis(stage) == UsdGeom.Tokens.z:
+        # (x, y, z) -> (x, z, -y): +Z becomes +Y, handedness kept
+        m[:3, :3] = s * np.array([[1.0, 0, 0], [0, 0, -1.0], [0, 1.0, 0]])
+    return m
+
+
+# -- materials ---------------------------------------------------------------------------------
+def _input_value(shader: UsdShade.Shader, name: str):
+    inp = shader.GetInput(name)
+    return inp.Get() if inp else None
+
+
+def _source(inp: UsdShade.Input) -> tuple[UsdShade.Shader, str] | None:
+    if not inp or not inp.HasConnectedSource():
+        return None
+    src, out_name, _ = inp.GetConnectedSource()
+    return UsdShade.Shader(src.GetPrim()), str(out_name)
+
+
+def _texture(shader: UsdShade.Shader, channels: str) -> TextureRef | None:
+    if _input_value(shader, "file") is None:
+        return None
+    asset = _input_value(shader, "file")
+    path = asset.resolvedPath if isinstance(asset, Sdf.AssetPath) else ""
+    if not path:
+        raise UsdAuthoringError(f"{shader.GetPath()}: texture {asset} does not resolve")
+    space = _input_value(shader, "sourceColorSpace") or "auto"
+    kw: dict = {}
+    for name in ("scale", "bias"):
+        v = _input_value(shader, name)
+        if v is not None:
+            kw[name] = tuple(float(x) for x in v)
+    for name, key in (("wrapS", "wrap_s"), ("wrapT", "wrap_t")):
+        v = _input_value(shader, name)
+        if v:
+            kw[key] = str(v)
+    st = _source(shader.GetInput("st"))
+    if st is not None and st[0].GetIdAttr().Get() == "UsdTransform2d":
+        xf = st[0]
+        sc = _input_value(xf, "scale")
+        kw["st_scale"] = (float(sc[0]), float(sc[1])) if sc is not None else (1.0, 1.0)
+        kw["st_rotation"] = float(_input_value(xf, "rotation") or 0.0)
+        tr = _input_value(xf, "translation")
+        kw["st_translation"] = (float(tr[0]), float(tr[1])) if tr is not None else (0.0, 0.0)
+    return TextureRef(path=path, channels=channels, colour_space=str(space), **kw)
+
+
+def read_material(mat: UsdShade.Material) -> MaterialData | None:
+    """A bound material's UsdPreviewSurface as :class:`MaterialData` (None: not a preview
+    surface)."""
+    src = mat.ComputeSurfaceSource()
+    shader = src[0] if isinstance(src, tuple) else src
+    if not shader or shader.GetIdAttr().Get() != "UsdPreviewSurface":
+        return None
+    kw: dict = {}
+    for name, key, tex_key in (("diffuseColor", "diffuse", "diffuse_texture"),
+                               ("roughness", "roughness", "roughness_texture"),
+                               ("metallic", "metallic", "metallic_texture"),
+                               ("normal", None, "normal_texture"),
+                               ("emissiveColor", "emissive", None),
+                               ("opacity", "opacity", None)):
+        inp = shader.GetInput(name)
+        if not inp:
+            continue
+        conn = _source(inp)
+        if conn is not None and conn[0].GetIdAttr().Get() == "UsdUVTexture" and tex_key:
+            tex = _texture(conn[0], conn[1])
+            if tex is not None:
+                kw[tex_key] = tex
+                continue
+        v = inp.Get()
+        if v is not None and key is not None:
+            kw[key] = tuple(float(x) for x in v) if hasattr(v, "__len__") else float(v)
+    return MaterialData(name=mat.GetPrim().GetName(), path=str(mat.GetPath()), **kw)
+
+
+# -- meshes ------------------------------------------------------------------------------------
+def _np(value, dtype) -> np.ndarray:
+    return np.asarray(value if value is not None else [], dtype=dtype)
+
+
+def _corner_values(pv: UsdGeom.Primvar, n_points: int, counts: np.ndarray,
+                   idx: np.ndarray, width: int, what: str) -> np.ndarray | None:
+    """A primvar (indexed or not) expanded to one value per face corner: (k, width)."""
+    if not pv or not pv.HasValue():
+        return None
+    vals = _np(pv.ComputeFlattened(), np.float64).reshape(-1, width)
+    interp = pv.GetInterpolation()
+    if interp == UsdGeom.Tokens.faceVarying and len(vals) == len(idx):
+        return vals
+    if interp in (UsdGeom.Tokens.vertex, UsdGeom.Tokens.varying) and len(vals) == n_points:
+        return vals[idx]
+    if interp == UsdGeom.Tokens.uniform and len(vals) == len(counts):
+        return np.repeat(vals, counts, axis=0)
+    if interp == UsdGeom.Tokens.constant and len(vals) >= 1:
+        return np.repeat(vals[:1], len(idx), axis=0)
+    raise GeometryError(f"{pv.GetAttr().GetPath()}: {len(vals)} {what} values do not fit "
+                        f"interpolation {interp}")
+
+
+def _read_mesh(prim: Usd.Prim, t: Usd.TimeCode):
+    mesh = UsdGeom.Mesh(prim)
+    pts = _np(mesh.GetPointsAttr().Get(t), np.float64).reshape(-1, 3)
+    counts = _np(mesh.GetFaceVertexCountsAttr().Get(t), np.int64)
+    idx = _np(mesh.GetFaceVertexIndicesAttr().Get(t), np.int64)
+    if len(pts) == 0 or len(counts) == 0:
+        return None
+    if counts.sum() != len(idx) or (len(idx) and (idx.min() < 0 or idx.max() >= len(pts))):
+        raise GeometryError(f"{prim.GetPath()}: faceVertexCounts/faceVertexIndices do not match "
+                            f"{len(pts)} points")
+    if not np.all(np.isfinite(pts)):
+        raise GeometryError(f"{prim.GetPath()}: points contain non-finite values")
+    keep = counts >= 3  # points and lines carry no area
+    if not keep.all():
+        corner_keep = np.repeat(keep, counts)
+        counts, idx = counts[keep], idx[corner_keep]
+    else:
+        corner_keep = None
+    if len(counts) == 0:
+        return None
+    pvapi = UsdGeom.PrimvarsAPI(prim)
+    nrm, interp = None, "vertex"
+    pv = pvapi.GetPrimvar("normals")
+    if pv and pv.HasValue():
+        nrm = _corner_values(pv, len(pts), counts, idx, 3, "normal")
+        interp = "faceVarying"
+    elif mesh.GetNormalsAttr().HasValue():
+        raw = _np(mesh.GetNormalsAttr().Get(t), np.float64).reshape(-1, 3)
+        ni = mesh.GetNormalsInterpolation()
+        if ni in (UsdGeom.Tokens.vertex, UsdGeom.Tokens.varying) and len(raw) == len(pts):
+            nrm = raw
+        elif ni == UsdGeom.Tokens.faceVarying and corner_keep is not None:
+            nrm, interp = raw[corner_keep], "faceVarying"
+        elif ni == UsdGeom.Tokens.faceVarying and len(raw) == len(idx):
+            nrm, interp = raw, "faceVarying"
+        elif ni == UsdGeom.Tokens.uniform and len(raw) == len(keep):
+            nrm, interp = np.repeat(raw[keep], counts, axis=0), "faceVarying"
+        elif ni == UsdGeom.Tokens.constant and len(raw):
+            nrm, interp = np.repeat(raw[:1], len(idx), axis=0), "faceVarying"
+        else:
+            raise GeometryError(f"{prim.GetPath()}: {len(raw)} normals do not fit "
+                                f"interpolation {ni}")
+    st = None
+    pv = pvapi.GetPrimvar("st")
+    if pv and pv.HasValue() and corner_keep is None:
+        st = _corner_values(pv, len(pts), counts, idx, 2, "st")
+    for name, arr in (("normals", nrm), ("st", st)):
+        if arr is not None and not np.all(np.isfinite(arr)):
+            raise GeometryError(f"{prim.GetPath()}: {name} contain non-finite values")
+    if mesh.GetOrientationAttr().Get() == UsdGeom.Tokens.leftHanded:
+        # reverse each face's corners so the winding is counter-clockwise
+        starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+        order = np.concatenate([s + np.arange(c)[::-1]
+                                for s, c in zip(starts, counts, strict=True)])
+        idx = idx[order]
+        if st is not None:
+            st = st[order]
+        if nrm is not None and interp == "faceVarying":
+            nrm = nrm[order]
+    double = bool(mesh.GetDoubleSidedAttr().Get())
+    return pts, counts, idx, nrm, interp, st, double
+
+
+def _content_key(arrays: Sequence[np.ndarray | None], extra: str) -> str:
+    h = hashlib.blake2b(digest_size=12)
+    for a in arrays:
+        h.update(b"-" if a is None else np.ascontiguousarray(a).tobytes())
+        h.update(b"|")
+    h.update(extra.encode())
+    return h.hexdigest()
+
+
+# -- walking -----------------------------------------------------------------------------------
+class _Reader:
+    """Walk a stage once; prototypes (native and point instancer) are read once and memoised."""
+
+    def __init__(self, stage: Usd.Stage, t: Usd.TimeCode, scene: Scene) -> None:
+        self.stage, self.t, self.scene = stage, t, scene
+        self.xfc = UsdGeom.XformCache(t)
+        self._protos: dict[str, list[tuple[str, np.ndarray, str]]] = {}
+        self._by_prim: dict[str, str | None] = {}
+        self._materials: dict[str, str | None] = {}
+
+    def walk(self, root: Usd.Prim, relative: bool, chain: dict
+             ) -> list[tuple[str, np.ndarray, str, dict]]:
+        """``(mesh key, matrix, path, paradata)`` per drawable under ``root``; matrices are
+        relative to ``root`` when ``relative``, else local-to-world."""
+        out: list[tuple[str, np.ndarray, str, dict]] = []
+        purposes: dict[Sdf.Path, str] = {}
+        para: dict[Sdf.Path, dict] = {root.GetPath().GetParentPath(): chain}
+        it = iter(Usd.PrimRange(root, Usd.PrimDefaultPredicate))
+        for prim in it:
+            path = prim.GetPath()
+            parent = path.GetParentPath()
+            inherited = purposes.get(parent, "default")
+            img = UsdGeom.Imageable(prim)
+            purpose = inherited
+            if img:
+                if img.GetVisibilityAttr().Get(self.t) == UsdGeom.Tokens.invisible:
+                    it.PruneChildren()
+                    continue
+                attr = img.GetPurposeAttr()
+                if attr.HasAuthoredValue():
+                    purpose = str(attr.Get())
+                if purpose in _SKIP_PURPOSES:
+                    it.PruneChildren()
+                    continue
+            purposes[path] = purpose
+            own = _prim_paradata(prim) if prim != self.stage.GetDefaultPrim() else {}
+            para[path] = _merge(para.get(parent, {}), own) if own else para.get(parent, {})
+            if prim.IsA(UsdShade.Material):
+                it.PruneChildren()
+                continue
+            if not (prim.IsInstance() or prim.IsA(UsdGeom.PointInstancer)
+                    or prim.IsA(UsdGeom.Mesh)):
+                continue
+            if relative:
+                m = np.array(self.xfc.ComputeRelativeTransform(prim, root)[0]).reshape(4, 4)
+            else:
+                m = np.array(self.xfc.GetLocalToWorldTransform(prim)).reshape(4, 4)
+            if prim.IsInstance():
+                it.PruneChildren()
+                for k, rel, _, pd in self._prototype(prim.GetPrototype()):
+                    out.append((k, rel @ m, str(path), _merge(para[path], pd)))
+            elif prim.IsA(UsdGeom.PointInstancer):
+                it.PruneChildren()
+                out.extend(self._point_instancer(UsdGeom.PointInstancer(prim), m, para[path]))
+            else:
+                key = self._mesh(prim, para[path] if relative else {})
+                if key is not None:
+                    out.append((key, m, str(path), {} if relative else para[path]))
+        return out
+
+    def _material(self, prim: Usd.Prim) -> str | None:
+        mat, _ = UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial()
+        if not mat:
+            return None
+        mpath = str(mat.GetPath())
+        if mpath not in self._materials:
+            data = read_material(mat)
+            key = data.key if data is not None else None
+            if data is not None and key not in self.scene.materials:
+                self.scene.materials[key] = data
+            self._materials[mpath] = key
+        return self._materials[mpath]
+
+    def _mesh(self, prim: Usd.Prim, paradata: dict) -> str | None:
+        read = _read_mesh(prim, self.t)
+        if read is None:
+            return None
+        pts, counts, idx, nrm, interp, st, double = read
+        material = self._material(prim)
+        meta = json.dumps(paradata, sort_keys=True, default=str)
+        key = _content_key([pts, counts, idx, nrm, st],
+                           f"{interp}|{material}|{double}|{meta}")
+        if key not in self.scene.meshes:
+            self.scene.meshes[key] = SceneMesh(
+                key=key, name=prim.GetName(), source=str(prim.GetPath()), points=pts,
+                face_vertex_counts=counts, face_vertex_indices=idx, normals=nrm,
+                normals_interpolation=interp, st=st, material=material, double_sided=double,
+                paradata=paradata)
+        return key
+
+    def _prototype(self, root: Usd.Prim) -> list[tuple[str, np.ndarray, str, dict]]:
+        key = str(root.GetPath())
+        if key not in self._protos:
+            self._protos[key] = self.walk(root, relative=True, chain={})  # type: ignore[assignment]
+        return self._protos[key]  # type: ignore[return-value]
+
+    def _point_instancer(self, pi: UsdGeom.PointInstancer, world: np.ndarray, chain: dict):
+        targets = pi.GetPrototypesRel().GetForwardedTargets()
+        ids = _np(pi.GetProtoIndicesAttr().Get(self.t), np.int64)
+        if len(ids) == 0 or not targets:
+            return []
+        # the prototype root's own transform is part of each instance (IncludeProtoXform)
+        xforms = pi.ComputeInstanceTransformsAtTime(
+            self.t, self.t, UsdGeom.PointInstancer.IncludeProtoXform,
+            UsdGeom.PointInstancer.ApplyMask)
+        mats = np.array(xforms, dtype=np.float64).reshape(-1, 4, 4)
+        mask = pi.ComputeMaskAtTime(self.t)
+        keep = np.ones(len(ids), bool) if not mask else np.asarray(mask, bool)
+        if len(mats) != int(keep.sum()):
+            raise GeometryError(f"{pi.GetPath()}: instance transforms do not match protoIndices")
+        full = np.full((len(ids), 4, 4), np.nan)
+        full[keep] = mats
+        out = []
+        base = str(pi.GetPath())
+        for j, target in enumerate(targets):
+            proto = self.stage.GetPrimAtPath(target)
+            sel = np.flatnonzero((ids == j) & keep)
+            if not proto or len(sel) == 0:
+                continue
+            # the prototype's transform is in ``mats``: walk it relative to itself
+            for k, rel, _, pd in self._prototype(proto):
+                for i in sel:
+                    out.append((k, rel @ full[i] @ world, f"{base}[{i}]", _merge(chain, pd)))
+        return out
+
+
+def read_scene(
+    path: str | os.PathLike,
+    *,
+    variants: Mapping[str, str] | None = None,
+    lod: str | None = None,
+    time: float | None = None,
+) -> Scene:
+    """Read a USD scene into a :class:`Scene` of distinct meshes and their placements.
+
+    Parameters
+    ----------
+    path : a USD file (.usda/.usdc/.usd/.usdz) any ionic_usd command wrote, or any stage of
+        meshes, instanceable prims and point instancers
+    variants : ``{set: value}`` selected on every prim that has the set (default: authored)
+    lod : shorthand for ``variants["lod"]``
+    time : time code to read (default: the default time)
+    """
+    sel = dict(variants or {})
+    if lod is not None:
+        sel["lod"] = lod
+    stage = open_stage(path)
+    if sel:
+        select_variants(stage, sel)
+    t = Usd.TimeCode(time) if time is not None else Usd.TimeCode.Default()
+    scene = Scene(source=str(path), variants=sel)
+    root = stage.GetDefaultPrim()
+    if root:
+        scene.paradata = _prim_paradata(root)
+        vs = root.GetVariantSets()
+        scene.paradata["variantSelections"] = {n: vs.GetVariantSelection(n)
+                                               for n in vs.GetNames()}
+    conv = _root_matrix(stage)
+    reader = _Reader(stage, t, scene)
+    for key, m, ppath, pd in reader.walk(stage.GetPseudoRoot(), relative=False, chain={}):
+        # through an instance, an instancer, or a second prim of equal content
+        instanced = ppath != scene.meshes[key].source
+        scene.placements.append(Placement(key, m @ conv, ppath, instanced, pd))
+    if not scene.placements:
+        raise GeometryError(f"{path}: the scene has no visible mesh")
+    return scene
+
+
+_ = (Gf, Vt)

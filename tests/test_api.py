@@ -1,0 +1,60 @@
+"""The curated top-level API: its doctests and the README's Python example, run as written."""
+
+from __future__ import annotations
+
+import doctest
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import ionic_usd
+import ionic_usd.api
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def test_api_doctests():
+    result = doctest.testmod(ionic_usd.api, optionflags=doctest.ELLIPSIS)
+    assert result.attempted >= 4 and result.failed == 0
+
+
+def test_top_level_names_resolve_lazily():
+    code = ("import sys, ionic_usd\n"
+            "assert 'ionic_usd.api' not in sys.modules\n"
+            "assert 'numpy' not in sys.modules\n"
+            "for n in ionic_usd.__all__: getattr(ionic_usd, n)\n"
+            "print('ok')\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    with pytest.raises(AttributeError):
+        ionic_usd.no_such_name  # noqa: B018
+
+
+def test_one_default_column():
+    """ColumnParams() and the Portunus preset are the same column (issue: two defaults)."""
+    from ionic_usd.column.column import ColumnParams, build_column, portunus_column_params
+
+    assert build_column(ColumnParams()).height == pytest.approx(
+        build_column(portunus_column_params()).height, abs=1e-9)
+
+
+def _readme_python() -> str:
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    section = re.search(r"^## Python API\s*$(.*?)(?=^## )", text, re.M | re.S)
+    assert section, "README has no Python API section"
+    block = re.search(r"^```python\s*$(.*?)^```", section.group(1), re.M | re.S)
+    assert block
+    return block.group(1)
+
+
+@pytest.mark.slow
+def test_readme_python_example_runs(tmp_path):
+    out = subprocess.run([sys.executable, "-c", _readme_python()], capture_output=True,
+                         text=True, cwd=tmp_path, timeout=600)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert (tmp_path / "column.usda").is_file()
+    assert (tmp_path / "PortunusTemple" / "Temple.usda").is_file()
+    assert "column instances" in out.stdout

@@ -1,0 +1,364 @@
+"""Export: glTF/GLB content (meshes, instancing, textures, paradata), usdz, STL/3MF solids, CLI."""
+
+from __future__ import annotations
+
+import json
+import math
+import zipfile
+from xml.etree import ElementTree
+
+import numpy as np
+import pygltflib
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from numpy.testing import assert_allclose
+from pxr import Gf, Sdf, Usd, UsdGeom
+
+from ionic_usd.cli import main
+from ionic_usd.export import export_scene
+from ionic_usd.export.gltf import _texture_transform, trs_decompose
+from ionic_usd.export.solid import check_solid, read_stl
+from ionic_usd.usd import validate_stage
+from ionic_usd.usd.column_asset import TILE_METRES, UV_SPAN
+from ionic_usd.usd.reader import TextureRef, read_scene
+
+
+def _accessor(g: pygltflib.GLTF2, i: int) -> np.ndarray:
+    acc = g.accessors[i]
+    bv = g.bufferViews[acc.bufferView]
+    blob = g.binary_blob()
+    dtype = {5126: np.float32, 5123: np.uint16, 5125: np.uint32}[acc.componentType]
+    width = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4}[acc.type]
+    a = np.frombuffer(blob, dtype, acc.count * width, bv.byteOffset + (acc.byteOffset or 0))
+    return a.reshape(acc.count, width) if width > 1 else a
+
+
+def _image_pixels(g: pygltflib.GLTF2, i: int, tmp_path) -> np.ndarray:
+    import OpenImageIO as oiio
+
+    img = g.images[i]
+    bv = g.bufferViews[img.bufferView]
+    data = g.binary_blob()[bv.byteOffset: bv.byteOffset + bv.byteLength]
+    assert data[:8] == b"\x89PNG\r\n\x1a\n" and img.mimeType == "image/png"
+    f = tmp_path / f"image{i}.png"
+    f.write_bytes(data)
+    return np.asarray(oiio.ImageBuf(str(f)).get_pixels(oiio.FLOAT))
+
+
+@pytest.fixture(scope="module")
+def temple_glb(tiny_temple, tmp_path_factory):
+    out = tmp_path_factory.mktemp("glb") / "temple.glb"
+    res = export_scene(tiny_temple.root, out)
+    return res, pygltflib.GLTF2().load(str(out)), read_scene(tiny_temple.root)
+
+
+def test_glb_keeps_instancing_as_gpu_instances(temple_glb, tiny_temple):
+    res, g, scene = temple_glb
+    assert len(g.meshes) == len(scene.meshes)
+    assert "EXT_mesh_gpu_instancing" in g.extensionsUsed
+    assert not g.extensionsRequired  # every extension has a fallback
+    inst_nodes = [n for n in g.nodes if n.extensions.get("EXT_mesh_gpu_instancing")]
+    assert len(inst_nodes) == 8  # 4 parts x (free, engaged)
+    copies = sorted(len(n.extras["instances"]) for n in inst_nodes)
+    assert copies == [6] * 4 + [12] * 4
+    # the instance translations are the columns' USD positions (read with UsdGeom directly)
+    stage = Usd.Stage.Open(str(tiny_temple.root))
+    xfc = UsdGeom.XformCache()
+    for n in inst_nodes:
+        attrs = n.extensions["EXT_mesh_gpu_instancing"]["attributes"]
+        tr = _accessor(g, attrs["TRANSLATION"])
+        q = _accessor(g, attrs["ROTATION"])
+        assert_allclose(np.linalg.norm(q, axis=1), 1.0, atol=1e-6)
+        for row, inst in zip(tr, n.extras["instances"], strict=True):
+            m = xfc.GetLocalToWorldTransform(stage.GetPrimAtPath(inst["path"]))
+            assert_allclose(row, np.array(m.ExtractTranslation()), atol=1e-4)
+    # triangles drawn: every copy counted, as the composer counts them
+    assert res.report.triangles_drawn == tiny_temple.triangles
+    assert res.report.draw_calls == len(g.meshes)
+
+
+def test_glb_materials_textures_and_transform(temple_glb):
+    _, g, scene = temple_glb
+    assert len(g.images) >= 3
+    column_mats = [m for m in g.materials if m.pbrMetallicRoughness.baseColorTexture
+                   and m.pbrMetallicRoughness.baseColorTexture.extensions]
+    assert column_mats, "the column material tiles its maps through KHR_texture_transform"
+    for m in g.materials:
+        pbr = m.pbrMetallicRoughness
+        assert pbr.baseColorTexture is not None and pbr.metallicRoughnessTexture is not None
+        assert m.normalTexture is not None
+    xf = column_mats[0].pbrMetallicRoughness.baseColorTexture.extensions["KHR_texture_transform"]
+    assert_allclose(xf["scale"], [UV_SPAN / TILE_METRES] * 2)
+    # every textured primitive has normals, uvs and tangents with unit xyz and w = ±1
+    for mesh in g.meshes:
+        a = mesh.primitives[0].attributes
+        nrm = _accessor(g, a.NORMAL)
+        assert_allclose(np.linalg.norm(nrm, axis=1), 1.0, atol=1e-5)
+        if mesh.primitives[0].material is not None:
+            tan = _accessor(g, a.TANGENT)
+            assert_allclose(np.linalg.norm(tan[:, :3], axis=1), 1.0, atol=1e-5)
+            assert set(np.unique(tan[:, 3])) <= {-1.0, 1.0}
+            assert a.TEXCOORD_0 is not None
+
+
+def test_glb_paradata_in_extras(temple_glb):
+    _, g, _ = temple_glb
+    extras = g.scenes[0].extras
+    hyps = extras["ionic_usd"]["hypotheses"]
+    assert "flutes_20" in hyps and hyps["flutes_20"]["certainty"]
+    assert extras["variantSelections"]["hyp_flutes_20"] == "baseline"  # as composed
+    assert not extras.get("requestedVariants")  # none asked (pygltflib drops empty dicts)
+    node = next(n for n in g.nodes if n.extensions.get("EXT_mesh_gpu_instancing"))
+    # the column asset's generator parameters are shared by every copy: stored once
+    assert "parameters" in node.extras["ionic_usd"]
+    assert all(set(i) == {"path"} for i in node.extras["instances"])
+    assert json.loads(g.to_json())["scenes"][0]["extras"] == extras  # plain JSON
+
+
+def test_metallic_roughness_packs_roughness_in_green(temple_glb, tmp_path):
+    import OpenImageIO as oiio
+
+    _, g, scene = temple_glb
+    mat = next(m for m in scene.materials.values() if m.roughness_texture is not None)
+    src = np.asarray(oiio.ImageBuf(mat.roughness_texture.path).get_pixels(oiio.FLOAT))
+    src = src[..., 0] if src.ndim == 3 else src
+    # prototype paths differ between two openings of a stage: match by name
+    gm = next(m for m in g.materials if m.name == mat.name)
+    tex = g.textures[gm.pbrMetallicRoughness.metallicRoughnessTexture.index]
+    px = _image_pixels(g, tex.source, tmp_path)
+    assert_allclose(px[..., 1], src, atol=0.5 / 255)
+    assert_allclose(px[..., 2], 1.0)  # metallic factor (0) multiplies a white channel
+    assert gm.pbrMetallicRoughness.metallicFactor == 0.0
+
+
+def test_texcoords_are_flipped_and_plain_nodes_fallback(tmp_path):
+    stage = Usd.Stage.CreateNew(str(tmp_path / "q.usda"))
+    UsdGeom.SetStageUpAxis(stage, "Y")
+    UsdGeom.SetStageMetersPerUnit(stage, 1.0)
+    stage.SetDefaultPrim(UsdGeom.Xform.Define(stage, "/R").GetPrim())
+    st_in = np.array([(0.0, 0.0), (1.0, 0.0), (1.0, 0.25), (0.0, 0.25)])
+    for i in range(3):
+        m = UsdGeom.Mesh.Define(stage, f"/R/Q{i}")
+        m.CreatePointsAttr([(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0)])
+        m.CreateFaceVertexCountsAttr([4])
+        m.CreateFaceVertexIndicesAttr([0, 1, 2, 3])
+        pv = UsdGeom.PrimvarsAPI(m).CreatePrimvar("st", Sdf.ValueTypeNames.TexCoord2fArray,
+                                                  UsdGeom.Tokens.vertex)
+        pv.Set([Gf.Vec2f(*s) for s in st_in])
+        UsdGeom.Xformable(m).AddTranslateOp().Set((3.0 * i, 0, 0))
+    stage.Save()
+    out = tmp_path / "q.glb"
+    export_scene(tmp_path / "q.usda", out, gpu_instancing=False)
+    g = pygltflib.GLTF2().load(str(out))
+    assert len(g.meshes) == 1 and not g.extensionsUsed
+    mesh_nodes = [n for n in g.nodes if n.mesh is not None]
+    assert len(mesh_nodes) == 3 and {n.mesh for n in mesh_nodes} == {0}
+    pos = _accessor(g, g.meshes[0].primitives[0].attributes.POSITION)
+    uv = _accessor(g, g.meshes[0].primitives[0].attributes.TEXCOORD_0)
+    for p, t in zip(pos, uv, strict=True):
+        k = int(np.argmin(np.linalg.norm(np.array([(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0)])
+                                         - p, axis=1)))
+        assert_allclose(t, (st_in[k, 0], 1.0 - st_in[k, 1]))
+    xs = sorted(np.array(n.matrix).reshape(4, 4)[3, 0] if n.matrix else 0.0
+                for n in mesh_nodes)
+    assert_allclose(xs, [0.0, 3.0, 6.0])
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.floats(0.1, 20), st.floats(0.1, 20), st.floats(-180, 180), st.floats(-3, 3),
+       st.floats(-3, 3), st.floats(0, 1), st.floats(0, 1))
+def test_texture_transform_samples_the_same_texel(sx, sy, rot, tx, ty, s, t):
+    """USD: st' = T + R(θ)·S·st, image row from the top 1 − t'. glTF (KHR_texture_transform
+    spec matrix, uv = (s, 1 − t)): uv' = offset + [[c, s], [−s, c]]·S·uv, row from the top v'."""
+    tex = TextureRef("x.png", "rgb", "sRGB", st_scale=(sx, sy), st_rotation=rot,
+                     st_translation=(tx, ty))
+    k = _texture_transform(tex)
+    th = math.radians(rot)
+    usd = np.array([tx, ty]) + np.array([[math.cos(th), -math.sin(th)],
+                                         [math.sin(th), math.cos(th)]]) @ (np.array([sx, sy])
+                                                                           * [s, t])
+    r = k.get("rotation", 0.0)
+    kr = np.array([[math.cos(r), math.sin(r)], [-math.sin(r), math.cos(r)]])
+    gl = np.array(k.get("offset", [0.0, 0.0])) + kr @ (np.array(k["scale"]) * [s, 1.0 - t])
+    assert_allclose(gl, [usd[0], 1.0 - usd[1]], atol=1e-9)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.floats(-1, 1), min_size=4, max_size=4).filter(lambda q: np.linalg.norm(q) > .1),
+       st.lists(st.floats(0.1, 5), min_size=3, max_size=3),
+       st.lists(st.floats(-100, 100), min_size=3, max_size=3), st.booleans())
+def test_trs_decompose_recomposes(q, scale, t, mirror):
+    from scipy.spatial.transform import Rotation
+
+    lin = Rotation.from_quat(q).as_matrix() @ np.diag(scale) @ np.diag([-1 if mirror else 1, 1, 1])
+    m = np.eye(4)
+    m[:3, :3] = lin.T
+    m[3, :3] = t
+    tr, quat, sc = trs_decompose(m)
+    back = np.eye(4)
+    back[:3, :3] = (Rotation.from_quat(quat).as_matrix() @ np.diag(sc)).T
+    back[3, :3] = tr
+    assert_allclose(back, m, atol=1e-9)
+    shear = m.copy()  # a sheared frame: its axes are no longer orthogonal
+    shear[:3, :3] = (lin @ np.array([[1.0, 0.5, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])).T
+    assert trs_decompose(shear) is None
+
+
+def test_usdz_is_flat_valid_and_self_contained(tiny_temple, tmp_path):
+    out = tmp_path / "t.usdz"
+    res = export_scene(tiny_temple.root, out, variants={"form": "engaged"})
+    assert res.report.variant_sets_left == 0
+    assert validate_stage(out) == []
+    with zipfile.ZipFile(out) as z:
+        names = z.namelist()
+    assert names[0].endswith(".usdc")
+    assert sum(n.endswith(".png") for n in names) >= 3
+    stage = Usd.Stage.Open(str(out))
+    assert not any(p.HasVariantSets() for p in stage.Traverse())
+    meshes = {p.GetName() for p in Usd.PrimRange.Stage(stage, Usd.TraverseInstanceProxies())
+              if p.IsA(UsdGeom.Mesh) and p.GetName().startswith("Shaft")}
+    assert meshes and all(n.endswith("_engaged") for n in meshes)
+    for prim in Usd.PrimRange.Stage(stage, Usd.TraverseInstanceProxies()):
+        f = prim.GetAttribute("inputs:file")
+        if f and f.Get() is not None:
+            assert "t.usdz[" in f.Get().resolvedPath  # textures resolve inside the package
+
+
+def _cubes_stage(path, boxes):
+    stage = Usd.Stage.CreateNew(str(path))
+    UsdGeom.SetStageUpAxis(stage, "Y")
+    UsdGeom.SetStageMetersPerUnit(stage, 1.0)
+    stage.SetDefaultPrim(UsdGeom.Xform.Define(stage, "/Col").GetPrim())
+    for i, (lo, hi) in enumerate(boxes):
+        x0, y0, z0 = lo
+        x1, y1, z1 = hi
+        pts = [(x0, y0, z0), (x1, y0, z0), (x1, y1, z0), (x0, y1, z0),
+               (x0, y0, z1), (x1, y0, z1), (x1, y1, z1), (x0, y1, z1)]
+        m = UsdGeom.Mesh.Define(stage, f"/Col/Part{i}")
+        m.CreatePointsAttr(pts)
+        m.CreateFaceVertexCountsAttr([4] * 6)
+        m.CreateFaceVertexIndicesAttr([0, 3, 2, 1, 4, 5, 6, 7, 0, 1, 5, 4,
+                                       2, 3, 7, 6, 1, 2, 6, 5, 0, 4, 7, 3])
+    stage.Save()
+    return path
+
+
+@pytest.mark.parametrize("ext", [".stl", ".3mf"])
+def test_parts_union_into_one_closed_solid_with_hand_computed_volume(tmp_path, ext):
+    # a 1 m cube and a 1 x 2 x 1 m box overlapping it by half: union 0.5 + 2 = 2.5 m^3... by hand:
+    # [0,1]^3 ∪ [0.5,1.5]x[0,2]x[0,1] = 1 + (1.5-0.5)*2*1 - (1-0.5)*1*1 = 2.5 m^3
+    src = _cubes_stage(tmp_path / "c.usda", [((0, 0, 0), (1, 1, 1)), ((0.5, 0, 0), (1.5, 2, 1))])
+    out = tmp_path / f"c{ext}"
+    res = export_scene(src, out, scale=0.05)
+    (solid,) = res.report.solids
+    assert solid.closed and solid.parts == 2 and solid.non_manifold_edges == 0
+    assert_allclose(solid.volume, 2.5 * 0.05**3, rtol=1e-6)
+    assert_allclose(solid.size, (1.5 * 0.05, 1.0 * 0.05, 2.0 * 0.05), rtol=1e-6)  # Z up
+    if ext == ".stl":
+        tri = read_stl(out)
+    else:
+        with zipfile.ZipFile(out) as z:
+            root = ElementTree.fromstring(z.read("3D/3dmodel.model"))
+        ns = {"m": "http://schemas.microsoft.com/3dmanufacturing/core/2015/02"}
+        assert root.get("unit") == "millimeter"
+        v = np.array([[float(e.get(k)) for k in "xyz"]
+                      for e in root.iterfind(".//m:vertex", ns)])
+        t = np.array([[int(e.get(k)) for k in ("v1", "v2", "v3")]
+                      for e in root.iterfind(".//m:triangle", ns)])
+        tri = v[t].astype(np.float32)
+    # re-check the file's own numbers, welded by position as a slicer does
+    uniq, inv = np.unique(tri.reshape(-1, 3), axis=0, return_inverse=True)
+    closed, pinched, vol = check_solid(uniq, inv.reshape(-1, 3))
+    assert closed and pinched == 0
+    assert_allclose(vol, 2.5 * 50.0**3, rtol=1e-5)  # mm^3 at 1:20
+
+
+def test_temple_stl_one_closed_solid_per_column(tiny_temple, tmp_path):
+    out = tmp_path / "t.stl"
+    rep = export_scene(tiny_temple.root, out, scale=0.01).report
+    assert len(rep.solids) == 18 + 1  # every column, and the building
+    assert rep.all_closed
+    cols = [s for s in rep.solids if s.parts == 4]
+    assert len(cols) == 18
+    free = [s for s in cols if s.name.startswith("front")]
+    # a free column at 1:100 stands its height (8.22 m -> 82.2 mm) tall, Z up
+    assert_allclose([s.size[2] for s in free], 0.0822, rtol=1e-3)
+    assert len(read_stl(out)) == sum(s.triangles for s in rep.solids)
+
+
+def test_cli_export_formats(tiny_temple, tmp_path, capsys):
+    for ext in (".glb", ".gltf"):
+        out = tmp_path / f"t{ext}"
+        assert main(["export", str(tiny_temple.root), "-o", str(out), "--variant",
+                     "finish=travertine"]) == 0
+        g = pygltflib.GLTF2().load(str(out))
+        assert g.scenes[0].extras["requestedVariants"] == {"finish": "travertine"}
+        # columns switch to travertine; the building keeps its (stucco) binding
+        assert {m.name for m in g.materials} == {"Travertine", "PaintedStucco"}
+    assert "draw calls" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("args,needle", [
+    (["-o", "{tmp}/x.obj"], "one of .glb"),
+    (["-o", "{tmp}/x.glb", "--variant", "lod"], "SET=VALUE"),
+    (["-o", "{tmp}/x.glb", "--variant", "form=sideways"], "one of engaged, full"),
+    (["-o", "{tmp}/x.glb", "--lod", "ultra"], "--variant lod"),
+    (["-o", "{tmp}/x.stl", "--scale", "0"], "--scale"),
+    (["-o", "{tmp}/x.stl", "--scale", "1:0"], "--scale"),
+    (["-o", "{tmp}/x.glb", "--scale", "1:20"], "--scale"),
+    (["-o", "{tmp}/nodir/x.glb"], "does not exist"),
+])
+def test_cli_errors_are_one_line_and_write_nothing(tiny_temple, tmp_path, capsys, args, needle):
+    args = [a.replace("{tmp}", str(tmp_path)) for a in args]
+    assert main(["export", str(tiny_temple.root), *args]) == 2
+    err = capsys.readouterr().err.strip()
+    assert needle in err and len(err.splitlines()) == 1 and "Traceback" not in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
+def test_cli_refuses_to_overwrite_and_bad_scene(tiny_temple, tmp_path, capsys):
+    out = tmp_path / "x.glb"
+    out.write_bytes(b"mine")
+    assert main(["export", str(tiny_temple.root), "-o", str(out)]) == 2
+    assert out.read_bytes() == b"mine"
+    bad = tmp_path / "bad.usda"
+    bad.write_text("#usda 1.0\n(\n garbage")
+    assert main(["export", str(bad), "-o", str(tmp_path / "y.glb")]) == 2
+    assert main(["export", str(tmp_path / "none.usda"), "-o", str(tmp_path / "y.glb")]) == 2
+    err = capsys.readouterr().err
+    assert "exists" in err and "cannot open" in err and "Traceback" not in err
+    assert not (tmp_path / "y.glb").exists()
+
+
+def test_draco_compressed_glb_decodes_to_the_same_geometry(tmp_path):
+    import DracoPy
+
+    src = _cubes_stage(tmp_path / "c.usda", [((0, 0, 0), (1, 1, 1)), ((2, 0, 0), (3, 2, 1))])
+    plain, packed = tmp_path / "p.glb", tmp_path / "d.glb"
+    export_scene(src, plain)
+    export_scene(src, packed, compress="draco")
+    gp, gd = pygltflib.GLTF2().load(str(plain)), pygltflib.GLTF2().load(str(packed))
+    assert gd.extensionsRequired == ["KHR_draco_mesh_compression"]
+    for mp, md in zip(gp.meshes, gd.meshes, strict=True):
+        ext = md.primitives[0].extensions["KHR_draco_mesh_compression"]
+        bv = gd.bufferViews[ext["bufferView"]]
+        dec = DracoPy.decode(gd.binary_blob()[bv.byteOffset: bv.byteOffset + bv.byteLength])
+        want = _accessor(gp, mp.primitives[0].attributes.POSITION)
+        tri_p = _canonical(want[_accessor(gp, mp.primitives[0].indices).reshape(-1, 3)])
+        tri_d = _canonical(np.asarray(dec.points)[np.asarray(dec.faces)])
+        assert_allclose(tri_d, tri_p, atol=2e-3)  # 16-bit positions over a 2 m box
+        acc = gd.accessors[md.primitives[0].attributes.POSITION]
+        assert acc.bufferView is None and acc.count == len(dec.points)
+
+
+def _canonical(tris: np.ndarray) -> np.ndarray:
+    """(t, 3, 3) triangles → rows sorted, each rotated (winding kept) to start at its
+    lexicographically smallest corner, rounded to the millimetre."""
+    r = np.round(tris, 3)
+    out = []
+    for t in r:
+        k = min(range(3), key=lambda i: tuple(t[i]))
+        out.append(np.roll(t, -k, axis=0).reshape(-1))
+    out = np.array(out)
+    return out[np.lexsort(out.T[::-1])]

@@ -1,0 +1,132 @@
+"""The one scene reader: primvars (indexed or not), instancing, variants, paradata."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+from pxr import Gf, Sdf, Usd, UsdGeom, Vt
+
+from ionic_usd.errors import ParameterError
+from ionic_usd.usd.reader import parse_variant_args, read_scene
+
+QUAD_PTS = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0)]
+QUAD_ST = np.array([(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)])
+
+
+def _quad_stage(path, st_mode: str, *, up="Y", mpu=1.0):
+    stage = Usd.Stage.CreateNew(str(path))
+    UsdGeom.SetStageUpAxis(stage, up)
+    UsdGeom.SetStageMetersPerUnit(stage, mpu)
+    root = UsdGeom.Xform.Define(stage, "/R")
+    stage.SetDefaultPrim(root.GetPrim())
+    root.GetPrim().SetCustomDataByKey("ionic_usd:note", "root paradata")
+    m = UsdGeom.Mesh.Define(stage, "/R/Q")
+    m.CreatePointsAttr(Vt.Vec3fArray([Gf.Vec3f(*p) for p in QUAD_PTS]))
+    m.CreateFaceVertexCountsAttr([4])
+    m.CreateFaceVertexIndicesAttr([0, 1, 2, 3])
+    pv = UsdGeom.PrimvarsAPI(m).CreatePrimvar("st", Sdf.ValueTypeNames.TexCoord2fArray)
+    if st_mode == "faceVarying":
+        pv.SetInterpolation("faceVarying")
+        pv.Set(Vt.Vec2fArray([Gf.Vec2f(*s) for s in QUAD_ST]))
+    elif st_mode == "indexed":
+        pv.SetInterpolation("faceVarying")
+        pv.Set(Vt.Vec2fArray([Gf.Vec2f(*s) for s in QUAD_ST[::-1]]))
+        pv.SetIndices(Vt.IntArray([3, 2, 1, 0]))
+    else:  # vertex
+        pv.SetInterpolation("vertex")
+        pv.Set(Vt.Vec2fArray([Gf.Vec2f(*s) for s in QUAD_ST]))
+    m.GetPrim().CreateAttribute("userProperties:source", Sdf.ValueTypeNames.String).Set("hand")
+    stage.Save()
+    return path
+
+
+@pytest.mark.parametrize("mode", ["faceVarying", "indexed", "vertex"])
+def test_st_per_corner_whatever_the_primvar_layout(tmp_path, mode):
+    scene = read_scene(_quad_stage(tmp_path / "q.usda", mode))
+    (mesh,) = scene.meshes.values()
+    assert_allclose(mesh.st, QUAD_ST)
+    assert mesh.paradata == {} and scene.placements[0].paradata == {
+        "userProperties": {"source": "hand"}}
+    assert scene.paradata["ionic_usd"]["note"] == "root paradata"  # key path: nested
+
+
+def test_z_up_centimetres_become_y_up_metres(tmp_path):
+    scene = read_scene(_quad_stage(tmp_path / "q.usda", "vertex", up="Z", mpu=0.01))
+    (p,) = scene.placements
+    world = np.c_[scene.meshes[p.mesh].points, np.ones(4)] @ p.matrix
+    # (x, y, z) cm, Z up -> (x, z, -y) m, Y up
+    expect = np.array([(x, z, -y) for x, y, z in QUAD_PTS]) * 0.01
+    assert_allclose(world[:, :3], expect, atol=1e-12)
+
+
+def test_point_instancer_and_equal_prims_share_one_mesh(tmp_path):
+    path = tmp_path / "pi.usda"
+    stage = Usd.Stage.CreateNew(str(path))
+    UsdGeom.SetStageUpAxis(stage, "Y")
+    UsdGeom.SetStageMetersPerUnit(stage, 1.0)  # the fallback is centimetres
+    stage.SetDefaultPrim(UsdGeom.Xform.Define(stage, "/W").GetPrim())
+    pi = UsdGeom.PointInstancer.Define(stage, "/W/PI")
+    proto = UsdGeom.Mesh.Define(stage, "/W/PI/Protos/Tri")
+    proto.CreatePointsAttr([(0, 0, 0), (1, 0, 0), (0, 1, 0)])
+    proto.CreateFaceVertexCountsAttr([3])
+    proto.CreateFaceVertexIndicesAttr([0, 1, 2])
+    UsdGeom.Xformable(proto).AddTranslateOp().Set((0, 0, 5))  # the prototype's own xform
+    pi.CreatePrototypesRel().SetTargets([proto.GetPath()])
+    pos = [(10, 0, 0), (20, 0, 0), (30, 0, 0)]
+    pi.CreatePositionsAttr(pos)
+    pi.CreateProtoIndicesAttr([0, 0, 0])
+    copy = UsdGeom.Mesh.Define(stage, "/W/Copy")  # the same triangle authored again
+    for name in ("points", "faceVertexCounts", "faceVertexIndices"):
+        copy.GetPrim().CreateAttribute(name, proto.GetPrim().GetAttribute(name).GetTypeName()
+                                       ).Set(proto.GetPrim().GetAttribute(name).Get())
+    UsdGeom.Xformable(copy).AddTranslateOp().Set((-1, 0, 0))
+    stage.Save()
+    scene = read_scene(path)
+    assert len(scene.meshes) == 1
+    # the source is the prototype prim, so every placement (3 instances + the copy) is a reuse
+    assert sum(p.instanced for p in scene.placements) == 4
+    origins = sorted(tuple(p.matrix[3, :3]) for p in scene.placements)
+    assert_allclose(origins, [(-1, 0, 0)] + [(x, 0, 5) for x, _, _ in pos])
+
+
+def test_temple_placements_and_triangles_match_the_composer(tiny_temple):
+    scene = read_scene(tiny_temple.root)
+    # the composer counts triangles on the composed stage its own way
+    assert scene.n_triangles == tiny_temple.triangles
+    counts = {}
+    for p in scene.placements:
+        counts[p.mesh] = counts.get(p.mesh, 0) + 1
+    colonnade = {p.mesh for p in scene.placements if p.path.startswith("/Temple/Colonnade/")}
+    column_meshes = [k for k, n in counts.items() if n > 1 and k in colonnade]
+    # 3 parts of the corner column (4 copies), the free one (6) and the engaged one (8); the
+    # other repeated meshes are the detail's PointInstancer prototypes (dentils, tiles)
+    assert sorted(counts[k] for k in column_meshes) == [4] * 3 + [6] * 3 + [8] * 3
+    assert scene.paradata["ionic_usd"]["temple"] == "Temple of Portunus"
+    instance_paths = {p.path for p in scene.placements if p.instanced}
+    assert "/Temple/Colonnade/Free/front_1" in instance_paths
+
+
+def test_variant_selection_reaches_nested_instances(tiny_city):
+    base = read_scene(tiny_city)
+    engaged = read_scene(tiny_city, variants={"form": "engaged"})
+    names = {m.name for m in engaged.meshes.values()}
+    column_names = {n for n in names if n.startswith(("Shaft", "Base", "Capital", "Scroll"))}
+    assert column_names and all(n.endswith("_engaged") for n in column_names)
+    assert any(not m.name.endswith("_engaged") for m in base.meshes.values()
+               if m.name.startswith("Shaft"))
+
+
+@pytest.mark.parametrize("sel,needle", [({"nope": "x"}, "variant set of the scene"),
+                                        ({"form": "sideways"}, "one of engaged, full")])
+def test_bad_variant_selection_names_the_valid_ones(tiny_temple, sel, needle):
+    with pytest.raises(ParameterError, match=needle):
+        read_scene(tiny_temple.root, variants=sel)
+
+
+def test_parse_variant_args():
+    assert parse_variant_args(["lod=low", " form = engaged "]) == {"lod": "low",
+                                                                  "form": "engaged"}
+    for bad in (["lod"], ["=x"], ["lod="]):
+        with pytest.raises(ParameterError):
+            parse_variant_args(bad)
