@@ -216,9 +216,12 @@ def cmd_temple(args: argparse.Namespace) -> int:
     from ionic_usd.usd.temple import compose_temple
 
     check_output_folder(args.output, force=args.force)
-    column = None
+    column = mouldings = None
     if args.config:
         data = load_toml(args.config)
+        from ionic_usd.temple.mouldings import mouldings_from_tables
+
+        mouldings = mouldings_from_tables(data, context=str(args.config))
         col_tables = {k: data.pop(k) for k in ("column", "shaft", "capital", "volute")
                       if k in data}
         layout = layout_from_mapping(data, context=str(args.config))
@@ -243,7 +246,8 @@ def cmd_temple(args: argparse.Namespace) -> int:
     check_estimate(estimate_temple(column or base, args.texture_size, n_cuboids),
                    args.max_memory)
     rep = compose_temple(args.output, layout, column, force=args.force,
-                         texture_size=args.texture_size, seed=args.seed)
+                         texture_size=args.texture_size, seed=args.seed,
+                         detail=args.detail, mouldings=mouldings)
     print(f"wrote {rep.root} ({layout.name}): {rep.files} files, {rep.prims} prims, "
           f"{rep.instances} column instances of {rep.prototypes} prototypes, "
           f"{rep.triangles:,} triangles, {len(rep.hypotheses)} hypotheses, {rep.seconds:.2f} s")
@@ -365,6 +369,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="texture resolution (px): a power of two, 16-4096 within the default "
                    "memory limit; 8192 needs about 10 GB (--max-memory 10)")
     p.add_argument("--seed", type=int, default=7, help="seed of the procedural stone")
+    p.add_argument("--detail", choices=("plain", "moulded", "carved"), default="carved",
+                   help="selected level of architectural detail (all three are written)")
     p.add_argument("--force", action="store_true",
                    help="rebuild an existing folder (atomically; overrides.usda is kept)")
     _add_memory_flag(p)

@@ -364,6 +364,7 @@ HYPOTHESIS_EXTRA_CHANGES = {
     "column.flute_count": FieldSpec("int", 3, 64, "count"),
     "material.finish": FieldSpec("str", choices=("bare_stone", "travertine", "stucco",
                                                  "painted_stucco")),
+    "detail.frieze": FieldSpec("str", choices=("garlands", "plain")),  # usd.detail
 }
 
 
@@ -390,13 +391,16 @@ def check_temple_tables(data: Mapping[str, Any], *, context: str) -> None:
             table = check_value(sec, table, FieldSpec("table"), context=context)
             check_table({f"{sec}.{k}": v for k, v in table.items()},
                         {f"{sec}.{k}": v for k, v in sections[sec].items()}, context=context)
+        elif sec == "mouldings":  # sections and sizes: checked by temple.mouldings
+            check_value(sec, table, FieldSpec("table"), context=context)
         elif sec in ("cuboid", "hypothesis"):
             if not isinstance(table, list):
                 raise ParameterError(sec, table, f"an array of tables ([[{sec}]])",
                                      context=context)
         elif sec not in column_tables:
             raise ParameterError(f"[{sec}]", "…", "a known table: " + ", ".join(
-                ["temple", *sections, "cuboid", "hypothesis", *sorted(column_tables)]),
+                ["temple", *sections, "mouldings", "cuboid", "hypothesis",
+                 *sorted(column_tables)]),
                 context=context)
     check_column_tables({k: v for k, v in data.items() if k in column_tables}, context=context)
     for i, e in enumerate(data.get("cuboid", []), 1):

@@ -49,7 +49,10 @@ def tiny_temple(tmp_path_factory):
     folder = tmp_path_factory.mktemp("tiny") / "TinyTemple"
     opts = ColumnAssetOptions(lods=("low",), bases=("attic_bezier_plinth",), scrolls=("S1",),
                               texture_size=16)
-    return compose_temple(folder, portunus_layout(), texture_size=16, asset_options=opts)
+    # detail = plain: the cuboid temple the export and reader tests count (the detail
+    # variants are tested in test_detail.py)
+    return compose_temple(folder, portunus_layout(), texture_size=16, asset_options=opts,
+                          detail="plain")
 
 
 @pytest.fixture(scope="session")

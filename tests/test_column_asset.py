@@ -62,6 +62,23 @@ def test_low_lod_is_the_proxy_of_every_selection(column_asset):
         assert str(ref.primPath).startswith("/IonicColumn/Geom/")
 
 
+def _prototype_of_instancer(p: Usd.Prim) -> bool:
+    return any(a.IsA(UsdGeom.PointInstancer) for a in _ancestors(p))
+
+
+def _ancestors(p: Usd.Prim):
+    p = p.GetParent()
+    while p and not p.IsPseudoRoot():
+        yield p
+        p = p.GetParent()
+
+
+def active_meshes(stage) -> dict[str, Usd.Prim]:
+    """The asset's part meshes (not the ornament prototypes under PointInstancers)."""
+    return {str(p.GetPath()): p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh)
+            and not _prototype_of_instancer(p)}
+
+
 def mesh_value(prim) -> Mesh:
     g = UsdGeom.Mesh(prim)
     st = UsdGeom.PrimvarsAPI(prim).GetPrimvar("st")
@@ -127,8 +144,8 @@ def test_every_selection_has_one_mesh_per_part(column_asset):
 def test_every_mesh_closed_with_uvs_in_unit_square(column_asset):
     layer = Sdf.Layer.FindOrOpen(str(column_asset.path.parent / "Payload/Geometry.usdc"))
     stage = Usd.Stage.Open(layer)
-    prims = [p for p in stage.Traverse()
-             if p.IsA(UsdGeom.Mesh) and "Proxy" not in str(p.GetPath())]
+    prims = [p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh)
+             and "Proxy" not in str(p.GetPath()) and not _prototype_of_instancer(p)]
     assert len(prims) == column_asset.meshes == 3 * (4 + 2 + 2 * 2) * 3
     for prim in prims:
         m = mesh_value(prim)
@@ -146,7 +163,8 @@ def test_charts_do_not_overlap_in_any_mesh(column_asset):
     stage = Usd.Stage.Open(layer)
     res = 2048  # raster of the normalised [0,1] square
     for prim in stage.Traverse():
-        if not prim.IsA(UsdGeom.Mesh) or prim.GetParent().GetName() == "Proxy":
+        if not prim.IsA(UsdGeom.Mesh) or prim.GetParent().GetName() == "Proxy" \
+                or _prototype_of_instancer(prim):
             continue
         m = mesh_value(prim)
         charts = uv_charts(m.st_indices, len(m.st))

@@ -22,6 +22,7 @@ from ionic_usd.geometry.mesh import (
     weld,
 )
 from ionic_usd.geometry.stitch import auto_sequence, row_parameters, stitch
+from ionic_usd.geometry.sweep import sweep
 
 __all__ = [
     "Mesh",
@@ -44,6 +45,7 @@ __all__ = [
     "signed_volume",
     "smooth_normals",
     "stitch",
+    "sweep",
     "transform",
     "triangulate_fan",
     "weld",

@@ -380,7 +380,7 @@ def params_from_tables(data: Mapping[str, Any], *, context: str) -> TempleParams
     if "name" in temple:
         kw["name"] = temple["name"]
     for sec, table in data.items():
-        if sec in ("temple", "hypothesis", "cuboid"):
+        if sec in ("temple", "hypothesis", "cuboid", "mouldings"):  # mouldings: temple.mouldings
             continue
         if sec not in _SECTIONS:
             raise ParameterError(f"[{sec}]", "…", "a known section: "

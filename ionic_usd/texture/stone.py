@@ -41,6 +41,7 @@ __all__ = [
     "TRAVERTINE",
     "MARBLE",
     "STUCCO_PAINTED",
+    "TERRACOTTA",
     "STONE_STYLES",
     "MIN_TEXTURE_SIZE",
     "MAX_TEXTURE_SIZE",
@@ -201,7 +202,22 @@ STUCCO_PAINTED = StoneStyle(
     pore_color=(0.7, 0.67, 0.6),
 )
 
-STONE_STYLES: dict[str, StoneStyle] = {s.name: s for s in (TRAVERTINE, MARBLE, STUCCO_PAINTED)}
+# Roof tiles (tegulae, imbrices, antefixes): fired red-orange clay, matt, fine mottling and
+# sparse pores (ionic_usd.temple.ornament).
+TERRACOTTA = StoneStyle(
+    name="terracotta",
+    base_color=(0.70, 0.38, 0.24),
+    vein_color=(0.58, 0.30, 0.19),
+    vein_strength=0.1,
+    pore_density=0.015,
+    roughness_range=(0.65, 0.9),
+    normal_strength=0.002,
+    banding=0.0,
+    mottling=0.45,
+    pore_color=(0.45, 0.24, 0.16),
+)
+STONE_STYLES: dict[str, StoneStyle] = {
+    s.name: s for s in (TRAVERTINE, MARBLE, STUCCO_PAINTED, TERRACOTTA)}
 
 
 def get_stone_style(style: StoneStyle | str) -> StoneStyle:

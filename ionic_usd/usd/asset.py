@@ -38,7 +38,8 @@ from ionic_usd.usd.materials import (
 from ionic_usd.usd.mesh import author_mesh, define_prim
 from ionic_usd.usd.stage import new_layer, save_layer
 
-__all__ = ["AssetMesh", "AssetSpec", "class_path", "write_asset", "write_asset_layers",
+__all__ = ["AssetMesh", "AssetInstancer", "AssetSpec", "class_path", "write_asset",
+           "write_asset_layers",
            "replace_folder"]
 
 
@@ -49,6 +50,17 @@ class AssetMesh:
     part: str
     name: str
     mesh: Mesh
+    tags: Mapping[str, str]
+
+
+@dataclass(frozen=True)
+class AssetInstancer:
+    """A PointInstancer ``/<Name>/Geom/<part>/<name>`` of ornament (see
+    :mod:`ionic_usd.usd.instancer`), switched by its variant tags like a mesh."""
+
+    part: str
+    name: str
+    instances: object  # ionic_usd.column.ornament.Instances
     tags: Mapping[str, str]
 
 
@@ -73,13 +85,14 @@ class AssetSpec:
     custom_data: Mapping[str, object] = field(default_factory=dict)
     documentation: str = ""
     proxy_lod: str | None = None  # this lod's meshes, always loaded, as the proxy purpose
+    instancers: tuple[AssetInstancer, ...] = ()
 
     def __post_init__(self) -> None:
         for vset, variants in self.variant_sets.items():
             sel = self.defaults.get(vset)
             if sel not in variants:
                 raise ParameterError(f"defaults[{vset!r}]", sel, f"one of {', '.join(variants)}")
-        for m in self.meshes:
+        for m in (*self.meshes, *self.instancers):
             for vset, v in m.tags.items():
                 if vset not in self.variant_sets or v not in self.variant_sets[vset]:
                     raise ParameterError(f"tags of {m.part}/{m.name}", dict(m.tags),
@@ -102,6 +115,13 @@ def _geometry_layer(spec: AssetSpec) -> Sdf.Layer:
         for m in spec.meshes:
             define_prim(layer, f"/{spec.name}/Geom/{m.part}", "Scope")
             author_mesh(layer, f"/{spec.name}/Geom/{m.part}/{m.name}", m.mesh)
+        if spec.instancers:
+            from ionic_usd.usd.instancer import author_point_instancer
+
+            for a in spec.instancers:
+                define_prim(layer, f"/{spec.name}/Geom/{a.part}", "Scope")
+                author_point_instancer(layer, f"/{spec.name}/Geom/{a.part}/{a.name}",
+                                       a.instances)
         if spec.proxy_lod is not None:
             # render/proxy split: Geom (the selected lod) renders; Proxy shows the light lod's
             # meshes in viewports. Each proxy mesh is an internal reference (no second copy
@@ -177,7 +197,7 @@ def _interface_layer(spec: AssetSpec) -> Sdf.Layer:
             for v in variants:
                 var = Sdf.VariantSpec(vs_spec, v)
                 vprim = var.primSpec
-                for m in spec.meshes:
+                for m in (*spec.meshes, *spec.instancers):
                     if vset in m.tags and m.tags[vset] != v:
                         geom = _over(vprim, "Geom")
                         part = _over(geom, m.part)

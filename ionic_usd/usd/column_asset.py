@@ -20,6 +20,10 @@ form        full, engaged, corner                       every part (engaged: cut
 finish      travertine, stucco                          the material bound to Geom
 ==========  ==========================================  ===================================
 
+The ``high`` LOD also carries the carved capital: egg-and-dart on the echinus and bead-and-reel
+on the astragal, two PointInstancers under ``Geom/Ornament`` (4 prototypes, 90 copies, 8.8k
+triangles drawn; :func:`ionic_usd.usd.detail.column_ornament`), tagged ``lod = high``.
+
 Every mesh is one closed solid: the capital's abacus, echinus, volutes, canales and bolsters are
 united (manifold3d), so the capital mesh depends on the scroll and capital variants. Each mesh
 is authored once: the shaft does not depend on the base. Triangle budgets of the default
@@ -58,6 +62,7 @@ from ionic_usd.errors import GeometryError, ParameterError
 from ionic_usd.geometry.mesh import Mesh
 from ionic_usd.texture.uv import UVCache, attach_uvs, unwrap_parts
 from ionic_usd.usd.asset import AssetMesh, AssetSpec, write_asset
+from ionic_usd.usd.detail import column_ornament
 from ionic_usd.usd.materials import MaterialTextures
 
 __all__ = [
@@ -322,6 +327,7 @@ def build_column_asset(
         "flutes, form, finish.",
         st_scale=UV_SPAN / TILE_METRES,
         proxy_lod="low" if "low" in opts.lods and len(opts.lods) > 1 else None,
+        instancers=column_ornament(opts),  # carved echinus and astragal in the high LOD
     )
     path = write_asset(spec, dest, populate=populate, force=force)
     tris: dict[str, int] = {}

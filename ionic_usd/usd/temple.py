@@ -77,6 +77,7 @@ from ionic_usd.usd.column_asset import (
     ColumnAssetOptions,
     build_column_asset,
 )
+from ionic_usd.usd.detail import add_detail
 from ionic_usd.usd.hypotheses import (
     FORMS,
     GROUPS,
@@ -286,6 +287,8 @@ def compose_temple(
     texture_size: int = 1024,
     seed: int = 7,
     asset_options: ColumnAssetOptions | None = None,
+    detail: str = "carved",
+    mouldings=None,
 ) -> TempleReport:
     """Write the temple folder (see the module docstring) atomically.
 
@@ -327,7 +330,11 @@ def compose_temple(
         for hid, lay in hyp_layers.items():
             if lay is not None:
                 save_layer(lay, tmp / "layers" / f"{hid}.usda")
-        save_layer(_generated_layer(layout, hyp_layers, lods), tmp / GENERATED_LAYER)
+        gen_layer = _generated_layer(layout, hyp_layers, lods)
+        # the detail variant set (plain, moulded, carved) and its layers: ionic_usd.usd.detail
+        add_detail(tmp, gen_layer, layout, texture_size=opts.texture_size, seed=opts.seed,
+                   mouldings=mouldings, default=detail)
+        save_layer(gen_layer, tmp / GENERATED_LAYER)
         save_layer(_root_layer(layout.name), tmp / ROOT_LAYER)
         # created only where absent: an existing overrides.usda (or symlink) is never touched
         save_layer(_user_overrides_layer(), tmp / OVERRIDES_LAYER)

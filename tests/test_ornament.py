@@ -1,0 +1,137 @@
+"""Ornament prototypes (closed, tiny) and their placement rules (Vitruvius where he gives one)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from ionic_usd.column.column import portunus_column_params
+from ionic_usd.column.ornament import (
+    capital_ornament,
+    frames_to_quaternions,
+    quaternion_matrices,
+)
+from ionic_usd.temple.layout import portunus_layout
+from ionic_usd.temple.mouldings import cornice_levels
+from ionic_usd.temple.ornament import (
+    TileParams,
+    dentil_spacing,
+    dentils,
+    frieze_garlands,
+    roof_tiles,
+)
+
+
+@pytest.fixture(scope="module")
+def layout():
+    return portunus_layout()
+
+
+@pytest.fixture(scope="module")
+def capital():
+    p = portunus_column_params()
+    return capital_ornament(y_capital=7.0, top_radius=p.shaft.top_radius,
+                            echinus_height=p.capital.echinus_height,
+                            echinus_projection=p.capital.echinus_projection,
+                            ring_top=p.shaft.ring_top)
+
+
+def _closed(m) -> bool:
+    import manifold3d as m3
+
+    man = m3.Manifold(m3.Mesh(vert_properties=m.points.astype(np.float32),
+                              tri_verts=m.triangles.astype(np.uint32)))
+    return str(man.status()) == "Error.NoError" and man.volume() > 0
+
+
+def test_every_prototype_is_a_small_closed_solid(layout, capital):
+    sets = [dentils(layout), roof_tiles(layout), frieze_garlands(layout), *capital]
+    protos = [p for s in sets for p in s.prototypes]
+    assert {p.name for p in protos} == {"Dentil", "Tegula", "Imbrex", "Antefix", "Candelabrum",
+                                        "Garland", "Egg", "Dart", "Bead", "Reel"}
+    for p in protos:
+        assert _closed(p), p.name
+        assert p.n_triangles <= 300, p.name
+
+
+def test_quaternions_match_the_frames(rng):
+    x = rng.normal(size=(200, 3))
+    y = np.cross(x, rng.normal(size=(200, 3)))
+    q = frames_to_quaternions(x, y)
+    assert_allclose(np.linalg.norm(q, axis=1), 1.0)
+    r = quaternion_matrices(q)
+    assert_allclose(r[:, :, 0], x / np.linalg.norm(x, axis=1, keepdims=True), atol=1e-12)
+    assert_allclose(r[:, :, 1], y / np.linalg.norm(y, axis=1, keepdims=True), atol=1e-12)
+    assert_allclose(np.linalg.det(r), 1.0)
+
+
+def test_dentils_follow_vitruvius(layout):
+    lv = cornice_levels(layout)
+    h = lv["dentil_top"] - lv["dentil_bottom"]
+    w, s = dentil_spacing(h)
+    assert w == pytest.approx(h / 2) and s - w == pytest.approx(2 * w / 3)  # III.5.11
+    d = dentils(layout)
+    # per side: as many as fit on the band face, centred, one every 5/6 of the height
+    fx, fz = lv["xe"] + lv["dentil_face"], lv["ze"] + lv["dentil_face"]
+    per_side = [math.floor((2 * fx - w) / s) + 1, math.floor((2 * fz - w) / s) + 1]
+    assert len(d) == 2 * sum(per_side)
+    front = d.positions[np.isclose(d.positions[:, 2], fz)]
+    assert len(front) == per_side[0]
+    assert_allclose(np.diff(np.sort(front[:, 0])), s)
+    assert_allclose(front[:, 0].mean(), 0.0, atol=1e-12)
+    # density: dentils per metre of cornice band = 1/s (6/(5h))
+    assert len(front) / (2 * fx) == pytest.approx(1 / s, rel=0.05)
+    # the dentil projects its own height out of the band, within the corona's soffit
+    proto = d.prototypes[0]
+    assert_allclose(proto.extent[1, 2], lv["dentil_front"] - lv["dentil_face"])
+    assert_allclose(proto.extent[1, 1] - proto.extent[0, 1], h)
+
+
+def test_roof_tiles_cover_both_slabs(layout):
+    tp = TileParams()
+    t = roof_tiles(layout, tp)
+    lv = cornice_levels(layout)
+    p = layout.params
+    xc, zc = lv["xe"] + lv["projection"], lv["ze"] + lv["projection"]
+    phi = math.atan(2 / p.roof_tympanum_ratio)
+    rows = math.ceil((xc / math.cos(phi) - tp.tegula_length) / (tp.tegula_length - tp.overlap)) + 1
+    cols = round(2 * zc / tp.tegula_width)
+    c = t.counts()
+    assert c == {"Tegula": 2 * rows * cols, "Imbrex": 2 * rows * (cols - 1),
+                 "Antefix": 2 * (cols - 1)}
+    # every tegula's origin lies on its slab's top plane
+    teg = t.positions[t.proto_indices == 0]
+    top = lv["y_top"] + p.roof_slab_thickness + (xc - np.abs(teg[:, 0])) * math.tan(phi)
+    assert_allclose(teg[:, 1], top, atol=1e-9)
+    # and its local +Y is the slab's normal (tilted by the pitch)
+    r = quaternion_matrices(t.orientations[t.proto_indices == 0])
+    assert_allclose(np.degrees(np.arccos(r[:, 1, 1])), math.degrees(phi), atol=1e-9)
+
+
+def test_capital_ornament_rings(capital):
+    egg, bead = capital
+    assert egg.counts() == {"Egg": 24, "Dart": 24}
+    p = portunus_column_params()
+    c = p.shaft.top_radius
+    n = bead.counts()["Bead"]
+    assert bead.counts()["Reel"] == n
+    # beads ring the astragal at the shaft's top radius, inside the top ring's height
+    r = np.hypot(bead.positions[:, 0], bead.positions[:, 2])
+    assert_allclose(r, c)
+    assert np.all((bead.positions[:, 1] < 7.0) & (bead.positions[:, 1] > 7.0 - p.shaft.ring_top))
+    # eggs face outwards and down the ovolo: local +Z has a positive radial component
+    z = quaternion_matrices(egg.orientations)[:, :, 2]
+    radial = egg.positions * [1, 0, 1] / np.hypot(egg.positions[:, 0],
+                                                   egg.positions[:, 2])[:, None]
+    assert np.all(np.einsum("ij,ij->i", z, radial) > 0.5) and np.all(z[:, 1] < 0)
+
+
+def test_frieze_garlands_alternate_on_the_frieze(layout):
+    f = frieze_garlands(layout)
+    lv = cornice_levels(layout)
+    c = f.counts()
+    assert c["Garland"] == c["Candelabrum"] - 4  # one fewer per side
+    assert np.all((f.positions[:, 1] > lv["y_frieze"]) & (f.positions[:, 1] < lv["y_cornice"]))
