@@ -31,9 +31,11 @@ def open_stage(report) -> Usd.Stage:
 
 
 def active_meshes(stage, purpose: str = "render") -> dict[str, Usd.Prim]:
-    """Active meshes of one purpose (render: the selected lod under Geom; proxy: Proxy)."""
+    """Active part meshes of one purpose (render: the selected lod under Geom; proxy: Proxy),
+    not the ornament prototypes under PointInstancers."""
     return {str(p.GetPath()): p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh)
-            and UsdGeom.Imageable(p).ComputePurpose() == purpose}
+            and UsdGeom.Imageable(p).ComputePurpose() == purpose
+            and not _prototype_of_instancer(p)}
 
 
 def test_low_lod_is_the_proxy_of_every_selection(column_asset):
@@ -71,12 +73,6 @@ def _ancestors(p: Usd.Prim):
     while p and not p.IsPseudoRoot():
         yield p
         p = p.GetParent()
-
-
-def active_meshes(stage) -> dict[str, Usd.Prim]:
-    """The asset's part meshes (not the ornament prototypes under PointInstancers)."""
-    return {str(p.GetPath()): p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh)
-            and not _prototype_of_instancer(p)}
 
 
 def mesh_value(prim) -> Mesh:
