@@ -94,7 +94,7 @@ __all__ = [
 
 PORTUNUS_TOML = "portunus.toml"
 # hypothesis ``changes`` namespaces realised by the composer, not by the layout
-COMPOSER_NAMESPACES = ("column", "material")
+COMPOSER_NAMESPACES = ("column", "material", "detail")
 
 
 class Layer(StrEnum):
