@@ -16,7 +16,7 @@ from hypothesis import strategies as st
 from ionic_usd.column.column import (
     ColumnParams,
     build_base_part,
-    build_capital_parts,
+    build_capital_part,
     portunus_column_params,
 )
 from ionic_usd.errors import GrammarError, ParameterError
@@ -97,12 +97,11 @@ def _base_property(text: str) -> None:
 def _scroll_property(text: str) -> None:
     try:
         params = portunus_column_params(lod="low")
-        body, bolsters = build_capital_parts(params, 0.0, scroll=text)
+        capital = build_capital_part(params, 0.0, scroll=text)
     except (ParameterError, GrammarError) as exc:
         assert str(exc)
         return
-    assert_solid(body)
-    assert_solid(bolsters)
+    assert_solid(capital)
 
 
 @FAST
@@ -139,7 +138,7 @@ def test_issue_11_bases_are_refused_naming_the_base(text):
 
 def test_issue_11_scroll_is_refused_naming_the_scroll():
     with pytest.raises(ParameterError, match="scroll"):
-        build_capital_parts(portunus_column_params(lod="low"), 0.0, scroll="R0 P0, R0 P1")
+        build_capital_part(portunus_column_params(lod="low"), 0.0, scroll="R0 P0, R0 P1")
 
 
 @pytest.mark.slow
