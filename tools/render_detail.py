@@ -81,7 +81,7 @@ def capital(tmp: Path) -> Path:
     col = build_column(p)
     y_cap = col.base_height + col.shaft_length
     shaft = clip_mesh(col.shaft, (0, y_cap - 0.35, 0), (0, 1, 0))
-    meshes = {"Shaft": shaft, "CapitalBody": col.capital_body}
+    meshes = {"Shaft": shaft, "Capital": col.capital_body}
     orn = {a.name: a.instances for a in column_ornament(ColumnAssetOptions(params=p))}
     # turn the volute face (+Z) to the lit side and look up at the echinus a little
     turn = np.eye(4)
@@ -126,7 +126,7 @@ def cornice_corner(tmp: Path) -> Path:
     front = next(c for c in lay.columns if c.name == "front_4")
     place = np.eye(4)
     place[:3, 3] = front.position
-    for name, m in (("Shaft", col.shaft), ("CapitalBody", col.capital_body)):
+    for name, m in (("Shaft", col.shaft), ("Capital", col.capital_body)):
         cm = clip(transform(m, place))
         if cm is not None:
             meshes[name] = cm
