@@ -164,7 +164,7 @@ def check_output_file(path: str | os.PathLike, *, force: bool = False,
     if p.is_dir():
         raise ParameterError(what, str(p), "a file path (this is an existing folder)")
     if p.exists() and not force:
-        raise OutputExistsError(f"{p} exists; pass --force (force=True) to overwrite it")
+        raise OutputExistsError(f"{p} exists; pass --force to overwrite it")
     return p
 
 
@@ -178,7 +178,7 @@ def check_output_folder(path: str | os.PathLike, *, force: bool = False,
     if p.exists() and not p.is_dir():
         raise ParameterError(what, str(p), "a folder path (this is an existing file)")
     if p.exists() and not force:
-        raise OutputExistsError(f"{p} exists; pass --force (force=True) to rebuild it")
+        raise OutputExistsError(f"{p} exists; pass --force to rebuild it")
     return p
 
 
@@ -372,7 +372,7 @@ def replace_folder(build: Callable[[Path], object], dest: str | os.PathLike, *,
     parent.mkdir(parents=True, exist_ok=True)
     recover_folder(dest)
     if dest.exists() and not force:
-        raise OutputExistsError(f"{dest} exists; pass --force (force=True) to replace it")
+        raise OutputExistsError(f"{dest} exists; pass --force to replace it")
     if dest.exists() and not dest.is_dir():
         raise ParameterError("output", str(dest), "a folder path (this is an existing file)")
     stage = _tmp_sibling(dest, _STAGE_TAG)

@@ -362,7 +362,7 @@ class FitResult:
 
         path = Path(path)
         if path.exists() and not force:
-            raise OutputExistsError(f"{path} exists; pass --force (force=True) to overwrite it")
+            raise OutputExistsError(f"{path} exists; pass --force to overwrite it")
         text = self.to_toml().encode("utf-8")
         return _atomic_write(path, lambda fh: fh.write(text))
 

@@ -281,52 +281,56 @@ def fit_volute(
         if e.shape != (2,) or not np.all(np.isfinite(e)):
             raise ParameterError("eye", eye, "two finite numbers (x, y)")
     results = []
-    for name in dict.fromkeys(models):
-        t0 = time.perf_counter()
-        model = _Model(name, v0, ref)
-        fitted, ref_o, hit, values, pose, start, iters, calls = _fit_one(
-            ref, model, measure=measure, samples=samples, seed=seed, popsize=popsize,
-            maxiter=maxiter, polish_evals=polish_evals, allow_mirror=allow_mirror)
-        notes = []
-        if name == "log_spiral":
-            notes.append("a, b held (the curve depends on R·a/b and R·d); R, c, d, start angle, "
-                         "circuits and the pose fitted")
-        else:
-            notes.append("eye radius, centres' square and ratio, start angle, turns and the "
-                         "pose fitted")
-        notes.append(f"start scaled ×{model.k:.4g} to the reference's size; "
-                     f"{model.turns:.3g} turns traced; rotation is the start angle and "
-                     "circuits (an exact equivalence)")
-        fitted, thin = model.finish(fitted)
-        if thin:
-            notes.append(thin)
-        if e is not None:
-            local = _rotate((e - np.asarray(pose.translation))[None, :], -pose.rotation)[0]
-            local[0] *= -1.0 if pose.mirrored else 1.0
-            fitted = fitted.with_(offset_x=float(local[0]), offset_y=float(local[1]))
-            notes.append("offsets from the given eye centre")
-        else:
-            notes.append("offsets kept (they move the eye, not the spiral)")
-        if hit:
-            notes.append("WARNING: ended on a search bound: " + ", ".join(hit))
-        # measured upright: turned so the spiral ends at the top (θ ≡ 90°), as carved
-        own = _rotate(volute_curve(fitted, 2048), 90.0 - math.degrees(fitted.theta_end))
-        height = float(np.ptp(own[:, 1]))
-        diameter = 18.0 / 8.0 * height
-        notes.append(f"diameter estimate {diameter:.4g} m (Vitruvius: volute 8/18 D high)")
-        col = dataclasses.replace(column, capital=column.capital.with_(volute=fitted))
-        h = _report_spacing(ref_o)
-        init_al = orient_like(ref_o, start)
-        before = compare(densify(ref_o, h), densify(init_al, h))
-        after, al, fit_al = compare_aligned(ref_o, pose.apply(volute_curve(fitted, samples)),
-                                            allow_mirror=False, max_segment=h)
-        al = Alignment(tuple(np.add(al.translation, pose.translation)), pose.mirrored,
-                       al.hausdorff_before, al.hausdorff_after, pose.rotation)
-        values.update(mirrored=float(pose.mirrored))
-        results.append(FitResult(
-            "volute", fitted, col, before, after, measure, iters, calls,
-            time.perf_counter() - t0, ref_o, fit_al, init_al, al, tuple(notes), model=name,
-            bounds_hit=hit, diameter=diameter, values=values, spacing=h))
+    from ionic_usd.progress import progress
+
+    with progress(len(dict.fromkeys(models)), "fitting the volute", unit="model") as bar:
+        for name in dict.fromkeys(models):
+            t0 = time.perf_counter()
+            model = _Model(name, v0, ref)
+            fitted, ref_o, hit, values, pose, start, iters, calls = _fit_one(
+                ref, model, measure=measure, samples=samples, seed=seed, popsize=popsize,
+                maxiter=maxiter, polish_evals=polish_evals, allow_mirror=allow_mirror)
+            notes = []
+            if name == "log_spiral":
+                notes.append("a, b held (the curve depends on R·a/b and R·d); R, c, d, start "
+                             "angle, circuits and the pose fitted")
+            else:
+                notes.append("eye radius, centres' square and ratio, start angle, turns and the "
+                             "pose fitted")
+            notes.append(f"start scaled ×{model.k:.4g} to the reference's size; "
+                         f"{model.turns:.3g} turns traced; rotation is the start angle and "
+                         "circuits (an exact equivalence)")
+            fitted, thin = model.finish(fitted)
+            if thin:
+                notes.append(thin)
+            if e is not None:
+                local = _rotate((e - np.asarray(pose.translation))[None, :], -pose.rotation)[0]
+                local[0] *= -1.0 if pose.mirrored else 1.0
+                fitted = fitted.with_(offset_x=float(local[0]), offset_y=float(local[1]))
+                notes.append("offsets from the given eye centre")
+            else:
+                notes.append("offsets kept (they move the eye, not the spiral)")
+            if hit:
+                notes.append("WARNING: ended on a search bound: " + ", ".join(hit))
+            # measured upright: turned so the spiral ends at the top (θ ≡ 90°), as carved
+            own = _rotate(volute_curve(fitted, 2048), 90.0 - math.degrees(fitted.theta_end))
+            height = float(np.ptp(own[:, 1]))
+            diameter = 18.0 / 8.0 * height
+            notes.append(f"diameter estimate {diameter:.4g} m (Vitruvius: volute 8/18 D high)")
+            col = dataclasses.replace(column, capital=column.capital.with_(volute=fitted))
+            h = _report_spacing(ref_o)
+            init_al = orient_like(ref_o, start)
+            before = compare(densify(ref_o, h), densify(init_al, h))
+            after, al, fit_al = compare_aligned(ref_o, pose.apply(volute_curve(fitted, samples)),
+                                                allow_mirror=False, max_segment=h)
+            al = Alignment(tuple(np.add(al.translation, pose.translation)), pose.mirrored,
+                           al.hausdorff_before, al.hausdorff_after, pose.rotation)
+            values.update(mirrored=float(pose.mirrored))
+            results.append(FitResult(
+                "volute", fitted, col, before, after, measure, iters, calls,
+                time.perf_counter() - t0, ref_o, fit_al, init_al, al, tuple(notes), model=name,
+                bounds_hit=hit, diameter=diameter, values=values, spacing=h))
+            bar.update(1)
     results.sort(key=lambda r: getattr(r.after, measure))
     best = results[0]
     return dataclasses.replace(best, alternatives=tuple(results[1:]),

@@ -180,7 +180,6 @@ def build_prototypes(specs: Sequence[TempleSpec], *, cache: PrototypeCache | Non
     scheduler : ``tcp://HOST:PORT`` of an existing Dask scheduler, or None for a LocalCluster
     n_workers : LocalCluster size (default: the machine's cores)
     """
-    from ionic_usd import __version__
 
     t0 = time.perf_counter()
     cache = cache or PrototypeCache()
@@ -226,20 +225,32 @@ def build_prototypes(specs: Sequence[TempleSpec], *, cache: PrototypeCache | Non
             by_key = {f.key: s for f, s in zip(futures, todo, strict=True)}
             workers: set[str] = set()
             task_seconds = {}
-            for fut in as_completed(futures):
-                files, address, version, secs = fut.result()
-                spec = by_key[fut.key]
-                if version != __version__:
-                    raise UsdAuthoringError(f"worker {address} runs ionic_usd {version}, the "
-                                            f"client {__version__}: install the same version")
-                cache.put(spec, files)
-                workers.add(address)
-                task_seconds[spec.key] = round(secs, 3)
-                fut.release()
-                if progress:
-                    progress(f"built {spec.folder} on {address} ({secs:.1f} s)")
+            from ionic_usd.progress import progress as bar_over
+
+            with bar_over(len(futures), "building temple prototypes (Dask)", unit="temple") as bar:
+                for fut in as_completed(futures):
+                    _take(fut, by_key, cache, workers, task_seconds, progress)
+                    bar.update(1)
     finally:
         if cluster is not None:
             cluster.close()
     return BuildResult(tuple(s.key for s in todo), reused, tuple(sorted(workers)), nw,
                        time.perf_counter() - t0, task_seconds)
+
+
+def _take(fut, by_key: dict, cache: PrototypeCache, workers: set[str],
+          task_seconds: dict[str, float], progress: Callable[[str], None] | None) -> None:
+    """Store one finished prototype build in the cache (the client writes every byte)."""
+    from ionic_usd import __version__
+
+    files, address, version, secs = fut.result()
+    spec = by_key[fut.key]
+    if version != __version__:
+        raise UsdAuthoringError(f"worker {address} runs ionic_usd {version}, the "
+                                f"client {__version__}: install the same version")
+    cache.put(spec, files)
+    workers.add(address)
+    task_seconds[spec.key] = round(secs, 3)
+    fut.release()
+    if progress:
+        progress(f"built {spec.folder} on {address} ({secs:.1f} s)")

@@ -587,12 +587,21 @@ def prefetch(
     n = workers or os.cpu_count() or 1
     # a daemonic process (a Dask worker) may not fork a pool: there the cluster is the
     # parallelism (one prototype per worker, see ionic_usd.pipeline), so unwrap in-process
-    if n <= 1 or len(todo) < 4 or mp.current_process().daemon:
-        results = [_unwrap_job(job) for job in todo.values()]
-    else:
-        ctx = mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
-        with ProcessPoolExecutor(max_workers=min(n, len(todo)), mp_context=ctx) as ex:
-            results = list(ex.map(_unwrap_job, todo.values(), chunksize=1))
+    from ionic_usd.progress import progress
+
+    with progress(len(todo), "unwrapping UVs (xatlas)", unit="mesh") as bar:
+        if n <= 1 or len(todo) < 4 or mp.current_process().daemon:
+            results = []
+            for job in todo.values():
+                results.append(_unwrap_job(job))
+                bar.update(1)
+        else:
+            ctx = mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
+            with ProcessPoolExecutor(max_workers=min(n, len(todo)), mp_context=ctx) as ex:
+                results = []
+                for r in ex.map(_unwrap_job, todo.values(), chunksize=1):
+                    results.append(r)
+                    bar.update(1)
     for key, atlas in zip(todo, results, strict=True):
         store.misses += 1
         store.put(key, atlas)

@@ -282,7 +282,7 @@ def build_column_asset(
     if dest.exists() and not force:
         from ionic_usd.errors import OutputExistsError
 
-        raise OutputExistsError(f"{dest} exists; pass --force (force=True) to replace it")
+        raise OutputExistsError(f"{dest} exists; pass --force to replace it")
     if opts.user_textures:
         for src in opts.user_textures.values():
             validate_user_texture(src)
@@ -299,13 +299,17 @@ def build_column_asset(
                                             for r in ("basecolor", "roughness", "normal")))
 
     def populate(tmp: Path) -> None:
+        from ionic_usd.progress import progress
+
         tex = tmp / "Payload" / "Textures"
-        for _, style in FINISHES.values():
-            if opts.user_textures and style == "travertine":
-                copy_user_textures(opts.user_textures, tex)
-            else:
-                copy_stone_textures(tex, style, opts.texture_size, opts.seed,
-                                    make_tx=opts.make_tx)
+        with progress(len(FINISHES), "stone textures (OpenImageIO)", unit="material") as bar:
+            for _, style in FINISHES.values():
+                if opts.user_textures and style == "travertine":
+                    copy_user_textures(opts.user_textures, tex)
+                else:
+                    copy_stone_textures(tex, style, opts.texture_size, opts.seed,
+                                        make_tx=opts.make_tx)
+                bar.update(1)
 
     variant_sets = {"lod": opts.lods, "base": opts.bases, "scroll": opts.scrolls,
                     "capital": opts.capitals, "flutes": opts.flutes, "form": opts.forms,

@@ -46,6 +46,7 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
+import logging
 import os
 import time
 from collections.abc import Sequence
@@ -98,6 +99,8 @@ from ionic_usd.usd.hypotheses import (
 from ionic_usd.usd.materials import bind_material_spec
 from ionic_usd.usd.mesh import author_mesh, define_prim
 from ionic_usd.usd.stage import new_layer, save_layer
+
+log = logging.getLogger(__name__)
 
 __all__ = ["TempleReport", "compose_temple", "hypothesis_layers", "temple_triangles",
            "ROOT_LAYER", "GENERATED_LAYER", "OVERRIDES_LAYER", "MATERIALS_LAYER",
@@ -306,7 +309,7 @@ def compose_temple(
     t0 = time.perf_counter()
     dest = Path(folder)
     if dest.exists() and not force:
-        raise OutputExistsError(f"{dest} exists; pass --force (force=True) to rebuild it "
+        raise OutputExistsError(f"{dest} exists; pass --force to rebuild it "
                                 f"(your {OVERRIDES_LAYER} is kept)")
     p = layout.params
     column = column or portunus_column_params(height=p.columns_height,
@@ -322,7 +325,9 @@ def compose_temple(
     stats: dict[str, Any] = {}
 
     def build(tmp: Path) -> None:
+        log.info("building the column asset")
         stats["asset"] = build_column_asset(tmp / ASSET_NAME, opts)
+        log.info("writing the part, colonnade and hypothesis layers")
         save_layer(_materials_layer(), tmp / MATERIALS_LAYER)
         for layer, meshes in base_meshes.items():
             save_layer(_part_layer(layer, meshes, baseline_material), tmp / PART_LAYERS[layer])
@@ -331,6 +336,7 @@ def compose_temple(
             if lay is not None:
                 save_layer(lay, tmp / "layers" / f"{hid}.usda")
         gen_layer = _generated_layer(layout, hyp_layers, lods)
+        log.info("architectural detail (%s)", detail)
         # the detail variant set (plain, moulded, carved) and its layers: ionic_usd.usd.detail
         add_detail(tmp, gen_layer, layout, texture_size=opts.texture_size, seed=opts.seed,
                    mouldings=mouldings, default=detail)
@@ -341,11 +347,14 @@ def compose_temple(
         # checks and hints on the generated layer alone: the user's opinions are theirs
         gen = Usd.Stage.Open(str(tmp / GENERATED_LAYER))
         realised = [h for h in layout.hypotheses if hyp_layers[h.id] is not None]
+        log.info("checking all %d combinations of %d hypotheses", 2 ** len(realised),
+                 len(realised))
         stats["combos"] = _realise_combinations(gen, tmp, layout, realised)
         stats["lod_triangles"] = {lod: _triangles_with(gen, {"lod": lod}) for lod in lods}
         vsets = {"lod": lods, **{hyp_set(h.id): ("baseline", "alternative") for h in realised}}
         parts = ["/Temple", *(f"/Temple/{PART_PRIMS[la]}" for la in layout.cuboids),
                  "/Temple/Colonnade"]
+        log.info("extentsHint per variant combination")
         hints = variant_extents_hints(gen, "/Temple", parts, vsets)
         gen_layer = gen.GetRootLayer()
         author_extents_hints(gen_layer, "/Temple", hints, list(vsets))
