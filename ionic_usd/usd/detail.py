@@ -149,18 +149,20 @@ def _over(lay: Sdf.Layer | Sdf.PrimSpec, path: str) -> Sdf.PrimSpec:
 
 
 def _detail_layer(geom: DetailGeometry, default: str) -> Sdf.Layer:
-    from ionic_usd.usd.column_asset import FINISHES
     from ionic_usd.usd.materials import MaterialTextures, author_preview_material
 
     lay = new_layer("Temple", kind=None)
     stage = Usd.Stage.Open(lay)
     stage.DefinePrim("/Temple/Materials", "Scope")
-    # Travertine as materials.usda defines it (same opinions), so this layer is valid alone
-    for mat, style in (TERRACOTTA, FINISHES["travertine"]):
-        author_preview_material(stage, f"/Temple/Materials/{mat}", MaterialTextures(
-            *(f"./Textures/{style}_{r}.png" for r in ("basecolor", "roughness", "normal"))))
+    # Terracotta is the detail's own; Travertine comes from the temple's material library
+    # (materials.usda, the column asset's: one copy of its maps), so this layer is valid alone
+    mat, style = TERRACOTTA
+    author_preview_material(stage, f"/Temple/Materials/{mat}", MaterialTextures(
+        *(f"./Textures/{style}_{r}.png" for r in ("basecolor", "roughness", "normal"))))
     del stage
-    lay.subLayerPaths.append(f"./{DETAIL_GEOM}")  # after the stage: it is not on disk yet
+    # after the stage: these are not on disk yet
+    lay.subLayerPaths.append("./materials.usda")
+    lay.subLayerPaths.append(f"./{DETAIL_GEOM}")
     temple = lay.GetPrimAtPath("/Temple")
     bind_spec(_over(temple, "Roof/Tiles"), f"/Temple/Materials/{TERRACOTTA[0]}")
     vs = Sdf.VariantSetSpec(temple, DETAIL_SET)

@@ -78,7 +78,7 @@ from ionic_usd.usd.column_asset import (
     ColumnAssetOptions,
     build_column_asset,
 )
-from ionic_usd.usd.detail import add_detail
+from ionic_usd.usd.detail import DETAIL_SET, add_detail
 from ionic_usd.usd.hypotheses import (
     FORMS,
     GROUPS,
@@ -496,6 +496,8 @@ def _realise_combinations(gen: Usd.Stage, folder: Path, layout: TempleLayout,
     variants) where they interact. Returns the combination layers written."""
     shape = [h for h in realised if temple_keys(h)]
     off = {hyp_set(h.id): "baseline" for h in realised}
+    if gen.GetPrimAtPath("/Temple").GetVariantSets().HasVariantSet(DETAIL_SET):
+        off[DETAIL_SET] = "plain"  # the layout's cuboids are the plain detail's geometry
     height = layout.params.columns_height
     written: list[str] = []
     try:
