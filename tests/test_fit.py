@@ -123,7 +123,9 @@ def test_fit_volute_scale_free_chooses_the_construction(diameter):
     assert res.after.hausdorff_pct < 0.2 and res.after.discrete_frechet_pct < 0.2
     assert res.alternatives[0].after.hausdorff > res.after.hausdorff
     assert res.params.arc_square == pytest.approx(true.arc_square, rel=1e-2)
-    assert res.diameter == pytest.approx(diameter, rel=0.08)
+    # the estimate reads 8/18 D off the fitted volute's height; this construction is not
+    # exactly 8 parts high, so compare with the reference's own height
+    assert res.diameter == pytest.approx(18 / 8 * np.ptp(ref[:, 1]), rel=1e-2)
 
 
 def test_fit_reports_a_bound_hit():

@@ -402,7 +402,13 @@ def scan_deviation(points: np.ndarray, col: ColumnParams, matrix: np.ndarray, *,
     rest = ~in_shaft | (y > y_shaft0 + 0.5 * sp.length)
     if rest.any():
         tree = tree if tree is not None else _other_parts_tree(col)
-        d, _ = tree.query(np.column_stack([x, y, z])[rest])
+        # a bounded search: points of the shaft band far from the capital stop early
+        q_rest = np.column_stack([x, y, z])[rest]
+        bound = 0.1 * (bp.height + 1e-3)
+        d, _ = tree.query(q_rest, distance_upper_bound=bound)
+        far = ~np.isfinite(d) & ~np.isfinite(dev[rest])
+        if far.any():  # off the shaft and far from everything: the full search
+            d[far] = tree.query(q_rest[far])[0]
         dev[rest] = np.minimum(dev[rest], d)
     return dev
 

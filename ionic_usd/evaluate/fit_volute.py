@@ -16,7 +16,7 @@ turning); every bound is derived from these (sizes within ×/÷ 1.6–2, turns �
 within a quarter of the reference's diagonal). The pose (translation, rotation, mirror) joins
 the parameters. The best model by the minimised measure is returned; the others ride along in
 :attr:`~ionic_usd.evaluate.fit_core.FitResult.alternatives`. The lower diameter is estimated
-from Vitruvius' proportion: the volute is 8/18 D high.
+from Vitruvius' proportion: the volute is 8/18 D high (upright).
 """
 
 from __future__ import annotations
@@ -312,11 +312,12 @@ def fit_volute(
                 notes.append("offsets kept (they move the eye, not the spiral)")
             if hit:
                 notes.append("WARNING: ended on a search bound: " + ", ".join(hit))
-            # measured upright: turned so the spiral ends at the top (θ ≡ 90°), as carved
+            # Vitruvius: the volute is 8/18 D high — measured upright, turned so the spiral ends
+            # at the top (θ ≡ 90°), as carved (the eye's size varies more between constructions)
             own = _rotate(volute_curve(fitted, 2048), 90.0 - math.degrees(fitted.theta_end))
-            height = float(np.ptp(own[:, 1]))
-            diameter = 18.0 / 8.0 * height
-            notes.append(f"diameter estimate {diameter:.4g} m (Vitruvius: volute 8/18 D high)")
+            diameter = 18.0 / 8.0 * float(np.ptp(own[:, 1]))
+            notes.append(f"diameter estimate {diameter:.4g} m (Vitruvius: the volute is 8/18 D "
+                         "high)")
             col = dataclasses.replace(column, capital=column.capital.with_(volute=fitted))
             h = _report_spacing(ref_o)
             init_al = orient_like(ref_o, start)
