@@ -19,7 +19,8 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 from pxr import Sdf, Usd, UsdGeom, Vt
 
-__all__ = ["variant_extents_hints", "author_extents_hints", "relevant_sets"]
+__all__ = [
+    "bound_changing_sets","variant_extents_hints", "author_extents_hints", "relevant_sets"]
 
 Combo = tuple[str, ...]
 
@@ -138,3 +139,32 @@ def author_extents_hints(
             for path, hint in h.items():
                 _author_hint(spec, Sdf.Path(path).MakeRelativePath(root_path), hint)
     return rel_sets
+
+
+def bound_changing_sets(
+    stage: Usd.Stage, root: str, prims: Sequence[str], vsets: Mapping[str, Sequence[str]],
+    *, base: str | None = None, tol: float = 1e-6,
+) -> dict[str, Sequence[str]]:
+    """The sets of ``vsets`` whose selection changes some hint when switched alone — under
+    each variant of ``base`` (e.g. ``lod``: a level of detail can hide a change), the other sets
+    at their authored selections: the sets worth enumerating together.
+
+    A set that moves no bound on its own is dropped before the product of the rest is taken
+    (a few short passes instead of one pass over every combination); the temple's tests
+    compose combinations of every set and compare the authored hints with
+    ``UsdGeom.BBoxCache`` to show that nothing that matters was dropped.
+    """
+    keep: dict[str, Sequence[str]] = {}
+    if base is not None:
+        keep[base] = vsets[base]
+    for name, variants in vsets.items():
+        if name == base:
+            continue
+        sets = {base: vsets[base], name: variants} if base is not None else {name: variants}
+        hints = variant_extents_hints(stage, root, prims, sets)
+        groups: dict[str, list[dict[str, np.ndarray]]] = {}
+        for combo, h in hints.items():
+            groups.setdefault(combo[0] if base is not None else "", []).append(h)
+        if any(not _same(g[0], h, tol) for g in groups.values() for h in g[1:]):
+            keep[name] = variants
+    return keep

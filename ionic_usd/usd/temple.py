@@ -69,7 +69,11 @@ from ionic_usd.temple.layout import (
     build_layout,
 )
 from ionic_usd.usd.asset import class_path, replace_folder
-from ionic_usd.usd.bounds import author_extents_hints, variant_extents_hints
+from ionic_usd.usd.bounds import (
+    author_extents_hints,
+    bound_changing_sets,
+    variant_extents_hints,
+)
 from ionic_usd.usd.column_asset import (
     ASSET_NAME,
     FINISHES,
@@ -351,10 +355,14 @@ def compose_temple(
                  len(realised))
         stats["combos"] = _realise_combinations(gen, tmp, layout, realised)
         stats["lod_triangles"] = {lod: _triangles_with(gen, {"lod": lod}) for lod in lods}
-        vsets = {"lod": lods, **{hyp_set(h.id): ("baseline", "alternative") for h in realised}}
+        temple_sets = gen.GetPrimAtPath("/Temple").GetVariantSets()
+        candidates = {"lod": lods, **{
+            n: tuple(temple_sets.GetVariantSet(n).GetVariantNames())
+            for n in temple_sets.GetNames() if n.startswith("hyp_") or n == DETAIL_SET}}
         parts = ["/Temple", *(f"/Temple/{PART_PRIMS[la]}" for la in layout.cuboids),
                  "/Temple/Colonnade"]
         log.info("extentsHint per variant combination")
+        vsets = bound_changing_sets(gen, "/Temple", parts, candidates, base="lod")
         hints = variant_extents_hints(gen, "/Temple", parts, vsets)
         gen_layer = gen.GetRootLayer()
         author_extents_hints(gen_layer, "/Temple", hints, list(vsets))
