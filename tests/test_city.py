@@ -234,9 +234,9 @@ def test_instance_bounds_match_brute_force(n, scaled):
     np.testing.assert_allclose(got[1], pts.max(axis=0), atol=1e-9)
 
 
-def test_lod_by_distance_selects_the_temple_lod_set_when_it_exists(grid_city, tmp_path):
-    """Before the temple has a ``lod`` set the city selects none; once it has one, each
-    temple gets the LOD of its distance from the focus."""
+def test_lod_by_distance_selects_the_temple_lod_set(grid_city, tmp_path):
+    """Each temple gets the LOD of its distance from the focus through the temple's own
+    ``lod`` variant set (which passes it to every column); equal LODs share a prototype."""
     import shutil
 
     from ionic_usd.usd.city import ColumnInstances, TempleInstances, compose_city
@@ -244,27 +244,20 @@ def test_lod_by_distance_selects_the_temple_lod_set_when_it_exists(grid_city, tm
     out, s, _ = grid_city
     src = next((out / "Temples").iterdir())
     shutil.copytree(src, tmp_path / "Temples" / src.name)
-    xz = np.array([[0.0, 0.0], [200.0, 0.0], [600.0, 0.0]])
-    temples = TempleInstances([f"Temples/{src.name}"], np.zeros(3, dtype=np.int32),
-                              ["a", "b", "c"], xz, np.zeros(3), np.ones(3), [{}, {}, {}],
-                              lod=np.array([0, 1, 2], dtype=np.int8))
+    xz = np.array([[0.0, 0.0], [200.0, 0.0], [600.0, 0.0], [610.0, 0.0]])
+    temples = TempleInstances([f"Temples/{src.name}"], np.zeros(4, dtype=np.int32),
+                              ["a", "b", "c", "d"], xz, np.zeros(4), np.ones(4),
+                              [{}, {}, {}, {}], lod=np.array([0, 1, 2, 2], dtype=np.int8))
     columns = ColumnInstances(f"Temples/{src.name}/IonicColumn/IonicColumn.usda",
                               np.zeros((0, 2)), np.zeros(0))
     rep = compose_city(tmp_path, temples, columns)
     stage = Usd.Stage.Open(str(rep.path))
-    prims = stage.GetPrimAtPath("/City/Temples").GetChildren()
-    assert all(not p.GetVariantSets().HasVariantSet("lod") for p in prims)
-    assert rep.temple_prototypes == 1
-    # give the temple a lod set (as the temple composer will), then compose again
-    layer = Sdf.Layer.FindOrOpen(str(tmp_path / "Temples" / src.name / "Temple.usda"))
-    spec = layer.GetPrimAtPath("/Temple")
-    vs = Sdf.VariantSetSpec(spec, "lod")
-    for name in ("high", "medium", "low"):
-        Sdf.VariantSpec(vs, name)
-    spec.variantSetNameList.Append("lod")
-    layer.Save()
-    rep = compose_city(tmp_path, temples, columns, force=True)
-    stage = Usd.Stage.Open(str(rep.path))
     got = [stage.GetPrimAtPath(f"/City/Temples/Temple_{n}").GetVariantSets()
-           .GetVariantSet("lod").GetVariantSelection() for n in "abc"]
-    assert got == ["high", "medium", "low"] and rep.temple_prototypes == 3
+           .GetVariantSet("lod").GetVariantSelection() for n in "abcd"]
+    assert got == ["high", "medium", "low", "low"] and rep.temple_prototypes == 3
+    # the lod reaches the columns inside each (instanced) temple
+    for n, lod in zip("abcd", got, strict=True):
+        temple = stage.GetPrimAtPath(f"/City/Temples/Temple_{n}")
+        cols = [p for p in Usd.PrimRange(temple, Usd.TraverseInstanceProxies())
+                if p.IsInstance() and p.GetVariantSets().HasVariantSet("form")]
+        assert cols and {c.GetVariantSets().GetVariantSelection("lod") for c in cols} == {lod}

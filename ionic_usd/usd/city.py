@@ -109,14 +109,17 @@ class CityReport:
 
 
 def temple_variant_sets(temple_root: Path) -> dict[str, tuple[str, ...]]:
-    """Variant set → its variants, on /Temple of a temple root layer (read with Sdf only)."""
-    layer = Sdf.Layer.FindOrOpen(str(temple_root))
-    if layer is None:
+    """Variant set → its variants, on the default prim of a temple (composed, payloads unloaded:
+    the root layer only sublayers the user's and the generated layer)."""
+    stage = Usd.Stage.Open(str(temple_root), Usd.Stage.LoadNone)
+    if stage is None:
         raise UsdAuthoringError(f"cannot open {temple_root}")
-    spec = layer.GetPrimAtPath(layer.defaultPrim and f"/{layer.defaultPrim}" or "/Temple")
-    if spec is None:
+    prim = stage.GetDefaultPrim()
+    if not prim:
         raise UsdAuthoringError(f"{temple_root} has no default prim")
-    return {name: tuple(vs.variants.keys()) for name, vs in spec.variantSets.items()}
+    vsets = prim.GetVariantSets()
+    return {name: tuple(vsets.GetVariantSet(name).GetVariantNames())
+            for name in vsets.GetNames()}
 
 
 def _stats(stage: Usd.Stage, root: str, selections: Mapping[str, str]
