@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 from ionic_usd.errors import ParameterError
@@ -29,6 +28,16 @@ def cmd_city(args: argparse.Namespace) -> int:
         raise ParameterError("--json", str(args.json), "a path ending in .json")
     if args.json is not None and args.json.exists() and not args.force:
         raise ParameterError("--json", str(args.json), "a new file (or pass --force)")
+    import math
+
+    for flag, v, lo, hi in (("--rows", args.rows, 1, 10_000), ("--cols", args.cols, 1, 10_000),
+                            ("--seed", args.seed, 0, 2**63 - 1)):
+        if not lo <= v <= hi:
+            raise ParameterError(flag, v, f"an integer in [{lo}, {hi:,}]")
+    for flag, v, lo, hi in (("--block", args.block, 1.0, 10_000.0),
+                            ("--column-spacing", args.column_spacing, 0.5, 1_000.0)):
+        if not (math.isfinite(v) and lo <= v <= hi):
+            raise ParameterError(flag, v, f"a length in [{lo:g}, {hi:g}] m")
     opts = CityOptions(
         plan=str(args.plan) if args.plan else None, rows=args.rows, cols=args.cols,
         block=args.block, columns=args.columns, column_spacing=args.column_spacing,
@@ -37,9 +46,10 @@ def cmd_city(args: argparse.Namespace) -> int:
         texture_size=args.texture_size, instancer_threshold=args.instancer_threshold,
         scheduler=args.scheduler, workers=args.workers, memory_limit_gb=args.memory_limit,
         force=args.force)
-    quiet = not sys.stderr.isatty()
-    s = build_city(args.folder, opts,
-                   progress=None if quiet else (lambda m: print(m, file=sys.stderr)))
+    import logging
+
+    log = logging.getLogger("ionic_usd.city")  # shown with -v; bars show the builds anyway
+    s = build_city(args.folder, opts, progress=log.info)
     if args.json is not None:
         write_summary(s, args.json)
     tri = s["triangles"]
