@@ -38,6 +38,25 @@ def cmd_city(args: argparse.Namespace) -> int:
                             ("--column-spacing", args.column_spacing, 0.5, 1_000.0)):
         if not (math.isfinite(v) and lo <= v <= hi):
             raise ParameterError(flag, v, f"a length in [{lo:g}, {hi:g}] m")
+    if args.plan is None:
+        # a grid's size is known before any layout work: refuse a city that cannot fit in
+        # memory at once (the layout of a million lots alone takes minutes)
+        from ionic_usd.errors import BudgetError
+        from ionic_usd.pipeline.city import estimate_memory
+
+        temples = args.rows * args.cols
+        street = 2 * (args.rows + 1) * (args.cols + 1) * int(args.block / args.column_spacing)
+        if args.columns is not None:
+            street = args.columns
+        from ionic_usd.usd.city import DEFAULT_INSTANCER_THRESHOLD
+
+        threshold = (DEFAULT_INSTANCER_THRESHOLD if args.instancer_threshold is None
+                     else args.instancer_threshold)
+        est = estimate_memory(temples, street, 1, threshold)
+        if est > args.memory_limit * 1e9:
+            raise BudgetError(f"this city needs about {est / 1e9:.1f} GB ({temples:,} temples, "
+                              f"about {street:,} columns), above --memory-limit "
+                              f"{args.memory_limit:g} GB; raise the limit to build it anyway")
     opts = CityOptions(
         plan=str(args.plan) if args.plan else None, rows=args.rows, cols=args.cols,
         block=args.block, columns=args.columns, column_spacing=args.column_spacing,
