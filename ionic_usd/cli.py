@@ -369,8 +369,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="texture resolution (px): a power of two, 16-4096 within the default "
                    "memory limit; 8192 needs about 10 GB (--max-memory 10)")
     p.add_argument("--seed", type=int, default=7, help="seed of the procedural stone")
-    p.add_argument("--detail", choices=("plain", "moulded", "carved"), default="carved",
-                   help="selected level of architectural detail (all three are written)")
+    p.add_argument("--detail", choices=("plain", "moulded", "carved"), default=None,
+                   help="also write the architectural detail (mouldings, dentils, tiles, the "
+                   "carved capital) as the variant set `detail` with plain, moulded and carved, "
+                   "selecting this one [default: no detail set; a preview feature]")
     p.add_argument("--force", action="store_true",
                    help="rebuild an existing folder (atomically; overrides.usda is kept)")
     _add_memory_flag(p)

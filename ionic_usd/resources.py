@@ -145,11 +145,12 @@ def _texture_bytes(size: int) -> tuple[int, int]:
 
 
 def estimate_asset(params: ColumnParams, texture_size: int, *, lods=None, bases=None,
-                   scrolls=None, flutes=None, forms: int = 2, what: str = "the asset"
-                   ) -> Estimate:
-    """Every mesh of the column asset (per LOD: each base, a shaft per flute count, the
-    capital body, bolsters per scroll; ``forms`` times, the engaged form counted as a full
-    one, an upper bound) and one stone texture set at a time."""
+                   scrolls=None, flutes=None, forms: int = 3, capitals: int = 2,
+                   what: str = "the asset") -> Estimate:
+    """Every mesh of the column asset (per LOD: each base, a shaft per flute count, one
+    capital solid per scroll and capital variant — body and bolsters united; ``forms`` times,
+    the cut forms counted as full ones, an upper bound) and one stone texture set at a
+    time."""
     from ionic_usd.column.column import LODS
     from ionic_usd.usd.column_asset import BASE_VARIANTS, FLUTE_VARIANTS, SCROLL_VARIANTS
 
@@ -160,8 +161,8 @@ def estimate_asset(params: ColumnParams, texture_size: int, *, lods=None, bases=
         for n in flutes or tuple(FLUTE_VARIANTS.values()):
             shaft = dataclasses.replace(p.shaft, flutes=n, flute_angle=0.8 * 360.0 / n)
             tris += _part_triangles(dataclasses.replace(p, shaft=shaft))[1]
-        tris += _part_triangles(p)[2]  # one capital body, one bolster pair per scroll
-        tris += sum(_part_triangles(p, scroll=s)[3] for s in scrolls or SCROLL_VARIANTS)
+        tris += capitals * sum(_part_triangles(p)[2] + _part_triangles(p, scroll=s)[3]
+                               for s in scrolls or SCROLL_VARIANTS)
     tris *= forms
     px, tex = _texture_bytes(texture_size)
     return Estimate(what, tris, 3 * px, BASELINE_BYTES + 2 * BYTES_PER_TRIANGLE * tris + tex)

@@ -39,6 +39,16 @@ def portunus_temple(tmp_path_factory):
 
 
 @pytest.fixture(scope="session")
+def carved_temple(tmp_path_factory):
+    """The Portunus temple with the architectural detail set (``--detail carved``)."""
+    from ionic_usd.temple.layout import portunus_layout
+    from ionic_usd.usd.temple import compose_temple
+
+    folder = tmp_path_factory.mktemp("carved") / "PortunusTemple"
+    return compose_temple(folder, portunus_layout(), texture_size=64, detail="carved")
+
+
+@pytest.fixture(scope="session")
 def tiny_temple(tmp_path_factory):
     """The Portunus temple with a one-LOD column asset (low, one base, one scroll) and 16 px
     textures: every kind of composition the full temple has, in a few seconds."""
@@ -58,7 +68,17 @@ def tiny_temple(tmp_path_factory):
 @pytest.fixture(scope="session")
 def tiny_city(tiny_temple):
     """A 2 x 2 city of the tiny temple (instanced temples + a PointInstancer of columns)."""
-    from ionic_usd.usd.city import compose_city
+    import numpy as np
 
-    return compose_city(tiny_temple.root.parent.parent, tiny_temple.root.parent.name,
-                        rows=2, cols=2).path
+    from ionic_usd.usd.city import ColumnInstances, TempleInstances, compose_city
+
+    city = tiny_temple.root.parent.parent
+    name = tiny_temple.root.parent.name
+    xz = np.array([[0.0, 0.0], [60.0, 0.0], [0.0, 60.0], [60.0, 60.0]])
+    sel = [{}, {"roof-pitch-15": "alternative"}, {}, {"flutes-20": "alternative"}]
+    temples = TempleInstances([name], np.zeros(4, dtype=np.int32), ["a", "b", "c", "d"], xz,
+                              np.zeros(4), np.ones(4), sel)
+    street = np.stack([np.arange(-27.0, 90.0, 3.0), np.full(39, 30.0)], axis=1)
+    columns = ColumnInstances(f"{name}/IonicColumn/IonicColumn.usda", street,
+                              np.zeros(len(street)))
+    return compose_city(city, temples, columns).path

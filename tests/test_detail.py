@@ -40,8 +40,8 @@ def scene_counts(stage) -> dict[str, int]:
 
 
 @pytest.fixture(scope="module")
-def stage(portunus_temple):
-    return Usd.Stage.Open(str(portunus_temple.root))
+def stage(carved_temple):
+    return Usd.Stage.Open(str(carved_temple.root))
 
 
 def test_variants_switch_geometry_and_counts(stage):
@@ -86,8 +86,8 @@ def test_materials_per_role(stage):
     assert UsdShade.Shader(tex).GetInput("file").Get().resolvedPath
 
 
-def test_every_detail_layer_is_valid_alone(portunus_temple):
-    folder = portunus_temple.root.parent
+def test_every_detail_layer_is_valid_alone(carved_temple):
+    folder = carved_temple.root.parent
     files = [folder / "detail.usda", folder / "detail_geom.usdc",
              *sorted((folder / "layers").glob("*.detail.usda")),
              folder / "layers" / "frieze-garlands.usda"]
@@ -105,8 +105,8 @@ def test_frieze_hypothesis_is_realised_and_cited(stage):
     assert not garlands.IsActive()
 
 
-def test_roof_hypothesis_moves_the_tiles_with_the_roof(portunus_temple):
-    stage = Usd.Stage.Open(str(portunus_temple.root))
+def test_roof_hypothesis_moves_the_tiles_with_the_roof(carved_temple):
+    stage = Usd.Stage.Open(str(carved_temple.root))
     tiles = UsdGeom.PointInstancer(stage.GetPrimAtPath("/Temple/Roof/Tiles"))
     before = np.array(tiles.GetPositionsAttr().Get())
     stage.GetDefaultPrim().GetVariantSets().GetVariantSet("hyp_roof_pitch_15") \
@@ -116,8 +116,8 @@ def test_roof_hypothesis_moves_the_tiles_with_the_roof(portunus_temple):
     assert ridge_after > ridge_before + 0.2  # a steeper roof raises the ridge tiles
 
 
-def test_column_high_lod_carries_the_carved_capital(portunus_temple):
-    path = portunus_temple.root.parent / "IonicColumn" / "IonicColumn.usda"
+def test_column_high_lod_carries_the_carved_capital(carved_temple):
+    path = carved_temple.root.parent / "IonicColumn" / "IonicColumn.usda"
     stage = Usd.Stage.Open(str(path))
     vs = stage.GetDefaultPrim().GetVariantSets().GetVariantSet("lod")
     for lod in ("high", "medium", "low"):

@@ -25,7 +25,7 @@ def test_column_estimate_bounds_the_build(lod, base, scroll):
     p = portunus_column_params(lod=lod, base=base, scroll=scroll)
     built = build_column(p).n_triangles
     est = column_triangle_estimate(p)
-    assert built <= est <= 1.1 * built
+    assert built <= est <= 1.3 * built  # united capital: fewer triangles than its parts
 
 
 def test_custom_sampling_estimate_bounds_the_build():
@@ -34,7 +34,7 @@ def test_custom_sampling_estimate_bounds_the_build():
     shaft = dataclasses.replace(p.shaft, flute_slices=5)
     p = dataclasses.replace(p, capital=cap, shaft=shaft)
     built = build_column(p).n_triangles
-    assert built <= column_triangle_estimate(p) <= 1.15 * built
+    assert built <= column_triangle_estimate(p) <= 1.4 * built
 
 
 def test_asset_estimate_bounds_the_asset_meshes():
@@ -46,10 +46,10 @@ def test_asset_estimate_bounds_the_asset_meshes():
     full = sum(m.mesh.n_triangles for m in meshes if m.tags.get("form") == "full")
     both = sum(m.mesh.n_triangles for m in meshes)
     est1 = estimate_asset(opts.params, 16, flutes=(24, 20), forms=1, **kw).triangles
-    est2 = estimate_asset(opts.params, 16, flutes=(24, 20), forms=2, **kw).triangles
-    assert full <= est1 <= 1.05 * full
-    # engaged meshes are clipped halves, counted as whole ones: a looser upper bound
-    assert both <= est2 <= 1.3 * both
+    est3 = estimate_asset(opts.params, 16, flutes=(24, 20), forms=3, **kw).triangles
+    assert full <= est1 <= 1.3 * full
+    # engaged and corner meshes are cut, counted as whole ones: a looser upper bound
+    assert both <= est3 <= 1.5 * both
 
 
 def test_refusal_names_estimate_and_limit():

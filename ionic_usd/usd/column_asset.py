@@ -117,6 +117,9 @@ class ColumnAssetOptions:
     seed: int = 7
     make_tx: bool = False
     user_textures: Mapping[str, str] | None = None  # role (basecolor/roughness/normal) -> file
+    # the carved echinus and astragal (instanced ornament in the high LOD): written with the
+    # temple's architectural detail (ionic-usd temple --detail …)
+    carved: bool = False
 
     def __post_init__(self) -> None:
         def check(name: str, given: Sequence[str], valid: Sequence[str]) -> None:
@@ -331,7 +334,7 @@ def build_column_asset(
         "flutes, form, finish.",
         st_scale=UV_SPAN / TILE_METRES,
         proxy_lod="low" if "low" in opts.lods and len(opts.lods) > 1 else None,
-        instancers=column_ornament(opts),  # carved echinus and astragal in the high LOD
+        instancers=column_ornament(opts) if opts.carved else (),
     )
     path = write_asset(spec, dest, populate=populate, force=force)
     tris: dict[str, int] = {}

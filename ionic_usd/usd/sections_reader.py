@@ -92,6 +92,9 @@ def stored_tables(path: str | Path, keys: Iterable[str]) -> dict[str, dict]:
     stage = Usd.Stage.Open(str(path), Usd.Stage.LoadNone)
     prim = stage.GetDefaultPrim() if stage else None
     data = dict(prim.GetCustomData()) if prim else {}
+    nested = data.get("ionic_usd", {})
+    if hasattr(nested, "get") and hasattr(nested.get("parameters"), "items"):
+        data = dict(nested["parameters"])  # where ``ionic-usd asset`` keeps them
     wanted = set(keys)
     return {k: dict(v) for k, v in data.items() if k in wanted and hasattr(v, "items")}
 

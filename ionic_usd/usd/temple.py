@@ -294,7 +294,7 @@ def compose_temple(
     texture_size: int = 1024,
     seed: int = 7,
     asset_options: ColumnAssetOptions | None = None,
-    detail: str = "carved",
+    detail: str | None = None,
     mouldings=None,
 ) -> TempleReport:
     """Write the temple folder (see the module docstring) atomically.
@@ -322,6 +322,8 @@ def compose_temple(
                                                seed=seed)
     if opts.params != column:
         opts = dataclasses.replace(opts, params=column)
+    if detail is not None and not opts.carved:
+        opts = dataclasses.replace(opts, carved=True)  # the carved capital goes with the detail
     hyp_layers = hypothesis_layers(layout, opts)  # validates every hypothesis first
     base_meshes = cuboid_meshes(layout, CUBOID_UV_SCALE)
     baseline_material = FINISHES[BASELINE_FINISH][0]
@@ -340,10 +342,11 @@ def compose_temple(
             if lay is not None:
                 save_layer(lay, tmp / "layers" / f"{hid}.usda")
         gen_layer = _generated_layer(layout, hyp_layers, lods)
-        log.info("architectural detail (%s)", detail)
-        # the detail variant set (plain, moulded, carved) and its layers: ionic_usd.usd.detail
-        add_detail(tmp, gen_layer, layout, texture_size=opts.texture_size, seed=opts.seed,
-                   mouldings=mouldings, default=detail)
+        if detail is not None:
+            log.info("architectural detail (%s)", detail)
+            # the detail variant set (plain, moulded, carved) and its layers
+            add_detail(tmp, gen_layer, layout, texture_size=opts.texture_size, seed=opts.seed,
+                       mouldings=mouldings, default=detail)
         save_layer(gen_layer, tmp / GENERATED_LAYER)
         save_layer(_root_layer(layout.name), tmp / ROOT_LAYER)
         # created only where absent: an existing overrides.usda (or symlink) is never touched
