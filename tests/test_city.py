@@ -122,6 +122,7 @@ def test_temples_as_point_instancer_draw_the_same(grid_city, tmp_path):
     np.testing.assert_allclose(np.array(a.GetMax()), np.array(b.GetMax()), atol=1e-3)
 
 
+@pytest.mark.slow
 def test_plan_city_buildings_on_lots_porticoes_on_lines(tmp_path):
     out = tmp_path / "forum"
     s = build_city(out, CityOptions(plan=str(FORUM), texture_size=TEX, focus=(0.0, 0.0),

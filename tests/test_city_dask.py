@@ -100,6 +100,7 @@ def _plan(tmp_path: Path) -> Path:
     return p
 
 
+@pytest.mark.slow
 def test_cluster_build_equals_local_build(portunus_temple, loopback_cluster, tmp_path):
     # (the session's temple has warmed the UV cache the workers share through the environment)
     address, workers = loopback_cluster

@@ -152,6 +152,7 @@ def test_every_mesh_closed_with_uvs_in_unit_square(column_asset):
         assert UsdGeom.PrimvarsAPI(prim).GetPrimvar("st").GetTypeName() == "texCoord2f[]"
 
 
+@pytest.mark.slow
 def test_charts_do_not_overlap_in_any_mesh(column_asset):
     from test_uv import rasterise, uv_charts
 
