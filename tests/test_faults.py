@@ -184,7 +184,8 @@ def _kill_rebuilds(tmp_path: Path, kills: int, *, final_run: bool) -> None:
     assert main(cmd[3:]) == 0  # the first build in-process (no interpreter start-up)
     full = time.perf_counter() - t0 + 4.0  # + a new interpreter's imports
     (x / "notes.txt").write_text("my notes")
-    (x / "Textures" / "my_decal.png").write_bytes(b"decal")
+    (x / "Textures").mkdir(exist_ok=True)  # the user's own folder (the temple shares the
+    (x / "Textures" / "my_decal.png").write_bytes(b"decal")  # asset's maps, no Textures/)
     shared = tmp_path / "X" / "shared_overrides.usda"  # the user's layer, linked in
     shared.write_text("#usda 1.0\n(\n    doc = \"my edits\"\n)\n")
     (x / "overrides.usda").unlink()
