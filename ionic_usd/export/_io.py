@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import os
-import secrets
 from collections.abc import Callable
 from pathlib import Path
 
@@ -47,16 +46,11 @@ def check_export_path(path: str | os.PathLike, *, force: bool = False) -> Path:
 
 
 def atomic_write(path: Path, write: Callable[[Path], None]) -> Path:
-    """Call ``write(tmp)`` on a temporary sibling of ``path``, then rename it into place.
+    """Call ``write(tmp)`` on a temporary sibling of ``path``, then rename it into place: the
+    package's one atomic writer (:func:`ionic_usd.io.atomic_path`; synced, stale temporaries
+    of killed runs removed). A failure leaves no partial file and ``path`` untouched."""
+    from ionic_usd.io import atomic_path
 
-    A failure leaves no partial file and the previous ``path`` (if any) untouched.
-    """
-    path = Path(path)
-    tmp = path.with_name(f".{path.stem}.{secrets.token_hex(4)}.tmp{path.suffix}")
-    try:
+    with atomic_path(path) as tmp:
         write(tmp)
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
-    return path
+    return Path(path)
