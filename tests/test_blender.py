@@ -86,7 +86,7 @@ over "Temple" (
 def test_blender_check_tool_passes_on_the_temple(portunus_temple):
     tool = Path(__file__).resolve().parent.parent / "tools" / "blender_check.py"
     proc = subprocess.run([sys.executable, str(tool), str(portunus_temple.root),
-                           "--instances", "18", "--prototypes", "2", "--blender-python", BPY],
+                           "--instances", "18", "--prototypes", "3", "--blender-python", BPY],
                           capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stdout[-3000:]
     assert "OK:" in proc.stdout
