@@ -349,7 +349,7 @@ def _other_parts_tree(col: ColumnParams):
         if n.lower() == "shaft":
             continue
         allp.append(mesh.points)
-        allt.append(_triangles(mesh) + off)
+        allt.append(mesh.triangles + off)
         off += len(mesh.points)
     P, T = np.concatenate(allp), np.concatenate(allt)
     pp = P[T]
@@ -412,18 +412,6 @@ def scan_deviation(points: np.ndarray, col: ColumnParams, matrix: np.ndarray, *,
         dev[rest] = np.minimum(dev[rest], d)
     return dev
 
-
-def _triangles(mesh) -> np.ndarray:
-    counts = np.asarray(mesh.face_vertex_counts)
-    idx = np.asarray(mesh.face_vertex_indices)
-    if np.all(counts == 3):
-        return idx.reshape(-1, 3)
-    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    n_tri = counts - 2
-    face = np.repeat(np.arange(len(counts)), n_tri)
-    k = np.arange(n_tri.sum()) - np.repeat(np.cumsum(n_tri) - n_tri, n_tri)
-    s = starts[face]
-    return np.stack([idx[s], idx[s + k + 1], idx[s + k + 2]], axis=1)
 
 
 def heat_colours(dev: np.ndarray, vmax: float) -> np.ndarray:
