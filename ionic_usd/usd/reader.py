@@ -30,6 +30,7 @@ import numpy as np
 from pxr import Sdf, Usd, UsdGeom, UsdShade
 
 from ionic_usd.errors import GeometryError, ParameterError, UsdAuthoringError
+from ionic_usd.usd.draw_mode import CardFace, card_colour, card_faces
 from ionic_usd.usd.surface import MaterialData, TextureRef, read_material
 
 __all__ = [
@@ -63,6 +64,9 @@ class SceneMesh:
     normals : (n, 3) ('vertex') or (k, 3) ('faceVarying') float64, or None
     st : (k, 2) float64 texture coordinates per face corner (flattened), or None
     material : key into :attr:`Scene.materials`, or None
+    display_color : the mean ``primvars:displayColor`` (linear RGB), or None
+    card_face : for a face of a model drawn as cards (``read_scene(draw_modes=True)``), the
+        face's name (``XPos`` … ``ZNeg``); its material's diffuse texture is the card image
     """
 
     key: str
@@ -77,6 +81,8 @@ class SceneMesh:
     material: str | None
     double_sided: bool = False
     paradata: dict = field(default_factory=dict)
+    display_color: tuple[float, float, float] | None = None
+    card_face: str = ""
 
     @property
     def n_triangles(self) -> int:
@@ -87,8 +93,9 @@ class SceneMesh:
 class Placement:
     """A mesh placed in the world: ``matrix`` (4, 4) row-vector, Y-up metres.
 
-    ``path`` names the prim it came from (an instance's path, or ``instancer[i]``); ``instanced``
-    is True when the placement came through native instancing or a PointInstancer.
+    ``path`` names the prim it came from (an instance's path, or ``instancer[i]``);
+    ``instanced`` is True when the mesh is reused (through native instancing, a PointInstancer,
+    or a second prim of equal content); ``via_instancing`` only for the first two.
     """
 
     mesh: str
@@ -96,6 +103,7 @@ class Placement:
     path: str
     instanced: bool = False
     paradata: dict = field(default_factory=dict)
+    via_instancing: bool = False
 
 
 @dataclass
@@ -200,14 +208,16 @@ def _outermost_instance(prim: Usd.Prim) -> Usd.Prim:
     return p
 
 
-def select_variants(stage: Usd.Stage, selections: Mapping[str, str]) -> dict[str, str]:
+def select_variants(stage: Usd.Stage, selections: Mapping[str, str], *,
+                    require_sets: bool = True) -> dict[str, str]:
     """Select ``set=value`` on every prim that has the set, in the session layer.
 
     Prims reached only through instancing (instance proxies) cannot carry a selection, so the
     instance above them is made non-instanceable in the session layer first (its nested
     instances stay instanced). Repeats until stable, because a selection can compose in prims
     with variant sets of their own. Raises ParameterError for a set no prim has, or a value a
-    prim's set does not offer (listing the valid ones).
+    prim's set does not offer (listing the valid ones); with ``require_sets=False`` a set no
+    prim has is ignored. Returns the selections made.
     """
     found: set[str] = set()
     session = stage.GetSessionLayer()
@@ -247,14 +257,15 @@ def select_variants(stage: Usd.Stage, selections: Mapping[str, str]) -> dict[str
         else:  # pragma: no cover - would need a pathological stage
             raise UsdAuthoringError("variant selections did not settle after 64 passes")
     missing = [s for s in selections if s not in found]
-    if missing:
+    if missing and require_sets:
         sets: set[str] = set()
         for prim in Usd.PrimRange(stage.GetPseudoRoot(), Usd.TraverseInstanceProxies()):
             if prim.HasVariantSets():
                 sets.update(prim.GetVariantSets().GetNames())
         valid = ", ".join(sorted(sets)) or "none: the scene has no variant sets"
-        raise ParameterError("--variant", missing[0], f"a variant set of the scene ({valid})")
-    return dict(selections)
+        raise ParameterError("--variant", missing[0], f"a variant set of the scene ({valid}); "
+                             f"the scene has no {missing[0]!r} variant set")
+    return {k: v for k, v in selections.items() if k in found}
 
 
 def _root_matrix(stage: Usd.Stage) -> np.ndarray:
@@ -368,9 +379,12 @@ def _content_key(arrays: Sequence[np.ndarray | None], extra: str) -> str:
 class _Reader:
     """Walk a stage once; prototypes (native and point instancer) are read once and memoised."""
 
-    def __init__(self, stage: Usd.Stage, t: Usd.TimeCode, scene: Scene) -> None:
+    def __init__(self, stage: Usd.Stage, t: Usd.TimeCode, scene: Scene,
+                 draw_modes: bool = False) -> None:
         self.stage, self.t, self.scene = stage, t, scene
         self.xfc = UsdGeom.XformCache(t)
+        self.bbox = UsdGeom.BBoxCache(t, [UsdGeom.Tokens.default_, UsdGeom.Tokens.render],
+                                      useExtentsHint=True) if draw_modes else None
         self._protos: dict[str, list[tuple[str, np.ndarray, str]]] = {}
         self._by_prim: dict[str, str | None] = {}
         self._materials: dict[str, str | None] = {}
@@ -406,13 +420,17 @@ class _Reader:
             if prim.IsA(UsdShade.Material):
                 it.PruneChildren()
                 continue
+            cards = card_faces(prim, self.bbox) if self.bbox is not None else None
+            if cards is not None:  # a model drawn as its card box stands in for its subtree
+                it.PruneChildren()
+                m = self._matrix(prim, root, relative)
+                for key in self._cards(prim, cards):
+                    out.append((key, m, str(path), {} if relative else para[path], False))
+                continue
             if not (prim.IsInstance() or prim.IsA(UsdGeom.PointInstancer)
                     or prim.IsA(UsdGeom.Mesh)):
                 continue
-            if relative:
-                m = np.array(self.xfc.ComputeRelativeTransform(prim, root)[0]).reshape(4, 4)
-            else:
-                m = np.array(self.xfc.GetLocalToWorldTransform(prim)).reshape(4, 4)
+            m = self._matrix(prim, root, relative)
             if prim.IsInstance():
                 it.PruneChildren()
                 proto = prim.GetPrototype()
@@ -428,6 +446,32 @@ class _Reader:
                 if key is not None:
                     out.append((key, m, str(path), {} if relative else para[path], False))
         return out
+
+    def _matrix(self, prim: Usd.Prim, root: Usd.Prim, relative: bool) -> np.ndarray:
+        if relative:
+            return np.array(self.xfc.ComputeRelativeTransform(prim, root)[0]).reshape(4, 4)
+        return np.array(self.xfc.GetLocalToWorldTransform(prim)).reshape(4, 4)
+
+    def _cards(self, prim: Usd.Prim, faces: list[CardFace]) -> list[str]:
+        """One quad mesh per card face, textured by the face's image (keys of the meshes)."""
+        keys = []
+        colour = card_colour(prim)
+        for face in faces:
+            tex = (TextureRef(path=face.texture, channels="rgba", colour_space="sRGB",
+                              wrap_s="clamp", wrap_t="clamp") if face.texture else None)
+            mat = MaterialData(name=f"card{face.name}", path=str(prim.GetPath()),
+                               diffuse=colour, diffuse_texture=tex)
+            self.scene.materials.setdefault(mat.key, mat)
+            counts, idx = np.array([4], np.int64), np.arange(4, dtype=np.int64)
+            key = _content_key([face.points, counts, idx, face.st], f"card|{mat.key}")
+            if key not in self.scene.meshes:
+                self.scene.meshes[key] = SceneMesh(
+                    key=key, name=f"card{face.name}", source=str(prim.GetPath()),
+                    points=face.points, face_vertex_counts=counts, face_vertex_indices=idx,
+                    normals=None, normals_interpolation="vertex", st=face.st,
+                    material=mat.key, card_face=face.name)
+            keys.append(key)
+        return keys
 
     def _material(self, prim: Usd.Prim) -> str | None:
         mat, _ = UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial()
@@ -448,15 +492,21 @@ class _Reader:
             return None
         pts, counts, idx, nrm, interp, st, double = read
         material = self._material(prim)
+        colour = None
+        pv = UsdGeom.Mesh(prim).GetDisplayColorPrimvar()
+        if pv and pv.HasValue():
+            vals = _np(pv.ComputeFlattened(), np.float64).reshape(-1, 3)
+            if len(vals):
+                colour = tuple(float(x) for x in vals.mean(axis=0))
         meta = json.dumps(paradata, sort_keys=True, default=str)
         key = _content_key([pts, counts, idx, nrm, st],
-                           f"{interp}|{material}|{double}|{meta}")
+                           f"{interp}|{material}|{double}|{meta}|{colour}")
         if key not in self.scene.meshes:
             self.scene.meshes[key] = SceneMesh(
                 key=key, name=prim.GetName(), source=str(prim.GetPath()), points=pts,
                 face_vertex_counts=counts, face_vertex_indices=idx, normals=nrm,
                 normals_interpolation=interp, st=st, material=material, double_sided=double,
-                paradata=paradata)
+                paradata=paradata, display_color=colour)
         return key
 
     def _prototype(self, root: Usd.Prim) -> list[tuple[str, np.ndarray, str, dict, bool]]:
@@ -504,6 +554,8 @@ def read_scene(
     variants: Mapping[str, str] | None = None,
     lod: str | None = None,
     time: float | None = None,
+    draw_modes: bool = False,
+    require_sets: bool = True,
 ) -> Scene:
     """Read a USD scene into a :class:`Scene` of distinct meshes and their placements.
 
@@ -514,13 +566,18 @@ def read_scene(
     variants : ``{set: value}`` selected on every prim that has the set (default: authored)
     lod : shorthand for ``variants["lod"]``
     time : time code to read (default: the default time)
+    draw_modes : honour ``UsdGeomModelAPI`` card draw modes as a viewer does — a model with
+        ``model:applyDrawMode = true`` whose resolved ``model:drawMode`` is ``cards`` is read as
+        its card quads (:func:`ionic_usd.usd.draw_mode.card_faces`), not its subtree. Off for
+        exporters, which want the geometry.
+    require_sets : a selected variant set that no prim has is an error (else it is ignored)
     """
     sel = dict(variants or {})
     if lod is not None:
         sel["lod"] = lod
     stage = open_stage(path)
     if sel:
-        select_variants(stage, sel)
+        sel = select_variants(stage, sel, require_sets=require_sets)
     t = Usd.TimeCode(time) if time is not None else Usd.TimeCode.Default()
     scene = Scene(source=str(path), variants=sel)
     root = stage.GetDefaultPrim()
@@ -530,13 +587,13 @@ def read_scene(
         scene.paradata["variantSelections"] = {n: vs.GetVariantSelection(n)
                                                for n in vs.GetNames()}
     conv = _root_matrix(stage)
-    reader = _Reader(stage, t, scene)
+    reader = _Reader(stage, t, scene, draw_modes)
     for key, m, ppath, pd, via in reader.walk(stage.GetPseudoRoot(), relative=False, chain={}):
         # through an instance, an instancer, or a second prim of equal content
         instanced = via or ppath != scene.meshes[key].source
         if not np.all(np.isfinite(m)):
             raise GeometryError(f"{ppath}: its transform is not finite")
-        scene.placements.append(Placement(key, m @ conv, ppath, instanced, pd))
+        scene.placements.append(Placement(key, m @ conv, ppath, instanced, pd, via))
     if not scene.placements:
         raise GeometryError(f"{path}: the scene has no visible mesh")
     return scene
