@@ -24,8 +24,8 @@ from dataclasses import dataclass
 import numpy as np
 from pxr import Sdf, Usd, UsdGeom
 
-__all__ = ["CARD_FACES", "CARD_GEOMETRIES", "CardFace", "card_faces", "card_colour",
-           "author_cards"]
+__all__ = ["CARD_FACES", "CARD_GEOMETRIES", "CardFace", "card_faces", "card_bound",
+           "card_bbox_cache", "card_colour", "author_cards", "face_quad"]
 
 #: face name → (outward normal, image right, image up), all unit axis vectors
 CARD_FACES: dict[str, tuple[tuple[int, int, int], tuple[int, int, int], tuple[int, int, int]]] = {
@@ -91,10 +91,10 @@ def card_faces(prim: Usd.Prim, bbox: UsdGeom.BBoxCache) -> list[CardFace] | None
         return None
     geometry = str(api.GetModelCardGeometryAttr().Get() or "cross")
     geometry = geometry if geometry in CARD_GEOMETRIES else "cross"  # fromTexture: not read
-    rng = bbox.ComputeUntransformedBound(prim).ComputeAlignedRange()
-    if rng.IsEmpty():
+    bound = card_bound(prim, bbox)
+    if bound is None:
         return None
-    lo, hi = np.array(rng.GetMin()), np.array(rng.GetMax())
+    lo, hi = bound
     textures = {}
     for name in CARD_FACES:
         attr = prim.GetAttribute(f"model:cardTexture{name}")
@@ -107,6 +107,23 @@ def card_faces(prim: Usd.Prim, bbox: UsdGeom.BBoxCache) -> list[CardFace] | None
             tex = textures[name[0] + ("Neg" if name.endswith("Pos") else "Pos")]
         out.append(CardFace(name, face_quad(name, lo, hi, geometry), _ST.copy(), tex))
     return out
+
+
+def card_bound(prim: Usd.Prim, bbox: UsdGeom.BBoxCache) -> tuple[np.ndarray, np.ndarray] | None:
+    """The box a viewer puts cards on: ``prim``'s bound in its own space (its transform
+    excluded; ``extentsHint`` used where authored), as ``(lo (3,), hi (3,))``; None if empty."""
+    rng = bbox.ComputeUntransformedBound(prim).ComputeAlignedRange()
+    if rng.IsEmpty():
+        return None
+    return np.array(rng.GetMin()), np.array(rng.GetMax())
+
+
+def card_bbox_cache() -> UsdGeom.BBoxCache:
+    """The bound cache :func:`card_bound` expects: default time, default + render purposes,
+    extents hints used (as Hydra's draw modes read them)."""
+    return UsdGeom.BBoxCache(Usd.TimeCode.Default(), [UsdGeom.Tokens.default_,
+                                                      UsdGeom.Tokens.render],
+                             useExtentsHint=True)
 
 
 def card_colour(prim: Usd.Prim) -> tuple[float, float, float]:

@@ -116,6 +116,7 @@ class Scene:
     placements: list[Placement] = field(default_factory=list)
     paradata: dict = field(default_factory=dict)
     variants: dict[str, str] = field(default_factory=dict)
+    prototypes: set[str] = field(default_factory=set)  # instancing prototypes that drew meshes
 
     def placements_of(self, key: str) -> list[Placement]:
         return [p for p in self.placements if p.mesh == key]
@@ -513,6 +514,8 @@ class _Reader:
         key = str(root.GetPath())
         if key not in self._protos:
             self._protos[key] = self.walk(root, relative=True, chain={})  # type: ignore[assignment]
+            if self._protos[key]:
+                self.scene.prototypes.add(key)
         return self._protos[key]  # type: ignore[return-value]
 
     def _point_instancer(self, pi: UsdGeom.PointInstancer, world: np.ndarray, chain: dict):
