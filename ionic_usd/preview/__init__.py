@@ -27,7 +27,13 @@ import numpy as np
 
 from ionic_usd.errors import GeometryError, ParameterError
 from ionic_usd.preview.cards import CardBake, bake_cards
-from ionic_usd.preview.render import PreviewUnavailableError, View, create_context, render, write_png
+from ionic_usd.preview.render import (
+    PreviewUnavailableError,
+    View,
+    create_context,
+    render,
+    write_png,
+)
 
 __all__ = [
     "CAMERAS",

@@ -138,17 +138,15 @@ def to_json_value(v: object) -> object:
         return v if np.isfinite(v) else None
     if isinstance(v, Sdf.AssetPath):
         return v.path
-    if isinstance(v, (Sdf.Path, Sdf.AssetPath)):
+    if isinstance(v, Sdf.Path):
         return str(v)
     if isinstance(v, (list, tuple)) or hasattr(v, "__len__") and not isinstance(v, bytes):
         try:
             return [to_json_value(x) for x in v]
         except TypeError:
             pass
-    if isinstance(v, (np.integer,)):
-        return int(v)
-    if isinstance(v, (np.floating,)):
-        return to_json_value(float(v))
+    if isinstance(v, (np.integer, np.floating)):
+        return to_json_value(v.item())
     return str(v)
 
 
@@ -460,17 +458,13 @@ class _Reader:
         for face in faces:
             tex = (TextureRef(path=face.texture, channels="rgba", colour_space="sRGB",
                               wrap_s="clamp", wrap_t="clamp") if face.texture else None)
-            mat = MaterialData(name=f"card{face.name}", path=str(prim.GetPath()),
-                               diffuse=colour, diffuse_texture=tex)
+            mat = MaterialData(f"card{face.name}", str(prim.GetPath()), colour, tex)
             self.scene.materials.setdefault(mat.key, mat)
             counts, idx = np.array([4], np.int64), np.arange(4, dtype=np.int64)
             key = _content_key([face.points, counts, idx, face.st], f"card|{mat.key}")
-            if key not in self.scene.meshes:
-                self.scene.meshes[key] = SceneMesh(
-                    key=key, name=f"card{face.name}", source=str(prim.GetPath()),
-                    points=face.points, face_vertex_counts=counts, face_vertex_indices=idx,
-                    normals=None, normals_interpolation="vertex", st=face.st,
-                    material=mat.key, card_face=face.name)
+            self.scene.meshes.setdefault(key, SceneMesh(
+                key, f"card{face.name}", str(prim.GetPath()), face.points, counts, idx, None,
+                "vertex", face.st, mat.key, card_face=face.name))
             keys.append(key)
         return keys
 
