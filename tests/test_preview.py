@@ -304,3 +304,40 @@ def test_no_egl_names_the_packages(monkeypatch):
     monkeypatch.setattr(moderngl, "create_standalone_context", fail)
     with pytest.raises(PreviewUnavailableError, match="apt-get install libegl1"):
         create_context()
+
+
+# -- one reader: preview draws what export writes ----------------------------------------------
+def _hypothesis_selection(root) -> dict[str, str]:
+    from ionic_usd.usd.city import temple_variant_sets
+
+    sets = temple_variant_sets(root)
+    return {name: "alternative" for name in sorted(sets) if name.startswith("hyp_")
+            and "alternative" in sets[name]}
+
+
+@needs_gl
+@pytest.mark.parametrize("which", ["authored", "hypotheses + engaged"])
+def test_preview_and_export_read_the_same_meshes(tiny_temple, tmp_path, which):
+    import trimesh
+
+    from ionic_usd.export import export_scene
+    from ionic_usd.preview.scene import draw_items
+    from ionic_usd.usd.reader import read_scene
+
+    sel = {} if which == "authored" else {**_hypothesis_selection(tiny_temple.root),
+                                          "form": "engaged"}
+    assert which == "authored" or len(sel) >= 3
+    res = export_scene(tiny_temple.root, tmp_path / "t.glb", variants=sel, gpu_instancing=False)
+    glb = trimesh.load(tmp_path / "t.glb", force="scene", process=False).dump(concatenate=True)
+    stats = render_preview(tiny_temple.root, tmp_path / "t.png", width=64, height=48,
+                           samples=0, ground=False, variants=sel)
+    assert stats.triangles == res.report.triangles_drawn == len(glb.faces)
+    # the preview's draw lists, placed: the same world bounds as the exported file's
+    items = draw_items(read_scene(tiny_temple.root, variants=sel, draw_modes=True))
+    pts = np.concatenate([np.einsum("vi,nij->nvj", np.c_[d.vertices[:, :3], np.ones(
+        len(d.vertices))], d.placements)[..., :3].reshape(-1, 3) for d in items])
+    np.testing.assert_allclose(pts.min(axis=0), glb.bounds[0], atol=1e-4)
+    np.testing.assert_allclose(pts.max(axis=0), glb.bounds[1], atol=1e-4)
+    if sel:  # the selection changed what is drawn
+        plain = draw_items(read_scene(tiny_temple.root, draw_modes=True))
+        assert {d.key for d in plain} != {d.key for d in items}

@@ -21,7 +21,7 @@ from ionic_usd.city.plan import Lot, Porticus
 from ionic_usd.errors import IonicError, ParameterError
 
 __all__ = ["Footprint", "TempleFit", "fit_temple", "porticus_columns", "extra_columns",
-           "drop_inside", "lod_by_distance", "LOD_NAMES", "yaw_quaternions"]
+           "drop_inside", "lod_by_distance", "distance_from", "LOD_NAMES", "yaw_quaternions"]
 
 LOD_NAMES = ("high", "medium", "low")
 
@@ -290,8 +290,14 @@ def lod_by_distance(xz: np.ndarray, focus: Sequence[float] | None,
     (plan (e, n)), medium within ``distances[1]``, low beyond; all high without a focus."""
     if focus is None:
         return np.zeros(len(xz), dtype=np.int8)
-    d = np.hypot(xz[:, 0] - focus[0], xz[:, 1] + focus[1])
+    d = distance_from(xz, focus)
     return (d > distances[0]).astype(np.int8) + (d > distances[1]).astype(np.int8)
+
+
+def distance_from(xz: np.ndarray, focus: Sequence[float]) -> np.ndarray:
+    """(n,) horizontal distances (m) of USD positions ``xz`` (n, 2) from a plan point
+    ``focus`` (e, n) (USD z = −n)."""
+    return np.hypot(xz[:, 0] - focus[0], xz[:, 1] + focus[1])
 
 
 def yaw_quaternions(yaw_deg: np.ndarray) -> np.ndarray:

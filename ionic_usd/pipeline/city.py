@@ -15,6 +15,7 @@ built locally, on a cluster, by any number of workers, or taken from the cache.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import time
@@ -27,6 +28,7 @@ import numpy as np
 from ionic_usd.city.layout import (
     Footprint,
     TempleFit,
+    distance_from,
     drop_inside,
     extra_columns,
     fit_temple,
@@ -49,6 +51,8 @@ _PER_COLUMN = 200.0
 _PER_REFERENCE = 10e3
 _PER_POINT = 1e3
 _PER_BUILD = 40e6
+# what the card images depend on besides the temple and its selections: the baker's version
+_CARD_BAKE = "cards-v1"
 
 @dataclass(frozen=True)
 class CityOptions:
@@ -65,6 +69,9 @@ class CityOptions:
     seed: int = 0
     focus: tuple[float, float] | None = None
     lod_distances: tuple[float, float] = (150.0, 400.0)
+    cards_beyond: float | None = None  # None: the far LOD distance, when a focus is given
+    cards: bool = True
+    card_size: int = 256
     scale_range: tuple[float, float] = (0.6, 1.4)
     texture_size: int = 1024
     instancer_threshold: int | None = None
@@ -85,6 +92,12 @@ class CityOptions:
         if not (np.isfinite([near, far]).all() and 0 < near <= far):
             raise ParameterError("--lod-distances", self.lod_distances, "NEAR,FAR with "
                                  "0 < NEAR <= FAR (m)")
+        if self.cards_beyond is not None and not (np.isfinite(self.cards_beyond)
+                                                  and self.cards_beyond >= 0):
+            raise ParameterError("--cards-beyond", self.cards_beyond, "a distance >= 0 (m)")
+        cs = self.card_size
+        if isinstance(cs, bool) or not isinstance(cs, int) or not 16 <= cs <= 4096:
+            raise ParameterError("--card-size", cs, "an integer from 16 to 4096 pixels")
         lo, hi = self.scale_range
         if not (np.isfinite([lo, hi]).all() and 0 < lo <= hi):
             raise ParameterError("--scale-range", self.scale_range, "MIN,MAX with "
@@ -261,12 +274,18 @@ def build_city(out: str | os.PathLike, opts: CityOptions, *,
         cache.install(s, out / "Temples" / s.folder)
     timings["build"] = time.perf_counter() - t2
 
+    # -- 4b. cards for the far field -------------------------------------------------------
+    t3 = time.perf_counter()
+    tcards, card_dirs, card_note = _far_cards(out, opts, specs, build, selections, txz,
+                                              progress)
+    timings["cards"] = time.perf_counter() - t3
+
     # -- 5. USD ---------------------------------------------------------------------------
     temples = TempleInstances(
         folders=[f"Temples/{s.folder}" for s in specs], build=build,
         names=[lot.id for lot in plan.lots], xz=txz,
         yaw=np.array([f.yaw_deg for f in fits]), scale=np.array([f.scale for f in fits]),
-        selections=selections, lod=tlod)
+        selections=selections, lod=tlod, cards=tcards)
     columns = ColumnInstances(f"Temples/{needed[0].folder}/{ASSET_NAME}/{ASSET_NAME}.usda",
                               cxz, cyaw, clod)
     # what the file records depends on the inputs only (not on who built what, or when)
@@ -277,7 +296,7 @@ def build_city(out: str | os.PathLike, opts: CityOptions, *,
         "builds": len(needed),
     }
     rep = compose_city(out, temples, columns, instancer_threshold=threshold,
-                       summary=summary, force=True)
+                       summary=summary, card_dirs=card_dirs, force=True)
     timings.update({f"usd {k}": v for k, v in rep.seconds.items()})
     timings["total"] = time.perf_counter() - t0
     summary.update({
@@ -290,6 +309,7 @@ def build_city(out: str | os.PathLike, opts: CityOptions, *,
         "unique_prototypes": rep.temple_prototypes + rep.column_prototypes,
         "instances": len(plan.lots) + int(len(cxz)),
         "triangles": rep.triangles,
+        "cards": card_note,
         "extent": [list(rep.extent[0]), list(rep.extent[1])],
         "memory_estimate_gb": round(est / 1e9, 3),
         "cluster_workers": res.n_workers,
@@ -298,6 +318,62 @@ def build_city(out: str | os.PathLike, opts: CityOptions, *,
         "timings": {k: round(v, 3) for k, v in timings.items()},
     })
     return summary
+
+
+def _far_cards(out: Path, opts: CityOptions, specs: list[TempleSpec], build: np.ndarray,
+               selections: list[dict], txz: np.ndarray,
+               progress: Callable[[str], None] | None) -> tuple[np.ndarray | None, dict, dict]:
+    """Which temples draw as cards (beyond ``cards_beyond`` of the focus) and their images.
+
+    One set of six images per temple prototype (build + hypothesis selections), baked by the
+    preview renderer into ``Temples/Cards/<build folder>-<key>/`` where ``key`` hashes what the
+    images depend on, so a rebuild (or another lot of the same prototype) reuses them. Returns
+    ``(cards (n,) bool or None, {(build, selections): folder}, summary note)``.
+    """
+    if opts.focus is None or not opts.cards:
+        return None, {}, {"temples": 0, "why": "no --focus" if opts.cards else "--no-cards"}
+    beyond = opts.cards_beyond if opts.cards_beyond is not None else opts.lod_distances[1]
+    cards = distance_from(txz, opts.focus) > beyond
+    note: dict = {"beyond_m": beyond, "temples": int(cards.sum()), "prototypes": 0,
+                  "baked": 0, "reused": 0, "size_px": opts.card_size}
+    if not cards.any():
+        return None, {}, note
+    from ionic_usd.preview import PreviewUnavailableError, bake_cards
+    from ionic_usd.usd.city import temple_card_bound, temple_selection, temple_variant_sets
+    from ionic_usd.usd.draw_mode import CARD_FACES
+
+    dirs: dict[tuple, str] = {}
+    vsets: dict[int, dict] = {}
+    for i in np.flatnonzero(cards):
+        b = int(build[i])
+        root = out / "Temples" / specs[b].folder / "Temple.usda"
+        if b not in vsets:
+            vsets[b] = temple_variant_sets(root)
+        sel = temple_selection(vsets[b], selections[i])
+        key = (b, tuple(sorted(sel.items())))
+        if key in dirs:
+            continue
+        digest = hashlib.blake2b(json.dumps([specs[b].key, key[1], opts.card_size, _CARD_BAKE]
+                                            ).encode(), digest_size=8).hexdigest()
+        rel = f"Temples/Cards/{specs[b].folder}-{digest}"
+        if all((out / rel / f"{f}.png").is_file() for f in CARD_FACES):
+            note["reused"] += 1
+        else:
+            try:
+                bake_cards(root, out / rel, temple_card_bound(root, sel), variants=sel,
+                           size=opts.card_size)
+            except PreviewUnavailableError as exc:
+                if opts.cards_beyond is not None:
+                    raise  # asked for by name: say why it cannot be done
+                if progress:
+                    progress(f"far temples drawn in full: cannot bake cards ({exc})")
+                return None, {}, {"temples": 0, "why": f"no renderer: {exc}"}
+            note["baked"] += 1
+            if progress:
+                progress(f"baked cards {rel}")
+        dirs[key] = rel
+    note["prototypes"] = len(dirs)
+    return cards, dirs, note
 
 
 def write_summary(summary: dict, path: str | os.PathLike) -> None:

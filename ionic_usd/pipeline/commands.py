@@ -62,6 +62,7 @@ def cmd_city(args: argparse.Namespace) -> int:
         block=args.block, columns=args.columns, column_spacing=args.column_spacing,
         variety=not args.baseline, column_variety=args.column_variety, seed=args.seed,
         focus=args.focus, lod_distances=args.lod_distances, scale_range=args.scale_range,
+        cards_beyond=args.cards_beyond, cards=not args.no_cards, card_size=args.card_size,
         texture_size=args.texture_size, instancer_threshold=args.instancer_threshold,
         scheduler=args.scheduler, workers=args.workers, memory_limit_gb=args.memory_limit,
         force=args.force)
@@ -116,6 +117,13 @@ def add_city_parser(sub, parser_class) -> None:
     p.add_argument("--lod-distances", type=_pair("--lod-distances"), default=(150.0, 400.0),
                    metavar="NEAR,FAR", help="high within NEAR, medium within FAR, low beyond "
                    "(m) [default 150,400]")
+    p.add_argument("--cards-beyond", type=float, default=None, metavar="METRES",
+                   help="with --focus: temples farther than this draw as cards (UsdGeomModelAPI "
+                   "draw mode, images baked by the preview renderer; needs the preview extra) "
+                   "[default: FAR of --lod-distances]")
+    p.add_argument("--no-cards", action="store_true", help="no card draw mode for far temples")
+    p.add_argument("--card-size", type=int, default=256, metavar="PX",
+                   help="card image size, longer side (px) [default 256]")
     p.add_argument("--scale-range", type=_pair("--scale-range"), default=(0.6, 1.4),
                    metavar="MIN,MAX", help="uniform scales a temple may take to fit its lot "
                    "[default 0.6,1.4]")

@@ -20,6 +20,7 @@ from __future__ import annotations
 import math
 import os
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -122,6 +123,7 @@ def render_preview(
     samples: int = 4,
     ground: bool = True,
     force: bool = False,
+    variants: Mapping[str, str] | None = None,
 ) -> PreviewStats:
     """Render a USD scene to a PNG thumbnail with OpenGL on a headless EGL context.
 
@@ -137,6 +139,7 @@ def render_preview(
     background : sRGB colour of the top of the gradient; the horizon is a lighter tint of it
     samples : MSAA samples (clamped to what the driver offers; 0 or 1 turns MSAA off)
     ground : draw a ground plane at the lowest point, with the key light's shadow
+    variants : ``{set: value}`` selected on every prim that has the set, as for export
 
     Models with ``model:applyDrawMode`` and draw mode ``cards`` are drawn as their textured
     cards (see :mod:`ionic_usd.usd.draw_mode`).
@@ -159,7 +162,7 @@ def render_preview(
     out = Path(out_png)
     _validate(width, height, camera, samples, background, out, force)
     try:
-        scene = read_scene(usd_path, lod=lod, draw_modes=True)
+        scene = read_scene(usd_path, variants=variants, lod=lod, draw_modes=True)
     except GeometryError as exc:
         if "has no visible mesh" in str(exc):
             raise GeometryError(f"{usd_path}: no visible, active mesh to draw") from None

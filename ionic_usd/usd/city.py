@@ -35,10 +35,15 @@ from pxr import Gf, Sdf, Tf, Usd, UsdGeom, Vt
 
 from ionic_usd.city.layout import LOD_NAMES, yaw_quaternions
 from ionic_usd.errors import OutputExistsError, ParameterError, UsdAuthoringError
+from ionic_usd.usd.draw_mode import CARD_FACES, author_cards, card_bbox_cache, card_bound
 from ionic_usd.usd.stage import new_layer, save_layer
 
 __all__ = ["CityReport", "TempleInstances", "ColumnInstances", "compose_city", "ROOT_LAYER",
-           "INSTANCES_LAYER", "DEFAULT_INSTANCER_THRESHOLD", "temple_variant_sets"]
+           "INSTANCES_LAYER", "DEFAULT_INSTANCER_THRESHOLD", "temple_variant_sets",
+           "temple_selection", "temple_card_bound", "CARD_TRIANGLES"]
+
+#: triangles of a box of cards as a renderer draws it: six quads
+CARD_TRIANGLES = 12
 
 ROOT_LAYER = "City.usda"
 INSTANCES_LAYER = "Instances.usdc"
@@ -65,6 +70,8 @@ class TempleInstances:
     selections : (n,) hypothesis id → "baseline" | "alternative" per temple (ids the build
         does not realise are ignored)
     lod : (n,) int8 index into LOD_NAMES, or None (no lod selection)
+    cards : (n,) bool — drawn as cards (far field), or None (none); a card temple's prototype
+        carries ``UsdGeomModelAPI`` draw mode cards with the images of ``card_dirs``
     """
 
     folders: Sequence[str]
@@ -75,6 +82,7 @@ class TempleInstances:
     scale: np.ndarray
     selections: Sequence[Mapping[str, str]]
     lod: np.ndarray | None = None
+    cards: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.build)
@@ -120,6 +128,33 @@ def temple_variant_sets(temple_root: Path) -> dict[str, tuple[str, ...]]:
     vsets = prim.GetVariantSets()
     return {name: tuple(vsets.GetVariantSet(name).GetVariantNames())
             for name in vsets.GetNames()}
+
+
+def temple_selection(vsets: Mapping[str, Sequence[str]], selections: Mapping[str, str],
+                     lod: str | None = None) -> dict[str, str]:
+    """The variant selections of one temple: hypothesis id → ``hyp_<id>`` where the build has
+    that set (others are ignored), plus ``lod`` where the build has a lod set."""
+    sel = {f"hyp_{_ident(h)}": v for h, v in selections.items() if f"hyp_{_ident(h)}" in vsets}
+    if lod is not None and "lod" in vsets:
+        sel["lod"] = lod
+    return sel
+
+
+def temple_card_bound(temple_root: Path, selections: Mapping[str, str]
+                      ) -> tuple[np.ndarray, np.ndarray]:
+    """The card box of a temple with ``selections`` (its own frame, metres): the box a viewer
+    draws its cards on (:func:`ionic_usd.usd.draw_mode.card_bound`)."""
+    stage = Usd.Stage.Open(str(temple_root))
+    if stage is None:
+        raise UsdAuthoringError(f"cannot open {temple_root}")
+    prim = stage.GetDefaultPrim()
+    with Usd.EditContext(stage, stage.GetSessionLayer()):
+        for name, value in selections.items():
+            prim.GetVariantSet(name).SetVariantSelection(value)
+    bound = card_bound(prim, card_bbox_cache())
+    if bound is None:
+        raise UsdAuthoringError(f"{temple_root}: the temple has no bound to put cards on")
+    return bound
 
 
 def _stats(stage: Usd.Stage, root: str, selections: Mapping[str, str]
@@ -171,19 +206,23 @@ def _group(layer: Sdf.Layer, path: str, type_name: str = "Xform") -> Sdf.PrimSpe
     return spec
 
 
-def _instancer(layer: Sdf.Layer, path: str, protos: list[tuple[str, str, dict[str, str]]],
+def _instancer(layer: Sdf.Layer, path: str,
+               protos: list[tuple[str, str, dict[str, str], str | None]],
                index: np.ndarray, xz: np.ndarray, yaw: np.ndarray, scale: np.ndarray | None,
                extent: tuple[np.ndarray, np.ndarray]) -> None:
-    """A PointInstancer (kind = group) with prototypes (name, reference, selections)."""
+    """A PointInstancer (kind = group) with prototypes (name, reference, selections, card
+    image folder or None)."""
     pi = _group(layer, path, "PointInstancer")
     _group(layer, f"{path}/Prototypes", "Scope")
     targets = []
-    for name, ref, sel in protos:
+    for name, ref, sel, cards in protos:
         spec = Sdf.CreatePrimInLayer(layer, f"{path}/Prototypes/{name}")
         spec.specifier, spec.typeName = Sdf.SpecifierDef, "Xform"
         spec.referenceList.Prepend(Sdf.Reference(ref))
         for k, v in sorted(sel.items()):
             spec.variantSelections[k] = v
+        if cards is not None:
+            _cards(spec, cards)
         targets.append(spec.path)
     Sdf.RelationshipSpec(pi, "prototypes", custom=False).targetPathList.explicitItems = targets
     n = len(index)
@@ -200,6 +239,11 @@ def _instancer(layer: Sdf.Layer, path: str, protos: list[tuple[str, str, dict[st
         Sdf.AttributeSpec(pi, "scales", _T.Float3Array).default = Vt.Vec3fArray.FromNumpy(s)
     Sdf.AttributeSpec(pi, "extent", _T.Float3Array).default = Vt.Vec3fArray(
         [Gf.Vec3f(*map(float, extent[0])), Gf.Vec3f(*map(float, extent[1]))])
+
+
+def _cards(spec: Sdf.PrimSpec, folder: str) -> None:
+    """Card draw mode on a temple model: a box of the six baked views in ``folder``."""
+    author_cards(spec, {f: f"./{folder}/{f}.png" for f in CARD_FACES}, geometry="box")
 
 
 def _instance_bounds(lo: np.ndarray, hi: np.ndarray, index: np.ndarray, xz: np.ndarray,
@@ -247,6 +291,7 @@ def compose_city(folder: str | os.PathLike, temples: TempleInstances,
                  columns: ColumnInstances, *,
                  instancer_threshold: int = DEFAULT_INSTANCER_THRESHOLD,
                  finish: str = "stucco", summary: Mapping | None = None,
+                 card_dirs: Mapping[tuple[int, tuple], str] | None = None,
                  force: bool = False) -> CityReport:
     """Write ``City.usda`` + ``Instances.usdc`` into ``folder`` (its ``Temples/`` must hold
     the builds named in ``temples.folders``).
@@ -256,6 +301,9 @@ def compose_city(folder: str | os.PathLike, temples: TempleInstances,
     instancer_threshold : temples above this count go into a PointInstancer
     finish : the street columns' finish variant
     summary : JSON-able build summary stored in /City's customData (``ionic_usd``)
+    card_dirs : for the temples drawn as cards (``temples.cards``): ``(build, selections)`` →
+        the city-relative folder of the baked card images (``XPos.png`` …), where
+        ``selections`` is ``tuple(sorted(temple_selection(...).items()))`` without a lod
     """
     t0 = time.perf_counter()
     folder = Path(folder)
@@ -274,11 +322,13 @@ def compose_city(folder: str | os.PathLike, temples: TempleInstances,
     proto_of = np.zeros(len(temples), dtype=np.int32)
     for i in range(len(temples)):
         b = int(temples.build[i])
-        sel = {f"hyp_{_ident(h)}": v for h, v in temples.selections[i].items()
-               if f"hyp_{_ident(h)}" in vsets[b]}
-        if temples.lod is not None and "lod" in vsets[b]:
-            sel["lod"] = LOD_NAMES[int(temples.lod[i])]
-        key = (b, tuple(sorted(sel.items())))
+        card = temples.cards is not None and bool(temples.cards[i])
+        lod = LOD_NAMES[int(temples.lod[i])] if temples.lod is not None and not card else None
+        sel = temple_selection(vsets[b], temples.selections[i], lod)
+        key = (b, tuple(sorted(sel.items())), card)
+        if card and (card_dirs is None or key[:2] not in card_dirs):
+            raise ParameterError("card images", f"temple {temples.names[i]}", "a folder of "
+                                 "baked cards for every temple drawn as cards (card_dirs)")
         proto_of[i] = keys.setdefault(key, len(keys))
     protos = list(keys)
 
@@ -288,16 +338,18 @@ def compose_city(folder: str | os.PathLike, temples: TempleInstances,
     ttri: dict[str, np.ndarray] = {s: np.zeros(len(protos), dtype=np.int64)
                                    for s in ("as authored", *LOD_NAMES)}
     stages: dict[int, Usd.Stage] = {}
-    for k, (b, sel) in enumerate(protos):
+    for k, (b, sel, card) in enumerate(protos):
         stage = stages.get(b) or Usd.Stage.Open(str(folder / temples.folders[b] / "Temple.usda"))
         stages[b] = stage
         lo, hi, ttri["as authored"][k] = _stats(stage, "/Temple", dict(sel))
+        if card:  # a box of cards stands in for the temple
+            ttri["as authored"][k] = CARD_TRIANGLES
         tlo[k], thi[k] = lo, hi
         for lod in LOD_NAMES:
             if "lod" in vsets[b]:
                 ttri[lod][k] = _stats(stage, "/Temple", {**dict(sel), "lod": lod})[2]
             else:  # before the temple has a lod set its columns draw as authored
-                ttri[lod][k] = ttri["as authored"][k]
+                ttri[lod][k] = _stats(stage, "/Temple", dict(sel))[2]
     # the street columns' prototypes: the column asset at each LOD used
     col_lods = sorted(set(np.unique(columns.lod).tolist())) if columns.lod is not None else [2]
     cidx = (np.searchsorted(col_lods, columns.lod).astype(np.int32) if columns.lod is not None
@@ -325,10 +377,12 @@ def compose_city(folder: str | os.PathLike, temples: TempleInstances,
     body = new_layer("City", kind="assembly")
     with Sdf.ChangeBlock():
         _group(body, "/City/Temples")
-        refs = [f"./{temples.folders[b]}/Temple.usda" for b, _ in protos]
+        refs = [f"./{temples.folders[b]}/Temple.usda" for b, _, _ in protos]
+        dirs = [card_dirs[(b, sel)] if card and card_dirs else None  # type: ignore[index]
+                for b, sel, card in protos]
         if as_instancer:
             _instancer(body, "/City/Temples/Field",
-                       [(f"Temple_{k}", refs[k], dict(sel)) for k, (_, sel) in
+                       [(f"Temple_{k}", refs[k], dict(sel), dirs[k]) for k, (_, sel, _) in
                         enumerate(protos)], proto_of, temples.xz, temples.yaw, temples.scale,
                        t_ext)
         else:
@@ -345,12 +399,14 @@ def compose_city(folder: str | os.PathLike, temples: TempleInstances,
                 spec.referenceList.Prepend(Sdf.Reference(refs[k]))
                 for vs, v in protos[k][1]:
                     spec.variantSelections[vs] = v
+                if dirs[k] is not None:
+                    _cards(spec, dirs[k])  # type: ignore[arg-type]
                 _set_xform(spec, float(temples.xz[i, 0]), float(temples.xz[i, 1]),
                            float(temples.yaw[i]), float(temples.scale[i]))
         if len(columns):
             _instancer(body, "/City/Porticus",
                        [(f"Column_{LOD_NAMES[li]}", f"./{columns.asset}",
-                         {"lod": LOD_NAMES[li], "form": "full", "finish": finish})
+                         {"lod": LOD_NAMES[li], "form": "full", "finish": finish}, None)
                         for li in col_lods], cidx, columns.xz, columns.yaw, None, c_ext)
     have = [e for e, n in ((t_ext, len(temples)), (c_ext, len(columns))) if n]
     lo = np.min([e[0] for e in have], axis=0) if have else np.zeros(3)
@@ -373,6 +429,15 @@ def compose_city(folder: str | os.PathLike, temples: TempleInstances,
         else:
             col = col_tri[s] * len(columns)
         triangles[s] = int(np.dot(counts, ttri[s])) + col
+    if temples.cards is not None and temples.cards.any():
+        # the same city with each card temple at its LOD by distance instead of its cards
+        far = np.flatnonzero(temples.cards)
+        lods = (np.asarray(temples.lod)[far] if temples.lod is not None
+                else np.zeros(len(far), dtype=np.int8))
+        instead = sum(int(ttri[LOD_NAMES[int(li)]][proto_of[i]]) for i, li in
+                      zip(far, lods, strict=True))
+        triangles["without cards"] = triangles["as authored"] - CARD_TRIANGLES * len(far) + \
+            instead
     if summary is not None:
         city.customData = {"ionic_usd": _vt_dict(summary)}
     secs["author"] = time.perf_counter() - t2
