@@ -262,3 +262,139 @@ def test_lod_by_distance_selects_the_temple_lod_set(grid_city, tmp_path):
         cols = [p for p in Usd.PrimRange(temple, Usd.TraverseInstanceProxies())
                 if p.IsInstance() and p.GetVariantSets().HasVariantSet("form")]
         assert cols and {c.GetVariantSets().GetVariantSelection("lod") for c in cols} == {lod}
+
+
+# -- cards for the far field (UsdGeomModelAPI draw mode) ----------------------------------------
+CARD_PX = 64
+
+
+@pytest.fixture(scope="module")
+def card_city(tmp_path_factory):
+    out = tmp_path_factory.mktemp("cards") / "city"
+    opts = CityOptions(rows=1, cols=3, texture_size=TEX, seed=1, focus=(0.0, 0.0),
+                       cards_beyond=100.0, card_size=CARD_PX, columns=0)
+    return out, build_city(out, opts), opts
+
+
+def _temples_by_distance(stage: Usd.Stage) -> dict[str, float]:
+    out = {}
+    for t in stage.GetPrimAtPath("/City/Temples").GetChildren():
+        x, _, z = t.GetAttribute("xformOp:translate").Get()
+        out[str(t.GetPath())] = float(np.hypot(x, z))  # focus (0, 0)
+    return out
+
+
+def _read_rgba(path: Path) -> np.ndarray:
+    import OpenImageIO as oiio
+
+    inp = oiio.ImageInput.open(str(path))
+    assert inp is not None, oiio.geterror()
+    px = np.asarray(inp.read_image(oiio.UINT8))
+    inp.close()
+    return px
+
+
+def test_far_temples_carry_card_draw_mode_with_baked_images(card_city):
+    out, s, opts = card_city
+    stage = Usd.Stage.Open(str(out / "City.usda"))
+    dist = _temples_by_distance(stage)
+    far = {p for p, d in dist.items() if d > opts.cards_beyond}
+    assert 0 < len(far) < len(dist) and s["cards"]["temples"] == len(far)
+    folders = {Path(stage.GetPrimAtPath(p).GetAttribute("model:cardTextureXPos").Get()
+                    .resolvedPath).parent for p in far}
+    # one set of images per temple prototype (build + hypotheses), shared by its lots
+    assert len(folders) == s["cards"]["prototypes"] == s["cards"]["baked"]
+    assert folders == set((out / "Temples" / "Cards").iterdir())
+    for path in dist:
+        prim = stage.GetPrimAtPath(path)
+        api = UsdGeom.ModelAPI(prim)
+        if path not in far:
+            assert not prim.HasAPI(UsdGeom.ModelAPI) or not api.GetModelApplyDrawModeAttr().Get()
+            continue
+        # drawMode takes effect on a model whose applyDrawMode is true: the temple instance
+        assert prim.IsModel() and prim.HasAPI(UsdGeom.ModelAPI)
+        assert api.GetModelApplyDrawModeAttr().Get() is True
+        assert api.ComputeModelDrawMode() == UsdGeom.Tokens.cards
+        assert api.GetModelCardGeometryAttr().Get() == "box"
+        for face in ("XPos", "XNeg", "YPos", "YNeg", "ZPos", "ZNeg"):
+            asset = prim.GetAttribute(f"model:cardTexture{face}").Get()
+            assert asset.path.startswith("./Temples/Cards/") and asset.path.endswith(f"/{face}.png")
+            png = Path(asset.resolvedPath)
+            assert png.is_file() and png.parent.parent == out / "Temples" / "Cards"
+            px = _read_rgba(png)
+            h, w, c = px.shape
+            assert c == 4 and max(h, w) == CARD_PX and min(h, w) >= 16
+            alpha = px[..., 3]
+            assert (alpha == 0).any() and (alpha == 255).any()  # a silhouette, not a box
+    assert _model_hierarchy_ok(stage) == []
+    _validate_each_layer(out)
+
+
+def test_baked_card_shows_the_temple(card_city):
+    """The front card covers a plausible part of its frame, the side less (the colonnade's
+    gaps, the pediment's corners), and the stone is lit, not black or flat."""
+    out, _, _ = card_city
+    folder = sorted((out / "Temples" / "Cards").iterdir())[0]
+    front, side = _read_rgba(folder / "ZPos.png"), _read_rgba(folder / "XPos.png")
+    cover_front = np.mean(front[..., 3] >= 128)
+    cover_side = np.mean(side[..., 3] >= 128)
+    assert 0.5 < cover_front < 0.95 and 0.4 < cover_side < 0.9
+    assert cover_side < cover_front
+    stone = front[front[..., 3] >= 128][:, :3].astype(float)
+    assert 60 < stone.mean() < 245 and stone.std() > 4
+    # the pediment narrows upwards: the top row is covered less than the middle
+    rows = (front[..., 3] >= 128).mean(axis=1)
+    assert rows[2] < rows[len(rows) // 2]
+
+
+def test_reader_and_preview_draw_cards_far_and_meshes_near(card_city, tmp_path):
+    from ionic_usd.preview import render_preview
+    from ionic_usd.usd.reader import read_scene
+
+    out, s, opts = card_city
+    stage = Usd.Stage.Open(str(out / "City.usda"))
+    dist = _temples_by_distance(stage)
+    far = {p for p, d in dist.items() if d > opts.cards_beyond}
+    drawn = read_scene(out / "City.usda", draw_modes=True)
+    full = read_scene(out / "City.usda")
+
+    def tris(scene, temple):
+        return sum(scene.meshes[p.mesh].n_triangles for p in scene.placements
+                   if p.path == temple or p.path.startswith(temple + "/"))
+
+    for temple in dist:
+        cards = [p for p in drawn.placements if drawn.meshes[p.mesh].card_face
+                 and p.path == temple]
+        if temple in far:
+            assert len(cards) == 6 and tris(drawn, temple) == 12 < tris(full, temple)
+        else:
+            assert not cards and tris(drawn, temple) == tris(full, temple) > 10_000
+    assert drawn.n_triangles == s["triangles"]["as authored"]
+    assert s["triangles"]["without cards"] - drawn.n_triangles == sum(
+        tris(full, t) - 12 for t in far)
+    stats = render_preview(out / "City.usda", tmp_path / "c.png", width=96, height=64,
+                           samples=0)
+    assert stats.triangles == drawn.n_triangles and stats.cards == 6 * len(far)
+
+
+def test_cards_are_reused_and_work_in_a_temple_point_instancer(card_city, tmp_path):
+    import shutil
+    from dataclasses import replace
+
+    from ionic_usd.usd.reader import read_scene
+
+    out, s, opts = card_city
+    # the images are content-addressed: a build that finds them in place bakes nothing
+    shutil.copytree(out / "Temples" / "Cards", tmp_path / "pi" / "Temples" / "Cards")
+    pi = build_city(tmp_path / "pi", replace(opts, instancer_threshold=0))
+    assert pi["cards"]["temples"] == s["cards"]["temples"]
+    assert pi["cards"]["baked"] == 0 and pi["cards"]["reused"] == s["cards"]["prototypes"]
+    assert pi["triangles"] == s["triangles"]
+    stage = Usd.Stage.Open(str(tmp_path / "pi" / "City.usda"))
+    protos = stage.GetPrimAtPath("/City/Temples/Field/Prototypes").GetChildren()
+    carded = [p for p in protos if UsdGeom.ModelAPI(p).ComputeModelDrawMode() == "cards"]
+    assert carded and all(p.IsModel() for p in carded)
+    assert _model_hierarchy_ok(stage) == []
+    _validate_each_layer(tmp_path / "pi")
+    assert read_scene(tmp_path / "pi" / "City.usda", draw_modes=True).n_triangles == \
+        s["triangles"]["as authored"]

@@ -51,8 +51,12 @@ _PER_COLUMN = 200.0
 _PER_REFERENCE = 10e3
 _PER_POINT = 1e3
 _PER_BUILD = 40e6
+# the LOD cards are baked from: at card resolution (256 px for a 25 m temple, ~10 cm a pixel)
+# low and high columns cover the same pixels (coverage per face equal to 1e-4, measured) and
+# the bake takes 3.2 s instead of 7.6 s
+_CARD_LOD = "low"
 # what the card images depend on besides the temple and its selections: the baker's version
-_CARD_BAKE = "cards-v1"
+_CARD_BAKE = f"cards-v1-{_CARD_LOD}"
 
 @dataclass(frozen=True)
 class CityOptions:
@@ -360,7 +364,8 @@ def _far_cards(out: Path, opts: CityOptions, specs: list[TempleSpec], build: np.
             note["reused"] += 1
         else:
             try:
-                bake_cards(root, out / rel, temple_card_bound(root, sel), variants=sel,
+                bake_sel = temple_selection(vsets[b], selections[i], _CARD_LOD)
+                bake_cards(root, out / rel, temple_card_bound(root, sel), variants=bake_sel,
                            size=opts.card_size)
             except PreviewUnavailableError as exc:
                 if opts.cards_beyond is not None:
