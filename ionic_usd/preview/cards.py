@@ -42,8 +42,8 @@ def card_views(lo: np.ndarray, hi: np.ndarray, size: int
     c, h = (lo + hi) / 2, np.maximum((hi - lo) / 2, 1e-6)
     sun = camera_direction("auto", lo, hi)  # one sun for every face, the preview's own
     out = {}
-    for name, (n, r, u) in CARD_FACES.items():
-        n, r, u = (np.asarray(v, dtype=np.float64) for v in (n, r, u))
+    for name, axes in CARD_FACES.items():
+        n, r, u = (np.asarray(v, dtype=np.float64) for v in axes)
         hn, hr, hu = abs(n @ h), abs(r @ h), abs(u @ h)
         margin = 0.05 * float(np.linalg.norm(h)) + 0.1
         eye = c + n * (hn + margin)

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -117,8 +118,9 @@ class _Uploaded:
                                      fragment_shader=shaders.CARD_FS)
         self.card_depth_prog = ctx.program(vertex_shader=shaders.CARD_DEPTH_VS,
                                            fragment_shader=shaders.CARD_DEPTH_FS)
-        self.meshes, self.cards = [], []
-        textures: dict[int, object] = {}
+        self.meshes: list[tuple[Any, Any, int, tuple[float, float, float]]] = []
+        self.cards: list[tuple[Any, Any, int, Any]] = []
+        textures: dict[int, Any] = {}
         for d in items:
             vbo = ctx.buffer(d.vertices.tobytes())
             ibo = ctx.buffer(instance_block(d.placements).tobytes())

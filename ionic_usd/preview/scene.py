@@ -171,7 +171,7 @@ def draw_items(scene: Scene) -> list[DrawItem]:
             corners = triangulate_fan(mesh.face_vertex_counts, np.arange(len(idx)))
             item.uv = np.asarray(mesh.st, dtype=np.float32)[corners.reshape(-1)]
             if item.image is None:  # no image: the draw mode colour, opaque
-                item.colour = tuple(float(c) for c in mat.diffuse) if mat else STONE_GREY
+                item.colour = mat.diffuse if mat else STONE_GREY
         out.append(item)
     return out
 

@@ -142,7 +142,7 @@ def to_json_value(v: object) -> object:
         return str(v)
     if isinstance(v, (list, tuple)) or hasattr(v, "__len__") and not isinstance(v, bytes):
         try:
-            return [to_json_value(x) for x in v]
+            return [to_json_value(x) for x in v]  # type: ignore[attr-defined]
         except TypeError:
             pass
     if isinstance(v, (np.integer, np.floating)):
@@ -154,7 +154,7 @@ def _prim_paradata(prim: Usd.Prim) -> dict:
     out: dict = {}
     cd = prim.GetAllAuthoredMetadata().get("customData")  # not the schemas' userDocBrief
     if cd:
-        out.update(to_json_value(dict(cd)))  # type: ignore[arg-type]
+        out.update(to_json_value(dict(cd)))  # type: ignore[call-overload]
     props = {}
     for attr in prim.GetAuthoredAttributes():
         name = attr.GetName()
@@ -441,9 +441,9 @@ class _Reader:
                 it.PruneChildren()
                 out.extend(self._point_instancer(UsdGeom.PointInstancer(prim), m, para[path]))
             else:
-                key = self._mesh(prim, para[path] if relative else {})
-                if key is not None:
-                    out.append((key, m, str(path), {} if relative else para[path], False))
+                mkey = self._mesh(prim, para[path] if relative else {})
+                if mkey is not None:
+                    out.append((mkey, m, str(path), {} if relative else para[path], False))
         return out
 
     def _matrix(self, prim: Usd.Prim, root: Usd.Prim, relative: bool) -> np.ndarray:
@@ -475,10 +475,9 @@ class _Reader:
         mpath = str(mat.GetPath())
         if mpath not in self._materials:
             data = read_material(mat)
-            key = data.key if data is not None else None
-            if data is not None and key not in self.scene.materials:
-                self.scene.materials[key] = data
-            self._materials[mpath] = key
+            if data is not None:
+                self.scene.materials.setdefault(data.key, data)
+            self._materials[mpath] = data.key if data is not None else None
         return self._materials[mpath]
 
     def _mesh(self, prim: Usd.Prim, paradata: dict) -> str | None:
@@ -487,12 +486,13 @@ class _Reader:
             return None
         pts, counts, idx, nrm, interp, st, double = read
         material = self._material(prim)
-        colour = None
+        colour: tuple[float, float, float] | None = None
         pv = UsdGeom.Mesh(prim).GetDisplayColorPrimvar()
         if pv and pv.HasValue():
             vals = _np(pv.ComputeFlattened(), np.float64).reshape(-1, 3)
             if len(vals):
-                colour = tuple(float(x) for x in vals.mean(axis=0))
+                r, g, b = (float(x) for x in vals.mean(axis=0))
+                colour = (r, g, b)
         meta = json.dumps(paradata, sort_keys=True, default=str)
         key = _content_key([pts, counts, idx, nrm, st],
                            f"{interp}|{material}|{double}|{meta}|{colour}")
