@@ -206,6 +206,12 @@ def test_cli_city_json_and_errors(grid_city, tmp_path, capsys):
         main(["city", str(tmp_path / "y"), "--focus", "1"])
     with pytest.raises(ParameterError):
         CityOptions(lod_distances=(100.0, 10.0))
+    capsys.readouterr()
+    assert main(["city", str(tmp_path / "z"), "--focus", "0,0", "--cards-beyond", "-5"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--cards-beyond" in err and not (tmp_path / "z").exists()
+    with pytest.raises(ParameterError, match="--card-size"):
+        CityOptions(card_size=8)
 
 
 @pytest.mark.parametrize("n, scaled", [(500, False), (500, True), (20_000, False)])
@@ -398,3 +404,12 @@ def test_cards_are_reused_and_work_in_a_temple_point_instancer(card_city, tmp_pa
     _validate_each_layer(tmp_path / "pi")
     assert read_scene(tmp_path / "pi" / "City.usda", draw_modes=True).n_triangles == \
         s["triangles"]["as authored"]
+
+
+def test_composer_counts_what_the_reader_draws(grid_city):
+    """The summary's triangles (as authored: no focus, each temple at the file's own lod) are
+    what a renderer draws, counted by the one reader on the composed city."""
+    from ionic_usd.usd.reader import read_scene
+
+    out, s, _ = grid_city
+    assert read_scene(out / "City.usda").n_triangles == s["triangles"]["as authored"]

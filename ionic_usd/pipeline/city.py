@@ -6,7 +6,9 @@
    column parameters (a build), hypothesis selections, LOD by distance from a focus point;
 2. fitting each temple to its lot and laying the colonnades (numpy/shapely, no USD);
 3. a memory estimate, refused above ``memory_limit`` before anything is written;
-4. the unique builds, from the content-addressed prototype cache or built on Dask;
+4. the unique builds, from the content-addressed prototype cache or built on Dask; with a
+   focus, the card images of the temple prototypes beyond ``cards_beyond`` (baked once each by
+   the preview renderer, content-addressed under ``Temples/Cards/``);
 5. ``City.usda`` + ``Instances.usdc`` (:func:`ionic_usd.usd.city.compose_city`).
 
 Output bytes depend only on the inputs: the same city is written whether the temples were

@@ -9,7 +9,9 @@ Files written into the city folder by :func:`compose_city` (the temple folders u
       /City/Temples            Xform, kind = group, holding either
         Temple_<lot>           instanceable references to ./Temples/<build>/Temple.usda with the
                                lot's variant selections (hypotheses, lod), translate/rotateXYZ/
-                               scale (XformCommonAPI ops) — up to ``instancer_threshold`` temples
+                               scale (XformCommonAPI ops) — up to ``instancer_threshold`` temples;
+                               a far temple (``TempleInstances.cards``) carries card draw mode
+                               (GeomModelAPI, a box of ./Temples/Cards/<key>/<Face>.png)
         Field                  or a UsdGeom.PointInstancer (kind = group) whose prototypes
                                (Prototypes, Scope, kind = group) are the unique temple choices
       /City/Porticus           UsdGeom.PointInstancer (kind = group) of the column asset, one
@@ -160,7 +162,9 @@ def temple_card_bound(temple_root: Path, selections: Mapping[str, str]
 def _stats(stage: Usd.Stage, root: str, selections: Mapping[str, str]
            ) -> tuple[np.ndarray, np.ndarray, int]:
     """Bounds (lo (3,), hi (3,)) and drawn triangles of ``root`` with ``selections`` made in
-    the stage's session layer (default + render purposes, visible prims only)."""
+    the stage's session layer (default + render purposes, visible prims only); earlier
+    selections there are cleared first, so "as authored" means the file's own."""
+    stage.GetSessionLayer().Clear()
     prim = stage.GetPrimAtPath(root)
     with Usd.EditContext(stage, stage.GetSessionLayer()):
         for name, value in selections.items():
