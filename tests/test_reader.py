@@ -166,3 +166,55 @@ def test_non_finite_transform_is_refused(tmp_path):
 
     with pytest.raises(GeometryError, match="/R/Q: its transform is not finite"):
         read_scene(path)
+
+
+@pytest.mark.parametrize("apply, kind, geometry", [
+    (True, "component", "box"), (True, "component", "cross"), (False, "component", "box"),
+    (True, "", "box")], ids=["box", "cross", "not-applied", "not-a-model"])
+def test_card_draw_mode_replaces_a_model_by_its_cards(tmp_path, apply, kind, geometry):
+    from ionic_usd.usd.draw_mode import author_cards
+
+    path = tmp_path / "c.usda"
+    stage = Usd.Stage.CreateNew(str(path))
+    UsdGeom.SetStageUpAxis(stage, "Y")
+    UsdGeom.SetStageMetersPerUnit(stage, 1.0)
+    root = UsdGeom.Xform.Define(stage, "/W")
+    stage.SetDefaultPrim(root.GetPrim())
+    Usd.ModelAPI(root).SetKind("assembly")
+    model = UsdGeom.Xform.Define(stage, "/W/M")
+    model.AddTranslateOp().Set((10, 0, 0))
+    if kind:
+        Usd.ModelAPI(model).SetKind(kind)
+    m = UsdGeom.Mesh.Define(stage, "/W/M/Box")  # a 2 x 3 x 4 box of 6 quads
+    m.CreatePointsAttr([(x, y, z) for x in (-1, 1) for y in (0, 3) for z in (-2, 2)])
+    m.CreateFaceVertexCountsAttr([4] * 6)
+    m.CreateFaceVertexIndicesAttr([0, 1, 3, 2, 4, 6, 7, 5, 0, 4, 5, 1, 2, 3, 7, 6,
+                                   0, 2, 6, 4, 1, 5, 7, 3])
+    (tmp_path / "x.png").write_bytes(b"")  # only XPos: a box's XNeg takes it too
+    author_cards(stage.GetRootLayer().GetPrimAtPath("/W/M"), {"XPos": "./x.png"},
+                 geometry=geometry)
+    if not apply:
+        model.GetPrim().GetAttribute("model:applyDrawMode").Set(False)
+    stage.Save()
+    scene = read_scene(path, draw_modes=True)
+    assert read_scene(path).n_triangles == 12  # exporters read the geometry
+    cards = {m.card_face: m for m in scene.meshes.values() if m.card_face}
+    if not (apply and kind):
+        assert not cards and scene.n_triangles == 12
+        return
+    assert sorted(cards) == sorted(["XPos", "XNeg", "YPos", "YNeg", "ZPos", "ZNeg"])
+    assert scene.n_triangles == 12 and all(p.path == "/W/M" for p in scene.placements)
+    assert_allclose(scene.placements[0].matrix[3, :3], (10, 0, 0))
+    xpos = cards["XPos"].points
+    assert_allclose(xpos[:, 0], 1.0 if geometry == "box" else 0.0)  # on the bound / centre
+    assert_allclose(xpos.min(axis=0)[1:], (0, -2))
+    assert_allclose(xpos.max(axis=0)[1:], (3, 2))
+    tex = {f: scene.materials[m.material].diffuse_texture for f, m in cards.items()}
+    assert tex["XPos"].path.endswith("x.png")
+    assert (tex["XNeg"] is not None) == (geometry == "box") and tex["ZPos"] is None
+    # every quad is counter-clockwise seen from the side it shows
+    for face, mesh in cards.items():
+        p = mesh.points
+        normal = np.cross(p[1] - p[0], p[2] - p[0])
+        axis = {"X": 0, "Y": 1, "Z": 2}[face[0]]
+        assert np.sign(normal[axis]) == (1 if face.endswith("Pos") else -1)
