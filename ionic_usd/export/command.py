@@ -5,7 +5,9 @@ from __future__ import annotations
 import argparse
 import math
 from pathlib import Path
+from typing import Any
 
+from ionic_usd.cli_flags import add_output_flags, add_variant_flag
 from ionic_usd.errors import ParameterError
 
 __all__ = ["add_parser", "cmd_export", "parse_scale"]
@@ -76,7 +78,12 @@ def cmd_export(args: argparse.Namespace) -> int:
     return 0
 
 
-def add_parser(sub, parser_class) -> None:
+def add_parser(sub: Any, parser_class: Any = None, *, arguments: bool = True) -> None:
+    """Add the ``export`` subcommand (``arguments=False``: its name and help only).
+
+    ``parser_class`` is unused: ``add_subparsers(parser_class=…)`` already sets it.
+    """
+    del parser_class
     p = sub.add_parser(
         "export",
         help="export a USD scene as glTF/GLB, usdz, STL or 3MF",
@@ -86,12 +93,13 @@ def add_parser(sub, parser_class) -> None:
         "(ARKit: one flattened package, textures inside), .stl/.3mf (3D printing: one closed "
         "solid per column, parts unioned, at --scale).",
     )
+    p.set_defaults(func=cmd_export)
+    if not arguments:
+        return
     p.add_argument("scene", type=Path, help="USD file to export")
-    p.add_argument("-o", "--output", required=True,
-                   help="output file: .glb, .gltf, .usdz, .stl or .3mf")
-    p.add_argument("--variant", action="append", metavar="SET=VALUE",
-                   help="select VALUE in variant set SET on every prim that has it "
-                   "(repeatable; default: the authored selections)")
+    add_output_flags(p, "output file: .glb, .gltf, .usdz, .stl or .3mf", required=True)
+    add_variant_flag(p, "select VALUE in variant set SET on every prim that has it "
+                     "(repeatable; default: the authored selections)")
     p.add_argument("--lod", help="level of detail (same as --variant lod=LOD)")
     p.add_argument("--no-gpu-instancing", action="store_true",
                    help="glTF: one plain node per copy instead of EXT_mesh_gpu_instancing "
@@ -101,5 +109,3 @@ def add_parser(sub, parser_class) -> None:
                    "required extension; needs DracoPy) [default none]")
     p.add_argument("--scale", default="1",
                    help="STL/3MF: model scale, a number or ratio (1:20 = 0.05) [default 1]")
-    p.add_argument("--force", action="store_true", help="overwrite an existing output file")
-    p.set_defaults(func=cmd_export)

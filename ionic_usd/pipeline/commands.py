@@ -48,7 +48,7 @@ def cmd_city(args: argparse.Namespace) -> int:
         street = 2 * (args.rows + 1) * (args.cols + 1) * int(args.block / args.column_spacing)
         if args.columns is not None:
             street = args.columns
-        from ionic_usd.usd.city import DEFAULT_INSTANCER_THRESHOLD
+        from ionic_usd.city.layout import DEFAULT_INSTANCER_THRESHOLD
 
         threshold = (DEFAULT_INSTANCER_THRESHOLD if args.instancer_threshold is None
                      else args.instancer_threshold)
@@ -81,11 +81,9 @@ def cmd_city(args: argparse.Namespace) -> int:
     return 0
 
 
-def add_city_parser(sub, parser_class) -> None:
+def add_city_parser(sub, parser_class, *, arguments: bool = True) -> None:
     """Add ``city`` to the CLI's subparsers (``parser_class``: the CLI's one-line-error
-    parser)."""
-    from ionic_usd.usd.city import DEFAULT_INSTANCER_THRESHOLD
-
+    parser; ``arguments=False``: its name and help only, for ``ionic-usd --help``)."""
     p = sub.add_parser(
         "city",
         help="build a city of temples and colonnades (grid, or a GeoJSON plan)",
@@ -95,6 +93,11 @@ def add_city_parser(sub, parser_class) -> None:
         "a local cluster, or --scheduler) into FOLDER/Temples through a content-addressed "
         "cache, so a rebuild builds only what changed.",
     )
+    p.set_defaults(func=cmd_city)
+    if not arguments:
+        return
+    from ionic_usd.city.layout import DEFAULT_INSTANCER_THRESHOLD
+
     p.add_argument("folder", type=Path, help="output folder (created if missing)")
     p.add_argument("--plan", type=Path, help="GeoJSON FeatureCollection (see examples/"
                    "forum.geojson); default: a grid")
@@ -134,4 +137,3 @@ def add_city_parser(sub, parser_class) -> None:
                    help="write the build summary (prototypes built/reused, instances, "
                    "timings, workers) as JSON")
     p.add_argument("--force", action="store_true", help="rebuild an existing city")
-    p.set_defaults(func=cmd_city)
