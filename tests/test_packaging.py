@@ -125,6 +125,43 @@ def test_geometry_kernel_is_numpy_only_at_import():
     assert out.returncode == 0, out.stderr[-2000:]
 
 
+#: what parsing a command line must not load (each costs 0.1-1 s of every run)
+HEAVY_AT_STARTUP = ("scipy", "numba", "pxr", "matplotlib", "xatlas", "OpenImageIO",
+                    "manifold3d", "shapely")
+
+
+def _modules_after(code: str) -> set[str]:
+    probe = (code + "\nimport sys, json\n"
+             "sys.__stdout__.write('\\n' + json.dumps(sorted({m.split('.')[0] "
+             "for m in sys.modules})))\n")
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                         timeout=300)
+    assert out.returncode == 0, out.stderr[-2000:]
+    import json
+
+    return set(json.loads(out.stdout.splitlines()[-1]))
+
+
+def test_building_the_whole_parser_loads_no_heavy_library():
+    """Every subcommand's flags (and their help) come without scipy, numba, pxr, ..."""
+    mods = _modules_after("from ionic_usd.cli import build_parser\nbuild_parser()")
+    assert not mods & set(HEAVY_AT_STARTUP), sorted(mods & set(HEAVY_AT_STARTUP))
+
+
+@pytest.mark.parametrize("argv", [["--version"], ["--help"], ["temple", "--help"],
+                                  ["shaft", "--help"], ["evaluate", "--help"]])
+def test_parsing_loads_no_heavy_library(argv):
+    code = ("from ionic_usd.cli import main\n"
+            "try:\n"
+            f"    main({argv!r})\n"
+            "except SystemExit as e:\n"
+            "    assert e.code == 0, e.code\n")
+    mods = _modules_after(code)
+    assert not mods & set(HEAVY_AT_STARTUP), sorted(mods & set(HEAVY_AT_STARTUP))
+    if argv in (["--version"], ["--help"], ["temple", "--help"]):
+        assert "numpy" not in mods  # the floor of `ionic-usd --version` <= 0.2 s
+
+
 def test_python_dash_m_runs_the_cli():
     from ionic_usd import __version__
 
