@@ -28,6 +28,7 @@ that reaches the column axis — a check only it can make, since it knows $d.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 
 from ionic_usd.errors import GrammarError, ParameterError
@@ -208,15 +209,19 @@ BaseGrammar = TorusBase | BezierBase
 
 
 # -- shared scanning ------------------------------------------------------------------------
+def _is_functional(toks: list[Token]) -> bool:
+    """The ``M(…)`` form: any parenthesis, or a leading ``M``."""
+    return any(t.kind == "(" for t in toks) or (
+        bool(toks) and toks[0].kind == "item" and toks[0].letter == "M")
+
+
 def _split(source: str, grammar: str) -> tuple[bool, list[tuple[list[Token], int]]]:
     """Tokenize, split into modules, and tell whether the functional ``M(…)`` form is used."""
     toks = tokenize(source, grammar=grammar)
     if not toks:
         raise GrammarError("empty grammar: expected at least one module", source, 0,
                            grammar=grammar)
-    functional = any(t.kind == "(" for t in toks) or (
-        toks[0].kind == "item" and toks[0].letter == "M"
-    )
+    functional = _is_functional(toks)
     parts = split_top_level(toks)
     for k, (part, start) in enumerate(parts, 1):
         if not part:
@@ -315,6 +320,16 @@ def _end_of(part: list[Token]) -> int:
     return part[-1].offset + part[-1].length
 
 
+def _modules(source: str, grammar: str
+             ) -> Iterator[tuple[int, list[Token], int, list[Token] | None]]:
+    """Each module of ``source``: (1-based number, its tokens, the offset where it ends, its
+    call arguments in the functional ``M(…)`` form or None in the letter form)."""
+    functional, parts = _split(source, grammar)
+    for k, (part, _start) in enumerate(parts, 1):
+        args = _call_args(part, source, k, grammar) if functional else None
+        yield k, part, _end_of(part), args
+
+
 # -- version 1 --------------------------------------------------------------------------------
 def _v1_floors(vals: list[tuple[str, Token]], source: str, k: int, end: int) -> TorusModule:
     """Floors from a flat sequence of (role, token), roles cycling r, h, c, r, h, c, r."""
@@ -348,12 +363,9 @@ def parse_base_v1(source: str) -> TorusBase:
     GrammarError
         With the module number and a caret under the offending token.
     """
-    functional, parts = _split(source, V1)
     modules = []
-    for k, (part, _start) in enumerate(parts, 1):
-        end = _end_of(part)
-        if functional:
-            args = _call_args(part, source, k, V1)
+    for k, part, end, args in _modules(source, V1):
+        if args is not None:
             roles = ["r", "h", "c"]
             vals = [(roles[i % 3], t) for i, t in enumerate(args)]
             if len(args) % 3 != 1 or len(args) < 4:
@@ -390,14 +402,11 @@ def parse_base_v2(source: str) -> BezierBase:
     GrammarError
         With the module number and a caret under the offending token.
     """
-    functional, parts = _split(source, V2)
     modules = []
-    for k, (part, _start) in enumerate(parts, 1):
-        end = _end_of(part)
+    for k, part, end, args in _modules(source, V2):
         flag_tok: Token | None = None
         pairs: list[tuple[Token, Token]] = []
-        if functional:
-            args = _call_args(part, source, k, V2)
+        if args is not None:
             if len(args) % 2 == 1:
                 flag_tok = args[-1]
                 args = args[:-1]
@@ -426,10 +435,10 @@ def parse_base_v2(source: str) -> BezierBase:
             pts.append(ControlPoint(r, h, _span(rt), _span(ht)))
         cont = _flag(flag_tok, source, k) if flag_tok is not None else False
         if len(pts) < 2:
-            at = pairs[0][0] if pairs else part[0]
+            first = pairs[0][0] if pairs else part[0]
             raise GrammarError(f"a Bézier module needs at least 2 control points, got "
-                               f"{len(pts)}", source, at.offset,
-                               length=max(1, end - at.offset), module=k, grammar=V2)
+                               f"{len(pts)}", source, first.offset,
+                               length=max(1, end - first.offset), module=k, grammar=V2)
         modules.append(BezierModule(tuple(pts), cont))
     return BezierBase(tuple(modules), source)
 
@@ -441,10 +450,7 @@ def detect_base_version(source: str) -> int:
         toks = tokenize(source, grammar="base")
     except GrammarError:
         return 1
-    functional = any(t.kind == "(" for t in toks) or (
-        bool(toks) and toks[0].kind == "item" and toks[0].letter == "M"
-    )
-    if functional:
+    if _is_functional(toks):
         for part, _ in split_top_level(toks):
             args = [t for t in part if t.kind == "item" and t.letter == ""]
             if len(args) < 4 or len(args) % 3 != 1:
