@@ -21,7 +21,7 @@ from ionic_usd.cli_flags import (
     add_stone_flags,
     collect_flags,
 )
-from ionic_usd.errors import IonicError
+from ionic_usd.errors import IonicError, ParameterError
 
 __all__ = ["main", "build_parser"]
 
@@ -36,8 +36,6 @@ def _shaft_params(args: argparse.Namespace):
         data = load_toml(args.config)
         section = data.get("shaft", data)
         if not isinstance(section, dict):
-            from ionic_usd.errors import ParameterError
-
             raise ParameterError("shaft", section, "a TOML table", context=str(args.config))
         base = dataclass_from_mapping(ShaftParams, section, context=f"{args.config} [shaft]")
     flags = collect_flags(args, ShaftParams)
@@ -137,16 +135,15 @@ def cmd_column(args: argparse.Namespace) -> int:
 
 
 def cmd_asset(args: argparse.Namespace) -> int:
-    from ionic_usd.errors import ParameterError
     from ionic_usd.io import check_output_folder
     from ionic_usd.resources import check_estimate, estimate_asset
     from ionic_usd.usd.column_asset import ColumnAssetOptions, build_column_asset
 
     check_output_folder(args.output, force=args.force)
     params = _column_params(args)
-    user = None
+    user: dict[str, str] | None = None
     if args.texture:
-        user: dict[str, str] = {}
+        user = {}
         roles = ("basecolor", "roughness", "normal")
         for item in args.texture:
             role, sep, path = item.partition("=")
@@ -188,8 +185,6 @@ def cmd_temple(args: argparse.Namespace) -> int:
         col_tables = {}
         layouts = {"portunus": portunus_layout}
         if args.layout not in layouts:
-            from ionic_usd.errors import ParameterError
-
             raise ParameterError("--layout", args.layout,
                                  f"one of the built-in layouts: {', '.join(layouts)} "
                                  "(or describe a temple in a TOML file: --config)")
@@ -216,13 +211,13 @@ def cmd_temple(args: argparse.Namespace) -> int:
 
 
 def cmd_preview(args: argparse.Namespace) -> int:
-    from ionic_usd.errors import ParameterError
     from ionic_usd.preview import render_preview
 
     try:
-        background = tuple(float(x) for x in args.background.split(","))
+        red, green, blue = (float(x) for x in args.background.split(","))
     except ValueError:
         raise ParameterError("--background", args.background, "three numbers R,G,B") from None
+    background = (red, green, blue)
     s = render_preview(args.scene, args.output, width=args.width, height=args.height,
                        camera=args.camera, lod=args.lod, background=background,
                        samples=args.samples, ground=not args.no_ground, force=args.force)

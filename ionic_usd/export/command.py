@@ -55,7 +55,7 @@ def cmd_export(args: argparse.Namespace) -> int:
                        gpu_instancing=not args.no_gpu_instancing,
                        compress=None if args.compress == "none" else args.compress, scale=scale,
                        force=args.force)
-    r = res.report
+    r: Any = res.report  # GltfReport, UsdzReport or SolidsReport, by res.format
     if res.format in ("glb", "gltf"):
         print(f"wrote {res.path}: {r.bytes / 1e6:.2f} MB, {r.meshes} meshes, "
               f"{r.materials} materials, {r.images} images, {r.triangles_drawn:,} triangles "

@@ -367,7 +367,8 @@ def _material(b: _Builder, mat: MaterialData, double_sided: bool) -> int:
         if key not in b._packed:
             b._packed[key] = _pack_metallic_roughness(rt, mt)
         ref = rt if rt is not None else mt
-        name = Path(ref.path).stem + "_metallicRoughness"  # type: ignore[union-attr]
+        assert ref is not None  # one of the two, by the test above
+        name = Path(ref.path).stem + "_metallicRoughness"
         pbr.metallicRoughnessTexture = b.texture_info(ref, b.image(b._packed[key], "image/png",
                                                                    name))
         pbr.roughnessFactor = 1.0 if rt is not None else float(mat.roughness)
@@ -494,9 +495,9 @@ def write_gltf(
         common, each = _split_common(each) if len(each) > 1 else ({}, each)
         name = scene.meshes[key].name
         if gpu_instancing and len(placements) > 1 and all(t is not None for t in trs):
-            t_arr = np.array([t[0] for t in trs], dtype=np.float32)  # type: ignore[index]
-            r_arr = np.array([t[1] for t in trs], dtype=np.float32)  # type: ignore[index]
-            s_arr = np.array([t[2] for t in trs], dtype=np.float32)  # type: ignore[index]
+            t_arr = np.array([t[0] for t in trs], dtype=np.float32)
+            r_arr = np.array([t[1] for t in trs], dtype=np.float32)
+            s_arr = np.array([t[2] for t in trs], dtype=np.float32)
             r_arr /= np.linalg.norm(r_arr, axis=1, keepdims=True)
             ext = {"attributes": {"TRANSLATION": b.accessor(t_arr, "VEC3"),
                                   "ROTATION": b.accessor(r_arr, "VEC4"),

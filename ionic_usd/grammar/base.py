@@ -27,10 +27,10 @@ that reaches the column axis — a check only it can make, since it knows $d.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 
+from ionic_usd.checks import check_fields
 from ionic_usd.errors import GrammarError, ParameterError
 from ionic_usd.grammar._lexer import Token, split_top_level, token_number, tokenize
 
@@ -77,12 +77,8 @@ class TorusFloor:
     r_top_at: Span = field(default=_NOWHERE, compare=False, repr=False)
 
     def __post_init__(self) -> None:
-        for name in ("r_bottom", "r_top", "height"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
-                raise ParameterError(name, v, "a finite number", context="base floor")
-        if self.height < 0:
-            raise ParameterError("height", self.height, "a number >= 0", context="base floor")
+        check_fields(self, context="base floor", skip=("curvature", "r_bottom_at", "r_top_at"),
+                     non_negative=("height",))
         if self.curvature not in (1, -1):
             raise ParameterError("curvature", self.curvature, "1 or -1", context="base floor")
         object.__setattr__(self, "curvature", int(self.curvature))
@@ -126,12 +122,8 @@ class ControlPoint:
     h_at: Span = field(default=_NOWHERE, compare=False, repr=False)
 
     def __post_init__(self) -> None:
-        for name in ("r", "h"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
-                raise ParameterError(name, v, "a finite number", context="base control point")
-        if self.h < 0:
-            raise ParameterError("h", self.h, "a number >= 0", context="base control point")
+        check_fields(self, context="base control point", skip=("r_at", "h_at"),
+                     non_negative=("h",))
 
 
 @dataclass(frozen=True)
