@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from ionic_usd.export._io import EXPORT_FORMATS, check_export_path
+from ionic_usd.export.common import EXPORT_FORMATS, check_export_path
 
 __all__ = ["EXPORT_FORMATS", "ExportResult", "export_scene", "add_export_parser"]
 

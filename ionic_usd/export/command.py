@@ -31,7 +31,7 @@ def parse_scale(text: str) -> float:
 
 def cmd_export(args: argparse.Namespace) -> int:
     from ionic_usd.export import export_scene
-    from ionic_usd.export._io import check_export_path
+    from ionic_usd.export.common import check_export_path
     from ionic_usd.usd.reader import parse_variant_args
 
     variants = parse_variant_args(args.variant)
@@ -43,7 +43,7 @@ def cmd_export(args: argparse.Namespace) -> int:
     if args.compress != "none" and fmt not in (".glb", ".gltf"):
         raise ParameterError("--compress", args.compress, "none unless the output is glTF")
     if args.compress == "draco":
-        from ionic_usd.export._io import require
+        from ionic_usd.export.common import require
 
         require("DracoPy", "--compress draco")  # before any work
     check_export_path(args.output, force=args.force)

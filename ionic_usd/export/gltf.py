@@ -37,7 +37,7 @@ import numpy as np
 
 from ionic_usd import __version__
 from ionic_usd.errors import GeometryError, IonicError, ParameterError
-from ionic_usd.export._io import atomic_write, require
+from ionic_usd.export.common import atomic_write, require
 from ionic_usd.geometry.mesh import triangulate_fan
 from ionic_usd.usd.reader import MaterialData, Scene, SceneMesh, TextureRef
 

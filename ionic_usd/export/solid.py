@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from ionic_usd.errors import GeometryError, ParameterError
-from ionic_usd.export._io import atomic_write, require
+from ionic_usd.export.common import atomic_write, require
 from ionic_usd.geometry.mesh import triangulate_fan
 from ionic_usd.usd.reader import Scene
 

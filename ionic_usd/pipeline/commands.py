@@ -34,10 +34,10 @@ def cmd_city(args: argparse.Namespace) -> int:
                             ("--seed", args.seed, 0, 2**63 - 1)):
         if not lo <= v <= hi:
             raise ParameterError(flag, v, f"an integer in [{lo}, {hi:,}]")
-    for flag, v, lo, hi in (("--block", args.block, 1.0, 10_000.0),
-                            ("--column-spacing", args.column_spacing, 0.5, 1_000.0)):
-        if not (math.isfinite(v) and lo <= v <= hi):
-            raise ParameterError(flag, v, f"a length in [{lo:g}, {hi:g}] m")
+    for flag, length, low, high in (("--block", args.block, 1.0, 10_000.0),
+                                    ("--column-spacing", args.column_spacing, 0.5, 1_000.0)):
+        if not (math.isfinite(length) and low <= length <= high):
+            raise ParameterError(flag, length, f"a length in [{low:g}, {high:g}] m")
     if args.plan is None:
         # a grid's size is known before any layout work: refuse a city that cannot fit in
         # memory at once (the layout of a million lots alone takes minutes)
