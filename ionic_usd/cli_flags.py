@@ -6,22 +6,18 @@ from here, so ``--output``/``--force``, ``--config``, the stone texture flags, `
 ``--variant`` and the report files read and behave the same everywhere.
 
 Nothing here imports more than the standard library at module level: building the parser must
-stay cheap (``ionic-usd --version`` imports no numpy). :class:`LazyChoices` lets a flag list
-choices defined in a heavy module that is imported only when the flag is parsed or its help
-is shown.
+stay cheap (``ionic-usd --version`` imports no numpy).
 """
 
 from __future__ import annotations
 
 import argparse
 import dataclasses
-import importlib
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Mapping
 from pathlib import Path
-from typing import Any, overload
+from typing import Any
 
 __all__ = [
-    "LazyChoices",
     "add_config_flags",
     "add_dataclass_flags",
     "add_memory_flag",
@@ -32,41 +28,6 @@ __all__ = [
     "collect_flags",
     "parse_bool",
 ]
-
-
-class LazyChoices(Sequence[str]):
-    """The choices ``module.name`` (a tuple of str), read on first use, plus ``extra``.
-
-    Give the flag a ``metavar`` (argparse otherwise lists the choices when the flag is added)
-    and ``%(choices)s`` in its help, which argparse expands only when the help is shown.
-    """
-
-    def __init__(self, module: str, name: str, extra: Sequence[str] = ()) -> None:
-        self._where = (module, name)
-        self._extra = tuple(extra)
-        self._values: tuple[str, ...] | None = None
-
-    def _load(self) -> tuple[str, ...]:
-        if self._values is None:
-            module, name = self._where
-            self._values = (*getattr(importlib.import_module(module), name), *self._extra)
-        return self._values
-
-    @overload
-    def __getitem__(self, i: int) -> str: ...
-    @overload
-    def __getitem__(self, i: slice) -> Sequence[str]: ...
-    def __getitem__(self, i: int | slice) -> str | Sequence[str]:
-        return self._load()[i]
-
-    def __len__(self) -> int:
-        return len(self._load())
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(self._load())
-
-    def __contains__(self, value: object) -> bool:
-        return value in self._load()
 
 
 def parse_bool(text: str) -> bool:

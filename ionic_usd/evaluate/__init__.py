@@ -13,7 +13,6 @@ from typing import Any
 
 #: public name → the module that defines it
 _NAMES = {
-    "FIT_MEASURES": "ionic_usd.evaluate.fit",
     "BaseLayout": "ionic_usd.evaluate.fit",
     "FitResult": "ionic_usd.evaluate.fit",
     "densify": "ionic_usd.evaluate.fit",
@@ -55,7 +54,11 @@ _NAMES = {
     "resample": "ionic_usd.evaluate.metrics",
 }
 
-__all__ = list(_NAMES)
+#: Measures a fit can minimise (names of :class:`CurveComparison` fields). Defined here, not
+#: in :mod:`~ionic_usd.evaluate.fit_core`, so the command line lists them without scipy.
+FIT_MEASURES = ("hausdorff", "average_error", "discrete_frechet", "frechet")
+
+__all__ = ["FIT_MEASURES", *_NAMES]
 
 
 def __getattr__(name: str) -> Any:

@@ -16,7 +16,6 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ionic_usd.cli_flags import (
-    LazyChoices,
     add_config_flags,
     add_output_flags,
     add_report_flags,
@@ -334,13 +333,6 @@ def _reference_flags(p: argparse.ArgumentParser, *, multiple: bool = False,
     p.add_argument("--element-id", help="SVG: id of the element to read (default: first path)")
 
 
-#: choices read from the modules that define them when a flag is parsed or its help shown
-#: (building the parser imports neither scipy nor numba)
-_PARTS = LazyChoices("ionic_usd.evaluate.sections", "PARTS")
-_MEASURES = LazyChoices("ionic_usd.evaluate.fit_core", "FIT_MEASURES")
-_MODELS = LazyChoices("ionic_usd.column.volute", "VOLUTE_MODELS")
-
-
 def add_evaluate_parser(subparsers: Any, *, arguments: bool = True) -> None:
     """Add the ``evaluate`` subcommand (``arguments=False``: its name and help only)."""
     p = subparsers.add_parser(
@@ -356,9 +348,10 @@ def add_evaluate_parser(subparsers: Any, *, arguments: bool = True) -> None:
     p.set_defaults(func=cmd_evaluate)
     if not arguments:
         return
-    p.add_argument("--part", choices=_PARTS, metavar="PART",
-                   help="which section, one of %(choices)s, for --reference FILE (else "
-                   "--reference PART=FILE)")
+    from ionic_usd.evaluate.sections import PARTS
+
+    p.add_argument("--part", choices=PARTS,
+                   help="which section, for --reference FILE (else --reference PART=FILE)")
     src = p.add_mutually_exclusive_group()
     src.add_argument("--usd", type=Path, help="USD file from `ionic-usd column` or `asset`")
     src.add_argument("--config", type=Path, help="column TOML (see ionic-usd column "
@@ -395,13 +388,15 @@ def add_fit_parser(subparsers: Any, *, arguments: bool = True) -> None:
     p.set_defaults(func=cmd_fit)
     if not arguments:
         return
-    p.add_argument("part", choices=LazyChoices("ionic_usd.evaluate.sections", "PARTS",
-                                               extra=("column",)), metavar="PART",
-                   help="what to fit, one of %(choices)s (column: a whole column from --scan)")
+    from ionic_usd.column.volute import VOLUTE_MODELS
+    from ionic_usd.evaluate import FIT_MEASURES
+    from ionic_usd.evaluate.sections import PARTS
+
+    p.add_argument("part", choices=(*PARTS, "column"),
+                   help="what to fit (column: a whole column from --scan)")
     _reference_flags(p, required=False)
-    p.add_argument("--measure", choices=_MEASURES, default="hausdorff", metavar="MEASURE",
-                   help="what to minimise, one of %(choices)s [default hausdorff: the paper's "
-                   "'weak Fréchet']")
+    p.add_argument("--measure", choices=FIT_MEASURES, default="hausdorff",
+                   help="what to minimise [default hausdorff: the paper's 'weak Fréchet']")
     add_output_flags(p, "TOML file to write (default: print the TOML); `fit column`: the "
                      "output folder (fitted column USD, scan points USD, PNG)", type=Path,
                      force_help="overwrite existing output files")
@@ -413,9 +408,8 @@ def add_fit_parser(subparsers: Any, *, arguments: bool = True) -> None:
     add_report_flags(p, curves="write the aligned reference and fitted curves as CSV (part, "
                      "curve, index, x, y)", json="write the fit (schema ionic_usd.evaluate/1)",
                      plot="write an overlay of the fitted curve (PNG)")
-    p.add_argument("--model", choices=_MODELS, metavar="MODEL",
-                   help="volute: fit only this model, one of %(choices)s [default: every "
-                   "model, best chosen]")
+    p.add_argument("--model", choices=VOLUTE_MODELS,
+                   help="volute: fit only this model [default: every model, best chosen]")
     p.add_argument("--section", action="store_true",
                    help="shaft: the reference is a closed fluted cross-section")
     p.add_argument("--scan", type=Path,
