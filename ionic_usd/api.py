@@ -8,13 +8,8 @@
 >>> col.save(pathlib.Path(tempfile.mkdtemp()) / "column.usda").name
 'column.usda'
 
-A temple in five lines (the default scene of ``ionic-usd temple``)::
-
-    import ionic_usd as iu
-    temple = iu.Temple.portunus()                    # the Temple of Portunus, Rome
-    temple = temple.with_hypotheses("flutes-20")     # optional: apply a hypothesis in the layout
-    report = temple.save("PortunusTemple")           # Temple.usda, layers, the column asset
-    print(report.triangles, report.instances)
+A temple in five lines (the default scene of ``ionic-usd temple``) is the example of
+:class:`Temple`.
 
 Everything here forwards to the modules that do the work (:mod:`ionic_usd.column`,
 :mod:`ionic_usd.temple`, :mod:`ionic_usd.usd`); it adds no behaviour of its own.
@@ -100,7 +95,18 @@ def portunus_column(**options: Any) -> Column:
 
 @dataclass(frozen=True)
 class Temple:
-    """A temple description (cuboids, colonnade, hypotheses), ready to compose as USD."""
+    """A temple description (cuboids, colonnade, hypotheses), ready to compose as USD.
+
+    A temple in five lines (run as a slow test: it builds the whole scene):
+
+    >>> import pathlib, tempfile
+    >>> import ionic_usd as iu
+    >>> temple = iu.Temple.portunus()                  # the Temple of Portunus, Rome
+    >>> temple = temple.with_hypotheses("flutes-20")   # optional: a hypothesis in the layout
+    >>> report = temple.save(pathlib.Path(tempfile.mkdtemp()) / "PortunusTemple")
+    >>> report.instances, report.prototypes, report.root.name
+    (18, 3, 'Temple.usda')
+    """
 
     layout: TempleLayout
     column: ColumnParams | None = None
