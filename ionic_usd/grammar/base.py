@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 
 from ionic_usd.checks import check_fields
 from ionic_usd.errors import GrammarError, ParameterError
-from ionic_usd.grammar._lexer import Token, split_top_level, token_number, tokenize
+from ionic_usd.grammar.lexer import Token, split_top_level, token_number, tokenize
 
 __all__ = [
     "TorusFloor",

@@ -8,7 +8,7 @@ case-insensitive; numbers are decimal, optionally signed, with an optional expon
 
 Every syntax or range error raises :class:`~ionic_usd.errors.GrammarError` (``grammar='scroll'``)
 naming the 1-based module, with a caret under the offending token; nothing else escapes
-:func:`parse_scroll`. Tokens come from the grammars' shared lexer (:mod:`ionic_usd.grammar._lexer`).
+:func:`parse_scroll`. Tokens come from the grammars' shared lexer (:mod:`ionic_usd.grammar.lexer`).
 
 Presets S1 and S2 (the paper's examples) ship in ``ionic_usd/data/scroll_presets.toml``.
 """
@@ -22,7 +22,7 @@ from functools import lru_cache
 from importlib import resources
 
 from ionic_usd.errors import GrammarError, ParameterError
-from ionic_usd.grammar._lexer import NUMBER_RE, Token, split_top_level, tokenize
+from ionic_usd.grammar.lexer import NUMBER_RE, Token, split_top_level, tokenize
 
 __all__ = [
     "ScrollRing",
