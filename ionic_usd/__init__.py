@@ -30,8 +30,7 @@ Everything else lives in the subpackages: ``geometry`` (numpy kernel), ``grammar
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from ionic_usd.lazy import lazy_attributes
 
 __version__ = "0.1.0"
 
@@ -63,14 +62,4 @@ _API = {
 __all__ = ["__version__", *_API]
 
 
-def __getattr__(name: str) -> Any:
-    module = _API.get(name)
-    if module is None:
-        raise AttributeError(f"module 'ionic_usd' has no attribute {name!r}")
-    value = getattr(importlib.import_module(module), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(__all__)
+__getattr__, __dir__ = lazy_attributes(__name__, _API, globals())

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from ionic_usd.cli_flags import (
+    add_command,
     add_config_flags,
     add_dataclass_flags,
     add_memory_flag,
@@ -249,9 +250,7 @@ _AddCommand = Callable[[Any, bool], None]
 
 def _command(sub: Any, name: str, help: str, description: str,
              func: Callable[[argparse.Namespace], int]) -> argparse.ArgumentParser:
-    p = sub.add_parser(name, help=help, description=description)
-    p.set_defaults(func=func)
-    return p
+    return add_command(sub, name, func, help=help, description=description)
 
 
 def _add_shaft(sub: Any, full: bool) -> None:

@@ -13,11 +13,12 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
 __all__ = [
+    "add_command",
     "add_config_flags",
     "add_dataclass_flags",
     "add_memory_flag",
@@ -28,6 +29,18 @@ __all__ = [
     "collect_flags",
     "parse_bool",
 ]
+
+
+def add_command(subparsers: Any, name: str, func: Callable[[argparse.Namespace], int], *,
+                help: str, description: str) -> argparse.ArgumentParser:
+    """Add subcommand ``name`` running ``func(args)``; its flags are the caller's to add.
+
+    A caller building only the name and help (``ionic-usd --help`` lists every command, but
+    parses with the flags of one) adds nothing more.
+    """
+    p: argparse.ArgumentParser = subparsers.add_parser(name, help=help, description=description)
+    p.set_defaults(func=func)
+    return p
 
 
 def parse_bool(text: str) -> bool:

@@ -13,6 +13,7 @@ import pytest
 import ionic_usd
 import ionic_usd.api
 import ionic_usd.checks
+import ionic_usd.lazy
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -20,7 +21,8 @@ ROOT = Path(__file__).resolve().parent.parent
 def _doctests(slow: bool) -> list[doctest.DocTest]:
     """The doctests of the API modules; the temple's (a whole scene build) is the slow one."""
     finder = doctest.DocTestFinder()
-    tests = [t for m in (ionic_usd.api, ionic_usd.checks) for t in finder.find(m) if t.examples]
+    tests = [t for m in (ionic_usd.api, ionic_usd.checks, ionic_usd.lazy) for t in finder.find(m)
+             if t.examples]
     return [t for t in tests if (t.name == "ionic_usd.api.Temple") == slow]
 
 

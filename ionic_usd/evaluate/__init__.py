@@ -8,8 +8,7 @@ its flags.
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from ionic_usd.lazy import lazy_attributes
 
 #: public name → the module that defines it
 _NAMES = {
@@ -61,14 +60,4 @@ FIT_MEASURES = ("hausdorff", "average_error", "discrete_frechet", "frechet")
 __all__ = ["FIT_MEASURES", *_NAMES]
 
 
-def __getattr__(name: str) -> Any:
-    module = _NAMES.get(name)
-    if module is None:
-        raise AttributeError(f"module 'ionic_usd.evaluate' has no attribute {name!r}")
-    value = getattr(importlib.import_module(module), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(__all__)
+__getattr__, __dir__ = lazy_attributes(__name__, _NAMES, globals())

@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ionic_usd.cli_flags import (
+    add_command,
     add_config_flags,
     add_output_flags,
     add_report_flags,
@@ -335,8 +336,8 @@ def _reference_flags(p: argparse.ArgumentParser, *, multiple: bool = False,
 
 def add_evaluate_parser(subparsers: Any, *, arguments: bool = True) -> None:
     """Add the ``evaluate`` subcommand (``arguments=False``: its name and help only)."""
-    p = subparsers.add_parser(
-        "evaluate",
+    p = add_command(
+        subparsers, "evaluate", cmd_evaluate,
         help="compare a section of the model with a reference curve (paper Table 6)",
         description="Cut a section of the model — from a USD file written by ionic-usd "
         "(--usd; composed, active variants) or built from parameters (--config, default the "
@@ -345,7 +346,6 @@ def add_evaluate_parser(subparsers: Any, *, arguments: bool = True) -> None:
         "length. Sections: base half-profile (r, y), shaft silhouette (r, y), the front-right "
         "volute's outer spiral (x, y) on the front face.",
     )
-    p.set_defaults(func=cmd_evaluate)
     if not arguments:
         return
     from ionic_usd.evaluate.sections import PARTS
@@ -376,8 +376,8 @@ def add_evaluate_parser(subparsers: Any, *, arguments: bool = True) -> None:
 
 def add_fit_parser(subparsers: Any, *, arguments: bool = True) -> None:
     """Add the ``fit`` subcommand (``arguments=False``: its name and help only)."""
-    p = subparsers.add_parser(
-        "fit",
+    p = add_command(
+        subparsers, "fit", cmd_fit,
         help="fit a part's parameters to a reference curve (writes column TOML)",
         description="Fit the volute (R, c, d, start angle, circuits, placement), the base "
         "(Bézier grammar control points; module layout suggested unless --modules) or the "
@@ -385,7 +385,6 @@ def add_fit_parser(subparsers: Any, *, arguments: bool = True) -> None:
         "evolution, then least squares, then Nelder-Mead on --measure. Prints the measures "
         "before and after and writes TOML for `ionic-usd column --config`.",
     )
-    p.set_defaults(func=cmd_fit)
     if not arguments:
         return
     from ionic_usd.column.volute import VOLUTE_MODELS

@@ -7,7 +7,7 @@ import math
 from pathlib import Path
 from typing import Any
 
-from ionic_usd.cli_flags import add_output_flags, add_variant_flag
+from ionic_usd.cli_flags import add_command, add_output_flags, add_variant_flag
 from ionic_usd.errors import ParameterError
 
 __all__ = ["add_parser", "cmd_export", "parse_scale"]
@@ -84,8 +84,8 @@ def add_parser(sub: Any, parser_class: Any = None, *, arguments: bool = True) ->
     ``parser_class`` is unused: ``add_subparsers(parser_class=…)`` already sets it.
     """
     del parser_class
-    p = sub.add_parser(
-        "export",
+    p = add_command(
+        sub, "export", cmd_export,
         help="export a USD scene as glTF/GLB, usdz, STL or 3MF",
         description="Export SCENE (any scene ionic_usd writes: shaft, column, asset, temple, "
         "city) by the output's extension: .glb/.gltf (glTF 2.0 for game engines and the web: "
@@ -93,7 +93,6 @@ def add_parser(sub: Any, parser_class: Any = None, *, arguments: bool = True) ->
         "(ARKit: one flattened package, textures inside), .stl/.3mf (3D printing: one closed "
         "solid per column, parts unioned, at --scale).",
     )
-    p.set_defaults(func=cmd_export)
     if not arguments:
         return
     p.add_argument("scene", type=Path, help="USD file to export")

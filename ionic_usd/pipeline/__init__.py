@@ -7,8 +7,7 @@ The names below are imported on first use, so the ``city`` subcommand's flags
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from ionic_usd.lazy import lazy_attributes
 
 _NAMES = {
     "CityOptions": "ionic_usd.pipeline.city",
@@ -23,14 +22,4 @@ __all__ = ["CityOptions", "PrototypeCache", "TempleSpec", "build_city", "build_p
            "temple_spec"]
 
 
-def __getattr__(name: str) -> Any:
-    module = _NAMES.get(name)
-    if module is None:
-        raise AttributeError(f"module 'ionic_usd.pipeline' has no attribute {name!r}")
-    value = getattr(importlib.import_module(module), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(__all__)
+__getattr__, __dir__ = lazy_attributes(__name__, _NAMES, globals())

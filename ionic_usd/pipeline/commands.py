@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ionic_usd.cli_flags import add_command
 from ionic_usd.errors import ParameterError
 
 __all__ = ["add_city_parser", "cmd_city"]
@@ -84,8 +85,8 @@ def cmd_city(args: argparse.Namespace) -> int:
 def add_city_parser(sub, parser_class, *, arguments: bool = True) -> None:
     """Add ``city`` to the CLI's subparsers (``parser_class``: the CLI's one-line-error
     parser; ``arguments=False``: its name and help only, for ``ionic-usd --help``)."""
-    p = sub.add_parser(
-        "city",
+    p = add_command(
+        sub, "city", cmd_city,
         help="build a city of temples and colonnades (grid, or a GeoJSON plan)",
         description="Build FOLDER/City.usda (+ Instances.usdc, crate): temples fitted to their "
         "lots and colonnades along the streets, from a GeoJSON plan (--plan; metres in a local "
@@ -93,7 +94,6 @@ def add_city_parser(sub, parser_class, *, arguments: bool = True) -> None:
         "a local cluster, or --scheduler) into FOLDER/Temples through a content-addressed "
         "cache, so a rebuild builds only what changed.",
     )
-    p.set_defaults(func=cmd_city)
     if not arguments:
         return
     from ionic_usd.city.layout import DEFAULT_INSTANCER_THRESHOLD
