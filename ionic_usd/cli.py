@@ -166,43 +166,26 @@ def cmd_asset(args: argparse.Namespace) -> int:
 
 
 def cmd_temple(args: argparse.Namespace) -> int:
-    from ionic_usd.column.column import column_params_from_mapping, portunus_column_params
+    from ionic_usd.api import Temple
     from ionic_usd.io import check_output_folder
-    from ionic_usd.params import load_toml
-    from ionic_usd.temple.layout import layout_from_mapping, portunus_layout
-    from ionic_usd.usd.temple import compose_temple
+    from ionic_usd.resources import check_estimate, estimate_temple
 
     check_output_folder(args.output, force=args.force)
-    column = mouldings = None
     if args.config:
-        data = load_toml(args.config)
-        from ionic_usd.temple.mouldings import mouldings_from_tables
-
-        mouldings = mouldings_from_tables(data, context=str(args.config))
-        col_tables = {k: data.pop(k) for k in ("column", "shaft", "capital", "volute")
-                      if k in data}
-        layout = layout_from_mapping(data, context=str(args.config))
+        temple = Temple.from_toml(args.config)
     else:
-        col_tables = {}
-        layouts = {"portunus": portunus_layout}
+        layouts = {"portunus": Temple.portunus}
         if args.layout not in layouts:
             raise ParameterError("--layout", args.layout,
                                  f"one of the built-in layouts: {', '.join(layouts)} "
                                  "(or describe a temple in a TOML file: --config)")
-        layout = layouts[args.layout]()
-    p = layout.params
-    base = portunus_column_params(height=p.columns_height,
-                                  lower_diameter=p.columns_lower_diameter)
-    if col_tables:
-        column = column_params_from_mapping(col_tables, context=str(args.config), base=base)
-    from ionic_usd.resources import check_estimate, estimate_temple
-
+        temple = layouts[args.layout]()
+    layout = temple.layout
     n_cuboids = sum(len(c) for c in layout.cuboids.values())
-    check_estimate(estimate_temple(column or base, args.texture_size, n_cuboids),
+    check_estimate(estimate_temple(temple.column_params, args.texture_size, n_cuboids),
                    args.max_memory)
-    rep = compose_temple(args.output, layout, column, force=args.force,
-                         texture_size=args.texture_size, seed=args.seed,
-                         detail=args.detail, mouldings=mouldings)
+    rep = temple.save(args.output, force=args.force, texture_size=args.texture_size,
+                      seed=args.seed, detail=args.detail)
     print(f"wrote {rep.root} ({layout.name}): {rep.files} files, {rep.prims} prims, "
           f"{rep.instances} column instances of {rep.prototypes} prototypes, "
           f"{rep.triangles:,} triangles, {len(rep.hypotheses)} hypotheses, {rep.seconds:.2f} s")

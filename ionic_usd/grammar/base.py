@@ -29,6 +29,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 from ionic_usd.checks import check_fields
 from ionic_usd.errors import GrammarError, ParameterError
@@ -154,6 +155,7 @@ class _ParsedBase:
 
     modules: tuple
     source: str
+    version: ClassVar[int]
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "modules", tuple(self.modules))
@@ -168,10 +170,10 @@ class _ParsedBase:
         """Canonical letter form; parses back to an equal value."""
         return ", ".join(m.to_string() for m in self.modules)
 
-    def located(self):
+    def located(self) -> TorusBase | BezierBase:
         """This grammar with token offsets: itself if parsed from text, else re-parsed."""
         if self.source:
-            return self
+            return self  # type: ignore[return-value]  # (only the two subclasses exist)
         return (parse_base_v1 if self.version == 1 else parse_base_v2)(self.to_string())
 
 
@@ -182,7 +184,7 @@ class TorusBase(_ParsedBase):
     modules: tuple[TorusModule, ...]
     source: str = field(default="", compare=False, repr=False)
 
-    version = 1
+    version: ClassVar[int] = 1
     grammar_name = V1
 
 
@@ -193,7 +195,7 @@ class BezierBase(_ParsedBase):
     modules: tuple[BezierModule, ...]
     source: str = field(default="", compare=False, repr=False)
 
-    version = 2
+    version: ClassVar[int] = 2
     grammar_name = V2
 
 
