@@ -8,13 +8,8 @@
 >>> col.save(pathlib.Path(tempfile.mkdtemp()) / "column.usda").name
 'column.usda'
 
-A temple in five lines (the default scene of ``ionic-usd temple``)::
-
-    import ionic_usd as iu
-    temple = iu.Temple.portunus()                    # the Temple of Portunus, Rome
-    temple = temple.with_hypotheses("flutes-20")     # optional: apply a hypothesis in the layout
-    report = temple.save("PortunusTemple")           # Temple.usda, layers, the column asset
-    print(report.triangles, report.instances)
+A temple in five lines (the default scene of ``ionic-usd temple``) is the example of
+:class:`Temple`.
 
 Everything here forwards to the modules that do the work (:mod:`ionic_usd.column`,
 :mod:`ionic_usd.temple`, :mod:`ionic_usd.usd`); it adds no behaviour of its own.
@@ -22,6 +17,7 @@ Everything here forwards to the modules that do the work (:mod:`ionic_usd.column
 
 from __future__ import annotations
 
+import dataclasses
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -32,6 +28,8 @@ if TYPE_CHECKING:  # imported lazily at run time: `import ionic_usd` stays light
     from ionic_usd.column.column import ColumnParams
     from ionic_usd.geometry.mesh import Mesh
     from ionic_usd.temple.layout import TempleLayout
+    from ionic_usd.temple.mouldings import MouldingParams
+    from ionic_usd.usd.temple import TempleReport
 
 __all__ = ["Column", "Temple", "portunus_column", "column"]
 
@@ -100,10 +98,22 @@ def portunus_column(**options: Any) -> Column:
 
 @dataclass(frozen=True)
 class Temple:
-    """A temple description (cuboids, colonnade, hypotheses), ready to compose as USD."""
+    """A temple description (cuboids, colonnade, hypotheses), ready to compose as USD.
+
+    A temple in five lines (run as a slow test: it builds the whole scene):
+
+    >>> import pathlib, tempfile
+    >>> import ionic_usd as iu
+    >>> temple = iu.Temple.portunus()                  # the Temple of Portunus, Rome
+    >>> temple = temple.with_hypotheses("flutes-20")   # optional: a hypothesis in the layout
+    >>> report = temple.save(pathlib.Path(tempfile.mkdtemp()) / "PortunusTemple")
+    >>> report.instances, report.prototypes, report.root.name
+    (18, 3, 'Temple.usda')
+    """
 
     layout: TempleLayout
     column: ColumnParams | None = None
+    mouldings: MouldingParams | None = None
 
     @classmethod
     def portunus(cls) -> Temple:
@@ -115,23 +125,53 @@ class Temple:
 
     @classmethod
     def from_toml(cls, path: str | os.PathLike) -> Temple:
-        """A temple described in TOML with the schema of ``ionic_usd/data/portunus.toml``."""
-        from ionic_usd.temple.layout import layout_from_toml
+        """A temple described in TOML with the schema of ``ionic_usd/data/portunus.toml``.
 
-        return cls(layout_from_toml(path))
+        The file may add ``[column]``, ``[shaft]``, ``[capital]`` and ``[volute]`` tables
+        for its column (over the Portunus column scaled to the description's columns) and a
+        ``[mouldings]`` table: what ``ionic-usd temple --config`` reads.
+        """
+        from ionic_usd.column.column import column_params_from_mapping
+        from ionic_usd.params import load_toml
+        from ionic_usd.temple.layout import layout_from_mapping
+        from ionic_usd.temple.mouldings import mouldings_from_tables
+
+        data = load_toml(path)
+        mouldings = mouldings_from_tables(data, context=str(path))
+        tables = {k: data.pop(k) for k in ("column", "shaft", "capital", "volute") if k in data}
+        temple = cls(layout_from_mapping(data, context=str(path)), None, mouldings)
+        if not tables:
+            return temple
+        column = column_params_from_mapping(tables, context=str(path),
+                                            base=temple.column_params)
+        return dataclasses.replace(temple, column=column)
+
+    @property
+    def column_params(self) -> ColumnParams:
+        """The column the temple instances: :attr:`column`, else the Portunus column at the
+        description's column height and lower diameter."""
+        if self.column is not None:
+            return self.column
+        from ionic_usd.column.column import portunus_column_params
+
+        p = self.layout.params
+        return portunus_column_params(height=p.columns_height,
+                                      lower_diameter=p.columns_lower_diameter)
 
     def with_hypotheses(self, *ids: str) -> Temple:
         """The Portunus layout with the named hypotheses applied in the geometry itself."""
         from ionic_usd.temple.layout import portunus_layout
 
-        return Temple(portunus_layout(apply=ids), self.column)
+        return dataclasses.replace(self, layout=portunus_layout(apply=ids))
 
-    def save(self, folder: str | os.PathLike, *, force: bool = False, **options: Any):
+    def save(self, folder: str | os.PathLike, *, force: bool = False,
+             **options: Any) -> TempleReport:
         """Compose the temple folder (``Temple.usda`` + layers + the column asset).
 
         ``options`` go to :func:`ionic_usd.usd.temple.compose_temple` (``texture_size``,
-        ``seed``). Returns its :class:`~ionic_usd.usd.temple.TempleReport`.
+        ``seed``, ``detail``). Returns its :class:`~ionic_usd.usd.temple.TempleReport`.
         """
         from ionic_usd.usd.temple import compose_temple
 
-        return compose_temple(folder, self.layout, self.column, force=force, **options)
+        return compose_temple(folder, self.layout, self.column, force=force,
+                              mouldings=self.mouldings, **options)

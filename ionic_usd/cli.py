@@ -7,64 +7,24 @@ Every command validates all input before writing anything; errors print one line
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import sys
 import time
+from collections.abc import Callable, Collection, Sequence
 from pathlib import Path
+from typing import Any
 
-from ionic_usd.errors import IonicError
+from ionic_usd.cli_flags import (
+    add_command,
+    add_config_flags,
+    add_dataclass_flags,
+    add_memory_flag,
+    add_output_flags,
+    add_stone_flags,
+    collect_flags,
+)
+from ionic_usd.errors import IonicError, ParameterError
 
 __all__ = ["main", "build_parser"]
-
-
-# -- parameter flags from dataclasses ----------------------------------------------------------
-def add_dataclass_flags(
-    parser: argparse.ArgumentParser,
-    cls,
-    docs: dict[str, tuple[str, str, str]],
-    *,
-    prefix: str = "",
-    title: str = "parameters",
-) -> None:
-    """One ``--flag`` per dataclass field; help shows the paper letter, unit and default."""
-    group = parser.add_argument_group(title)
-    defaults = cls()
-    for f in dataclasses.fields(cls):
-        if f.name.startswith("_"):
-            continue
-        letter, unit, text = docs.get(f.name, ("", "", f.name.replace("_", " ")))
-        default = getattr(defaults, f.name)
-        typ = type(default) if default is not None else str
-        if typ is bool:
-            typ = _parse_bool
-        tag = f"{letter}, " if letter else ""
-        group.add_argument(
-            f"--{prefix}{f.name.replace('_', '-')}",
-            dest=f"{prefix.replace('-', '_')}{f.name}",
-            type=typ,
-            default=None,
-            metavar=unit.upper() if unit else "VALUE",
-            help=f"{text} [{tag}{unit}; default {default}]",
-        )
-
-
-def _parse_bool(text: str) -> bool:
-    low = text.lower()
-    if low in ("1", "true", "yes", "on"):
-        return True
-    if low in ("0", "false", "no", "off"):
-        return False
-    raise argparse.ArgumentTypeError(f"expected true/false, got {text!r}")
-
-
-def collect_flags(args: argparse.Namespace, cls, *, prefix: str = "") -> dict:
-    """The dataclass fields given on the command line (None = not given)."""
-    out = {}
-    for f in dataclasses.fields(cls):
-        v = getattr(args, f"{prefix.replace('-', '_')}{f.name}", None)
-        if v is not None:
-            out[f.name] = v
-    return out
 
 
 # -- commands ----------------------------------------------------------------------------------
@@ -77,8 +37,6 @@ def _shaft_params(args: argparse.Namespace):
         data = load_toml(args.config)
         section = data.get("shaft", data)
         if not isinstance(section, dict):
-            from ionic_usd.errors import ParameterError
-
             raise ParameterError("shaft", section, "a TOML table", context=str(args.config))
         base = dataclass_from_mapping(ShaftParams, section, context=f"{args.config} [shaft]")
     flags = collect_flags(args, ShaftParams)
@@ -178,16 +136,15 @@ def cmd_column(args: argparse.Namespace) -> int:
 
 
 def cmd_asset(args: argparse.Namespace) -> int:
-    from ionic_usd.errors import ParameterError
     from ionic_usd.io import check_output_folder
     from ionic_usd.resources import check_estimate, estimate_asset
     from ionic_usd.usd.column_asset import ColumnAssetOptions, build_column_asset
 
     check_output_folder(args.output, force=args.force)
     params = _column_params(args)
-    user = None
+    user: dict[str, str] | None = None
     if args.texture:
-        user: dict[str, str] = {}
+        user = {}
         roles = ("basecolor", "roughness", "normal")
         for item in args.texture:
             role, sep, path = item.partition("=")
@@ -209,45 +166,26 @@ def cmd_asset(args: argparse.Namespace) -> int:
 
 
 def cmd_temple(args: argparse.Namespace) -> int:
-    from ionic_usd.column.column import column_params_from_mapping, portunus_column_params
+    from ionic_usd.api import Temple
     from ionic_usd.io import check_output_folder
-    from ionic_usd.params import load_toml
-    from ionic_usd.temple.layout import layout_from_mapping, portunus_layout
-    from ionic_usd.usd.temple import compose_temple
+    from ionic_usd.resources import check_estimate, estimate_temple
 
     check_output_folder(args.output, force=args.force)
-    column = mouldings = None
     if args.config:
-        data = load_toml(args.config)
-        from ionic_usd.temple.mouldings import mouldings_from_tables
-
-        mouldings = mouldings_from_tables(data, context=str(args.config))
-        col_tables = {k: data.pop(k) for k in ("column", "shaft", "capital", "volute")
-                      if k in data}
-        layout = layout_from_mapping(data, context=str(args.config))
+        temple = Temple.from_toml(args.config)
     else:
-        col_tables = {}
-        layouts = {"portunus": portunus_layout}
+        layouts = {"portunus": Temple.portunus}
         if args.layout not in layouts:
-            from ionic_usd.errors import ParameterError
-
             raise ParameterError("--layout", args.layout,
                                  f"one of the built-in layouts: {', '.join(layouts)} "
                                  "(or describe a temple in a TOML file: --config)")
-        layout = layouts[args.layout]()
-    p = layout.params
-    base = portunus_column_params(height=p.columns_height,
-                                  lower_diameter=p.columns_lower_diameter)
-    if col_tables:
-        column = column_params_from_mapping(col_tables, context=str(args.config), base=base)
-    from ionic_usd.resources import check_estimate, estimate_temple
-
+        temple = layouts[args.layout]()
+    layout = temple.layout
     n_cuboids = sum(len(c) for c in layout.cuboids.values())
-    check_estimate(estimate_temple(column or base, args.texture_size, n_cuboids),
+    check_estimate(estimate_temple(temple.column_params, args.texture_size, n_cuboids),
                    args.max_memory)
-    rep = compose_temple(args.output, layout, column, force=args.force,
-                         texture_size=args.texture_size, seed=args.seed,
-                         detail=args.detail, mouldings=mouldings)
+    rep = temple.save(args.output, force=args.force, texture_size=args.texture_size,
+                      seed=args.seed, detail=args.detail)
     print(f"wrote {rep.root} ({layout.name}): {rep.files} files, {rep.prims} prims, "
           f"{rep.instances} column instances of {rep.prototypes} prototypes, "
           f"{rep.triangles:,} triangles, {len(rep.hypotheses)} hypotheses, {rep.seconds:.2f} s")
@@ -257,13 +195,13 @@ def cmd_temple(args: argparse.Namespace) -> int:
 
 
 def cmd_preview(args: argparse.Namespace) -> int:
-    from ionic_usd.errors import ParameterError
     from ionic_usd.preview import render_preview
 
     try:
-        background = tuple(float(x) for x in args.background.split(","))
+        red, green, blue = (float(x) for x in args.background.split(","))
     except ValueError:
         raise ParameterError("--background", args.background, "three numbers R,G,B") from None
+    background = (red, green, blue)
     s = render_preview(args.scene, args.output, width=args.width, height=args.height,
                        camera=args.camera, lod=args.lod, background=background,
                        samples=args.samples, ground=not args.no_ground, force=args.force)
@@ -284,23 +222,164 @@ def _check_memory(what: str, triangles: int, args: argparse.Namespace) -> None:
                    args.max_memory)
 
 
-def _add_memory_flag(p: argparse.ArgumentParser) -> None:
-    from ionic_usd.resources import DEFAULT_MAX_MEMORY_GB
-
-    p.add_argument("--max-memory", type=float, metavar="GB", default=None,
-                   help="refuse work whose estimated peak memory exceeds this "
-                   f"[default {DEFAULT_MAX_MEMORY_GB:g} GB]")
-
-
 # -- parser --------------------------------------------------------------------------------------
 class _Parser(argparse.ArgumentParser):
     def error(self, message: str):  # one line, status 2 (argparse's own convention)
         self.exit(2, f"{self.prog}: error: {message}\n")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    from ionic_usd import __version__
+_AddCommand = Callable[[Any, bool], None]
+
+
+def _command(sub: Any, name: str, help: str, description: str,
+             func: Callable[[argparse.Namespace], int]) -> argparse.ArgumentParser:
+    return add_command(sub, name, func, help=help, description=description)
+
+
+def _add_shaft(sub: Any, full: bool) -> None:
+    p = _command(sub, "shaft", "write the fluted column shaft as USD",
+                 "Build the fluted shaft (paper Table 1, parameters $a-$i) and write it as "
+                 "USD (.usda text, .usdc/.usd binary, by extension). Parameters come from "
+                 "defaults (the Temple of Portunus), then --config TOML ([shaft] table), then "
+                 "flags.", cmd_shaft)
+    if not full:
+        return
     from ionic_usd.column.shaft import DEFAULT_TRIANGLE_BUDGET, SHAFT_PARAMETER_DOCS, ShaftParams
+
+    add_output_flags(p, "output USD file", default="shaft.usda")
+    add_config_flags(p, "TOML file with a [shaft] table", print_config=True)
+    p.add_argument("--max-triangles", type=int, default=DEFAULT_TRIANGLE_BUDGET,
+                   help="refuse a level of detail above this triangle count "
+                   f"[default {DEFAULT_TRIANGLE_BUDGET:,}]")
+    add_dataclass_flags(p, ShaftParams, SHAFT_PARAMETER_DOCS, title="shaft parameters")
+    add_memory_flag(p)
+
+
+def _add_column(sub: Any, full: bool) -> None:
+    p = _command(sub, "column", "write a whole column (base, shaft, capital) as USD",
+                 "Build base + shaft + capital (default: the Temple of Portunus column) and "
+                 "write the parts as separate meshes under one Xform. Parameters: defaults, "
+                 "then --config TOML ([column], [shaft], [capital], [volute] tables; see "
+                 "--print-config), then flags.", cmd_column)
+    if not full:
+        return
+    add_output_flags(p, "output USD file", default="column.usda")
+    add_config_flags(p, "TOML file (see --print-config)", print_config=True)
+    p.add_argument("--part", choices=list(_PARTS), default="all", help="which parts to write")
+    p.add_argument("--lod", help="level of detail: high, medium, low or custom")
+    p.add_argument("--base", help="base preset (G1, G2, attic_bezier, attic_bezier_plinth) or "
+                   "a base grammar string")
+    p.add_argument("--scroll", help="scroll preset (S1, S2) or ring grammar 'R0.7 P0.05, …'")
+    add_memory_flag(p)
+
+
+def _add_temple(sub: Any, full: bool) -> None:
+    p = _command(sub, "temple",
+                 "compose a temple scene (default: the Temple of Portunus) — the main job",
+                 "Write a temple as a USD assembly: Temple.usda (root) with podium, cella, "
+                 "entablature, roof and colonnade layers, the instanced column asset, "
+                 "textures, and one variant set per reconstruction hypothesis (layers/). Your "
+                 "overrides.usda is kept.", cmd_temple)
+    if not full:
+        return
+    add_output_flags(p, "output folder", default="PortunusTemple",
+                     force_help="rebuild an existing folder (atomically; overrides.usda is "
+                     "kept)")
+    add_config_flags(p, "temple TOML (schema of ionic_usd/data/portunus.toml; may add "
+                     "[column], [shaft], [capital], [volute] tables for the column)")
+    p.add_argument("--layout", default="portunus", help="built-in temple layout (portunus)")
+    add_stone_flags(p)
+    p.add_argument("--detail", choices=("plain", "moulded", "carved"), default=None,
+                   help="also write the architectural detail (mouldings, dentils, tiles, the "
+                   "carved capital) as the variant set `detail` with plain, moulded and carved, "
+                   "selecting this one [default: no detail set; a preview feature]")
+    add_memory_flag(p)
+
+
+def _add_asset(sub: Any, full: bool) -> None:
+    p = _command(sub, "asset", "write the column as a USD component asset with variant sets",
+                 "Write IonicColumn/IonicColumn.usda (interface: kind=component, assetInfo, "
+                 "variant sets lod/base/scroll/flutes/form/finish, payload) with "
+                 "Payload/Contents.usda, Geometry.usdc, Materials.usda and Textures/ (xatlas "
+                 "UVs, OpenImageIO stone maps).", cmd_asset)
+    if not full:
+        return
+    add_output_flags(p, "asset folder", default="IonicColumn",
+                     force_help="replace an existing asset folder (atomically)")
+    add_config_flags(p, "column TOML (see ionic-usd column --print-config)")
+    p.add_argument("--base", help="default base (variants are always all four presets)")
+    p.add_argument("--scroll", help=argparse.SUPPRESS)
+    p.add_argument("--lod", help=argparse.SUPPRESS)
+    add_stone_flags(p)
+    p.add_argument("--tx", action="store_true", help="also write mipmapped .tx textures")
+    p.add_argument("--texture", action="append", metavar="ROLE=FILE",
+                   help="use your own travertine map (png/jpg) for ROLE basecolor, roughness "
+                   "or normal; give all three")
+    add_memory_flag(p)
+
+
+def _add_preview(sub: Any, full: bool) -> None:
+    p = _command(sub, "preview", "render a USD scene to a PNG thumbnail (headless OpenGL)",
+                 "Render SCENE with moderngl on a software EGL context (needs the preview "
+                 "extra: pip install 'ionic_usd[preview]'). Instances are drawn from one "
+                 "upload each.", cmd_preview)
+    if not full:
+        return
+    p.add_argument("scene", type=Path, help="USD file to render")
+    add_output_flags(p, "PNG file", default=Path("preview.png"), type=Path,
+                     force_help="overwrite an existing PNG")
+    p.add_argument("--width", type=int, default=800)
+    p.add_argument("--height", type=int, default=600)
+    p.add_argument("--camera", choices=["auto", "front", "three-quarter"], default="auto")
+    p.add_argument("--lod", help="select this lod variant on every prim that has one")
+    p.add_argument("--background", default="0.80,0.84,0.89", help="R,G,B in [0, 1]")
+    p.add_argument("--samples", type=int, default=4, help="MSAA samples")
+    p.add_argument("--no-ground", action="store_true", help="no ground plane")
+
+
+def _add_city(sub: Any, full: bool) -> None:
+    from ionic_usd.pipeline.commands import add_city_parser
+
+    add_city_parser(sub, _Parser, arguments=full)
+
+
+def _add_evaluate(sub: Any, full: bool) -> None:
+    from ionic_usd.evaluate.commands import add_evaluate_parser
+
+    add_evaluate_parser(sub, arguments=full)
+
+
+def _add_fit(sub: Any, full: bool) -> None:
+    from ionic_usd.evaluate.commands import add_fit_parser
+
+    add_fit_parser(sub, arguments=full)
+
+
+def _add_export(sub: Any, full: bool) -> None:
+    from ionic_usd.export.command import add_parser
+
+    add_parser(sub, _Parser, arguments=full)
+
+
+#: subcommand → the function that adds it (in the order ``--help`` lists them)
+_COMMANDS: dict[str, _AddCommand] = {
+    "shaft": _add_shaft, "column": _add_column, "temple": _add_temple, "city": _add_city,
+    "asset": _add_asset, "preview": _add_preview, "evaluate": _add_evaluate, "fit": _add_fit,
+    "export": _add_export,
+}
+
+
+def build_parser(commands: Collection[str] | None = None) -> argparse.ArgumentParser:
+    """The ``ionic-usd`` parser.
+
+    Parameters
+    ----------
+    commands : the subcommands whose flags to add (default: all). The others get only their
+        name and help line, enough for ``ionic-usd --help``: :func:`main` builds the flags of
+        the one command it runs, so ``ionic-usd --version`` imports no numpy and
+        ``ionic-usd temple`` none of the modules behind the other commands' flags.
+    """
+    from ionic_usd import __version__
 
     parser = _Parser(
         prog="ionic-usd",
@@ -312,126 +391,15 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("-q", "--quiet", action="store_true",
                         help="no progress bars and no messages but errors")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
-
-    p = sub.add_parser(
-        "shaft",
-        help="write the fluted column shaft as USD",
-        description="Build the fluted shaft (paper Table 1, parameters $a-$i) and write it as "
-        "USD (.usda text, .usdc/.usd binary, by extension). Parameters come from defaults "
-        "(the Temple of Portunus), then --config TOML ([shaft] table), then flags.",
-    )
-    p.add_argument("-o", "--output", default="shaft.usda", help="output USD file")
-    p.add_argument("--config", type=Path, help="TOML file with a [shaft] table")
-    p.add_argument("--print-config", action="store_true",
-                   help="print the full parameter set as TOML and exit")
-    p.add_argument("--force", action="store_true", help="overwrite an existing output file")
-    p.add_argument("--max-triangles", type=int, default=DEFAULT_TRIANGLE_BUDGET,
-                   help="refuse a level of detail above this triangle count "
-                   f"[default {DEFAULT_TRIANGLE_BUDGET:,}]")
-    add_dataclass_flags(p, ShaftParams, SHAFT_PARAMETER_DOCS, title="shaft parameters")
-    _add_memory_flag(p)
-    p.set_defaults(func=cmd_shaft)
-
-    p = sub.add_parser(
-        "column",
-        help="write a whole column (base, shaft, capital) as USD",
-        description="Build base + shaft + capital (default: the Temple of Portunus column) and "
-        "write the parts as separate meshes under one Xform. Parameters: defaults, then "
-        "--config TOML ([column], [shaft], [capital], [volute] tables; see --print-config), "
-        "then flags.",
-    )
-    p.add_argument("-o", "--output", default="column.usda", help="output USD file")
-    p.add_argument("--config", type=Path, help="TOML file (see --print-config)")
-    p.add_argument("--print-config", action="store_true",
-                   help="print the full parameter set as TOML and exit")
-    p.add_argument("--force", action="store_true", help="overwrite an existing output file")
-    p.add_argument("--part", choices=list(_PARTS), default="all", help="which parts to write")
-    p.add_argument("--lod", help="level of detail: high, medium, low or custom")
-    p.add_argument("--base", help="base preset (G1, G2, attic_bezier, attic_bezier_plinth) or "
-                   "a base grammar string")
-    p.add_argument("--scroll", help="scroll preset (S1, S2) or ring grammar 'R0.7 P0.05, …'")
-    _add_memory_flag(p)
-    p.set_defaults(func=cmd_column)
-
-    p = sub.add_parser(
-        "temple",
-        help="compose a temple scene (default: the Temple of Portunus) — the main job",
-        description="Write a temple as a USD assembly: Temple.usda (root) with podium, cella, "
-        "entablature, roof and colonnade layers, the instanced column asset, textures, and one "
-        "variant set per reconstruction hypothesis (layers/). Your overrides.usda is kept.",
-    )
-    p.add_argument("-o", "--output", default="PortunusTemple", help="output folder")
-    p.add_argument("--config", type=Path,
-                   help="temple TOML (schema of ionic_usd/data/portunus.toml; may add [column], "
-                   "[shaft], [capital], [volute] tables for the column)")
-    p.add_argument("--layout", default="portunus", help="built-in temple layout (portunus)")
-    p.add_argument("--texture-size", type=int, default=1024,
-                   help="texture resolution (px): a power of two, 16-4096 within the default "
-                   "memory limit; 8192 needs about 10 GB (--max-memory 10)")
-    p.add_argument("--seed", type=int, default=7, help="seed of the procedural stone")
-    p.add_argument("--detail", choices=("plain", "moulded", "carved"), default=None,
-                   help="also write the architectural detail (mouldings, dentils, tiles, the "
-                   "carved capital) as the variant set `detail` with plain, moulded and carved, "
-                   "selecting this one [default: no detail set; a preview feature]")
-    p.add_argument("--force", action="store_true",
-                   help="rebuild an existing folder (atomically; overrides.usda is kept)")
-    _add_memory_flag(p)
-    p.set_defaults(func=cmd_temple)
-
-    from ionic_usd.pipeline.commands import add_city_parser
-
-    add_city_parser(sub, _Parser)
-
-    p = sub.add_parser(
-        "asset",
-        help="write the column as a USD component asset with variant sets",
-        description="Write IonicColumn/IonicColumn.usda (interface: kind=component, assetInfo, "
-        "variant sets lod/base/scroll/flutes/form/finish, payload) with Payload/Contents.usda, "
-        "Geometry.usdc, Materials.usda and Textures/ (xatlas UVs, OpenImageIO stone maps).",
-    )
-    p.add_argument("-o", "--output", default="IonicColumn", help="asset folder")
-    p.add_argument("--config", type=Path, help="column TOML (see ionic-usd column --print-config)")
-    p.add_argument("--base", help="default base (variants are always all four presets)")
-    p.add_argument("--scroll", help=argparse.SUPPRESS)
-    p.add_argument("--lod", help=argparse.SUPPRESS)
-    p.add_argument("--texture-size", type=int, default=1024,
-                   help="texture resolution in pixels: a power of two, 16-4096 within the "
-                   "default memory limit; 8192 needs about 10 GB (--max-memory 10)")
-    p.add_argument("--seed", type=int, default=7, help="seed of the procedural stone")
-    p.add_argument("--tx", action="store_true", help="also write mipmapped .tx textures")
-    p.add_argument("--texture", action="append", metavar="ROLE=FILE",
-                   help="use your own travertine map (png/jpg) for ROLE basecolor, roughness "
-                   "or normal; give all three")
-    p.add_argument("--force", action="store_true",
-                   help="replace an existing asset folder (atomically)")
-    _add_memory_flag(p)
-    p.set_defaults(func=cmd_asset)
-
-    p = sub.add_parser(
-        "preview",
-        help="render a USD scene to a PNG thumbnail (headless OpenGL)",
-        description="Render SCENE with moderngl on a software EGL context (needs the preview "
-        "extra: pip install 'ionic_usd[preview]'). Instances are drawn from one upload each.",
-    )
-    p.add_argument("scene", type=Path, help="USD file to render")
-    p.add_argument("-o", "--output", type=Path, default=Path("preview.png"), help="PNG file")
-    p.add_argument("--width", type=int, default=800)
-    p.add_argument("--height", type=int, default=600)
-    p.add_argument("--camera", choices=["auto", "front", "three-quarter"], default="auto")
-    p.add_argument("--lod", help="select this lod variant on every prim that has one")
-    p.add_argument("--background", default="0.80,0.84,0.89", help="R,G,B in [0, 1]")
-    p.add_argument("--samples", type=int, default=4, help="MSAA samples")
-    p.add_argument("--no-ground", action="store_true", help="no ground plane")
-    p.add_argument("--force", action="store_true", help="overwrite an existing PNG")
-    p.set_defaults(func=cmd_preview)
-
-    from ionic_usd.evaluate.commands import add_parsers
-
-    add_parsers(sub, _Parser)
-    from ionic_usd.export import add_export_parser
-
-    add_export_parser(sub, _Parser)
+    for name, add in _COMMANDS.items():
+        add(sub, commands is None or name in commands)
     return parser
+
+
+def _command_name(argv: Sequence[str]) -> str | None:
+    """The subcommand in ``argv``: the first word that is not an option (the top-level
+    options take no values)."""
+    return next((a for a in argv if not a.startswith("-")), None)
 
 
 def _one_line(text: str) -> str:
@@ -482,8 +450,10 @@ def main(argv: list[str] | None = None) -> int:
     import os
 
     try:
-        parser = build_parser()
-        args = parser.parse_args(argv)
+        words = sys.argv[1:] if argv is None else argv
+        name = _command_name(words)
+        parser = build_parser(() if name is None else (name,))
+        args = parser.parse_args(words)
         from ionic_usd.progress import configure
 
         configure(-1 if args.quiet else args.verbose)

@@ -31,7 +31,7 @@ import os
 import re
 import secrets
 import shutil
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
 
 from ionic_usd.errors import OutputExistsError, ParameterError
@@ -153,13 +153,16 @@ def _read_only_fs(folder: Path) -> bool:
 
 
 def check_output_file(path: str | os.PathLike, *, force: bool = False,
-                      what: str = "output") -> Path:
+                      what: str = "output", suffixes: Sequence[str] | None = None) -> Path:
     """Refuse an output file that cannot be written, before any work is done.
 
-    Refused: a name that is empty, ``.`` or ``..``; a name longer than the file system allows;
-    a parent that is a file; a location that is read-only; an existing folder; an existing file
-    unless ``force``.
+    Refused: an extension not in ``suffixes`` (lower-case, with the dot; None: any); a name
+    that is empty, ``.`` or ``..``; a name longer than the file system allows; a parent that
+    is a file; a location that is read-only; an existing folder; an existing file unless
+    ``force``.
     """
+    if suffixes is not None and Path(path).suffix.lower() not in suffixes:
+        raise ParameterError(what, str(path), f"a file ending in one of {', '.join(suffixes)}")
     p = _check_target(Path(path), what)
     if p.is_dir():
         raise ParameterError(what, str(p), "a file path (this is an existing folder)")

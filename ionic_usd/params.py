@@ -37,6 +37,8 @@ __all__ = [
     "dataclass_schema",
     "load_toml",
     "to_toml",
+    "toml_key",
+    "toml_string",
     "toml_value",
 ]
 
@@ -100,6 +102,33 @@ def dataclass_from_mapping(cls, mapping: dict[str, Any], *, context: str, base=N
     return cls(**mapping)
 
 
+_BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
+_TOML_ESCAPES = {"\b": "\\b", "\t": "\\t", "\n": "\\n", "\f": "\\f", "\r": "\\r",
+                 '"': '\\"', "\\": "\\\\"}
+
+
+def toml_string(s: str) -> str:
+    """``s`` as a TOML basic string: quotes, backslashes and control characters escaped."""
+    try:
+        s.encode("utf-8")
+    except UnicodeEncodeError:  # a lone surrogate: no TOML file can hold it
+        raise ParameterError("value", s, "a string of Unicode characters") from None
+    out = []
+    for ch in s:
+        if ch in _TOML_ESCAPES:
+            out.append(_TOML_ESCAPES[ch])
+        elif ch < " " or ch == "\x7f":
+            out.append(f"\\u{ord(ch):04X}")
+        else:
+            out.append(ch)
+    return '"' + "".join(out) + '"'
+
+
+def toml_key(key: str) -> str:
+    """A TOML key: bare when it can be (letters, digits, ``_``, ``-``), else quoted."""
+    return key if _BARE_KEY.fullmatch(key) else toml_string(key)
+
+
 def toml_value(v: Any) -> str:
     """A Python scalar/list/dict as a TOML value."""
     if isinstance(v, bool):
@@ -111,11 +140,11 @@ def toml_value(v: Any) -> str:
             raise ParameterError("value", v, "a finite number (TOML files hold no inf/nan here)")
         return repr(v)
     if isinstance(v, str):
-        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+        return toml_string(v)
     if isinstance(v, list | tuple):
         return "[" + ", ".join(toml_value(x) for x in v) + "]"
     if isinstance(v, dict):
-        return "{ " + ", ".join(f"{k} = {toml_value(x)}" for k, x in v.items()) + " }"
+        return "{ " + ", ".join(f"{toml_key(k)} = {toml_value(x)}" for k, x in v.items()) + " }"
     if v is None:
         raise ParameterError("value", v, "a value (TOML has no null)")
     raise ParameterError("value", v, "a TOML scalar, list or table")
@@ -134,7 +163,7 @@ def to_toml(
     for name, values in sections.items():
         if out:
             out.append("")
-        out.append(f"[{name}]")
+        out.append(f"[{toml_key(name)}]")
         sec_docs = (docs or {}).get(name, {})
         for key, value in values.items():
             if key in sec_docs:
@@ -142,9 +171,9 @@ def to_toml(
                 tag = f"{letter}, " if letter else ""
                 out.append(f"# {text} ({tag}{unit})")
             if value is None:
-                out.append(f"# {key} =")
+                out.append(f"# {toml_key(key)} =")
             else:
-                out.append(f"{key} = {toml_value(value)}")
+                out.append(f"{toml_key(key)} = {toml_value(value)}")
     return "\n".join(out) + "\n"
 
 

@@ -12,13 +12,46 @@ import pytest
 
 import ionic_usd
 import ionic_usd.api
+import ionic_usd.checks
+import ionic_usd.lazy
 
 ROOT = Path(__file__).resolve().parent.parent
 
 
+def _doctests(slow: bool) -> list[doctest.DocTest]:
+    """The doctests of the API modules; the temple's (a whole scene build) is the slow one."""
+    finder = doctest.DocTestFinder()
+    tests = [t for m in (ionic_usd.api, ionic_usd.checks, ionic_usd.lazy) for t in finder.find(m)
+             if t.examples]
+    return [t for t in tests if (t.name == "ionic_usd.api.Temple") == slow]
+
+
+def _run(tests: list[doctest.DocTest]) -> doctest.TestResults:
+    runner = doctest.DocTestRunner(optionflags=doctest.ELLIPSIS)
+    for t in tests:
+        runner.run(t)
+    return runner.summarize(verbose=False)
+
+
 def test_api_doctests():
-    result = doctest.testmod(ionic_usd.api, optionflags=doctest.ELLIPSIS)
-    assert result.attempted >= 4 and result.failed == 0
+    result = _run(_doctests(slow=False))
+    assert result.attempted >= 6 and result.failed == 0
+
+
+@pytest.mark.slow
+def test_temple_in_five_lines_doctest():
+    tests = _doctests(slow=True)
+    assert len(tests) == 1
+    result = _run(tests)
+    assert result.attempted >= 5 and result.failed == 0
+
+
+def test_every_top_level_name_is_documented():
+    """``__all__`` is the curated API, and the package docstring names each entry."""
+    doc = ionic_usd.__doc__
+    for name in ionic_usd.__all__:
+        if name != "__version__":
+            assert f":func:`{name}`" in doc or f":class:`{name}`" in doc, name
 
 
 def test_top_level_names_resolve_lazily():

@@ -17,7 +17,7 @@ from pxr import Gf, Sdf, Usd, UsdGeom
 
 from ionic_usd.cli import main
 from ionic_usd.export import export_scene
-from ionic_usd.export.gltf import _texture_transform, trs_decompose
+from ionic_usd.export.gltf import texture_transform, trs_decompose
 from ionic_usd.export.solid import check_solid, read_stl
 from ionic_usd.usd import validate_stage
 from ionic_usd.usd.column_asset import TILE_METRES, UV_SPAN
@@ -183,7 +183,7 @@ def test_texture_transform_samples_the_same_texel(sx, sy, rot, tx, ty, s, t):
     spec matrix, uv = (s, 1 − t)): uv' = offset + [[c, s], [−s, c]]·S·uv, row from the top v'."""
     tex = TextureRef("x.png", "rgb", "sRGB", st_scale=(sx, sy), st_rotation=rot,
                      st_translation=(tx, ty))
-    k = _texture_transform(tex)
+    k = texture_transform(tex)
     th = math.radians(rot)
     usd = np.array([tx, ty]) + np.array([[math.cos(th), -math.sin(th)],
                                          [math.sin(th), math.cos(th)]]) @ (np.array([sx, sy])
@@ -383,10 +383,10 @@ def _canonical(tris: np.ndarray) -> np.ndarray:
 
 
 def test_shared_paradata_is_stored_once():
-    from ionic_usd.export.gltf import _split_common
+    from ionic_usd.export.gltf import split_common
 
     a = {"path": "/a", "ionic_usd": {"temple": "T", "hypothesis": {"id": "h1"}}, "x": 1}
     b = {"path": "/b", "ionic_usd": {"temple": "T"}, "x": 1}
-    common, rest = _split_common([a, b])
+    common, rest = split_common([a, b])
     assert common == {"ionic_usd": {"temple": "T"}, "x": 1}
     assert rest == [{"path": "/a", "ionic_usd": {"hypothesis": {"id": "h1"}}}, {"path": "/b"}]

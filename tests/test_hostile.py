@@ -218,7 +218,7 @@ def test_internal_error_is_one_line_status_70(tmp_path, capsys, monkeypatch):
     parser.parse_args(["shaft"])  # the sub-parser exists
     sub = parser._subparsers._group_actions[0]
     sub.choices["shaft"].set_defaults(func=boom)
-    monkeypatch.setattr(cli, "build_parser", lambda: parser)
+    monkeypatch.setattr(cli, "build_parser", lambda *_a, **_k: parser)
     code, _, err = run_cli(["shaft"], tmp_path, capsys)
     assert code == 70 and len(err.splitlines()) == 1 and "KeyError" in err
     assert _listing(tmp_path) == []

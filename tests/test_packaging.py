@@ -8,6 +8,7 @@ modules, so a dependency that only the test extras bring (the crash of the first
 from __future__ import annotations
 
 import importlib.metadata as md
+import importlib.util
 import re
 import subprocess
 import sys
@@ -32,7 +33,12 @@ def _import_names(dist: str) -> set[str]:
         for top, dists in md.packages_distributions().items()
         if any(d.lower().replace("_", "-") == dist for d in dists)
     }
-    return {n for n in names if n.isidentifier() and not n.startswith("_")}
+    names = {n for n in names if n.isidentifier() and not n.startswith("_")}
+    if not names:  # a lone extension module (xatlas, manifold3d) lists no package
+        guess = dist.replace("-", "_")
+        if importlib.util.find_spec(guess) is not None:
+            names = {guess}
+    return names
 
 
 RUNTIME = {_dist_name(r) for r in PYPROJECT["project"]["dependencies"]}
@@ -67,14 +73,25 @@ def _run(blocked: set[str], code: str, cwd: Path | None = None) -> subprocess.Co
     )
 
 
+#: runtime dependencies the package imports only inside the functions that use them (numpy is
+#: the kernel's one import-time dependency)
+LAZY_RUNTIME = sorted(RUNTIME - {"numpy"})
+
+
 def test_optional_dependencies_are_known():
     assert OPTIONAL, "no optional dependencies found in pyproject.toml"
     assert {"usd-core", "numpy", "shapely", "tqdm"} <= RUNTIME
+    extras = {_dist_name(r) for reqs in PYPROJECT["project"]["optional-dependencies"].values()
+              for r in reqs}
+    # every extra is blocked in turn below (or is a runtime dependency, blocked as lazy)
+    assert extras - {"pytest", "hypothesis", "mypy", "ruff"} <= set(OPTIONAL) | RUNTIME
 
 
-@pytest.mark.parametrize("dist", OPTIONAL)
-def test_cli_builds_with_each_optional_dependency_blocked(dist):
-    names = _import_names(dist) or {dist.replace("-", "_")}
+@pytest.mark.parametrize("dist", OPTIONAL + LAZY_RUNTIME)
+def test_cli_builds_with_each_dependency_blocked(dist):
+    """The whole parser and every subcommand's help, with one dependency missing."""
+    names = _import_names(dist)
+    assert names, f"{dist} is not installed: blocking it would test nothing"
     code = (
         "from ionic_usd.cli import build_parser\n"
         "p = build_parser()\n"
@@ -91,7 +108,7 @@ def test_cli_builds_with_each_optional_dependency_blocked(dist):
 def test_column_command_with_every_optional_dependency_blocked(tmp_path):
     names: set[str] = set()
     for dist in OPTIONAL:
-        names |= _import_names(dist) or {dist.replace("-", "_")}
+        names |= _import_names(dist)
     code = (
         "import sys\n"
         "from ionic_usd.cli import main\n"
@@ -123,6 +140,43 @@ def test_geometry_kernel_is_numpy_only_at_import():
     )
     out = _run(heavy, code)
     assert out.returncode == 0, out.stderr[-2000:]
+
+
+#: what parsing a command line must not load (each costs 0.1-1 s of every run)
+HEAVY_AT_STARTUP = ("scipy", "numba", "pxr", "matplotlib", "xatlas", "OpenImageIO",
+                    "manifold3d", "shapely")
+
+
+def _modules_after(code: str) -> set[str]:
+    probe = (code + "\nimport sys, json\n"
+             "sys.__stdout__.write('\\n' + json.dumps(sorted({m.split('.')[0] "
+             "for m in sys.modules})))\n")
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                         timeout=300)
+    assert out.returncode == 0, out.stderr[-2000:]
+    import json
+
+    return set(json.loads(out.stdout.splitlines()[-1]))
+
+
+def test_building_the_whole_parser_loads_no_heavy_library():
+    """Every subcommand's flags (and their help) come without scipy, numba, pxr, ..."""
+    mods = _modules_after("from ionic_usd.cli import build_parser\nbuild_parser()")
+    assert not mods & set(HEAVY_AT_STARTUP), sorted(mods & set(HEAVY_AT_STARTUP))
+
+
+@pytest.mark.parametrize("argv", [["--version"], ["--help"], ["temple", "--help"],
+                                  ["shaft", "--help"], ["evaluate", "--help"]])
+def test_parsing_loads_no_heavy_library(argv):
+    code = ("from ionic_usd.cli import main\n"
+            "try:\n"
+            f"    main({argv!r})\n"
+            "except SystemExit as e:\n"
+            "    assert e.code == 0, e.code\n")
+    mods = _modules_after(code)
+    assert not mods & set(HEAVY_AT_STARTUP), sorted(mods & set(HEAVY_AT_STARTUP))
+    if argv in (["--version"], ["--help"], ["temple", "--help"]):
+        assert "numpy" not in mods  # the floor of `ionic-usd --version` <= 0.2 s
 
 
 def test_python_dash_m_runs_the_cli():

@@ -21,9 +21,17 @@ from ionic_usd.city.plan import Lot, Porticus
 from ionic_usd.errors import IonicError, ParameterError
 
 __all__ = ["Footprint", "TempleFit", "fit_temple", "porticus_columns", "extra_columns",
-           "drop_inside", "lod_by_distance", "distance_from", "LOD_NAMES", "yaw_quaternions"]
+           "drop_inside", "lod_by_distance", "distance_from", "LOD_NAMES", "yaw_quaternions",
+           "DEFAULT_INSTANCER_THRESHOLD"]
 
 LOD_NAMES = ("high", "medium", "low")
+# above this many temples the city uses a PointInstancer of temple prototypes instead of
+# instanceable references. Measured (tools/bench_city.py): opening and counting a city of
+# 2,500 temple references takes 2.9-3.8 s against 0.4-0.5 s as a PointInstancer, 10,000 take
+# 12-18 s against 0.3-0.6 s (authoring 17 s against 0.8-2.5 s), on 2 busy cores: references
+# grow ~1.5 ms each, so past a few hundred they cost more than the whole instancer; below,
+# each temple stays a prim of its own
+DEFAULT_INSTANCER_THRESHOLD = 500
 
 
 @dataclass(frozen=True)

@@ -34,10 +34,11 @@ increasing angle), where the base and capital join.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from ionic_usd.checks import check_fields
 from ionic_usd.errors import BudgetError, ParameterError
 from ionic_usd.geometry.mesh import Mesh, smooth_normals
 from ionic_usd.geometry.stitch import auto_sequence, stitch
@@ -103,17 +104,8 @@ class ShaftParams:
 
     def __post_init__(self) -> None:
         ctx = "shaft"
-        for f in fields(self):
-            v = getattr(self, f.name)
-            if isinstance(v, bool) or not isinstance(v, int | float):
-                raise ParameterError(f.name, v, "a number", context=ctx)
-            if not math.isfinite(v):
-                raise ParameterError(f.name, v, "a finite number", context=ctx)
-        for name in ("flutes", "flute_slices", "flute_slices_per_fillet_slice", "entasis_rows",
-                     "body_rows", "ring_vertices"):
-            if int(getattr(self, name)) != getattr(self, name):
-                raise ParameterError(name, getattr(self, name), "an integer", context=ctx)
-            object.__setattr__(self, name, int(getattr(self, name)))
+        check_fields(self, context=ctx, integers=("flutes", "flute_slices", "entasis_rows",
+                     "flute_slices_per_fillet_slice", "body_rows", "ring_vertices"))
         _pos = "a finite number > 0"
         if self.height <= 0:
             raise ParameterError("height ($a)", self.height, _pos, context=ctx)

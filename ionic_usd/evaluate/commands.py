@@ -9,17 +9,31 @@ part's parameters to a reference and writes TOML that ``ionic-usd column --confi
 from __future__ import annotations
 
 import argparse
+import math
 import sys
+from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
+from ionic_usd.cli_flags import (
+    add_command,
+    add_config_flags,
+    add_output_flags,
+    add_report_flags,
+    add_variant_flag,
+)
 from ionic_usd.errors import ParameterError
 
-__all__ = ["add_parsers", "cmd_evaluate", "cmd_fit"]
+if TYPE_CHECKING:  # numpy is imported by the commands, not by building the parser
+    import numpy as np
+
+    from ionic_usd.column.column import ColumnParams
+    from ionic_usd.evaluate.fit_core import FitResult
+
+__all__ = ["add_evaluate_parser", "add_fit_parser", "add_parsers", "cmd_evaluate", "cmd_fit"]
 
 
-def _column(config: Path | None):
+def _column(config: Path | None) -> ColumnParams:
     from ionic_usd.column.column import column_params_from_mapping, portunus_column_params
     from ionic_usd.params import load_toml
 
@@ -49,20 +63,12 @@ MAX_REFERENCE_BYTES_DEFAULT = 16 << 20
 MAX_RESAMPLED_NODES = 2_000_000
 
 
-def _variants(items: list[str] | None) -> dict[str, str]:
-    out = {}
-    for item in items or []:
-        name, sep, value = item.partition("=")
-        if not sep or not name or not value:
-            raise ParameterError("--variant", item, "SET=VALUE, e.g. lod=high")
-        out[name] = value
-    return out
-
-
 def _read(path: Path, args: argparse.Namespace) -> np.ndarray:
+    import numpy as np
+
     from ionic_usd.evaluate.reference import read_reference
 
-    if not (np.isfinite(args.scale) and args.scale > 0):
+    if not (math.isfinite(args.scale) and args.scale > 0):
         raise ParameterError("--scale", args.scale, "a finite number > 0 (m per unit)")
     p = Path(path)
     limit = MAX_REFERENCE_BYTES.get(p.suffix.lower(), MAX_REFERENCE_BYTES_DEFAULT)
@@ -110,7 +116,10 @@ def _generated(args: argparse.Namespace, part: str, section_y: float | None
     from ionic_usd.evaluate import sections
 
     if args.usd is not None:
-        curve = sections.section_from_usd(args.usd, part, variants=_variants(args.variant),
+        from ionic_usd.usd.reader import parse_variant_args
+
+        curve = sections.section_from_usd(args.usd, part,
+                                          variants=parse_variant_args(args.variant),
                                           y=section_y)
         return curve, f"section of {args.usd}"
     params = _column(args.config)
@@ -133,10 +142,10 @@ def _section_height(args: argparse.Namespace) -> float:
     return params.base_params().height + sp.length / 3.0
 
 
-def _compare_one(args: argparse.Namespace, part: str, ref: np.ndarray):
+def _compare_one(args: argparse.Namespace, part: str, ref: np.ndarray) -> tuple[Any, ...]:
     """Align and compare one part; returns (comparison, alignment, a, b, source, spacing)."""
     from ionic_usd.evaluate.fit_core import orient_like
-    from ionic_usd.evaluate.fit_shaft import _closed_like, is_closed_curve
+    from ionic_usd.evaluate.fit_shaft import closed_like, is_closed_curve
     from ionic_usd.evaluate.metrics import compare, curve_length, resample
     from ionic_usd.evaluate.reference import align
 
@@ -149,7 +158,7 @@ def _compare_one(args: argparse.Namespace, part: str, ref: np.ndarray):
     gen, source = _generated(args, part, _section_height(args) if section else None)
     moved, how = align(ref, gen, allow_mirror=args.mirror, allow_rotation=args.rotate or
                        bool(section))
-    moved = _closed_like(ref, moved) if section else orient_like(ref, moved)
+    moved = closed_like(ref, moved) if section else orient_like(ref, moved)
     spacing = args.spacing if args.spacing is not None else curve_length(ref) / 2000.0
     a, b = resample(ref, spacing=spacing), resample(moved, spacing=spacing)
     return compare(a, b), how, a, b, source, spacing, len(gen)
@@ -167,7 +176,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     _check_out(args.json, args.force, ".json", "--json")
     _check_out(args.plot, args.force, ".png", "--plot")
     _check_out(args.curves, args.force, ".csv", "--curves")
-    if args.spacing is not None and not (np.isfinite(args.spacing) and args.spacing > 0):
+    if args.spacing is not None and not (math.isfinite(args.spacing) and args.spacing > 0):
         raise ParameterError("--spacing", args.spacing, "a finite length > 0 (m)")
     refs = _references(args)
     if args.plot is not None and len(refs) > 1:
@@ -209,12 +218,12 @@ def _floats(text: str | None, n: int, flag: str) -> list[float] | None:
         vals = [float(v) for v in text.split(",")]
     except ValueError:
         vals = []
-    if len(vals) != n or not all(np.isfinite(vals)):
+    if len(vals) != n or not all(math.isfinite(v) for v in vals):
         raise ParameterError(flag, text, f"{n} comma-separated numbers")
     return vals
 
 
-def _fit_part(args: argparse.Namespace, column, ref: np.ndarray):
+def _fit_part(args: argparse.Namespace, column: ColumnParams, ref: np.ndarray) -> FitResult:
     from ionic_usd.evaluate import fit as F
     from ionic_usd.evaluate.fit_shaft import fit_shaft_section, is_closed_curve
 
@@ -325,22 +334,10 @@ def _reference_flags(p: argparse.ArgumentParser, *, multiple: bool = False,
     p.add_argument("--element-id", help="SVG: id of the element to read (default: first path)")
 
 
-def add_parsers(subparsers, parser_class=argparse.ArgumentParser) -> None:
-    """Add the ``evaluate`` and ``fit`` subcommands to ``subparsers``.
-
-    Parameters
-    ----------
-    subparsers : the object returned by ``ArgumentParser.add_subparsers``
-    parser_class : the CLI's parser class; unused, as ``add_subparsers(parser_class=…)``
-        already makes every subparser of that class (kept for the lead's call signature)
-    """
-    del parser_class
-    from ionic_usd.column.volute import VOLUTE_MODELS
-    from ionic_usd.evaluate.fit import FIT_MEASURES
-    from ionic_usd.evaluate.sections import PARTS
-
-    p = subparsers.add_parser(
-        "evaluate",
+def add_evaluate_parser(subparsers: Any, *, arguments: bool = True) -> None:
+    """Add the ``evaluate`` subcommand (``arguments=False``: its name and help only)."""
+    p = add_command(
+        subparsers, "evaluate", cmd_evaluate,
         help="compare a section of the model with a reference curve (paper Table 6)",
         description="Cut a section of the model — from a USD file written by ionic-usd "
         "(--usd; composed, active variants) or built from parameters (--config, default the "
@@ -349,14 +346,17 @@ def add_parsers(subparsers, parser_class=argparse.ArgumentParser) -> None:
         "length. Sections: base half-profile (r, y), shaft silhouette (r, y), the front-right "
         "volute's outer spiral (x, y) on the front face.",
     )
+    if not arguments:
+        return
+    from ionic_usd.evaluate.sections import PARTS
+
     p.add_argument("--part", choices=PARTS,
                    help="which section, for --reference FILE (else --reference PART=FILE)")
     src = p.add_mutually_exclusive_group()
     src.add_argument("--usd", type=Path, help="USD file from `ionic-usd column` or `asset`")
     src.add_argument("--config", type=Path, help="column TOML (see ionic-usd column "
                      "--print-config)")
-    p.add_argument("--variant", action="append", metavar="SET=VALUE",
-                   help="with --usd: select a variant (e.g. lod=high, base=G2); repeatable")
+    add_variant_flag(p, "with --usd: select a variant (e.g. lod=high, base=G2); repeatable")
     _reference_flags(p, multiple=True)
     p.add_argument("--mirror", action="store_true",
                    help="also try the mirrored section (the drawing's handedness is arbitrary)")
@@ -369,14 +369,15 @@ def add_parsers(subparsers, parser_class=argparse.ArgumentParser) -> None:
     p.add_argument("--spacing", type=float,
                    help="resample both curves at this node spacing (m) [default: the "
                    "reference's length / 2000], as the paper")
-    p.add_argument("--curves", type=Path, help="write the compared curves as CSV")
-    p.add_argument("--json", type=Path, help="write the measures as JSON")
-    p.add_argument("--plot", type=Path, help="write an overlay plot (PNG)")
+    add_report_flags(p, curves="write the compared curves as CSV",
+                     json="write the measures as JSON", plot="write an overlay plot (PNG)")
     p.add_argument("--force", action="store_true", help="overwrite existing --json/--plot files")
-    p.set_defaults(func=cmd_evaluate)
 
-    p = subparsers.add_parser(
-        "fit",
+
+def add_fit_parser(subparsers: Any, *, arguments: bool = True) -> None:
+    """Add the ``fit`` subcommand (``arguments=False``: its name and help only)."""
+    p = add_command(
+        subparsers, "fit", cmd_fit,
         help="fit a part's parameters to a reference curve (writes column TOML)",
         description="Fit the volute (R, c, d, start angle, circuits, placement), the base "
         "(Bézier grammar control points; module layout suggested unless --modules) or the "
@@ -384,29 +385,47 @@ def add_parsers(subparsers, parser_class=argparse.ArgumentParser) -> None:
         "evolution, then least squares, then Nelder-Mead on --measure. Prints the measures "
         "before and after and writes TOML for `ionic-usd column --config`.",
     )
+    if not arguments:
+        return
+    from ionic_usd.column.volute import VOLUTE_MODELS
+    from ionic_usd.evaluate import FIT_MEASURES
+    from ionic_usd.evaluate.sections import PARTS
+
     p.add_argument("part", choices=(*PARTS, "column"),
                    help="what to fit (column: a whole column from --scan)")
     _reference_flags(p, required=False)
     p.add_argument("--measure", choices=FIT_MEASURES, default="hausdorff",
                    help="what to minimise [default hausdorff: the paper's 'weak Fréchet']")
-    p.add_argument("-o", "--output", type=Path,
-                   help="TOML file to write (default: print the TOML); `fit column`: the "
-                   "output folder (fitted column USD, scan points USD, PNG)")
-    p.add_argument("--force", action="store_true", help="overwrite existing output files")
+    add_output_flags(p, "TOML file to write (default: print the TOML); `fit column`: the "
+                     "output folder (fitted column USD, scan points USD, PNG)", type=Path,
+                     force_help="overwrite existing output files")
     p.add_argument("--seed", type=int, default=0, help="seed of the global stage [default 0]")
-    p.add_argument("--config", type=Path,
-                   help="column TOML to start from (default: the Portunus column)")
+    add_config_flags(p, "column TOML to start from (default: the Portunus column)")
     p.add_argument("--modules", help="base: control points per module, e.g. 2,4,4,2")
     p.add_argument("--eye", help="volute: the eye centre X,Y in metres in the reference's "
                    "frame (after --scale/--flip-y); sets the offsets")
-    p.add_argument("--plot", type=Path, help="write an overlay of the fitted curve (PNG)")
-    p.add_argument("--json", type=Path, help="write the fit (schema ionic_usd.evaluate/1)")
-    p.add_argument("--curves", type=Path, help="write the aligned reference and fitted "
-                   "curves as CSV (part, curve, index, x, y)")
+    add_report_flags(p, curves="write the aligned reference and fitted curves as CSV (part, "
+                     "curve, index, x, y)", json="write the fit (schema ionic_usd.evaluate/1)",
+                     plot="write an overlay of the fitted curve (PNG)")
     p.add_argument("--model", choices=VOLUTE_MODELS,
                    help="volute: fit only this model [default: every model, best chosen]")
     p.add_argument("--section", action="store_true",
                    help="shaft: the reference is a closed fluted cross-section")
     p.add_argument("--scan", type=Path,
                    help="column: point cloud or mesh (.ply, .obj, .xyz, .csv), metres")
-    p.set_defaults(func=cmd_fit)
+
+
+def add_parsers(subparsers: Any, parser_class: Any = argparse.ArgumentParser, *,
+                only: Sequence[str] | None = None) -> None:
+    """Add the ``evaluate`` and ``fit`` subcommands to ``subparsers``.
+
+    Parameters
+    ----------
+    subparsers : the object returned by ``ArgumentParser.add_subparsers``
+    parser_class : unused, as ``add_subparsers(parser_class=…)`` already makes every
+        subparser of that class (kept for the call signature)
+    only : the subcommands whose flags to add (default: both)
+    """
+    del parser_class
+    add_evaluate_parser(subparsers, arguments=only is None or "evaluate" in only)
+    add_fit_parser(subparsers, arguments=only is None or "fit" in only)

@@ -33,6 +33,7 @@ from scipy.optimize import differential_evolution, least_squares, minimize
 
 from ionic_usd.column.column import ColumnParams
 from ionic_usd.errors import OutputExistsError, ParameterError
+from ionic_usd.evaluate import FIT_MEASURES  # the package's light vocabulary
 from ionic_usd.evaluate.metrics import (
     CurveComparison,
     _as_curve,
@@ -52,8 +53,6 @@ __all__ = [
     "densify",
 ]
 
-#: Measures a fit can minimise (names of :class:`CurveComparison` fields).
-FIT_MEASURES = ("hausdorff", "average_error", "discrete_frechet", "frechet")
 
 def orient_like(reference: np.ndarray, curve: np.ndarray) -> np.ndarray:
     """``curve`` or its reverse, whichever runs the same way as ``reference`` (end points)."""

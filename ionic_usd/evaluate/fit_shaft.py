@@ -27,7 +27,7 @@ from ionic_usd.evaluate.fit_core import (
     compare_aligned,
 )
 
-__all__ = ["fit_shaft", "fit_shaft_section", "fluted_section", "is_closed_curve"]
+__all__ = ["closed_like", "fit_shaft", "fit_shaft_section", "fluted_section", "is_closed_curve"]
 
 
 def fit_shaft(
@@ -182,7 +182,7 @@ def fluted_section(radius: float, flutes: int, flute_angle: float, flute_depth: 
     return np.vstack([pts, pts[:1]])
 
 
-def _closed_like(reference: np.ndarray, curve: np.ndarray) -> np.ndarray:
+def closed_like(reference: np.ndarray, curve: np.ndarray) -> np.ndarray:
     """A closed curve run the reference's way round, starting at the node nearest its start
     (the Fréchet measures of closed curves depend on both)."""
     def area(c: np.ndarray) -> float:
@@ -298,9 +298,9 @@ def fit_shaft_section(
     from ionic_usd.evaluate.reference import Alignment
 
     fine = fluted_section(x[0], e, x[1], x[2], x[3], x[4:6], slices=48)
-    fitted = _closed_like(ref, fine)
+    fitted = closed_like(ref, fine)
     after = compare(densify(ref, h), densify(fitted, h))
-    start = _closed_like(ref, fluted_section(x0[0], e, x0[1], x0[2], x0[3], x0[4:6],
+    start = closed_like(ref, fluted_section(x0[0], e, x0[1], x0[2], x0[3], x0[4:6],
                                              slices=48))
     before = compare(densify(ref, h), densify(start, h))
     al = Alignment((float(x[4]), float(x[5])), False, before.hausdorff, after.hausdorff,

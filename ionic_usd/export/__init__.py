@@ -13,8 +13,9 @@ import os
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
-from ionic_usd.export._io import EXPORT_FORMATS, check_export_path
+from ionic_usd.export.common import EXPORT_FORMATS, check_export_path
 
 __all__ = ["EXPORT_FORMATS", "ExportResult", "export_scene", "add_export_parser"]
 
@@ -71,8 +72,8 @@ def export_scene(
     return ExportResult(out, fmt, write_solids(s, out, scale=scale))
 
 
-def add_export_parser(sub, parser_class) -> None:
+def add_export_parser(sub: Any, parser_class: Any = None, *, arguments: bool = True) -> None:
     """Add the ``export`` subcommand to an argparse subparsers object."""
     from ionic_usd.export.command import add_parser
 
-    add_parser(sub, parser_class)
+    add_parser(sub, parser_class, arguments=arguments)

@@ -5,7 +5,9 @@ from __future__ import annotations
 import argparse
 import math
 from pathlib import Path
+from typing import Any
 
+from ionic_usd.cli_flags import add_command, add_output_flags, add_variant_flag
 from ionic_usd.errors import ParameterError
 
 __all__ = ["add_parser", "cmd_export", "parse_scale"]
@@ -29,7 +31,7 @@ def parse_scale(text: str) -> float:
 
 def cmd_export(args: argparse.Namespace) -> int:
     from ionic_usd.export import export_scene
-    from ionic_usd.export._io import check_export_path
+    from ionic_usd.export.common import check_export_path
     from ionic_usd.usd.reader import parse_variant_args
 
     variants = parse_variant_args(args.variant)
@@ -41,7 +43,7 @@ def cmd_export(args: argparse.Namespace) -> int:
     if args.compress != "none" and fmt not in (".glb", ".gltf"):
         raise ParameterError("--compress", args.compress, "none unless the output is glTF")
     if args.compress == "draco":
-        from ionic_usd.export._io import require
+        from ionic_usd.export.common import require
 
         require("DracoPy", "--compress draco")  # before any work
     check_export_path(args.output, force=args.force)
@@ -53,7 +55,7 @@ def cmd_export(args: argparse.Namespace) -> int:
                        gpu_instancing=not args.no_gpu_instancing,
                        compress=None if args.compress == "none" else args.compress, scale=scale,
                        force=args.force)
-    r = res.report
+    r: Any = res.report  # GltfReport, UsdzReport or SolidsReport, by res.format
     if res.format in ("glb", "gltf"):
         print(f"wrote {res.path}: {r.bytes / 1e6:.2f} MB, {r.meshes} meshes, "
               f"{r.materials} materials, {r.images} images, {r.triangles_drawn:,} triangles "
@@ -76,9 +78,14 @@ def cmd_export(args: argparse.Namespace) -> int:
     return 0
 
 
-def add_parser(sub, parser_class) -> None:
-    p = sub.add_parser(
-        "export",
+def add_parser(sub: Any, parser_class: Any = None, *, arguments: bool = True) -> None:
+    """Add the ``export`` subcommand (``arguments=False``: its name and help only).
+
+    ``parser_class`` is unused: ``add_subparsers(parser_class=…)`` already sets it.
+    """
+    del parser_class
+    p = add_command(
+        sub, "export", cmd_export,
         help="export a USD scene as glTF/GLB, usdz, STL or 3MF",
         description="Export SCENE (any scene ionic_usd writes: shaft, column, asset, temple, "
         "city) by the output's extension: .glb/.gltf (glTF 2.0 for game engines and the web: "
@@ -86,12 +93,12 @@ def add_parser(sub, parser_class) -> None:
         "(ARKit: one flattened package, textures inside), .stl/.3mf (3D printing: one closed "
         "solid per column, parts unioned, at --scale).",
     )
+    if not arguments:
+        return
     p.add_argument("scene", type=Path, help="USD file to export")
-    p.add_argument("-o", "--output", required=True,
-                   help="output file: .glb, .gltf, .usdz, .stl or .3mf")
-    p.add_argument("--variant", action="append", metavar="SET=VALUE",
-                   help="select VALUE in variant set SET on every prim that has it "
-                   "(repeatable; default: the authored selections)")
+    add_output_flags(p, "output file: .glb, .gltf, .usdz, .stl or .3mf", required=True)
+    add_variant_flag(p, "select VALUE in variant set SET on every prim that has it "
+                     "(repeatable; default: the authored selections)")
     p.add_argument("--lod", help="level of detail (same as --variant lod=LOD)")
     p.add_argument("--no-gpu-instancing", action="store_true",
                    help="glTF: one plain node per copy instead of EXT_mesh_gpu_instancing "
@@ -101,5 +108,3 @@ def add_parser(sub, parser_class) -> None:
                    "required extension; needs DracoPy) [default none]")
     p.add_argument("--scale", default="1",
                    help="STL/3MF: model scale, a number or ratio (1:20 = 0.05) [default 1]")
-    p.add_argument("--force", action="store_true", help="overwrite an existing output file")
-    p.set_defaults(func=cmd_export)

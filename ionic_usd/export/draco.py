@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ionic_usd.export._io import require
+from ionic_usd.export.common import require
 
 __all__ = ["DRACO", "draco_primitive"]
 

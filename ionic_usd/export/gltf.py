@@ -37,11 +37,11 @@ import numpy as np
 
 from ionic_usd import __version__
 from ionic_usd.errors import GeometryError, IonicError, ParameterError
-from ionic_usd.export._io import atomic_write, require
+from ionic_usd.export.common import atomic_write, require
 from ionic_usd.geometry.mesh import triangulate_fan
 from ionic_usd.usd.reader import MaterialData, Scene, SceneMesh, TextureRef
 
-__all__ = ["GltfReport", "write_gltf", "trs_decompose"]
+__all__ = ["GltfReport", "write_gltf", "trs_decompose", "texture_transform", "split_common"]
 
 _GPU = "EXT_mesh_gpu_instancing"
 _XF = "KHR_texture_transform"
@@ -159,7 +159,7 @@ def _tangents(pos: np.ndarray, nrm: np.ndarray, st: np.ndarray, tris: np.ndarray
     return out
 
 
-def _split_common(dicts: list[dict]) -> tuple[dict, list[dict]]:
+def split_common(dicts: list[dict]) -> tuple[dict, list[dict]]:
     """``(common, residuals)``: what every dict holds (recursively, compared as JSON), and
     what is left of each. Paradata shared by all copies of a mesh is then stored once."""
     def j(v: object) -> str:
@@ -176,7 +176,7 @@ def _split_common(dicts: list[dict]) -> tuple[dict, list[dict]]:
             for r in rest:
                 del r[k]
         elif all(isinstance(x, dict) for x in vals):
-            sub, subrest = _split_common(vals)
+            sub, subrest = split_common(vals)
             if sub:
                 common[k] = sub
                 for r, sr in zip(rest, subrest, strict=True):
@@ -275,14 +275,14 @@ class _Builder:
             self._textures[tkey] = len(self.doc.textures) - 1
         cls = self.g.NormalMaterialTexture if normal else self.g.TextureInfo
         info = cls(index=self._textures[tkey])
-        xf = _texture_transform(tex)
+        xf = texture_transform(tex)
         if xf is not None:
             info.extensions = {_XF: xf}
             self.used.add(_XF)
         return info
 
 
-def _texture_transform(tex: TextureRef) -> dict | None:
+def texture_transform(tex: TextureRef) -> dict | None:
     """USD's ``st' = T + R(θ)·S·st`` seen through glTF's flip ``v = 1 − t``.
 
     ``F∘M∘F`` with ``F(p) = D p + e``, ``D = diag(1, −1)``, ``e = (0, 1)``: the linear part is
@@ -367,7 +367,8 @@ def _material(b: _Builder, mat: MaterialData, double_sided: bool) -> int:
         if key not in b._packed:
             b._packed[key] = _pack_metallic_roughness(rt, mt)
         ref = rt if rt is not None else mt
-        name = Path(ref.path).stem + "_metallicRoughness"  # type: ignore[union-attr]
+        assert ref is not None  # one of the two, by the test above
+        name = Path(ref.path).stem + "_metallicRoughness"
         pbr.metallicRoughnessTexture = b.texture_info(ref, b.image(b._packed[key], "image/png",
                                                                    name))
         pbr.roughnessFactor = 1.0 if rt is not None else float(mat.roughness)
@@ -491,12 +492,12 @@ def write_gltf(
         trs = [trs_decompose(p.matrix) for p in placements] if gpu_instancing else []
         # paradata every copy shares goes on the node once; the rest per copy
         each = [{"path": p.path, **p.paradata} for p in placements]
-        common, each = _split_common(each) if len(each) > 1 else ({}, each)
+        common, each = split_common(each) if len(each) > 1 else ({}, each)
         name = scene.meshes[key].name
         if gpu_instancing and len(placements) > 1 and all(t is not None for t in trs):
-            t_arr = np.array([t[0] for t in trs], dtype=np.float32)  # type: ignore[index]
-            r_arr = np.array([t[1] for t in trs], dtype=np.float32)  # type: ignore[index]
-            s_arr = np.array([t[2] for t in trs], dtype=np.float32)  # type: ignore[index]
+            t_arr = np.array([t[0] for t in trs], dtype=np.float32)
+            r_arr = np.array([t[1] for t in trs], dtype=np.float32)
+            s_arr = np.array([t[2] for t in trs], dtype=np.float32)
             r_arr /= np.linalg.norm(r_arr, axis=1, keepdims=True)
             ext = {"attributes": {"TRANSLATION": b.accessor(t_arr, "VEC3"),
                                   "ROTATION": b.accessor(r_arr, "VEC4"),

@@ -18,11 +18,12 @@ import time
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from ionic_usd.errors import GeometryError, ParameterError
-from ionic_usd.export._io import atomic_write, require
+from ionic_usd.export.common import atomic_write, require
 from ionic_usd.geometry.mesh import triangulate_fan
 from ionic_usd.usd.reader import Scene
 
@@ -82,7 +83,7 @@ def scene_solids(scene: Scene, *, scale: float = 1.0) -> list[Solid]:
     conv = np.eye(4)
     conv[:3, :3] = _Y_TO_Z_UP * (1000.0 * scale)
     out: list[Solid] = []
-    shells: dict[str, object] = {}  # each mesh as a Manifold once, in its own space
+    shells: dict[str, Any] = {}  # each mesh as a Manifold once, in its own space
     for name, placements in bodies.items():
         parts = []
         for p in placements:

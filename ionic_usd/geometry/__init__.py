@@ -21,10 +21,12 @@ from ionic_usd.geometry.mesh import (
     triangulate_fan,
     weld,
 )
+from ionic_usd.geometry.polygon import polygon_triangles
 from ionic_usd.geometry.stitch import auto_sequence, row_parameters, stitch
 from ionic_usd.geometry.sweep import sweep
 
 __all__ = [
+    "polygon_triangles",
     "Mesh",
     "MeshReport",
     "auto_sequence",

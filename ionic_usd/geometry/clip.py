@@ -13,6 +13,7 @@ import numpy as np
 
 from ionic_usd.errors import GeometryError
 from ionic_usd.geometry.mesh import Mesh, triangulate_fan
+from ionic_usd.geometry.polygon import polygon_triangles
 
 __all__ = ["clip_mesh"]
 
@@ -285,7 +286,6 @@ def _cap(points: np.ndarray, tri: np.ndarray, on_plane: np.ndarray, normal: np.n
          mesh_name: str) -> np.ndarray:
     """(c, 3) int64 cap triangles over the cut outline, wound to face ``−normal``."""
     import shapely  # optional at import time: the kernel is numpy-only until a cut is made
-    from scipy.spatial import cKDTree
 
     loops = _plane_loops(points, tri, on_plane, normal, mesh_name=mesh_name)
     if not loops:
@@ -313,19 +313,10 @@ def _cap(points: np.ndarray, tri: np.ndarray, on_plane: np.ndarray, normal: np.n
     caps = []
     for k, i in enumerate(outer):
         lp = np.concatenate([loops[i]] + [loops[h] for h in owned[k]])
-        ring_xy = np.concatenate([rings[i]] + [rings[h] for h in owned[k]])
-        poly = shapely.Polygon(rings[i], [rings[h] for h in owned[k]])
-        coords = shapely.get_coordinates(shapely.constrained_delaunay_triangles(poly))
-        if coords.size == 0:
+        ct = lp[polygon_triangles(rings[i], [rings[h] for h in owned[k]],
+                                  what=f"clip_mesh: the cap of mesh {mesh_name!r}")]
+        if len(ct) == 0:
             continue
-        # constrained Delaunay adds no vertices: map its corners back to the loop vertices
-        dist, j = cKDTree(ring_xy).query(coords.reshape(-1, 4, 2)[:, :3].reshape(-1, 2))
-        scale = float(np.ptp(rings[i], axis=0).max())
-        if np.any(dist > 1e-9 * scale):
-            raise GeometryError(
-                f"clip_mesh: the cap triangulation of mesh {mesh_name!r} added vertices"
-            )
-        ct = lp[j].reshape(-1, 3)
         ct = ct[(ct[:, 0] != ct[:, 1]) & (ct[:, 1] != ct[:, 2]) & (ct[:, 0] != ct[:, 2])]
         # wind every cap triangle counter-clockwise in (u, w), i.e. facing −normal
         q = points[ct]

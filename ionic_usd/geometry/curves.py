@@ -62,6 +62,7 @@ def resample_polyline(
         if not np.isfinite(spacing) or spacing <= 0:
             raise ParameterError("spacing", spacing, "a finite number > 0")
         count = int(np.ceil(total / spacing - 1e-9)) + 1
+    assert count is not None  # exactly one of count and spacing, by the test above
     if count < 2:
         raise ParameterError("count", count, "an integer >= 2")
     if total == 0:

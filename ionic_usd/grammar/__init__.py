@@ -1,6 +1,5 @@
 """Text grammars → frozen dataclasses, with errors that point at the offending token."""
 
-from ionic_usd.grammar._lexer import Token, split_top_level, token_number, tokenize
 from ionic_usd.grammar.base import (
     BaseGrammar,
     BezierBase,
@@ -14,6 +13,7 @@ from ionic_usd.grammar.base import (
     parse_base_v1,
     parse_base_v2,
 )
+from ionic_usd.grammar.lexer import Token, split_top_level, token_number, tokenize
 
 __all__ = [
     "BaseGrammar",

@@ -27,11 +27,13 @@ that reaches the column axis — a check only it can make, since it knows $d.
 
 from __future__ import annotations
 
-import math
+from collections.abc import Iterator
 from dataclasses import dataclass, field
+from typing import ClassVar
 
+from ionic_usd.checks import check_fields
 from ionic_usd.errors import GrammarError, ParameterError
-from ionic_usd.grammar._lexer import Token, split_top_level, token_number, tokenize
+from ionic_usd.grammar.lexer import Token, split_top_level, token_number, tokenize
 
 __all__ = [
     "TorusFloor",
@@ -76,12 +78,8 @@ class TorusFloor:
     r_top_at: Span = field(default=_NOWHERE, compare=False, repr=False)
 
     def __post_init__(self) -> None:
-        for name in ("r_bottom", "r_top", "height"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
-                raise ParameterError(name, v, "a finite number", context="base floor")
-        if self.height < 0:
-            raise ParameterError("height", self.height, "a number >= 0", context="base floor")
+        check_fields(self, context="base floor", skip=("curvature", "r_bottom_at", "r_top_at"),
+                     non_negative=("height",))
         if self.curvature not in (1, -1):
             raise ParameterError("curvature", self.curvature, "1 or -1", context="base floor")
         object.__setattr__(self, "curvature", int(self.curvature))
@@ -125,12 +123,8 @@ class ControlPoint:
     h_at: Span = field(default=_NOWHERE, compare=False, repr=False)
 
     def __post_init__(self) -> None:
-        for name in ("r", "h"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
-                raise ParameterError(name, v, "a finite number", context="base control point")
-        if self.h < 0:
-            raise ParameterError("h", self.h, "a number >= 0", context="base control point")
+        check_fields(self, context="base control point", skip=("r_at", "h_at"),
+                     non_negative=("h",))
 
 
 @dataclass(frozen=True)
@@ -161,6 +155,7 @@ class _ParsedBase:
 
     modules: tuple
     source: str
+    version: ClassVar[int]
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "modules", tuple(self.modules))
@@ -175,10 +170,10 @@ class _ParsedBase:
         """Canonical letter form; parses back to an equal value."""
         return ", ".join(m.to_string() for m in self.modules)
 
-    def located(self):
+    def located(self) -> TorusBase | BezierBase:
         """This grammar with token offsets: itself if parsed from text, else re-parsed."""
         if self.source:
-            return self
+            return self  # type: ignore[return-value]  # (only the two subclasses exist)
         return (parse_base_v1 if self.version == 1 else parse_base_v2)(self.to_string())
 
 
@@ -189,7 +184,7 @@ class TorusBase(_ParsedBase):
     modules: tuple[TorusModule, ...]
     source: str = field(default="", compare=False, repr=False)
 
-    version = 1
+    version: ClassVar[int] = 1
     grammar_name = V1
 
 
@@ -200,7 +195,7 @@ class BezierBase(_ParsedBase):
     modules: tuple[BezierModule, ...]
     source: str = field(default="", compare=False, repr=False)
 
-    version = 2
+    version: ClassVar[int] = 2
     grammar_name = V2
 
 
@@ -208,15 +203,19 @@ BaseGrammar = TorusBase | BezierBase
 
 
 # -- shared scanning ------------------------------------------------------------------------
+def _is_functional(toks: list[Token]) -> bool:
+    """The ``M(…)`` form: any parenthesis, or a leading ``M``."""
+    return any(t.kind == "(" for t in toks) or (
+        bool(toks) and toks[0].kind == "item" and toks[0].letter == "M")
+
+
 def _split(source: str, grammar: str) -> tuple[bool, list[tuple[list[Token], int]]]:
     """Tokenize, split into modules, and tell whether the functional ``M(…)`` form is used."""
     toks = tokenize(source, grammar=grammar)
     if not toks:
         raise GrammarError("empty grammar: expected at least one module", source, 0,
                            grammar=grammar)
-    functional = any(t.kind == "(" for t in toks) or (
-        toks[0].kind == "item" and toks[0].letter == "M"
-    )
+    functional = _is_functional(toks)
     parts = split_top_level(toks)
     for k, (part, start) in enumerate(parts, 1):
         if not part:
@@ -315,6 +314,16 @@ def _end_of(part: list[Token]) -> int:
     return part[-1].offset + part[-1].length
 
 
+def _modules(source: str, grammar: str
+             ) -> Iterator[tuple[int, list[Token], int, list[Token] | None]]:
+    """Each module of ``source``: (1-based number, its tokens, the offset where it ends, its
+    call arguments in the functional ``M(…)`` form or None in the letter form)."""
+    functional, parts = _split(source, grammar)
+    for k, (part, _start) in enumerate(parts, 1):
+        args = _call_args(part, source, k, grammar) if functional else None
+        yield k, part, _end_of(part), args
+
+
 # -- version 1 --------------------------------------------------------------------------------
 def _v1_floors(vals: list[tuple[str, Token]], source: str, k: int, end: int) -> TorusModule:
     """Floors from a flat sequence of (role, token), roles cycling r, h, c, r, h, c, r."""
@@ -348,12 +357,9 @@ def parse_base_v1(source: str) -> TorusBase:
     GrammarError
         With the module number and a caret under the offending token.
     """
-    functional, parts = _split(source, V1)
     modules = []
-    for k, (part, _start) in enumerate(parts, 1):
-        end = _end_of(part)
-        if functional:
-            args = _call_args(part, source, k, V1)
+    for k, part, end, args in _modules(source, V1):
+        if args is not None:
             roles = ["r", "h", "c"]
             vals = [(roles[i % 3], t) for i, t in enumerate(args)]
             if len(args) % 3 != 1 or len(args) < 4:
@@ -390,14 +396,11 @@ def parse_base_v2(source: str) -> BezierBase:
     GrammarError
         With the module number and a caret under the offending token.
     """
-    functional, parts = _split(source, V2)
     modules = []
-    for k, (part, _start) in enumerate(parts, 1):
-        end = _end_of(part)
+    for k, part, end, args in _modules(source, V2):
         flag_tok: Token | None = None
         pairs: list[tuple[Token, Token]] = []
-        if functional:
-            args = _call_args(part, source, k, V2)
+        if args is not None:
             if len(args) % 2 == 1:
                 flag_tok = args[-1]
                 args = args[:-1]
@@ -426,10 +429,10 @@ def parse_base_v2(source: str) -> BezierBase:
             pts.append(ControlPoint(r, h, _span(rt), _span(ht)))
         cont = _flag(flag_tok, source, k) if flag_tok is not None else False
         if len(pts) < 2:
-            at = pairs[0][0] if pairs else part[0]
+            first = pairs[0][0] if pairs else part[0]
             raise GrammarError(f"a Bézier module needs at least 2 control points, got "
-                               f"{len(pts)}", source, at.offset,
-                               length=max(1, end - at.offset), module=k, grammar=V2)
+                               f"{len(pts)}", source, first.offset,
+                               length=max(1, end - first.offset), module=k, grammar=V2)
         modules.append(BezierModule(tuple(pts), cont))
     return BezierBase(tuple(modules), source)
 
@@ -441,10 +444,7 @@ def detect_base_version(source: str) -> int:
         toks = tokenize(source, grammar="base")
     except GrammarError:
         return 1
-    functional = any(t.kind == "(" for t in toks) or (
-        bool(toks) and toks[0].kind == "item" and toks[0].letter == "M"
-    )
-    if functional:
+    if _is_functional(toks):
         for part, _ in split_top_level(toks):
             args = [t for t in part if t.kind == "item" and t.letter == ""]
             if len(args) < 4 or len(args) % 3 != 1:

@@ -27,7 +27,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 
 from ionic_usd.errors import GrammarError, ParameterError
-from ionic_usd.grammar._lexer import Token, split_top_level, token_number, tokenize
+from ionic_usd.grammar.lexer import Token, split_top_level, token_number, tokenize
 from ionic_usd.temple.cuboid import Cuboid, Incline
 
 __all__ = ["parse_cuboids", "format_cuboids", "GRAMMAR"]

@@ -8,7 +8,7 @@ case-insensitive; numbers are decimal, optionally signed, with an optional expon
 
 Every syntax or range error raises :class:`~ionic_usd.errors.GrammarError` (``grammar='scroll'``)
 naming the 1-based module, with a caret under the offending token; nothing else escapes
-:func:`parse_scroll`. Self-contained on purpose: the grammar is small.
+:func:`parse_scroll`. Tokens come from the grammars' shared lexer (:mod:`ionic_usd.grammar.lexer`).
 
 Presets S1 and S2 (the paper's examples) ship in ``ionic_usd/data/scroll_presets.toml``.
 """
@@ -16,13 +16,13 @@ Presets S1 and S2 (the paper's examples) ship in ``ionic_usd/data/scroll_presets
 from __future__ import annotations
 
 import math
-import re
 import tomllib
 from dataclasses import dataclass, field
 from functools import lru_cache
 from importlib import resources
 
 from ionic_usd.errors import GrammarError, ParameterError
+from ionic_usd.grammar.lexer import NUMBER_RE, Token, split_top_level, tokenize
 
 __all__ = [
     "ScrollRing",
@@ -41,10 +41,6 @@ GRAMMAR = "scroll"
 RADIUS_RANGE = (0.0, 2.0)
 POSITION_RANGE = (0.0, 1.0)
 
-_NUMBER = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?\Z")
-# characters that continue a word (a symbol letter and its value); see _tokens for where an
-# R or P inside a word starts a new one
-_WORD = re.compile(r"[^\s,]")
 
 
 @dataclass(frozen=True)
@@ -91,32 +87,19 @@ def format_scroll(g: ScrollGrammar | list[ScrollRing] | tuple[ScrollRing, ...]) 
     return ", ".join(f"R{_fmt(r.radius)} P{_fmt(r.position)}" for r in rings)
 
 
-def _tokens(source: str) -> list[tuple[str, int, int]]:
-    """Split into (text, offset, length): commas and words (a symbol letter + its value).
-
-    A letter after the first character of a word starts a new word only when it is R or P
-    and follows a digit or dot, so ``R0.7P0.1`` reads as two words while ``R1e5`` and
-    ``Rabc`` stay one word each (and fail as numbers).
-    """
-    out: list[tuple[str, int, int]] = []
-    i, n = 0, len(source)
-    while i < n:
-        ch = source[i]
-        if ch.isspace():
-            i += 1
-            continue
-        if ch == ",":
-            out.append((",", i, 1))
-            i += 1
-            continue
-        j = i + 1
-        while j < n and _WORD.match(source[j]):
-            if source[j] in "RrPp" and (source[j - 1].isdigit() or source[j - 1] == "."):
-                break
-            j += 1
-        out.append((source[i:j], i, j - i))
-        i = j
-    return out
+def _value(t: Token, source: str, mod: int) -> float:
+    """The finite number after an R or P (pointed errors for a missing or bad one)."""
+    if not t.text:
+        raise GrammarError(f"missing value after {t.letter}", source, t.offset, length=1,
+                           module=mod, grammar=GRAMMAR)
+    if NUMBER_RE.fullmatch(t.text) is None:
+        raise GrammarError(f"{t.text!r} is not a number", source, t.text_offset,
+                           length=len(t.text), module=mod, grammar=GRAMMAR)
+    val = float(t.text)
+    if not math.isfinite(val):  # e.g. 1e999
+        raise GrammarError(f"{t.text!r} is not a finite number", source, t.text_offset,
+                           length=len(t.text), module=mod, grammar=GRAMMAR)
+    return val
 
 
 def parse_scroll(source: str) -> ScrollGrammar:
@@ -131,70 +114,56 @@ def parse_scroll(source: str) -> ScrollGrammar:
     if not isinstance(source, str):
         raise GrammarError(f"expected a string, got {type(source).__name__}", "", 0,
                            grammar=GRAMMAR)
-    toks = _tokens(source)
+    toks = tokenize(source, grammar=GRAMMAR)
     if not toks:
         raise GrammarError("empty scroll grammar: expected rings like 'R0.7 P0.05, R0.7 P0.95'",
                            source, 0, length=max(1, len(source)), grammar=GRAMMAR)
-    # modules: runs of words between commas
-    modules: list[list[tuple[str, int, int]]] = [[]]
-    commas: list[tuple[str, int, int]] = []
-    for t in toks:
-        if t[0] == ",":
-            commas.append(t)
-            modules.append([])
-        else:
-            modules[-1].append(t)
+    modules = split_top_level(toks)  # runs of items between commas
     rings: list[ScrollRing] = []
-    for k, words in enumerate(modules):
+    for k, (words, opening) in enumerate(modules):
         mod = k + 1
         if not words:
-            at = commas[k] if k < len(commas) else commas[-1]
-            raise GrammarError(f"empty module {mod}: expected 'R<r> P<p>'", source, at[1],
+            # point at the comma that closes the empty module (the opening one if trailing)
+            at = modules[k + 1][1] if k + 1 < len(modules) else opening
+            raise GrammarError(f"empty module {mod}: expected 'R<r> P<p>'", source, at,
                                module=mod, grammar=GRAMMAR)
-        values: dict[str, tuple[float, int, int]] = {}
-        for text, off, ln in words:
-            sym = text[0].upper()
-            if sym not in "RP":
+        values: dict[str, tuple[float, Token]] = {}
+        for t in words:
+            sym = t.letter if t.kind == "item" else t.kind
+            if sym not in ("R", "P"):
+                text = source[t.offset:t.offset + t.length]
                 raise GrammarError(
                     f"unknown token {text!r}: expected R<radius> or P<position>",
-                    source, off, length=ln, module=mod, grammar=GRAMMAR)
+                    source, t.offset, length=t.length, module=mod, grammar=GRAMMAR)
             if sym in values:
                 raise GrammarError(f"second {sym} in one module (separate rings with commas)",
-                                   source, off, length=ln, module=mod, grammar=GRAMMAR)
+                                   source, t.offset, length=t.length, module=mod,
+                                   grammar=GRAMMAR)
             if sym == "P" and "R" not in values:
                 raise GrammarError("P before R: a ring is written 'R<r> P<p>'",
-                                   source, off, length=ln, module=mod, grammar=GRAMMAR)
-            raw = text[1:]
-            if not raw:
-                raise GrammarError(f"missing value after {sym}", source, off, length=1,
-                                   module=mod, grammar=GRAMMAR)
-            if not _NUMBER.match(raw):
-                raise GrammarError(f"{raw!r} is not a number", source, off + 1,
-                                   length=len(raw), module=mod, grammar=GRAMMAR)
-            val = float(raw)
-            if not math.isfinite(val):  # e.g. 1e999
-                raise GrammarError(f"{raw!r} is not a finite number", source, off + 1,
-                                   length=len(raw), module=mod, grammar=GRAMMAR)
+                                   source, t.offset, length=t.length, module=mod,
+                                   grammar=GRAMMAR)
+            val = _value(t, source, mod)
             lo, hi = RADIUS_RANGE if sym == "R" else POSITION_RANGE
             if not lo <= val <= hi:
                 what = "radius r" if sym == "R" else "position p"
                 raise GrammarError(f"{what} = {_fmt(val)} is outside [{_fmt(lo)}, {_fmt(hi)}]",
-                                   source, off + 1, length=len(raw), module=mod,
+                                   source, t.text_offset, length=len(t.text), module=mod,
                                    grammar=GRAMMAR)
-            values[sym] = (val, off, ln)
+            values[sym] = (val, t)
         if "P" not in values:
             last = words[-1]
             raise GrammarError("missing position P<p> after the radius", source,
-                               last[1] + last[2], module=mod, grammar=GRAMMAR)
+                               last.offset + last.length, module=mod, grammar=GRAMMAR)
         r, p = values["R"][0], values["P"][0]
         if rings and p < rings[-1].position:
-            _, off, ln = values["P"]
+            pt = values["P"][1]
             raise GrammarError(
                 f"position p = {_fmt(p)} is below the previous ring's "
                 f"{_fmt(rings[-1].position)}: positions must not decrease",
-                source, off + 1, length=ln - 1, module=mod, grammar=GRAMMAR)
-        start = words[0][1]
-        end = words[-1][1] + words[-1][2]
+                source, pt.text_offset, length=len(pt.text), module=mod, grammar=GRAMMAR)
+        start = words[0].offset
+        end = words[-1].offset + words[-1].length
         rings.append(ScrollRing(r, p, (start, end - start)))
     return ScrollGrammar(tuple(rings), source)
 

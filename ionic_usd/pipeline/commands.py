@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ionic_usd.cli_flags import add_command
 from ionic_usd.errors import ParameterError
 
 __all__ = ["add_city_parser", "cmd_city"]
@@ -34,10 +35,10 @@ def cmd_city(args: argparse.Namespace) -> int:
                             ("--seed", args.seed, 0, 2**63 - 1)):
         if not lo <= v <= hi:
             raise ParameterError(flag, v, f"an integer in [{lo}, {hi:,}]")
-    for flag, v, lo, hi in (("--block", args.block, 1.0, 10_000.0),
-                            ("--column-spacing", args.column_spacing, 0.5, 1_000.0)):
-        if not (math.isfinite(v) and lo <= v <= hi):
-            raise ParameterError(flag, v, f"a length in [{lo:g}, {hi:g}] m")
+    for flag, length, low, high in (("--block", args.block, 1.0, 10_000.0),
+                                    ("--column-spacing", args.column_spacing, 0.5, 1_000.0)):
+        if not (math.isfinite(length) and low <= length <= high):
+            raise ParameterError(flag, length, f"a length in [{low:g}, {high:g}] m")
     if args.plan is None:
         # a grid's size is known before any layout work: refuse a city that cannot fit in
         # memory at once (the layout of a million lots alone takes minutes)
@@ -48,7 +49,7 @@ def cmd_city(args: argparse.Namespace) -> int:
         street = 2 * (args.rows + 1) * (args.cols + 1) * int(args.block / args.column_spacing)
         if args.columns is not None:
             street = args.columns
-        from ionic_usd.usd.city import DEFAULT_INSTANCER_THRESHOLD
+        from ionic_usd.city.layout import DEFAULT_INSTANCER_THRESHOLD
 
         threshold = (DEFAULT_INSTANCER_THRESHOLD if args.instancer_threshold is None
                      else args.instancer_threshold)
@@ -82,13 +83,11 @@ def cmd_city(args: argparse.Namespace) -> int:
     return 0
 
 
-def add_city_parser(sub, parser_class) -> None:
+def add_city_parser(sub, parser_class, *, arguments: bool = True) -> None:
     """Add ``city`` to the CLI's subparsers (``parser_class``: the CLI's one-line-error
-    parser)."""
-    from ionic_usd.usd.city import DEFAULT_INSTANCER_THRESHOLD
-
-    p = sub.add_parser(
-        "city",
+    parser; ``arguments=False``: its name and help only, for ``ionic-usd --help``)."""
+    p = add_command(
+        sub, "city", cmd_city,
         help="build a city of temples and colonnades (grid, or a GeoJSON plan)",
         description="Build FOLDER/City.usda (+ Instances.usdc, crate): temples fitted to their "
         "lots and colonnades along the streets, from a GeoJSON plan (--plan; metres in a local "
@@ -96,6 +95,10 @@ def add_city_parser(sub, parser_class) -> None:
         "a local cluster, or --scheduler) into FOLDER/Temples through a content-addressed "
         "cache, so a rebuild builds only what changed.",
     )
+    if not arguments:
+        return
+    from ionic_usd.city.layout import DEFAULT_INSTANCER_THRESHOLD
+
     p.add_argument("folder", type=Path, help="output folder (created if missing)")
     p.add_argument("--plan", type=Path, help="GeoJSON FeatureCollection (see examples/"
                    "forum.geojson); default: a grid")
@@ -142,4 +145,3 @@ def add_city_parser(sub, parser_class) -> None:
                    help="write the build summary (prototypes built/reused, instances, "
                    "timings, workers) as JSON")
     p.add_argument("--force", action="store_true", help="rebuild an existing city")
-    p.set_defaults(func=cmd_city)

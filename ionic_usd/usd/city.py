@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 from pxr import Gf, Sdf, Tf, Usd, UsdGeom, Vt
 
-from ionic_usd.city.layout import LOD_NAMES, yaw_quaternions
+from ionic_usd.city.layout import DEFAULT_INSTANCER_THRESHOLD, LOD_NAMES, yaw_quaternions
 from ionic_usd.errors import OutputExistsError, ParameterError, UsdAuthoringError
 from ionic_usd.usd.draw_mode import CARD_FACES, author_cards, card_bbox_cache, card_bound
 from ionic_usd.usd.stage import new_layer, save_layer
@@ -49,13 +49,6 @@ CARD_TRIANGLES = 12
 
 ROOT_LAYER = "City.usda"
 INSTANCES_LAYER = "Instances.usdc"
-# above this many temples the city uses a PointInstancer of temple prototypes instead of
-# instanceable references. Measured (tools/bench_city.py): opening and counting a city of
-# 2,500 temple references takes 2.9-3.8 s against 0.4-0.5 s as a PointInstancer, 10,000 take
-# 12-18 s against 0.3-0.6 s (authoring 17 s against 0.8-2.5 s), on 2 busy cores: references
-# grow ~1.5 ms each, so past a few hundred they cost more than the whole instancer; below,
-# each temple stays a prim of its own
-DEFAULT_INSTANCER_THRESHOLD = 500
 _T = Sdf.ValueTypeNames
 
 

@@ -29,11 +29,7 @@ def check_output_path(path: str | os.PathLike, *, force: bool = False) -> Path:
     """Validate an output path: a USD extension, and no existing file unless ``force``."""
     from ionic_usd.io import check_output_file
 
-    p = Path(path)
-    if p.suffix.lower() not in USD_EXTENSIONS:
-        raise ParameterError("output", str(p),
-                             f"a file ending in one of {', '.join(USD_EXTENSIONS)}")
-    return check_output_file(p, force=force)
+    return check_output_file(path, force=force, suffixes=USD_EXTENSIONS)
 
 
 def new_layer(

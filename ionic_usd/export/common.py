@@ -6,7 +6,8 @@ import os
 from collections.abc import Callable
 from pathlib import Path
 
-from ionic_usd.errors import IonicError, OutputExistsError, ParameterError
+from ionic_usd.errors import IonicError, ParameterError
+from ionic_usd.io import atomic_path, check_output_file
 
 __all__ = ["EXPORT_FORMATS", "MissingDependencyError", "check_export_path", "atomic_write",
            "require"]
@@ -30,15 +31,9 @@ EXPORT_FORMATS = (".glb", ".gltf", ".usdz", ".stl", ".3mf")
 
 
 def check_export_path(path: str | os.PathLike, *, force: bool = False) -> Path:
-    """An export path: a known extension, an existing folder, no file unless ``force``."""
-    p = Path(path)
-    if p.suffix.lower() not in EXPORT_FORMATS:
-        raise ParameterError("--output", str(p),
-                             f"a file ending in one of {', '.join(EXPORT_FORMATS)}")
-    if p.is_dir():
-        raise ParameterError("--output", str(p), "a file name, not a folder")
-    if p.exists() and not force:
-        raise OutputExistsError(f"{p} exists; pass --force to overwrite it")
+    """An export path: a known extension, a file in an existing folder, no file unless
+    ``force`` (and the refusals of :func:`ionic_usd.io.check_output_file`)."""
+    p = check_output_file(path, force=force, what="--output", suffixes=EXPORT_FORMATS)
     if not p.parent.is_dir():
         raise ParameterError("--output", str(p), f"a file in an existing folder ({p.parent} "
                              "does not exist)")
@@ -49,8 +44,6 @@ def atomic_write(path: Path, write: Callable[[Path], None]) -> Path:
     """Call ``write(tmp)`` on a temporary sibling of ``path``, then rename it into place: the
     package's one atomic writer (:func:`ionic_usd.io.atomic_path`; synced, stale temporaries
     of killed runs removed). A failure leaves no partial file and ``path`` untouched."""
-    from ionic_usd.io import atomic_path
-
     with atomic_path(path) as tmp:
         write(tmp)
     return Path(path)
