@@ -47,11 +47,11 @@ from ionic_usd.grammar.scroll import ScrollGrammar, resolve_scroll
 
 from .volute import (
     VoluteParams,
-    build_volute,
     volute_curve,
     volute_extent,
     volute_total_radius,
 )
+from .volute_solid import build_volute
 
 __all__ = [
     "CapitalParams",
