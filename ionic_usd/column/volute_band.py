@@ -11,7 +11,14 @@ from typing import Protocol
 
 import numpy as np
 
-__all__ = ["VoluteShape", "CHECK_PER_TURN", "spiral_limit", "band_thickness", "turn_samples", "worst_crossing"]
+__all__ = [
+    "VoluteShape",
+    "CHECK_PER_TURN",
+    "spiral_limit",
+    "band_thickness",
+    "turn_samples",
+    "worst_crossing",
+]
 
 #: θ samples per turn used by the validity checks (exact 2π pairing)
 CHECK_PER_TURN = 720
