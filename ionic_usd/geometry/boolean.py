@@ -254,11 +254,26 @@ def remove_slivers(mesh: Mesh, tol: float, *, min_angle: float = SLIVER_ANGLE_DE
     cn = mesh.normals.reshape(-1, 3, 3).copy() if fv else None
     alive = np.ones(len(tri), dtype=bool)
 
+    inc: dict[int, set[int]] = {}  # vertex → the live triangles using it
+    for f, row in enumerate(tri.tolist()):
+        for v in row:
+            inc.setdefault(v, set()).add(f)
+
     def faces_with(*vs: int) -> np.ndarray:
-        sel = alive.copy()
-        for v in vs:
-            sel &= (tri == v).any(axis=1)
-        return np.flatnonzero(sel)
+        common = set.intersection(*(inc.get(int(v), set()) for v in vs))
+        return np.array(sorted(common), dtype=np.int64)
+
+    def set_tri(f: int, new) -> None:
+        if f < len(tri):
+            for v in tri[f].tolist():
+                inc[v].discard(f)
+        for v in np.asarray(new).tolist():
+            inc.setdefault(v, set()).add(f)
+
+    def kill(f: int) -> None:
+        for v in tri[f].tolist():
+            inc[v].discard(f)
+        alive[f] = False
 
     def try_flip(t: int, k: int) -> bool:
         """Flip the edge opposite corner k of triangle t."""
@@ -288,6 +303,8 @@ def remove_slivers(mesh: Mesh, tol: float, *, min_angle: float = SLIVER_ANGLE_DE
             n_new = np.array([[corner(t, c), corner(t, a), corner(o, d)],
                               [corner(o, d), corner(o, b), corner(t, c)]])
             cn[t], cn[o] = n_new
+        set_tri(t, new[0])
+        set_tri(o, new[1])
         tri[t], tri[o] = new
         return True
 
@@ -326,10 +343,12 @@ def remove_slivers(mesh: Mesh, tol: float, *, min_angle: float = SLIVER_ANGLE_DE
             nf = nf / max(float(np.linalg.norm(nf)), 1e-12)
             cn[o] = [n_b, nf, n_d]
             cn = np.concatenate([cn, [[nf, n_a, n_d]]])
+        set_tri(o, halves[0])
         tri[o] = halves[0]
+        set_tri(len(tri), halves[1])
         tri = np.vstack([tri, halves[1:]])
         alive = np.concatenate([alive, [True]])
-        alive[t] = False
+        kill(t)
         return True
 
     def try_collapse(t: int, k: int) -> bool:
@@ -355,28 +374,37 @@ def remove_slivers(mesh: Mesh, tol: float, *, min_angle: float = SLIVER_ANGLE_DE
                 continue
             if _tri_angles(pts[new]).min() < min(min_angle, _tri_angles(pts[tri[moved]]).min()):
                 continue
+            for f, row in zip(moved.tolist(), new, strict=True):
+                set_tri(f, row)
             tri[moved] = new
-            alive[shared] = False
+            for f in shared.tolist():
+                kill(f)
             return True
         return False
 
+    touched: set[int] | None = None  # vertices near a change in the last pass (None: all)
     for _ in range(max_passes):
-        ang = _tri_angles(pts[tri])
-        worst = ang.min(axis=1)
+        worst = _tri_angles(pts[tri]).min(axis=1)
         bad = np.flatnonzero(alive & (worst < min_angle))
+        if touched is not None:  # a sliver nothing changed around failed before: skip it
+            near = np.isin(tri[bad], np.fromiter(touched, np.int64, len(touched))).any(axis=1)
+            bad = bad[near]
         if not len(bad):
             break
-        changed = False
+        touched = set()
         for t in bad[np.argsort(worst[bad])]:
             if not alive[t]:
                 continue
             a = _tri_angles(pts[tri[t]][None])[0]
             if a.min() >= min_angle:
                 continue
+            ring = tri[t].tolist()
             if (try_flip(t, int(np.argmax(a))) or try_snap(t, int(np.argmax(a)))
                     or try_collapse(t, int(np.argmin(a)))):
-                changed = True
-        if not changed:
+                for v in ring:
+                    for f in inc.get(v, ()):
+                        touched.update(tri[f].tolist())
+        if not touched:
             break
     tri = tri[alive]
     used, idx = np.unique(tri, return_inverse=True)
