@@ -44,6 +44,7 @@ from ionic_usd.column.capital_body import (
 from ionic_usd.column.solids import MIRROR_X, SWAP_XZ, box_mesh, rigid, rot_y
 from ionic_usd.column.volute import volute_curve
 from ionic_usd.column.volute_solid import build_volute
+from ionic_usd.geometry.mesh import Mesh
 
 __all__ = [
     "build_angle_capital",
@@ -84,19 +85,22 @@ def build_angle_capital(p: CapitalParams, lay: CapitalLayout, top_radius: float)
 
     r, slab = p.relief_depth, p.slab_depth
     top_dx = float(volute_curve(p.volute, 2)[-1, 0]) - p.volute.offset_x
-    vol = dict(samples=p.spiral_samples, eye_segments=p.ring_segments, relief_depth=r,
-               slab_depth=slab)
+
+    def volute(margin: float) -> Mesh:
+        return build_volute(p.volute, samples=p.spiral_samples, eye_segments=p.ring_segments,
+                            relief_depth=r, slab_depth=slab, margin=margin)
+
     # the +Z face's own volute (front-left), its margin running along the canalis' top to
     # half a relief past the side face's band plane, inside the corner volute's band
     reach = lay.face_z + 0.5 * r
-    right = build_volute(p.volute, margin=lay.eye_x + top_dx + reach, **vol)
+    right = volute(lay.eye_x + top_dx + reach)
     fl = rigid(rigid(right, np.eye(3), (lay.eye_x, lay.eye_y, lay.face_z)), MIRROR_X,
                name="volute_front_left")
     side = rigid(fl, SWAP_XZ, name="volute_side_rear")  # the +X face's, at z = −eye_x
     # the corner volute: the front-right one (a short margin into the listels' corner) turned
     # 45° about its eye's vertical onto the outer diagonal; its disc, band and eye are united
     # first, while their touching faces are still exactly coplanar
-    corner = rigid(union([build_volute(p.volute, margin=r, **vol)]), rot_y(45.0),
+    corner = rigid(union([volute(r)]), rot_y(45.0),
                    corner_eye(p, lay), "volute_corner")
     # the canalis plates: an L whose outer corner edge is buried in the corner volute's disc
     slab_front = lay.face_z - r

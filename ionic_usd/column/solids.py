@@ -43,10 +43,10 @@ def lathe(profile: np.ndarray, segments: int, name: str, crease_deg: float = 40.
     first = np.concatenate([[0], np.cumsum(sizes)[:-1]])
     ang = np.arange(s) * (2 * np.pi / s)
     cos, sin = np.cos(ang), np.sin(ang)
-    pts = []
+    pts: list[np.ndarray] = []
     for (r, y), ax in zip(prof, on_axis, strict=True):
         if ax:
-            pts.append([[0.0, y, 0.0]])
+            pts.append(np.array([[0.0, y, 0.0]]))
         else:
             pts.append(np.stack([r * cos, np.full(s, y), -r * sin], axis=1))
     points = np.concatenate(pts)

@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, fields, replace
+from typing import Any
 
 import numpy as np
 
@@ -294,9 +295,9 @@ def vitruvian_volute(lower_diameter: float = _D_PORTUNUS, **overrides) -> Volute
     if not (isinstance(lower_diameter, int | float) and math.isfinite(lower_diameter)
             and lower_diameter > 0):
         raise ParameterError("lower_diameter", lower_diameter, "a length > 0", context="volute")
-    kw = dict(capital_spiral_radius=lower_diameter / 4.0,
-              capital_circle_radius=lower_diameter / 36.0,
-              arc_square=lower_diameter / 18.0 * 6.0 / 11.0)
+    kw: dict[str, Any] = dict(capital_spiral_radius=lower_diameter / 4.0,
+                              capital_circle_radius=lower_diameter / 36.0,
+                              arc_square=lower_diameter / 18.0 * 6.0 / 11.0)
     kw.update(overrides)
     return VoluteParams(**kw)
 

@@ -27,17 +27,38 @@ CHECK_PER_TURN = 720
 class VoluteShape(Protocol):
     """The attributes the curve functions read (a ``VoluteParams`` or a fitter's stand-in)."""
 
-    theta_start: float
-    theta_end: float
-    start_angle: float
-    increasing_max: float
-    thickness: float
-    min_thickness: float
-    capital_circle_radius: float
-    capital_spiral_radius: float
-    arc_square: float
-    arc_ratio: float
-    eye_center: np.ndarray
+    @property
+    def theta_start(self) -> float: ...
+
+    @property
+    def theta_end(self) -> float: ...
+
+    @property
+    def start_angle(self) -> float: ...
+
+    @property
+    def increasing_max(self) -> float: ...
+
+    @property
+    def thickness(self) -> float: ...
+
+    @property
+    def min_thickness(self) -> float: ...
+
+    @property
+    def capital_circle_radius(self) -> float: ...
+
+    @property
+    def capital_spiral_radius(self) -> float: ...
+
+    @property
+    def arc_square(self) -> float: ...
+
+    @property
+    def arc_ratio(self) -> float: ...
+
+    @property
+    def eye_center(self) -> np.ndarray: ...
 
 
 def spiral_limit(circuits: float) -> float:

@@ -9,6 +9,8 @@ new intersection curves are crisp.
 
 from __future__ import annotations
 
+from typing import Literal
+
 import numpy as np
 
 from ionic_usd.errors import GeometryError
@@ -219,7 +221,7 @@ def _tet_height(a, b, c, d) -> float:
     """Smallest height of the tetrahedron abcd: how far a flip of edge ab (triangles abc, abd
     → acd, bcd) moves the surface."""
     v = abs(float(np.dot(np.cross(b - a, c - a), d - a)))
-    areas = [np.linalg.norm(np.cross(q - o, r - o)) for o, q, r in
+    areas = [float(np.linalg.norm(np.cross(q - o, r - o))) for o, q, r in
              ((a, b, c), (a, b, d), (a, c, d), (b, c, d))]
     return v / max(max(areas), 1e-300)
 
@@ -250,8 +252,9 @@ def remove_slivers(mesh: Mesh, tol: float, *, min_angle: float = SLIVER_ANGLE_DE
     """
     tri = mesh.triangles.astype(np.int64).copy()
     pts = np.array(mesh.points, dtype=np.float64)
-    fv = mesh.normals is not None and mesh.normals_interpolation == "faceVarying"
-    cn = mesh.normals.reshape(-1, 3, 3).copy() if fv else None
+    cn: np.ndarray | None = None
+    if mesh.normals is not None and mesh.normals_interpolation == "faceVarying":
+        cn = mesh.normals.reshape(-1, 3, 3).copy()
     alive = np.ones(len(tri), dtype=bool)
 
     inc: dict[int, set[int]] = {}  # vertex → the live triangles using it
@@ -298,8 +301,10 @@ def remove_slivers(mesh: Mesh, tol: float, *, min_angle: float = SLIVER_ANGLE_DE
         if _tri_angles(pts[new]).min() <= before:
             return False
         if cn is not None:
+            cnl = cn
+
             def corner(f: int, v: int) -> np.ndarray:
-                return cn[f][int(np.flatnonzero(tri[f] == v)[0])]
+                return cnl[f][int(np.flatnonzero(tri[f] == v)[0])]
             n_new = np.array([[corner(t, c), corner(t, a), corner(o, d)],
                               [corner(o, d), corner(o, b), corner(t, c)]])
             cn[t], cn[o] = n_new
@@ -408,8 +413,10 @@ def remove_slivers(mesh: Mesh, tol: float, *, min_angle: float = SLIVER_ANGLE_DE
             break
     tri = tri[alive]
     used, idx = np.unique(tri, return_inverse=True)
+    interp: Literal["vertex", "faceVarying"] = "faceVarying"
+    nrm: np.ndarray | None
     if cn is not None:
-        nrm, interp = cn[alive].reshape(-1, 3), "faceVarying"
+        nrm = cn[alive].reshape(-1, 3)
     else:
         nrm = None if mesh.normals is None else mesh.normals[used]
         interp = mesh.normals_interpolation
