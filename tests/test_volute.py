@@ -10,10 +10,6 @@ from numpy.testing import assert_allclose
 
 from ionic_usd.column.volute import (
     VoluteParams,
-    build_volute,
-    build_volute_backing,
-    build_volute_band,
-    build_volute_eye,
     spiral_limit,
     vitruvian_coefficients,
     vitruvian_volute,
@@ -24,6 +20,12 @@ from ionic_usd.column.volute import (
     volute_theta,
     volute_thickness,
     volute_total_radius,
+)
+from ionic_usd.column.volute_solid import (
+    build_volute,
+    build_volute_backing,
+    build_volute_band,
+    build_volute_eye,
 )
 from ionic_usd.errors import GeometryError, IonicError, ParameterError
 from ionic_usd.geometry.analysis import inspect_mesh

@@ -3,8 +3,8 @@
 Run: ``python tools/render_corner.py`` (needs the preview extra). Writes docs/cella_corner.png
 (the Temple of Portunus' rear-right corner: the three-quarter ``corner`` column rear_4 between
 the engaged half columns rear_3 and right_6, on their walls, as the layout places them) and
-docs/angle_capital.png (the angle capital seen from the corner's diagonal side, both volute
-faces in view).
+docs/angle_capital.png (the angle capital seen from the corner's diagonal, both outer faces'
+volutes in view, and from its front face).
 """
 
 from __future__ import annotations
@@ -76,15 +76,37 @@ def cella_corner(lod: str, out: Path) -> None:
     print(f"{out.name}: {s.triangles:,} triangles, {s.seconds:.2f} s")
 
 
+def _join(pngs: list[Path], out: Path) -> None:
+    """Put pictures of one height side by side (OpenImageIO)."""
+    import OpenImageIO as oiio
+
+    tiles = [oiio.ImageBuf(str(p)).get_pixels(oiio.UINT8) for p in pngs]
+    row = np.concatenate(tiles, axis=1)
+    spec = oiio.ImageSpec(row.shape[1], row.shape[0], row.shape[2], oiio.UINT8)
+    buf = oiio.ImageBuf(spec)
+    buf.set_pixels(oiio.ROI(), row)
+    if not buf.write(str(out)):
+        raise OSError(f"cannot write {out}: {buf.geterror()}")
+
+
 def angle_capital(lod: str, out: Path) -> None:
+    """Two views: from the outer diagonal (the corner volute square on, the volutes of both
+    outer faces on either side) and from the front (+Z) face a little to the right (its own
+    volute on the left, the canalis running into the corner volute turned 45°)."""
     p = portunus_column_params(lod=lod)
     cap = capital_mesh(p.capital_params(), top_radius=p.shaft.top_radius, angle=True)
-    # turned so the corner's diagonal faces the three-quarter camera a little off-axis
-    cap = transform(cap, _placement_matrix((0, 0, 0), 0.0, -10.0))
     tmp = Path(tempfile.mkdtemp())
-    src = write_meshes(tmp / "capital.usda", {"AngleCapital": cap}, root="Capital")
-    s = render_preview(src, out, width=900, height=700, camera="three-quarter", force=True)
-    print(f"{out.name}: {s.triangles:,} triangles, {s.seconds:.2f} s")
+    pngs = []
+    # the three-quarter camera looks from 35° off +Z towards +X: turn the capital so that it
+    # sees the diagonal (45°) and then the front face from 15°
+    for k, turn in enumerate((-10.0, 20.0)):
+        m = transform(cap, _placement_matrix((0, 0, 0), 0.0, turn))
+        src = write_meshes(tmp / f"capital{k}.usda", {"AngleCapital": m}, root="Capital")
+        pngs.append(tmp / f"capital{k}.png")
+        s = render_preview(src, pngs[-1], width=700, height=560, camera="three-quarter",
+                           force=True)
+    _join(pngs, out)
+    print(f"{out.name}: {s.triangles:,} triangles, {s.seconds:.2f} s per view")
 
 
 def main() -> None:

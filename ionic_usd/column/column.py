@@ -24,6 +24,7 @@ import numpy as np
 
 from ionic_usd.column.base import BaseParams, build_base, load_base_preset
 from ionic_usd.column.capital import CapitalParams, build_capital, capital_height
+from ionic_usd.column.portunus import PORTUNUS_HEIGHT, PORTUNUS_LOWER_DIAMETER
 from ionic_usd.column.shaft import ShaftParams, build_shaft
 from ionic_usd.errors import ParameterError
 from ionic_usd.geometry.boolean import union
@@ -43,10 +44,6 @@ __all__ = [
     "column_params_from_mapping",
     "column_params_to_tables",
 ]
-
-PORTUNUS_HEIGHT = 8.22  # m, base bottom to abacus top
-PORTUNUS_LOWER_DIAMETER = 0.95  # m
-
 
 @dataclass(frozen=True)
 class Lod:

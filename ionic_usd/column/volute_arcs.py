@@ -1,7 +1,8 @@
 """The centred-arc volute (``volute_model = "centred_arcs"``): quarter circles about centres
 walking a square spiral in the eye — the Vitruvian construction as Alberti, Serlio, Vignola and
-Palladio draw it. :mod:`ionic_usd.column.volute` dispatches here; the parameters live in
-:class:`~ionic_usd.column.volute.VoluteParams` (``capital_circle_radius`` is the first arc's
+Palladio draw it. :mod:`ionic_usd.column.volute` dispatches here; the shared θ range, band
+thickness and crossing-check sampling are in :mod:`ionic_usd.column.volute_band`. The parameters
+live in :class:`~ionic_usd.column.volute.VoluteParams` (``capital_circle_radius`` is the first arc's
 radius, ``arc_square`` and ``arc_ratio`` the centres' squares, ``start_angle`` and
 ``spiral_circuits`` the θ range, ``thickness``/``min_thickness`` the band as for the spiral).
 """
@@ -9,22 +10,16 @@ radius, ``arc_square`` and ``arc_ratio`` the centres' squares, ``start_angle`` a
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ionic_usd.column.volute_band import VoluteShape, band_thickness, turn_samples, worst_crossing
 from ionic_usd.errors import GeometryError, ParameterError
-
-if TYPE_CHECKING:
-    from ionic_usd.column.volute import VoluteParams
 
 __all__ = ["arc_centres", "arc_points", "check_arcs"]
 
-#: θ samples per turn of the crossing check (as the spiral's)
-_CHECK_PER_TURN = 720
 
-
-def check_arcs(p: VoluteParams) -> None:
+def check_arcs(p: VoluteShape) -> None:
     """Refuse centred-arc parameters that give no volute or a band crossing itself.
 
     Turns are compared along rays from the eye centre, as for the spiral: the band's inner
@@ -38,13 +33,11 @@ def check_arcs(p: VoluteParams) -> None:
     span = p.theta_end - p.theta_start
     if span <= 2 * math.pi:
         return
-    n = int(math.ceil((span - 2 * math.pi) / (2 * math.pi) * _CHECK_PER_TURN)) + 2
-    th = np.linspace(p.theta_start, p.theta_end - 2 * math.pi, n)
+    th = turn_samples(p.theta_start, p.theta_end)
     o = np.linalg.norm(arc_points(p, th, 0.0) - p.eye_center, axis=1)
     i2 = np.linalg.norm(arc_points(p, th + 2 * math.pi, 1.0) - p.eye_center, axis=1)
-    gap = i2 - o
-    if gap.min() <= 0:
-        j = int(np.argmin(gap))
+    j = worst_crossing(i2 - o)
+    if j is not None:
         raise GeometryError(
             "volute (centred_arcs): the band crosses itself at θ = "
             f"{math.degrees(th[j]):.1f} deg (inner edge {i2[j]:.4g} m from the eye centre, "
@@ -52,7 +45,7 @@ def check_arcs(p: VoluteParams) -> None:
         )
 
 
-def arc_centres(p: VoluteParams) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def arc_centres(p: VoluteShape) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Centres, radii and start angles of the quarter-circle arcs (``centred_arcs``).
 
     Arc ``j`` turns from θ_j = start + j·90° to θ_{j+1} (the last one may be shorter) about
@@ -81,13 +74,11 @@ def arc_centres(p: VoluteParams) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return centres, radii, th0
 
 
-def arc_points(p: VoluteParams, theta: np.ndarray, inner: float) -> np.ndarray:
+def arc_points(p: VoluteShape, theta: np.ndarray, inner: float) -> np.ndarray:
     """Points of the centred-arc curve at θ; ``inner`` = 1 gives the band's inner edge."""
     th = np.asarray(theta, dtype=np.float64)
     centres, radii, _ = arc_centres(p)
     j = np.clip(np.floor((th - p.theta_start) / (0.5 * math.pi) + 1e-12).astype(np.int64),
                 0, len(radii) - 1)
-    from ionic_usd.column.volute import volute_thickness
-
-    rho = radii[j] - inner * p.capital_spiral_radius * volute_thickness(p, th)
+    rho = radii[j] - inner * p.capital_spiral_radius * band_thickness(p, th)
     return centres[j] + rho[:, None] * np.stack([np.cos(th), np.sin(th)], axis=1)

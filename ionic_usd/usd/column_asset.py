@@ -170,13 +170,15 @@ def _engage(mesh: Mesh, part: str = "") -> Mesh:
     """The half column: the part behind the wall plane z = −ENGAGED_INSET removed.
 
     A plane clip capped by a constrained Delaunay triangulation (base and shaft cut faces meet
-    along the same vertices, so they still weld); for a capital whose united surface has
-    slivers the triangulation chokes on, the boolean difference.
+    along the same vertices, so they still weld); for the capital, the boolean difference
+    (its sliver clean-up keeps the cut free of needle triangles).
     """
     import shapely
 
     from ionic_usd.geometry.clip import clip_mesh
 
+    if part == "CapitalBody":
+        return _wall_cut(mesh, None, simplify=True)
     try:
         return clip_mesh(mesh, (0.0, 0.0, -ENGAGED_INSET), (0.0, 0.0, 1.0), name=mesh.name)
     except (GeometryError, shapely.errors.GEOSException):
