@@ -136,7 +136,7 @@ def _section_height(args: argparse.Namespace) -> float:
 def _compare_one(args: argparse.Namespace, part: str, ref: np.ndarray):
     """Align and compare one part; returns (comparison, alignment, a, b, source, spacing)."""
     from ionic_usd.evaluate.fit_core import orient_like
-    from ionic_usd.evaluate.fit_shaft import _closed_like, is_closed_curve
+    from ionic_usd.evaluate.fit_shaft import closed_like, is_closed_curve
     from ionic_usd.evaluate.metrics import compare, curve_length, resample
     from ionic_usd.evaluate.reference import align
 
@@ -149,7 +149,7 @@ def _compare_one(args: argparse.Namespace, part: str, ref: np.ndarray):
     gen, source = _generated(args, part, _section_height(args) if section else None)
     moved, how = align(ref, gen, allow_mirror=args.mirror, allow_rotation=args.rotate or
                        bool(section))
-    moved = _closed_like(ref, moved) if section else orient_like(ref, moved)
+    moved = closed_like(ref, moved) if section else orient_like(ref, moved)
     spacing = args.spacing if args.spacing is not None else curve_length(ref) / 2000.0
     a, b = resample(ref, spacing=spacing), resample(moved, spacing=spacing)
     return compare(a, b), how, a, b, source, spacing, len(gen)
@@ -244,7 +244,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
     from ionic_usd.evaluate.report import format_table, plot_overlay
 
     if args.part == "column":
-        from ionic_usd.evaluate.fit_scan import cmd_fit_column
+        from ionic_usd.evaluate.scan_report import cmd_fit_column
 
         return cmd_fit_column(args)
     if args.reference is None:

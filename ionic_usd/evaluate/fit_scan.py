@@ -31,10 +31,10 @@ import numpy as np
 from ionic_usd.column.column import ColumnParams, build_column, portunus_column_params
 from ionic_usd.errors import GeometryError
 from ionic_usd.evaluate.fit_core import FitResult
-from ionic_usd.evaluate.metrics import _closest, _PolylineIndex
+from ionic_usd.evaluate.polyline import PolylineIndex, closest_on_polyline
 from ionic_usd.evaluate.scan_axis import ColumnFrame, estimate_axis, find_parts
 
-__all__ = ["ScanFit", "fit_column_scan", "cmd_fit_column"]
+__all__ = ["ScanFit", "fit_column_scan", "heat_colours", "scan_deviation"]
 
 
 @dataclass(eq=False)
@@ -115,7 +115,7 @@ def _fit_section_e(xy: np.ndarray, r0: float, e: int, centre_deg: float):
 
     def res(x: np.ndarray) -> np.ndarray:
         poly = fluted_section(x[0], e, x[1], x[2], x[3], x[4:6], slices=12)
-        return _closest(pts, np.ascontiguousarray(poly))[0]
+        return closest_on_polyline(pts, np.ascontiguousarray(poly))[0]
 
     best = None
     for f0 in (0.6, 0.8):
@@ -391,7 +391,7 @@ def scan_deviation(points: np.ndarray, col: ColumnParams, matrix: np.ndarray, *,
         sec = fluted_section(1.0, sp.flutes, sp.flute_angle, sp.flute_depth, slices=64)
         k = shaft_radius_at(sp, np.clip(y[in_shaft] - y_shaft0, 0, sp.length))
         xy = np.column_stack([x[in_shaft], -z[in_shaft]]) / k[:, None]
-        dev[in_shaft] = _PolylineIndex(sec).distances(xy) * k
+        dev[in_shaft] = PolylineIndex(sec).distances(xy) * k
         # the plain rings at both ends are circles, not fluted
         ring = ((y[in_shaft] - y_shaft0 < sp.ring_bottom)
                 | (y_cap - y[in_shaft] < sp.ring_top))
@@ -422,51 +422,3 @@ def heat_colours(dev: np.ndarray, vmax: float) -> np.ndarray:
     i = np.minimum(x.astype(int), 2)
     f = (x - i)[:, None]
     return stops[i] * (1 - f) + stops[i + 1] * f
-
-
-def cmd_fit_column(args) -> int:
-    """``ionic-usd fit column --scan FILE -o OUTDIR [--json R.json]``."""
-    from pathlib import Path
-
-    from ionic_usd.errors import OutputExistsError, ParameterError
-    from ionic_usd.evaluate.scan_io import read_scan
-
-    if args.scan is None:
-        raise ParameterError("--scan", None, "a scan file for `fit column`")
-    if args.output is None:
-        raise ParameterError("-o", None, "an output folder for `fit column`")
-    out = Path(args.output)
-    if out.exists() and not out.is_dir():
-        raise ParameterError("-o", str(out), "a folder (created if missing)")
-    files = {k: out / n for k, n in (("column", "fitted_column.usda"),
-                                     ("scan", "scan_deviation.usdc"),
-                                     ("png", "scan_fit.png"), ("toml", "fitted_column.toml"))}
-    clash = [str(p) for p in files.values() if p.exists()]
-    if clash and not args.force:
-        raise OutputExistsError(f"{clash[0]} exists; pass --force to overwrite it")
-    if args.json is not None:
-        if args.json.suffix.lower() != ".json":
-            raise ParameterError("--json", str(args.json), "a file ending in .json")
-        if args.json.exists() and not args.force:
-            raise OutputExistsError(f"{args.json} exists; pass --force to overwrite it")
-    pts = read_scan(args.scan, scale=args.scale)
-    fit = fit_column_scan(pts, seed=args.seed)
-    summary = fit.summary()
-    out.mkdir(parents=True, exist_ok=True)
-    from ionic_usd.evaluate.scan_report import write_outputs
-
-    write_outputs(fit, pts, files, args, summary)
-    dev = summary["deviation"]
-    print(f"scan {args.scan}: {len(pts):,} points; parts {', '.join(summary['parts_found'])}")
-    print(f"  diameter {fit.diameter:.4f} m, {fit.flutes} flutes; axis "
-          f"{np.round(fit.frame.direction, 5).tolist()} through "
-          f"{np.round(fit.frame.origin, 4).tolist()}")
-    print(f"  deviation rms {dev['rms'] * 1000:.3g} mm, p95 {dev['p95'] * 1000:.3g} mm, max "
-          f"{dev['max'] * 1000:.3g} mm; {fit.seconds:.1f} s")
-    for note in fit.notes:
-        print(f"  {note}")
-    for p in files.values():
-        print(f"wrote {p}")
-    if args.json is not None:
-        print(f"wrote {args.json}")
-    return 0

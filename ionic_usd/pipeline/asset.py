@@ -158,7 +158,8 @@ def column_asset_meshes(opts: ColumnAssetOptions) -> list[AssetMesh]:
             vp = volute_variant_params(p, vm)
             for s in opts.scrolls:
                 for c in opts.capitals:
-                    body = build_capital_part(vp, y_cap, scroll=s, angle=c == "angle")
+                    body = _weld_exact(build_capital_part(vp, y_cap, scroll=s,
+                                                          angle=c == "angle"))
                     tag = {"scroll": s, "capital": c}
                     name = f"Capital_{s}_{c}"
                     if len(opts.volutes) > 1:
@@ -174,6 +175,16 @@ def column_asset_meshes(opts: ColumnAssetOptions) -> list[AssetMesh]:
                     t["form"] = form
                 out.append(AssetMesh(part, f"{name}_{lod}{suffix}", m.with_(name=name), t))
     return out
+
+
+def _weld_exact(mesh: Mesh) -> Mesh:
+    """``mesh`` with exactly coincident points merged: the capital's union can leave one
+    vertex twice at the same place (closed, but pinched: not a clean solid)."""
+    from ionic_usd.geometry.mesh import weld
+
+    if len(np.unique(mesh.points, axis=0)) < mesh.n_points:
+        return weld(mesh, 1e-12)
+    return mesh
 
 
 def column_asset_ornament(opts: ColumnAssetOptions) -> tuple[AssetInstancer, ...]:

@@ -174,7 +174,28 @@ def volute_variant_params(params: ColumnParams, model: str) -> ColumnParams:
                     arc_square=r * 4.0 / 33.0, arc_ratio=1.0 / 3.0)
     else:
         v = v.with_(volute_model=model)
-    return dataclasses.replace(params, capital=params.capital.with_(volute=v))
+    own_gap = _margin_gap(params)[0]
+    out = dataclasses.replace(params, capital=params.capital.with_(volute=v))
+    gap, top_end_x = _margin_gap(out)
+    if own_gap > 0.0 and gap < own_gap:
+        # the straight margins stop as far short of the centre plane as the column's own
+        # model's do (1.4 mm for Portunus), the canalis bridging them: margins meeting on
+        # the plane leave coincident vertices in the capital's union
+        margin = max(top_end_x - own_gap, 0.0)
+        out = dataclasses.replace(out, capital=out.capital.with_(spiral_margin=margin))
+    return out
+
+
+def _margin_gap(params: ColumnParams) -> tuple[float, float]:
+    """How far short of the centre plane x = 0 a volute's straight margin stops, and the x of
+    the band's top end where the margin starts (m)."""
+    from ionic_usd.column.capital import capital_layout
+    from ionic_usd.column.volute import volute_curve
+
+    cp = params.capital_params()
+    lay = capital_layout(cp)
+    top_end_x = lay.eye_x + float(volute_curve(cp.volute, 2)[-1, 0]) - cp.volute.offset_x
+    return top_end_x - lay.margin, top_end_x
 
 
 def _materials(opts: ColumnAssetOptions) -> dict[str, MaterialTextures]:
