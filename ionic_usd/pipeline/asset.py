@@ -158,8 +158,7 @@ def column_asset_meshes(opts: ColumnAssetOptions) -> list[AssetMesh]:
             vp = volute_variant_params(p, vm)
             for s in opts.scrolls:
                 for c in opts.capitals:
-                    body = _weld_exact(build_capital_part(vp, y_cap, scroll=s,
-                                                          angle=c == "angle"))
+                    body = build_capital_part(vp, y_cap, scroll=s, angle=c == "angle")
                     tag = {"scroll": s, "capital": c}
                     name = f"Capital_{s}_{c}"
                     if len(opts.volutes) > 1:
@@ -169,6 +168,8 @@ def column_asset_meshes(opts: ColumnAssetOptions) -> list[AssetMesh]:
         for part, name, mesh, tags in groups:
             for form in opts.forms:
                 m = form_cut(mesh, form, part)
+                if part == "CapitalBody":
+                    m = _weld_exact(m)
                 suffix = "" if form == "full" else f"_{form}"
                 t = {"lod": lod, **tags}
                 if len(opts.forms) > 1:
@@ -178,13 +179,19 @@ def column_asset_meshes(opts: ColumnAssetOptions) -> list[AssetMesh]:
 
 
 def _weld_exact(mesh: Mesh) -> Mesh:
-    """``mesh`` with exactly coincident points merged: the capital's union can leave one
-    vertex twice at the same place (closed, but pinched: not a clean solid)."""
+    """``mesh`` with coincident points merged: the capital's union can leave one vertex twice
+    at (nearly) the same place, with a sliver between (closed, but pinched: not a clean
+    solid). Points within the solid check's tolerance (1e-7 of the diagonal) are welded,
+    and the weld is kept only if it leaves the mesh closed and edge-manifold."""
+    from ionic_usd.geometry.check import colocated_points, solid_report
     from ionic_usd.geometry.mesh import weld
 
-    if len(np.unique(mesh.points, axis=0)) < mesh.n_points:
-        return weld(mesh, 1e-12)
-    return mesh
+    if colocated_points(mesh) == 0:
+        return mesh
+    tol = 1e-7 * float(np.linalg.norm(np.ptp(mesh.points, axis=0)))
+    out = weld(mesh, tol)
+    r = solid_report(out, intersections=False)
+    return out if r.open_edges == 0 and r.nonmanifold_edges == 0 and r.shells == 1 else mesh
 
 
 def column_asset_ornament(opts: ColumnAssetOptions) -> tuple[AssetInstancer, ...]:

@@ -37,7 +37,8 @@ or corner column drops the copies inside its wall).
 The ``volute`` set's default is the model of the column's parameters (``log_spiral`` for the
 Portunus column: the paper's generator, which every fitted and published figure refers to);
 ``centred_arcs`` derives its arcs from the same volute height (eye radius R/9, arc squares
-4R/33 with ratio 1/3: the Vitruvian twelve-centre construction).
+4R/33 with ratio 1/3: the Vitruvian twelve-centre construction), scaled so that the capital
+keeps its height.
 
 Every mesh is one closed solid: the capital's abacus, echinus, volutes, canales and bolsters are
 united (manifold3d), so the capital mesh depends on the scroll and capital variants. Each mesh
@@ -67,7 +68,7 @@ from ionic_usd.column.column import (
     column_params_to_tables,
     portunus_column_params,
 )
-from ionic_usd.column.volute import VOLUTE_MODELS
+from ionic_usd.column.volute import VOLUTE_MODELS, volute_extent
 from ionic_usd.errors import ParameterError
 from ionic_usd.usd.asset import AssetInstancer, AssetMesh, AssetSpec, write_asset
 from ionic_usd.usd.materials import MaterialTextures
@@ -162,16 +163,26 @@ def volute_variant_params(params: ColumnParams, model: str) -> ColumnParams:
 
     The params' own model is kept as given. ``centred_arcs`` taken from a log-spiral column
     derives its arcs from the volute height R (``capital_spiral_radius``): eye radius R/9, arc
-    squares from R/11 (innermost, ratio 1/3) to 4R/33 — the Portunus defaults at D = 0.95 m,
-    scaled with the column. ``log_spiral`` keeps the spiral's own a, b, c, d and R.
+    squares from R/11 (innermost, ratio 1/3) to 4R/33 — the Portunus defaults at D = 0.95 m —
+    then scaled together so that the band rises as far above the eye as the spiral's (the
+    capital keeps its height: the abacus and the entablature do not move). ``log_spiral``
+    keeps the spiral's own a, b, c, d and R.
     """
     v = params.capital.volute
     if v.volute_model == model:
         return params
+    cp = params.capital_params()
+    top = volute_extent(v, cp.spiral_samples, cp.ring_segments)[1, 1]
     if model == "centred_arcs":
         r = v.capital_spiral_radius
         v = v.with_(volute_model=model, capital_circle_radius=r / 9.0,
                     arc_square=r * 4.0 / 33.0, arc_ratio=1.0 / 3.0)
+        # the same height above the eye as the column's own volute, so the abacus (and all
+        # that stands on the column) stays where it was: the arcs scale linearly
+        for _ in range(3):
+            k = top / volute_extent(v, cp.spiral_samples, cp.ring_segments)[1, 1]
+            v = v.with_(capital_circle_radius=v.capital_circle_radius * k,
+                        arc_square=v.arc_square * k)
     else:
         v = v.with_(volute_model=model)
     own_gap = _margin_gap(params)[0]
