@@ -148,9 +148,9 @@ def estimate_asset(params: ColumnParams, texture_size: int, *, lods=None, bases=
                    scrolls=None, flutes=None, forms: int = 3, capitals: int = 2,
                    volutes: int = 2, what: str = "the asset") -> Estimate:
     """Every mesh of the column asset (per LOD: each base, a shaft per flute count, one
-    capital solid per scroll, capital and volute variant — body and bolsters united; ``forms`` times,
-    the cut forms counted as full ones, an upper bound) and one stone texture set at a
-    time."""
+    capital solid per scroll, capital and volute variant — body and bolsters united;
+    ``forms`` times, the cut forms counted as full ones, an upper bound) and one stone
+    texture set at a time."""
     from ionic_usd.column.column import LODS
     from ionic_usd.usd.column_asset import BASE_VARIANTS, FLUTE_VARIANTS, SCROLL_VARIANTS
 
