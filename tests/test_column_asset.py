@@ -329,8 +329,9 @@ def test_volute_variant_switches_the_capital_to_the_centred_arcs(column_asset):
             p = volute_variant_params(params.with_lod("low"), "centred_arcs")
             y = p.base_params().height + p.shaft.length
             ref = build_capital_part(p, y, scroll="S1", angle=False)
-            np.testing.assert_allclose(np.sort(pts["centred_arcs"], axis=0),
-                                       np.sort(ref.points, axis=0), atol=1e-5)
+            # the same surface (the asset welds the union's coincident copies of a point)
+            for a, b in ((pts["centred_arcs"], ref.points), (ref.points, pts["centred_arcs"])):
+                assert cKDTree(b).query(a)[0].max() < 1e-5
     vs.SetVariantSelection("log_spiral")
 
 

@@ -40,7 +40,8 @@ def base_meridian(col_pts: np.ndarray, y0: float, y1: float, *, half_angle: floa
 
     Returns
     -------
-    (k, 2) float (r, y) bottom to top, or None with fewer than 12 filled bins
+    (k + 2, 2) float (r, y) bottom to top, the first and last bins' radii repeated at y0 and
+    y1; or None with fewer than 12 filled bins
     """
     y = col_pts[:, 1]
     sel = (y >= y0) & (y <= y1)
@@ -66,7 +67,10 @@ def base_meridian(col_pts: np.ndarray, y0: float, y1: float, *, half_angle: floa
         spread = [float(np.subtract(*np.percentile(v, [90, 10]))) for v in (a, b)]
         rk = a if spread[0] <= spread[1] else b
         out.append((float(np.percentile(rk, 95)), 0.5 * (edges[k] + edges[k + 1])))
-    return np.asarray(out) if len(out) >= 12 else None
+    if len(out) < 12:
+        return None
+    # the end bins' radii carried to the ends of the range (the base's bottom and top)
+    return np.asarray([(out[0][0], y0), *out, (out[-1][0], y1)])
 
 
 def has_square_plinth(col_pts: np.ndarray, y0: float, y1: float) -> bool:

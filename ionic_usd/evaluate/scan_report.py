@@ -135,6 +135,17 @@ def cmd_fit_column(args) -> int:
           f"{np.round(fit.frame.origin, 4).tolist()}")
     print(f"  deviation rms {dev['rms'] * 1000:.3g} mm, p95 {dev['p95'] * 1000:.3g} mm, max "
           f"{dev['max'] * 1000:.3g} mm; {fit.seconds:.1f} s")
+    for part, rep in sorted(fit.fits.items()):
+        d = rep["deviation"]
+        dev_txt = ("no points" if d["rms"] is None else
+                   f"rms {d['rms'] * 1000:.3g} mm, p95 {d['p95'] * 1000:.3g} mm")
+        extra = ""
+        if "measures" in rep:
+            m = rep["measures"]
+            extra = (f"; meridian {m['hausdorff_pct']:.3f} % (paper's measure), "
+                     f"{m['discrete_frechet_pct']:.3f} % (discrete Fréchet)")
+        print(f"  {part}: {rep['status']} ({rep['model']}); {rep['points']:,} points, "
+              f"{dev_txt}{extra}")
     for note in fit.notes:
         print(f"  {note}")
     for p in files.values():
