@@ -328,7 +328,8 @@ def _fit_scanned_base(col_pts: np.ndarray, col: ColumnParams, frame: ColumnFrame
     from ionic_usd.evaluate.fit_base import fit_base
 
     b0, b1 = frame.parts["base"]
-    mer = base_meridian(col_pts, 0.0, b1 - b0)
+    top = b1 - b0  # the parts' bins: the joint with the shaft may fall short of the top
+    mer = base_meridian(col_pts, 0.0, top)
     if mer is None:
         notes.append("base found but its meridian is too sparse to fit: the Vitruvian base")
         return col, None
@@ -336,7 +337,7 @@ def _fit_scanned_base(col_pts: np.ndarray, col: ColumnParams, frame: ColumnFrame
     what = (f"base fitted to its meridian ({len(mer)} bins at the plinth's face normals): "
             f"{fit.after.hausdorff_pct:.3f} % (paper's measure), "
             f"{fit.after.discrete_frechet_pct:.3f} % (discrete Fréchet)")
-    if has_square_plinth(col_pts, 0.0, b1 - b0) and not use_on_plinth:
+    if has_square_plinth(col_pts, 0.0, top) and not use_on_plinth:
         notes.append(f"{what}; square plinth: the column keeps the Vitruvian base (a lathe "
                      "grammar would round its corners)")
         return col, fit
