@@ -26,6 +26,7 @@ import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -70,7 +71,7 @@ class ScanFit:
     slab: np.ndarray = field(repr=False)
     profile: np.ndarray | None = field(default=None, repr=False)
     notes: list[str] = field(default_factory=list)
-    fits: dict[str, dict[str, object]] = field(default_factory=dict)
+    fits: dict[str, dict[str, Any]] = field(default_factory=dict)
 
     def summary(self) -> dict[str, object]:
         """The R.json keys: diameter, flutes, axis, parts_found, deviation, …"""
@@ -346,12 +347,12 @@ def _fit_scanned_base(col_pts: np.ndarray, col: ColumnParams, frame: ColumnFrame
 
 
 def _part_report(h: np.ndarray, dev: np.ndarray, frame: ColumnFrame, sec: dict[str, float],
-                 base_fit: FitResult | None, col: ColumnParams) -> dict[str, dict[str, object]]:
+                 base_fit: FitResult | None, col: ColumnParams) -> dict[str, dict[str, Any]]:
     """Per part found: what was fitted or only rebuilt, and the deviations of its points."""
-    out: dict[str, dict[str, object]] = {}
+    out: dict[str, dict[str, Any]] = {}
     for part, (a, b) in frame.parts.items():
         d = dev[(h >= a) & (h <= b)]
-        rep: dict[str, object] = {
+        rep: dict[str, Any] = {
             "points": int(len(d)),
             "deviation": {"rms": float(np.sqrt(np.mean(d**2))) if len(d) else None,
                           "p95": float(np.percentile(d, 95)) if len(d) else None}}

@@ -59,7 +59,7 @@ _COLUMNS = (
 )
 
 
-def write_atomically(path: str | Path, write: Callable[[IO[bytes]], None]) -> Path:
+def write_atomically(path: str | Path, write: Callable[[IO[bytes]], object]) -> Path:
     """Write a file through ``write(binary file)`` atomically (:func:`ionic_usd.io.atomic_path`:
     a temporary sibling, synced, renamed over ``path``; nothing is left on failure)."""
     from ionic_usd.io import atomic_path

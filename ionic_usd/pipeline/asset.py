@@ -25,6 +25,7 @@ import shutil
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -208,14 +209,12 @@ def column_asset_ornament(opts: ColumnAssetOptions) -> tuple[AssetInstancer, ...
 
     out = []
     for a in column_ornament(opts):
-        inst = a.instances
+        inst: Any = a.instances  # ionic_usd.column.ornament.Instances
         for form in opts.forms:
-            keep = _outside_walls(np.asarray(inst.positions), form)  # type: ignore[attr-defined]
+            keep = _outside_walls(np.asarray(inst.positions), form)
             sub = dataclasses.replace(
-                inst, proto_indices=inst.proto_indices[keep],  # type: ignore[attr-defined]
-                positions=inst.positions[keep],  # type: ignore[attr-defined]
-                orientations=inst.orientations[keep],  # type: ignore[attr-defined]
-                scales=inst.scales[keep])  # type: ignore[attr-defined]
+                inst, proto_indices=inst.proto_indices[keep], positions=inst.positions[keep],
+                orientations=inst.orientations[keep], scales=inst.scales[keep])
             tags = dict(a.tags)
             name = a.name
             if len(opts.forms) > 1:

@@ -123,8 +123,8 @@ class ColumnAssetOptions:
     flutes: tuple[str, ...] = tuple(FLUTE_VARIANTS)
     forms: tuple[str, ...] = FORM_VARIANTS
     capitals: tuple[str, ...] = CAPITAL_VARIANTS
-    # volute models; None: both, the params' own model first (the default selection)
-    volutes: tuple[str, ...] | None = None
+    # volute models, the first the default selection; (): both, the params' own model first
+    volutes: tuple[str, ...] = ()
     texture_size: int = 1024
     seed: int = 7
     make_tx: bool = False
@@ -146,7 +146,7 @@ class ColumnAssetOptions:
         check("flutes", self.flutes, tuple(FLUTE_VARIANTS))
         check("form", self.forms, FORM_VARIANTS)
         check("capital", self.capitals, CAPITAL_VARIANTS)
-        if self.volutes is None:
+        if not self.volutes:
             own = self.params.capital.volute.volute_model
             object.__setattr__(self, "volutes",
                                (own, *(v for v in VOLUTE_VARIANTS if v != own)))
@@ -225,7 +225,6 @@ def column_asset_spec(opts: ColumnAssetOptions, meshes: Sequence[AssetMesh],
                       instancers: Sequence[AssetInstancer] = ()) -> AssetSpec:
     """The asset's description: ``meshes`` (with ``st``) and ``instancers`` under the variant
     sets of ``opts``, the finishes' materials, the parameters as customData."""
-    assert opts.volutes is not None  # resolved by ColumnAssetOptions
     variant_sets = {"lod": opts.lods, "base": opts.bases, "scroll": opts.scrolls,
                     "capital": opts.capitals, "volute": opts.volutes, "flutes": opts.flutes,
                     "form": opts.forms, "finish": tuple(FINISHES)}
