@@ -146,11 +146,11 @@ def _texture_bytes(size: int) -> tuple[int, int]:
 
 def estimate_asset(params: ColumnParams, texture_size: int, *, lods=None, bases=None,
                    scrolls=None, flutes=None, forms: int = 3, capitals: int = 2,
-                   what: str = "the asset") -> Estimate:
+                   volutes: int = 2, what: str = "the asset") -> Estimate:
     """Every mesh of the column asset (per LOD: each base, a shaft per flute count, one
-    capital solid per scroll and capital variant — body and bolsters united; ``forms`` times,
-    the cut forms counted as full ones, an upper bound) and one stone texture set at a
-    time."""
+    capital solid per scroll, capital and volute variant — body and bolsters united;
+    ``forms`` times, the cut forms counted as full ones, an upper bound) and one stone
+    texture set at a time."""
     from ionic_usd.column.column import LODS
     from ionic_usd.usd.column_asset import BASE_VARIANTS, FLUTE_VARIANTS, SCROLL_VARIANTS
 
@@ -161,8 +161,8 @@ def estimate_asset(params: ColumnParams, texture_size: int, *, lods=None, bases=
         for n in flutes or tuple(FLUTE_VARIANTS.values()):
             shaft = dataclasses.replace(p.shaft, flutes=n, flute_angle=0.8 * 360.0 / n)
             tris += _part_triangles(dataclasses.replace(p, shaft=shaft))[1]
-        tris += capitals * sum(_part_triangles(p)[2] + _part_triangles(p, scroll=s)[3]
-                               for s in scrolls or SCROLL_VARIANTS)
+        tris += capitals * volutes * sum(_part_triangles(p)[2] + _part_triangles(p, scroll=s)[3]
+                                         for s in scrolls or SCROLL_VARIANTS)
     tris *= forms
     px, tex = _texture_bytes(texture_size)
     return Estimate(what, tris, 3 * px, BASELINE_BYTES + 2 * BYTES_PER_TRIANGLE * tris + tex)

@@ -1,4 +1,5 @@
-"""The column component asset: layout on disk, variant sets, UVs, materials, textures, cache."""
+"""The column component asset: layout on disk, variant sets (volute models too), the carved
+capital, UVs, materials, textures, cache."""
 
 from __future__ import annotations
 
@@ -11,15 +12,17 @@ from pxr import Sdf, Usd, UsdGeom, UsdShade
 
 from ionic_usd.errors import OutputExistsError, ParameterError
 from ionic_usd.geometry import Mesh, inspect_mesh
+from ionic_usd.pipeline.asset import build_column_asset
 from ionic_usd.texture.stone import TextureError
 from ionic_usd.usd import validate_stage
-from ionic_usd.usd.column_asset import ColumnAssetOptions, build_column_asset
+from ionic_usd.usd.column_asset import ColumnAssetOptions
 
 VARIANTS = {
     "lod": ("high", "medium", "low"),
     "base": ("attic_bezier_plinth", "attic_bezier", "G1", "G2"),
     "scroll": ("S1", "S2"),
     "capital": ("normal", "angle"),
+    "volute": ("log_spiral", "centred_arcs"),
     "flutes": ("f24", "f20"),
     "form": ("full", "engaged", "corner"),
     "finish": ("travertine", "stucco"),
@@ -42,7 +45,7 @@ def test_low_lod_is_the_proxy_of_every_selection(column_asset):
     stage = open_stage(column_asset)
     vsets = stage.GetDefaultPrim().GetVariantSets()
     assert not active_meshes(stage, "default")  # every mesh is render or proxy
-    names = ["lod", "base", "scroll", "flutes", "form"]
+    names = ["lod", "base", "scroll", "volute", "flutes", "form"]
     for combo in itertools.product(*(VARIANTS[n] for n in names)):
         for n, v in zip(names, combo, strict=True):
             vsets.GetVariantSet(n).SetVariantSelection(v)
@@ -125,7 +128,7 @@ def test_variant_sets_and_validation_per_selection(column_asset):
 def test_every_selection_has_one_mesh_per_part(column_asset):
     stage = open_stage(column_asset)
     vsets = stage.GetDefaultPrim().GetVariantSets()
-    names = ["lod", "base", "scroll", "capital", "flutes", "form"]
+    names = ["lod", "base", "scroll", "capital", "volute", "flutes", "form"]
     for combo in itertools.product(*(VARIANTS[n] for n in names)):
         for n, v in zip(names, combo, strict=True):
             vsets.GetVariantSet(n).SetVariantSelection(v)
@@ -142,7 +145,7 @@ def test_every_mesh_closed_with_uvs_in_unit_square(column_asset):
     stage = Usd.Stage.Open(layer)
     prims = [p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh)
              and "Proxy" not in str(p.GetPath()) and not _prototype_of_instancer(p)]
-    assert len(prims) == column_asset.meshes == 3 * (4 + 2 + 2 * 2) * 3
+    assert len(prims) == column_asset.meshes == 3 * (4 + 2 + 2 * 2 * 2) * 3
     for prim in prims:
         m = mesh_value(prim)
         r = inspect_mesh(m)
@@ -173,7 +176,8 @@ def test_switching_variants_changes_exactly_their_part(column_asset):
     stage = open_stage(column_asset)
     vsets = stage.GetDefaultPrim().GetVariantSets()
     expect = {"lod": {"Base", "Shaft", "CapitalBody"}, "base": {"Base"},
-              "scroll": {"CapitalBody"}, "capital": {"CapitalBody"}, "flutes": {"Shaft"},
+              "scroll": {"CapitalBody"}, "capital": {"CapitalBody"}, "volute": {"CapitalBody"},
+              "flutes": {"Shaft"},
               "form": {"Base", "Shaft", "CapitalBody"}}
     for name, parts in expect.items():
         vs = vsets.GetVariantSet(name)
@@ -291,3 +295,113 @@ def test_bad_user_textures_refused_before_writing(tmp_path):
                                ColumnAssetOptions(user_textures={k: str(v) for k, v in
                                                                  textures.items()}))
         assert not (tmp_path / "IonicColumn").exists()
+
+
+def _capital(stage) -> Usd.Prim:
+    (prim,) = [p for path, p in active_meshes(stage).items() if "/CapitalBody/" in path]
+    return prim
+
+
+def test_volute_variant_switches_the_capital_to_the_centred_arcs(column_asset):
+    """The ``volute`` set swaps the capital mesh at every lod; centred_arcs holds the
+    generator's centred-arc capital (same points), and the two curves differ by centimetres."""
+    from scipy.spatial import cKDTree
+
+    from ionic_usd.column.column import build_capital_part
+    from ionic_usd.usd.column_asset import volute_variant_params
+
+    stage = open_stage(column_asset)
+    vsets = stage.GetDefaultPrim().GetVariantSets()
+    vs = vsets.GetVariantSet("volute")
+    assert vs.GetVariantSelection() == "log_spiral"  # the paper's formula is the default
+    params = ColumnAssetOptions().params
+    for lod in VARIANTS["lod"]:
+        vsets.GetVariantSet("lod").SetVariantSelection(lod)
+        pts = {}
+        for v in VARIANTS["volute"]:
+            vs.SetVariantSelection(v)
+            prim = _capital(stage)
+            assert prim.GetName().endswith(f"_{v}_{lod}"), prim.GetPath()
+            pts[v] = np.array(UsdGeom.Mesh(prim).GetPointsAttr().Get(), dtype=np.float64)
+        d, _ = cKDTree(pts["log_spiral"]).query(pts["centred_arcs"])
+        assert d.max() > 0.005, lod  # the volute's face is another curve
+        if lod == "low":
+            p = volute_variant_params(params.with_lod("low"), "centred_arcs")
+            y = p.base_params().height + p.shaft.length
+            ref = build_capital_part(p, y, scroll="S1", angle=False)
+            # the same surface (the asset welds the union's coincident copies of a point)
+            for a, b in ((pts["centred_arcs"], ref.points), (ref.points, pts["centred_arcs"])):
+                assert cKDTree(b).query(a)[0].max() < 1e-5
+    vs.SetVariantSelection("log_spiral")
+
+
+@pytest.mark.parametrize("lod", ["high", pytest.param("medium", marks=pytest.mark.slow),
+                                 pytest.param("low", marks=pytest.mark.slow)])
+def test_every_volute_selection_validates_and_is_one_solid(column_asset, lod):
+    """Each capital selection (volute × scroll × capital × form, per lod) has 0 UsdValidation
+    errors and its capital is one closed, outward shell."""
+    from ionic_usd.geometry.check import shell_count
+
+    stage = open_stage(column_asset)
+    vsets = stage.GetDefaultPrim().GetVariantSets()
+    vsets.GetVariantSet("lod").SetVariantSelection(lod)
+    names = ["volute", "scroll", "capital", "form"]
+    seen = set()
+    for combo in itertools.product(*(VARIANTS[n] for n in names)):
+        for n, v in zip(names, combo, strict=True):
+            vsets.GetVariantSet(n).SetVariantSelection(v)
+        assert validate_stage(stage) == [], combo
+        seen.add(_capital(stage).GetPath())
+    assert len(seen) == 2 * 2 * 2 * 3  # every combination its own mesh
+    # closed and outward: test_every_mesh_closed_with_uvs_in_unit_square; here one shell
+    for path in seen:
+        prim = stage.GetPrimAtPath(path)
+        g = UsdGeom.Mesh(prim)
+        m = Mesh(np.array(g.GetPointsAttr().Get()), np.array(g.GetFaceVertexCountsAttr().Get()),
+                 np.array(g.GetFaceVertexIndicesAttr().Get()))
+        assert shell_count(m) == 1, path
+
+
+def test_high_lod_carries_the_carved_capital_cut_by_each_form(column_asset):
+    """Egg-and-dart and bead-and-reel PointInstancers in the high lod only; the engaged and
+    corner forms drop the copies inside their walls."""
+    stage = open_stage(column_asset)
+    vsets = stage.GetDefaultPrim().GetVariantSets()
+    counts = {}
+    for lod in VARIANTS["lod"]:
+        vsets.GetVariantSet("lod").SetVariantSelection(lod)
+        for form in VARIANTS["form"]:
+            vsets.GetVariantSet("form").SetVariantSelection(form)
+            inst = [UsdGeom.PointInstancer(p) for p in stage.Traverse()
+                    if p.IsA(UsdGeom.PointInstancer)]
+            if lod != "high":
+                assert inst == [], (lod, form)
+                continue
+            assert sorted(i.GetPrim().GetName().split("_high")[0] for i in inst) == \
+                ["BeadAndReel", "EggAndDart"], form
+            pos = np.concatenate([np.array(i.GetPositionsAttr().Get()) for i in inst])
+            counts[form] = len(pos)
+            if form != "full":
+                behind = pos[:, 2] < -0.05
+                if form == "corner":
+                    behind &= pos[:, 0] < -0.05
+                assert not behind.any(), form
+    vsets.GetVariantSet("lod").SetVariantSelection("high")
+    vsets.GetVariantSet("form").SetVariantSelection("full")
+    # 24 eggs + 24 darts; beads: 2π·0.407 m / (0.0768 + 0.0336 + 0.0096) m → 21 pairs
+    assert counts["full"] == 2 * 24 + 2 * 21
+    # about half (engaged) and a quarter (corner) of the ring lie inside the walls
+    assert 0.4 * counts["full"] < counts["engaged"] < 0.6 * counts["full"]
+    assert 0.65 * counts["full"] < counts["corner"] < 0.85 * counts["full"]
+
+
+def test_volute_option_builds_one_model_without_the_set(tmp_path):
+    opts = ColumnAssetOptions(lods=("low",), bases=("G1",), scrolls=("S1",), flutes=("f24",),
+                              forms=("full",), capitals=("normal",), volutes=("centred_arcs",),
+                              texture_size=16)
+    rep = build_column_asset(tmp_path / "IonicColumn", opts)
+    stage = open_stage(rep)
+    assert "volute" not in stage.GetDefaultPrim().GetVariantSets().GetNames()
+    assert validate_stage(stage) == []
+    with pytest.raises(ParameterError, match="log_spiral"):
+        ColumnAssetOptions(volutes=("ionic_scroll",))

@@ -132,9 +132,9 @@ def test_fit_reports_a_bound_hit():
     # a spiral of 6 turns: circuits may go 0.6 above the traced turns at most, so a start
     # forced far from it (through a fixed seed and no global stage) cannot explain it all;
     # instead check the box flags values on its edge directly
-    from ionic_usd.evaluate.fit_core import _Box
+    from ionic_usd.evaluate.fit_core import Box
 
-    box = _Box([0.0, 0.0], [1.0, 2.0])
+    box = Box([0.0, 0.0], [1.0, 2.0])
     assert box.hit(np.array([0.5, 1.0]), ("a", "b")) == ("b",)
     assert box.hit(np.array([0.0, 0.5]), ("a", "b")) == ("a",)
     assert box.hit(np.array([0.4, 0.5]), ("a", "b")) == ()

@@ -116,3 +116,82 @@ def test_fit_scan_200k_points_timing():
     fit = fit_column_scan(pts)
     assert time.perf_counter() - t0 < 60.0
     assert fit.flutes == 24 and fit.diameter == pytest.approx(0.95, rel=0.02)
+
+
+def _column_points(meshes, n, seed, **kw):
+    """Scan points of ``meshes`` taken back into column coordinates with the known pose."""
+    pts, rot, t = synthetic_scan(meshes, n=n, seed=seed, **kw)
+    return (pts - t) @ rot
+
+
+@pytest.mark.parametrize("diameter,base,square", [(0.8, "attic_bezier_plinth", True),
+                                                  (1.2, "attic_bezier", False)])
+def test_base_meridian_follows_the_visible_profile(diameter, base, square):
+    """The meridian at the plinth's face normals, from a noisy scan with holes and a missing
+    sector, lies within 0.6 of a height bin (1/60 of the base's height) + 2 mm of the true
+    base's outer profile: 0.5 mm noise, and the horizontal faces only seen as steps between
+    bins (measured 2.1 mm at D = 0.8 m, 5.6 mm at 1.2 m)."""
+    import dataclasses
+
+    from ionic_usd.column.column import build_base_part
+    from ionic_usd.evaluate.metrics import hausdorff_distance
+    from ionic_usd.evaluate.scan_parts import base_meridian, has_square_plinth
+
+    p = dataclasses.replace(portunus_column_params(lower_diameter=diameter), base=base)
+    bh = p.base_params().height
+    mesh = {"Base": build_base_part(p)}
+    pts = _column_points(mesh, 20_000, 2, noise=5e-4, holes=3, missing_sector=(40.0, 100.0),
+                         hole_radius=0.05)
+    mer = base_meridian(pts, 0.0, bh)
+    truth = base_meridian(_column_points(mesh, 100_000, 5, noise=0.0, holes=0,
+                                         missing_sector=None), 0.0, bh)
+    assert hausdorff_distance(mer, truth) < 0.6 * bh / 60 + 0.002
+    assert mer[0, 1] == 0.0 and mer[-1, 1] == pytest.approx(bh)
+    assert has_square_plinth(pts, 0.0, bh) is square
+    assert base_meridian(pts[:300], 0.0, bh) is None  # too sparse: no section
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("diameter,base", [(0.8, "attic_bezier_plinth"), (1.2, "attic_bezier")])
+def test_scan_fits_the_base_and_names_the_rebuilt_parts(diameter, base):
+    """A whole column in a random pose (noise, holes, a broken sector): the shaft and the
+    base are fitted, the capital only rebuilt; a round base is taken into the column, a
+    square plinth is reported only. The base's top comes from the parts' height bins, which
+    can leave the joint with the shaft unassigned (measured −7.6 % at D = 0.8 m): its height
+    within 10 %, and over the height it covers, its outer profile within 10 mm + 2 % of the
+    base's height of the truth's (the meridian's own 2–6 mm, plus the Bézier layout's)."""
+    import dataclasses
+
+    from ionic_usd.column.column import build_base_part
+    from ionic_usd.evaluate.fit_scan import fit_column_scan
+    from ionic_usd.evaluate.metrics import hausdorff_distance
+    from ionic_usd.evaluate.scan_parts import base_meridian
+
+    p = dataclasses.replace(portunus_column_params(lower_diameter=diameter), base=base)
+    bh, length = p.base_params().height, p.shaft_params().length
+    hidden = ((0.0, 99.0), (bh, 9.0), (bh + length, 9.0))
+    pts, rot, t = synthetic_scan(build_column(p).parts(), n=120_000, noise=5e-4, holes=4,
+                                 missing_sector=(40.0, 100.0), hidden=hidden, seed=4,
+                                 hole_radius=0.05)
+    fit = fit_column_scan(pts)
+    s = fit.summary()
+    parts = s["parts"]
+    assert set(parts) == {"base", "shaft", "capital"}
+    assert parts["shaft"]["status"] == "fitted" and parts["capital"]["status"] == "rebuilt"
+    assert parts["base"]["status"].startswith("fitted")
+    assert parts["base"]["measures"]["hausdorff_pct"] < 1.0
+    b = fit.base.column
+    h_fit = b.base_params().height
+    assert h_fit == pytest.approx(bh, rel=0.10)
+    truth = base_meridian(_column_points({"Base": build_base_part(p)}, 100_000, 5, noise=0.0,
+                                         holes=0, missing_sector=None), 0.0, bh)
+    fm = build_base_part(b)
+    fitted = base_meridian(_column_points({"Base": fm}, 100_000, 6, noise=0.0, holes=0,
+                                          missing_sector=None), 0.0, b.base_params().height)
+    # the fit is at the fitted diameter (±2 %): compare in units of the true one
+    k = diameter / fit.diameter
+    assert hausdorff_distance(fitted * k, truth[truth[:, 1] <= h_fit * k]) < 0.010 + 0.02 * bh
+    taken = fit.column.base == b.base
+    assert taken == (base == "attic_bezier")
+    for rep in parts.values():
+        assert rep["deviation"]["rms"] is not None and rep["deviation"]["rms"] < 0.02

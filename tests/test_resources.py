@@ -48,8 +48,9 @@ def test_asset_estimate_bounds_the_asset_meshes():
     est1 = estimate_asset(opts.params, 16, flutes=(24, 20), forms=1, **kw).triangles
     est3 = estimate_asset(opts.params, 16, flutes=(24, 20), forms=3, **kw).triangles
     assert full <= est1 <= 1.3 * full
-    # engaged and corner meshes are cut, counted as whole ones: a looser upper bound
-    assert both <= est3 <= 1.5 * both
+    # engaged and corner meshes are cut, counted as whole ones: a looser upper bound (the
+    # capitals, doubled by the volute variant, lose the most to the cuts: 1.55 measured)
+    assert both <= est3 <= 1.65 * both
 
 
 def test_refusal_names_estimate_and_limit():

@@ -139,7 +139,8 @@ def column_usd(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def small_asset(tmp_path_factory):
-    from ionic_usd.usd.column_asset import ColumnAssetOptions, build_column_asset
+    from ionic_usd.pipeline.asset import build_column_asset
+    from ionic_usd.usd.column_asset import ColumnAssetOptions
 
     folder = tmp_path_factory.mktemp("sections_asset") / "IonicColumn"
     opts = ColumnAssetOptions(lods=("high", "low"), bases=("attic_bezier_plinth", "G2"),

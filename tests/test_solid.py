@@ -15,6 +15,7 @@ from ionic_usd.column.column import portunus_column_params
 from ionic_usd.column.shaft import build_shaft
 from ionic_usd.geometry.check import manifold_status, solid_report
 from ionic_usd.geometry.mesh import Mesh, merge, smooth_normals, weld
+from ionic_usd.pipeline.asset import column_asset_meshes, form_cut
 from ionic_usd.temple.layout import ColumnKind, Layer, portunus_layout
 from ionic_usd.usd.column_asset import (
     BASE_VARIANTS,
@@ -24,9 +25,6 @@ from ionic_usd.usd.column_asset import (
     FORM_VARIANTS,
     SCROLL_VARIANTS,
     ColumnAssetOptions,
-    _corner,
-    _engage,
-    column_asset_meshes,
 )
 
 
@@ -118,8 +116,7 @@ def _weld_check(lod: str, base: str, flutes: str, form: str) -> None:
     bp = p.base_params(base)
     b = build_base(bp)
     s = build_shaft(p.shaft_params(), y_offset=bp.height)
-    cut = {"full": lambda m: m, "engaged": _engage, "corner": _corner}[form]
-    b, s = cut(b), cut(s)
+    b, s = form_cut(b, form), form_cut(s, form)
     d = p.shaft_params().bottom_radius
     joined = weld(merge([_without_cap(b, bp.height, d), _without_cap(s, bp.height, d)]), 1e-6)
     r = solid_report(joined, intersections=False)

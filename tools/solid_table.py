@@ -17,7 +17,8 @@ import numpy as np
 
 from ionic_usd.geometry.check import manifold_status, solid_report
 from ionic_usd.geometry.mesh import Mesh
-from ionic_usd.usd.column_asset import ColumnAssetOptions, column_asset_meshes
+from ionic_usd.pipeline.asset import column_asset_meshes
+from ionic_usd.usd.column_asset import ColumnAssetOptions
 
 #: a triangle with less area than this (m²) counts as zero-area
 ZERO_AREA = 1e-12
@@ -83,14 +84,14 @@ def main() -> None:
     from ionic_usd.column.base import build_base
     from ionic_usd.column.shaft import build_shaft
     from ionic_usd.geometry.mesh import merge, weld
-    from ionic_usd.usd.column_asset import FLUTE_VARIANTS, _flute_params
+    from ionic_usd.usd.column_asset import FLUTE_VARIANTS
 
     p = opts.params.with_lod(args.lod)
     for b in opts.bases:
         bp = p.base_params(b)
         base = build_base(bp, cap_top=False)
         for fname in opts.flutes:
-            fp = _flute_params(p, FLUTE_VARIANTS[fname]).shaft_params()
+            fp = p.with_flutes(FLUTE_VARIANTS[fname]).shaft_params()
             shaft = build_shaft(fp, cap_bottom=False, y_offset=bp.height)
             w = weld(merge([base, shaft]), 1e-6)
             r = solid_report(w, intersections=False)

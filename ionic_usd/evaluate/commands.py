@@ -253,7 +253,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
     from ionic_usd.evaluate.report import format_table, plot_overlay
 
     if args.part == "column":
-        from ionic_usd.evaluate.fit_scan import cmd_fit_column
+        from ionic_usd.evaluate.scan_report import cmd_fit_column
 
         return cmd_fit_column(args)
     if args.reference is None:

@@ -20,16 +20,9 @@ import numpy as np
 
 from ionic_usd.column.column import ColumnParams, portunus_column_params
 from ionic_usd.errors import ParameterError
-from ionic_usd.evaluate.fit_core import (
-    FitResult,
-    _Box,
-    _check_common,
-    _Objective,
-    _report_spacing,
-    _Stages,
-    compare_aligned,
-)
-from ionic_usd.evaluate.metrics import _as_curve, _PolylineIndex, curve_length, resample
+from ionic_usd.evaluate import fit_core as core
+from ionic_usd.evaluate.fit_core import FitResult, compare_aligned
+from ionic_usd.evaluate.polyline import PolylineIndex, as_curve, curve_length, resample
 from ionic_usd.geometry.curves import bezier
 
 __all__ = ["BaseLayout", "fit_base", "suggest_base_layout", "base_grammar_string"]
@@ -79,7 +72,7 @@ def _fit_bezier_piece(piece: np.ndarray, n_points: int) -> tuple[np.ndarray, flo
     p0, p1 = piece[0], piece[-1]
     if n_points == 2 or len(piece) <= n_points:
         ctrl = np.linspace(p0, p1, n_points)
-        return ctrl, float(_PolylineIndex(np.vstack([p0, p1])).distances(piece).max())
+        return ctrl, float(PolylineIndex(np.vstack([p0, p1])).distances(piece).max())
     s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(piece, axis=0), axis=1))])
     t = s / s[-1]
     n = n_points - 1
@@ -98,7 +91,7 @@ def _fit_bezier_piece(piece: np.ndarray, n_points: int) -> tuple[np.ndarray, flo
         _, j = cKDTree(dense).query(piece)
         t = np.maximum.accumulate(j / 256.0)
         t[0], t[-1] = 0.0, 1.0
-    err = float(_PolylineIndex(bezier(ctrl, np.linspace(0, 1, 129))).distances(piece).max())
+    err = float(PolylineIndex(bezier(ctrl, np.linspace(0, 1, 129))).distances(piece).max())
     return ctrl, err
 
 
@@ -124,7 +117,7 @@ def suggest_base_layout(
     -------
     BaseLayout (indices refer to ``resample(profile, count=400)``)
     """
-    prof = _as_curve(profile, "profile", min_nodes=2)
+    prof = as_curve(profile, "profile", min_nodes=2)
     length = curve_length(prof)
     tol = 5e-4 * length if tolerance is None else float(tolerance)
     if not (math.isfinite(tol) and tol > 0):
@@ -158,13 +151,13 @@ def suggest_base_layout(
     while pieces:
         i, j = pieces.pop(0)
         seg = p[i:j + 1]
-        chord_err = float(_PolylineIndex(seg[[0, -1]]).distances(seg).max())
+        chord_err = float(PolylineIndex(seg[[0, -1]]).distances(seg).max())
         if chord_err <= tol:
             out.append((i, j, 2))
             continue
         ctrl, err = _fit_bezier_piece(seg, 4)
         if err > tol and j - i >= 8 and len(out) + len(pieces) + 2 <= max_modules:
-            d = _PolylineIndex(bezier(ctrl, np.linspace(0, 1, 129))).distances(seg)
+            d = PolylineIndex(bezier(ctrl, np.linspace(0, 1, 129))).distances(seg)
             m = i + int(np.clip(np.argmax(d), 3, j - i - 3))
             pieces[:0] = [(i, m), (m, j)]
             continue
@@ -252,7 +245,7 @@ def fit_base(
     from ionic_usd.evaluate.sections import base_section
 
     t0 = time.perf_counter()
-    ref = _check_common(reference, measure, seed)
+    ref = core.check_fit_inputs(reference, measure, seed)
     if ref[0, 1] > ref[-1, 1]:
         ref = ref[::-1].copy()
     # Vitruvius (III.5.1–2): the base is half the lower diameter high
@@ -292,7 +285,7 @@ def fit_base(
     x0 = np.asarray(x0)
     lo = np.where(np.arange(len(x0)) % 2 == 0, 1e-4 * size, 0.0)  # R (even), h (odd)
     lo = np.minimum(lo, x0)
-    box = _Box(lo, np.maximum(x0 + 0.5 * size, lo + 1e-6))
+    box = core.Box(lo, np.maximum(x0 + 0.5 * size, lo + 1e-6))
     counts = layout.points
     ts = {m: np.linspace(0.0, 1.0, 2 if m == 2 else slices + 1) for m in set(counts)}
 
@@ -323,8 +316,8 @@ def fit_base(
     def make(u: np.ndarray) -> np.ndarray | None:
         return g0 + lin @ box.x(u)
 
-    obj = _Objective(ref_c, measure)
-    stages = _Stages(make, obj, penalty=10.0 * size, ls_evals=4, dgen=dgen)
+    obj = core.Objective(ref_c, measure)
+    stages = core.Stages(make, obj, penalty=10.0 * size, ls_evals=4, dgen=dgen)
     stages.run(box.u(x0), seed=seed, global_stage=False, popsize=0, maxiter=0,
                polish_evals=polish_evals)
     grammar = base_grammar_string(controls(box.x(stages.best_u)), d)
@@ -333,9 +326,9 @@ def fit_base(
     height = parse_base_grammar(grammar, 2).height
     col = dataclasses.replace(column, base=grammar, base_height=height)
     before, _, init_al = compare_aligned(ref, base_section(column), allow_mirror=False,
-                                           max_segment=_report_spacing(ref))
+                                           max_segment=core.report_spacing(ref))
     after, al, fit_al = compare_aligned(ref, base_section(col), allow_mirror=False,
-                                           max_segment=_report_spacing(ref))
+                                           max_segment=core.report_spacing(ref))
     names = tuple(f"x{i}" for i in range(len(x0)))
     hit = tuple(n for n in box.hit(stages.best_u, names)
                 if box.hi[int(n[1:])] - box.lo[int(n[1:])] > 0 and
@@ -352,6 +345,6 @@ def fit_base(
     return FitResult("base", grammar, col, before, after, measure, stages.iterations,
                      obj.calls, time.perf_counter() - t0, ref, fit_al, init_al, al,
                      tuple(notes), model="bezier", bounds_hit=hit, diameter=diameter,
-                     values=values, spacing=_report_spacing(ref))
+                     values=values, spacing=core.report_spacing(ref))
 
 

@@ -36,18 +36,22 @@ from ionic_usd.errors import OutputExistsError, ParameterError
 from ionic_usd.evaluate import FIT_MEASURES  # the package's light vocabulary
 from ionic_usd.evaluate.metrics import (
     CurveComparison,
-    _as_curve,
-    _closest,
     compare,
     curve_length,
     discrete_frechet_distance,
     frechet_distance,
 )
+from ionic_usd.evaluate.polyline import as_curve, closest_on_polyline
 from ionic_usd.evaluate.reference import Alignment, align
 
 __all__ = [
     "FIT_MEASURES",
+    "Box",
     "FitResult",
+    "Objective",
+    "Stages",
+    "check_fit_inputs",
+    "report_spacing",
     "orient_like",
     "compare_aligned",
     "densify",
@@ -76,7 +80,7 @@ def densify(curve: np.ndarray, max_segment: float) -> np.ndarray:
     -------
     (m, d) float, m >= n
     """
-    c = _as_curve(curve, "curve", min_nodes=1)
+    c = as_curve(curve, "curve", min_nodes=1)
     if not (math.isfinite(max_segment) and max_segment > 0):
         raise ParameterError("max_segment", max_segment, "a length > 0")
     if len(c) < 2:
@@ -112,14 +116,14 @@ def compare_aligned(
     return compare(reference, moved, spacing=spacing), how, moved
 
 
-def _report_spacing(reference: np.ndarray) -> float:
+def report_spacing(reference: np.ndarray) -> float:
     """Longest segment of the reported comparisons: the reference's length / 2000 (raw nodes
     would make the discrete measures depend on how coarsely each curve happens to be
     sampled; :func:`densify` keeps the corners that resampling would cut)."""
     return curve_length(reference) / 2000.0
 
 
-class _Objective:
+class Objective:
     """The chosen measure and the least-squares residuals against one fixed reference."""
 
     def __init__(self, reference: np.ndarray, measure: str) -> None:
@@ -133,7 +137,7 @@ class _Objective:
         # brute force in numba: for fit-sized curves (hundreds of nodes) it beats the kd-tree
         # index, whose exactness loop re-queries many nodes of a badly placed candidate
         gen = np.ascontiguousarray(gen, dtype=np.float64)
-        return _closest(gen, self.ref)[0], _closest(self.ref, gen)[0]
+        return closest_on_polyline(gen, self.ref)[0], closest_on_polyline(self.ref, gen)[0]
 
     def value(self, gen: np.ndarray) -> float:
         self.calls += 1
@@ -162,8 +166,8 @@ class _Objective:
         """
         gen = np.ascontiguousarray(gen, dtype=np.float64)
         m, n = len(gen), len(self.ref)
-        da, seg_a, t_a = _closest(gen, self.ref)  # generated nodes → reference
-        db, seg_b, t_b = _closest(self.ref, gen)  # reference nodes → generated
+        da, seg_a, t_a = closest_on_polyline(gen, self.ref)  # generated nodes → reference
+        db, seg_b, t_b = closest_on_polyline(self.ref, gen)  # reference nodes → generated
         foot_a = (self.ref[seg_a] * (1 - t_a)[:, None]
                   + self.ref[np.minimum(seg_a + 1, n - 1)] * t_a[:, None])
         na = np.divide(gen - foot_a, da[:, None], out=np.zeros_like(gen), where=da[:, None] > 0)
@@ -178,11 +182,11 @@ class _Objective:
 
 
 @dataclass
-class _Stages:
+class Stages:
     """Runs the three stages on a curve generator over the unit box."""
 
     make: Callable[[np.ndarray], np.ndarray | None]  # unit-box params → curve, None if invalid
-    objective: _Objective
+    objective: Objective
     penalty: float
     best_u: np.ndarray = field(init=False)
     best_f: float = field(init=False, default=math.inf)
@@ -212,7 +216,7 @@ class _Stages:
 
     def jacobian(self, u: np.ndarray) -> np.ndarray:
         """Residual Jacobian: the curve's derivative by forward differences (cheap: curves
-        only), the distances' derivative analytically (:meth:`_Objective.jacobian`)."""
+        only), the distances' derivative analytically (:meth:`Objective.jacobian`)."""
         u = np.clip(u, 0.0, 1.0)
         gen = self.make(u)
         k = len(u)
@@ -357,17 +361,17 @@ class FitResult:
 
     def write_toml(self, path: str | Path, *, force: bool = False) -> Path:
         """Write :meth:`to_toml` atomically; refuse to overwrite without ``force``."""
-        from ionic_usd.evaluate.report import _atomic_write
+        from ionic_usd.evaluate.report import write_atomically
 
         path = Path(path)
         if path.exists() and not force:
             raise OutputExistsError(f"{path} exists; pass --force to overwrite it")
         text = self.to_toml().encode("utf-8")
-        return _atomic_write(path, lambda fh: fh.write(text))
+        return write_atomically(path, lambda fh: fh.write(text))
 
 
-def _check_common(reference: object, measure: str, seed: object) -> np.ndarray:
-    ref = _as_curve(reference, "reference", min_nodes=2)
+def check_fit_inputs(reference: object, measure: str, seed: object) -> np.ndarray:
+    ref = as_curve(reference, "reference", min_nodes=2)
     if ref.shape[1] != 2:
         raise ParameterError("reference", f"shape {ref.shape}", "an (n, 2) curve")
     if curve_length(ref) <= 0:
@@ -379,7 +383,7 @@ def _check_common(reference: object, measure: str, seed: object) -> np.ndarray:
     return ref
 
 
-class _Box:
+class Box:
     """Parameter bounds; optimisers work on u ∈ [0, 1]^k."""
 
     def __init__(self, lo: Sequence[float], hi: Sequence[float]) -> None:

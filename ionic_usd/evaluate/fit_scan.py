@@ -9,9 +9,10 @@
    the distances from the slab's points to the model section (:func:`.fit_shaft.fluted_section`)
    — points against the model, so missing sectors cost nothing; the outer radius of every bin
    gives the taper (robust line), hence the lower diameter at the shaft's bottom;
-3. the base: its outer profile (r, h) — the outer radius of thin bins — is measured; with
-   ``fit_base_grammar`` it is fitted with :func:`.fit_base.fit_base` on the axis (round
-   plinths only), else the base is the Vitruvian one at the fitted diameter;
+3. the base: once the turn about the axis is fixed, its meridian at the plinth's face normals
+   (:func:`.scan_parts.base_meridian`) is fitted with :func:`.fit_base.fit_base`; the column
+   takes the fitted base unless the base has a square plinth (a lathe grammar cannot rebuild
+   its corners; ``fit_base_grammar`` takes it anyway);
 4. the capital is detected (asymmetric wide bins) and rebuilt from the Vitruvian proportions
    at the fitted diameter (a scanned volute is not fitted yet);
 5. deviations: every scan point's distance to the fitted surfaces — exact to the fitted
@@ -25,16 +26,18 @@ import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from ionic_usd.column.column import ColumnParams, build_column, portunus_column_params
 from ionic_usd.errors import GeometryError
 from ionic_usd.evaluate.fit_core import FitResult
-from ionic_usd.evaluate.metrics import _closest, _PolylineIndex
+from ionic_usd.evaluate.polyline import PolylineIndex, closest_on_polyline
 from ionic_usd.evaluate.scan_axis import ColumnFrame, estimate_axis, find_parts
+from ionic_usd.evaluate.scan_parts import base_meridian, has_square_plinth, to_column
 
-__all__ = ["ScanFit", "fit_column_scan", "cmd_fit_column"]
+__all__ = ["ScanFit", "fit_column_scan", "heat_colours", "scan_deviation"]
 
 
 @dataclass(eq=False)
@@ -49,9 +52,11 @@ class ScanFit:
     diameter : lower shaft diameter
     flutes : flute count
     section : fitted section values (radius, flute_angle, flute_depth, rotation_deg, …)
-    base : the base's FitResult, or None
+    base : the base's FitResult (its meridian), or None
     deviation : (n,) per point
     notes : what was inferred, assumed or skipped
+    fits : per part found, what was fitted (model, measures) or only rebuilt, and the
+        deviations (rms, p95) of its points
     """
 
     column: ColumnParams
@@ -66,6 +71,7 @@ class ScanFit:
     slab: np.ndarray = field(repr=False)
     profile: np.ndarray | None = field(default=None, repr=False)
     notes: list[str] = field(default_factory=list)
+    fits: dict[str, dict[str, Any]] = field(default_factory=dict)
 
     def summary(self) -> dict[str, object]:
         """The R.json keys: diameter, flutes, axis, parts_found, deviation, …"""
@@ -79,6 +85,7 @@ class ScanFit:
             "deviation": {"rms": float(np.sqrt(np.mean(d**2))),
                           "p95": float(np.percentile(d, 95)), "max": float(d.max())},
             "points": int(len(d)), "section": self.section, "seconds": self.seconds,
+            "parts": self.fits,
             "notes": self.notes,
         }
 
@@ -115,7 +122,7 @@ def _fit_section_e(xy: np.ndarray, r0: float, e: int, centre_deg: float):
 
     def res(x: np.ndarray) -> np.ndarray:
         poly = fluted_section(x[0], e, x[1], x[2], x[3], x[4:6], slices=12)
-        return _closest(pts, np.ascontiguousarray(poly))[0]
+        return closest_on_polyline(pts, np.ascontiguousarray(poly))[0]
 
     best = None
     for f0 in (0.6, 0.8):
@@ -205,13 +212,12 @@ def fit_column_scan(points: np.ndarray, *, seed: int = 0, max_fit_points: int = 
     points : (n, 3) float, metres, any pose
     max_fit_points : the axis and the fits use a random subset of at most this many points;
         the deviations cover every point
-    fit_base_grammar : fit a lathe base grammar to the base's outer profile (round plinths)
+    fit_base_grammar : the column takes the fitted (lathe) base even on a square plinth
 
     Returns
     -------
     ScanFit
     """
-    from ionic_usd.evaluate.fit_base import fit_base
 
     t0 = time.perf_counter()
     pts = np.asarray(points, dtype=np.float64)
@@ -277,23 +283,12 @@ def fit_column_scan(points: np.ndarray, *, seed: int = 0, max_fit_points: int = 
                              flutes=e, flute_angle=sec["flute_angle"],
                              flute_depth=sec["flute_depth"])
     col = dataclasses.replace(col, shaft=sh)
-    base_fit, bprof = None, None
+    bprof = None
     if has_base:
         b0, b1 = frame.parts["base"]
         bprof = _outer_profile(loc, b0, b1, max((b1 - b0) / 80, 0.002))
-        if fit_base_grammar and len(bprof) >= 8:
-            base_fit = fit_base(bprof, initial=col, axis_x=0.0, polish_evals=300)
-            col = base_fit.column
-            notes.append(f"base fitted to its outer profile ({len(bprof)} bins)")
-        else:
-            notes.append("base found; kept from the Vitruvian column at the diameter (its "
-                         "outer profile is in the PNG; a square plinth is not a lathe "
-                         "profile, so it is not fitted as one)")
     else:
         notes.append("no base in the scan: the column's base is the Vitruvian one")
-    if has_cap:
-        notes.append("capital found; rebuilt from Vitruvius' proportions at the diameter "
-                     "(scanned volutes are not fitted yet)")
     # column coordinates → scan: y along the axis, x at the flutes' angle 0
     h_col0 = _column_zero(frame, col, s0)
     # the flutes fix the turn about the axis up to a flute period; the plinth and the
@@ -309,9 +304,74 @@ def fit_column_scan(points: np.ndarray, *, seed: int = 0, max_fit_points: int = 
             best = (score, m, j)
     m = best[1]
     sec["rotation_deg"] += best[2] * 360.0 / e
+    base_fit = None
+    if has_base:  # the turn about the axis is known now: the plinth's faces face ±x, ±z
+        col, base_fit = _fit_scanned_base(to_column(sub, m), col, frame, notes,
+                                          fit_base_grammar)
+        if base_fit is not None:
+            tree = _other_parts_tree(col)
+    if has_cap:
+        notes.append("capital found; rebuilt from Vitruvius' proportions at the diameter "
+                     "(scanned volutes are not fitted yet)")
     dev = scan_deviation(pts, col, m, tree=tree)
+    fits = _part_report(frame.local(pts)[:, 2], dev, frame, sec, base_fit, col)
     return ScanFit(col, frame, m, diameter, e, sec, base_fit, dev, time.perf_counter() - t0,
-                   slab, bprof, notes)
+                   slab, bprof, notes, fits)
+
+
+def _fit_scanned_base(col_pts: np.ndarray, col: ColumnParams, frame: ColumnFrame,
+                      notes: list[str], use_on_plinth: bool
+                      ) -> tuple[ColumnParams, FitResult | None]:
+    """The base's meridian (:func:`.scan_parts.base_meridian`) fitted with
+    :func:`.fit_base.fit_base`; the column takes the fitted base unless the scanned base has
+    a square plinth (a lathe grammar cannot rebuild its corners) and ``use_on_plinth`` is
+    False. Returns the column and the fit (None when the scan covers too little)."""
+    from ionic_usd.evaluate.fit_base import fit_base
+
+    b0, b1 = frame.parts["base"]
+    top = b1 - b0  # the parts' bins: the joint with the shaft may fall short of the top
+    mer = base_meridian(col_pts, 0.0, top)
+    if mer is None:
+        notes.append("base found but its meridian is too sparse to fit: the Vitruvian base")
+        return col, None
+    fit = fit_base(mer, initial=col, axis_x=0.0, polish_evals=300)
+    what = (f"base fitted to its meridian ({len(mer)} bins at the plinth's face normals): "
+            f"{fit.after.hausdorff_pct:.3f} % (paper's measure), "
+            f"{fit.after.discrete_frechet_pct:.3f} % (discrete Fréchet)")
+    if has_square_plinth(col_pts, 0.0, top) and not use_on_plinth:
+        notes.append(f"{what}; square plinth: the column keeps the Vitruvian base (a lathe "
+                     "grammar would round its corners)")
+        return col, fit
+    notes.append(f"{what}; the column takes the fitted base")
+    return fit.column, fit
+
+
+def _part_report(h: np.ndarray, dev: np.ndarray, frame: ColumnFrame, sec: dict[str, float],
+                 base_fit: FitResult | None, col: ColumnParams) -> dict[str, dict[str, Any]]:
+    """Per part found: what was fitted or only rebuilt, and the deviations of its points."""
+    out: dict[str, dict[str, Any]] = {}
+    for part, (a, b) in frame.parts.items():
+        d = dev[(h >= a) & (h <= b)]
+        rep: dict[str, Any] = {
+            "points": int(len(d)),
+            "deviation": {"rms": float(np.sqrt(np.mean(d**2))) if len(d) else None,
+                          "p95": float(np.percentile(d, 95)) if len(d) else None}}
+        if part == "shaft":
+            rep.update(status="fitted", model="fluted section",
+                       fitted=["diameter", "flutes", "flute_angle", "flute_depth", "taper",
+                               "rotation"],
+                       values={k: sec[k] for k in ("radius", "flute_angle", "flute_depth")
+                               if k in sec})
+        elif part == "base" and base_fit is not None:
+            rep.update(status="fitted" if col.base == base_fit.column.base else
+                       "fitted (reported; the column keeps the Vitruvian plinth base)",
+                       model="bezier meridian", height=base_fit.column.base_params().height,
+                       measures={"hausdorff_pct": base_fit.after.hausdorff_pct,
+                                 "discrete_frechet_pct": base_fit.after.discrete_frechet_pct})
+        else:
+            rep.update(status="rebuilt", model="Vitruvian proportions at the diameter")
+        out[part] = rep
+    return out
 
 
 def _matrix(frame: ColumnFrame, rotation_deg: float, h0: float) -> np.ndarray:
@@ -391,7 +451,7 @@ def scan_deviation(points: np.ndarray, col: ColumnParams, matrix: np.ndarray, *,
         sec = fluted_section(1.0, sp.flutes, sp.flute_angle, sp.flute_depth, slices=64)
         k = shaft_radius_at(sp, np.clip(y[in_shaft] - y_shaft0, 0, sp.length))
         xy = np.column_stack([x[in_shaft], -z[in_shaft]]) / k[:, None]
-        dev[in_shaft] = _PolylineIndex(sec).distances(xy) * k
+        dev[in_shaft] = PolylineIndex(sec).distances(xy) * k
         # the plain rings at both ends are circles, not fluted
         ring = ((y[in_shaft] - y_shaft0 < sp.ring_bottom)
                 | (y_cap - y[in_shaft] < sp.ring_top))
@@ -422,51 +482,3 @@ def heat_colours(dev: np.ndarray, vmax: float) -> np.ndarray:
     i = np.minimum(x.astype(int), 2)
     f = (x - i)[:, None]
     return stops[i] * (1 - f) + stops[i + 1] * f
-
-
-def cmd_fit_column(args) -> int:
-    """``ionic-usd fit column --scan FILE -o OUTDIR [--json R.json]``."""
-    from pathlib import Path
-
-    from ionic_usd.errors import OutputExistsError, ParameterError
-    from ionic_usd.evaluate.scan_io import read_scan
-
-    if args.scan is None:
-        raise ParameterError("--scan", None, "a scan file for `fit column`")
-    if args.output is None:
-        raise ParameterError("-o", None, "an output folder for `fit column`")
-    out = Path(args.output)
-    if out.exists() and not out.is_dir():
-        raise ParameterError("-o", str(out), "a folder (created if missing)")
-    files = {k: out / n for k, n in (("column", "fitted_column.usda"),
-                                     ("scan", "scan_deviation.usdc"),
-                                     ("png", "scan_fit.png"), ("toml", "fitted_column.toml"))}
-    clash = [str(p) for p in files.values() if p.exists()]
-    if clash and not args.force:
-        raise OutputExistsError(f"{clash[0]} exists; pass --force to overwrite it")
-    if args.json is not None:
-        if args.json.suffix.lower() != ".json":
-            raise ParameterError("--json", str(args.json), "a file ending in .json")
-        if args.json.exists() and not args.force:
-            raise OutputExistsError(f"{args.json} exists; pass --force to overwrite it")
-    pts = read_scan(args.scan, scale=args.scale)
-    fit = fit_column_scan(pts, seed=args.seed)
-    summary = fit.summary()
-    out.mkdir(parents=True, exist_ok=True)
-    from ionic_usd.evaluate.scan_report import write_outputs
-
-    write_outputs(fit, pts, files, args, summary)
-    dev = summary["deviation"]
-    print(f"scan {args.scan}: {len(pts):,} points; parts {', '.join(summary['parts_found'])}")
-    print(f"  diameter {fit.diameter:.4f} m, {fit.flutes} flutes; axis "
-          f"{np.round(fit.frame.direction, 5).tolist()} through "
-          f"{np.round(fit.frame.origin, 4).tolist()}")
-    print(f"  deviation rms {dev['rms'] * 1000:.3g} mm, p95 {dev['p95'] * 1000:.3g} mm, max "
-          f"{dev['max'] * 1000:.3g} mm; {fit.seconds:.1f} s")
-    for note in fit.notes:
-        print(f"  {note}")
-    for p in files.values():
-        print(f"wrote {p}")
-    if args.json is not None:
-        print(f"wrote {args.json}")
-    return 0

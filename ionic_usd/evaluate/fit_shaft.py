@@ -17,15 +17,8 @@ import numpy as np
 from ionic_usd.column.column import ColumnParams, portunus_column_params
 from ionic_usd.column.shaft import ShaftParams, shaft_radius_at
 from ionic_usd.errors import IonicError
-from ionic_usd.evaluate.fit_core import (
-    FitResult,
-    _Box,
-    _check_common,
-    _Objective,
-    _report_spacing,
-    _Stages,
-    compare_aligned,
-)
+from ionic_usd.evaluate import fit_core as core
+from ionic_usd.evaluate.fit_core import FitResult, compare_aligned
 
 __all__ = ["closed_like", "fit_shaft", "fit_shaft_section", "fluted_section", "is_closed_curve"]
 
@@ -62,7 +55,7 @@ def fit_shaft(
     from ionic_usd.evaluate.sections import shaft_silhouette_section
 
     t0 = time.perf_counter()
-    ref = _check_common(reference, measure, seed)
+    ref = core.check_fit_inputs(reference, measure, seed)
     if is_closed_curve(ref):
         from ionic_usd.errors import ParameterError
 
@@ -86,7 +79,7 @@ def fit_shaft(
     x0[4] = float(ref[:, 1].min())
     x0[0] = float(np.clip(x0[0], 0.3 * rmax, 1.5 * rmax))
     x0[1] = float(np.clip(x0[1], 0.3 * rmax, 1.5 * rmax))
-    box = _Box([0.3 * rmax, 0.3 * rmax, max(0.3 * x0[2], 1e-3), -0.2, x0[4] - 0.2 * span],
+    box = core.Box([0.3 * rmax, 0.3 * rmax, max(0.3 * x0[2], 1e-3), -0.2, x0[4] - 0.2 * span],
                [1.5 * rmax, 1.5 * rmax, 1.5 * x0[2] + 1e-3, 0.2, x0[4] + 0.2 * span])
     ys01 = np.linspace(0.0, 1.0, samples)
 
@@ -106,8 +99,8 @@ def fit_shaft(
             out = np.vstack([[0.0, x[4]], out, [0.0, x[4] + sp.length]])
         return out
 
-    obj = _Objective(ref, measure)
-    stages = _Stages(make, obj, penalty=10.0 * (span + rmax))
+    obj = core.Objective(ref, measure)
+    stages = core.Stages(make, obj, penalty=10.0 * (span + rmax))
     stages.run(box.u(x0), seed=seed, global_stage=True, popsize=popsize, maxiter=maxiter,
                polish_evals=polish_evals)
     x = box.x(stages.best_u)
@@ -120,9 +113,9 @@ def fit_shaft(
         return shaft_silhouette_section(c, samples=samples, ends=ends)
 
     before, _, init_al = compare_aligned(ref, section(column), allow_mirror=False,
-                                           max_segment=_report_spacing(ref))
+                                           max_segment=core.report_spacing(ref))
     after, al, fit_al = compare_aligned(ref, section(col), allow_mirror=False,
-                                           max_segment=_report_spacing(ref))
+                                           max_segment=core.report_spacing(ref))
     names = ("bottom_radius", "top_radius", "height", "entasis", "y_bottom")
     hit = box.hit(stages.best_u, names)
     notes = ["rings, flute-end ratio and flutes kept; r measured from the axis",
@@ -135,7 +128,7 @@ def fit_shaft(
                      tuple(notes), model="silhouette", bounds_hit=hit,
                      diameter=2.0 * fitted.bottom_radius,
                      values=dict(zip(names, (float(v) for v in x), strict=True)),
-                     spacing=_report_spacing(ref))
+                     spacing=core.report_spacing(ref))
 
 
 
@@ -246,23 +239,23 @@ def fit_shaft_section(
     taken as the shaft's lower section (``diameter`` = twice the fitted radius).
     """
     t0 = time.perf_counter()
-    ref = _check_common(reference, measure, seed)
+    ref = core.check_fit_inputs(reference, measure, seed)
     if not is_closed_curve(ref):
         from ionic_usd.errors import ParameterError
 
         raise ParameterError("reference", "an open curve", "a closed cross-section (its last "
                              "node on its first)")
     column = initial or portunus_column_params()
-    from ionic_usd.evaluate.reference import _arc_centroid
+    from ionic_usd.evaluate.reference import arc_centroid
 
-    c0 = _arc_centroid(ref)
+    c0 = arc_centroid(ref)
     e, rot0, r0 = _flute_estimate(ref, c0)
     if flutes is not None:
         e = int(flutes)
     period = 360.0 / e
     size = r0
     x0 = np.array([r0, 0.8 * period, 1.0, rot0, *c0])
-    box = _Box([0.8 * r0, 0.2 * period, 0.05, rot0 - 0.5 * period, c0[0] - 0.1 * size,
+    box = core.Box([0.8 * r0, 0.2 * period, 0.05, rot0 - 0.5 * period, c0[0] - 0.1 * size,
                 c0[1] - 0.1 * size],
                [1.2 * r0, 0.98 * period, 1.6, rot0 + 0.5 * period, c0[0] + 0.1 * size,
                 c0[1] + 0.1 * size])
@@ -272,8 +265,8 @@ def fit_shaft_section(
         x = box.x(u)
         return fluted_section(x[0], e, x[1], x[2], x[3], x[4:6], slices=12)
 
-    obj = _Objective(ref, measure)
-    stages = _Stages(make, obj, penalty=10.0 * size)
+    obj = core.Objective(ref, measure)
+    stages = core.Stages(make, obj, penalty=10.0 * size)
     stages.run(box.u(x0), seed=seed, global_stage=True, popsize=popsize, maxiter=maxiter,
                polish_evals=polish_evals)
     x = box.x(stages.best_u)
@@ -292,7 +285,7 @@ def fit_shaft_section(
         notes.append(f"not put into the column: {exc}")
     if hit:
         notes.append("WARNING: ended on a search bound: " + ", ".join(hit))
-    h = _report_spacing(ref)
+    h = core.report_spacing(ref)
     from ionic_usd.evaluate.fit_core import densify
     from ionic_usd.evaluate.metrics import compare
     from ionic_usd.evaluate.reference import Alignment

@@ -31,17 +31,8 @@ import numpy as np
 from ionic_usd.column.column import ColumnParams, portunus_column_params
 from ionic_usd.column.volute import VOLUTE_MODELS, VoluteParams, volute_curve
 from ionic_usd.errors import IonicError, ParameterError
-from ionic_usd.evaluate.fit_core import (
-    FitResult,
-    _Box,
-    _check_common,
-    _Objective,
-    _report_spacing,
-    _Stages,
-    compare_aligned,
-    densify,
-    orient_like,
-)
+from ionic_usd.evaluate import fit_core as core
+from ionic_usd.evaluate.fit_core import FitResult, compare_aligned, densify, orient_like
 from ionic_usd.evaluate.metrics import compare, resample
 from ionic_usd.evaluate.reference import Alignment, align
 
@@ -198,7 +189,7 @@ def _fit_one(ref: np.ndarray, model: _Model, *, measure: str, samples: int, seed
     diag = float(np.linalg.norm(np.ptp(ref, axis=0)))
     t0 = np.asarray(how.translation)
     x0 = np.concatenate([model.x0, t0])
-    box = _Box(np.concatenate([model.lo, t0 - 0.25 * diag]),
+    box = core.Box(np.concatenate([model.lo, t0 - 0.25 * diag]),
                np.concatenate([model.hi, t0 + 0.25 * diag]))
     ref_o = orient_like(first + t0, ref)
 
@@ -211,8 +202,8 @@ def _fit_one(ref: np.ndarray, model: _Model, *, measure: str, samples: int, seed
         return curve + x[5:7]
 
     # the objective on at most 400 reference nodes (arc-length resampled); reports use all
-    obj = _Objective(ref_o if len(ref_o) <= 400 else resample(ref_o, count=400), measure)
-    stages = _Stages(make, obj, penalty=10.0 * diag)
+    obj = core.Objective(ref_o if len(ref_o) <= 400 else resample(ref_o, count=400), measure)
+    stages = core.Stages(make, obj, penalty=10.0 * diag)
     stages.run(box.u(x0), seed=seed, global_stage=True, popsize=popsize, maxiter=maxiter,
                polish_evals=polish_evals)
     x = box.x(stages.best_u)
@@ -263,7 +254,7 @@ def fit_volute(
     FitResult with ``params`` a :class:`VoluteParams` of the best model; the others in
     ``alternatives``.
     """
-    ref = _check_common(reference, measure, seed)
+    ref = core.check_fit_inputs(reference, measure, seed)
     column = column or portunus_column_params()
     v0 = initial or column.capital.volute
     if not isinstance(v0, VoluteParams):
@@ -319,7 +310,7 @@ def fit_volute(
             notes.append(f"diameter estimate {diameter:.4g} m (Vitruvius: the volute is 8/18 D "
                          "high)")
             col = dataclasses.replace(column, capital=column.capital.with_(volute=fitted))
-            h = _report_spacing(ref_o)
+            h = core.report_spacing(ref_o)
             init_al = orient_like(ref_o, start)
             before = compare(densify(ref_o, h), densify(init_al, h))
             after, al, fit_al = compare_aligned(ref_o, pose.apply(volute_curve(fitted, samples)),

@@ -28,10 +28,12 @@ from pathlib import Path
 import numpy as np
 
 from ionic_usd.errors import ParameterError, ReferenceCurveError
-from ionic_usd.evaluate.metrics import _as_curve, _closest, _PolylineIndex, hausdorff_distance
+from ionic_usd.evaluate.metrics import hausdorff_distance
+from ionic_usd.evaluate.polyline import PolylineIndex, as_curve, closest_on_polyline
 
 __all__ = [
     "Alignment",
+    "arc_centroid",
     "align",
     "read_csv_curve",
     "read_reference",
@@ -174,16 +176,9 @@ def read_svg_curve(
     samples_per_curve : int
         Points per curved segment (Bézier, arc), >= 2; straight segments keep their nodes.
 
-    Returns
-    -------
-    (n, 2) float
-        n >= 2, in metres.
-
-    Raises
-    ------
-    ReferenceCurveError
-        Unreadable or malformed file, no (matching) path, empty path, ambiguous subpaths,
-        non-finite or degenerate curve; the message names the file and element.
+    Returns the (n >= 2, 2) curve in metres, as :func:`read_csv_curve`; raises
+    ReferenceCurveError for an unreadable or malformed file, no (matching) path, an empty
+    path, ambiguous subpaths, a non-finite or degenerate curve, naming the file and element.
     """
     _check_options(scale, samples_per_curve)
     path = Path(path)
@@ -374,7 +369,7 @@ class Alignment:
         }
 
 
-def _arc_centroid(c: np.ndarray) -> np.ndarray:
+def arc_centroid(c: np.ndarray) -> np.ndarray:
     # Length-weighted centroid: independent of how densely the curve is sampled.
     seg = np.linalg.norm(np.diff(c, axis=0), axis=1)
     if c.shape[0] < 2 or seg.sum() == 0.0:
@@ -395,7 +390,7 @@ class _Brute:
         self.poly = np.ascontiguousarray(poly, dtype=np.float64)
 
     def distances(self, points: np.ndarray) -> np.ndarray:
-        return _closest(np.ascontiguousarray(points, dtype=np.float64), self.poly)[0]
+        return closest_on_polyline(np.ascontiguousarray(points, dtype=np.float64), self.poly)[0]
 
 
 def _search(ref: np.ndarray, gen: np.ndarray, mirrored: bool, ang: float | None,
@@ -411,8 +406,8 @@ def _search(ref: np.ndarray, gen: np.ndarray, mirrored: bool, ang: float | None,
     if len(ref) * len(g) <= 250_000:  # brute force (numba) beats the index on small curves
         ref_index, g_index = _Brute(ref), _Brute(g)
     else:
-        ref_index, g_index = _PolylineIndex(ref), _PolylineIndex(g)
-    cg, cr = _arc_centroid(g), _arc_centroid(ref)
+        ref_index, g_index = PolylineIndex(ref), PolylineIndex(g)
+    cg, cr = arc_centroid(g), arc_centroid(ref)
     rotate = ang is not None
 
     def pose(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -461,7 +456,7 @@ def _refine(ref: np.ndarray, gen: np.ndarray, before: float, rough: Alignment
     g = gen.copy()
     if rough.mirrored:
         g[:, 0] = -g[:, 0]
-    cg = _arc_centroid(g)
+    cg = arc_centroid(g)
     rot = _rot(rough.rotation)
     # translation t about the centroid that reproduces the rough pose: T = cg - R cg + t
     t = np.asarray(rough.translation) - (cg - rot @ cg)
@@ -500,8 +495,8 @@ def align(
         The moved generated curve.
     alignment : Alignment
     """
-    ref = _as_curve(reference, "reference", min_nodes=2)
-    gen = _as_curve(generated, "generated", min_nodes=2)
+    ref = as_curve(reference, "reference", min_nodes=2)
+    gen = as_curve(generated, "generated", min_nodes=2)
     if ref.shape[1] != gen.shape[1]:
         raise ParameterError("generated", f"dimension {gen.shape[1]}", f"{ref.shape[1]}")
     if allow_rotation and ref.shape[1] != 2:

@@ -33,8 +33,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import tempfile
 from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import IO, Any
@@ -42,11 +40,12 @@ from typing import IO, Any
 import numpy as np
 
 from ionic_usd.errors import ParameterError
-from ionic_usd.evaluate.metrics import CurveComparison, _as_curve, point_to_polyline_distances
+from ionic_usd.evaluate.metrics import CurveComparison, point_to_polyline_distances
+from ionic_usd.evaluate.polyline import as_curve
 from ionic_usd.evaluate.reference import Alignment
 
-__all__ = ["SCHEMA", "format_table", "plot_overlay", "write_json", "write_fit_json",
-           "write_curves_csv"]
+__all__ = ["SCHEMA", "format_table", "plot_overlay", "write_atomically", "write_json",
+           "write_fit_json", "write_curves_csv"]
 
 SCHEMA = "ionic_usd.evaluate/1"
 
@@ -60,24 +59,14 @@ _COLUMNS = (
 )
 
 
-def _atomic_write(path: str | Path, write: Callable[[IO[bytes]], None]) -> Path:
+def write_atomically(path: str | Path, write: Callable[[IO[bytes]], object]) -> Path:
+    """Write a file through ``write(binary file)`` atomically (:func:`ionic_usd.io.atomic_path`:
+    a temporary sibling, synced, renamed over ``path``; nothing is left on failure)."""
+    from ionic_usd.io import atomic_path
+
     path = Path(path)
-    folder = path.parent if str(path.parent) else Path(".")
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
-    replaced = False
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            write(fh)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-        replaced = True
-    finally:
-        if not replaced:  # whatever interrupted us, leave no temporary file behind
-            try:
-                os.unlink(tmp)
-            except FileNotFoundError:
-                pass
+    with atomic_path(path) as tmp, open(tmp, "wb") as fh:
+        write(fh)
     return path
 
 
@@ -184,7 +173,7 @@ def write_json(
         text = json.dumps(doc, indent=2, ensure_ascii=False, allow_nan=False)
     except (TypeError, ValueError) as exc:
         raise ParameterError("metadata", metadata, "JSON-serialisable values") from exc
-    return _atomic_write(path, lambda fh: fh.write(text.encode("utf-8") + b"\n"))
+    return write_atomically(path, lambda fh: fh.write(text.encode("utf-8") + b"\n"))
 
 
 def plot_overlay(
@@ -217,8 +206,8 @@ def plot_overlay(
     Path
         The written file.
     """
-    a = _as_curve(a, "a", min_nodes=2)
-    b = _as_curve(b, "b", min_nodes=2)
+    a = as_curve(a, "a", min_nodes=2)
+    b = as_curve(b, "b", min_nodes=2)
     if a.shape[1] != 2 or b.shape[1] != 2:
         raise ParameterError("a/b", (a.shape, b.shape), "2D curves (n, 2)")
     from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -286,7 +275,7 @@ def plot_overlay(
     def write(fh: IO[bytes]) -> None:
         fig.savefig(fh, format="png", dpi=dpi)
 
-    return _atomic_write(path, write)
+    return write_atomically(path, write)
 
 
 def write_fit_json(
@@ -313,7 +302,7 @@ def write_fit_json(
         text = json.dumps(doc, indent=2, ensure_ascii=False, allow_nan=False)
     except (TypeError, ValueError) as exc:
         raise ParameterError("fit report", str(exc), "finite, JSON-serialisable values") from exc
-    return _atomic_write(path, lambda fh: fh.write(text.encode("utf-8") + b"\n"))
+    return write_atomically(path, lambda fh: fh.write(text.encode("utf-8") + b"\n"))
 
 
 def write_curves_csv(path: str | Path, curves: Mapping[str, Mapping[str, np.ndarray]]) -> Path:
@@ -327,8 +316,8 @@ def write_curves_csv(path: str | Path, curves: Mapping[str, Mapping[str, np.ndar
     lines = ["part,curve,index,x,y"]
     for part, named in curves.items():
         for name, c in named.items():
-            c = _as_curve(c, f"{part}/{name}", min_nodes=1)
+            c = as_curve(c, f"{part}/{name}", min_nodes=1)
             lines.extend(f"{part},{name},{i},{x!r},{y!r}" for i, (x, y) in
                          enumerate(c[:, :2].tolist()))
     text = "\n".join(lines) + "\n"
-    return _atomic_write(path, lambda fh: fh.write(text.encode("utf-8")))
+    return write_atomically(path, lambda fh: fh.write(text.encode("utf-8")))

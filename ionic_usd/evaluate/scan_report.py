@@ -1,5 +1,6 @@
 """Outputs of a scan fit: fitted column USD (scan frame), scan points USD with deviations,
-a PNG (deviation histogram and section overlays), the column TOML and R.json."""
+a PNG (deviation histogram and section overlays), the column TOML and R.json; and the
+``ionic-usd fit column --scan`` command that fits and writes them."""
 
 from __future__ import annotations
 
@@ -8,9 +9,9 @@ from typing import IO, Any
 
 import numpy as np
 
-from ionic_usd.evaluate.fit_scan import ScanFit, heat_colours
+from ionic_usd.evaluate.fit_scan import ScanFit, fit_column_scan, heat_colours
 
-__all__ = ["plot_scan_fit", "write_outputs"]
+__all__ = ["cmd_fit_column", "plot_scan_fit", "write_outputs"]
 
 
 def plot_scan_fit(fit: ScanFit, path: Path) -> Path:
@@ -20,7 +21,7 @@ def plot_scan_fit(fit: ScanFit, path: Path) -> Path:
     from matplotlib.figure import Figure
 
     from ionic_usd.evaluate.fit_shaft import fluted_section
-    from ionic_usd.evaluate.report import _atomic_write
+    from ionic_usd.evaluate.report import write_atomically
     from ionic_usd.evaluate.sections import base_section
 
     fig = Figure(figsize=(15, 5), layout="constrained")
@@ -64,7 +65,7 @@ def plot_scan_fit(fit: ScanFit, path: Path) -> Path:
     def write(fh: IO[bytes]) -> None:
         fig.savefig(fh, format="png", dpi=110)
 
-    return _atomic_write(path, write)
+    return write_atomically(path, write)
 
 
 def write_outputs(fit: ScanFit, points: np.ndarray, files: dict[str, Path], args: Any,
@@ -73,7 +74,7 @@ def write_outputs(fit: ScanFit, points: np.ndarray, files: dict[str, Path], args
     ``args.json``)."""
     from ionic_usd.column.column import COLUMN_DOCS, build_column, column_params_to_tables
     from ionic_usd.column.shaft import SHAFT_PARAMETER_DOCS
-    from ionic_usd.evaluate.report import _atomic_write, write_fit_json
+    from ionic_usd.evaluate.report import write_atomically, write_fit_json
     from ionic_usd.params import to_toml
     from ionic_usd.usd.scan import write_fitted_column, write_scan_points
 
@@ -89,9 +90,66 @@ def write_outputs(fit: ScanFit, points: np.ndarray, files: dict[str, Path], args
     text = to_toml(column_params_to_tables(fit.column),
                    {"column": COLUMN_DOCS, "shaft": SHAFT_PARAMETER_DOCS},
                    header=f"ionic_usd column fitted to the scan {Path(args.scan).name}")
-    _atomic_write(files["toml"], lambda fh: fh.write(text.encode("utf-8")))
+    write_atomically(files["toml"], lambda fh: fh.write(text.encode("utf-8")))
     if args.json is not None:
         fits = {"base": fit.base} if fit.base is not None else {}
         write_fit_json(args.json, fits, extra=summary,
                        metadata={"scan": str(args.scan), "scale": args.scale,
                                  "outputs": {k: str(v) for k, v in files.items()}})
+
+
+def cmd_fit_column(args) -> int:
+    """``ionic-usd fit column --scan FILE -o OUTDIR [--json R.json]``."""
+    from pathlib import Path
+
+    from ionic_usd.errors import OutputExistsError, ParameterError
+    from ionic_usd.evaluate.scan_io import read_scan
+
+    if args.scan is None:
+        raise ParameterError("--scan", None, "a scan file for `fit column`")
+    if args.output is None:
+        raise ParameterError("-o", None, "an output folder for `fit column`")
+    out = Path(args.output)
+    if out.exists() and not out.is_dir():
+        raise ParameterError("-o", str(out), "a folder (created if missing)")
+    files = {k: out / n for k, n in (("column", "fitted_column.usda"),
+                                     ("scan", "scan_deviation.usdc"),
+                                     ("png", "scan_fit.png"), ("toml", "fitted_column.toml"))}
+    clash = [str(p) for p in files.values() if p.exists()]
+    if clash and not args.force:
+        raise OutputExistsError(f"{clash[0]} exists; pass --force to overwrite it")
+    if args.json is not None:
+        if args.json.suffix.lower() != ".json":
+            raise ParameterError("--json", str(args.json), "a file ending in .json")
+        if args.json.exists() and not args.force:
+            raise OutputExistsError(f"{args.json} exists; pass --force to overwrite it")
+    pts = read_scan(args.scan, scale=args.scale)
+    fit = fit_column_scan(pts, seed=args.seed)
+    summary = fit.summary()
+    out.mkdir(parents=True, exist_ok=True)
+    write_outputs(fit, pts, files, args, summary)
+    dev = summary["deviation"]
+    print(f"scan {args.scan}: {len(pts):,} points; parts {', '.join(summary['parts_found'])}")
+    print(f"  diameter {fit.diameter:.4f} m, {fit.flutes} flutes; axis "
+          f"{np.round(fit.frame.direction, 5).tolist()} through "
+          f"{np.round(fit.frame.origin, 4).tolist()}")
+    print(f"  deviation rms {dev['rms'] * 1000:.3g} mm, p95 {dev['p95'] * 1000:.3g} mm, max "
+          f"{dev['max'] * 1000:.3g} mm; {fit.seconds:.1f} s")
+    for part, rep in sorted(fit.fits.items()):
+        d = rep["deviation"]
+        dev_txt = ("no points" if d["rms"] is None else
+                   f"rms {d['rms'] * 1000:.3g} mm, p95 {d['p95'] * 1000:.3g} mm")
+        extra = ""
+        if "measures" in rep:
+            m = rep["measures"]
+            extra = (f"; meridian {m['hausdorff_pct']:.3f} % (paper's measure), "
+                     f"{m['discrete_frechet_pct']:.3f} % (discrete Fréchet)")
+        print(f"  {part}: {rep['status']} ({rep['model']}); {rep['points']:,} points, "
+              f"{dev_txt}{extra}")
+    for note in fit.notes:
+        print(f"  {note}")
+    for p in files.values():
+        print(f"wrote {p}")
+    if args.json is not None:
+        print(f"wrote {args.json}")
+    return 0

@@ -1,4 +1,9 @@
-"""The Ionic column as a USD component asset: variant sets, xatlas UVs, stone materials.
+"""The Ionic column as a USD component asset: its variant sets, materials and layers.
+
+This module authors prims from kernel values; the pipeline that makes those values
+(generate → clip → UV → texture) is :mod:`ionic_usd.pipeline.asset`, whose
+:func:`~ionic_usd.pipeline.asset.build_column_asset` is the entry point (also reachable here,
+for existing callers).
 
 Variant sets on ``/IonicColumn`` (defaults first):
 
@@ -11,6 +16,9 @@ scroll      S1, S2                                      CapitalBody (its bolster
 capital     normal, angle                               CapitalBody (angle: the corner volute
                                                         turned 45° onto the diagonal, volutes
                                                         on the +Z and +X faces)
+volute      log_spiral, centred_arcs                    CapitalBody (the volute's curve: the
+                                                        paper's formula 3, or the treatises'
+                                                        quarter circles about twelve centres)
 flutes      f24, f20                                    Shaft (f20: a reconstruction
                                                         hypothesis for the Portunus shafts)
 form        full, engaged, corner                       every part (engaged: cut by the wall
@@ -20,9 +28,17 @@ form        full, engaged, corner                       every part (engaged: cut
 finish      travertine, stucco                          the material bound to Geom
 ==========  ==========================================  ===================================
 
-The ``high`` LOD also carries the carved capital: egg-and-dart on the echinus and bead-and-reel
-on the astragal, two PointInstancers under ``Geom/Ornament`` (4 prototypes, 90 copies, 8.8k
-triangles drawn; :func:`ionic_usd.usd.detail.column_ornament`), tagged ``lod = high``.
+The ``high`` LOD also carries the carved capital (``carved``, on by default): egg-and-dart on
+the echinus and bead-and-reel on the astragal, two PointInstancers under ``Geom/Ornament``
+per form (4 prototypes, 90 copies on the full column, 8.8k triangles drawn;
+:func:`ionic_usd.usd.detail.column_ornament`), tagged ``lod = high`` and ``form`` (an engaged
+or corner column drops the copies inside its wall).
+
+The ``volute`` set's default is the model of the column's parameters (``log_spiral`` for the
+Portunus column: the paper's generator, which every fitted and published figure refers to);
+``centred_arcs`` derives its arcs from the same volute height (eye radius R/9, arc squares
+4R/33 with ratio 1/3: the Vitruvian twelve-centre construction), scaled so that the capital
+keeps its height.
 
 Every mesh is one closed solid: the capital's abacus, echinus, volutes, canales and bolsters are
 united (manifold3d), so the capital mesh depends on the scroll and capital variants. Each mesh
@@ -39,43 +55,36 @@ unit of ``st`` (UsdTransform2d), i.e. once every ``TILE_METRES`` metres of stone
 from __future__ import annotations
 
 import dataclasses
-import math
 import os
-import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-
-import numpy as np
+from typing import Any
 
 from ionic_usd import __version__
 from ionic_usd.column.column import (
     LODS,
     ColumnParams,
-    build_base_part,
-    build_capital_part,
-    build_shaft_part,
     column_params_to_tables,
     portunus_column_params,
 )
-from ionic_usd.errors import GeometryError, ParameterError
-from ionic_usd.geometry.mesh import Mesh
-from ionic_usd.texture.uv import UVCache, attach_uvs, unwrap_parts
-from ionic_usd.usd.asset import AssetMesh, AssetSpec, write_asset
-from ionic_usd.usd.detail import column_ornament
+from ionic_usd.column.volute import VOLUTE_MODELS, volute_extent
+from ionic_usd.errors import ParameterError
+from ionic_usd.usd.asset import AssetInstancer, AssetMesh, AssetSpec, write_asset
 from ionic_usd.usd.materials import MaterialTextures
 
 __all__ = [
     "ColumnAssetOptions",
-    "AssetReport",
-    "build_column_asset",
-    "column_asset_meshes",
+    "author_column_asset",
+    "column_asset_spec",
+    "volute_variant_params",
     "ASSET_NAME",
     "BASE_VARIANTS",
     "SCROLL_VARIANTS",
     "FLUTE_VARIANTS",
     "FORM_VARIANTS",
     "CAPITAL_VARIANTS",
+    "VOLUTE_VARIANTS",
     "FINISHES",
     "ENGAGED_INSET",
     "UV_SPAN",
@@ -88,6 +97,7 @@ SCROLL_VARIANTS = ("S1", "S2")
 FLUTE_VARIANTS = {"f24": 24, "f20": 20}
 FORM_VARIANTS = ("full", "engaged", "corner")
 CAPITAL_VARIANTS = ("normal", "angle")
+VOLUTE_VARIANTS = tuple(VOLUTE_MODELS)  # log_spiral, centred_arcs
 # finish variant -> (material prim name, stone style of its textures)
 FINISHES = {"travertine": ("Travertine", "travertine"),
             "stucco": ("PaintedStucco", "stucco_painted")}
@@ -113,13 +123,14 @@ class ColumnAssetOptions:
     flutes: tuple[str, ...] = tuple(FLUTE_VARIANTS)
     forms: tuple[str, ...] = FORM_VARIANTS
     capitals: tuple[str, ...] = CAPITAL_VARIANTS
+    # volute models, the first the default selection; (): both, the params' own model first
+    volutes: tuple[str, ...] = ()
     texture_size: int = 1024
     seed: int = 7
     make_tx: bool = False
     user_textures: Mapping[str, str] | None = None  # role (basecolor/roughness/normal) -> file
-    # the carved echinus and astragal (instanced ornament in the high LOD): written with the
-    # temple's architectural detail (ionic-usd temple --detail …)
-    carved: bool = False
+    # the carved echinus and astragal (instanced ornament in the high LOD)
+    carved: bool = True
 
     def __post_init__(self) -> None:
         def check(name: str, given: Sequence[str], valid: Sequence[str]) -> None:
@@ -135,6 +146,11 @@ class ColumnAssetOptions:
         check("flutes", self.flutes, tuple(FLUTE_VARIANTS))
         check("form", self.forms, FORM_VARIANTS)
         check("capital", self.capitals, CAPITAL_VARIANTS)
+        if not self.volutes:
+            own = self.params.capital.volute.volute_model
+            object.__setattr__(self, "volutes",
+                               (own, *(v for v in VOLUTE_VARIANTS if v != own)))
+        check("volute", self.volutes, VOLUTE_VARIANTS)
         if self.user_textures is not None:
             roles = {"basecolor", "roughness", "normal"}
             if set(self.user_textures) != roles:
@@ -142,158 +158,58 @@ class ColumnAssetOptions:
                                      "exactly the roles basecolor, roughness, normal")
 
 
-@dataclass(frozen=True)
-class AssetReport:
-    path: Path
-    meshes: int
-    triangles_per_lod: dict[str, int]
-    uv_unwraps: int
-    seconds: float
-    bytes_on_disk: int
+def volute_variant_params(params: ColumnParams, model: str) -> ColumnParams:
+    """``params`` with the volute drawn by ``model`` (a ``volute`` variant).
 
-
-def _wall_cut(mesh: Mesh, x_max: float | None, simplify: bool = False) -> Mesh:
-    """``mesh`` minus the wall block z < −ENGAGED_INSET (and x < ``x_max`` if given), by a
-    robust boolean difference (manifold3d): the cut faces are exact planar caps."""
-    from ionic_usd.geometry.boolean import difference
-    from ionic_usd.temple.cuboid import Cuboid, cuboid_mesh
-
-    lo, hi = mesh.extent
-    big = float(np.abs(np.concatenate([lo, hi])).max()) + 1.0
-    x1 = big if x_max is None else x_max
-    block = cuboid_mesh(Cuboid((-big, lo[1] - 1.0, -big), (x1, hi[1] + 1.0, -ENGAGED_INSET),
-                               name="wall"))
-    return difference(mesh, [block], name=mesh.name, simplify=simplify)
-
-
-def _engage(mesh: Mesh, part: str = "") -> Mesh:
-    """The half column: the part behind the wall plane z = −ENGAGED_INSET removed.
-
-    A plane clip capped by a constrained Delaunay triangulation (base and shaft cut faces meet
-    along the same vertices, so they still weld); for the capital, the boolean difference
-    (its sliver clean-up keeps the cut free of needle triangles).
+    The params' own model is kept as given. ``centred_arcs`` taken from a log-spiral column
+    derives its arcs from the volute height R (``capital_spiral_radius``): eye radius R/9, arc
+    squares from R/11 (innermost, ratio 1/3) to 4R/33 — the Portunus defaults at D = 0.95 m —
+    then scaled together so that the band rises as far above the eye as the spiral's (the
+    capital keeps its height: the abacus and the entablature do not move). ``log_spiral``
+    keeps the spiral's own a, b, c, d and R.
     """
-    import shapely
-
-    from ionic_usd.geometry.clip import clip_mesh
-
-    if part == "CapitalBody":
-        return _wall_cut(mesh, None, simplify=True)
-    try:
-        return clip_mesh(mesh, (0.0, 0.0, -ENGAGED_INSET), (0.0, 0.0, 1.0), name=mesh.name)
-    except (GeometryError, shapely.errors.GEOSException):
-        if part != "CapitalBody":
-            raise
-        return _wall_cut(mesh, None, simplify=True)
-
-
-def _corner(mesh: Mesh, part: str = "") -> Mesh:
-    """The three-quarter column: the quadrant x, z < −ENGAGED_INSET (inside the walls of a
-    corner whose outer faces hold the axis) removed."""
-    return _wall_cut(mesh, -ENGAGED_INSET, simplify=part == "CapitalBody")
-
-
-_FORM_CUT = {"full": None, "engaged": _engage, "corner": _corner}
-
-
-def _flute_params(params: ColumnParams, flutes: int) -> ColumnParams:
-    return params.with_flutes(flutes)
-
-
-def column_asset_meshes(opts: ColumnAssetOptions) -> list[AssetMesh]:
-    """Every mesh of the asset with its variant tags (geometry only, no UVs)."""
-    out: list[AssetMesh] = []
-    for lod in opts.lods:
-        p = opts.params.with_lod(lod)
-        base_h = p.base_params().height
-        groups: list[tuple[str, str, Mesh, dict[str, str]]] = []
-        for b in opts.bases:
-            groups.append(("Base", f"Base_{b}", build_base_part(p, b), {"base": b}))
-        for fname in opts.flutes:
-            fp = _flute_params(p, FLUTE_VARIANTS[fname])
-            groups.append(("Shaft", f"Shaft_{fname}", build_shaft_part(fp, base_h),
-                           {"flutes": fname}))
-        y_cap = base_h + p.shaft.length
-        for s in opts.scrolls:
-            for c in opts.capitals:
-                body = build_capital_part(p, y_cap, scroll=s, angle=c == "angle")
-                tag = {"scroll": s, "capital": c}
-                groups.append(("CapitalBody", f"Capital_{s}_{c}", body, tag))
-        for part, name, mesh, tags in groups:
-            for form in opts.forms:
-                cut = _FORM_CUT[form]
-                m = mesh if cut is None else cut(mesh, part)
-                suffix = "" if form == "full" else f"_{form}"
-                t = {"lod": lod, **tags}
-                if len(opts.forms) > 1:
-                    t["form"] = form
-                out.append(AssetMesh(part, f"{name}_{lod}{suffix}", m.with_(name=name), t))
+    v = params.capital.volute
+    if v.volute_model == model:
+        return params
+    cp = params.capital_params()
+    top = volute_extent(v, cp.spiral_samples, cp.ring_segments)[1, 1]
+    if model == "centred_arcs":
+        r = v.capital_spiral_radius
+        v = v.with_(volute_model=model, capital_circle_radius=r / 9.0,
+                    arc_square=r * 4.0 / 33.0, arc_ratio=1.0 / 3.0)
+        # the same height above the eye as the column's own volute, so the abacus (and all
+        # that stands on the column) stays where it was: the arcs scale linearly
+        for _ in range(3):
+            k = top / volute_extent(v, cp.spiral_samples, cp.ring_segments)[1, 1]
+            v = v.with_(capital_circle_radius=v.capital_circle_radius * k,
+                        arc_square=v.arc_square * k)
+    else:
+        v = v.with_(volute_model=model)
+    own_gap = _margin_gap(params)[0]
+    out = dataclasses.replace(params, capital=params.capital.with_(volute=v))
+    gap, top_end_x = _margin_gap(out)
+    if own_gap > 0.0 and gap < own_gap:
+        # the straight margins stop as far short of the centre plane as the column's own
+        # model's do (1.4 mm for Portunus), the canalis bridging them: margins meeting on
+        # the plane leave coincident vertices in the capital's union
+        margin = max(top_end_x - own_gap, 0.0)
+        out = dataclasses.replace(out, capital=out.capital.with_(spiral_margin=margin))
     return out
 
 
-def _with_uvs(meshes: list[AssetMesh], cache: UVCache | None) -> tuple[list[AssetMesh], int]:
-    from ionic_usd.texture.uv import prefetch
+def _margin_gap(params: ColumnParams) -> tuple[float, float]:
+    """How far short of the centre plane x = 0 a volute's straight margin stops, and the x of
+    the band's top end where the margin starts (m)."""
+    from ionic_usd.column.capital import capital_layout
+    from ionic_usd.column.volute import volute_curve
 
-    misses0 = cache.misses if cache is not None else 0
-    def boundary(m: AssetMesh) -> float | None:
-        return BASE_CHART_BOUNDARY if m.part == "Base" else None
-
-    prefetch([(m.mesh, ASSET_TEXELS_PER_METRE[m.tags["lod"]], boundary(m)) for m in meshes],
-             cache=cache)
-    out = []
-    for lod in {m.tags["lod"] for m in meshes}:
-        these = [m for m in meshes if m.tags["lod"] == lod]
-        tpm = ASSET_TEXELS_PER_METRE[lod]
-        atlases = unwrap_parts({f"{m.part}/{m.name}": m.mesh for m in these},
-                               texels_per_metre=tpm, cache=cache,
-                               chart_boundaries={f"{m.part}/{m.name}": boundary(m)
-                                                 for m in these})
-        used = min(a.texels_per_metre for a in atlases.values())
-        size = max(math.ceil(used * UV_SPAN), max(a.size for a in atlases.values()))
-        for m in these:
-            a = atlases[f"{m.part}/{m.name}"]
-            out.append(dataclasses.replace(m, mesh=attach_uvs(m.mesh, a, size)))
-    order = {(m.part, m.name): i for i, m in enumerate(meshes)}
-    out.sort(key=lambda m: order[(m.part, m.name)])
-    unwraps = (cache.misses - misses0) if cache is not None else len(meshes)
-    return out, unwraps
+    cp = params.capital_params()
+    lay = capital_layout(cp)
+    top_end_x = lay.eye_x + float(volute_curve(cp.volute, 2)[-1, 0]) - cp.volute.offset_x
+    return top_end_x - lay.margin, top_end_x
 
 
-def build_column_asset(
-    folder: str | os.PathLike,
-    opts: ColumnAssetOptions | None = None,
-    *,
-    force: bool = False,
-    cache: UVCache | None = None,
-) -> AssetReport:
-    """Write the column asset ``<folder>/IonicColumn.usda`` (+ Payload/) atomically.
-
-    Parameters
-    ----------
-    folder : the asset folder (its name is usually ``IonicColumn``)
-    opts : variants and textures to build (default: everything, Portunus column)
-    force : replace an existing folder (atomically)
-    cache : UV cache (default: the process-wide one); a rebuild of unchanged geometry runs
-        no xatlas work
-
-    User textures (``opts.user_textures``) are validated before anything is written.
-    """
-    from ionic_usd.texture.stone import copy_user_textures, validate_user_texture
-    from ionic_usd.texture.uv import default_cache
-
-    t0 = time.perf_counter()
-    opts = opts or ColumnAssetOptions()
-    dest = Path(folder)
-    if dest.exists() and not force:
-        from ionic_usd.errors import OutputExistsError
-
-        raise OutputExistsError(f"{dest} exists; pass --force to replace it")
-    if opts.user_textures:
-        for src in opts.user_textures.values():
-            validate_user_texture(src)
-    cache = cache if cache is not None else default_cache()
-    meshes, unwraps = _with_uvs(column_asset_meshes(opts), cache)
-
+def _materials(opts: ColumnAssetOptions) -> dict[str, MaterialTextures]:
     materials: dict[str, MaterialTextures] = {}
     for _, (mat, style) in FINISHES.items():
         if opts.user_textures and style == "travertine":
@@ -302,86 +218,63 @@ def build_column_asset(
             names = {r: f"{style}_{r}.png" for r in ("basecolor", "roughness", "normal")}
         materials[mat] = MaterialTextures(*(f"./Textures/{names[r]}"
                                             for r in ("basecolor", "roughness", "normal")))
+    return materials
 
-    def populate(tmp: Path) -> None:
-        from ionic_usd.progress import progress
 
-        tex = tmp / "Payload" / "Textures"
-        with progress(len(FINISHES), "stone textures (OpenImageIO)", unit="material") as bar:
-            for _, style in FINISHES.values():
-                if opts.user_textures and style == "travertine":
-                    copy_user_textures(opts.user_textures, tex)
-                else:
-                    copy_stone_textures(tex, style, opts.texture_size, opts.seed,
-                                        make_tx=opts.make_tx)
-                bar.update(1)
-
+def column_asset_spec(opts: ColumnAssetOptions, meshes: Sequence[AssetMesh],
+                      instancers: Sequence[AssetInstancer] = ()) -> AssetSpec:
+    """The asset's description: ``meshes`` (with ``st``) and ``instancers`` under the variant
+    sets of ``opts``, the finishes' materials, the parameters as customData."""
     variant_sets = {"lod": opts.lods, "base": opts.bases, "scroll": opts.scrolls,
-                    "capital": opts.capitals, "flutes": opts.flutes, "form": opts.forms,
-                    "finish": tuple(FINISHES)}
+                    "capital": opts.capitals, "volute": opts.volutes, "flutes": opts.flutes,
+                    "form": opts.forms, "finish": tuple(FINISHES)}
+    if len(opts.volutes) == 1:
+        del variant_sets["volute"]
     custom = {"ionic_usd": {"version": __version__,
                             "parameters": _flatten(column_params_to_tables(opts.params))}}
-    spec = AssetSpec(
+    return AssetSpec(
         name=ASSET_NAME,
         version=__version__,
         meshes=tuple(meshes),
         variant_sets=variant_sets,
         defaults={k: v[0] for k, v in variant_sets.items()},
-        materials=materials,
+        materials=_materials(opts),
         default_material=FINISHES["travertine"][0],
         finishes={k: v[0] for k, v in FINISHES.items()},
         custom_data=custom,
         documentation="Ionic column (Temple of Portunus proportions) generated by ionic_usd "
-        "after Konečný, Syllaiou & Liarokapis 2016; variant sets: lod, base, scroll, capital, "
-        "flutes, form, finish.",
+        "after Konečný, Syllaiou & Liarokapis 2016; variant sets: "
+        f"{', '.join(variant_sets)}.",
         st_scale=UV_SPAN / TILE_METRES,
         proxy_lod="low" if "low" in opts.lods and len(opts.lods) > 1 else None,
-        instancers=column_ornament(opts) if opts.carved else (),
+        instancers=tuple(instancers),
     )
-    path = write_asset(spec, dest, populate=populate, force=force)
-    tris: dict[str, int] = {}
-    for lod in opts.lods:
-        sel = [m for m in meshes if m.tags["lod"] == lod and m.tags.get("form", "full") == "full"
-               and m.tags.get("base", opts.bases[0]) == opts.bases[0]
-               and m.tags.get("scroll", opts.scrolls[0]) == opts.scrolls[0]
-               and m.tags.get("capital", opts.capitals[0]) == opts.capitals[0]
-               and m.tags.get("flutes", opts.flutes[0]) == opts.flutes[0]]
-        tris[lod] = sum(m.mesh.n_triangles for m in sel)
-    size = sum(f.stat().st_size for f in dest.rglob("*") if f.is_file())
-    return AssetReport(path, len(meshes), tris, unwraps, time.perf_counter() - t0, size)
 
 
-def copy_stone_textures(folder: Path, style: str, size: int, seed: int, *,
-                        make_tx: bool = False) -> list[Path]:
-    """Put a stone style's maps into ``folder``, generating them once per (style, size, seed).
-
-    Generated maps are deterministic, so they are kept in the cache folder (beside the UV
-    cache) and copied: a rebuild writes no PNG.
-    """
-    import shutil
-
-    from ionic_usd.io import verified_cache
-    from ionic_usd.texture.stone import TextureError, write_stone_textures
-    from ionic_usd.texture.uv import default_cache_folder
-
-    key = f"{style}-{size}-{seed}-{__version__}{'-tx' if make_tx else ''}"
-    store = default_cache_folder().parent / "textures" / key
-    names = [f"{style}_{r}.{e}" for r in ("basecolor", "roughness", "normal")
-             for e in (("png", "tx") if make_tx else ("png",))]
-    try:  # verified on read (SHA-256 manifest), written atomically, rebuilt when bad
-        store = verified_cache(store, lambda tmp: write_stone_textures(
-            tmp, style, size, seed, make_tx=make_tx))
-    except (OSError, TextureError):  # an unwritable or full cache: write into the asset
-        write_stone_textures(folder, style, size, seed, make_tx=make_tx)
-        return [folder / n for n in names]
-    folder.mkdir(parents=True, exist_ok=True)
-    out = []
-    for n in names:
-        shutil.copyfile(store / n, folder / n)
-        out.append(folder / n)
-    return out
+def author_column_asset(folder: str | os.PathLike, opts: ColumnAssetOptions,
+                        meshes: Sequence[AssetMesh], instancers: Sequence[AssetInstancer] = (),
+                        *, populate: Callable[[Path], None] | None = None,
+                        force: bool = False) -> Path:
+    """Author the asset folder from kernel values (see :func:`column_asset_spec`);
+    ``populate(tmp)`` puts the textures in first. Returns the interface layer's path."""
+    return write_asset(column_asset_spec(opts, meshes, instancers), folder,
+                       populate=populate, force=force)
 
 
 def _flatten(tables: dict[str, dict]) -> dict[str, object]:
     """TOML-like tables as USD customData (a dictionary of dictionaries of scalars)."""
     return {name: {k: v for k, v in t.items() if v is not None} for name, t in tables.items()}
+
+
+#: names that moved to the pipeline (:mod:`ionic_usd.pipeline.asset`), still importable from
+#: here for existing callers; imported on first use so that authoring does not load the
+#: pipeline.
+_MOVED = ("AssetReport", "build_column_asset", "column_asset_meshes", "copy_stone_textures")
+
+
+def __getattr__(name: str) -> Any:
+    if name in _MOVED:
+        from ionic_usd.pipeline import asset
+
+        return getattr(asset, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

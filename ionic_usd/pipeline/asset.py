@@ -1,0 +1,361 @@
+"""The column asset's coordinator: generate → clip → UV → texture → author.
+
+:func:`build_column_asset` runs the pipeline for one ``IonicColumn`` folder:
+
+1. **generate** every part per variant (:mod:`ionic_usd.column`): bases, shafts per flute
+   count, capitals per scroll × capital × volute model;
+2. **clip** each part to its ``form`` (engaged: the wall plane; corner: a quadrant), a plane
+   clip or a manifold3d difference (:mod:`ionic_usd.geometry`);
+3. **UV**: xatlas charts per part and LOD at one texel density per LOD
+   (:mod:`ionic_usd.texture.uv`);
+4. **texture**: the tileable stone maps, made once per (style, size, seed) and kept in the
+   cache folder (:mod:`ionic_usd.texture.stone`);
+5. **author** the layers from those values (:func:`ionic_usd.usd.column_asset.author_column_asset`).
+
+The variant vocabulary (sets, variants, texel densities, ``UV_SPAN``) is the asset's, in
+:mod:`ionic_usd.usd.column_asset`; this module holds no ``pxr``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+import shutil
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ionic_usd import __version__
+from ionic_usd.column.column import (
+    build_base_part,
+    build_capital_part,
+    build_shaft_part,
+)
+from ionic_usd.errors import GeometryError, OutputExistsError
+from ionic_usd.geometry.mesh import Mesh
+from ionic_usd.texture.uv import UVCache, attach_uvs, unwrap_parts
+from ionic_usd.usd.asset import AssetInstancer, AssetMesh
+from ionic_usd.usd.column_asset import (
+    ASSET_TEXELS_PER_METRE,
+    BASE_CHART_BOUNDARY,
+    ENGAGED_INSET,
+    FINISHES,
+    FLUTE_VARIANTS,
+    UV_SPAN,
+    ColumnAssetOptions,
+    author_column_asset,
+    volute_variant_params,
+)
+
+__all__ = [
+    "AssetReport",
+    "build_column_asset",
+    "column_asset_meshes",
+    "column_asset_ornament",
+    "copy_stone_textures",
+    "form_cut",
+]
+
+
+@dataclass(frozen=True)
+class AssetReport:
+    """What :func:`build_column_asset` wrote: meshes, triangles of the default selection per
+    LOD (form full), xatlas unwraps run, wall seconds and bytes on disk."""
+
+    path: Path
+    meshes: int
+    triangles_per_lod: dict[str, int]
+    uv_unwraps: int
+    seconds: float
+    bytes_on_disk: int
+
+
+# -- clip ---------------------------------------------------------------------------------
+def _wall_cut(mesh: Mesh, x_max: float | None, simplify: bool = False) -> Mesh:
+    """``mesh`` minus the wall block z < −ENGAGED_INSET (and x < ``x_max`` if given), by a
+    robust boolean difference (manifold3d): the cut faces are exact planar caps."""
+    from ionic_usd.geometry.boolean import difference
+    from ionic_usd.temple.cuboid import Cuboid, cuboid_mesh
+
+    lo, hi = mesh.extent
+    big = float(np.abs(np.concatenate([lo, hi])).max()) + 1.0
+    x1 = big if x_max is None else x_max
+    block = cuboid_mesh(Cuboid((-big, lo[1] - 1.0, -big), (x1, hi[1] + 1.0, -ENGAGED_INSET),
+                               name="wall"))
+    return difference(mesh, [block], name=mesh.name, simplify=simplify)
+
+
+def _engage(mesh: Mesh, part: str = "") -> Mesh:
+    """The half column: the part behind the wall plane z = −ENGAGED_INSET removed.
+
+    A plane clip capped by a constrained Delaunay triangulation (base and shaft cut faces meet
+    along the same vertices, so they still weld); for the capital, the boolean difference
+    (its sliver clean-up keeps the cut free of needle triangles).
+    """
+    import shapely
+
+    from ionic_usd.geometry.clip import clip_mesh
+
+    if part == "CapitalBody":
+        return _wall_cut(mesh, None, simplify=True)
+    try:
+        return clip_mesh(mesh, (0.0, 0.0, -ENGAGED_INSET), (0.0, 0.0, 1.0), name=mesh.name)
+    except (GeometryError, shapely.errors.GEOSException):
+        if part != "CapitalBody":
+            raise
+        return _wall_cut(mesh, None, simplify=True)
+
+
+def _corner(mesh: Mesh, part: str = "") -> Mesh:
+    """The three-quarter column: the quadrant x, z < −ENGAGED_INSET (inside the walls of a
+    corner whose outer faces hold the axis) removed."""
+    return _wall_cut(mesh, -ENGAGED_INSET, simplify=part == "CapitalBody")
+
+
+def form_cut(mesh: Mesh, form: str, part: str = "") -> Mesh:
+    """``mesh`` clipped to a ``form`` variant: ``full`` (unchanged), ``engaged`` (behind the
+    wall plane z = −ENGAGED_INSET removed, capped) or ``corner`` (the quadrant x, z <
+    −ENGAGED_INSET removed)."""
+    if form == "full":
+        return mesh
+    return {"engaged": _engage, "corner": _corner}[form](mesh, part)
+
+
+def _outside_walls(points: np.ndarray, form: str) -> np.ndarray:
+    """(n,) bool: the points (n, 3) a ``form`` keeps (see :func:`form_cut`)."""
+    behind = points[:, 2] < -ENGAGED_INSET
+    if form == "engaged":
+        return ~behind
+    if form == "corner":
+        return ~(behind & (points[:, 0] < -ENGAGED_INSET))
+    return np.ones(len(points), dtype=bool)
+
+
+# -- generate -----------------------------------------------------------------------------
+def column_asset_meshes(opts: ColumnAssetOptions) -> list[AssetMesh]:
+    """Every mesh of the asset with its variant tags (geometry only, no UVs).
+
+    Returns
+    -------
+    one :class:`~ionic_usd.usd.asset.AssetMesh` per (part variant, lod, form), named
+    ``<Part>_<variant>_<lod>[_<form>]``; capitals are tagged with ``scroll``, ``capital`` and
+    (when the asset has more than one model) ``volute``.
+    """
+    out: list[AssetMesh] = []
+    for lod in opts.lods:
+        p = opts.params.with_lod(lod)
+        base_h = p.base_params().height
+        groups: list[tuple[str, str, Mesh, dict[str, str]]] = []
+        for b in opts.bases:
+            groups.append(("Base", f"Base_{b}", build_base_part(p, b), {"base": b}))
+        for fname in opts.flutes:
+            fp = p.with_flutes(FLUTE_VARIANTS[fname])
+            groups.append(("Shaft", f"Shaft_{fname}", build_shaft_part(fp, base_h),
+                           {"flutes": fname}))
+        y_cap = base_h + p.shaft.length
+        for vm in opts.volutes:
+            vp = volute_variant_params(p, vm)
+            for s in opts.scrolls:
+                for c in opts.capitals:
+                    body = build_capital_part(vp, y_cap, scroll=s, angle=c == "angle")
+                    tag = {"scroll": s, "capital": c}
+                    name = f"Capital_{s}_{c}"
+                    if len(opts.volutes) > 1:
+                        tag["volute"] = vm
+                        name = f"{name}_{vm}"
+                    groups.append(("CapitalBody", name, body, tag))
+        for part, name, mesh, tags in groups:
+            for form in opts.forms:
+                m = form_cut(mesh, form, part)
+                if part == "CapitalBody":
+                    m = _weld_exact(m)
+                suffix = "" if form == "full" else f"_{form}"
+                t = {"lod": lod, **tags}
+                if len(opts.forms) > 1:
+                    t["form"] = form
+                out.append(AssetMesh(part, f"{name}_{lod}{suffix}", m.with_(name=name), t))
+    return out
+
+
+def _weld_exact(mesh: Mesh) -> Mesh:
+    """``mesh`` with coincident points merged: the capital's union can leave one vertex twice
+    at (nearly) the same place, with a sliver between (closed, but pinched: not a clean
+    solid). Points within the solid check's tolerance (1e-7 of the diagonal) are welded,
+    and the weld is kept only if it leaves the mesh closed and edge-manifold."""
+    from ionic_usd.geometry.check import colocated_points, solid_report
+    from ionic_usd.geometry.mesh import weld
+
+    if colocated_points(mesh) == 0:
+        return mesh
+    tol = 1e-7 * float(np.linalg.norm(np.ptp(mesh.points, axis=0)))
+    out = weld(mesh, tol)
+    r = solid_report(out, intersections=False)
+    return out if r.open_edges == 0 and r.nonmanifold_edges == 0 and r.shells == 1 else mesh
+
+
+def column_asset_ornament(opts: ColumnAssetOptions) -> tuple[AssetInstancer, ...]:
+    """The carved echinus (egg-and-dart) and astragal (bead-and-reel) of the ``high`` LOD,
+    one PointInstancer pair per ``form``: the copies a form's wall would swallow (their
+    centre behind the wall plane) are dropped, so an engaged column carries no eggs inside
+    its wall. Nothing if the asset is not ``carved`` or has no high LOD.
+
+    The instances are :func:`ionic_usd.usd.detail.column_ornament`'s (the one placement rule).
+    """
+    if not opts.carved or "high" not in opts.lods:
+        return ()
+    from ionic_usd.usd.detail import column_ornament
+
+    out = []
+    for a in column_ornament(opts):
+        inst: Any = a.instances  # ionic_usd.column.ornament.Instances
+        for form in opts.forms:
+            keep = _outside_walls(np.asarray(inst.positions), form)
+            sub = dataclasses.replace(
+                inst, proto_indices=inst.proto_indices[keep], positions=inst.positions[keep],
+                orientations=inst.orientations[keep], scales=inst.scales[keep])
+            tags = dict(a.tags)
+            name = a.name
+            if len(opts.forms) > 1:
+                tags["form"] = form
+                name = a.name if form == "full" else f"{a.name}_{form}"
+            out.append(AssetInstancer(a.part, name, sub, tags))
+    return tuple(out)
+
+
+# -- UV -----------------------------------------------------------------------------------
+def _with_uvs(meshes: list[AssetMesh], cache: UVCache | None) -> tuple[list[AssetMesh], int]:
+    """The meshes with ``st`` (xatlas, one atlas per LOD) and the number of unwraps run."""
+    from ionic_usd.texture.uv import prefetch
+
+    misses0 = cache.misses if cache is not None else 0
+
+    def boundary(m: AssetMesh) -> float | None:
+        return BASE_CHART_BOUNDARY if m.part == "Base" else None
+
+    prefetch([(m.mesh, ASSET_TEXELS_PER_METRE[m.tags["lod"]], boundary(m)) for m in meshes],
+             cache=cache)
+    out = []
+    for lod in {m.tags["lod"] for m in meshes}:
+        these = [m for m in meshes if m.tags["lod"] == lod]
+        tpm = ASSET_TEXELS_PER_METRE[lod]
+        atlases = unwrap_parts({f"{m.part}/{m.name}": m.mesh for m in these},
+                               texels_per_metre=tpm, cache=cache,
+                               chart_boundaries={f"{m.part}/{m.name}": boundary(m)
+                                                 for m in these})
+        used = min(a.texels_per_metre for a in atlases.values())
+        size = max(math.ceil(used * UV_SPAN), max(a.size for a in atlases.values()))
+        for m in these:
+            a = atlases[f"{m.part}/{m.name}"]
+            out.append(dataclasses.replace(m, mesh=attach_uvs(m.mesh, a, size)))
+    order = {(m.part, m.name): i for i, m in enumerate(meshes)}
+    out.sort(key=lambda m: order[(m.part, m.name)])
+    unwraps = (cache.misses - misses0) if cache is not None else len(meshes)
+    return out, unwraps
+
+
+# -- texture ------------------------------------------------------------------------------
+def copy_stone_textures(folder: Path, style: str, size: int, seed: int, *,
+                        make_tx: bool = False) -> list[Path]:
+    """Put a stone style's maps into ``folder``, generating them once per (style, size, seed).
+
+    Generated maps are deterministic, so they are kept in the cache folder (beside the UV
+    cache) and copied: a rebuild writes no PNG.
+    """
+    from ionic_usd.io import verified_cache
+    from ionic_usd.texture.stone import TextureError, write_stone_textures
+    from ionic_usd.texture.uv import default_cache_folder
+
+    key = f"{style}-{size}-{seed}-{__version__}{'-tx' if make_tx else ''}"
+    store = default_cache_folder().parent / "textures" / key
+    names = [f"{style}_{r}.{e}" for r in ("basecolor", "roughness", "normal")
+             for e in (("png", "tx") if make_tx else ("png",))]
+    try:  # verified on read (SHA-256 manifest), written atomically, rebuilt when bad
+        store = verified_cache(store, lambda tmp: write_stone_textures(
+            tmp, style, size, seed, make_tx=make_tx))
+    except (OSError, TextureError):  # an unwritable or full cache: write into the asset
+        write_stone_textures(folder, style, size, seed, make_tx=make_tx)
+        return [folder / n for n in names]
+    folder.mkdir(parents=True, exist_ok=True)
+    out = []
+    for n in names:
+        shutil.copyfile(store / n, folder / n)
+        out.append(folder / n)
+    return out
+
+
+def _textures_writer(opts: ColumnAssetOptions):
+    """``populate(tmp)``: the finishes' maps into ``tmp/Payload/Textures``."""
+    from ionic_usd.texture.stone import copy_user_textures
+
+    def populate(tmp: Path) -> None:
+        from ionic_usd.progress import progress
+
+        tex = tmp / "Payload" / "Textures"
+        with progress(len(FINISHES), "stone textures (OpenImageIO)", unit="material") as bar:
+            for _, style in FINISHES.values():
+                if opts.user_textures and style == "travertine":
+                    copy_user_textures(opts.user_textures, tex)
+                else:
+                    copy_stone_textures(tex, style, opts.texture_size, opts.seed,
+                                        make_tx=opts.make_tx)
+                bar.update(1)
+
+    return populate
+
+
+# -- the pipeline -------------------------------------------------------------------------
+def _default_triangles(meshes: list[AssetMesh], opts: ColumnAssetOptions) -> dict[str, int]:
+    """Triangles per LOD of the default selection (first variant of every set, form full)."""
+    firsts = {"base": opts.bases[0], "scroll": opts.scrolls[0], "capital": opts.capitals[0],
+              "flutes": opts.flutes[0], "volute": opts.volutes[0]}
+    tris: dict[str, int] = {}
+    for lod in opts.lods:
+        sel = [m for m in meshes if m.tags["lod"] == lod
+               and m.tags.get("form", "full") == "full"
+               and all(m.tags.get(k, v) == v for k, v in firsts.items())]
+        tris[lod] = sum(m.mesh.n_triangles for m in sel)
+    return tris
+
+
+def build_column_asset(
+    folder: str | os.PathLike,
+    opts: ColumnAssetOptions | None = None,
+    *,
+    force: bool = False,
+    cache: UVCache | None = None,
+) -> AssetReport:
+    """Write the column asset ``<folder>/IonicColumn.usda`` (+ Payload/) atomically.
+
+    Parameters
+    ----------
+    folder : the asset folder (its name is usually ``IonicColumn``)
+    opts : variants and textures to build (default: everything, Portunus column)
+    force : replace an existing folder (atomically)
+    cache : UV cache (default: the process-wide one); a rebuild of unchanged geometry runs
+        no xatlas work
+
+    User textures (``opts.user_textures``) are validated before anything is written.
+    """
+    from ionic_usd.texture.stone import validate_user_texture
+    from ionic_usd.texture.uv import default_cache
+
+    t0 = time.perf_counter()
+    opts = opts or ColumnAssetOptions()
+    dest = Path(folder)
+    if dest.exists() and not force:
+        raise OutputExistsError(f"{dest} exists; pass --force to replace it")
+    if opts.user_textures:
+        for src in opts.user_textures.values():
+            validate_user_texture(src)
+    cache = cache if cache is not None else default_cache()
+    meshes, unwraps = _with_uvs(column_asset_meshes(opts), cache)
+    path = author_column_asset(dest, opts, meshes, column_asset_ornament(opts),
+                               populate=_textures_writer(opts), force=force)
+    size = sum(f.stat().st_size for f in dest.rglob("*") if f.is_file())
+    return AssetReport(path, len(meshes), _default_triangles(meshes, opts), unwraps,
+                       time.perf_counter() - t0, size)
+
