@@ -370,9 +370,9 @@ def build_parser() -> argparse.ArgumentParser:
                    "memory limit; 8192 needs about 10 GB (--max-memory 10)")
     p.add_argument("--seed", type=int, default=7, help="seed of the procedural stone")
     p.add_argument("--detail", choices=("plain", "moulded", "carved"), default=None,
-                   help="also write the architectural detail (mouldings, dentils, tiles, the "
-                   "carved capital) as the variant set `detail` with plain, moulded and carved, "
-                   "selecting this one [default: no detail set; a preview feature]")
+                   help="the default selection of the temple's variant set `detail`: plain "
+                   "(cuboids), moulded (swept mouldings) or carved (mouldings, dentils, roof "
+                   "tiles, frieze relief hypothesis) [default: carved]")
     p.add_argument("--force", action="store_true",
                    help="rebuild an existing folder (atomically; overrides.usda is kept)")
     _add_memory_flag(p)

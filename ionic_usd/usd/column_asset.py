@@ -63,7 +63,7 @@ from ionic_usd.geometry.mesh import Mesh
 from ionic_usd.texture.uv import UVCache, attach_uvs, unwrap_parts
 from ionic_usd.usd.asset import AssetMesh, AssetSpec, write_asset
 from ionic_usd.usd.detail import column_ornament
-from ionic_usd.usd.materials import MaterialTextures
+from ionic_usd.usd.materials import TILE_METRES, MaterialTextures, copy_stone_textures
 
 __all__ = [
     "ColumnAssetOptions",
@@ -99,7 +99,6 @@ ENGAGED_INSET = 0.05  # m: the cut lies this far behind the wall face (axis on t
 ASSET_TEXELS_PER_METRE = {"high": 128.0, "medium": 64.0, "low": 32.0}
 BASE_CHART_BOUNDARY = 2.0  # m: see texture.uv.unwrap(max_chart_boundary=…)
 UV_SPAN = 32.0  # m of surface across st ∈ [0, 1]
-TILE_METRES = 2.0  # m of stone per repeat of the tileable maps
 
 
 @dataclass(frozen=True)
@@ -347,37 +346,6 @@ def build_column_asset(
         tris[lod] = sum(m.mesh.n_triangles for m in sel)
     size = sum(f.stat().st_size for f in dest.rglob("*") if f.is_file())
     return AssetReport(path, len(meshes), tris, unwraps, time.perf_counter() - t0, size)
-
-
-def copy_stone_textures(folder: Path, style: str, size: int, seed: int, *,
-                        make_tx: bool = False) -> list[Path]:
-    """Put a stone style's maps into ``folder``, generating them once per (style, size, seed).
-
-    Generated maps are deterministic, so they are kept in the cache folder (beside the UV
-    cache) and copied: a rebuild writes no PNG.
-    """
-    import shutil
-
-    from ionic_usd.io import verified_cache
-    from ionic_usd.texture.stone import TextureError, write_stone_textures
-    from ionic_usd.texture.uv import default_cache_folder
-
-    key = f"{style}-{size}-{seed}-{__version__}{'-tx' if make_tx else ''}"
-    store = default_cache_folder().parent / "textures" / key
-    names = [f"{style}_{r}.{e}" for r in ("basecolor", "roughness", "normal")
-             for e in (("png", "tx") if make_tx else ("png",))]
-    try:  # verified on read (SHA-256 manifest), written atomically, rebuilt when bad
-        store = verified_cache(store, lambda tmp: write_stone_textures(
-            tmp, style, size, seed, make_tx=make_tx))
-    except (OSError, TextureError):  # an unwritable or full cache: write into the asset
-        write_stone_textures(folder, style, size, seed, make_tx=make_tx)
-        return [folder / n for n in names]
-    folder.mkdir(parents=True, exist_ok=True)
-    out = []
-    for n in names:
-        shutil.copyfile(store / n, folder / n)
-        out.append(folder / n)
-    return out
 
 
 def _flatten(tables: dict[str, dict]) -> dict[str, object]:

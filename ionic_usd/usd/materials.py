@@ -3,11 +3,16 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 from pxr import Gf, Sdf, Usd, UsdShade
 
-__all__ = ["FALLBACKS", "MaterialTextures", "author_preview_material", "bind_material",
-           "bind_material_spec"]
+from ionic_usd import __version__
+
+__all__ = ["FALLBACKS", "TILE_METRES", "MaterialTextures", "author_preview_material",
+           "bind_material", "bind_material_spec", "copy_stone_textures", "stone_material"]
+
+TILE_METRES = 2.0  # m of stone per repeat of the tileable maps
 
 
 # UsdUVTexture ``inputs:fallback`` per map, in the map's own encoding: a mid stone colour, a
@@ -117,3 +122,43 @@ def bind_material_spec(spec: Sdf.PrimSpec, material: str) -> None:
     rel = spec.relationships.get("material:binding") or Sdf.RelationshipSpec(
         spec, "material:binding", custom=False)
     rel.targetPathList.explicitItems = [Sdf.Path(material)]
+
+
+def copy_stone_textures(folder: Path, style: str, size: int, seed: int, *,
+                        make_tx: bool = False) -> list[Path]:
+    """Put a stone style's maps into ``folder``, generating them once per (style, size, seed).
+
+    Generated maps are deterministic, so they are kept in the cache folder (beside the UV
+    cache) and copied: a rebuild writes no PNG.
+    """
+    import shutil
+
+    from ionic_usd.io import verified_cache
+    from ionic_usd.texture.stone import TextureError, write_stone_textures
+    from ionic_usd.texture.uv import default_cache_folder
+
+    key = f"{style}-{size}-{seed}-{__version__}{'-tx' if make_tx else ''}"
+    store = default_cache_folder().parent / "textures" / key
+    names = [f"{style}_{r}.{e}" for r in ("basecolor", "roughness", "normal")
+             for e in (("png", "tx") if make_tx else ("png",))]
+    try:  # verified on read (SHA-256 manifest), written atomically, rebuilt when bad
+        store = verified_cache(store, lambda tmp: write_stone_textures(
+            tmp, style, size, seed, make_tx=make_tx))
+    except (OSError, TextureError):  # an unwritable or full cache: write into the asset
+        write_stone_textures(folder, style, size, seed, make_tx=make_tx)
+        return [folder / n for n in names]
+    folder.mkdir(parents=True, exist_ok=True)
+    out = []
+    for n in names:
+        shutil.copyfile(store / n, folder / n)
+        out.append(folder / n)
+    return out
+
+
+def stone_material(stage: Usd.Stage, path: str, style: str, *, st_scale: float | None = None,
+                   specular_tint: tuple[float, float, float] | None = None) -> UsdShade.Material:
+    """A material reading a stone style's maps from ``./Textures/<style>_<map>.png`` (written by
+    :func:`copy_stone_textures`) — the one way every ionic_usd material names its maps."""
+    return author_preview_material(stage, path, MaterialTextures(
+        *(f"./Textures/{style}_{r}.png" for r in ("basecolor", "roughness", "normal"))),
+        st_scale=st_scale, specular_tint=specular_tint)
