@@ -178,6 +178,10 @@ def _correction_layer(stage: Usd.Stage, fixes: dict[str, Fix], hyps: Sequence[Hy
                              want.scale * ratio)
             add_paradata(spec, hyps)
         define_overs(lay, types)
+        for path, type_name in types.items():  # the composed types, not the authoring default
+            spec = lay.GetPrimAtPath(path)
+            if spec is not None and path not in fixes:
+                spec.typeName = type_name
     return lay
 
 

@@ -158,10 +158,14 @@ def detail_layer(geom: DetailGeometry, materials_ref: str = "./materials.usda") 
                     "the detail variant set of generated.usda")
     lay.subLayerPaths.append(materials_ref)
     with Sdf.ChangeBlock():
+        # organising prims are Scopes (no transform of their own), the parts Xforms
         for part, members in geom.mouldings.items():
-            define_prim(lay, f"/Temple/{part}/Mouldings", "Xform")
+            define_prim(lay, f"/Temple/{part}/Mouldings", "Scope")
             for name, m in members.items():
                 author_mesh(lay, f"/Temple/{part}/Mouldings/{name}", m)
+        for rel in geom.ornament:
+            if "/Ornament/" in rel:
+                define_prim(lay, "/Temple/" + rel.split("/Ornament/")[0] + "/Ornament", "Scope")
         for rel, inst in geom.ornament.items():
             spec = author_point_instancer(lay, f"/Temple/{rel}", inst)
             if rel == "Roof/Tiles":
@@ -174,6 +178,7 @@ def frieze_layer(h: Hypothesis, geom: DetailGeometry) -> Sdf.Layer:
     lay = new_layer("Temple", kind="assembly",
                     comment=f"reconstruction hypothesis {h.id!r} (ionic_usd)")
     with Sdf.ChangeBlock():
+        define_prim(lay, FRIEZE_PATH.rsplit("/", 1)[0], "Scope")
         spec = author_point_instancer(lay, FRIEZE_PATH, geom.frieze)
         add_paradata(spec, [h])
     return lay
@@ -190,6 +195,7 @@ def _over(parent: Sdf.PrimSpec, rel: str) -> Sdf.PrimSpec:
 
 def author_detail_variants(spec: Sdf.PrimSpec, geom: DetailGeometry, default: str) -> None:
     """The ``detail`` variant set on ``spec`` (/Temple of ``generated.usda``)."""
+    check_detail(default)
     vs = Sdf.VariantSetSpec(spec, DETAIL_SET)
     spec.variantSetNameList.Append(DETAIL_SET)
     sweeps = [f"{part}/Mouldings" for part in geom.mouldings]

@@ -432,8 +432,9 @@ def _check_resolves(root: Path, generated: Path) -> None:
 
 
 def temple_triangles(stage: Usd.Stage) -> int:
-    """Triangles drawn by the composed stage (instances counted once per instance, nested
-    instances included; default and render purpose, active and visible-by-default)."""
+    """Triangles drawn by the composed stage: native instances and PointInstancer copies each
+    counted once per copy (nested instances included); default and render purpose, active and
+    visible-by-default."""
     memo: dict[Sdf.Path, int] = {}
 
     def count(root: Usd.Prim) -> int:
@@ -451,7 +452,15 @@ def temple_triangles(stage: Usd.Stage) -> int:
             if img and img.GetPurposeAttr().Get() in ("proxy", "guide"):
                 it.PruneChildren()
                 continue
-            if prim.IsA(UsdGeom.Mesh):
+            if prim.IsA(UsdGeom.PointInstancer):
+                it.PruneChildren()  # its prototypes are drawn only through it
+                pi = UsdGeom.PointInstancer(prim)
+                idx = np.asarray(pi.GetProtoIndicesAttr().Get() or [], dtype=np.int64)
+                per = [count(stage.GetPrimAtPath(t))
+                       for t in pi.GetPrototypesRel().GetForwardedTargets()]
+                if len(idx) and per:
+                    n += int(np.asarray(per)[idx[idx < len(per)]].sum())
+            elif prim.IsA(UsdGeom.Mesh):
                 counts = UsdGeom.Mesh(prim).GetFaceVertexCountsAttr().Get()
                 if counts is not None and len(counts):
                     n += int(np.sum(np.asarray(counts) - 2))
