@@ -49,7 +49,7 @@ class Incline(StrEnum):
     @classmethod
     def parse(cls, value: object, *, context: str = "") -> Incline:
         try:
-            return cls(value)
+            return cls(value) if isinstance(value, str) else cls(str(value))
         except ValueError:
             valid = " or ".join(repr(m.value) for m in cls)
             raise ParameterError("incline", value, valid, context=context) from None
@@ -153,11 +153,9 @@ class Cuboid:
 
     def translated(self, offset) -> Cuboid:
         d = _vec3("offset", offset, f"cuboid {self.name!r}")
-        return Cuboid(
-            tuple(a + b for a, b in zip(self.min, d, strict=True)),
-            tuple(a + b for a, b in zip(self.max, d, strict=True)),
-            self.rise, self.incline, self.name,
-        )
+        (x0, y0, z0), (x1, y1, z1) = self.min, self.max
+        return Cuboid((x0 + d[0], y0 + d[1], z0 + d[2]), (x1 + d[0], y1 + d[1], z1 + d[2]),
+                      self.rise, self.incline, self.name)
 _KINDS = {"C": Incline.SHEAR, "W": Incline.WEDGE}
 _NAMES = ("x0", "y0", "z0", "x1", "y1", "z1", "rise")
 
@@ -243,7 +241,8 @@ def _cuboid(part: list[Token], source: str, k: int) -> Cuboid:
                        f"{_NAMES[a]} = {args[a].text}", source, t, k)
     rise = vals[6] if len(vals) == 7 else 0.0
     try:
-        return Cuboid(tuple(vals[:3]), tuple(vals[3:6]), rise, kind, name=f"cuboid{k}")
+        return Cuboid((vals[0], vals[1], vals[2]), (vals[3], vals[4], vals[5]), rise, kind,
+                      name=f"cuboid{k}")
     except ParameterError as exc:  # the wedge turned inside out: point at its rise
         raise _err(str(exc), source, args[6], k) from None
 
