@@ -81,6 +81,7 @@ from ionic_usd.usd.detail import (
     DETAIL_LAYER,
     DETAIL_SET,
     TERRACOTTA,
+    DetailGeometry,
     author_detail_variants,
     check_detail,
     detail_geometry,
@@ -336,10 +337,11 @@ def compose_temple(
         opts = dataclasses.replace(opts, carved=True)  # the carved capital goes with the detail
     hyp_layers = hypothesis_layers(layout, opts)  # validates every hypothesis first
     mp = mouldings or portunus_mouldings()
-    detail_cache: dict[tuple[str, ...], object] = {}
+    detail_cache: dict[object, DetailGeometry] = {}
 
-    def detail_of(want: TempleLayout):
-        key = tuple(sorted(want.applied))
+    def detail_of(want: TempleLayout) -> DetailGeometry:
+        # the detail follows the dimensions (hypotheses without temple keys share one)
+        key = (want.params, tuple(want.all_cuboids()))
         if key not in detail_cache:
             detail_cache[key] = detail_geometry(want, mp)
         return detail_cache[key]
