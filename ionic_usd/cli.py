@@ -290,9 +290,9 @@ def _add_temple(sub: Any, full: bool) -> None:
     p.add_argument("--layout", default="portunus", help="built-in temple layout (portunus)")
     add_stone_flags(p)
     p.add_argument("--detail", choices=("plain", "moulded", "carved"), default=None,
-                   help="also write the architectural detail (mouldings, dentils, tiles, the "
-                   "carved capital) as the variant set `detail` with plain, moulded and carved, "
-                   "selecting this one [default: no detail set; a preview feature]")
+                   help="the default selection of the temple's variant set `detail`: plain "
+                   "(cuboids), moulded (swept mouldings) or carved (mouldings, dentils, roof "
+                   "tiles, frieze relief hypothesis) [default: carved]")
     add_memory_flag(p)
 
 

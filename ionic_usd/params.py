@@ -30,7 +30,6 @@ __all__ = [
     "check_column_tables",
     "check_identifier",
     "check_table",
-    "check_temple_tables",
     "check_value",
     "prim_key",
     "dataclass_from_mapping",
@@ -371,82 +370,3 @@ def check_column_tables(data: Mapping[str, Any], *, context: str) -> None:
             check_table(check_value(table, data[table], FieldSpec("table"), context=context),
                         {k: v for k, v in schema.items() if k != "volute"},
                         context=f"{context} [{table}]")
-
-
-_CUBOID = {
-    "name": FieldSpec("ident"),
-    "min": FieldSpec("vec3", -UNIT_LIMITS["m"], UNIT_LIMITS["m"], "m"),
-    "max": FieldSpec("vec3", -UNIT_LIMITS["m"], UNIT_LIMITS["m"], "m"),
-    "rise": FieldSpec("float", -UNIT_LIMITS["m"], UNIT_LIMITS["m"], "m"),
-    "incline": FieldSpec("str", max_len=16),
-    "layer": FieldSpec("str", max_len=32),
-}
-_HYPOTHESIS = {
-    "id": FieldSpec("ident"),
-    "description": FieldSpec("str", max_len=10_000),
-    "sources": FieldSpec("strings"),
-    "certainty": FieldSpec("str", max_len=32),
-    "changes": FieldSpec("table"),
-}
-#: hypothesis changes outside the temple's dimension sections, realised by the composer
-HYPOTHESIS_EXTRA_CHANGES = {
-    "column.flute_count": FieldSpec("int", 3, 64, "count"),
-    "material.finish": FieldSpec("str", choices=("bare_stone", "travertine", "stucco",
-                                                 "painted_stucco")),
-    "detail.frieze": FieldSpec("str", choices=("garlands", "plain")),  # usd.detail
-}
-
-
-def check_temple_tables(data: Mapping[str, Any], *, context: str) -> None:
-    """Check a temple document: ``[temple]``, the dimension sections, ``[[cuboid]]``,
-    ``[[hypothesis]]`` (ids are identifiers; changes name known keys with valid values) and
-    any column tables. Cuboid names must stay distinct as prim names."""
-    from ionic_usd.temple.layout import TempleParams
-
-    if not isinstance(data, Mapping):
-        raise ParameterError("document", data, "TOML tables", context=context)
-    dims = dataclass_schema(TempleParams)
-    sections: dict[str, dict[str, FieldSpec]] = {}
-    for name, dim in dims.items():
-        if name != "name":
-            sec, key = name.split("_", 1)
-            sections.setdefault(sec, {})[key] = dim
-    column_tables = {"column", "shaft", "capital", "volute"}
-    for sec, table in data.items():
-        if sec == "temple":
-            check_table(check_value("temple", table, FieldSpec("table"), context=context),
-                        {"name": FieldSpec("str", max_len=256)}, context=f"{context} [temple]")
-        elif sec in sections:
-            table = check_value(sec, table, FieldSpec("table"), context=context)
-            check_table({f"{sec}.{k}": v for k, v in table.items()},
-                        {f"{sec}.{k}": v for k, v in sections[sec].items()}, context=context)
-        elif sec == "mouldings":  # sections and sizes: checked by temple.mouldings
-            check_value(sec, table, FieldSpec("table"), context=context)
-        elif sec in ("cuboid", "hypothesis"):
-            if not isinstance(table, list):
-                raise ParameterError(sec, table, f"an array of tables ([[{sec}]])",
-                                     context=context)
-        elif sec not in column_tables:
-            raise ParameterError(f"[{sec}]", "…", "a known table: " + ", ".join(
-                ["temple", *sections, "mouldings", "cuboid", "hypothesis",
-                 *sorted(column_tables)]),
-                context=context)
-    check_column_tables({k: v for k, v in data.items() if k in column_tables}, context=context)
-    for i, e in enumerate(data.get("cuboid", []), 1):
-        where = f"{context} [[cuboid]] #{i}"
-        check_table(check_value("[[cuboid]]", e, FieldSpec("table"), context=where),
-                    _CUBOID, context=where)
-    changes_schema = {f"{sec}.{k}": spec for sec, keys in sections.items()
-                      for k, spec in keys.items()}
-    changes_schema.update(HYPOTHESIS_EXTRA_CHANGES)
-    for i, e in enumerate(data.get("hypothesis", []), 1):
-        where = f"{context} [[hypothesis]] #{i}"
-        e = check_table(check_value("[[hypothesis]]", e, FieldSpec("table"), context=where),
-                        _HYPOTHESIS, context=where)
-        for key, value in e.get("changes", {}).items():
-            # column.* / material.* record alternatives the generator may not realise yet
-            change: FieldSpec | None = changes_schema.get(key)
-            if change is None and str(key).split(".")[0] in ("column", "material"):
-                change = FieldSpec("scalar")
-            check_table({key: value}, {key: change} if change else changes_schema,
-                        context=f"{where} changes")

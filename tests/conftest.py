@@ -39,13 +39,9 @@ def portunus_temple(tmp_path_factory):
 
 
 @pytest.fixture(scope="session")
-def carved_temple(tmp_path_factory):
-    """The Portunus temple with the architectural detail set (``--detail carved``)."""
-    from ionic_usd.temple.layout import portunus_layout
-    from ionic_usd.usd.temple import compose_temple
-
-    folder = tmp_path_factory.mktemp("carved") / "PortunusTemple"
-    return compose_temple(folder, portunus_layout(), texture_size=64, detail="carved")
+def carved_temple(portunus_temple):
+    """The default temple: its ``detail`` selection is ``carved`` (one build serves both)."""
+    return portunus_temple
 
 
 @pytest.fixture(scope="session")
@@ -59,8 +55,8 @@ def tiny_temple(tmp_path_factory):
     folder = tmp_path_factory.mktemp("tiny") / "TinyTemple"
     opts = ColumnAssetOptions(lods=("low",), bases=("attic_bezier_plinth",), scrolls=("S1",),
                               texture_size=16)
-    # detail = plain: the cuboid temple the export and reader tests count (the detail
-    # variants are tested in test_detail.py)
+    # detail = plain selected: the cuboid temple the export and reader tests count (the
+    # detail variants are tested in test_detail.py)
     return compose_temple(folder, portunus_layout(), texture_size=16, asset_options=opts,
                           detail="plain")
 

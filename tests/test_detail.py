@@ -88,10 +88,11 @@ def test_materials_per_role(stage):
 
 def test_every_detail_layer_is_valid_alone(carved_temple):
     folder = carved_temple.root.parent
-    files = [folder / "detail.usda", folder / "detail_geom.usdc",
-             *sorted((folder / "layers").glob("*.detail.usda")),
-             folder / "layers" / "frieze-garlands.usda"]
-    assert len(files) >= 5
+    files = [folder / "detail.usdc", *sorted((folder / "layers").glob("*.usdc"))]
+    # the detail, the frieze relief, the detail re-placed for the two hypotheses that move the
+    # entablature or the roof, and the garlands on the lower frieze
+    assert {f.name for f in files} >= {"detail.usdc", "frieze-garlands.usdc",
+                                        "roof-pitch-15.detail.usdc", "frieze-plain.detail.usdc"}
     for f in files:
         assert validate_stage(Usd.Stage.Open(str(f))) == [], f.name
 
@@ -101,8 +102,19 @@ def test_frieze_hypothesis_is_realised_and_cited(stage):
     entry = listing["frieze_garlands"]
     assert entry["realised"] is True and entry["variantSet"] == "hyp_frieze_garlands"
     assert entry["certainty"] == "medium" and len(entry["sources"]) >= 2
-    garlands = stage.GetPrimAtPath("/Temple/Entablature/Ornament/FriezeGarlands")
-    assert not garlands.IsActive()
+    path = "/Temple/Entablature/Ornament/FriezeGarlands"
+    assert not stage.GetPrimAtPath(path)  # a plain band by default
+    sets = stage.GetDefaultPrim().GetVariantSets()
+    try:
+        sets.GetVariantSet("hyp_frieze_garlands").SetVariantSelection("alternative")
+        garlands = UsdGeom.PointInstancer(stage.GetPrimAtPath(path))
+        assert garlands and len(garlands.GetProtoIndicesAttr().Get()) > 10
+        assert garlands.GetPrim().GetCustomData()["ionic_usd"]["hypotheses"]["frieze_garlands"]
+        sets.GetVariantSet("detail").SetVariantSelection("moulded")  # relief is ornament
+        assert not stage.GetPrimAtPath("/Temple/Entablature/Ornament").IsActive()
+    finally:
+        sets.GetVariantSet("hyp_frieze_garlands").SetVariantSelection("baseline")
+        sets.GetVariantSet("detail").SetVariantSelection("carved")
 
 
 def test_roof_hypothesis_moves_the_tiles_with_the_roof(carved_temple):
@@ -137,16 +149,19 @@ def test_column_high_lod_carries_the_carved_capital(carved_temple):
 
 def test_selected_variant_is_a_choice(tmp_path):
     from ionic_usd.errors import ParameterError
-    from ionic_usd.usd.detail import add_detail
+    from ionic_usd.usd.detail import author_detail_variants
     from ionic_usd.usd.stage import new_layer
+    from ionic_usd.usd.temple import compose_temple
 
     root = new_layer("Temple", kind="assembly")
-    add_detail(tmp_path, root, portunus_layout(), texture_size=32, default="plain")
+    geom = detail_geometry(portunus_layout())
+    author_detail_variants(root.GetPrimAtPath("/Temple"), geom, "plain")
     assert root.GetPrimAtPath("/Temple").variantSelections["detail"] == "plain"
-    detail = Sdf.Layer.FindOrOpen(str(tmp_path / "detail.usda"))
-    assert detail.GetPrimAtPath("/Temple").variantSelections["detail"] == "plain"
     with pytest.raises(ParameterError, match="detail"):
-        add_detail(tmp_path / "x", new_layer("Temple"), portunus_layout(), default="fancy")
+        author_detail_variants(new_layer("Temple").GetPrimAtPath("/Temple"), geom, "fancy")
+    with pytest.raises(ParameterError, match="detail"):  # before anything is written
+        compose_temple(tmp_path / "t", portunus_layout(), detail="fancy")
+    assert not (tmp_path / "t").exists()
 
 
 def test_cli_bad_moulding_section_names_file_and_key(tmp_path, capsys):

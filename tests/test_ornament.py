@@ -135,3 +135,29 @@ def test_frieze_garlands_alternate_on_the_frieze(layout):
     c = f.counts()
     assert c["Garland"] == c["Candelabrum"] - 4  # one fewer per side
     assert np.all((f.positions[:, 1] > lv["y_frieze"]) & (f.positions[:, 1] < lv["y_cornice"]))
+
+
+def test_every_prototype_has_outward_normals(layout, capital):
+    """Renderers and NVIDIA's NormalsExistChecker want normals on every prototype; the tiles'
+    are carried through their shear (inverse transpose), so each corner's normal still leans
+    outward from its face (within the sweep's smoothing of gentle section corners)."""
+    sets = [dentils(layout), roof_tiles(layout), frieze_garlands(layout), *capital]
+    for p in (p for s in sets for p in s.prototypes):
+        assert p.normals is not None, p.name
+        n = np.asarray(p.normals, dtype=np.float64)
+        assert_allclose(np.linalg.norm(n, axis=1), 1.0, atol=1e-3, err_msg=p.name)
+        tri = p.triangles
+        a, b, c = (p.points[tri[:, k]] for k in range(3))
+        face = np.cross(b - a, c - a)
+        face /= np.linalg.norm(face, axis=1, keepdims=True)
+        if p.normals_interpolation == "faceVarying":
+            # fan triangulation: triangle t of face f uses corners 0, k, k+1 of that face
+            counts = p.face_vertex_counts
+            starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+            corner = np.concatenate([starts[f] + np.array([0, k, k + 1])
+                                     for f, cnt in enumerate(counts) for k in range(1, cnt - 1)])
+            per = n[corner].reshape(-1, 3, 3)
+        else:
+            per = n[tri]
+        cos = np.einsum("tj,tkj->tk", face, per)
+        assert cos.min() > 0.0, p.name

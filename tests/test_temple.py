@@ -106,15 +106,12 @@ def test_each_hypothesis_switches_exactly_its_prims(portunus_temple, hid):
     root = stage.GetDefaultPrim()
     vset = "hyp_" + hid.replace("-", "_")
     listing = root.GetCustomData()["ionic_usd"]["hypotheses"][hid.replace("-", "_")]
-    if not root.GetVariantSets().HasVariantSet(vset):
-        # realised only with the architectural detail (--detail; test_detail.py): listed as
-        # such, with no layer of its own here
-        assert listing["realised"] is False and not any(
-            (portunus_temple.root.parent / "layers").glob(f"{hid}*.usda"))
-        return
+    assert listing["realised"] is True and root.GetVariantSets().HasVariantSet(vset)
     named = set()
-    # the hypothesis' own layer and the detail re-placed for it (<id>.detail.usda)
-    for f in (portunus_temple.root.parent / "layers").glob(f"{hid}*.usda"):
+    # the hypothesis' own layer and the detail re-placed for it (<id>.detail.usdc); not the
+    # combination layers (<a>+<b>), which apply only with the other hypothesis
+    layers = portunus_temple.root.parent / "layers"
+    for f in [f for f in layers.iterdir() if f.name.split(".")[0] == hid]:
         layer = Sdf.Layer.FindOrOpen(str(f))
         layer.Traverse(Sdf.Path("/Temple"), lambda p, la=layer: named.add(str(p)) if (
             p.IsPrimPath() and la.GetPrimAtPath(p).customData.get("ionic_usd")) else None)

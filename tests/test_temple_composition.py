@@ -112,9 +112,12 @@ def test_model_hierarchy_and_scopes(portunus_temple):
 
 def test_one_material_library_one_copy_of_the_maps(portunus_temple):
     folder = folder_of(portunus_temple)
-    assert not (folder / "Textures").exists()
+    # the stone maps are the column asset's; the temple adds only the roof's terracotta
+    assert sorted(p.name for p in (folder / "Textures").iterdir()) == [
+        f"terracotta_{m}.png" for m in ("basecolor", "normal", "roughness")]
     pngs = sorted(folder.rglob("*.png"))
-    assert {p.parent for p in pngs} == {folder / "IonicColumn" / "Payload" / "Textures"}
+    assert {p.parent for p in pngs} == {folder / "IonicColumn" / "Payload" / "Textures",
+                                        folder / "Textures"}
     stage = Usd.Stage.Open(str(portunus_temple.root))
     used = set()
     for p in Usd.PrimRange(stage.GetPseudoRoot(), EVERYTHING):
@@ -127,10 +130,13 @@ def test_one_material_library_one_copy_of_the_maps(portunus_temple):
         assert fallback and fallback.Get() is not None, p.GetPath()
         space = shader.GetInput("sourceColorSpace").Get()
         assert space == ("sRGB" if p.GetName() == "BaseColor" else "raw"), p.GetPath()
-        # st comes through the material's UsdTransform2d (the shared tiling)
+        # stone: st comes through the material's UsdTransform2d (the shared tiling); the
+        # tiles' st are already in repeats (one per tile)
         src = shader.GetInput("st").GetConnectedSources()[0][0].source
-        assert UsdShade.Shader(src.GetPrim()).GetIdAttr().Get() == "UsdTransform2d"
-    assert used == {p.resolve() for p in pngs} and len(used) == 6
+        node = UsdShade.Shader(src.GetPrim()).GetIdAttr().Get()
+        terracotta = p.GetParent().GetName() == "Terracotta"
+        assert node == ("UsdPrimvarReader_float2" if terracotta else "UsdTransform2d")
+    assert used == {p.resolve() for p in pngs} and len(used) == 9
     # the temple's parts bind the library's materials, and their st follow its convention
     part = stage.GetPrimAtPath("/Temple/Podium")
     mat, _ = UsdShade.MaterialBindingAPI(part).ComputeBoundMaterial()
@@ -184,7 +190,7 @@ def test_overrides_are_strongest_and_survive_a_rebuild(tmp_path):
 def layer_paradata(folder: Path) -> dict[str, dict[str, set[str]]]:
     """Layer file stem → prim path → hypothesis idents recorded there."""
     out: dict[str, dict[str, set[str]]] = {}
-    for f in (folder / "layers").glob("*.usda"):
+    for f in [*(folder / "layers").glob("*.usda"), *(folder / "layers").glob("*.usdc")]:
         layer = Sdf.Layer.FindOrOpen(str(f))
         found: dict[str, set[str]] = {}
 
@@ -196,66 +202,113 @@ def layer_paradata(folder: Path) -> dict[str, dict[str, set[str]]]:
                     found[str(path)] = set(hyps)
 
         layer.Traverse(Sdf.Path("/Temple"), visit)
-        out[f.stem] = found
+        out[f.stem] = found  # <id>, <id>.detail or <a>+<b>
     return out
 
 
-def test_every_combination_of_hypotheses_composes(portunus_temple):
-    folder = folder_of(portunus_temple)
+def check_combination(stage, hyps, chosen, detail, recorded, layout) -> None:
+    """Compose one selection of hypotheses x ``detail`` variant and check that the parts meet
+    (columns between stylobate and architrave, roof on the cornice, ornament on its member),
+    that the geometry is finite, that every prim lists the selected hypotheses touching it,
+    and that the stage validates."""
+    select(stage, detail=detail,
+           **{h: ("alternative" if h in chosen else "baseline") for h in hyps})
+    bbox = UsdGeom.BBoxCache(Usd.TimeCode.Default(), [UsdGeom.Tokens.default_,
+                                                      UsdGeom.Tokens.render])
+    where = (chosen, detail)
+
+    def world(path: str) -> Gf.Range3d:
+        prim = stage.GetPrimAtPath(path)
+        assert prim and prim.IsActive(), (where, path)
+        return bbox.ComputeWorldBound(prim).ComputeAlignedRange()
+
+    # plain shows the cuboids; the detailed variants the mouldings that replace two of them
+    member = "/Temple/Entablature/" + ("" if detail == "plain" else "Mouldings/")
+    for name in ("cornice", "architrave"):
+        gone = stage.GetPrimAtPath(f"/Temple/Entablature/{name}").IsActive()
+        assert gone == (detail == "plain"), (where, name)
+    cornice = world(member + "cornice")
+    cornice_top = cornice.GetMax()[1]
+    # the gable wedges sit on the cornice; the slabs rest on their bed at the eaves
+    for slab, bed in (("roof_left", ROOF_BED), ("roof_right", ROOF_BED),
+                      ("pediment_left", 0.0), ("pediment_right", 0.0)):
+        assert world(f"/Temple/Roof/{slab}").GetMin()[1] == pytest.approx(
+            cornice_top + bed, abs=1e-3), (where, slab)
+    stylobate = world("/Temple/Podium/die").GetMax()[1]
+    architrave = world(member + "architrave").GetMin()[1]
+    assert stylobate == pytest.approx(layout.stylobate_height, abs=1e-6)
+    columns = [p for p in stage.Traverse() if p.IsInstance()]
+    assert len(columns) == 18
+    for c in columns:
+        r = bbox.ComputeWorldBound(c).ComputeAlignedRange()
+        assert r.GetMin()[1] == pytest.approx(stylobate, abs=1e-3), (where, c.GetPath())
+        assert r.GetMax()[1] == pytest.approx(architrave, abs=1e-3), (where, c.GetPath())
+    if detail != "plain":
+        crown = world("/Temple/Podium/Mouldings/podium_crown")
+        assert crown.GetMax()[1] == pytest.approx(stylobate, abs=1e-3), where
+    if detail == "carved":
+        dentils = world("/Temple/Entablature/Ornament/Dentils")
+        assert cornice.GetMin()[1] < dentils.GetMin()[1] < dentils.GetMax()[1] < cornice_top
+        slab = world("/Temple/Roof/roof_left")
+        tiles = world("/Temple/Roof/Tiles")
+        # on the slabs: from the eaves (antefixes hang 5 cm) to just over the ridge
+        assert tiles.GetMin()[1] > slab.GetMin()[1], where
+        assert slab.GetMax()[1] < tiles.GetMax()[1] < slab.GetMax()[1] + 0.3, where
+    expected: dict[str, set[str]] = {}
+    for stem, found in recorded.items():
+        ids = {("hyp_" + i) for i in stem.removesuffix(".detail").replace("-", "_").split("+")}
+        if ids <= set(chosen):
+            for path, idents in found.items():
+                expected.setdefault(path, set()).update(idents)
+    for p in stage.Traverse():
+        if p.IsA(UsdGeom.Mesh):
+            assert np.isfinite(np.array(p.GetAttribute("points").Get())).all()
+        listed = set(p.GetCustomData().get("ionic_usd", {}).get("hypotheses", {}))
+        if str(p.GetPath()) == "/Temple":
+            continue  # the listing of all hypotheses
+        assert listed == expected.get(str(p.GetPath()), set()), (where, p.GetPath())
+        for ident in listed:
+            assert p.GetAttribute(f"userProperties:ionic_usd:{ident}:id").Get()
+    assert validate_stage(stage) == []
+
+
+def _combinations(portunus_temple, sample: int | None):
     stage = Usd.Stage.Open(str(portunus_temple.root))
     root = stage.GetDefaultPrim()
     hyps = sorted(n for n in root.GetVariantSets().GetNames() if n.startswith("hyp_"))
-    assert len(hyps) == 5  # every hypothesis of portunus.toml is realised
-    recorded = layer_paradata(folder)
+    assert len(hyps) == 6  # every hypothesis of portunus.toml is realised
+    details = root.GetVariantSets().GetVariantSet("detail").GetVariantNames()
+    assert details == ["carved", "moulded", "plain"]
+    combos = list(itertools.product(itertools.product((0, 1), repeat=len(hyps)), details))
+    if sample is not None:  # none, all, and a seeded sample of the rest
+        rng = np.random.default_rng(17)
+        ends = [c for c in combos if len(set(c[0])) == 1]
+        rest = [c for c in combos if c not in ends]
+        combos = ends + [rest[k] for k in rng.choice(len(rest), sample, replace=False)]
+    recorded = layer_paradata(folder_of(portunus_temple))
     layout = portunus_layout()
-    cache_purposes = [UsdGeom.Tokens.default_, UsdGeom.Tokens.render]
-    for bits in itertools.product((0, 1), repeat=len(hyps)):
+    for bits, detail in combos:
         chosen = [h for h, b in zip(hyps, bits, strict=True) if b]
-        select(stage, **{h: ("alternative" if h in chosen else "baseline") for h in hyps})
-        bbox = UsdGeom.BBoxCache(Usd.TimeCode.Default(), cache_purposes)
+        check_combination(stage, hyps, chosen, detail, recorded, layout)
+    return len(combos)
 
-        def world(path: str, bbox=bbox) -> Gf.Range3d:
-            return bbox.ComputeWorldBound(stage.GetPrimAtPath(path)).ComputeAlignedRange()
 
-        cornice_top = world("/Temple/Entablature/cornice").GetMax()[1]
-        # the gable wedges sit on the cornice; the slabs rest on their bed at the eaves
-        for slab, bed in (("roof_left", ROOF_BED), ("roof_right", ROOF_BED),
-                          ("pediment_left", 0.0), ("pediment_right", 0.0)):
-            assert world(f"/Temple/Roof/{slab}").GetMin()[1] == pytest.approx(
-                cornice_top + bed, abs=1e-3), (chosen, slab)
-        stylobate = world("/Temple/Podium/die").GetMax()[1]
-        architrave = world("/Temple/Entablature/architrave").GetMin()[1]
-        assert stylobate == pytest.approx(layout.stylobate_height, abs=1e-6)
-        columns = [p for p in stage.Traverse() if p.IsInstance()]
-        assert len(columns) == 18
-        for c in columns:
-            r = bbox.ComputeWorldBound(c).ComputeAlignedRange()
-            assert r.GetMin()[1] == pytest.approx(stylobate, abs=1e-3), (chosen, c.GetPath())
-            assert r.GetMax()[1] == pytest.approx(architrave, abs=1e-3), (chosen, c.GetPath())
-        # finite geometry, and every prim lists every selected hypothesis that touches it
-        expected: dict[str, set[str]] = {}
-        for stem, found in recorded.items():
-            ids = {("hyp_" + i) for i in stem.replace("-", "_").split("+")}
-            if ids <= set(chosen):
-                for path, idents in found.items():
-                    expected.setdefault(path, set()).update(idents)
-        for p in stage.Traverse():
-            if p.IsA(UsdGeom.Mesh):
-                assert np.isfinite(np.array(p.GetAttribute("points").Get())).all()
-            listed = set(p.GetCustomData().get("ionic_usd", {}).get("hypotheses", {}))
-            if str(p.GetPath()) == "/Temple":
-                continue  # the listing of all hypotheses
-            assert listed == expected.get(str(p.GetPath()), set()), (chosen, p.GetPath())
-            for ident in listed:
-                assert p.GetAttribute(f"userProperties:ionic_usd:{ident}:id").Get()
-        assert validate_stage(stage) == []
+def test_sampled_combinations_of_hypotheses_and_detail_compose(portunus_temple):
+    assert _combinations(portunus_temple, sample=10) == 16
+
+
+@pytest.mark.slow
+def test_every_combination_of_hypotheses_and_detail_composes(portunus_temple):
+    assert _combinations(portunus_temple, sample=None) == 2 ** 6 * 3
 
 
 def test_interacting_hypotheses_get_a_combination_layer(tmp_path):
     """Two hypotheses that both reshape the roof: the composer writes their combined values
     and every combination composes to the layout built with those hypotheses."""
     from ionic_usd.temple.layout import build_layout
-    from ionic_usd.usd.temple import _mismatches
+    from ionic_usd.usd.combinations import mismatches
+    from ionic_usd.usd.detail import detail_geometry
+    from ionic_usd.usd.temple import CUBOID_UV_SCALE
 
     data = load_toml(Path(__file__).resolve().parent.parent / "ionic_usd/data/portunus.toml")
     data["hypothesis"] = [h for h in data["hypothesis"] if h["id"] == "roof-pitch-15"] + [{
@@ -264,15 +317,19 @@ def test_interacting_hypotheses_get_a_combination_layer(tmp_path):
         "changes": {"entablature.cornice_projection_ratio": 1.6}}]
     layout = layout_from_mapping(data, context="test")
     rep = compose_temple(tmp_path / "T", layout, texture_size=16)
-    assert rep.combination_layers == ("roof-pitch-15+deep-cornice",)
+    # each hypothesis re-places the detail it moves; together they reshape the roof
+    assert rep.combination_layers == ("roof-pitch-15.detail", "deep-cornice.detail",
+                                      "roof-pitch-15+deep-cornice")
     folder = tmp_path / "T"
-    assert (folder / "layers" / "roof-pitch-15+deep-cornice.usda").is_file()
+    assert (folder / "layers" / "roof-pitch-15+deep-cornice.usdc").is_file()
     stage = Usd.Stage.Open(str(folder / "Temple.usda"))
-    for a, b in itertools.product(("baseline", "alternative"), repeat=2):
-        select(stage, hyp_roof_pitch_15=a, hyp_deep_cornice=b)
+    for a, b, d in itertools.product(("baseline", "alternative"), ("baseline", "alternative"),
+                                     ("plain", "moulded", "carved")):
+        select(stage, hyp_roof_pitch_15=a, hyp_deep_cornice=b, detail=d)
         ids = [i for i, s in (("roof-pitch-15", a), ("deep-cornice", b)) if s == "alternative"]
         want = build_layout(layout.params, hypotheses=layout.hypotheses, apply=ids)
-        assert _mismatches(stage, want, layout.params.columns_height) == {}, ids
+        assert mismatches(stage, want, layout.params.columns_height, uv_scale=CUBOID_UV_SCALE,
+                          variant=d, detail=detail_geometry(want)) == {}, (ids, d)
         assert validate_stage(stage) == []
     listed = stage.GetPrimAtPath("/Temple/Roof/roof_left").GetCustomData()["ionic_usd"]
     assert set(listed["hypotheses"]) == {"roof_pitch_15", "deep_cornice"}
@@ -370,8 +427,23 @@ def test_temple_lod_passes_to_every_column(portunus_temple):
     assert len(stage.GetPrototypes()) == 3 and proxies == 3 * 3
     inst = sum(per_proto[p.GetPrototype().GetPath()] for p in stage.Traverse()
                if p.IsInstance())
-    cuboids = sum(12 for p in stage.Traverse() if p.IsA(UsdGeom.Mesh))
-    assert temple_triangles(stage) == inst + cuboids
+    # the temple's own meshes (cuboids, mouldings) and every copy of the PointInstancers'
+    # prototypes (dentils, tiles)
+    def tris(p) -> int:
+        return int(np.sum(np.array(UsdGeom.Mesh(p).GetFaceVertexCountsAttr().Get()) - 2))
+
+    own, copies = 0, 0
+    it = iter(stage.Traverse())
+    for p in it:
+        if p.IsA(UsdGeom.PointInstancer):
+            it.PruneChildren()
+            pi = UsdGeom.PointInstancer(p)
+            per = [tris(stage.GetPrimAtPath(t)) for t in pi.GetPrototypesRel().GetTargets()]
+            copies += sum(per[i] for i in pi.GetProtoIndicesAttr().Get())
+        elif p.IsA(UsdGeom.Mesh):
+            own += tris(p)
+    assert copies > 0
+    assert temple_triangles(stage) == inst + own + copies
 
 
 def test_a_rebuild_is_not_blocked_by_the_users_edits(tmp_path):

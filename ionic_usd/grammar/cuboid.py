@@ -8,8 +8,8 @@ Grammar (whitespace is free everywhere; cuboids are separated by commas at the t
 
 The two corners are the paper's two vertices (minimum and maximum x, y, z, metres, Y up);
 ``rise`` is the paper's "height difference". With ``C`` it shifts the four vertices at max x
-along +y (the paper's rule, :attr:`~ionic_usd.temple.cuboid.Incline.SHEAR`: an inclined roof
-slab); with ``W`` only the top edge at max x is raised (:attr:`~ionic_usd.temple.cuboid.Incline.
+along +y (the paper's rule, :attr:`Incline.SHEAR`: an inclined roof
+slab); with ``W`` only the top edge at max x is raised (:attr:`Incline.
 WEDGE`: a solid gable half). Examples::
 
     C(-5.25, 0, -9.65, 5.25, 2.4, 9.65)                      podium die
@@ -24,15 +24,138 @@ wrong number of values, a max corner not above the min corner, a wedge turned in
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable
+from dataclasses import dataclass
+from enum import StrEnum
+
+import numpy as np
 
 from ionic_usd.errors import GrammarError, ParameterError
 from ionic_usd.grammar.lexer import Token, split_top_level, token_number, tokenize
-from ionic_usd.temple.cuboid import Cuboid, Incline
 
-__all__ = ["parse_cuboids", "format_cuboids", "GRAMMAR"]
+__all__ = ["Cuboid", "Incline", "parse_cuboids", "format_cuboids", "GRAMMAR"]
 
 GRAMMAR = "cuboid"
+_AXES = ("x", "y", "z")
+
+
+class Incline(StrEnum):
+    """How ``rise`` deforms a cuboid (see the module docstring)."""
+
+    SHEAR = "shear"
+    WEDGE = "wedge"
+
+    @classmethod
+    def parse(cls, value: object, *, context: str = "") -> Incline:
+        try:
+            return cls(value) if isinstance(value, str) else cls(str(value))
+        except ValueError:
+            valid = " or ".join(repr(m.value) for m in cls)
+            raise ParameterError("incline", value, valid, context=context) from None
+
+
+def _vec3(name: str, value: object, context: str) -> tuple[float, float, float]:
+    try:
+        arr = np.asarray(value, dtype=np.float64).reshape(-1)
+    except (TypeError, ValueError):
+        raise ParameterError(name, value, "three numbers (x, y, z)", context=context) from None
+    if arr.size != 3:
+        raise ParameterError(name, value, "three numbers (x, y, z)", context=context)
+    if not np.all(np.isfinite(arr)):
+        raise ParameterError(name, value, "finite numbers", context=context)
+    return (float(arr[0]), float(arr[1]), float(arr[2]))
+
+
+@dataclass(frozen=True)
+class Cuboid:
+    """An axis-aligned box, optionally inclined across X (a roof piece).
+
+    Parameters
+    ----------
+    min, max : (3,) float
+        Corners with the smallest and largest x, y, z, in metres; ``min < max`` on every axis.
+    rise : float
+        Height difference (metres, along +y) applied to the vertices at max x; 0 for a box.
+    incline : Incline or str
+        ``"shear"`` (the paper's rule: the whole max-x face moves) or ``"wedge"`` (only its
+        top edge moves). A wedge must keep its max-x face upright: ``max.y + rise > min.y``.
+    name : str
+        Prim name for authoring.
+    """
+
+    min: tuple[float, float, float]
+    max: tuple[float, float, float]
+    rise: float = 0.0
+    incline: Incline = Incline.SHEAR
+    name: str = "cuboid"
+
+    def __post_init__(self) -> None:
+        ctx = f"cuboid {self.name!r}"
+        lo = _vec3("min", self.min, ctx)
+        hi = _vec3("max", self.max, ctx)
+        for k, axis in enumerate(_AXES):
+            if not lo[k] < hi[k]:
+                raise ParameterError(
+                    f"max.{axis}", hi[k], f"> min.{axis} = {lo[k]!r}", context=ctx
+                )
+        try:
+            rise = float(self.rise)
+        except (TypeError, ValueError):
+            raise ParameterError("rise", self.rise, "a number (metres)", context=ctx) from None
+        if not math.isfinite(rise):
+            raise ParameterError("rise", self.rise, "a finite number (metres)", context=ctx)
+        incline = Incline.parse(self.incline, context=ctx)
+        if incline is Incline.WEDGE and not hi[1] + rise > lo[1]:
+            raise ParameterError(
+                "rise", rise, f"> {lo[1] - hi[1]!r} (a wedge's top edge must stay above its "
+                "bottom: max.y + rise > min.y)", context=ctx,
+            )
+        if not isinstance(self.name, str) or not self.name:
+            raise ParameterError("name", self.name, "a non-empty string", context=ctx)
+        object.__setattr__(self, "min", lo)
+        object.__setattr__(self, "max", hi)
+        object.__setattr__(self, "rise", rise)
+        object.__setattr__(self, "incline", incline)
+
+    @property
+    def size(self) -> tuple[float, float, float]:
+        """(Δx, Δy, Δz) of the undeformed box."""
+        return tuple(b - a for a, b in zip(self.min, self.max, strict=True))  # type: ignore[return-value]
+
+    @property
+    def inclined(self) -> bool:
+        return self.rise != 0.0
+
+    @property
+    def pitch_deg(self) -> float:
+        """Slope of the inclined faces, ``atan(rise / Δx)`` in degrees (signed)."""
+        return math.degrees(math.atan2(self.rise, self.size[0]))
+
+    def top_at(self, x: float | np.ndarray) -> float | np.ndarray:
+        """Height of the top face at ``x`` (linear across the slope)."""
+        t = (np.asarray(x, dtype=np.float64) - self.min[0]) / self.size[0]
+        return self.max[1] + self.rise * t
+
+    def bottom_at(self, x: float | np.ndarray) -> float | np.ndarray:
+        """Height of the bottom face at ``x``."""
+        t = (np.asarray(x, dtype=np.float64) - self.min[0]) / self.size[0]
+        return self.min[1] + (self.rise * t if self.incline is Incline.SHEAR else 0.0 * t)
+
+    def contains(self, p, *, strict: bool = True, tol: float = 1e-9) -> bool:
+        """Whether point ``p`` (3,) is inside the (deformed) solid; ``strict`` excludes the
+        boundary within ``tol``."""
+        x, y, z = (float(v) for v in p)
+        e = tol if strict else -tol
+        if not (self.min[0] + e < x < self.max[0] - e and self.min[2] + e < z < self.max[2] - e):
+            return False
+        return float(self.bottom_at(x)) + e < y < float(self.top_at(x)) - e
+
+    def translated(self, offset) -> Cuboid:
+        d = _vec3("offset", offset, f"cuboid {self.name!r}")
+        (x0, y0, z0), (x1, y1, z1) = self.min, self.max
+        return Cuboid((x0 + d[0], y0 + d[1], z0 + d[2]), (x1 + d[0], y1 + d[1], z1 + d[2]),
+                      self.rise, self.incline, self.name)
 _KINDS = {"C": Incline.SHEAR, "W": Incline.WEDGE}
 _NAMES = ("x0", "y0", "z0", "x1", "y1", "z1", "rise")
 
@@ -118,7 +241,8 @@ def _cuboid(part: list[Token], source: str, k: int) -> Cuboid:
                        f"{_NAMES[a]} = {args[a].text}", source, t, k)
     rise = vals[6] if len(vals) == 7 else 0.0
     try:
-        return Cuboid(tuple(vals[:3]), tuple(vals[3:6]), rise, kind, name=f"cuboid{k}")
+        return Cuboid((vals[0], vals[1], vals[2]), (vals[3], vals[4], vals[5]), rise, kind,
+                      name=f"cuboid{k}")
     except ParameterError as exc:  # the wedge turned inside out: point at its rise
         raise _err(str(exc), source, args[6], k) from None
 

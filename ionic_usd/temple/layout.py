@@ -57,8 +57,7 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass, fields, replace
-from enum import StrEnum
+from dataclasses import dataclass, replace
 from importlib import resources
 from pathlib import Path
 from types import MappingProxyType
@@ -67,8 +66,27 @@ from typing import Any
 import numpy as np
 
 from ionic_usd.errors import ParameterError
-from ionic_usd.params import load_toml, toml_value
+from ionic_usd.params import load_toml, prim_key
 from ionic_usd.temple.cuboid import Cuboid, Incline
+
+# the description's types, re-exported: a layout is read in their terms
+from ionic_usd.temple.description import (
+    COMPOSER_NAMESPACES,
+    SECTIONS,
+    Certainty,
+    ColumnKind,
+    ColumnPlacement,
+    Hypothesis,
+    Layer,
+    TempleParams,
+    check_temple_tables,
+    cuboids_from_tables,
+    cuboids_to_toml,
+    enum_value,
+    hypotheses_from_tables,
+    load_cuboids_toml,
+    params_from_tables,
+)
 
 __all__ = [
     "Layer",
@@ -93,370 +111,6 @@ __all__ = [
 ]
 
 PORTUNUS_TOML = "portunus.toml"
-# hypothesis ``changes`` namespaces realised by the composer, not by the layout
-COMPOSER_NAMESPACES = ("column", "material", "detail")
-
-
-class Layer(StrEnum):
-    """The composer's cuboid layers."""
-
-    PODIUM = "podium"
-    CELLA = "cella"
-    ENTABLATURE = "entablature"
-    ROOF = "roof"
-
-
-class ColumnKind(StrEnum):
-    """How a column meets the walls: ``free``; ``engaged`` (a half column, its local −Z half
-    in a wall); ``corner`` (a three-quarter column at a wall corner, its local quadrant
-    x < 0, z < 0 in the walls, so its outer faces are local +Z and +X)."""
-
-    FREE = "free"
-    ENGAGED = "engaged"
-    CORNER = "corner"
-
-
-class Certainty(StrEnum):
-    HIGH = "high"
-    MEDIUM = "medium"
-    LOW = "low"
-
-
-def _enum(cls, value: object, name: str, context: str):
-    try:
-        return cls(value)
-    except ValueError:
-        valid = ", ".join(repr(m.value) for m in cls)
-        raise ParameterError(name, value, f"one of {valid}", context=context) from None
-
-
-def _finite(name: str, value: object, context: str, *, positive: bool = False) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ParameterError(name, value, "a number", context=context)
-    v = float(value)
-    if not math.isfinite(v) or (positive and v <= 0):
-        raise ParameterError(name, value, "a finite number > 0" if positive else "finite",
-                             context=context)
-    return v
-
-
-@dataclass(frozen=True)
-class ColumnPlacement:
-    """Where the composer instances a column.
-
-    Parameters
-    ----------
-    position : (3,) float
-        Centre of the column's bottom (its axis on the stylobate), metres.
-    rotation_deg : float
-        Rotation about +Y; the column's local +Z ends up along ``(sin θ, 0, cos θ)``.
-    kind : ColumnKind or str
-        ``"free"``, ``"engaged"`` (a half column set against a wall: its axis is on the
-        wall's outer face and its local −Z half is inside the wall) or ``"corner"`` (a
-        three-quarter column on a wall corner, its local −X/−Z quadrant inside the walls).
-    scale : float
-        Uniform scale of the column asset (built at the layout's column height), > 0.
-    name : str
-    angle_rotation_deg : float or None
-        For a corner of the colonnade: the rotation that turns an angle capital's two volute
-        faces (local +Z and +X) to the building's two outer sides (None elsewhere).
-    """
-
-    position: tuple[float, float, float]
-    rotation_deg: float = 0.0
-    kind: ColumnKind = ColumnKind.FREE
-    scale: float = 1.0
-    name: str = "column"
-    angle_rotation_deg: float | None = None
-
-    def __post_init__(self) -> None:
-        ctx = f"column {self.name!r}"
-        pos = tuple(_finite("position", v, ctx) for v in np.asarray(self.position).tolist())
-        if len(pos) != 3:
-            raise ParameterError("position", self.position, "three numbers", context=ctx)
-        object.__setattr__(self, "position", pos)
-        object.__setattr__(self, "rotation_deg", _finite("rotation_deg", self.rotation_deg, ctx))
-        object.__setattr__(self, "scale", _finite("scale", self.scale, ctx, positive=True))
-        object.__setattr__(self, "kind", _enum(ColumnKind, self.kind, "kind", ctx))
-        if self.angle_rotation_deg is not None:
-            object.__setattr__(self, "angle_rotation_deg",
-                               _finite("angle_rotation_deg", self.angle_rotation_deg, ctx))
-
-    @property
-    def facing(self) -> np.ndarray:
-        """(3,) unit vector of the column's local +Z after the rotation."""
-        t = math.radians(self.rotation_deg)
-        return np.array([math.sin(t), 0.0, math.cos(t)])
-
-
-@dataclass(frozen=True)
-class Hypothesis:
-    """An alternative reconstruction the composer can author as a layer or variant.
-
-    ``changes`` maps dotted keys to the alternative values: ``section.key`` of the temple TOML
-    (applied by :func:`build_layout`) or another namespace (``column.…``, ``material.…``)
-    that the layout records for the composer. ``certainty`` rates the alternative.
-    """
-
-    id: str
-    description: str
-    sources: tuple[str, ...]
-    certainty: Certainty
-    changes: Mapping[str, Any]
-
-    def __post_init__(self) -> None:
-        ctx = f"hypothesis {self.id!r}"
-        from ionic_usd.params import check_identifier
-
-        check_identifier("id", self.id, context=ctx)  # it names a file: never a path
-        object.__setattr__(self, "certainty", _enum(Certainty, self.certainty, "certainty", ctx))
-        object.__setattr__(self, "sources", tuple(self.sources))
-        if not self.changes:
-            raise ParameterError("changes", self.changes, "at least one dotted key", context=ctx)
-        for k in self.changes:
-            if not isinstance(k, str) or k.count(".") != 1:
-                raise ParameterError("changes", k, "keys like 'section.key'", context=ctx)
-        object.__setattr__(self, "changes", MappingProxyType(dict(self.changes)))
-
-
-# ---------------------------------------------------------------------------------------------
-# parameters
-
-
-_INT_FIELDS = {"columns_front", "columns_side", "columns_porch_depth", "steps_count"}
-# ratios that may be any positive number; everything else is a length in metres (> 0)
-
-
-@dataclass(frozen=True)
-class TempleParams:
-    """Dimensions of a tetrastyle-like pseudoperipteral temple (the TOML ``[section] key``
-    maps to the field ``section_key``; see ``portunus.toml`` for meanings and sources)."""
-
-    name: str = "temple"
-    podium_height: float = 2.40
-    podium_footing_height: float = 0.45
-    podium_base_width: float = 11.87
-    podium_base_length: float = 25.60
-    podium_cheek_wall_width: float = 0.85
-    stylobate_width: float = 10.50
-    stylobate_length: float = 19.30
-    columns_height: float = 8.22
-    columns_lower_diameter: float = 0.95
-    columns_upper_diameter_ratio: float = 6.0 / 7.0
-    columns_front: int = 4
-    columns_side: int = 7
-    columns_porch_depth: int = 2
-    steps_count: int = 10
-    cella_wall_thickness: float = 0.80
-    cella_door_height_ratio: float = 2.0 / 3.5
-    cella_door_width_ratio: float = 5.5 / 12.0
-    entablature_architrave_divisor: float = 12.0
-    entablature_frieze_ratio: float = 1.25
-    entablature_cornice_ratio: float = 1.0
-    entablature_cornice_projection_ratio: float = 1.0
-    roof_tympanum_ratio: float = 9.0
-    roof_slab_thickness: float = 0.35
-
-    def __post_init__(self) -> None:
-        ctx = f"temple {self.name!r}"
-        for f in fields(self):
-            if f.name == "name":
-                continue
-            v = getattr(self, f.name)
-            key = f.name.replace("_", ".", 1)
-            if f.name in _INT_FIELDS:
-                if isinstance(v, bool) or not isinstance(v, int):
-                    raise ParameterError(key, v, "an integer", context=ctx)
-            else:
-                object.__setattr__(self, f.name, _finite(key, v, ctx, positive=True))
-        if self.columns_front < 2 or self.columns_side < self.columns_front + 1:
-            raise ParameterError("columns.side", self.columns_side,
-                                 f"> columns.front = {self.columns_front} (≥ 2)", context=ctx)
-        if not 1 <= self.columns_porch_depth <= self.columns_side - 2:
-            raise ParameterError("columns.porch_depth", self.columns_porch_depth,
-                                 f"1 … {self.columns_side - 2} (a cella needs ≥ 1 bay)",
-                                 context=ctx)
-        if self.steps_count < 1:
-            raise ParameterError("steps.count", self.steps_count, "≥ 1", context=ctx)
-        if self.stylobate_length <= self.stylobate_width:
-            raise ParameterError("stylobate.length", self.stylobate_length,
-                                 f"> stylobate.width = {self.stylobate_width}", context=ctx)
-        if self.margin <= self.columns_lower_diameter / 2:
-            raise ParameterError(
-                "stylobate.width", self.stylobate_width,
-                f"a value leaving the corner columns on the stylobate (margin {self.margin:.3f}"
-                f" m ≤ lower radius {self.columns_lower_diameter / 2:.3f} m)", context=ctx)
-        if self.podium_base_width <= self.stylobate_width:
-            raise ParameterError("podium.base_width", self.podium_base_width,
-                                 f"> stylobate.width = {self.stylobate_width}", context=ctx)
-        if self.stair_run <= 0:
-            raise ParameterError("podium.base_length", self.podium_base_length,
-                                 "long enough for the stairs (stylobate + projections)",
-                                 context=ctx)
-        if self.podium_footing_height >= self.podium_height:
-            raise ParameterError("podium.footing_height", self.podium_footing_height,
-                                 f"< podium.height = {self.podium_height}", context=ctx)
-        if self.podium_cheek_wall_width >= self.stylobate_width / 2:
-            raise ParameterError("podium.cheek_wall_width", self.podium_cheek_wall_width,
-                                 f"< half the stylobate width ({self.stylobate_width / 2})",
-                                 context=ctx)
-        inner = 2 * (self.x_axis - self.cella_wall_thickness)
-        if self.door_width >= inner or self.door_height >= self.columns_height:
-            raise ParameterError("cella.door_width_ratio", self.cella_door_width_ratio,
-                                 "a door that fits inside the cella's front wall", context=ctx)
-        if self.cella_wall_thickness >= self.axial_spacing:
-            raise ParameterError("cella.wall_thickness", self.cella_wall_thickness,
-                                 f"< the axial spacing {self.axial_spacing:.3f}", context=ctx)
-
-    # -- derived dimensions (see the module docstring) -------------------------------------
-    @property
-    def axial_spacing(self) -> float:
-        return (self.stylobate_length - self.stylobate_width) / (
-            self.columns_side - self.columns_front)
-
-    @property
-    def margin(self) -> float:
-        return (self.stylobate_width - (self.columns_front - 1) * self.axial_spacing) / 2
-
-    @property
-    def x_axis(self) -> float:
-        """|x| of the flank column axes (= the cella side walls' outer faces)."""
-        return self.stylobate_width / 2 - self.margin
-
-    @property
-    def z_front_axis(self) -> float:
-        return self.stylobate_length / 2 - self.margin
-
-    @property
-    def footing_projection(self) -> float:
-        return (self.podium_base_width - self.stylobate_width) / 2
-
-    @property
-    def stair_run(self) -> float:
-        return self.podium_base_length - self.stylobate_length - 2 * self.footing_projection
-
-    @property
-    def door_height(self) -> float:
-        return self.cella_door_height_ratio * self.columns_height
-
-    @property
-    def door_width(self) -> float:
-        return self.cella_door_width_ratio * self.door_height
-
-    @property
-    def architrave_height(self) -> float:
-        return self.columns_height / self.entablature_architrave_divisor
-
-    @property
-    def entablature_heights(self) -> tuple[float, float, float]:
-        """(architrave, frieze, cornice) heights in metres."""
-        a = self.architrave_height
-        return a, a * self.entablature_frieze_ratio, a * self.entablature_cornice_ratio
-
-    @property
-    def pitch_deg(self) -> float:
-        return math.degrees(math.atan(2.0 / self.roof_tympanum_ratio))
-
-
-_SECTIONS: dict[str, tuple[str, ...]] = {}
-for _f in fields(TempleParams):
-    if _f.name != "name":
-        _sec, _key = _f.name.split("_", 1)
-        _SECTIONS.setdefault(_sec, ())
-        _SECTIONS[_sec] += (_key,)
-
-
-def params_from_tables(data: Mapping[str, Any], *, context: str) -> TempleParams:
-    """A :class:`TempleParams` from TOML tables (``[temple] name`` and the dimension sections);
-    unknown sections or keys raise :class:`ParameterError` naming them."""
-    kw: dict[str, Any] = {}
-    temple = data.get("temple", {})
-    if not isinstance(temple, Mapping):
-        raise ParameterError("[temple]", temple, "a table", context=context)
-    for key, value in temple.items():
-        if key != "name":
-            raise ParameterError(f"temple.{key}", value, "name (the only key of [temple])",
-                                 context=context)
-    if "name" in temple:
-        kw["name"] = temple["name"]
-    for sec, table in data.items():
-        if sec in ("temple", "hypothesis", "cuboid", "mouldings"):  # mouldings: temple.mouldings
-            continue
-        if sec not in _SECTIONS:
-            raise ParameterError(f"[{sec}]", "…", "a known section: "
-                                 + ", ".join(["temple", *_SECTIONS, "hypothesis", "cuboid"]),
-                                 context=context)
-        for key, value in table.items():
-            if key not in _SECTIONS[sec]:
-                raise ParameterError(f"{sec}.{key}", value,
-                                     f"one of {', '.join(_SECTIONS[sec])}", context=context)
-            kw[f"{sec}_{key}"] = value
-    return TempleParams(**kw)
-
-
-# ---------------------------------------------------------------------------------------------
-# cuboids in TOML
-
-
-def cuboids_from_tables(
-    entries: Iterable[Mapping[str, Any]], *, context: str
-) -> dict[Layer, tuple[Cuboid, ...]]:
-    """Cuboids from ``[[cuboid]]`` tables grouped by layer.
-
-    Each table: ``name`` (str), ``min`` / ``max`` ([x, y, z] metres), ``layer`` (one of
-    :class:`Layer`), optional ``rise`` (metres, default 0) and ``incline`` (``"shear"`` or
-    ``"wedge"``). Errors name ``context`` (the file), the entry and the key.
-    """
-    out: dict[Layer, list[Cuboid]] = {}
-    allowed = {"name", "min", "max", "rise", "incline", "layer"}
-    for i, e in enumerate(entries, 1):
-        where = f"{context} [[cuboid]] #{i}"
-        if not isinstance(e, Mapping):
-            raise ParameterError("[[cuboid]]", e, "a table", context=where)
-        if "name" in e:
-            where += f" ({e['name']!r})"
-        for key in e:
-            if key not in allowed:
-                raise ParameterError(key, e[key], f"one of {', '.join(sorted(allowed))}",
-                                     context=where)
-        for key in ("name", "min", "max", "layer"):
-            if key not in e:
-                raise ParameterError(key, "(missing)", "a value (required key)", context=where)
-        layer = _enum(Layer, e["layer"], "layer", where)
-        try:
-            c = Cuboid(e["min"], e["max"], e.get("rise", 0.0), e.get("incline", "shear"),
-                       name=e["name"])
-        except ParameterError as exc:
-            raise ParameterError(exc.name, exc.value, exc.valid, context=where) from None
-        out.setdefault(layer, []).append(c)
-    return {k: tuple(v) for k, v in out.items()}
-
-
-def load_cuboids_toml(path: str | os.PathLike) -> dict[Layer, tuple[Cuboid, ...]]:
-    """Read the ``[[cuboid]]`` entries of a TOML file, grouped by layer."""
-    data = load_toml(path)
-    entries = data.get("cuboid", [])
-    if not isinstance(entries, list):
-        raise ParameterError("cuboid", entries, "an array of tables ([[cuboid]])",
-                             context=str(path))
-    return cuboids_from_tables(entries, context=str(path))
-
-
-def cuboids_to_toml(groups: Mapping[str, Iterable[Cuboid]]) -> str:
-    """``[[cuboid]]`` tables for cuboids grouped by layer (read back by
-    :func:`load_cuboids_toml`)."""
-    out = []
-    for layer, cs in groups.items():
-        lay = _enum(Layer, layer, "layer", "cuboids_to_toml")
-        for c in cs:
-            out += ["[[cuboid]]", f"name = {toml_value(c.name)}",
-                    f"layer = {toml_value(lay.value)}",
-                    f"min = {toml_value(list(c.min))}", f"max = {toml_value(list(c.max))}"]
-            if c.rise != 0.0 or c.incline is not Incline.SHEAR:
-                out += [f"rise = {toml_value(c.rise)}",
-                        f"incline = {toml_value(c.incline.value)}"]
-            out.append("")
-    return "\n".join(out)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -511,7 +165,8 @@ class TempleLayout:
     applied: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
-        groups = {_enum(Layer, k, "layer", self.name): tuple(v) for k, v in self.cuboids.items()}
+        groups = {enum_value(Layer, k, "layer", self.name): tuple(v)
+                  for k, v in self.cuboids.items()}
         object.__setattr__(self, "cuboids", MappingProxyType(groups))
         object.__setattr__(self, "columns", tuple(self.columns))
         object.__setattr__(self, "hypotheses", tuple(self.hypotheses))
@@ -689,9 +344,9 @@ def build_layout(
         changes = {}
         for key, value in by_id[hid].changes.items():
             sec, k = key.split(".")
-            if sec in _SECTIONS:
-                if k not in _SECTIONS[sec]:
-                    raise ParameterError(key, value, f"one of {sec}.{', '.join(_SECTIONS[sec])}",
+            if sec in SECTIONS:
+                if k not in SECTIONS[sec]:
+                    raise ParameterError(key, value, f"one of {sec}.{', '.join(SECTIONS[sec])}",
                                          context=f"hypothesis {hid!r}")
                 changes[f"{sec}_{k}"] = value
         params = replace(params, **changes)
@@ -704,8 +359,6 @@ def build_layout(
     }
     for layer, cs in (extra_cuboids or {}).items():
         groups[Layer(layer)].extend(cs)
-    from ionic_usd.params import prim_key
-
     seen: dict[str, str] = {}  # two names that author the same prim would lose a cuboid
     for c in (c for cs in groups.values() for c in cs):
         if prim_key(c.name) in seen:
@@ -716,52 +369,6 @@ def build_layout(
         seen[prim_key(c.name)] = c.name
     return TempleLayout(params.name, {k: tuple(v) for k, v in groups.items()},
                         tuple(_columns(params)), params, hyps, applied)
-
-
-def _hypotheses(entries, context: str) -> tuple[Hypothesis, ...]:
-    out = []
-    allowed = {"id", "description", "sources", "certainty", "changes"}
-    for i, e in enumerate(entries, 1):
-        where = f"{context} [[hypothesis]] #{i}"
-        if not isinstance(e, Mapping):
-            raise ParameterError("[[hypothesis]]", e, "a table", context=where)
-        for key in e:
-            if key not in allowed:
-                raise ParameterError(key, e[key], f"one of {', '.join(sorted(allowed))}",
-                                     context=where)
-        for key in sorted(allowed):
-            if key not in e:
-                raise ParameterError(key, "(missing)", "a value (required key)", context=where)
-        src = e["sources"]
-        if not isinstance(src, list) or not all(isinstance(x, str) for x in src):
-            raise ParameterError("sources", src, "a list of strings", context=where)
-        try:
-            out.append(Hypothesis(e["id"], e["description"], tuple(src),
-                                  e["certainty"], e["changes"]))
-        except ParameterError as exc:
-            raise ParameterError(exc.name, exc.value, exc.valid, context=where) from None
-    from ionic_usd.params import check_identifier, prim_key
-
-    seen: dict[str, str] = {}  # ids name files and variant sets: hyp_a_b for a-b and a_b
-    for h in out:
-        check_identifier("id", h.id, context=f"{context} [[hypothesis]]")
-        if prim_key(h.id) in seen:
-            other = seen[prim_key(h.id)]
-            raise ParameterError("id", h.id, f"an id distinct from {other!r} (both would name "
-                                 "the same layer file and variant set)",
-                                 context=f"{context} [[hypothesis]]")
-        seen[prim_key(h.id)] = h.id
-    for i, h in enumerate(out, 1):
-        for key, value in h.changes.items():
-            sec, k = key.split(".")
-            if sec in COMPOSER_NAMESPACES:
-                continue  # the composer checks these (ionic_usd.usd.hypotheses)
-            if sec not in _SECTIONS or k not in _SECTIONS[sec]:
-                valid = (f"one of {sec}.{', '.join(_SECTIONS[sec])}" if sec in _SECTIONS else
-                         "section.key of the temple TOML, or column.… / material.…")
-                raise ParameterError(key, value, valid,
-                                     context=f"{context} [[hypothesis]] #{i} ({h.id!r})")
-    return tuple(out)
 
 
 def layout_from_toml(
@@ -775,12 +382,10 @@ def layout_from_mapping(
     data: Mapping[str, Any], *, context: str = "temple", apply: Iterable[str] = ()
 ) -> TempleLayout:
     """Build a layout from already-parsed TOML tables (see :func:`layout_from_toml`)."""
-    from ionic_usd.params import check_temple_tables
-
     ctx = context
     check_temple_tables(data, context=ctx)  # types and ranges of every table, at the boundary
     params = params_from_tables(data, context=ctx)
-    hyps = _hypotheses(data.get("hypothesis", []), ctx)
+    hyps = hypotheses_from_tables(data.get("hypothesis", []), ctx)
     extra = cuboids_from_tables(data.get("cuboid", []), context=ctx)
     return build_layout(params, hypotheses=hyps, apply=apply, extra_cuboids=extra)
 

@@ -71,7 +71,7 @@ from ionic_usd.column.column import (
 from ionic_usd.column.volute import VOLUTE_MODELS, volute_extent
 from ionic_usd.errors import ParameterError
 from ionic_usd.usd.asset import AssetInstancer, AssetMesh, AssetSpec, write_asset
-from ionic_usd.usd.materials import MaterialTextures
+from ionic_usd.usd.materials import TILE_METRES, MaterialTextures
 
 __all__ = [
     "ColumnAssetOptions",
@@ -109,7 +109,6 @@ ENGAGED_INSET = 0.05  # m: the cut lies this far behind the wall face (axis on t
 ASSET_TEXELS_PER_METRE = {"high": 128.0, "medium": 64.0, "low": 32.0}
 BASE_CHART_BOUNDARY = 2.0  # m: see texture.uv.unwrap(max_chart_boundary=…)
 UV_SPAN = 32.0  # m of surface across st ∈ [0, 1]
-TILE_METRES = 2.0  # m of stone per repeat of the tileable maps
 
 
 @dataclass(frozen=True)

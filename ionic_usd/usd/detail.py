@@ -1,28 +1,33 @@
 """Architectural detail as levels of detail: the ``detail`` variant set on ``/Temple``.
 
-Files added to a temple folder (by :func:`add_detail`, called from
+Files of a temple folder that hold the detail (written by :func:`write_detail`, called from
 :func:`ionic_usd.usd.temple.compose_temple`)::
 
-    detail.usda          /Temple: variant set ``detail`` = plain | moulded | carved; the
-                         Terracotta material; sublayers ./detail_geom.usdc
-    detail_geom.usdc     the swept mouldings and the ornament PointInstancers, under the part
-                         prims they belong to:
+    detail.usdc          the swept mouldings and the ornament PointInstancers, as ``def`` prims
+                         under the part prims they belong to (a crate file: ~8k points):
                            /Temple/Podium/Mouldings/{podium_base, podium_crown}
-                           /Temple/Entablature/Mouldings/{architrave, cornice}
+                           /Temple/Entablature/Mouldings/{architrave, cornice, sima_*}
                            /Temple/Entablature/Ornament/Dentils          (PointInstancer)
-                           /Temple/Entablature/Ornament/FriezeGarlands   (hypothesis, inactive)
                            /Temple/Roof/Mouldings/{raking_cornice_front, raking_cornice_rear}
-                           /Temple/Roof/Tiles                            (PointInstancer)
-    layers/<id>.detail.usda   for each hypothesis that moves the entablature or the roof: the
-                         same members rebuilt for it, referenced by that hypothesis'
-                         ``alternative`` variant next to its own layer
-    layers/frieze-garlands.usda   the frieze relief hypothesis (``hyp_frieze_garlands``)
+                           /Temple/Roof/Tiles                            (PointInstancer,
+                                                                          bound to Terracotta)
+                         it sublayers ./materials.usda, so the tiles' binding resolves alone
+    layers/frieze-garlands.usdc   the frieze relief hypothesis (``hyp_frieze_garlands``): the
+                         FriezeGarlands PointInstancer under /Temple/Entablature/Ornament
+    layers/<id>.detail.usdc       the detail re-placed for a hypothesis that moves the
+                         entablature or the roof (written by the combination check,
+                         :mod:`ionic_usd.usd.combinations`, only where composing the
+                         hypothesis' own layer over the detail is not already right)
 
-Variants: ``plain`` deactivates everything above (today's cuboids); ``moulded`` shows the
-mouldings and deactivates the ``architrave`` and ``cornice`` cuboids they replace; ``carved``
-adds the instanced dentils and roof tiles. Both detailed variants bind the podium (cuboids and
-mouldings) to Travertine — the podium's facing [C] — and the tiles to Terracotta; walls,
-entablature and mouldings keep the part's binding (painted stucco, or the finish hypothesis').
+The variant set itself lives in ``generated.usda`` (:func:`author_detail_variants`), where the
+whole temple composes, so that none of its opinions dangles: ``plain`` deactivates the
+mouldings and the ornament (the cuboid temple); ``moulded`` shows the mouldings and
+deactivates the ``architrave`` and ``cornice`` cuboids they replace; ``carved`` adds the
+instanced dentils, roof tiles and (with its hypothesis) the frieze relief. Both detailed
+variants bind the podium (cuboids and mouldings) to Travertine — the podium's facing [C];
+the tiles are Terracotta in every variant that shows them; walls, entablature and mouldings
+keep the part's binding (painted stucco, or the finish hypothesis'). The materials come from the
+temple's one library, ``materials.usda`` (:func:`ionic_usd.usd.materials.stone_material`).
 The column asset's ``high`` LOD carries the carved echinus and astragal
 (:func:`column_ornament`, PointInstancers inside the asset).
 """
@@ -32,12 +37,12 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from pxr import Sdf, Tf, Usd, Vt
+from pxr import Sdf, Tf, Vt
 
 from ionic_usd.column.ornament import Instances, capital_ornament
 from ionic_usd.errors import ParameterError
 from ionic_usd.geometry.mesh import Mesh
-from ionic_usd.temple.layout import Hypothesis, Layer, TempleLayout, build_layout
+from ionic_usd.temple.layout import Hypothesis, Layer, TempleLayout
 from ionic_usd.temple.mouldings import (
     REPLACED_CUBOIDS,
     MouldingParams,
@@ -46,31 +51,41 @@ from ionic_usd.temple.mouldings import (
 )
 from ionic_usd.temple.ornament import dentils, frieze_garlands, roof_tiles
 from ionic_usd.usd.asset import AssetInstancer
-from ionic_usd.usd.instancer import author_point_instancer, bind_spec
+from ionic_usd.usd.hypotheses import add_paradata
+from ionic_usd.usd.instancer import author_point_instancer
+from ionic_usd.usd.materials import TILE_METRES, bind_material_spec
 from ionic_usd.usd.mesh import author_mesh, define_prim
-from ionic_usd.usd.stage import new_layer, save_layer
+from ionic_usd.usd.stage import new_layer
 
 __all__ = [
     "DETAIL_SET",
     "DETAIL_VARIANTS",
     "DEFAULT_DETAIL",
     "DETAIL_LAYER",
-    "DETAIL_GEOM",
     "FRIEZE_KEY",
+    "FRIEZE_PATH",
+    "TERRACOTTA",
     "DetailGeometry",
     "detail_geometry",
     "detail_counts",
-    "add_detail",
+    "detail_layer",
+    "frieze_layer",
+    "author_detail_variants",
+    "write_frieze_hypotheses",
+    "check_detail",
     "column_ornament",
 ]
 
 DETAIL_SET = "detail"
 DETAIL_VARIANTS = ("plain", "moulded", "carved")
+# the default selection: see the README (Detail) for the measured cost of each variant
 DEFAULT_DETAIL = "carved"
-DETAIL_LAYER = "detail.usda"
-DETAIL_GEOM = "detail_geom.usdc"
+DETAIL_LAYER = "detail.usdc"
 FRIEZE_KEY = "detail.frieze"  # a hypothesis change key realised here ("garlands")
+FRIEZE_PATH = "/Temple/Entablature/Ornament/FriezeGarlands"
+# material prim name, stone style of its maps (the temple's library, materials.usda)
 TERRACOTTA = ("Terracotta", "terracotta")
+TRAVERTINE = "/Temple/Materials/Travertine"
 _PART = {"podium": "Podium", "architrave": "Entablature", "cornice": "Entablature",
          "sima": "Entablature", "raking": "Roof"}
 
@@ -84,15 +99,33 @@ class DetailGeometry:
     frieze: Instances
     podium_cuboids: tuple[str, ...] = field(default=())
 
+    def prims(self, variant: str, *, garlands: bool = False) -> dict[str, Mesh | Instances]:
+        """Absolute prim path → the mesh or instances shown by ``variant`` (cuboids aside)."""
+        if variant == "plain":
+            return {}
+        out: dict[str, Mesh | Instances] = {
+            f"/Temple/{part}/Mouldings/{name}": m
+            for part, members in self.mouldings.items() for name, m in members.items()}
+        if variant == "carved":
+            out.update({f"/Temple/{rel}": inst for rel, inst in self.ornament.items()})
+            if garlands:
+                out[FRIEZE_PATH] = self.frieze
+        return out
+
 
 def _ident(name: str) -> str:
     return Tf.MakeValidIdentifier(name)
 
 
+def check_detail(value: str) -> str:
+    """``value`` if it names a ``detail`` variant, else :class:`ParameterError`."""
+    if value not in DETAIL_VARIANTS:
+        raise ParameterError("detail", value, f"one of {', '.join(DETAIL_VARIANTS)}")
+    return value
+
+
 def detail_geometry(layout: TempleLayout, mp: MouldingParams | None = None) -> DetailGeometry:
     """Mouldings and ornament of a layout (pure numpy; see the module docstring)."""
-    from ionic_usd.usd.column_asset import TILE_METRES
-
     mp = mp or portunus_mouldings()
     by_part: dict[str, dict[str, Mesh]] = {}
     for m in moulding_meshes(layout, mp, uv_scale=1.0 / TILE_METRES):
@@ -109,203 +142,114 @@ def detail_counts(geom: DetailGeometry) -> dict[str, dict[str, int]]:
     triangles counted over every copy)."""
     sweep_tris = sum(m.n_triangles for ms in geom.mouldings.values() for m in ms.values())
     orn = list(geom.ornament.values())
+    meshes = sum(len(ms) for ms in geom.mouldings.values())
     return {
         "plain": {"triangles": 0, "prototypes": 0, "instances": 0, "meshes": 0},
-        "moulded": {"triangles": sweep_tris, "prototypes": 0, "instances": 0,
-                    "meshes": sum(len(ms) for ms in geom.mouldings.values())},
+        "moulded": {"triangles": sweep_tris, "prototypes": 0, "instances": 0, "meshes": meshes},
         "carved": {"triangles": sweep_tris + sum(i.triangles for i in orn),
                    "prototypes": sum(len(i.prototypes) for i in orn),
-                   "instances": sum(len(i) for i in orn),
-                   "meshes": sum(len(ms) for ms in geom.mouldings.values())},
+                   "instances": sum(len(i) for i in orn), "meshes": meshes},
     }
 
 
-def _geom_layer(geom: DetailGeometry) -> Sdf.Layer:
-    lay = new_layer("Temple", kind=None)
+def detail_layer(geom: DetailGeometry, materials_ref: str = "./materials.usda") -> Sdf.Layer:
+    """``detail.usdc``: every member and ornament as ``def`` prims (see the module docstring)."""
+    lay = new_layer("Temple", kind=None, comment="architectural detail (ionic_usd): shown by "
+                    "the detail variant set of generated.usda")
+    lay.subLayerPaths.append(materials_ref)
     with Sdf.ChangeBlock():
+        # organising prims are Scopes (no transform of their own), the parts Xforms
         for part, members in geom.mouldings.items():
-            define_prim(lay, f"/Temple/{part}/Mouldings", "Xform")
+            define_prim(lay, f"/Temple/{part}/Mouldings", "Scope")
             for name, m in members.items():
                 author_mesh(lay, f"/Temple/{part}/Mouldings/{name}", m)
+        for rel in geom.ornament:
+            if "/Ornament/" in rel:
+                define_prim(lay, "/Temple/" + rel.split("/Ornament/")[0] + "/Ornament", "Scope")
         for rel, inst in geom.ornament.items():
-            author_point_instancer(lay, f"/Temple/{rel}", inst)
-        spec = author_point_instancer(lay, "/Temple/Entablature/Ornament/FriezeGarlands",
-                                      geom.frieze)
-        spec.active = False  # the frieze-garlands hypothesis activates it
+            spec = author_point_instancer(lay, f"/Temple/{rel}", inst)
+            if rel == "Roof/Tiles":
+                bind_material_spec(spec, f"/Temple/Materials/{TERRACOTTA[0]}")
     return lay
 
 
-def _over(lay: Sdf.Layer | Sdf.PrimSpec, path: str) -> Sdf.PrimSpec:
-    """An ``over`` at ``path`` relative to a variant's prim spec (or a layer's root)."""
-    spec = lay
-    for name in path.split("/"):
-        child = spec.nameChildren.get(name) if isinstance(spec, Sdf.PrimSpec) else \
-            spec.GetPrimAtPath(f"/{name}")
-        if child is None:
-            child = Sdf.PrimSpec(spec, name, Sdf.SpecifierOver) if isinstance(
-                spec, Sdf.PrimSpec) else Sdf.PrimSpec(spec, name, Sdf.SpecifierOver)
-        spec = child
+def frieze_layer(h: Hypothesis, geom: DetailGeometry) -> Sdf.Layer:
+    """The frieze relief hypothesis: its PointInstancer, with the hypothesis' paradata."""
+    lay = new_layer("Temple", kind="assembly",
+                    comment=f"reconstruction hypothesis {h.id!r} (ionic_usd)")
+    with Sdf.ChangeBlock():
+        define_prim(lay, FRIEZE_PATH.rsplit("/", 1)[0], "Scope")
+        spec = author_point_instancer(lay, FRIEZE_PATH, geom.frieze)
+        add_paradata(spec, [h])
+    return lay
+
+
+def _over(parent: Sdf.PrimSpec, rel: str) -> Sdf.PrimSpec:
+    """An ``over`` at ``rel`` below ``parent`` (a variant's prim spec)."""
+    spec = parent
+    for name in rel.split("/"):
+        child = spec.nameChildren.get(name)
+        spec = child if child is not None else Sdf.PrimSpec(spec, name, Sdf.SpecifierOver)
     return spec
 
 
-def _detail_layer(geom: DetailGeometry, default: str) -> Sdf.Layer:
-    from ionic_usd.usd.materials import MaterialTextures, author_preview_material
-
-    lay = new_layer("Temple", kind=None)
-    stage = Usd.Stage.Open(lay)
-    stage.DefinePrim("/Temple/Materials", "Scope")
-    # Terracotta is the detail's own; Travertine comes from the temple's material library
-    # (materials.usda, the column asset's: one copy of its maps), so this layer is valid alone
-    mat, style = TERRACOTTA
-    author_preview_material(stage, f"/Temple/Materials/{mat}", MaterialTextures(
-        *(f"./Textures/{style}_{r}.png" for r in ("basecolor", "roughness", "normal"))))
-    del stage
-    # after the stage: these are not on disk yet
-    lay.subLayerPaths.append("./materials.usda")
-    lay.subLayerPaths.append(f"./{DETAIL_GEOM}")
-    temple = lay.GetPrimAtPath("/Temple")
-    bind_spec(_over(temple, "Roof/Tiles"), f"/Temple/Materials/{TERRACOTTA[0]}")
-    vs = Sdf.VariantSetSpec(temple, DETAIL_SET)
-    temple.variantSetNameList.Append(DETAIL_SET)
+def author_detail_variants(spec: Sdf.PrimSpec, geom: DetailGeometry, default: str) -> None:
+    """The ``detail`` variant set on ``spec`` (/Temple of ``generated.usda``)."""
+    check_detail(default)
+    vs = Sdf.VariantSetSpec(spec, DETAIL_SET)
+    spec.variantSetNameList.Append(DETAIL_SET)
     sweeps = [f"{part}/Mouldings" for part in geom.mouldings]
+    ornament = sorted({rel.split("/Ornament/")[0] + "/Ornament" if "/Ornament/" in rel else rel
+                       for rel in geom.ornament})
     for v in DETAIL_VARIANTS:
         prim = Sdf.VariantSpec(vs, v).primSpec
         if v == "plain":
-            for p in (*sweeps, *geom.ornament):
+            for p in (*sweeps, *ornament):
                 _over(prim, p).active = False
             continue
         for c in REPLACED_CUBOIDS:
             _over(prim, f"Entablature/{c}").active = False
         if v == "moulded":
-            for p in geom.ornament:
+            for p in ornament:
                 _over(prim, p).active = False
-        travertine = "/Temple/Materials/Travertine"
         for name in geom.podium_cuboids:
-            bind_spec(_over(prim, f"Podium/{name}"), travertine)
+            bind_material_spec(_over(prim, f"Podium/{name}"), TRAVERTINE)
         if "Podium" in geom.mouldings:
-            bind_spec(_over(prim, "Podium/Mouldings"), travertine)
-    temple.variantSelections[DETAIL_SET] = default
-    return lay
+            bind_material_spec(_over(prim, "Podium/Mouldings"), TRAVERTINE)
+    spec.variantSelections[DETAIL_SET] = check_detail(default)
+    data = dict(spec.customData.get("ionic_usd", {}))
+    data["detail"] = {"variants": Vt.StringArray(list(DETAIL_VARIANTS)), "default": default}
+    spec.customData = {"ionic_usd": data}
 
 
-def _meta(h: Hypothesis) -> dict:
-    return {"ionic_usd": {"hypothesis": {
-        "id": h.id, "description": " ".join(h.description.split()),
-        "certainty": str(h.certainty), "sources": Vt.StringArray(list(h.sources))}}}
+def write_frieze_hypotheses(folder: Path, spec: Sdf.PrimSpec, layout: TempleLayout,
+                            geom: DetailGeometry) -> list[Hypothesis]:
+    """The hypotheses realised by the detail (``detail.frieze``): their layers, their variant
+    sets on ``spec`` (/Temple of ``generated.usda``) and their listing. Returns them."""
+    from ionic_usd.usd.stage import save_layer
 
-
-def _hypothesis_detail_layer(h: Hypothesis, layout: TempleLayout, base: DetailGeometry,
-                             mp: MouldingParams) -> Sdf.Layer | None:
-    """Overs re-placing the detail for a hypothesis that moves the building (or None)."""
-    import numpy as np
-
-    alt = detail_geometry(build_layout(layout.params, hypotheses=layout.hypotheses,
-                                       apply=[h.id]), mp)
-    lay = Sdf.Layer.CreateAnonymous(".usda")
-    lay.defaultPrim = "Temple"
-    lay.pseudoRoot.SetInfo("upAxis", "Y")
-    lay.pseudoRoot.SetInfo("metersPerUnit", 1.0)
-    touched = []
-    with Sdf.ChangeBlock():
-        for part, members in alt.mouldings.items():
-            for name, m in members.items():
-                old = base.mouldings[part][name]
-                if old.points.shape == m.points.shape and np.allclose(old.points, m.points):
-                    continue
-                path = f"/Temple/{part}/Mouldings/{name}"
-                author_mesh(lay, path, m)
-                touched.append(path)
-        for rel, inst in alt.ornament.items():
-            old = base.ornament[rel]
-            if len(old) == len(inst) and np.allclose(old.positions, inst.positions) and \
-                    np.allclose(old.orientations, inst.orientations):
-                continue
-            author_point_instancer(lay, f"/Temple/{rel}", inst)
-            touched.append(f"/Temple/{rel}")
-        if not touched:
-            return None
-        for p in touched:
-            for anc in Sdf.Path(p).GetAncestorsRange():
-                s = lay.GetPrimAtPath(anc)
-                if s is not None and anc != Sdf.Path(p):
-                    s.specifier = Sdf.SpecifierOver
-                    s.typeName = ""
-            spec = lay.GetPrimAtPath(p)
-            spec.specifier = Sdf.SpecifierOver
-            spec.customData = _meta(h)
-    return lay
-
-
-def _frieze_layer(h: Hypothesis) -> Sdf.Layer:
-    lay = Sdf.Layer.CreateAnonymous(".usda")
-    lay.defaultPrim = "Temple"
-    lay.pseudoRoot.SetInfo("upAxis", "Y")
-    lay.pseudoRoot.SetInfo("metersPerUnit", 1.0)
-    spec = _over(lay, "Temple/Entablature/Ornament/FriezeGarlands")
-    spec.active = True
-    spec.customData = _meta(h)
-    return lay
-
-
-def add_detail(folder: Path, root: Sdf.Layer, layout: TempleLayout, *,
-               texture_size: int = 1024, seed: int = 7,
-               mouldings: MouldingParams | None = None,
-               default: str = DEFAULT_DETAIL) -> DetailGeometry:
-    """Write the detail layers into a temple folder being built and wire them into its root.
-
-    Parameters
-    ----------
-    folder : the temple folder (its ``Textures/`` and ``layers/`` are filled too)
-    root : the temple's root layer (not yet saved): gets the reference to ``detail.usda``, the
-        ``detail`` selection, and the variants of the hypotheses realised here
-    layout : the temple
-    mouldings : the sections (default: those of ``portunus.toml``)
-    default : the selected ``detail`` variant (plain, moulded, carved)
-    """
-    from ionic_usd.usd.column_asset import copy_stone_textures
-
-    if default not in DETAIL_VARIANTS:
-        raise ParameterError("detail", default, f"one of {', '.join(DETAIL_VARIANTS)}")
-    mp = mouldings or portunus_mouldings()
-    geom = detail_geometry(layout, mp)
-    # tiles repeat their map every metre (stone: every TILE_METRES = 2 m): half the size keeps
-    # the texel density and saves ~3 s of a cold build
-    copy_stone_textures(folder / "Textures", TERRACOTTA[1], max(16, texture_size // 2), seed)
-    save_layer(_geom_layer(geom), folder / DETAIL_GEOM, force=True)
-    save_layer(_detail_layer(geom, default), folder / DETAIL_LAYER, force=True)
-    spec = root.GetPrimAtPath("/Temple")
-    spec.referenceList.Append(Sdf.Reference(f"./{DETAIL_LAYER}"))
-    spec.variantSelections[DETAIL_SET] = default
+    done = []
     data = dict(spec.customData.get("ionic_usd", {}))
     listing = {k: dict(v) for k, v in data.get("hypotheses", {}).items()}
     for h in layout.hypotheses:
+        if FRIEZE_KEY not in h.changes:
+            continue
         vset = "hyp_" + _ident(h.id)
-        if FRIEZE_KEY in h.changes:
-            save_layer(_frieze_layer(h), folder / "layers" / f"{h.id}.usda", force=True)
-            if vset not in spec.variantSets:
-                vs = Sdf.VariantSetSpec(spec, vset)
-                spec.variantSetNameList.Append(vset)
-                Sdf.VariantSpec(vs, "baseline")
-                Sdf.VariantSpec(vs, "alternative")
-            alt = spec.variantSets[vset].variants["alternative"].primSpec
-            alt.referenceList.Append(Sdf.Reference(f"./layers/{h.id}.usda"))
-            spec.variantSelections[vset] = "baseline"
-            entry = listing.setdefault(_ident(h.id), {})
-            entry.update(realised=True, variantSet=vset)
-            continue
+        name = f"{h.id}.usdc"
+        save_layer(frieze_layer(h, geom), folder / "layers" / name, force=True)
         if vset not in spec.variantSets:
-            continue
-        lay = _hypothesis_detail_layer(h, layout, geom, mp)
-        if lay is None:
-            continue
-        name = f"{h.id}.detail.usda"
-        save_layer(lay, folder / "layers" / name, force=True)
-        spec.variantSets[vset].variants["alternative"].primSpec.referenceList.Append(
-            Sdf.Reference(f"./layers/{name}"))
+            vs = Sdf.VariantSetSpec(spec, vset)
+            spec.variantSetNameList.Append(vset)
+            Sdf.VariantSpec(vs, "baseline")
+            Sdf.VariantSpec(vs, "alternative")
+        alt = spec.variantSets[vset].variants["alternative"].primSpec
+        alt.referenceList.Append(Sdf.Reference(f"./layers/{name}"))
+        spec.variantSelections[vset] = "baseline"
+        listing.setdefault(_ident(h.id), {}).update(realised=True, variantSet=vset)
+        done.append(h)
     data["hypotheses"] = listing
-    data["detail"] = {"variants": Vt.StringArray(list(DETAIL_VARIANTS)), "default": default}
     spec.customData = {"ionic_usd": data}
-    return geom
+    return done
 
 
 def column_ornament(opts) -> tuple[AssetInstancer, ...]:

@@ -346,11 +346,13 @@ def hypothesis_layer(
     return lay
 
 
-def define_overs(lay: Sdf.Layer) -> None:
+def define_overs(lay: Sdf.Layer, types: Mapping[str, str] | None = None) -> None:
     """Turn every ``over`` of a temple delta layer into a typed ``def`` (the type the prim has
-    in the generated layers: Mesh for a cuboid of a part, else Xform), so the layer opened
-    alone has no dangling overs; in composition the opinions are the same."""
+    in the generated layers: ``types[path]`` if given, else Mesh for a cuboid of a part and
+    Xform for the rest), so the layer opened alone has no dangling overs; in composition the
+    opinions are the same."""
     parts = set(PART_PRIMS.values())
+    types = types or {}
 
     def visit(path: Sdf.Path) -> None:
         if not path.IsPrimPath() or path.IsPrimVariantSelectionPath():
@@ -359,7 +361,9 @@ def define_overs(lay: Sdf.Layer) -> None:
         if spec is None or spec.specifier != Sdf.SpecifierOver:
             return
         spec.specifier = Sdf.SpecifierDef
-        if not spec.typeName:
+        if not spec.typeName and path.pathString in types:
+            spec.typeName = types[path.pathString]
+        elif not spec.typeName:
             names = path.pathString.split("/")
             mesh = len(names) == 4 and names[1] == "Temple" and names[2] in parts
             spec.typeName = "Mesh" if mesh else "Xform"

@@ -45,7 +45,6 @@ every temple or column of the scene at once.
 from __future__ import annotations
 
 import dataclasses
-import itertools
 import logging
 import os
 import time
@@ -55,19 +54,13 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from pxr import Gf, Sdf, Usd, UsdGeom, Vt
+from pxr import Sdf, Usd, UsdGeom
 
 from ionic_usd import __version__
 from ionic_usd.column.column import LODS, ColumnParams, portunus_column_params
 from ionic_usd.errors import OutputExistsError, ParameterError, UsdAuthoringError
-from ionic_usd.geometry.mesh import Mesh
-from ionic_usd.temple.layout import (
-    ColumnPlacement,
-    Hypothesis,
-    Layer,
-    TempleLayout,
-    build_layout,
-)
+from ionic_usd.temple.layout import Layer, TempleLayout
+from ionic_usd.temple.mouldings import MouldingParams, portunus_mouldings
 from ionic_usd.usd.asset import class_path, replace_folder
 from ionic_usd.usd.bounds import (
     author_extents_hints,
@@ -81,26 +74,37 @@ from ionic_usd.usd.column_asset import (
     UV_SPAN,
     ColumnAssetOptions,
     build_column_asset,
+    copy_stone_textures,
 )
-from ionic_usd.usd.detail import DETAIL_SET, add_detail
+from ionic_usd.usd.combinations import realise_combinations, select_variants
+from ionic_usd.usd.detail import (
+    DEFAULT_DETAIL,
+    DETAIL_LAYER,
+    DETAIL_SET,
+    TERRACOTTA,
+    DetailGeometry,
+    author_detail_variants,
+    check_detail,
+    detail_geometry,
+    detail_layer,
+    write_frieze_hypotheses,
+)
 from ionic_usd.usd.hypotheses import (
     FORMS,
     GROUPS,
     PART_PRIMS,
     HypothesisChanges,
-    add_paradata,
     check_composer_changes,
     column_path,
     column_xform,
     cuboid_meshes,
-    define_overs,
     hyp_ident,
     hyp_set,
     hypothesis_layer,
     hypothesis_paradata,
     temple_keys,
 )
-from ionic_usd.usd.materials import bind_material_spec
+from ionic_usd.usd.materials import bind_material_spec, stone_material
 from ionic_usd.usd.mesh import author_mesh, define_prim
 from ionic_usd.usd.stage import new_layer, save_layer
 
@@ -123,9 +127,6 @@ ASSET_REF = f"./{ASSET_NAME}/{ASSET_NAME}.usda"
 BASELINE_FINISH = "stucco"
 # the cuboids' st share the column asset's convention: UV_SPAN metres per unit of st
 CUBOID_UV_SCALE = 1.0 / UV_SPAN
-# what a prim should be, for the combination check: a cuboid's mesh, a column's placement,
-# or None (the prim should not be there)
-Fix = Mesh | ColumnPlacement | None
 # temple keys the composer cannot realise: the column asset is built once per temple
 _COLUMN_SHAPE_KEYS = ("columns.lower_diameter", "columns.upper_diameter_ratio")
 
@@ -178,9 +179,16 @@ def hypothesis_layers(
 
 
 def _materials_layer() -> Sdf.Layer:
+    """The temple's one material library: the column asset's (stucco, travertine: one copy of
+    their maps) and the roof's Terracotta."""
     lay = new_layer("Temple", kind="assembly", comment="the temple's materials: the column "
-                    "asset's material library (one copy of every texture map)")
-    spec = define_prim(lay, "/Temple/Materials", "Scope")
+                    "asset's material library (one copy of every texture map) and Terracotta")
+    stage = Usd.Stage.Open(lay)
+    stage.DefinePrim("/Temple/Materials", "Scope")
+    stone_material(stage, f"/Temple/Materials/{TERRACOTTA[0]}", TERRACOTTA[1])
+    del stage
+    # after the stage: the asset is not on disk yet
+    spec = lay.GetPrimAtPath("/Temple/Materials")
     spec.referenceList.Prepend(Sdf.Reference(f"./{ASSET_NAME}/Payload/Materials.usda",
                                              Sdf.Path(f"/{ASSET_NAME}/Materials")))
     return lay
@@ -252,7 +260,7 @@ def _generated_layer(layout: TempleLayout, hyp_layers: dict[str, Sdf.Layer | Non
     col_cls = Sdf.CreatePrimInLayer(lay, class_path(ASSET_NAME))
     col_cls.specifier = Sdf.SpecifierClass
     for ref in [f"./{MATERIALS_LAYER}", *(f"./{PART_LAYERS[la]}" for la in layout.cuboids),
-                f"./{COLONNADE_LAYER}"]:
+                f"./{COLONNADE_LAYER}", f"./{DETAIL_LAYER}"]:
         spec.referenceList.Append(Sdf.Reference(ref))
     # lod: one selection on /Temple passes to every column (a far temple is light)
     vs = Sdf.VariantSetSpec(spec, "lod")
@@ -295,7 +303,7 @@ def compose_temple(
     seed: int = 7,
     asset_options: ColumnAssetOptions | None = None,
     detail: str | None = None,
-    mouldings=None,
+    mouldings: MouldingParams | None = None,
 ) -> TempleReport:
     """Write the temple folder (see the module docstring) atomically.
 
@@ -306,6 +314,9 @@ def compose_temple(
     layout : the temple (e.g. :func:`ionic_usd.temple.portunus_layout`)
     column : column parameters (default: Portunus proportions at the layout's column height and
         lower diameter)
+    detail : the default selection of the ``detail`` variant set (plain, moulded, carved;
+        None: :data:`~ionic_usd.usd.detail.DEFAULT_DETAIL`)
+    mouldings : the moulding sections (default: those of ``portunus.toml``)
 
     Hypothesis changes the generator cannot realise raise :class:`ParameterError` before
     anything is written.
@@ -322,9 +333,21 @@ def compose_temple(
                                                seed=seed)
     if opts.params != column:
         opts = dataclasses.replace(opts, params=column)
-    if detail is not None and not opts.carved:
+    detail = check_detail(detail or DEFAULT_DETAIL)
+    if not opts.carved:
         opts = dataclasses.replace(opts, carved=True)  # the carved capital goes with the detail
     hyp_layers = hypothesis_layers(layout, opts)  # validates every hypothesis first
+    mp = mouldings or portunus_mouldings()
+    detail_cache: dict[object, DetailGeometry] = {}
+
+    def detail_of(want: TempleLayout) -> DetailGeometry:
+        # the detail follows the dimensions (hypotheses without temple keys share one)
+        key = (want.params, tuple(want.all_cuboids()))
+        if key not in detail_cache:
+            detail_cache[key] = detail_geometry(want, mp)
+        return detail_cache[key]
+
+    geom = detail_of(layout)
     base_meshes = cuboid_meshes(layout, CUBOID_UV_SCALE)
     baseline_material = FINISHES[BASELINE_FINISH][0]
     lods = tuple(lod for lod in LODS if lod in opts.lods)
@@ -333,8 +356,13 @@ def compose_temple(
     def build(tmp: Path) -> None:
         log.info("building the column asset")
         stats["asset"] = build_column_asset(tmp / ASSET_NAME, opts)
-        log.info("writing the part, colonnade and hypothesis layers")
+        log.info("writing the part, colonnade, detail and hypothesis layers")
+        # tiles repeat their map every metre (stone: every TILE_METRES = 2 m): half the size
+        # keeps the texel density
+        copy_stone_textures(tmp / "Textures", TERRACOTTA[1], max(16, opts.texture_size // 2),
+                            opts.seed)
         save_layer(_materials_layer(), tmp / MATERIALS_LAYER)
+        save_layer(detail_layer(geom), tmp / DETAIL_LAYER)
         for layer, meshes in base_meshes.items():
             save_layer(_part_layer(layer, meshes, baseline_material), tmp / PART_LAYERS[layer])
         save_layer(_colonnade_layer(layout), tmp / COLONNADE_LAYER)
@@ -342,21 +370,20 @@ def compose_temple(
             if lay is not None:
                 save_layer(lay, tmp / "layers" / f"{hid}.usda")
         gen_layer = _generated_layer(layout, hyp_layers, lods)
-        if detail is not None:
-            log.info("architectural detail (%s)", detail)
-            # the detail variant set (plain, moulded, carved) and its layers
-            add_detail(tmp, gen_layer, layout, texture_size=opts.texture_size, seed=opts.seed,
-                       mouldings=mouldings, default=detail)
+        spec = gen_layer.GetPrimAtPath("/Temple")
+        author_detail_variants(spec, geom, detail)
+        frieze = write_frieze_hypotheses(tmp, spec, layout, geom)
         save_layer(gen_layer, tmp / GENERATED_LAYER)
         save_layer(_root_layer(layout.name), tmp / ROOT_LAYER)
         # created only where absent: an existing overrides.usda (or symlink) is never touched
         save_layer(_user_overrides_layer(), tmp / OVERRIDES_LAYER)
         # checks and hints on the generated layer alone: the user's opinions are theirs
         gen = Usd.Stage.Open(str(tmp / GENERATED_LAYER))
-        realised = [h for h in layout.hypotheses if hyp_layers[h.id] is not None]
-        log.info("checking all %d combinations of %d hypotheses", 2 ** len(realised),
-                 len(realised))
-        stats["combos"] = _realise_combinations(gen, tmp, layout, realised)
+        realised = [h for h in layout.hypotheses
+                    if hyp_layers[h.id] is not None or h in frieze]
+        log.info("checking the combinations of %d hypotheses x detail", len(realised))
+        stats["combos"] = realise_combinations(gen, tmp, layout, realised,
+                                               uv_scale=CUBOID_UV_SCALE, detail_of=detail_of)
         stats["lod_triangles"] = {lod: _triangles_with(gen, {"lod": lod}) for lod in lods}
         temple_sets = gen.GetPrimAtPath("/Temple").GetVariantSets()
         candidates = {"lod": lods, **{
@@ -385,165 +412,6 @@ def compose_temple(
 
 
 # ---------------------------------------------------------------------------------------------
-# every combination of hypotheses, checked against the layout and corrected where they interact
-
-
-def _select(stage: Usd.Stage, selections: dict[str, str]) -> None:
-    """Variant selections on /Temple in the session layer (cleared first)."""
-    session = stage.GetSessionLayer()
-    session.Clear()
-    with Usd.EditContext(stage, session), Sdf.ChangeBlock():
-        prim = stage.GetPrimAtPath("/Temple")
-        for vs, v in selections.items():
-            prim.GetVariantSet(vs).SetVariantSelection(v)
-
-
-def _expected_column(c, ratio: float) -> Gf.Matrix4d:
-    s = c.scale * ratio
-    return (Gf.Matrix4d().SetScale(Gf.Vec3d(s, s, s))
-            * Gf.Matrix4d().SetRotate(Gf.Rotation(Gf.Vec3d(0, 1, 0), c.rotation_deg))
-            * Gf.Matrix4d().SetTranslate(Gf.Vec3d(*c.position)))
-
-
-def _mismatches(stage: Usd.Stage, expected: TempleLayout, column_height: float,
-                atol: float = 1e-6) -> dict[str, Fix]:
-    """Prims whose composed values differ from ``expected``: path → the expected Mesh, column
-    placement, or None (the prim should not be there)."""
-    cache = UsdGeom.XformCache()
-    out: dict[str, Fix] = {}
-    meshes = cuboid_meshes(expected, CUBOID_UV_SCALE)
-    seen = set()
-    for layer, ms in meshes.items():
-        for name, m in ms.items():
-            path = f"/Temple/{PART_PRIMS[layer]}/{name}"
-            seen.add(path)
-            prim = stage.GetPrimAtPath(path)
-            if not prim or not prim.IsActive():
-                out[path] = m
-                continue
-            pts = np.array(UsdGeom.Mesh(prim).GetPointsAttr().Get(), dtype=np.float64)
-            xf = np.array(cache.GetLocalToWorldTransform(prim))
-            world = pts @ xf[:3, :3] + xf[3, :3]
-            if world.shape != m.points.shape or not np.allclose(world, m.points, atol=atol):
-                out[path] = m
-    for part in PART_PRIMS.values():
-        prim = stage.GetPrimAtPath(f"/Temple/{part}")
-        for child in (prim.GetChildren() if prim else []):
-            if child.IsA(UsdGeom.Mesh) and str(child.GetPath()) not in seen:
-                out[str(child.GetPath())] = None
-    ratio = expected.params.columns_height / column_height
-    want = {column_path(c): c for c in expected.columns}
-    for path, c in want.items():
-        prim = stage.GetPrimAtPath(path)
-        if not prim or not prim.IsActive() or not Gf.IsClose(
-                cache.GetLocalToWorldTransform(prim), _expected_column(c, ratio), atol):
-            out[path] = c
-    for group in GROUPS.values():
-        prim = stage.GetPrimAtPath(f"/Temple/Colonnade/{group}")
-        for child in (prim.GetChildren() if prim else []):
-            if str(child.GetPath()) not in want:
-                out[str(child.GetPath())] = None
-    return out
-
-
-def _correction_layer(stage: Usd.Stage, fixes: dict[str, Fix], hyps: Sequence[Hypothesis],
-                      ratio: float) -> Sdf.Layer:
-    """Absolute values for the prims the selected hypotheses do not compose right."""
-    lay = new_layer("Temple", kind="assembly", comment="combined values of the hypotheses "
-                    + ", ".join(h.id for h in hyps) + " (they interact)")
-    cache = UsdGeom.XformCache()
-    with Sdf.ChangeBlock():
-        for path, want in fixes.items():
-            parent = stage.GetPrimAtPath(Sdf.Path(path).GetParentPath())
-            to_parent = np.array(cache.GetLocalToWorldTransform(parent).GetInverse())
-            if want is None:
-                spec = Sdf.CreatePrimInLayer(lay, path)
-                spec.specifier = Sdf.SpecifierOver
-                spec.active = False
-            elif isinstance(want, Mesh):
-                local = want.points @ to_parent[:3, :3] + to_parent[3, :3]
-                exists = bool(stage.GetPrimAtPath(path))
-                spec = author_mesh(lay, path, want.with_(points=local))
-                if exists:
-                    spec.specifier = Sdf.SpecifierOver
-                    spec.active = True
-                Sdf.AttributeSpec(spec, "xformOpOrder", Sdf.ValueTypeNames.TokenArray,
-                                  Sdf.VariabilityUniform).default = Vt.TokenArray([])
-            else:
-                m = _expected_column(want, ratio) * Gf.Matrix4d(to_parent)
-                spec = Sdf.CreatePrimInLayer(lay, path)
-                spec.specifier = Sdf.SpecifierOver
-                spec.active = True
-                t = Gf.Transform(m)
-                column_xform(spec, t.GetTranslation(), want.rotation_deg,
-                             want.scale * ratio)
-            add_paradata(spec, hyps)
-        define_overs(lay)
-    return lay
-
-
-def _nest(gen: Sdf.Layer, hyps: Sequence[Hypothesis], ref: str) -> None:
-    """Reference ``ref`` from the variant ``alternative`` of every ``hyp_<id>`` of ``hyps``,
-    nested in that order inside /Temple's variant sets."""
-    spec = gen.GetPrimAtPath("/Temple")
-    for i, h in enumerate(hyps):
-        name = hyp_set(h.id)
-        vs = spec.variantSets.get(name)
-        if vs is None:
-            vs = Sdf.VariantSetSpec(spec, name)
-            spec.variantSetNameList.Prepend(name)
-        for v in ("baseline", "alternative"):
-            if v not in vs.variants:
-                Sdf.VariantSpec(vs, v)
-        spec = vs.variants["alternative"].primSpec
-        if i == len(hyps) - 1:
-            spec.referenceList.Prepend(Sdf.Reference(ref))
-
-
-def _realise_combinations(gen: Usd.Stage, folder: Path, layout: TempleLayout,
-                          realised: Sequence[Hypothesis]) -> list[str]:
-    """Compose every combination of the realised hypotheses that reshape the temple, compare it
-    with :func:`build_layout` of that combination, and write a combination layer (nested
-    variants) where they interact. Returns the combination layers written."""
-    shape = [h for h in realised if temple_keys(h)]
-    off = {hyp_set(h.id): "baseline" for h in realised}
-    if gen.GetPrimAtPath("/Temple").GetVariantSets().HasVariantSet(DETAIL_SET):
-        off[DETAIL_SET] = "plain"  # the layout's cuboids are the plain detail's geometry
-    height = layout.params.columns_height
-    written: list[str] = []
-    try:
-        for size in range(len(shape) + 1):
-            for subset in itertools.combinations(shape, size):
-                sel = dict(off) | {hyp_set(h.id): "alternative" for h in subset}
-                _select(gen, sel)
-                ids = [h.id for h in subset]
-                want = build_layout(layout.params, hypotheses=layout.hypotheses, apply=ids)
-                bad = _mismatches(gen, want, height)
-                if not bad:
-                    continue
-                if size < 2:
-                    raise UsdAuthoringError(
-                        f"hypotheses {ids or '(none)'} compose to other geometry than the "
-                        f"layout at {', '.join(sorted(bad))}")
-                name = "+".join(ids)
-                ratio = want.params.columns_height / height
-                save_layer(_correction_layer(gen, bad, subset, ratio),
-                           folder / "layers" / f"{name}.usda")
-                _nest(gen.GetRootLayer(), subset, f"./layers/{name}.usda")
-                written.append(name)
-                _select(gen, sel)
-                still = _mismatches(gen, want, height)
-                if still:
-                    raise UsdAuthoringError(f"hypotheses {ids} still compose wrongly at "
-                                            f"{', '.join(sorted(still))}")
-    finally:
-        gen.GetSessionLayer().Clear()
-    if written:
-        gen.GetRootLayer().Save()
-    return written
-
-
-# ---------------------------------------------------------------------------------------------
 # checks and report
 
 
@@ -567,8 +435,9 @@ def _check_resolves(root: Path, generated: Path) -> None:
 
 
 def temple_triangles(stage: Usd.Stage) -> int:
-    """Triangles drawn by the composed stage (instances counted once per instance, nested
-    instances included; default and render purpose, active and visible-by-default)."""
+    """Triangles drawn by the composed stage: native instances and PointInstancer copies each
+    counted once per copy (nested instances included); default and render purpose, active and
+    visible-by-default."""
     memo: dict[Sdf.Path, int] = {}
 
     def count(root: Usd.Prim) -> int:
@@ -586,7 +455,15 @@ def temple_triangles(stage: Usd.Stage) -> int:
             if img and img.GetPurposeAttr().Get() in ("proxy", "guide"):
                 it.PruneChildren()
                 continue
-            if prim.IsA(UsdGeom.Mesh):
+            if prim.IsA(UsdGeom.PointInstancer):
+                it.PruneChildren()  # its prototypes are drawn only through it
+                pi = UsdGeom.PointInstancer(prim)
+                idx = np.asarray(pi.GetProtoIndicesAttr().Get() or [], dtype=np.int64)
+                per = [count(stage.GetPrimAtPath(t))
+                       for t in pi.GetPrototypesRel().GetForwardedTargets()]
+                if len(idx) and per:
+                    n += int(np.asarray(per)[idx[idx < len(per)]].sum())
+            elif prim.IsA(UsdGeom.Mesh):
                 counts = UsdGeom.Mesh(prim).GetFaceVertexCountsAttr().Get()
                 if counts is not None and len(counts):
                     n += int(np.sum(np.asarray(counts) - 2))
@@ -597,7 +474,7 @@ def temple_triangles(stage: Usd.Stage) -> int:
 
 def _triangles_with(stage: Usd.Stage, selections: dict[str, str]) -> int:
     try:
-        _select(stage, selections)
+        select_variants(stage, selections)
         return temple_triangles(stage)
     finally:
         stage.GetSessionLayer().Clear()
