@@ -65,7 +65,7 @@ def test_shaft_is_watertight(params):
 def test_normals_point_outward_and_agree_with_faces():
     m = build_shaft(ShaftParams(flute_slices=6))
     fn, _ = face_normals(m.points, m.triangles)
-    corner = m.normals.reshape(-1, 3, 3)
+    corner = m.corner_normals().reshape(-1, 3, 3)
     # each corner normal lies on the outer side of its face
     assert np.all(np.einsum("ijk,ik->ij", corner, fn) > 0.2)
 
@@ -74,7 +74,7 @@ def test_crisp_fillet_edges_smooth_flutes():
     p = ShaftParams(flute_slices=8)
     m = build_shaft(p)
     tri = m.triangles.reshape(-1)
-    normals = m.normals
+    normals = m.corner_normals()
     # group corner normals by vertex: a flute corner vertex carries two distinct normals,
     # an interior flute vertex only one
     order = np.argsort(tri, kind="stable")

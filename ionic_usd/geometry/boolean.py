@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from ionic_usd.errors import GeometryError
-from ionic_usd.geometry.mesh import Mesh, face_normals, triangulate_fan
+from ionic_usd.geometry.mesh import Mesh, corner_normals, face_normals, triangulate_fan
 
 __all__ = ["split_shells", "union", "difference"]
 
@@ -23,12 +23,11 @@ def _as_triangles(mesh: Mesh) -> Mesh:
         return mesh
     corners = triangulate_fan(mesh.face_vertex_counts,
                               np.arange(len(mesh.face_vertex_indices))).reshape(-1)
-    nrm = mesh.normals
-    if nrm is not None and mesh.normals_interpolation == "faceVarying":
-        nrm = nrm[corners]
+    nrm, interp = mesh.normals, mesh.normals_interpolation
+    if nrm is not None and interp == "faceVarying":
+        nrm = corner_normals(mesh)[corners]
     return Mesh(mesh.points, np.full(len(corners) // 3, 3, np.int32),
-                mesh.face_vertex_indices[corners], nrm, mesh.normals_interpolation,
-                name=mesh.name)
+                mesh.face_vertex_indices[corners], nrm, interp, name=mesh.name)
 
 
 def split_shells(mesh: Mesh) -> list[Mesh]:
@@ -63,7 +62,7 @@ def _corner_normals(mesh: Mesh) -> np.ndarray | None:
         return mesh.normals[mesh.triangles.reshape(-1)]
     if not np.all(mesh.face_vertex_counts == 3):
         raise GeometryError("union: faceVarying normals need a triangle mesh")
-    return mesh.normals
+    return corner_normals(mesh)
 
 
 def _to_manifold(mesh: Mesh, keep_faces: bool = False):

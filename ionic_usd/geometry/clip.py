@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from ionic_usd.errors import GeometryError
-from ionic_usd.geometry.mesh import Mesh, triangulate_fan
+from ionic_usd.geometry.mesh import Mesh, corner_normals, triangulate_fan
 
 __all__ = ["clip_mesh"]
 
@@ -128,9 +128,7 @@ def clip_mesh(
                              np.arange(mesh.face_vertex_indices.size)).astype(np.int64)
     fv = None
     if mesh.normals is not None:
-        fv = mesh.normals.astype(np.float64)
-        if mesh.normals_interpolation == "vertex":
-            fv = fv[mesh.face_vertex_indices]
+        fv = corner_normals(mesh).astype(np.float64)
 
     # -- split the crossing triangles: one new vertex per crossing undirected edge ----------
     st_ = tri[split]
