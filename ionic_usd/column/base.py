@@ -53,6 +53,7 @@ from importlib import resources
 
 import numpy as np
 
+from ionic_usd.column.charts import revolved_st
 from ionic_usd.errors import GeometryError, GrammarError, ParameterError
 from ionic_usd.geometry.curves import bezier, revolve
 from ionic_usd.geometry.mesh import Mesh, face_normals, smooth_normals
@@ -449,6 +450,8 @@ def build_base(
     if len(groups) != mesh.n_triangles:  # revolve emits bands in profile order
         raise GeometryError("build_base: revolve's band layout changed")
     mesh = smooth_normals(mesh, groups - groups.min(), indexed=True)
+    st, st_idx = revolved_st(nodes, rows, mesh.points, mesh.triangles, per_band)
+    mesh = mesh.with_(st=st, st_indices=st_idx)
     if p.plinth_modules:
         mesh = _with_plinth(mesh, rows[0], half, ptop, cap_bottom, name)
     if y_offset:
@@ -478,8 +481,26 @@ def _with_plinth(mesh: Mesh, ring: np.ndarray, half: float, top: float, cap_bott
     nidx = np.concatenate([mesh.normals_indices,
                            len(mesh.normals) + np.repeat(np.arange(len(tri)), 3)])
     idx = np.concatenate([mesh.face_vertex_indices, tri.reshape(-1)])
+    st, sti = mesh.st, mesh.st_indices
+    if st is not None and sti is not None:
+        # the slab's faces are planar: one chart per face plane (by outward normal), the
+        # face's own two axes as (s, t), wound like the face
+        corners = tri.reshape(-1)
+        axis = np.argmax(np.abs(fn), axis=1)
+        key = np.repeat(axis * 2 + (fn[np.arange(len(fn)), axis] > 0), 3)
+        uniq, inv = np.unique(key * len(points) + corners, return_inverse=True)
+        q = points[uniq % len(points)]
+        plane = uniq // len(points)
+        # (s, t) axes with s × t = the outward normal -X, +X, -Y, +Y, -Z, +Z (t up on sides)
+        frames = np.array([[(0, 0, 1), (0, 1, 0)], [(0, 0, -1), (0, 1, 0)],
+                           [(1, 0, 0), (0, 0, 1)], [(1, 0, 0), (0, 0, -1)],
+                           [(-1, 0, 0), (0, 1, 0)], [(1, 0, 0), (0, 1, 0)]], dtype=np.float64)
+        su, tv = frames[plane, 0], frames[plane, 1]
+        slab = np.stack([np.einsum("ij,ij->i", q, su), np.einsum("ij,ij->i", q, tv)], axis=1)
+        sti = np.concatenate([sti, len(st) + inv.reshape(-1)])
+        st = np.concatenate([st, slab.astype(np.float32)])
     return Mesh(points, np.full(len(idx) // 3, 3, np.int32), idx, normals, "faceVarying",
-                name=name, normals_indices=nidx)
+                st, sti, name=name, normals_indices=nidx)
 
 
 # -- presets --------------------------------------------------------------------------------

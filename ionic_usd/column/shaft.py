@@ -379,6 +379,7 @@ def build_shaft(
         g[hit] = 1 + flute_of_col[fl_col[hit, which[hit]]]
         tris.append(t)
         groups.append(g)
+    n_lateral = len(grid_tri) + sum(len(t) for t in tris)
     if cap_bottom:
         t = stitch(plain[0], np.array([c_bot]), is_closed=True, direction=-1)
         tris.append(t)
@@ -393,6 +394,7 @@ def build_shaft(
     rest_mesh = Mesh(points[used], np.full(len(rest), 3, np.int32), local.reshape(-1))
     rest_mesh = smooth_normals(rest_mesh, np.concatenate(groups), indexed=True)
     tri = np.concatenate([grid_tri, rest]).astype(np.int32)
+    st, st_idx = _shaft_st(p, points, tri, n_lateral, fl_ang[0], ring_ang, starts)
     normals = np.concatenate([grid_normals, rest_mesh.normals])
     nidx = np.concatenate([grid_nidx, rest_mesh.normals_indices + len(grid_normals)])
     # drop points no triangle uses (cap centres of an open shaft, collapsed ring rows)
@@ -409,7 +411,91 @@ def build_shaft(
     if y_offset:
         points = points + np.array([0.0, y_offset, 0.0])
     return Mesh(points, np.full(len(tri), 3, np.int32), tri.reshape(-1), normals,
-                "faceVarying", name=name, normals_indices=nidx)
+                "faceVarying", st, st_idx, name=name, normals_indices=nidx)
+
+
+def _shaft_st(p: ShaftParams, points: np.ndarray, tri: np.ndarray, n_lateral: int,
+              fl_ang: np.ndarray, ring_ang: np.ndarray,
+              starts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Analytic texture coordinates in metres: the unrolled side and two planar caps.
+
+    Side (triangles ``[:n_lateral]``): t = y (the taper's slope changes arc length by
+    < 0.01 %), s = arc length around the full-flute cross-section at the mean radius, the
+    same s for a column of vertices on every row, so flute edges run straight up the chart.
+    Plain-ring vertices (at other angles) take s from their angle through the same arc-length
+    function. The seam (s = 0 and s = perimeter) lies on a fillet at angle 0; triangles
+    across it use a second value of their low-s corners. Caps: (x, z) below and (x, −z) above,
+    exact and wound like their faces (so is the side: s grows with the angle about +Y).
+    Distortion: the side's s-scale is the reference row's, so a ring at radius r is stretched
+    by (reference arc length)/(2π r) and a flute end is compressed where its flute narrows.
+
+    Returns
+    -------
+    st : (w, 2) float32 metres
+    st_indices : (3 t,) int32
+    """
+    e, h = p.flutes, p.flute_slices
+    n = p.fluted_segments
+    k_per = n // e  # vertices per flute period in a fluted row
+    r_mid = 0.5 * (p.bottom_radius + p.top_radius)
+    ref, _ = _fluted_rows(ShaftParams(**{**p.to_dict(), "entasis": 0.0,
+                                        "bottom_radius": r_mid, "top_radius": r_mid}),
+                          np.array([0.5 * p.length]), np.ones(1))
+    perimeter = float(np.linalg.norm(np.diff(np.vstack([ref[0], ref[0, :1]]), axis=0),
+                                     axis=1).sum())
+    n_pts = len(points)
+    # plain rings (other angles): s proportional to the angle
+    theta = np.mod(np.arctan2(-points[:, 2], points[:, 0]), 2 * np.pi)
+    s = theta / (2 * np.pi) * perimeter
+    # rows with the flute columns (the fluted grid and the two plain rows at its angles):
+    # s = the flute centre's s + arc length along this row from the flute centre, so every
+    # flute centre runs straight up the chart and a narrowing flute end stays narrow
+    rows = [np.arange(starts[k], starts[k + 1]) for k in (1, 2)]
+    grid = np.arange(starts[-1], n_pts - 2).reshape(-1, n)
+    rows += list(grid)
+    for row in rows:
+        q = points[row]
+        seg = np.linalg.norm(np.roll(q, -1, axis=0) - q, axis=1)
+        cum = np.concatenate([[0.0], np.cumsum(seg)[:-1]]).reshape(e, k_per)
+        # the flute centre lies half-way (in arc length) between the flute's two corners
+        centre = 0.5 * (cum[:, 0] + cum[:, 0] + seg.reshape(e, k_per)[:, :h].sum(axis=1))
+        # scaled so the row's perimeter maps to the reference one: the taper and a flute
+        # end's narrowing spread over the whole row instead of squeezing the fillets
+        local = (cum - centre[:, None]) * (perimeter / seg.sum())
+        s[row] = ((np.arange(e) + 0.5)[:, None] * (perimeter / e) + local).reshape(-1)
+    s = np.mod(s, perimeter)
+    side = np.stack([s, points[:, 1]], axis=1)
+    # the seam: a side triangle spanning more than half the perimeter wraps around s = 0
+    lat = tri[:n_lateral]
+    ss = s[lat]
+    wraps = (ss.max(axis=1) - ss.min(axis=1)) > 0.5 * perimeter
+    low = wraps[:, None] & (ss < 0.5 * perimeter)
+    dup_v = np.unique(lat[low])
+    dup_of = np.zeros(n_pts, dtype=np.int64)
+    dup_of[dup_v] = n_pts + np.arange(len(dup_v))
+    lat_idx = np.where(low, dup_of[lat], lat)
+    values = [side, side[dup_v] + [perimeter, 0.0]]
+    idx = [lat_idx.reshape(-1)]
+    base = n_pts + len(dup_v)
+    for k, sign in ((0, 1.0), (3, -1.0)):  # caps: bottom ring row 0, top ring row 3
+        caps = tri[n_lateral:]
+        y_ring = points[starts[k], 1]
+        sel = np.all(np.abs(points[caps, 1] - y_ring) < 1e-12, axis=1)
+        if not sel.any():
+            continue
+        v = np.unique(caps[sel])
+        local = np.searchsorted(v, caps[sel])
+        values.append(np.stack([points[v, 0], sign * points[v, 2]], axis=1))
+        idx.append((base + local).reshape(-1))
+        base += len(v)
+    st = np.concatenate(values).astype(np.float32)
+    order_tri = np.concatenate([np.arange(n_lateral)] + [
+        n_lateral + np.flatnonzero(np.all(np.abs(points[tri[n_lateral:], 1]
+                                                 - points[starts[k], 1]) < 1e-12, axis=1))
+        for k in (0, 3)])
+    st_idx = np.empty(3 * len(tri), dtype=np.int64)
+    st_idx.reshape(-1, 3)[order_tri] = np.concatenate(idx).reshape(-1, 3)
+    return st, st_idx.astype(np.int32)
 
 
 def _grid_normals(pts: np.ndarray, col: np.ndarray, h: int) -> tuple[np.ndarray, np.ndarray]:
