@@ -26,15 +26,20 @@ __all__ = [
     "smooth_normals",
     "triangulate_fan",
     "corner_normals",
+    "frozen_array",
 ]
 
 Interpolation = Literal["vertex", "faceVarying"]
 
 
-def _frozen(a: np.ndarray) -> np.ndarray:
+def frozen_array(a: np.ndarray) -> np.ndarray:
+    """A C-contiguous read-only view or copy of ``a`` (the fields of immutable values)."""
     a = np.ascontiguousarray(a)
     a.setflags(write=False)
     return a
+
+
+_frozen = frozen_array
 
 
 @dataclass(frozen=True, eq=False)

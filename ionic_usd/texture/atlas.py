@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ionic_usd.errors import GeometryError, ParameterError
-from ionic_usd.geometry.mesh import Mesh
+from ionic_usd.geometry.mesh import Mesh, frozen_array
 
 __all__ = [
     "DEFAULT_PADDING",
@@ -55,12 +55,6 @@ __all__ = [
 LOD_TEXELS_PER_METRE: dict[str, float] = {"high": 256.0, "medium": 128.0, "low": 64.0}
 DEFAULT_PADDING = 4
 DEFAULT_RESOLUTION_CAP = 8192
-
-
-def _frozen(a: np.ndarray) -> np.ndarray:
-    a = np.ascontiguousarray(a)
-    a.setflags(write=False)
-    return a
 
 
 @dataclass(frozen=True, eq=False)
@@ -123,8 +117,8 @@ class UVAtlas:
             or np.any(st.max(axis=0) > np.array([self.width, self.height]) + 1e-3)
         ):
             raise GeometryError("UVAtlas: st_px outside the atlas")
-        object.__setattr__(self, "st_px", _frozen(st))
-        object.__setattr__(self, "st_indices", _frozen(sti))
+        object.__setattr__(self, "st_px", frozen_array(st))
+        object.__setattr__(self, "st_indices", frozen_array(sti))
         object.__setattr__(self, "utilisation", float(self.utilisation))
         object.__setattr__(self, "texels_per_metre", float(self.texels_per_metre))
 
