@@ -56,7 +56,7 @@ import numpy as np
 from ionic_usd.column.charts import revolved_st
 from ionic_usd.errors import GeometryError, GrammarError, ParameterError
 from ionic_usd.geometry.curves import bezier, revolve
-from ionic_usd.geometry.mesh import Mesh, face_normals, smooth_normals
+from ionic_usd.geometry.mesh import Mesh, box_st, face_normals, smooth_normals
 from ionic_usd.grammar.base import (
     BaseGrammar,
     BezierBase,
@@ -483,20 +483,13 @@ def _with_plinth(mesh: Mesh, ring: np.ndarray, half: float, top: float, cap_bott
     idx = np.concatenate([mesh.face_vertex_indices, tri.reshape(-1)])
     st, sti = mesh.st, mesh.st_indices
     if st is not None and sti is not None:
-        # the slab's faces are planar: one chart per face plane (by outward normal), the
-        # face's own two axes as (s, t), wound like the face
+        # the slab's faces are planar: one chart per face plane (by outward normal), box-mapped
         corners = tri.reshape(-1)
         axis = np.argmax(np.abs(fn), axis=1)
         key = np.repeat(axis * 2 + (fn[np.arange(len(fn)), axis] > 0), 3)
-        uniq, inv = np.unique(key * len(points) + corners, return_inverse=True)
-        q = points[uniq % len(points)]
-        plane = uniq // len(points)
-        # (s, t) axes with s × t = the outward normal -X, +X, -Y, +Y, -Z, +Z (t up on sides)
-        frames = np.array([[(0, 0, 1), (0, 1, 0)], [(0, 0, -1), (0, 1, 0)],
-                           [(1, 0, 0), (0, 0, 1)], [(1, 0, 0), (0, 0, -1)],
-                           [(-1, 0, 0), (0, 1, 0)], [(1, 0, 0), (0, 1, 0)]], dtype=np.float64)
-        su, tv = frames[plane, 0], frames[plane, 1]
-        slab = np.stack([np.einsum("ij,ij->i", q, su), np.einsum("ij,ij->i", q, tv)], axis=1)
+        uniq, first, inv = np.unique(key * len(points) + corners, return_index=True,
+                                     return_inverse=True)
+        slab = box_st(points[uniq % len(points)], np.repeat(fn, 3, axis=0)[first])
         sti = np.concatenate([sti, len(st) + inv.reshape(-1)])
         st = np.concatenate([st, slab.astype(np.float32)])
     return Mesh(points, np.full(len(idx) // 3, 3, np.int32), idx, normals, "faceVarying",

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from ionic_usd.errors import GeometryError
-from ionic_usd.geometry.mesh import Mesh, corner_normals, face_normals, triangulate_fan
+from ionic_usd.geometry.mesh import Mesh, box_st, corner_normals, face_normals, triangulate_fan
 
 __all__ = ["split_shells", "union", "difference"]
 
@@ -65,8 +65,9 @@ def _corner_normals(mesh: Mesh) -> np.ndarray | None:
     return corner_normals(mesh)
 
 
-def _to_manifold(mesh: Mesh, keep_faces: bool = False):
-    """A manifold3d.Manifold with the corner normals as properties 3..5.
+def _to_manifold(mesh: Mesh, keep_faces: bool = False, st: np.ndarray | None = None):
+    """A manifold3d.Manifold with the corner normals as properties 3..5 (and ``st``, per
+    corner (3 t, 2), as properties 6..7).
 
     ``keep_faces``: one face id per triangle, so coplanar neighbours keep their edges (a flat
     top keeps the ring a shaft welds to); otherwise manifold3d merges coplanar triangles into
@@ -82,10 +83,13 @@ def _to_manifold(mesh: Mesh, keep_faces: bool = False):
     corner_pt = tri.reshape(-1)
     q = np.round(cn.astype(np.float64) * 1e6).astype(np.int64)
     key = np.concatenate([corner_pt[:, None], q], axis=1)
+    if st is not None:
+        key = np.concatenate([key, np.round(st * 1e6).astype(np.int64)], axis=1)
     uk, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
     inv = inv.reshape(-1)
     pv = uk[:, 0]
-    props = np.concatenate([mesh.points[pv], cn[first].astype(np.float64)], axis=1)
+    props = np.concatenate([mesh.points[pv], cn[first].astype(np.float64)]
+                           + ([] if st is None else [st[first]]), axis=1)
     # property vertices at one point are merged for topology
     order = np.argsort(pv, kind="stable")
     head = np.r_[True, pv[order][1:] != pv[order][:-1]]
@@ -141,6 +145,20 @@ def difference(mesh: Mesh, cutters: list[Mesh], name: str | None = None, *,
     """
     import manifold3d
 
+    if mesh.st is not None:
+        # carry the mesh's own (analytic) st through the cut; the cap faces a cutter leaves
+        # get planar st (box-mapped, wound like the caps, which face against the cutter)
+        ops = [_to_manifold(mesh, keep_faces=True,
+                            st=mesh.st[mesh.st_indices].astype(np.float64))]
+        cut = []
+        for m in map(_as_triangles, cutters):
+            fn, _ = face_normals(m.points, m.triangles)
+            cst = box_st(m.points[m.triangles.reshape(-1)], -np.repeat(fn, 3, axis=0))
+            cut.append(_to_manifold(m, keep_faces=True, st=cst))
+        res = manifold3d.Manifold.batch_boolean([*ops, *cut], manifold3d.OpType.Subtract)
+        if res.is_empty():
+            raise GeometryError(f"difference: nothing of mesh {mesh.name!r} is left")
+        return _from_manifold(res, mesh.name if name is None else name, simplify=simplify)
     ops = [_to_manifold(s, keep_faces=True) for s in split_shells(mesh)]
     base = manifold3d.Manifold.batch_boolean(ops, manifold3d.OpType.Add)
     cut = [_to_manifold(s, keep_faces=True) for m in cutters for s in split_shells(m)]
@@ -181,5 +199,14 @@ def _from_manifold(res, name: str, simplify: bool = True) -> Mesh:
     # a subtracted solid's faces come with its outward normals: they now face the other way
     against = np.einsum("ij,ij->i", nrm, fn3) < 0
     nrm[against] = -nrm[against]
+    st = sti = None
+    if props.shape[1] >= 8:
+        # one st value per (point, st) pair: property vertices split by a normal crease only
+        # share it, so a chart stays connected across creases
+        q = np.round(props[:, 6:8] * 1e6).astype(np.int64)
+        key = np.concatenate([pt_index[:, None], q], axis=1)
+        _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
+        st = props[first, 6:8].astype(np.float32)
+        sti = inv.reshape(-1)[tri.reshape(-1)]
     return Mesh(points, np.full(len(idx), 3, np.int32), idx.reshape(-1),
-                nrm.astype(np.float32), "faceVarying", name=name)
+                nrm.astype(np.float32), "faceVarying", st, sti, name=name)

@@ -27,6 +27,7 @@ __all__ = [
     "triangulate_fan",
     "corner_normals",
     "frozen_array",
+    "box_st",
 ]
 
 Interpolation = Literal["vertex", "faceVarying"]
@@ -228,6 +229,36 @@ def face_normals(points: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray,
     with np.errstate(invalid="ignore", divide="ignore"):
         n = np.where(ln[:, None] > 0, cr / ln[:, None], 0.0)
     return n, 0.5 * ln
+
+
+# (s, t) axes with s × t = the outward normal -X, +X, -Y, +Y, -Z, +Z (t up on vertical faces)
+_BOX_FRAMES = np.array([[(0, 0, 1), (0, 1, 0)], [(0, 0, -1), (0, 1, 0)],
+                        [(1, 0, 0), (0, 0, 1)], [(1, 0, 0), (0, 0, -1)],
+                        [(-1, 0, 0), (0, 1, 0)], [(1, 0, 0), (0, 1, 0)]], dtype=np.float64)
+
+
+def box_st(points: np.ndarray, normals: np.ndarray) -> np.ndarray:
+    """Planar texture coordinates (m) by the dominant axis of each normal ("box mapping").
+
+    Exact (isometric) on faces perpendicular to an axis; the (s, t) axes are chosen so that
+    s × t is the outward normal, i.e. a chart winds counter-clockwise like its faces seen from
+    outside, and t points up on vertical faces.
+
+    Parameters
+    ----------
+    points : (k, 3) float, the corners
+    normals : (k, 3) float, their outward normals (need not be unit)
+
+    Returns
+    -------
+    (k, 2) float64
+    """
+    n = np.asarray(normals, dtype=np.float64).reshape(-1, 3)
+    axis = np.argmax(np.abs(n), axis=1)
+    frame = _BOX_FRAMES[2 * axis + (n[np.arange(len(n)), axis] > 0)]
+    p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    return np.stack([np.einsum("ij,ij->i", p, frame[:, 0]),
+                     np.einsum("ij,ij->i", p, frame[:, 1])], axis=1)
 
 
 def smooth_normals(mesh: Mesh, groups: np.ndarray | None = None, *,
