@@ -256,10 +256,11 @@ def analytic_atlas(
     n_charts = int(chart.max()) + 1 if chart.size else 0
     used = np.zeros(len(st), dtype=bool)
     used[corner_st] = True
-    lo = np.full((n_charts, 2), np.inf)
-    hi = np.full((n_charts, 2), -np.inf)
-    np.minimum.at(lo, value_chart[used], st[used])
-    np.maximum.at(hi, value_chart[used], st[used])
+    # chart boxes: sort the used values by chart, then one reduceat per bound
+    order = np.flatnonzero(used)[np.argsort(value_chart[used], kind="stable")]
+    starts = np.searchsorted(value_chart[order], np.arange(n_charts))
+    lo = np.minimum.reduceat(st[order], starts, axis=0)
+    hi = np.maximum.reduceat(st[order], starts, axis=0)
     tpm = float(texels_per_metre)
     area = float(np.prod(hi - lo, axis=1).sum())
     for _ in range(8):

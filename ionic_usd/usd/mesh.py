@@ -104,10 +104,12 @@ def indexed_st(st: np.ndarray, indices: np.ndarray | None) -> tuple[np.ndarray, 
     values : (w, 2) float32, ``w ≤ u``, distinct rows
     corner_indices : (k,) int32 with ``values[corner_indices] == st[indices]``
     """
-    st32 = np.ascontiguousarray(st, dtype=np.float32).reshape(-1, 2)
+    st32 = np.ascontiguousarray(st, dtype=np.float32).reshape(-1, 2) + np.float32(0.0)  # -0 → 0
     idx = np.arange(len(st32)) if indices is None else np.asarray(indices).reshape(-1)
-    values, inverse = np.unique(st32, axis=0, return_inverse=True)
-    return (np.ascontiguousarray(values, dtype=np.float32),
+    # one 64-bit key per (s, t) pair: a 1-D unique is ~10x faster than unique(axis=0)
+    keys = st32.view(np.int64).reshape(-1)
+    _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
+    return (np.ascontiguousarray(st32[first], dtype=np.float32),
             np.ascontiguousarray(inverse.reshape(-1)[idx], dtype=np.int32))
 
 
