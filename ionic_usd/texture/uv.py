@@ -73,6 +73,7 @@ __all__ = [
     "default_cache",
     "analytic_atlas",
     "default_cache_folder",
+    "metric_charts",
     "prefetch",
     "uv_cache_key",
     "unwrap",
@@ -384,3 +385,36 @@ def apply_uvs(
                 context="apply_uvs",
             )
     return {k: attach_uvs(m, atlases[k], size) for k, m in meshes.items()}
+
+
+def metric_charts(
+    meshes: Iterable[Mesh],
+    texels_per_metre: float,
+    *,
+    padding: int = DEFAULT_PADDING,
+    resolution_cap: int = DEFAULT_RESOLUTION_CAP,
+    cache: UVCache | None = None,
+) -> list[Mesh]:
+    """The meshes with xatlas charts attached as metric ``st`` (metres of surface).
+
+    For a mesh that is cut afterwards (the engaged and corner forms of a capital): the cuts
+    carry ``st`` (:func:`ionic_usd.geometry.clip.clip_mesh`,
+    :func:`ionic_usd.geometry.boolean.difference`), so xatlas runs once for the uncut mesh
+    instead of once per form, and :func:`unwrap` then packs the cut pieces' charts as analytic
+    ones. Meshes that already have ``st`` are returned as they are; the others are unwrapped
+    in parallel (:func:`prefetch`, through ``cache``) at ``texels_per_metre``.
+    """
+    meshes = list(meshes)
+    todo = [m for m in meshes if m.st is None]
+    prefetch([(m, texels_per_metre) for m in todo], padding=padding,
+             resolution_cap=resolution_cap, cache=cache)
+    out = []
+    for m in meshes:
+        if m.st is not None:
+            out.append(m)
+            continue
+        a = unwrap(m, texels_per_metre=texels_per_metre, padding=padding,
+                   resolution_cap=resolution_cap, cache=cache, analytic=False)
+        out.append(m.with_(st=a.st_px / np.float32(a.texels_per_metre),
+                           st_indices=a.st_indices))
+    return out

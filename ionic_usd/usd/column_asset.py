@@ -198,8 +198,10 @@ def _flute_params(params: ColumnParams, flutes: int) -> ColumnParams:
     return params.with_flutes(flutes)
 
 
-def column_asset_meshes(opts: ColumnAssetOptions) -> list[AssetMesh]:
-    """Every mesh of the asset with its variant tags (geometry only, no UVs)."""
+def column_asset_meshes(opts: ColumnAssetOptions,
+                        uv_cache: UVCache | None = None) -> list[AssetMesh]:
+    """Every mesh of the asset with its variant tags (geometry only; with ``uv_cache`` the
+    capital is charted by xatlas before the form cuts, which carry the charts)."""
     out: list[AssetMesh] = []
     for lod in opts.lods:
         p = opts.params.with_lod(lod)
@@ -217,6 +219,14 @@ def column_asset_meshes(opts: ColumnAssetOptions) -> list[AssetMesh]:
                 body = build_capital_part(p, y_cap, scroll=s, angle=c == "angle")
                 tag = {"scroll": s, "capital": c}
                 groups.append(("CapitalBody", f"Capital_{s}_{c}", body, tag))
+        if uv_cache is not None:  # base and shaft have analytic st; chart the capital once
+            from ionic_usd.texture.uv import metric_charts
+
+            caps = [i for i, g in enumerate(groups) if g[0] == "CapitalBody"]
+            charted = metric_charts([groups[i][2] for i in caps], ASSET_TEXELS_PER_METRE[lod],
+                                    cache=uv_cache)
+            for i, m in zip(caps, charted, strict=True):
+                groups[i] = (groups[i][0], groups[i][1], m, groups[i][3])
         for part, name, mesh, tags in groups:
             for form in opts.forms:
                 cut = _FORM_CUT[form]
@@ -290,7 +300,9 @@ def build_column_asset(
         for src in opts.user_textures.values():
             validate_user_texture(src)
     cache = cache if cache is not None else default_cache()
-    meshes, unwraps = _with_uvs(column_asset_meshes(opts), cache)
+    misses0 = cache.misses
+    meshes, _ = _with_uvs(column_asset_meshes(opts, uv_cache=cache), cache)
+    unwraps = cache.misses - misses0
 
     materials: dict[str, MaterialTextures] = {}
     for _, (mat, style) in FINISHES.items():
