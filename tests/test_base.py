@@ -372,3 +372,54 @@ def test_random_bezier_bases_build_or_raise_grammar_error(pts, c1, slices):
         return
     m = build_base(p)
     assert inspect_mesh(m).degenerate_faces == 0
+
+
+# -- analytic st ------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("name", ["G1", "G2", "attic_bezier", "attic_bezier_plinth"])
+def test_analytic_st_is_finite_wound_and_bounded(name):
+    from ionic_usd.column.charts import FLAT_SLOPE_DEG, SIDE_RADIUS_SPREAD
+    from ionic_usd.geometry.mesh import face_normals
+    from ionic_usd.texture.atlas import chart_labels
+
+    m = build_base(load_base_preset(name))
+    assert m.st is not None and np.all(np.isfinite(m.st))
+    st = m.st[m.st_indices].reshape(-1, 3, 2).astype(np.float64)
+    e1, e2 = st[:, 1] - st[:, 0], st[:, 2] - st[:, 0]
+    a_st = 0.5 * (e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
+    _, a3 = face_normals(m.points, m.triangles)
+    ok = a3 > 1e-12 * a3.max()
+    ratio = a_st[ok] / a3[ok]
+    assert np.all(ratio > 0), "a triangle is folded or mirrored in st"
+    # the tolerance the chart rules give: planar charts scale areas by cos(slope) ≥
+    # cos(FLAT_SLOPE_DEG); side charts by r / R within sqrt(SIDE_RADIUS_SPREAD) either way;
+    # chords of the profile and the ring make a few per cent more
+    lo = min(np.cos(np.radians(FLAT_SLOPE_DEG)), 1 / np.sqrt(SIDE_RADIUS_SPREAD)) * 0.97
+    hi = np.sqrt(SIDE_RADIUS_SPREAD) * 1.03
+    assert lo < ratio.min() and ratio.max() < hi
+    charts = chart_labels(m.st_indices, len(m.st))
+    assert 3 <= charts.max() + 1 < 40
+
+
+def test_wall_cuts_carry_the_analytic_st():
+    from ionic_usd.geometry.boolean import difference
+    from ionic_usd.geometry.clip import clip_mesh
+    from ionic_usd.temple.cuboid import Cuboid, cuboid_mesh
+
+    m = build_base(load_base_preset("G2", segments=48))
+    half = clip_mesh(m, (0.0, 0.0, -0.05), (0.0, 0.0, 1.0))
+    block = cuboid_mesh(Cuboid((-2.0, -1.0, -2.0), (-0.05, 2.0, -0.05), name="wall"))
+    corner = difference(m, [block])
+    for cut in (half, corner):
+        assert cut.st is not None and inspect_mesh(cut).watertight
+        st = cut.st[cut.st_indices].reshape(-1, 3, 2).astype(np.float64)
+        e1, e2 = st[:, 1] - st[:, 0], st[:, 2] - st[:, 0]
+        a_st = 0.5 * (e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
+        big = a_st > 1e-10
+        assert big.mean() > 0.99  # nothing folded but a few slivers at the cut
+        # the cap on the wall plane is box-mapped: its st are its (x, y) up to sign
+        on_cap = np.all(np.abs(cut.points[cut.triangles][:, :, 2] + 0.05) < 1e-9, axis=1)
+        assert on_cap.any()
+        cap_st = st[on_cap].reshape(-1, 2)
+        cap_xy = cut.points[cut.triangles[on_cap].reshape(-1)][:, :2]
+        assert_allclose(np.abs(cap_st), np.abs(cap_xy), atol=1e-6)
