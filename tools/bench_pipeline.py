@@ -59,8 +59,11 @@ def _cli(args: list[str], env: dict[str, str]) -> tuple[float, float]:
     """Wall and CPU (user + sys, process and children) seconds of one CLI run."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
+    # cwd: a neutral folder, so ``-m`` does not put a checkout in the working directory
+    # ahead of PYTHONPATH
     subprocess.run([sys.executable, "-m", "ionic_usd", *args], env=env, check=True,
-                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                   cwd=tempfile.gettempdir(), stdout=subprocess.DEVNULL,
+                   stderr=subprocess.DEVNULL)
     wall = time.perf_counter() - t0
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
@@ -76,6 +79,9 @@ def cli_temple(baseline: str | None = None) -> None:
     if baseline:
         env["PYTHONPATH"] = baseline
     out = str(Path(tempfile.mkdtemp()) / "t")
+    probe = subprocess.run([sys.executable, "-c", "import ionic_usd; print(ionic_usd.__file__)"],
+                           env=env, cwd=tempfile.gettempdir(), capture_output=True, text=True)
+    print(f"package: {probe.stdout.strip()}")
     ver = min(_cli(["--version"], env) for _ in range(3))
     cold = _cli(["temple", "-o", out, "--force"], env)
     warm = min(_cli(["temple", "-o", out, "--force"], env) for _ in range(2))

@@ -396,6 +396,7 @@ def build_shaft(
     tri = np.concatenate([grid_tri, rest]).astype(np.int32)
     st, st_idx = _shaft_st(p, points, tri, n_lateral, fl_ang[0], ring_ang, starts)
     normals = np.concatenate([grid_normals, rest_mesh.normals])
+    assert rest_mesh.normals is not None and rest_mesh.normals_indices is not None
     nidx = np.concatenate([grid_nidx, rest_mesh.normals_indices + len(grid_normals)])
     # drop points no triangle uses (cap centres of an open shaft, collapsed ring rows)
     keep = np.ones(len(points), dtype=bool)

@@ -296,8 +296,9 @@ def smooth_normals(mesh: Mesh, groups: np.ndarray | None = None, *,
 
     def by_vertex(weights) -> np.ndarray:
         # one bincount per corner column avoids materialising per-corner weight arrays
-        return sum(
-            np.bincount(tri[:, c], weights=weights[c], minlength=npts) for c in range(3)
+        return np.sum(
+            [np.bincount(tri[:, c], weights=weights[c], minlength=npts) for c in range(3)],
+            axis=0,
         )
 
     per_vertex = _normalise(
@@ -365,7 +366,9 @@ def merge(meshes: list[Mesh] | tuple[Mesh, ...], name: str = "mesh") -> Mesh:
     points = np.concatenate([m.points for m in meshes])
     counts = np.concatenate([m.face_vertex_counts for m in meshes])
     idx = np.concatenate([m.face_vertex_indices + o for m, o in zip(meshes, offsets, strict=True)])
-    normals, interp, nidx = None, "vertex", None
+    normals: np.ndarray | None = None
+    nidx: np.ndarray | None = None
+    interp: Interpolation = "vertex"
     if all(m.normals is not None for m in meshes):
         if all(m.normals_interpolation == "vertex" for m in meshes):
             normals = np.concatenate([m.normals for m in meshes])
@@ -376,13 +379,14 @@ def merge(meshes: list[Mesh] | tuple[Mesh, ...], name: str = "mesh") -> Mesh:
             nidx = np.concatenate([i + o for (_, i), o in zip(parts, no, strict=True)])
             interp = "faceVarying"
         else:
-            normals = np.concatenate([corner_normals(m) for m in meshes])
+            normals = np.concatenate([m.corner_normals() for m in meshes])  # type: ignore[misc]
             interp = "faceVarying"
     st = sti = None
-    if all(m.st is not None for m in meshes):
-        so = np.cumsum([0] + [len(m.st) for m in meshes[:-1]])
-        st = np.concatenate([m.st for m in meshes])
-        sti = np.concatenate([m.st_indices + o for m, o in zip(meshes, so, strict=True)])
+    sts = [(m.st, m.st_indices) for m in meshes if m.st is not None and m.st_indices is not None]
+    if len(sts) == len(meshes):
+        so = np.cumsum([0] + [len(v) for v, _ in sts[:-1]])
+        st = np.concatenate([v for v, _ in sts])
+        sti = np.concatenate([i + o for (_, i), o in zip(sts, so, strict=True)])
     return Mesh(points, counts, idx, normals, interp, st, sti, name=name, normals_indices=nidx)
 
 

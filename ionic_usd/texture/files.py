@@ -10,6 +10,7 @@ import shutil
 from collections.abc import Mapping
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -51,7 +52,7 @@ def _to_uint8(a: np.ndarray) -> np.ndarray:
     return np.round(np.clip(a, 0.0, 1.0) * 255.0).astype(np.uint8)
 
 
-def _write_png(buf: object, path: Path) -> None:
+def _write_png(buf: Any, path: Path) -> None:
     import OpenImageIO as oiio
 
     # zlib level 3 with the "average" filter: ~4x faster than the defaults (level 6, adaptive
@@ -86,7 +87,7 @@ def verify_image(path: Path) -> None:
         raise TextureError(path, "written image is incomplete; is the disk full?")
 
 
-def _write_tx(buf: object, path: Path) -> None:
+def _write_tx(buf: Any, path: Path) -> None:
     import OpenImageIO as oiio
 
     config = oiio.ImageSpec()

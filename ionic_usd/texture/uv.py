@@ -320,12 +320,12 @@ def unwrap_parts(
     """
     if not meshes:
         raise GeometryError("unwrap_parts needs at least one mesh")
-    kw = {"padding": padding, "resolution_cap": resolution_cap, "cache": cache}
     bnd = chart_boundaries or {}
 
     def run(tpm: float) -> dict[str, UVAtlas]:
         return {
-            k: unwrap(m, texels_per_metre=tpm, max_chart_boundary=bnd.get(k), **kw)
+            k: unwrap(m, texels_per_metre=tpm, max_chart_boundary=bnd.get(k), padding=padding,
+                      resolution_cap=resolution_cap, cache=cache)
             for k, m in meshes.items()
         }
 
