@@ -438,7 +438,8 @@ def build_base(
     Returns
     -------
     Mesh with indexed faceVarying normals (``normals_indices``): smooth within a module (and
-    across C1 joints), crisp between modules and at the caps.
+    across C1 joints), crisp between modules and at the caps; and analytic ``st`` in metres
+    of surface (:func:`ionic_usd.column.charts.revolved_st`; the plinth box-mapped).
     """
     p = p or BaseParams()
     nodes, seg, half, ptop = _closed_profile(p, cap_bottom=cap_bottom, cap_top=cap_top)

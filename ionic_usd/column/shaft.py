@@ -295,7 +295,10 @@ def build_shaft(
     Returns
     -------
     Mesh with indexed faceVarying normals (``normals_indices``): smooth inside each flute
-    and over fillets and rings, crisp at every flute/fillet edge and at the caps.
+    and over fillets and rings, crisp at every flute/fillet edge and at the caps; and analytic
+    ``st`` in metres of surface (the unrolled side, seam on the fillet at +X, and two flat
+    caps; see :func:`_shaft_st`), which :func:`ionic_usd.texture.uv.unwrap` packs without
+    xatlas.
     """
     p = p or ShaftParams()
     est = shaft_triangle_estimate(p, caps=int(cap_bottom) + int(cap_top))
