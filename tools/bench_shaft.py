@@ -7,11 +7,11 @@ Run: ``python tools/bench_shaft.py [--slices 64] [--repeat 3]``. Per level of de
 * ``author``: this package's authoring to ``.usdc`` (Sdf API + ``Vt.*.FromNumpy``, indexed
   ``primvars:normals``), then save;
 * ``raw idx``: raw usd-core with the *same* attributes (``UsdGeom.Mesh.Define`` + the same
-  Vt arrays from numpy + an indexed normals primvar + extent), then save — the floor a
-  Python exporter of these attributes can reach;
+  Vt arrays from numpy + indexed ``normals`` and ``st`` primvars + extent), then save — the
+  floor a Python exporter of these attributes can reach;
 * ``raw fv``: raw usd-core writing the *before* layout: faceVarying normals expanded per corner
-  into the ``normals`` attribute (what the package wrote before indexed normals), extent via
-  numpy ``min(axis=0)``;
+  into the ``normals`` attribute (what the package wrote before indexed normals; no ``st``,
+  which the shaft did not have), extent via numpy ``min(axis=0)``;
 * ``lists``: a plain UsdGeom exporter with Python lists (only up to 400 k triangles: slow).
 
 Ratios are against the rows above; file sizes are of the written ``.usdc``. Targets (issue 12):
@@ -64,6 +64,11 @@ def main() -> None:
                 "normals", Sdf.ValueTypeNames.Normal3fArray, UsdGeom.Tokens.faceVarying)
             pv.Set(Vt.Vec3fArray.FromNumpy(mesh.normals))
             pv.SetIndices(Vt.IntArray.FromNumpy(mesh.normals_indices))
+            if mesh.st is not None:  # the analytic st the generator now emits
+                sv = UsdGeom.PrimvarsAPI(m).CreatePrimvar(
+                    "st", Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.faceVarying)
+                sv.Set(Vt.Vec2fArray.FromNumpy(mesh.st))
+                sv.SetIndices(Vt.IntArray.FromNumpy(mesh.st_indices))
         else:
             lo, hi = mesh.points.min(axis=0), mesh.points.max(axis=0)
             m.CreateNormalsAttr(Vt.Vec3fArray.FromNumpy(

@@ -449,57 +449,52 @@ def _shaft_st(p: ShaftParams, points: np.ndarray, tri: np.ndarray, n_lateral: in
                                      axis=1).sum())
     n_pts = len(points)
     # plain rings (other angles): s proportional to the angle
-    theta = np.mod(np.arctan2(-points[:, 2], points[:, 0]), 2 * np.pi)
-    s = theta / (2 * np.pi) * perimeter
+    s = np.zeros(n_pts)
+    for k in (0, 3):
+        ring = points[starts[k]:starts[k + 1]]
+        theta = np.mod(np.arctan2(-ring[:, 2], ring[:, 0]), 2 * np.pi)
+        s[starts[k]:starts[k + 1]] = theta / (2 * np.pi) * perimeter
     # rows with the flute columns (the fluted grid and the two plain rows at its angles):
     # s = the flute centre's s + arc length along this row from the flute centre, so every
     # flute centre runs straight up the chart and a narrowing flute end stays narrow
-    rows = [np.arange(starts[k], starts[k + 1]) for k in (1, 2)]
-    grid = np.arange(starts[-1], n_pts - 2).reshape(-1, n)
-    rows += list(grid)
-    for row in rows:
-        q = points[row]
-        seg = np.linalg.norm(np.roll(q, -1, axis=0) - q, axis=1)
-        cum = np.concatenate([[0.0], np.cumsum(seg)[:-1]]).reshape(e, k_per)
-        # the flute centre lies half-way (in arc length) between the flute's two corners
-        centre = 0.5 * (cum[:, 0] + cum[:, 0] + seg.reshape(e, k_per)[:, :h].sum(axis=1))
-        # scaled so the row's perimeter maps to the reference one: the taper and a flute
-        # end's narrowing spread over the whole row instead of squeezing the fillets
-        local = (cum - centre[:, None]) * (perimeter / seg.sum())
-        s[row] = ((np.arange(e) + 0.5)[:, None] * (perimeter / e) + local).reshape(-1)
+    rows = np.concatenate([np.arange(starts[1], starts[3]).reshape(2, n),
+                           np.arange(starts[-1], n_pts - 2).reshape(-1, n)])
+    q = points[rows]  # (R, n, 3), all rows at once
+    seg = np.linalg.norm(np.roll(q, -1, axis=1) - q, axis=2)
+    cum = (np.cumsum(seg, axis=1) - seg).reshape(len(rows), e, k_per)
+    # the flute centre lies half-way (in arc length) between the flute's two corners
+    centre = cum[:, :, 0] + 0.5 * seg.reshape(len(rows), e, k_per)[:, :, :h].sum(axis=2)
+    # scaled so the row's perimeter maps to the reference one: the taper and a flute end's
+    # narrowing spread over the whole row instead of squeezing the fillets
+    local = (cum - centre[:, :, None]) * (perimeter / seg.sum(axis=1))[:, None, None]
+    s[rows] = ((np.arange(e) + 0.5)[None, :, None] * (perimeter / e) + local).reshape(len(rows), n)
     s = np.mod(s, perimeter)
     side = np.stack([s, points[:, 1]], axis=1)
     # the seam: a side triangle spanning more than half the perimeter wraps around s = 0
     lat = tri[:n_lateral]
-    ss = s[lat]
-    wraps = (ss.max(axis=1) - ss.min(axis=1)) > 0.5 * perimeter
-    low = wraps[:, None] & (ss < 0.5 * perimeter)
-    dup_v = np.unique(lat[low])
+    s0, s1, s2 = s[lat[:, 0]], s[lat[:, 1]], s[lat[:, 2]]  # columns: fast reductions
+    span = np.maximum(np.maximum(s0, s1), s2) - np.minimum(np.minimum(s0, s1), s2)
+    wraps = np.flatnonzero(span > 0.5 * perimeter)
+    sub = lat[wraps]
+    low = s[sub] < 0.5 * perimeter
+    dup_v = np.unique(sub[low])
     dup_of = np.zeros(n_pts, dtype=np.int64)
     dup_of[dup_v] = n_pts + np.arange(len(dup_v))
-    lat_idx = np.where(low, dup_of[lat], lat)
+    st_idx = np.empty((len(tri), 3), dtype=np.int64)
+    st_idx[:n_lateral] = lat
+    st_idx[wraps] = np.where(low, dup_of[sub], sub)
     values = [side, side[dup_v] + [perimeter, 0.0]]
-    idx = [lat_idx.reshape(-1)]
     base = n_pts + len(dup_v)
+    caps = tri[n_lateral:]
     for k, sign in ((0, 1.0), (3, -1.0)):  # caps: bottom ring row 0, top ring row 3
-        caps = tri[n_lateral:]
-        y_ring = points[starts[k], 1]
-        sel = np.all(np.abs(points[caps, 1] - y_ring) < 1e-12, axis=1)
+        sel = np.all(np.abs(points[caps, 1] - points[starts[k], 1]) < 1e-12, axis=1)
         if not sel.any():
             continue
         v = np.unique(caps[sel])
-        local = np.searchsorted(v, caps[sel])
         values.append(np.stack([points[v, 0], sign * points[v, 2]], axis=1))
-        idx.append((base + local).reshape(-1))
+        st_idx[n_lateral + np.flatnonzero(sel)] = base + np.searchsorted(v, caps[sel])
         base += len(v)
-    st = np.concatenate(values).astype(np.float32)
-    order_tri = np.concatenate([np.arange(n_lateral)] + [
-        n_lateral + np.flatnonzero(np.all(np.abs(points[tri[n_lateral:], 1]
-                                                 - points[starts[k], 1]) < 1e-12, axis=1))
-        for k in (0, 3)])
-    st_idx = np.empty(3 * len(tri), dtype=np.int64)
-    st_idx.reshape(-1, 3)[order_tri] = np.concatenate(idx).reshape(-1, 3)
-    return st, st_idx.astype(np.int32)
+    return np.concatenate(values).astype(np.float32), st_idx.reshape(-1).astype(np.int32)
 
 
 def _grid_normals(pts: np.ndarray, col: np.ndarray, h: int) -> tuple[np.ndarray, np.ndarray]:

@@ -83,8 +83,14 @@ def author_mesh(
                   interpolation="faceVarying")
             _attr(spec, "primvars:normals:indices", _T.IntArray, Vt.IntArray.FromNumpy(
                 np.ascontiguousarray(mesh.normals_indices, dtype=np.int32)))
-    if mesh.st is not None:
-        values, indices = indexed_st(mesh.st, mesh.st_indices)
+    if mesh.st is not None and mesh.st_indices is not None:
+        # already indexed (fewer values than corners: generators' and atlases' st) is authored
+        # as given; one value per corner is deduplicated first
+        if len(mesh.st) < len(mesh.st_indices):
+            values = np.ascontiguousarray(mesh.st, dtype=np.float32)
+            indices = np.ascontiguousarray(mesh.st_indices, dtype=np.int32)
+        else:
+            values, indices = indexed_st(mesh.st, mesh.st_indices)
         _attr(spec, "primvars:st", _T.TexCoord2fArray, Vt.Vec2fArray.FromNumpy(values),
               interpolation="faceVarying")
         _attr(spec, "primvars:st:indices", _T.IntArray, Vt.IntArray.FromNumpy(indices))
