@@ -83,14 +83,8 @@ def author_mesh(
                   interpolation="faceVarying")
             _attr(spec, "primvars:normals:indices", _T.IntArray, Vt.IntArray.FromNumpy(
                 np.ascontiguousarray(mesh.normals_indices, dtype=np.int32)))
-    if mesh.st is not None and mesh.st_indices is not None:
-        # already indexed (fewer values than corners: generators' and atlases' st) is authored
-        # as given; one value per corner is deduplicated first
-        if len(mesh.st) < len(mesh.st_indices):
-            values = np.ascontiguousarray(mesh.st, dtype=np.float32)
-            indices = np.ascontiguousarray(mesh.st_indices, dtype=np.int32)
-        else:
-            values, indices = indexed_st(mesh.st, mesh.st_indices)
+    if mesh.st is not None:
+        values, indices = indexed_st(mesh.st, mesh.st_indices)
         _attr(spec, "primvars:st", _T.TexCoord2fArray, Vt.Vec2fArray.FromNumpy(values),
               interpolation="faceVarying")
         _attr(spec, "primvars:st:indices", _T.IntArray, Vt.IntArray.FromNumpy(indices))
@@ -110,13 +104,18 @@ def indexed_st(st: np.ndarray, indices: np.ndarray | None) -> tuple[np.ndarray, 
     values : (w, 2) float32, ``w ≤ u``, distinct rows
     corner_indices : (k,) int32 with ``values[corner_indices] == st[indices]``
     """
-    st32 = np.ascontiguousarray(st, dtype=np.float32).reshape(-1, 2) + np.float32(0.0)  # -0 → 0
+    st32 = np.ascontiguousarray(st, dtype=np.float32).reshape(-1, 2)
     idx = np.arange(len(st32)) if indices is None else np.asarray(indices).reshape(-1)
-    # one 64-bit key per (s, t) pair: a 1-D unique is ~10x faster than unique(axis=0)
-    keys = st32.view(np.int64).reshape(-1)
-    _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
-    return (np.ascontiguousarray(st32[first], dtype=np.float32),
-            np.ascontiguousarray(inverse.reshape(-1)[idx], dtype=np.int32))
+    # the rows in lexicographic (s, t) order, as np.unique(axis=0) gives them, by one lexsort
+    # of the two columns (several times faster than unique(axis=0)'s structured sort)
+    order = np.lexsort((st32[:, 1], st32[:, 0]))
+    srt = st32[order]
+    new = np.ones(len(srt), dtype=bool)
+    new[1:] = np.any(srt[1:] != srt[:-1], axis=1)
+    inverse = np.empty(len(srt), dtype=np.int64)
+    inverse[order] = np.cumsum(new) - 1
+    return (np.ascontiguousarray(srt[new], dtype=np.float32),
+            np.ascontiguousarray(inverse[idx], dtype=np.int32))
 
 
 def write_meshes(
