@@ -147,7 +147,8 @@ def test_continuity_flag_changes_only_the_normals_at_the_joint():
     a, b = build_base(smooth), build_base(crisp)
     assert_allclose(a.points, b.points, atol=0)
     np.testing.assert_array_equal(a.face_vertex_indices, b.face_vertex_indices)
-    differ = np.abs(a.normals - b.normals).max(axis=1) > 1e-6
+    an, bn = a.corner_normals(), b.corner_normals()
+    differ = np.abs(an - bn).max(axis=1) > 1e-6
     corner_y = a.points[a.face_vertex_indices, 1]
     joints = [0.12 + 0.046, 0.12 + 0.092 + 0.015 + 0.045 + 0.015 + 0.038]  # the torus equators
     at_joint = np.any([np.abs(corner_y - j) < 1e-9 for j in joints], axis=0)
@@ -155,8 +156,8 @@ def test_continuity_flag_changes_only_the_normals_at_the_joint():
     assert not differ[~at_joint].any()
     # with C1 the equator normals of the torus are horizontal (shared by both halves)
     eq = np.abs(corner_y - joints[0]) < 1e-9
-    assert np.abs(a.normals[eq, 1]).max() < 1e-3
-    assert np.abs(b.normals[eq, 1]).max() > 0.05
+    assert np.abs(an[eq, 1]).max() < 1e-3
+    assert np.abs(bn[eq, 1]).max() > 0.05
 
 
 def test_continuity_flag_drops_the_first_row_of_a_module():
@@ -172,7 +173,7 @@ def test_continuity_flag_drops_the_first_row_of_a_module():
 
 def test_modules_meet_at_crisp_edges_and_floors_within_a_module_are_smooth():
     m = build_base(load_base_preset("G2", segments=32, profile_slices=8))
-    n = m.normals
+    n = m.corner_normals()
     corner = m.face_vertex_indices
     r = np.hypot(m.points[:, 0], m.points[:, 2])
 
@@ -371,3 +372,54 @@ def test_random_bezier_bases_build_or_raise_grammar_error(pts, c1, slices):
         return
     m = build_base(p)
     assert inspect_mesh(m).degenerate_faces == 0
+
+
+# -- analytic st ------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("name", ["G1", "G2", "attic_bezier", "attic_bezier_plinth"])
+def test_analytic_st_is_finite_wound_and_bounded(name):
+    from ionic_usd.column.charts import FLAT_SLOPE_DEG, SIDE_RADIUS_SPREAD
+    from ionic_usd.geometry.mesh import face_normals
+    from ionic_usd.texture.atlas import chart_labels
+
+    m = build_base(load_base_preset(name))
+    assert m.st is not None and np.all(np.isfinite(m.st))
+    st = m.st[m.st_indices].reshape(-1, 3, 2).astype(np.float64)
+    e1, e2 = st[:, 1] - st[:, 0], st[:, 2] - st[:, 0]
+    a_st = 0.5 * (e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
+    _, a3 = face_normals(m.points, m.triangles)
+    ok = a3 > 1e-12 * a3.max()
+    ratio = a_st[ok] / a3[ok]
+    assert np.all(ratio > 0), "a triangle is folded or mirrored in st"
+    # the tolerance the chart rules give: planar charts scale areas by cos(slope) ≥
+    # cos(FLAT_SLOPE_DEG); side charts by r / R within sqrt(SIDE_RADIUS_SPREAD) either way;
+    # chords of the profile and the ring make a few per cent more
+    lo = min(np.cos(np.radians(FLAT_SLOPE_DEG)), 1 / np.sqrt(SIDE_RADIUS_SPREAD)) * 0.97
+    hi = np.sqrt(SIDE_RADIUS_SPREAD) * 1.03
+    assert lo < ratio.min() and ratio.max() < hi
+    charts = chart_labels(m.st_indices, len(m.st))
+    assert 3 <= charts.max() + 1 < 40
+
+
+def test_wall_cuts_carry_the_analytic_st():
+    from ionic_usd.geometry.boolean import difference
+    from ionic_usd.geometry.clip import clip_mesh
+    from ionic_usd.temple.cuboid import Cuboid, cuboid_mesh
+
+    m = build_base(load_base_preset("G2", segments=48))
+    half = clip_mesh(m, (0.0, 0.0, -0.05), (0.0, 0.0, 1.0))
+    block = cuboid_mesh(Cuboid((-2.0, -1.0, -2.0), (-0.05, 2.0, -0.05), name="wall"))
+    corner = difference(m, [block])
+    for cut in (half, corner):
+        assert cut.st is not None and inspect_mesh(cut).watertight
+        st = cut.st[cut.st_indices].reshape(-1, 3, 2).astype(np.float64)
+        e1, e2 = st[:, 1] - st[:, 0], st[:, 2] - st[:, 0]
+        a_st = 0.5 * (e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
+        big = a_st > 1e-10
+        assert big.mean() > 0.99  # nothing folded but a few slivers at the cut
+        # the cap on the wall plane is box-mapped: its st are its (x, y) up to sign
+        on_cap = np.all(np.abs(cut.points[cut.triangles][:, :, 2] + 0.05) < 1e-9, axis=1)
+        assert on_cap.any()
+        cap_st = st[on_cap].reshape(-1, 2)
+        cap_xy = cut.points[cut.triangles[on_cap].reshape(-1)][:, :2]
+        assert_allclose(np.abs(cap_st), np.abs(cap_xy), atol=1e-6)

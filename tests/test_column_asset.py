@@ -12,7 +12,7 @@ from pxr import Sdf, Usd, UsdGeom, UsdShade
 
 from ionic_usd.errors import OutputExistsError, ParameterError
 from ionic_usd.geometry import Mesh, inspect_mesh
-from ionic_usd.pipeline.asset import build_column_asset
+from ionic_usd.pipeline.asset import build_column_asset, column_asset_meshes
 from ionic_usd.texture.stone import TextureError
 from ionic_usd.usd import validate_stage
 from ionic_usd.usd.column_asset import ColumnAssetOptions
@@ -243,7 +243,13 @@ def test_rebuild_does_no_unwrapping(tmp_path):
     opts = ColumnAssetOptions(lods=("low",), bases=("G1",), scrolls=("S1",), flutes=("f24",),
                               texture_size=16)
     cold = build_column_asset(tmp_path / "a" / "IonicColumn", opts, cache=cache)
-    assert cold.uv_unwraps == cold.meshes == cache.misses > 0
+    # the base and shaft carry analytic charts (no xatlas), and the cut forms carry the charts
+    # of the mesh they were cut from: xatlas runs once per uncut capital
+    meshes = column_asset_meshes(opts)
+    assert sum(m.mesh.st is not None for m in meshes) == 6  # base and shaft, every form
+    uncut_capitals = sum(m.part == "CapitalBody" and m.tags["form"] == "full" for m in meshes)
+    # (normal, angle) capitals x (log_spiral, centred_arcs) volutes
+    assert cold.uv_unwraps == uncut_capitals == cache.misses == 4
     misses = cache.misses
     warm = build_column_asset(tmp_path / "a" / "IonicColumn", opts, cache=cache, force=True)
     assert warm.uv_unwraps == 0 and cache.misses == misses

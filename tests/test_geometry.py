@@ -157,3 +157,60 @@ def test_replace_never_keeps_stale_triangles():
                   m.with_(face_vertex_indices=flipped)):
         np.testing.assert_array_equal(other.triangles, expected)
         assert not np.array_equal(other.triangles, before)
+
+
+# -- indexed normals -------------------------------------------------------------------------
+
+def _lathe_with_groups():
+    from ionic_usd.geometry.curves import revolve
+
+    prof = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.6, 1.4], [0.0, 1.4]])
+    m, _ = revolve(prof, 24)
+    groups = np.repeat(np.arange(4), [24, 48, 48, 24])  # one group per band: crisp joints
+    return m, groups
+
+
+def test_indexed_smooth_normals_expand_to_the_per_corner_ones():
+    m, groups = _lathe_with_groups()
+    flat = smooth_normals(m, groups)
+    idx = smooth_normals(m, groups, indexed=True)
+    assert flat.normals_indices is None and idx.normals_indices is not None
+    assert_allclose(idx.corner_normals(), flat.normals, atol=1e-6)
+    # one value per point plus one per (point, group) pair of a point on a crease
+    pairs = np.unique(m.triangles.reshape(-1) * 10 + np.repeat(groups, 3))
+    per_point = np.bincount(pairs // 10, minlength=m.n_points)
+    assert len(idx.normals) == m.n_points + per_point[per_point > 1].sum()
+    # first-occurrence numbering of the crease values: they first appear in increasing order
+    crease = idx.normals_indices[idx.normals_indices >= m.n_points]
+    _, first = np.unique(crease, return_index=True)
+    assert np.all(np.diff(crease[np.sort(first)]) == 1)
+
+
+def test_indexed_normals_survive_merge_transform_weld():
+    m, groups = _lathe_with_groups()
+    a = smooth_normals(m, groups, indexed=True)
+    b = transform(smooth_normals(m), np.diag([1.0, 1.0, 1.0, 1.0]) + np.eye(4, k=3) * 3)
+    c = smooth_normals(m, groups)  # faceVarying, not indexed
+    ab = merge([a, b, c])
+    assert ab.normals_indices is not None
+    assert_allclose(ab.corner_normals(), np.concatenate(
+        [a.corner_normals(), b.corner_normals(), c.corner_normals()]), atol=1e-6)
+    mirror = np.diag([-1.0, 1.0, 1.0, 1.0])
+    t = transform(a, mirror)
+    assert t.normals_indices is not None
+    expected = transform(c, mirror)  # the same mirror on per-corner storage
+    assert_allclose(t.corner_normals(), expected.normals, atol=1e-6)
+    w = weld(a)
+    assert w.normals_indices is not None
+    assert_allclose(w.corner_normals(), a.corner_normals(), atol=0)
+
+
+def test_indexed_normals_are_validated_and_extent_is_cached():
+    m, groups = _lathe_with_groups()
+    a = smooth_normals(m, groups, indexed=True)
+    with pytest.raises(GeometryError, match="normals_indices"):
+        a.with_(normals_indices=a.normals_indices[:-3])
+    with pytest.raises(GeometryError, match="faceVarying"):
+        a.with_(normals_interpolation="vertex")
+    assert_allclose(a.extent, [a.points.min(axis=0), a.points.max(axis=0)])
+    assert a.extent is a.extent and not a.extent.flags.writeable

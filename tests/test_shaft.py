@@ -65,7 +65,7 @@ def test_shaft_is_watertight(params):
 def test_normals_point_outward_and_agree_with_faces():
     m = build_shaft(ShaftParams(flute_slices=6))
     fn, _ = face_normals(m.points, m.triangles)
-    corner = m.normals.reshape(-1, 3, 3)
+    corner = m.corner_normals().reshape(-1, 3, 3)
     # each corner normal lies on the outer side of its face
     assert np.all(np.einsum("ijk,ik->ij", corner, fn) > 0.2)
 
@@ -74,7 +74,7 @@ def test_crisp_fillet_edges_smooth_flutes():
     p = ShaftParams(flute_slices=8)
     m = build_shaft(p)
     tri = m.triangles.reshape(-1)
-    normals = m.normals
+    normals = m.corner_normals()
     # group corner normals by vertex: a flute corner vertex carries two distinct normals,
     # an interior flute vertex only one
     order = np.argsort(tri, kind="stable")
@@ -192,3 +192,79 @@ def test_budget_refused_with_estimate():
     p = ShaftParams(flute_slices=400)
     with pytest.raises(BudgetError, match=f"{shaft_triangle_estimate(p):,}"):
         build_shaft(p, max_triangles=1_000_000)
+
+
+# -- indexed normals and analytic st -----------------------------------------------------------
+
+def _st_ratio(m):
+    """Per triangle: signed st area / 3D area, and the 3D areas."""
+    st = m.st[m.st_indices].reshape(-1, 3, 2).astype(np.float64)
+    e1, e2 = st[:, 1] - st[:, 0], st[:, 2] - st[:, 0]
+    a_st = 0.5 * (e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
+    _, a3 = face_normals(m.points, m.triangles)
+    return a_st / a3, a3
+
+
+@pytest.mark.parametrize("params", [ShaftParams(), ShaftParams(flute_slices=3, entasis=0.01),
+                                    ShaftParams(ring_bottom=0.0, ring_top=0.0)])
+def test_indexed_normals_compact_and_consistent(params):
+    from ionic_usd.geometry.check import normals_against_winding
+
+    m = build_shaft(params)
+    assert m.normals_indices is not None and m.normals_interpolation == "faceVarying"
+    corner = m.corner_normals()
+    assert corner.shape == (m.face_vertex_indices.size, 3)
+    assert_allclose(np.linalg.norm(corner, axis=1), 1.0, atol=1e-5)
+    # about one value per point (two on a flute edge): a third of the per-corner storage
+    assert len(m.normals) < 0.5 * len(corner)
+    if params.ring_bottom > 0:
+        assert normals_against_winding(m) == 0
+    # equal indices mean equal normals, and no two values are equal at one point across a
+    # smooth region: indexing lost no crease
+    again = weld(m)
+    assert_allclose(again.corner_normals(), corner, atol=0)
+
+
+@pytest.mark.parametrize("params", [ShaftParams(), ShaftParams(flute_slices=3, entasis=0.01),
+                                    ShaftParams(flute_slices=16, entasis=-0.01)])
+def test_analytic_st_is_finite_wound_and_nearly_isometric(params):
+    from ionic_usd.texture.atlas import chart_labels
+
+    m = build_shaft(params)
+    assert m.st is not None and np.all(np.isfinite(m.st))
+    ratio, area = _st_ratio(m)
+    assert np.all(ratio > 0), "a triangle is folded or mirrored in st"
+    # tolerance: the side is unrolled at the arc length of the mid-height full-flute row, so
+    # rows elsewhere scale by (that perimeter)/(their own), the plain rings most; flute ends
+    # (the spoons, tilted against v = y) are the only region beyond it
+    r_mid = 0.5 * (params.bottom_radius + params.top_radius)
+    ring_stretch = r_mid / params.top_radius * 1.3  # fluted/plain perimeter ≤ 1.3
+    assert ratio.max() < 1.2 * ring_stretch
+    body = (ratio > 1 / 1.25) & (ratio < 1.25)
+    assert area[body].sum() > 0.97 * area.sum()
+    charts = chart_labels(m.st_indices, len(m.st))
+    assert charts.max() + 1 == 3  # the side (one seam) and two caps
+    for c in range(3):
+        sel = charts == c
+        mean = (ratio[sel] * area[sel]).sum() / area[sel].sum()
+        assert abs(mean - 1.0) < 0.03
+
+
+def test_readme_lod_table_matches_the_generator():
+    import re
+    from pathlib import Path
+
+    from ionic_usd.column.column import build_column, portunus_column_params
+
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text("utf-8")
+    rows = re.findall(r"^\| (high|medium|low) \| (\d+) / (\d+) \| (\d+) \| ([\d,]+) \|$",
+                      readme, flags=re.M)
+    assert [r[0] for r in rows] == ["high", "medium", "low"]
+    for lod, h, i, body_rows, tris in rows:
+        p = portunus_column_params(lod=lod)
+        sp = p.shaft_params()  # the shaft as the column builds it at this LOD
+        assert (sp.flute_slices, sp.flute_slices_per_fillet_slice, sp.body_rows) == \
+            (int(h), int(i), int(body_rows))
+        col = build_column(p)
+        assert col.n_triangles == int(tris.replace(",", ""))
+        assert col.parts()["Shaft"].n_triangles == shaft_triangle_estimate(sp, caps=2)

@@ -26,8 +26,15 @@ def test_shaft_roundtrip_and_validates(tmp_path, ext):
     assert_allclose(np.array(geom.GetPointsAttr().Get()), mesh.points, atol=1e-6)
     assert list(geom.GetFaceVertexIndicesAttr().Get()) == mesh.face_vertex_indices.tolist()
     assert geom.GetSubdivisionSchemeAttr().Get() == "none"
-    assert geom.GetNormalsInterpolation() == UsdGeom.Tokens.faceVarying
-    assert len(geom.GetNormalsAttr().Get()) == mesh.face_vertex_indices.size
+    # indexed normals are the indexed primvar primvars:normals, and only it (the normals
+    # attribute cannot be indexed; the primvar takes precedence for every reader)
+    assert not geom.GetNormalsAttr().HasAuthoredValue()
+    pv = UsdGeom.PrimvarsAPI(prim).GetPrimvar("normals")
+    assert pv.IsIndexed() and pv.GetInterpolation() == UsdGeom.Tokens.faceVarying
+    assert len(pv.Get()) == len(mesh.normals) < mesh.face_vertex_indices.size / 2
+    flat = np.array(pv.ComputeFlattened())
+    assert flat.shape == (mesh.face_vertex_indices.size, 3)
+    assert_allclose(flat, mesh.corner_normals(), atol=1e-6)
     extent = np.array(geom.GetExtentAttr().Get())
     assert_allclose(extent, mesh.extent, atol=1e-6)
     # every ancestor is typed: the model an Xform, the organising Geom a Scope

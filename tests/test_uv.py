@@ -400,3 +400,40 @@ def test_default_cache_folder(monkeypatch, tmp_path):
     monkeypatch.delenv("XDG_CACHE_HOME")
     monkeypatch.setenv("HOME", str(tmp_path / "home"))
     assert default_cache_folder() == tmp_path / "home" / ".cache" / "ionic_usd" / "uv"
+
+
+# -- analytic charts ---------------------------------------------------------------------------
+
+def test_analytic_charts_are_packed_without_xatlas_at_the_density(cache):
+    from ionic_usd.column.base import build_base, load_base_preset
+    from ionic_usd.column.shaft import ShaftParams, build_shaft
+
+    parts = {"shaft": build_shaft(ShaftParams(flute_slices=3)),
+             "base": build_base(load_base_preset("G2", segments=48))}
+    atlases = unwrap_parts(parts, texels_per_metre=TPM, cache=cache)
+    assert cache.misses == 0 and cache.hits == 0  # no xatlas run, no cache entry
+    for name, a in atlases.items():
+        m = parts[name]
+        assert a.texels_per_metre == TPM
+        _, area3 = face_normals(m.points, m.triangles)
+        # charts are only translated: pixel area = metric st area × density²
+        assert_allclose(uv_areas(a.st_px, a.st_indices).sum(),
+                        uv_areas(m.st, m.st_indices).sum() * TPM**2, rtol=1e-4)
+        assert 0.2 < a.utilisation <= 1.0
+    out = apply_uvs(parts, texels_per_metre=TPM, cache=cache)
+    for m in out.values():
+        assert np.all(np.isfinite(m.st)) and m.st.min() >= 0.0 and m.st.max() <= 1.0
+
+
+def test_metric_charts_let_cuts_reuse_one_unwrap(cache):
+    from ionic_usd.geometry.clip import clip_mesh
+    from ionic_usd.texture.uv import metric_charts
+
+    (charted,) = metric_charts([cylinder()], TPM, cache=cache)
+    assert cache.misses == 1 and charted.st is not None
+    half = clip_mesh(charted, (0.0, 0.0, 0.0), (0.0, 0.0, 1.0))
+    assert half.st is not None
+    a = unwrap(half, texels_per_metre=TPM, cache=cache)
+    assert cache.misses == 1  # the cut's charts are packed, not unwrapped again
+    areas = uv_areas(a.st_px, a.st_indices)
+    assert np.all(areas[np.abs(areas) > 1e-9] > 0)

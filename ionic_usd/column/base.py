@@ -20,14 +20,15 @@ Profile. Modules stack upward from y = 0; within a module:
   ``profile_slices`` + 1 uniform parameters; a 2-point module is a straight segment with
   exactly 2 rows. The module's top (next module's bottom) is its last control point's h.
 
-Joints and normals. Normals are faceVarying from :func:`~ionic_usd.geometry.smooth_normals`
-with one smoothing group per module (the floors of a v1 module are welded, as in the paper), so
-every joint between modules is a crisp edge. A v2 module flagged C1 drops its first row and its
-second row joins the previous module's last row; it shares that module's smoothing group, so the
-joint is smooth. Coincident rows are always merged (a mesh with one set of points, not stacked
-shells), so where a module starts where the last ended the flag changes only the normals.
-Zero-thickness "fins" — a flat run that goes out and comes back at one height — are dropped:
-each run of rows at one height keeps only its first and last row.
+Joints and normals. Normals are indexed faceVarying from
+:func:`~ionic_usd.geometry.smooth_normals` with one smoothing group per module (the floors of a
+v1 module are welded, as in the paper), so every joint between modules is a crisp edge. A v2
+module flagged C1 drops its first row and its second row joins the previous module's last row;
+it shares that module's smoothing group, so the joint is smooth. Coincident rows are always
+merged (a mesh with one set of points, not stacked shells), so where a module starts where the
+last ended the flag changes only the normals. Zero-thickness "fins" — a flat run that goes out
+and comes back at one height — are dropped: each run of rows at one height keeps only its first
+and last row.
 
 Solid. A bottom disc (at the first row's height, y = 0 for all presets), the revolved outside,
 and a flat top disc from the last row to the axis. With ``cap_top=False`` a flat annulus joins
@@ -52,9 +53,10 @@ from importlib import resources
 
 import numpy as np
 
+from ionic_usd.column.charts import revolved_st
 from ionic_usd.errors import GeometryError, GrammarError, ParameterError
 from ionic_usd.geometry.curves import bezier, revolve
-from ionic_usd.geometry.mesh import Mesh, face_normals, smooth_normals
+from ionic_usd.geometry.mesh import Mesh, box_st, face_normals, smooth_normals
 from ionic_usd.grammar.base import (
     BaseGrammar,
     BezierBase,
@@ -435,8 +437,9 @@ def build_base(
 
     Returns
     -------
-    Mesh with faceVarying normals: smooth within a module (and across C1 joints), crisp
-    between modules and at the caps.
+    Mesh with indexed faceVarying normals (``normals_indices``): smooth within a module (and
+    across C1 joints), crisp between modules and at the caps; and analytic ``st`` in metres
+    of surface (:func:`ionic_usd.column.charts.revolved_st`; the plinth box-mapped).
     """
     p = p or BaseParams()
     nodes, seg, half, ptop = _closed_profile(p, cap_bottom=cap_bottom, cap_top=cap_top)
@@ -447,7 +450,9 @@ def build_base(
     groups = np.repeat(seg, per_band)
     if len(groups) != mesh.n_triangles:  # revolve emits bands in profile order
         raise GeometryError("build_base: revolve's band layout changed")
-    mesh = smooth_normals(mesh, groups - groups.min())
+    mesh = smooth_normals(mesh, groups - groups.min(), indexed=True)
+    st, st_idx = revolved_st(nodes, rows, mesh.points, mesh.triangles, per_band)
+    mesh = mesh.with_(st=st, st_indices=st_idx)
     if p.plinth_modules:
         mesh = _with_plinth(mesh, rows[0], half, ptop, cap_bottom, name)
     if y_offset:
@@ -472,11 +477,24 @@ def _with_plinth(mesh: Mesh, ring: np.ndarray, half: float, top: float, cap_bott
     flip = out < 0
     tri[flip] = tri[flip][:, [0, 2, 1]]
     fn[flip] = -fn[flip]
-    normals = np.concatenate([mesh.normals.reshape(-1, 3),
-                              np.repeat(fn.astype(np.float32), 3, axis=0)])
+    assert mesh.normals is not None and mesh.normals_indices is not None
+    normals = np.concatenate([mesh.normals, fn.astype(np.float32)])
+    nidx = np.concatenate([mesh.normals_indices,
+                           len(mesh.normals) + np.repeat(np.arange(len(tri)), 3)])
     idx = np.concatenate([mesh.face_vertex_indices, tri.reshape(-1)])
+    st, sti = mesh.st, mesh.st_indices
+    if st is not None and sti is not None:
+        # the slab's faces are planar: one chart per face plane (by outward normal), box-mapped
+        corners = tri.reshape(-1)
+        axis = np.argmax(np.abs(fn), axis=1)
+        key = np.repeat(axis * 2 + (fn[np.arange(len(fn)), axis] > 0), 3)
+        uniq, first, inv = np.unique(key * len(points) + corners, return_index=True,
+                                     return_inverse=True)
+        slab = box_st(points[uniq % len(points)], np.repeat(fn, 3, axis=0)[first])
+        sti = np.concatenate([sti, len(st) + inv.reshape(-1)])
+        st = np.concatenate([st, slab.astype(np.float32)])
     return Mesh(points, np.full(len(idx) // 3, 3, np.int32), idx, normals, "faceVarying",
-                name=name)
+                st, sti, name=name, normals_indices=nidx)
 
 
 # -- presets --------------------------------------------------------------------------------

@@ -9,12 +9,10 @@ new intersection curves are crisp.
 
 from __future__ import annotations
 
-from typing import Literal
-
 import numpy as np
 
 from ionic_usd.errors import GeometryError
-from ionic_usd.geometry.mesh import Mesh, face_normals, triangulate_fan
+from ionic_usd.geometry.mesh import Mesh, box_st, corner_normals, face_normals, triangulate_fan
 
 __all__ = ["split_shells", "union", "difference", "remove_slivers", "SLIVER_ANGLE_DEG",
            "SLIVER_TOL"]
@@ -26,12 +24,11 @@ def _as_triangles(mesh: Mesh) -> Mesh:
         return mesh
     corners = triangulate_fan(mesh.face_vertex_counts,
                               np.arange(len(mesh.face_vertex_indices))).reshape(-1)
-    nrm = mesh.normals
-    if nrm is not None and mesh.normals_interpolation == "faceVarying":
-        nrm = nrm[corners]
+    nrm, interp = mesh.normals, mesh.normals_interpolation
+    if nrm is not None and interp == "faceVarying":
+        nrm = corner_normals(mesh)[corners]
     return Mesh(mesh.points, np.full(len(corners) // 3, 3, np.int32),
-                mesh.face_vertex_indices[corners], nrm, mesh.normals_interpolation,
-                name=mesh.name)
+                mesh.face_vertex_indices[corners], nrm, interp, name=mesh.name)
 
 
 def split_shells(mesh: Mesh) -> list[Mesh]:
@@ -66,11 +63,12 @@ def _corner_normals(mesh: Mesh) -> np.ndarray | None:
         return mesh.normals[mesh.triangles.reshape(-1)]
     if not np.all(mesh.face_vertex_counts == 3):
         raise GeometryError("union: faceVarying normals need a triangle mesh")
-    return mesh.normals
+    return corner_normals(mesh)
 
 
-def _to_manifold(mesh: Mesh, keep_faces: bool = False):
-    """A manifold3d.Manifold with the corner normals as properties 3..5.
+def _to_manifold(mesh: Mesh, keep_faces: bool = False, st: np.ndarray | None = None):
+    """A manifold3d.Manifold with the corner normals as properties 3..5 (and ``st``, per
+    corner (3 t, 2), as properties 6..7).
 
     ``keep_faces``: one face id per triangle, so coplanar neighbours keep their edges (a flat
     top keeps the ring a shaft welds to); otherwise manifold3d merges coplanar triangles into
@@ -86,10 +84,13 @@ def _to_manifold(mesh: Mesh, keep_faces: bool = False):
     corner_pt = tri.reshape(-1)
     q = np.round(cn.astype(np.float64) * 1e6).astype(np.int64)
     key = np.concatenate([corner_pt[:, None], q], axis=1)
+    if st is not None:
+        key = np.concatenate([key, np.round(st * 1e6).astype(np.int64)], axis=1)
     uk, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
     inv = inv.reshape(-1)
     pv = uk[:, 0]
-    props = np.concatenate([mesh.points[pv], cn[first].astype(np.float64)], axis=1)
+    props = np.concatenate([mesh.points[pv], cn[first].astype(np.float64)]
+                           + ([] if st is None else [st[first]]), axis=1)
     # property vertices at one point are merged for topology
     order = np.argsort(pv, kind="stable")
     head = np.r_[True, pv[order][1:] != pv[order][:-1]]
@@ -145,6 +146,20 @@ def difference(mesh: Mesh, cutters: list[Mesh], name: str | None = None, *,
     """
     import manifold3d
 
+    if mesh.st is not None:
+        # carry the mesh's own (analytic) st through the cut; the cap faces a cutter leaves
+        # get planar st (box-mapped, wound like the caps, which face against the cutter)
+        ops = [_to_manifold(mesh, keep_faces=True,
+                            st=mesh.st[mesh.st_indices].astype(np.float64))]
+        cut = []
+        for m in map(_as_triangles, cutters):
+            fn, _ = face_normals(m.points, m.triangles)
+            cst = box_st(m.points[m.triangles.reshape(-1)], -np.repeat(fn, 3, axis=0))
+            cut.append(_to_manifold(m, keep_faces=True, st=cst))
+        res = manifold3d.Manifold.batch_boolean([*ops, *cut], manifold3d.OpType.Subtract)
+        if res.is_empty():
+            raise GeometryError(f"difference: nothing of mesh {mesh.name!r} is left")
+        return _from_manifold(res, mesh.name if name is None else name, simplify=simplify)
     ops = [_to_manifold(s, keep_faces=True) for s in split_shells(mesh)]
     base = manifold3d.Manifold.batch_boolean(ops, manifold3d.OpType.Add)
     cut = [_to_manifold(s, keep_faces=True) for m in cutters for s in split_shells(m)]
@@ -190,8 +205,17 @@ def _from_manifold(res, name: str, simplify: bool = True) -> Mesh:
     # a subtracted solid's faces come with its outward normals: they now face the other way
     against = np.einsum("ij,ij->i", nrm, fn3) < 0
     nrm[against] = -nrm[against]
+    st = sti = None
+    if props.shape[1] >= 8:
+        # one st value per (point, st) pair: property vertices split by a normal crease only
+        # share it, so a chart stays connected across creases
+        q = np.round(props[:, 6:8] * 1e6).astype(np.int64)
+        key = np.concatenate([pt_index[:, None], q], axis=1)
+        _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
+        st = props[first, 6:8].astype(np.float32)
+        sti = inv.reshape(-1)[tri.reshape(-1)]
     out_mesh = Mesh(points, np.full(len(idx), 3, np.int32), idx.reshape(-1),
-                    nrm.astype(np.float32), "faceVarying", name=name)
+                    nrm.astype(np.float32), "faceVarying", st, sti, name=name)
     return remove_slivers(out_mesh, SLIVER_TOL * diag) if simplify else out_mesh
 
 
@@ -252,9 +276,15 @@ def remove_slivers(mesh: Mesh, tol: float, *, min_angle: float = SLIVER_ANGLE_DE
     """
     tri = mesh.triangles.astype(np.int64).copy()
     pts = np.array(mesh.points, dtype=np.float64)
-    cn: np.ndarray | None = None
-    if mesh.normals is not None and mesh.normals_interpolation == "faceVarying":
-        cn = mesh.normals.reshape(-1, 3, 3).copy()
+    # per-corner attributes carried through every edit: the normals (3) and st (2)
+    parts = []
+    corner_n = corner_normals(mesh)
+    if corner_n is not None:
+        parts.append(np.asarray(corner_n, dtype=np.float64).reshape(-1, 3, 3))
+    if mesh.st is not None and mesh.st_indices is not None:
+        parts.append(np.asarray(mesh.st, dtype=np.float64)[mesh.st_indices].reshape(-1, 3, 2))
+    cn: np.ndarray | None = np.concatenate(parts, axis=2) if parts else None
+    n_dim = 3 if corner_n is not None else 0
     alive = np.ones(len(tri), dtype=bool)
 
     inc: dict[int, set[int]] = {}  # vertex → the live triangles using it
@@ -345,7 +375,8 @@ def remove_slivers(mesh: Mesh, tol: float, *, min_angle: float = SLIVER_ANGLE_DE
         if cn is not None:
             n_a, n_b, n_d = (cn[o][int(np.flatnonzero(tri[o] == v)[0])] for v in (a, b, d))
             nf = (1 - u) * n_a + u * n_b
-            nf = nf / max(float(np.linalg.norm(nf)), 1e-12)
+            if n_dim:
+                nf[:n_dim] /= max(float(np.linalg.norm(nf[:n_dim])), 1e-12)
             cn[o] = [n_b, nf, n_d]
             cn = np.concatenate([cn, [[nf, n_a, n_d]]])
         set_tri(o, halves[0])
@@ -413,12 +444,17 @@ def remove_slivers(mesh: Mesh, tol: float, *, min_angle: float = SLIVER_ANGLE_DE
             break
     tri = tri[alive]
     used, idx = np.unique(tri, return_inverse=True)
-    interp: Literal["vertex", "faceVarying"] = "faceVarying"
-    nrm: np.ndarray | None
-    if cn is not None:
-        nrm = cn[alive].reshape(-1, 3)
-    else:
-        nrm = None if mesh.normals is None else mesh.normals[used]
-        interp = mesh.normals_interpolation
-    return Mesh(pts[used], np.full(len(tri), 3, np.int32), idx.reshape(-1), nrm, interp,
-                name=mesh.name)
+    corners = None if cn is None else cn[alive].reshape(-1, cn.shape[2])
+    nrm = None if corners is None or not n_dim else corners[:, :3].astype(np.float32)
+    st = sti = None
+    if corners is not None and corners.shape[1] > n_dim:
+        # re-index st per corner (equal values shared, first occurrence first)
+        q = np.round(corners[:, n_dim:] * 1e7).astype(np.int64)
+        _, first, inv = np.unique(q, axis=0, return_index=True, return_inverse=True)
+        order = np.argsort(first)
+        rank = np.empty_like(order)
+        rank[order] = np.arange(len(order))
+        st = corners[first[order], n_dim:].astype(np.float32)
+        sti = rank[inv.reshape(-1)].astype(np.int32)
+    return Mesh(pts[used], np.full(len(tri), 3, np.int32), idx.reshape(-1), nrm, "faceVarying",
+                st, sti, name=mesh.name)

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ionic_usd.geometry.analysis import signed_volume
-from ionic_usd.geometry.mesh import Mesh, face_normals, triangulate_fan, weld
+from ionic_usd.geometry.mesh import Mesh, corner_normals, face_normals, triangulate_fan, weld
 
 __all__ = [
     "SolidReport",
@@ -130,7 +130,7 @@ def normals_against_winding(mesh: Mesh) -> int:
     else:  # corners of the fan triangles, in the order ``triangles`` uses
         corners = triangulate_fan(mesh.face_vertex_counts,
                                   np.arange(len(mesh.face_vertex_indices)))
-        cn = mesh.normals[corners].astype(np.float64)
+        cn = corner_normals(mesh)[corners].astype(np.float64)
     dots = np.einsum("ikj,ij->ik", cn, fn).min(axis=1)
     return int(((dots < 0) & (area > 0)).sum())
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from ionic_usd.errors import GeometryError
-from ionic_usd.geometry.mesh import Mesh, triangulate_fan
+from ionic_usd.geometry.mesh import Mesh, box_st, corner_normals, triangulate_fan
 from ionic_usd.geometry.polygon import polygon_triangles
 
 __all__ = ["clip_mesh"]
@@ -69,7 +69,8 @@ def clip_mesh(
     -------
     Mesh
         Triangles, faceVarying normals when the input has normals (interpolated along cut
-        edges, ``−plane_normal`` on the cap), no texture coordinates (re-unwrap the result).
+        edges, ``−plane_normal`` on the cap); the input's ``st`` likewise, with planar
+        (box-mapped, metric) ``st`` on the cap.
         When the plane does not cut the mesh (everything is kept), the input is returned
         unchanged apart from the name.
 
@@ -129,9 +130,11 @@ def clip_mesh(
                              np.arange(mesh.face_vertex_indices.size)).astype(np.int64)
     fv = None
     if mesh.normals is not None:
-        fv = mesh.normals.astype(np.float64)
-        if mesh.normals_interpolation == "vertex":
-            fv = fv[mesh.face_vertex_indices]
+        fv = corner_normals(mesh).astype(np.float64)
+    if mesh.st is not None and mesh.st_indices is not None:
+        # st rides along with the normals (3 more columns, interpolated the same way)
+        cst = mesh.st[mesh.st_indices].astype(np.float64)
+        fv = np.concatenate([fv if fv is not None else np.zeros((len(cst), 3)), cst], axis=1)
 
     # -- split the crossing triangles: one new vertex per crossing undirected edge ----------
     st_ = tri[split]
@@ -165,7 +168,7 @@ def clip_mesh(
         sd = d[st_]
         w = sd / np.where(cross, sd - np.roll(sd, -1, axis=1), 1.0)  # share of the next corner
         en = cn + w[..., None] * (np.roll(cn, -1, axis=1) - cn)
-        cand_n = np.empty((len(st_), 6, 3))
+        cand_n = np.empty((len(st_), 6, fv.shape[1]))
         cand_n[:, 0::2], cand_n[:, 1::2] = cn, en
         poly_n = triangulate_fan(counts, np.arange(int(counts.sum())))
         kept_nrm = np.concatenate([fv[corner[whole]], cand_n[mask][poly_n]])
@@ -178,12 +181,23 @@ def clip_mesh(
         if len(cap_tri):
             faces.append(cap_tri)
             if normals is not None:
-                normals.append(np.broadcast_to(-n, (len(cap_tri), 3, 3)))
+                cap_v = np.broadcast_to(-n, (3 * len(cap_tri), 3))
+                if fv is not None and fv.shape[1] == 5:  # planar st on the cap, box-mapped
+                    cap_v = np.concatenate([cap_v, box_st(all_pts[cap_tri.reshape(-1)],
+                                                          cap_v)], axis=1)
+                normals.append(cap_v)
     faces_all = np.concatenate(faces)
     used, remap = np.unique(faces_all, return_inverse=True)
-    out_nrm = None
+    out_nrm = st = sti = None
     if normals is not None:
-        out_nrm = np.concatenate([np.reshape(x, (-1, 3)) for x in normals])
+        out_nrm = np.concatenate([np.reshape(x, (-1, fv.shape[1])) for x in normals])
+        if out_nrm.shape[1] == 5:
+            key = np.concatenate([faces_all.reshape(-1, 1),
+                                  np.round(out_nrm[:, 3:] * 1e6).astype(np.int64)], axis=1)
+            _, first, sti = np.unique(key, axis=0, return_index=True, return_inverse=True)
+            st, sti = out_nrm[first, 3:], sti.reshape(-1)
+            out_nrm = out_nrm[:, :3] if mesh.normals is not None else None
+    if out_nrm is not None:
         ln_ = np.linalg.norm(out_nrm, axis=1, keepdims=True)
         out_nrm = np.where(ln_ > 0, out_nrm / np.where(ln_ > 0, ln_, 1.0), -n)
     return Mesh(
@@ -192,6 +206,8 @@ def clip_mesh(
         remap.reshape(-1).astype(np.int32),
         out_nrm,
         "faceVarying",
+        st,
+        sti,
         name=name,
     )
 

@@ -136,8 +136,10 @@ def _outside_walls(points: np.ndarray, form: str) -> np.ndarray:
 
 
 # -- generate -----------------------------------------------------------------------------
-def column_asset_meshes(opts: ColumnAssetOptions) -> list[AssetMesh]:
-    """Every mesh of the asset with its variant tags (geometry only, no UVs).
+def column_asset_meshes(opts: ColumnAssetOptions,
+                        uv_cache: UVCache | None = None) -> list[AssetMesh]:
+    """Every mesh of the asset with its variant tags (geometry only; with ``uv_cache`` the
+    capital is charted by xatlas before the form cuts, which carry the charts).
 
     Returns
     -------
@@ -168,6 +170,14 @@ def column_asset_meshes(opts: ColumnAssetOptions) -> list[AssetMesh]:
                         tag["volute"] = vm
                         name = f"{name}_{vm}"
                     groups.append(("CapitalBody", name, body, tag))
+        if uv_cache is not None:  # base and shaft have analytic st; chart the capital once
+            from ionic_usd.texture.uv import metric_charts
+
+            caps = [i for i, g in enumerate(groups) if g[0] == "CapitalBody"]
+            charted = metric_charts([groups[i][2] for i in caps], ASSET_TEXELS_PER_METRE[lod],
+                                    cache=uv_cache)
+            for i, m in zip(caps, charted, strict=True):
+                groups[i] = (groups[i][0], groups[i][1], m, groups[i][3])
         for part, name, mesh, tags in groups:
             for form in opts.forms:
                 m = form_cut(mesh, form, part)
@@ -352,7 +362,9 @@ def build_column_asset(
         for src in opts.user_textures.values():
             validate_user_texture(src)
     cache = cache if cache is not None else default_cache()
-    meshes, unwraps = _with_uvs(column_asset_meshes(opts), cache)
+    misses0 = cache.misses
+    meshes, _ = _with_uvs(column_asset_meshes(opts, uv_cache=cache), cache)
+    unwraps = cache.misses - misses0
     path = author_column_asset(dest, opts, meshes, column_asset_ornament(opts),
                                populate=_textures_writer(opts), force=force)
     size = sum(f.stat().st_size for f in dest.rglob("*") if f.is_file())

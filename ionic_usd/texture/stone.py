@@ -14,25 +14,37 @@ Conventions
   downwards, the tangent +X points right (increasing column) and the bitangent +Y points up
   (decreasing row). Components are encoded as ``0.5 * n + 0.5``; z > 0 always.
 * Feature sizes are defined in cycles per tile, not pixels, and the random Fourier
-  coefficients up to :data:`_KMAX` cycles per tile do not depend on ``size``: one seed gives the
-  same stone at every resolution (a 1024 map downsampled matches the 512 map), which keeps
-  LOD texture sets consistent.
+  coefficients up to :data:`ionic_usd.texture.noise.KMAX` cycles per tile do not depend on
+  ``size``: one seed gives the same stone at every resolution (a 1024 map downsampled matches
+  the 512 map), which keeps LOD texture sets consistent.
+
+Noise synthesis lives in :mod:`ionic_usd.texture.noise`, the sRGB transfer functions in
+:mod:`ionic_usd.texture.colour` and file writing / user textures in
+:mod:`ionic_usd.texture.files`; their public names used here are importable from this module
+too.
 """
 
 from __future__ import annotations
 
-import functools
 import math
 import os
-import shutil
-from collections.abc import Mapping
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from ..errors import IonicError, ParameterError
+from ionic_usd.errors import ParameterError
+from ionic_usd.texture.colour import encode_srgb_inplace, linear_to_srgb, srgb_to_linear
+from ionic_usd.texture.files import (
+    MAX_USER_TEXTURE_SIZE,
+    USDZ_TEXTURE_FORMATS,
+    TextureError,
+    copy_user_textures,
+    validate_user_texture,
+    verify_image,
+    write_maps,
+)
+from ionic_usd.texture.noise import NoiseSpec, Spectrum, gauss_quantile, smoothstep
 
 __all__ = [
     "StoneStyle",
@@ -60,33 +72,6 @@ __all__ = [
 
 MIN_TEXTURE_SIZE = 16
 MAX_TEXTURE_SIZE = 8192
-MAX_USER_TEXTURE_SIZE = 16384  # pixels per side of a user texture, checked before decoding
-
-#: OpenImageIO format names allowed inside a USDZ package, with the file extensions that
-#: must go with them (USD's image plugins choose the reader by extension).
-USDZ_TEXTURE_FORMATS: dict[str, tuple[str, ...]] = {
-    "png": (".png",),
-    "jpeg": (".jpg", ".jpeg"),
-}
-
-# Highest frequency (cycles per tile) drawn from the size-independent random stream.
-_KMAX = 512
-# Edge of the independently seeded cells of the Fourier-coefficient grid.
-_CELL = 64
-# Offset of the stream ids that draw frequencies beyond _KMAX (tiles larger than 1024).
-_HIGH_STREAM = 1000
-
-
-class TextureError(IonicError, ValueError):
-    """A texture file is missing, unreadable or in a format USDZ does not allow.
-
-    Carries the offending ``path`` and a human-readable ``problem``.
-    """
-
-    def __init__(self, path: str | os.PathLike[str], problem: str) -> None:
-        self.path = Path(path)
-        self.problem = problem
-        super().__init__(f"texture {str(self.path)!r}: {problem}")
 
 
 def _check_unit(name: str, value: float, style: str) -> None:
@@ -162,60 +147,24 @@ class StoneStyle:
             )
 
 
-# Temple of Portunus: travertine (columns, facing) and tufa: warm cream, horizontal layers with
-# small elongated voids lying along them.
-TRAVERTINE = StoneStyle(
-    name="travertine",
-    base_color=(0.84, 0.76, 0.62),
-    vein_color=(0.72, 0.62, 0.47),
-    vein_strength=0.15,
-    pore_density=0.045,
-    roughness_range=(0.55, 0.9),
-    normal_strength=0.004,
-    banding=0.8,
-    mottling=0.35,
-    pore_color=(0.5, 0.42, 0.3),
+# The presets, one row each in StoneStyle's field order: name, base colour, vein colour, vein
+# strength, pore density, roughness range, normal strength, banding, mottling, pore colour.
+_PRESETS = (
+    # Temple of Portunus: travertine (columns, facing) and tufa: warm cream, horizontal
+    # layers with small elongated voids lying along them
+    ("travertine", (0.84, 0.76, 0.62), (0.72, 0.62, 0.47), 0.15, 0.045, (0.55, 0.9), 0.004,
+     0.8, 0.35, (0.5, 0.42, 0.3)),
+    ("marble", (0.91, 0.90, 0.88), (0.45, 0.46, 0.48), 0.75, 0.0, (0.12, 0.3), 0.0008,
+     0.0, 0.2, (0.6, 0.6, 0.6)),
+    # reconstruction hypothesis: the travertine/tufa was coated with white painted stucco
+    ("stucco_painted", (0.90, 0.88, 0.83), (0.80, 0.77, 0.70), 0.0, 0.01, (0.6, 0.85), 0.0015,
+     0.0, 0.25, (0.7, 0.67, 0.6)),
+    # roof tiles (tegulae, imbrices, antefixes): fired red-orange clay, matt, fine mottling
+    # and sparse pores (ionic_usd.temple.ornament)
+    ("terracotta", (0.70, 0.38, 0.24), (0.58, 0.30, 0.19), 0.1, 0.015, (0.65, 0.9), 0.002,
+     0.0, 0.45, (0.45, 0.24, 0.16)),
 )
-MARBLE = StoneStyle(
-    name="marble",
-    base_color=(0.91, 0.90, 0.88),
-    vein_color=(0.45, 0.46, 0.48),
-    vein_strength=0.75,
-    pore_density=0.0,
-    roughness_range=(0.12, 0.3),
-    normal_strength=0.0008,
-    banding=0.0,
-    mottling=0.2,
-    pore_color=(0.6, 0.6, 0.6),
-)
-# Reconstruction hypothesis: the travertine/tufa was coated with white painted stucco.
-STUCCO_PAINTED = StoneStyle(
-    name="stucco_painted",
-    base_color=(0.90, 0.88, 0.83),
-    vein_color=(0.80, 0.77, 0.70),
-    vein_strength=0.0,
-    pore_density=0.01,
-    roughness_range=(0.6, 0.85),
-    normal_strength=0.0015,
-    banding=0.0,
-    mottling=0.25,
-    pore_color=(0.7, 0.67, 0.6),
-)
-
-# Roof tiles (tegulae, imbrices, antefixes): fired red-orange clay, matt, fine mottling and
-# sparse pores (ionic_usd.temple.ornament).
-TERRACOTTA = StoneStyle(
-    name="terracotta",
-    base_color=(0.70, 0.38, 0.24),
-    vein_color=(0.58, 0.30, 0.19),
-    vein_strength=0.1,
-    pore_density=0.015,
-    roughness_range=(0.65, 0.9),
-    normal_strength=0.002,
-    banding=0.0,
-    mottling=0.45,
-    pore_color=(0.45, 0.24, 0.16),
-)
+TRAVERTINE, MARBLE, STUCCO_PAINTED, TERRACOTTA = (StoneStyle(*row) for row in _PRESETS)
 STONE_STYLES: dict[str, StoneStyle] = {
     s.name: s for s in (TRAVERTINE, MARBLE, STUCCO_PAINTED, TERRACOTTA)}
 
@@ -266,155 +215,6 @@ class StoneMaps:
         return int(self.roughness.shape[0])
 
 
-# ---------------------------------------------------------------------------------- colour
-
-
-def srgb_to_linear(c: np.ndarray) -> np.ndarray:
-    """IEC 61966-2-1 sRGB decoding of values in [0, 1] (any shape)."""
-    c = np.asarray(c, dtype=np.float32)
-    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4).astype(np.float32)
-
-
-def linear_to_srgb(c: np.ndarray) -> np.ndarray:
-    """IEC 61966-2-1 sRGB encoding; input is clipped to [0, 1] first (any shape)."""
-    c = np.clip(np.asarray(c, dtype=np.float32), 0.0, 1.0)
-    out = np.where(c <= 0.0031308, c * 12.92, 1.055 * np.power(c, 1.0 / 2.4) - 0.055)
-    return np.clip(out, 0.0, 1.0).astype(np.float32)
-
-
-# ---------------------------------------------------------------------------- periodic noise
-
-
-@dataclass(frozen=True)
-class _NoiseSpec:
-    """Spectrum of one periodic noise field (frequencies in cycles per tile).
-
-    The amplitude at frequency ``f`` is ``f**-beta`` with a Gaussian high cut at ``f_hi`` and a
-    low cut at ``f_lo``; ``stretch = (sx, sy)`` makes features ``sx / sy`` times longer along
-    the x axis rotated by ``angle_deg``.
-    """
-
-    stream: int
-    beta: float
-    f_lo: float
-    f_hi: float
-    stretch: tuple[float, float] = (1.0, 1.0)
-    angle_deg: float = 0.0
-
-    @property
-    def k_need(self) -> int:
-        # Beyond 3 f_hi the Gaussian cut is below 1.3e-4: coefficients there are not drawn.
-        return math.ceil(3.0 * self.f_hi / min(self.stretch))
-
-    def amplitude(self, kx: np.ndarray, ky: np.ndarray) -> np.ndarray:
-        a = math.radians(self.angle_deg)
-        u = (kx * math.cos(a) + ky * math.sin(a)) * self.stretch[0]
-        v = (ky * math.cos(a) - kx * math.sin(a)) * self.stretch[1]
-        f = np.maximum(np.sqrt(u * u + v * v), 1e-6)
-        amp = f ** (-self.beta) * np.exp(-((f / self.f_hi) ** 2))
-        amp *= 1.0 - np.exp(-((f / self.f_lo) ** 2))
-        return amp.astype(np.float32, copy=False)
-
-
-@functools.lru_cache(maxsize=64)
-def _sigma(spec: _NoiseSpec) -> float:
-    """Standard deviation of the unnormalised field in the infinite-resolution limit (x n^2)."""
-    k = spec.k_need
-    amp = spec.amplitude(
-        np.arange(0, k + 1, dtype=np.float32)[None, :],
-        np.arange(-k, k + 1, dtype=np.float32)[:, None],
-    )
-    amp[k, 0] = 0.0
-    # Columns kx > 0 of the half plane stand for two full-plane bins (Hermitian pairs);
-    # E|c|^2 = 2 for a complex coefficient with unit-variance parts.
-    var = 2.0 * (2.0 * float(np.sum(amp.astype(np.float64) ** 2)) - float(np.sum(amp[:, 0] ** 2)))
-    return math.sqrt(var)
-
-
-class _Spectrum:
-    """Seeded periodic noise fields of one ``n x n`` tile, synthesised in rfft2 layout."""
-
-    def __init__(self, size: int, seed: int) -> None:
-        self.size = size
-        self.seed = seed
-        # Integer frequencies (cycles per tile) of the rfft2 rows and columns.
-        self.iy = np.rint(np.fft.fftfreq(size) * size).astype(np.int64)
-        self.ix = np.arange(size // 2 + 1, dtype=np.int64)
-
-    def _draw_low(self, stream: int, k: int) -> np.ndarray:
-        """Complex white noise for ky in [-k, k], kx in [0, k]: (2k+1, k+1) complex64.
-
-        The grid |k| <= _KMAX is cut into fixed 64 x 64 cells, each with its own seed, so a
-        coefficient has the same value whatever ``k`` (hence the tile size) is, and only the
-        cells that are needed are drawn.
-        """
-        t = _CELL
-        out = np.empty((2 * k + 1, k + 1), dtype=np.complex64)
-        gy0, gy1 = _KMAX - k, _KMAX + k + 1  # global row range (row = ky + _KMAX)
-        for cy in range(gy0 // t, (gy1 - 1) // t + 1):
-            for cx in range(0, k // t + 1):
-                rng = np.random.default_rng([self.seed, stream, cy, cx])
-                cell = rng.standard_normal((t, t, 2), dtype=np.float32).view(np.complex64)[..., 0]
-                y0, y1 = max(cy * t, gy0), min((cy + 1) * t, gy1)
-                x0, x1 = cx * t, min((cx + 1) * t, k + 1)
-                out[y0 - gy0 : y1 - gy0, x0:x1] = cell[y0 - cy * t : y1 - cy * t, : x1 - x0]
-        return out
-
-    def field(self, spec: _NoiseSpec) -> np.ndarray:
-        """Periodic Gaussian noise, (n, n) float32, unit standard deviation in the
-        infinite-resolution limit (so contrast does not depend on ``size``)."""
-        n = self.size
-        k = min(spec.k_need, _KMAX, n // 2)
-        scale = np.float32(n * n / _sigma(spec))
-        block = self._draw_low(spec.stream, k)
-        block *= spec.amplitude(
-            np.arange(0, k + 1, dtype=np.float32)[None, :],
-            np.arange(-k, k + 1, dtype=np.float32)[:, None],
-        )
-        block *= scale
-        if n // 2 <= k:
-            coef = block[self.iy + k, : n // 2 + 1]
-        else:
-            coef = np.zeros((n, n // 2 + 1), dtype=np.complex64)
-            if spec.k_need > _KMAX:
-                # Frequencies past the size-independent block come from a second stream.
-                rng = np.random.default_rng([self.seed, _HIGH_STREAM + spec.stream])
-                hi = rng.standard_normal((n, n // 2 + 1, 2), dtype=np.float32)
-                coef = hi.view(np.complex64)[..., 0]
-                coef *= spec.amplitude(
-                    self.ix[None, :].astype(np.float32), self.iy[:, None].astype(np.float32)
-                )
-                coef *= scale
-            coef[: k + 1, : k + 1] = block[k:]
-            coef[n - k :, : k + 1] = block[:k]
-        return np.fft.irfft2(coef, s=(n, n)).astype(np.float32, copy=False)
-
-    def fields(self, specs: Mapping[str, _NoiseSpec]) -> dict[str, np.ndarray]:
-        """Several fields at once; threads overlap because numpy's FFT and RNG release the GIL
-        (each field has its own streams, so the result does not depend on scheduling)."""
-        workers = min(len(specs), os.cpu_count() or 1, 4)
-        if workers <= 1 or self.size < 256:
-            return {name: self.field(s) for name, s in specs.items()}
-        with ThreadPoolExecutor(max_workers=workers) as pool:
-            futures = {name: pool.submit(self.field, s) for name, s in specs.items()}
-            return {name: f.result() for name, f in futures.items()}
-
-
-def _gauss_quantile(p: float) -> float:
-    """Inverse standard normal CDF by bisection (scalar; avoids a scipy dependency)."""
-    lo, hi = -10.0, 10.0
-    for _ in range(80):
-        mid = 0.5 * (lo + hi)
-        if 0.5 * (1.0 + math.erf(mid / math.sqrt(2.0))) < p:
-            lo = mid
-        else:
-            hi = mid
-    return 0.5 * (lo + hi)
-
-
-def _smoothstep(e0: float, e1: float, x: np.ndarray) -> np.ndarray:
-    t = np.clip((x - e0) / (e1 - e0), 0.0, 1.0)
-    return t * t * (3.0 - 2.0 * t)
 
 
 def height_to_normal(height: np.ndarray, depth: float) -> np.ndarray:
@@ -443,17 +243,6 @@ def height_to_normal(height: np.ndarray, depth: float) -> np.ndarray:
     n /= np.linalg.norm(n, axis=-1, keepdims=True)
     return n.astype(np.float32)
 
-
-def _encode_srgb_inplace(c: np.ndarray) -> None:
-    """:func:`linear_to_srgb` without temporaries of the full shape beyond one mask."""
-    np.clip(c, 0.0, 1.0, out=c)
-    low = c <= 0.0031308
-    lin = c[low] * 12.92
-    np.power(c, np.float32(1.0 / 2.4), out=c)
-    c *= 1.055
-    c -= 0.055
-    c[low] = lin
-    np.clip(c, 0.0, 1.0, out=c)
 
 
 def _check_size(size: object) -> int:
@@ -491,23 +280,23 @@ def generate_stone_maps(style: StoneStyle | str, size: int = 1024, seed: int = 0
     st = get_stone_style(style)
     n = _check_size(size)
     seed = _check_seed(seed)
-    sp = _Spectrum(n, seed)
+    sp = Spectrum(n, seed)
 
     # Each field has its own random streams, so skipping an unused one changes no other field.
     specs = {
-        "cloud": _NoiseSpec(1, beta=1.6, f_lo=1.0, f_hi=24.0),
-        "grain": _NoiseSpec(2, beta=0.3, f_lo=40.0, f_hi=260.0),
-        "rough": _NoiseSpec(7, beta=0.8, f_lo=4.0, f_hi=120.0),
+        "cloud": NoiseSpec(1, beta=1.6, f_lo=1.0, f_hi=24.0),
+        "grain": NoiseSpec(2, beta=0.3, f_lo=40.0, f_hi=260.0),
+        "rough": NoiseSpec(7, beta=0.8, f_lo=4.0, f_hi=120.0),
     }
     if st.banding > 0.0:
         # Sedimentary layers: features 16x longer horizontally than vertically, slightly wavy.
-        specs["band"] = _NoiseSpec(3, 0.9, 2.0, 120.0, stretch=(16.0, 1.0), angle_deg=2.0)
+        specs["band"] = NoiseSpec(3, 0.9, 2.0, 120.0, stretch=(16.0, 1.0), angle_deg=2.0)
     if st.vein_strength > 0.0:
-        specs["vein_a"] = _NoiseSpec(4, 1.3, 1.0, 64.0, stretch=(2.5, 1.0), angle_deg=35.0)
-        specs["vein_b"] = _NoiseSpec(5, 1.0, 3.0, 128.0, stretch=(1.5, 1.0), angle_deg=-20.0)
+        specs["vein_a"] = NoiseSpec(4, 1.3, 1.0, 64.0, stretch=(2.5, 1.0), angle_deg=35.0)
+        specs["vein_b"] = NoiseSpec(5, 1.0, 3.0, 128.0, stretch=(1.5, 1.0), angle_deg=-20.0)
     if st.pore_density > 0.0:
         # Pores are elongated along the layers in banded stone.
-        specs["pore"] = _NoiseSpec(6, 0.0, 20.0, 140.0, stretch=(1.0 + 5.0 * st.banding, 1.0))
+        specs["pore"] = NoiseSpec(6, 0.0, 20.0, 140.0, stretch=(1.0 + 5.0 * st.banding, 1.0))
     fld = sp.fields(specs)
     zeros = np.zeros((n, n), dtype=np.float32)
     cloud, grain, rough_f = fld["cloud"], fld["grain"], fld["rough"]
@@ -519,8 +308,8 @@ def generate_stone_maps(style: StoneStyle | str, size: int = 1024, seed: int = 0
         vein_a, vein_b = fld["vein_a"], fld["vein_b"]
         # Widths and presence vary along each vein (large-scale cloud), so veins swell, thin
         # out and fade instead of looking like uniform contour lines.
-        fade_a = _smoothstep(-0.8, 0.6, cloud)
-        fade_b = _smoothstep(0.2, 1.4, -cloud + 0.5 * grain)
+        fade_a = smoothstep(-0.8, 0.6, cloud)
+        fade_b = smoothstep(0.2, 1.4, -cloud + 0.5 * grain)
         width = np.float32(0.06) * (1.0 + 0.6 * cloud)
         primary = np.exp(-((vein_a / np.maximum(width, 0.015)) ** 2))
         halo = 0.25 * np.exp(-((vein_a / 0.3) ** 2))
@@ -533,8 +322,8 @@ def generate_stone_maps(style: StoneStyle | str, size: int = 1024, seed: int = 0
         # Pores cluster in the porous layers: the threshold drops where the band field is high;
         # the threshold is scaled by the std of the sum so the covered fraction stays as asked.
         coupling = 1.2 * st.banding
-        t = _gauss_quantile(1.0 - st.pore_density) * math.sqrt(1.0 + coupling**2)
-        pores = _smoothstep(t, t + 0.6, fld["pore"] + np.float32(coupling) * band)
+        t = gauss_quantile(1.0 - st.pore_density) * math.sqrt(1.0 + coupling**2)
+        pores = smoothstep(t, t + 0.6, fld["pore"] + np.float32(coupling) * band)
 
     base = srgb_to_linear(np.array(st.base_color, dtype=np.float32))
     vein_c = srgb_to_linear(np.array(st.vein_color, dtype=np.float32))
@@ -561,7 +350,7 @@ def generate_stone_maps(style: StoneStyle | str, size: int = 1024, seed: int = 0
         if st.pore_density > 0.0:
             ch += (pore_c[c] - ch) * pore_mix
         base_color[..., c] = ch
-    _encode_srgb_inplace(base_color)
+    encode_srgb_inplace(base_color)
 
     height = 0.25 * grain
     height += (0.35 * st.mottling) * cloud
@@ -602,70 +391,6 @@ def generate_stone_maps(style: StoneStyle | str, size: int = 1024, seed: int = 0
     )
 
 
-# ------------------------------------------------------------------------------------ writing
-
-
-def _to_uint8(a: np.ndarray) -> np.ndarray:
-    return np.round(np.clip(a, 0.0, 1.0) * 255.0).astype(np.uint8)
-
-
-def _write_png(buf: object, path: Path) -> None:
-    import OpenImageIO as oiio
-
-    # zlib level 2 instead of libpng's 6: measured 0.62 s → 0.16 s for a 1024² basecolor,
-    # files ≈ 12 % larger
-    buf.specmod().attribute("png:compressionLevel", 2)
-    # zlib level 3 with the "average" filter: ~4x faster than the defaults (level 6, adaptive
-    # filters) and no larger on noisy images.
-    buf.specmod().attribute("png:compressionLevel", 3)
-    buf.specmod().attribute("png:filter", 64)
-    from ionic_usd.io import atomic_path
-
-    with atomic_path(path, verify=verify_image) as tmp:
-        if not buf.write(str(tmp), oiio.UINT8, "png"):
-            raise TextureError(path, f"OpenImageIO could not write it: {oiio.geterror()}")
-
-
-def verify_image(path: Path) -> None:
-    """Decode every pixel of an image file; raise :class:`TextureError` if it is incomplete.
-
-    OpenImageIO's writers can report success on a full disk and leave a truncated file.
-    """
-    import OpenImageIO as oiio
-
-    inp = oiio.ImageInput.open(str(path))
-    if inp is None:
-        raise TextureError(path, f"written image does not read back ({_one_line(oiio.geterror())})"
-                           "; is the disk full?")
-    try:
-        spec = inp.spec()
-        ok = inp.read_image(0, 0, 0, spec.nchannels, oiio.UINT8) is not None \
-            and not inp.has_error
-    finally:
-        inp.close()
-    if not ok:
-        raise TextureError(path, "written image is incomplete; is the disk full?")
-
-
-def _write_tx(buf: object, path: Path) -> None:
-    import OpenImageIO as oiio
-
-    config = oiio.ImageSpec()
-    config.attribute("maketx:fileformatname", "tiff")
-    # maketx's default 2x2 box reduction: exact for power-of-two sizes and 2.5x faster than
-    # lanczos3, with no visible difference on noise-like stone.
-    config.attribute("tile_width", 64)
-    config.attribute("tile_height", 64)
-    config.attribute("compression", "zip")
-    # No maketx:incolorspace / outcolorspace: texels are copied unconverted (colour stays
-    # sRGB-encoded and tagged so; roughness and normals stay raw data).
-    from ionic_usd.io import atomic_path
-
-    with atomic_path(path, verify=verify_image) as tmp:
-        if not oiio.ImageBufAlgo.make_texture(oiio.MakeTxTexture, buf, str(tmp), config):
-            raise TextureError(path, f"OpenImageIO make_texture failed: {oiio.geterror()}")
-
-
 def write_stone_textures(
     folder: str | os.PathLike[str],
     style: StoneStyle | str,
@@ -688,8 +413,6 @@ def write_stone_textures(
         Keys ``basecolor``, ``roughness``, ``normal`` and, with ``make_tx``, ``basecolor_tx``,
         ``roughness_tx``, ``normal_tx``.
     """
-    import OpenImageIO as oiio
-
     maps = generate_stone_maps(style, size, seed)
     out = Path(folder)
     out.mkdir(parents=True, exist_ok=True)
@@ -698,131 +421,4 @@ def write_stone_textures(
         "roughness": (maps.roughness, "Raw"),
         "normal": (maps.normal, "Raw"),
     }
-
-    def write_one(key: str) -> dict[str, Path]:
-        data, colorspace = planes[key]
-        buf = oiio.ImageBuf(_to_uint8(data))
-        # "Raw" makes the PNG writer omit sRGB/gAMA chunks, so viewers do not re-grade data.
-        buf.specmod().attribute("oiio:ColorSpace", colorspace)
-        done = {key: out / f"{maps.style}_{key}.png"}
-        _write_png(buf, done[key])
-        if make_tx:
-            done[f"{key}_tx"] = out / f"{maps.style}_{key}.tx"
-            _write_tx(buf, done[f"{key}_tx"])
-        return done
-
-    # zlib and maketx run outside the GIL: the three maps encode in parallel.
-    with ThreadPoolExecutor(max_workers=min(3, os.cpu_count() or 1)) as pool:
-        results = list(pool.map(write_one, planes))
-    written: dict[str, Path] = {}
-    for part in results:
-        written.update(part)
-    return written
-
-
-# ------------------------------------------------------------------------- user textures
-
-
-def _one_line(message: str) -> str:
-    return "; ".join(part.strip() for part in message.splitlines() if part.strip())
-
-
-def validate_user_texture(path: str | os.PathLike[str]) -> Path:
-    """Check that a user-supplied texture can be packaged into a USDZ.
-
-    The file must exist, be decodable by OpenImageIO, be PNG or JPEG by its *content*, and
-    carry an extension matching that content (USD picks its image reader by extension).
-
-    Returns
-    -------
-    Path
-        The resolved path.
-
-    Raises
-    ------
-    TextureError
-        Naming the path and the problem.
-    """
-    import OpenImageIO as oiio
-
-    p = Path(path)
-    if not p.exists():
-        raise TextureError(p, "file does not exist")
-    if not p.is_file():
-        raise TextureError(p, "not a regular file")
-    if not os.access(p, os.R_OK):
-        raise TextureError(p, "file is not readable (permission denied)")
-    inp = oiio.ImageInput.open(str(p))
-    if inp is None:
-        msg = _one_line(oiio.geterror()) or "unknown format"
-        raise TextureError(p, f"OpenImageIO cannot read it as an image ({msg})")
-    try:
-        fmt = inp.format_name()
-        spec = inp.spec()
-        if fmt not in USDZ_TEXTURE_FORMATS:
-            allowed = ", ".join(sorted(USDZ_TEXTURE_FORMATS))
-            raise TextureError(p, f"format is {fmt!r}; USDZ allows only {allowed}")
-        if p.suffix.lower() not in USDZ_TEXTURE_FORMATS[fmt]:
-            raise TextureError(
-                p,
-                f"content is {fmt} but the extension is {p.suffix!r}; "
-                f"rename it to one of {list(USDZ_TEXTURE_FORMATS[fmt])}",
-            )
-        if spec.width <= 0 or spec.height <= 0:
-            raise TextureError(p, "image has no pixels")
-        # the header's dimensions, before any pixel is decoded (a small PNG can hold 20000²)
-        if max(spec.width, spec.height) > MAX_USER_TEXTURE_SIZE or spec.depth > 1:
-            raise TextureError(p, f"image is {spec.width}x{spec.height}x{spec.depth} pixels; "
-                               f"the limit is {MAX_USER_TEXTURE_SIZE} per side, 2-D")
-        # Opening only parses the header; decode the pixels to catch truncated files.
-        pixels = inp.read_image(0, 0, 0, spec.nchannels, oiio.UINT8)
-        if pixels is None:
-            msg = _one_line(inp.geterror()) or "decode failed"
-            raise TextureError(p, f"pixels cannot be decoded ({msg})")
-    finally:
-        inp.close()
-    return p.resolve()
-
-
-def copy_user_textures(
-    mapping: Mapping[str, str | os.PathLike[str]], folder: str | os.PathLike[str]
-) -> dict[str, Path]:
-    """Validate every texture, then copy them all into ``folder`` under their own file names.
-
-    Parameters
-    ----------
-    mapping : Mapping[str, path]
-        Role (e.g. ``"basecolor"``) to source file.
-    folder : path
-        Destination, created if needed; existing files of the same name are replaced
-        atomically.
-
-    Returns
-    -------
-    dict[str, Path]
-        Role to destination path.
-
-    Raises
-    ------
-    TextureError
-        If any source is invalid or two different sources share a file name; nothing is
-        copied in that case.
-    """
-    sources = {role: validate_user_texture(src) for role, src in mapping.items()}
-    by_name: dict[str, Path] = {}
-    for role, src in sources.items():
-        other = by_name.setdefault(src.name, src)
-        if other != src:
-            raise TextureError(src, f"file name clashes with {str(other)!r} (role {role!r})")
-    out = Path(folder)
-    out.mkdir(parents=True, exist_ok=True)
-    copied: dict[str, Path] = {}
-    for role, src in sources.items():
-        dest = out / src.name
-        if not (dest.exists() and dest.samefile(src)):
-            from ionic_usd.io import atomic_path
-
-            with atomic_path(dest) as tmp:
-                shutil.copyfile(src, tmp)
-        copied[role] = dest
-    return copied
+    return write_maps(out, maps.style, planes, make_tx=make_tx)

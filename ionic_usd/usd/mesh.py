@@ -57,7 +57,8 @@ def author_mesh(
     ----------
     layer : the layer to author into
     path : prim path; missing ancestors are created as ``Xform``
-    mesh : the geometry; normals and ``st`` are written when present
+    mesh : the geometry; normals and ``st`` are written when present (indexed normals as
+        the indexed primvar ``primvars:normals``, others as the ``normals`` attribute)
     """
     spec = define_prim(layer, path, "Mesh")
     pts = np.ascontiguousarray(mesh.points, dtype=np.float32)
@@ -70,9 +71,18 @@ def author_mesh(
     _attr(spec, "subdivisionScheme", _T.Token, "none", uniform=True)
     _attr(spec, "doubleSided", _T.Bool, bool(double_sided), uniform=True)
     if mesh.normals is not None:
-        _attr(spec, "normals", _T.Normal3fArray,
-              Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(mesh.normals, dtype=np.float32)),
-              interpolation=mesh.normals_interpolation)
+        values = Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(mesh.normals, dtype=np.float32))
+        if mesh.normals_indices is None:
+            _attr(spec, "normals", _T.Normal3fArray, values,
+                  interpolation=mesh.normals_interpolation)
+        else:
+            # only a primvar can be indexed; UsdGeomPointBased: "if 'normals' and
+            # 'primvars:normals' are both specified, the latter has precedence" (Hydra, Blender
+            # and usdview read the primvar first), so exactly one of the two is authored
+            _attr(spec, "primvars:normals", _T.Normal3fArray, values,
+                  interpolation="faceVarying")
+            _attr(spec, "primvars:normals:indices", _T.IntArray, Vt.IntArray.FromNumpy(
+                np.ascontiguousarray(mesh.normals_indices, dtype=np.int32)))
     if mesh.st is not None:
         values, indices = indexed_st(mesh.st, mesh.st_indices)
         _attr(spec, "primvars:st", _T.TexCoord2fArray, Vt.Vec2fArray.FromNumpy(values),
@@ -96,9 +106,16 @@ def indexed_st(st: np.ndarray, indices: np.ndarray | None) -> tuple[np.ndarray, 
     """
     st32 = np.ascontiguousarray(st, dtype=np.float32).reshape(-1, 2)
     idx = np.arange(len(st32)) if indices is None else np.asarray(indices).reshape(-1)
-    values, inverse = np.unique(st32, axis=0, return_inverse=True)
-    return (np.ascontiguousarray(values, dtype=np.float32),
-            np.ascontiguousarray(inverse.reshape(-1)[idx], dtype=np.int32))
+    # the rows in lexicographic (s, t) order, as np.unique(axis=0) gives them, by one lexsort
+    # of the two columns (several times faster than unique(axis=0)'s structured sort)
+    order = np.lexsort((st32[:, 1], st32[:, 0]))
+    srt = st32[order]
+    new = np.ones(len(srt), dtype=bool)
+    new[1:] = np.any(srt[1:] != srt[:-1], axis=1)
+    inverse = np.empty(len(srt), dtype=np.int64)
+    inverse[order] = np.cumsum(new) - 1
+    return (np.ascontiguousarray(srt[new], dtype=np.float32),
+            np.ascontiguousarray(inverse[idx], dtype=np.int32))
 
 
 def write_meshes(
