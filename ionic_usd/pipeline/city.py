@@ -58,7 +58,7 @@ _PER_BUILD = 40e6
 # the bake takes 3.2 s instead of 7.6 s
 _CARD_LOD = "low"
 # what the card images depend on besides the temple and its selections: the baker's version
-_CARD_BAKE = f"cards-v1-{_CARD_LOD}"
+_CARD_BAKE = f"cards-v2-{_CARD_LOD}"  # v2: Hydra's face axes (side faces Z-up)
 
 @dataclass(frozen=True)
 class CityOptions:
