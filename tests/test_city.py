@@ -413,3 +413,70 @@ def test_composer_counts_what_the_reader_draws(grid_city):
 
     out, s, _ = grid_city
     assert read_scene(out / "City.usda").n_triangles == s["triangles"]["as authored"]
+
+
+@pytest.fixture(scope="module")
+def column_card_city(tmp_path_factory):
+    """Two temples (at 0 m and 60 m from the focus, both near) and their street columns, the
+    ones beyond 65 m drawn as cards."""
+    out = tmp_path_factory.mktemp("colcards") / "city"
+    opts = CityOptions(rows=1, cols=2, texture_size=TEX, seed=1, focus=(0.0, 0.0),
+                       cards_beyond=65.0, card_size=CARD_PX)
+    return out, build_city(out, opts), opts
+
+
+def test_far_street_columns_use_the_card_prototype(column_card_city, tmp_path):
+    from ionic_usd.preview import render_preview
+    from ionic_usd.usd.reader import read_scene
+
+    out, s, opts = column_card_city
+    stage = Usd.Stage.Open(str(out / "City.usda"))
+    pi = UsdGeom.PointInstancer(stage.GetPrimAtPath("/City/Porticus"))
+    pos = np.asarray(pi.GetPositionsAttr().Get())
+    idx = np.asarray(pi.GetProtoIndicesAttr().Get())
+    protos = [stage.GetPrimAtPath(t) for t in pi.GetPrototypesRel().GetTargets()]
+    names = np.array([p.GetName() for p in protos])
+    far = np.hypot(pos[:, 0], pos[:, 2]) > opts.cards_beyond  # focus (0, 0)
+    assert 0 < far.sum() < len(far) and s["cards"]["columns"] == int(far.sum())
+    assert s["cards"]["temples"] == 0  # the temples are near: only columns are cards
+    # exactly the far columns are drawn by the card prototype
+    assert np.array_equal(names[idx] == "Column_cards", far)
+    card = protos[list(names).index("Column_cards")]
+    api = UsdGeom.ModelAPI(card)
+    assert card.IsModel() and Usd.ModelAPI(card).GetKind() == "component"
+    assert card.HasAPI(UsdGeom.ModelAPI) and api.GetModelApplyDrawModeAttr().Get() is True
+    assert api.ComputeModelDrawMode() == UsdGeom.Tokens.cards
+    assert api.GetModelCardGeometryAttr().Get() == "box"
+    # what ignores draw modes draws the low column
+    assert card.GetVariantSets().GetVariantSelection("lod") == "low"
+    for face in ("XPos", "XNeg", "YPos", "YNeg", "ZPos", "ZNeg"):
+        png = Path(card.GetAttribute(f"model:cardTexture{face}").Get().resolvedPath)
+        alpha = _read_rgba(png)[..., 3]
+        assert png.parent.parent == out / "Temples" / "Cards"
+        assert (alpha == 0).any() and (alpha == 255).any()  # the column's silhouette
+    for p in protos:  # the near prototypes are full geometry
+        if p != card:
+            assert not p.HasAPI(UsdGeom.ModelAPI) or UsdGeom.ModelAPI(
+                p).ComputeModelDrawMode() != UsdGeom.Tokens.cards
+    assert _model_hierarchy_ok(stage) == []
+    _validate_each_layer(out)
+    # the reader and the preview draw what the composer counted
+    drawn = read_scene(out / "City.usda", draw_modes=True)
+    full = read_scene(out / "City.usda")
+    assert drawn.n_triangles == s["triangles"]["as authored"]
+
+    def column_tris(scene, instance: int) -> int:
+        key = f"/City/Porticus[{instance}]"
+        return sum(scene.meshes[p.mesh].n_triangles for p in scene.placements
+                   if p.path == key or p.path.startswith(key + "/"))
+
+    i_far, i_near = int(np.flatnonzero(far)[0]), int(np.flatnonzero(~far)[0])
+    assert column_tris(drawn, i_far) == 12 < column_tris(full, i_far)
+    assert column_tris(drawn, i_near) == column_tris(full, i_near) > 12
+    # "without cards" puts each far column at its lod by distance: high (all are within the
+    # default near distance, 150 m), as the near column draws
+    assert s["triangles"]["without cards"] - drawn.n_triangles == int(far.sum()) * (
+        column_tris(full, i_near) - 12)
+    stats = render_preview(out / "City.usda", tmp_path / "c.png", width=96, height=64,
+                           samples=0)
+    assert stats.triangles == drawn.n_triangles and stats.cards == 6 * int(far.sum())

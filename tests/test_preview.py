@@ -341,3 +341,106 @@ def test_preview_and_export_read_the_same_meshes(tiny_temple, tmp_path, which):
     if sel:  # the selection changed what is drawn
         plain = draw_items(read_scene(tiny_temple.root, draw_modes=True))
         assert {d.key for d in plain} != {d.key for d in items}
+
+
+# Hydra's card box, transcribed from OpenUSD pxr/usdImaging/usdImaging/drawModeAdapter.cpp
+# (UsdImagingDrawModeAdapter::_GenerateCardsGeometry: the four corners of each face, in terms
+# of the bound's min "0" / max "1" per axis; _GetUVsForQuad + _GenerateTextureCoordinates: their
+# uv). drawModeStandin.cpp (_CardsDataCache::_CardsData::_ComputePoints/_ComputeUVs, the scene
+# index path) builds the same quads and uvs. UsdUVTexture's st (0, 0) is the image's bottom left.
+_HYDRA_CORNERS = {
+    "XPos": ["111", "101", "100", "110"], "XNeg": ["001", "011", "010", "000"],
+    "YPos": ["011", "111", "110", "010"], "YNeg": ["101", "001", "000", "100"],
+    "ZPos": ["111", "011", "001", "101"], "ZNeg": ["010", "110", "100", "000"],
+}  # x, y, z digits; cardGeometry box (cross puts the face's own axis at the middle)
+
+
+def _hydra_uv(flip_u: bool, flip_v: bool) -> np.ndarray:
+    """_GetUVsForQuad(flipU, flipV)."""
+    u0, u1 = (1, 0) if flip_u else (0, 1)
+    v0, v1 = (1, 0) if flip_v else (0, 1)
+    return np.array([(u1, v1), (u0, v1), (u0, v0), (u1, v0)], dtype=float)
+
+
+def _hydra_face_uvs(has: set[str]) -> dict[str, np.ndarray]:
+    """_GenerateTextureCoordinates for the faces drawn, given the faces with a texture."""
+    out = {}
+    for a in "XY":
+        out[a + "Pos"] = _hydra_uv(a + "Pos" not in has, False)
+        out[a + "Neg"] = _hydra_uv(a + "Neg" not in has, False)
+    out["ZPos"] = _hydra_uv(False, "ZPos" not in has)
+    out["ZNeg"] = _hydra_uv(True, "ZNeg" in has)
+    return out
+
+
+def _affine_st(face: str, corners: np.ndarray, uv: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """st of the point p (3,) projected on a quad with corners (4, 3) and their uv (4, 2)."""
+    keep = [i for i in range(3) if i != "XYZ".index(face[0])]
+    a = np.c_[corners[:, keep], np.ones(4)]
+    coef, *_ = np.linalg.lstsq(a, uv, rcond=None)
+    np.testing.assert_allclose(a @ coef, uv, atol=1e-9)  # affine on the quad (a rectangle)
+    return np.r_[p[keep], 1.0] @ coef
+
+
+@needs_gl
+def test_card_images_follow_hydras_uv_mapping(tmp_path):
+    """Bake the cards of a bound holding one small marker box near a corner (+X, +Y, +Z by
+    different amounts, so a swapped or flipped axis moves it) and find the marker in each image
+    where Hydra's quad and uv put it; our reader's quads map it to the same st."""
+    from numpy.testing import assert_allclose as close
+
+    from ionic_usd.preview import bake_cards
+    from ionic_usd.usd.draw_mode import author_cards, card_bbox_cache, card_faces
+
+    lo, hi = np.array([-1.0, -1.5, -2.0]), np.array([1.0, 1.5, 2.0])
+    centre = np.array([0.35, 0.7, 1.1])
+    stage = _new_stage(tmp_path / "m.usda")
+    model = stage.GetPrimAtPath("/World")
+    Usd.ModelAPI(model).SetKind("component")
+    UsdGeom.ModelAPI.Apply(model).SetExtentsHint([Gf.Vec3f(*lo), Gf.Vec3f(*hi)])
+    mesh = UsdGeom.Mesh.Define(stage, "/World/Marker")
+    mesh.CreatePointsAttr([tuple(centre + 0.15 * (np.array(p) * 2 - (1, 1, 1))) for p in
+                           [(c[0] + 0.5, c[1], c[2] + 0.5) for c in CUBE_POINTS]])
+    mesh.CreateFaceVertexCountsAttr([4] * 6)
+    mesh.CreateFaceVertexIndicesAttr(CUBE_FACES)
+    mesh.CreateDisplayColorPrimvar().Set([RED])
+    stage.Save()
+    bake = bake_cards(tmp_path / "m.usda", tmp_path / "cards", (lo, hi), size=160, samples=0)
+
+    box = np.stack([lo, hi])
+    hydra_uv = _hydra_face_uvs(set(_HYDRA_CORNERS))
+    for face, digits in _HYDRA_CORNERS.items():
+        corners = np.array([[box[int(d), i] for i, d in enumerate(ds)] for ds in digits])
+        s, t = _affine_st(face, corners, hydra_uv[face], centre)
+        inp = oiio.ImageInput.open(str(bake.files[face]))
+        px = np.asarray(inp.read_image(oiio.UINT8))
+        inp.close()
+        h, w = px.shape[:2]
+        # the image spans the face: its aspect is the quad's length along s over that along t
+        uv = hydra_uv[face]
+        at = {tuple(q): corners[i] for i, q in enumerate(uv)}
+        span_s = np.linalg.norm(at[(1, 0)] - at[(0, 0)])
+        span_t = np.linalg.norm(at[(0, 1)] - at[(0, 0)])
+        assert abs(w / h - span_s / span_t) < 0.05, face
+        rows, cols = np.nonzero(px[..., 3] >= 128)
+        assert len(rows) > 20, face
+        # pixel centres: column (s * w - 0.5), row from the top ((1 - t) * h - 0.5)
+        assert abs(cols.mean() - (s * w - 0.5)) < 1.5, (face, cols.mean(), s * w)
+        assert abs(rows.mean() - ((1 - t) * h - 0.5)) < 1.5, (face, rows.mean(), (1 - t) * h)
+
+    # our reader's quads give the marker the same st, with all six images and with only the
+    # Pos ones (the Neg faces borrow them, as Hydra's flipped uvs say)
+    for authored in (list(_HYDRA_CORNERS), ["XPos", "YPos", "ZPos"]):
+        layer = Sdf.Layer.OpenAsAnonymous(str(tmp_path / "m.usda"))
+        author_cards(layer.GetPrimAtPath("/World"), {f: str(bake.files[f]) for f in authored})
+        stage = Usd.Stage.Open(layer)
+        ours = {f.name: f for f in card_faces(stage.GetPrimAtPath("/World"), card_bbox_cache())}
+        assert sorted(ours) == sorted(_HYDRA_CORNERS)
+        hydra_uv = _hydra_face_uvs(set(authored))
+        for face, digits in _HYDRA_CORNERS.items():
+            corners = np.array([[box[int(d), i] for i, d in enumerate(ds)] for ds in digits])
+            expect = _affine_st(face, corners, hydra_uv[face], centre)
+            got = _affine_st(face, ours[face].points, ours[face].st, centre)
+            close(got, expect, atol=1e-9, err_msg=face)
+            src = face if face in authored else face[0] + "Pos"
+            assert ours[face].texture == str(bake.files[src])

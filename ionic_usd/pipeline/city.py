@@ -58,7 +58,9 @@ _PER_BUILD = 40e6
 # the bake takes 3.2 s instead of 7.6 s
 _CARD_LOD = "low"
 # what the card images depend on besides the temple and its selections: the baker's version
-_CARD_BAKE = f"cards-v1-{_CARD_LOD}"
+_CARD_BAKE = f"cards-v2-{_CARD_LOD}"  # v2: Hydra's face axes (side faces Z-up)
+# the street columns' finish variant
+_COLUMN_FINISH = "stucco"
 
 @dataclass(frozen=True)
 class CityOptions:
@@ -284,6 +286,9 @@ def build_city(out: str | os.PathLike, opts: CityOptions, *,
     t3 = time.perf_counter()
     tcards, card_dirs, card_note = _far_cards(out, opts, specs, build, selections, txz,
                                               progress)
+    column_asset = f"Temples/{needed[0].folder}/{ASSET_NAME}/{ASSET_NAME}.usda"
+    ccards, column_card_dir = _far_column_cards(out, opts, needed[0], column_asset, cxz,
+                                                card_note, progress)
     timings["cards"] = time.perf_counter() - t3
 
     # -- 5. USD ---------------------------------------------------------------------------
@@ -292,8 +297,7 @@ def build_city(out: str | os.PathLike, opts: CityOptions, *,
         names=[lot.id for lot in plan.lots], xz=txz,
         yaw=np.array([f.yaw_deg for f in fits]), scale=np.array([f.scale for f in fits]),
         selections=selections, lod=tlod, cards=tcards)
-    columns = ColumnInstances(f"Temples/{needed[0].folder}/{ASSET_NAME}/{ASSET_NAME}.usda",
-                              cxz, cyaw, clod)
+    columns = ColumnInstances(column_asset, cxz, cyaw, clod, ccards)
     # what the file records depends on the inputs only (not on who built what, or when)
     summary = {
         "plan": Path(plan.source).name if opts.plan else "grid",
@@ -302,7 +306,8 @@ def build_city(out: str | os.PathLike, opts: CityOptions, *,
         "builds": len(needed),
     }
     rep = compose_city(out, temples, columns, instancer_threshold=threshold,
-                       summary=summary, card_dirs=card_dirs, force=True)
+                       summary=summary, card_dirs=card_dirs, finish=_COLUMN_FINISH,
+                       column_card_dir=column_card_dir, force=True)
     timings.update({f"usd {k}": v for k, v in rep.seconds.items()})
     timings["total"] = time.perf_counter() - t0
     summary.update({
@@ -381,6 +386,52 @@ def _far_cards(out: Path, opts: CityOptions, specs: list[TempleSpec], build: np.
         dirs[key] = rel
     note["prototypes"] = len(dirs)
     return cards, dirs, note
+
+
+def _far_column_cards(out: Path, opts: CityOptions, spec: TempleSpec, asset: str,
+                      cxz: np.ndarray, note: dict, progress: Callable[[str], None] | None
+                      ) -> tuple[np.ndarray | None, str | None]:
+    """Which street columns draw as cards (beyond the temples' card distance from the focus)
+    and the folder of the column's six images, baked once by the preview renderer from the
+    column asset at :data:`ionic_usd.usd.city.COLUMN_CARD_SELECTION` into
+    ``Temples/Cards/<asset>-<key>/`` (content-addressed like the temples'). Records
+    ``columns`` (far columns), ``column_baked`` / ``column_reused`` in ``note``. Returns
+    ``(cards (m,) bool or None, folder or None)``."""
+    if opts.focus is None or not opts.cards or not len(cxz) or note.get("why"):
+        return None, None
+    beyond = opts.cards_beyond if opts.cards_beyond is not None else opts.lod_distances[1]
+    cards = distance_from(cxz, opts.focus) > beyond
+    note.update({"beyond_m": beyond, "columns": int(cards.sum()), "column_baked": 0,
+                 "column_reused": 0})
+    if not cards.any():
+        return None, None
+    from ionic_usd.preview import PreviewUnavailableError, bake_cards
+    from ionic_usd.usd.city import COLUMN_CARD_SELECTION, model_card_bound
+    from ionic_usd.usd.draw_mode import CARD_FACES
+
+    sel = {**COLUMN_CARD_SELECTION, "finish": _COLUMN_FINISH}
+    digest = hashlib.blake2b(json.dumps([spec.key, "column", sorted(sel.items()),
+                                         opts.card_size, _CARD_BAKE]).encode(),
+                             digest_size=8).hexdigest()
+    rel = f"Temples/Cards/{Path(asset).stem}-{digest}"
+    if all((out / rel / f"{f}.png").is_file() for f in CARD_FACES):
+        note["column_reused"] = 1
+        return cards, rel
+    root = out / asset
+    try:
+        bake_cards(root, out / rel, model_card_bound(root, sel), variants=sel,
+                   size=opts.card_size)
+    except PreviewUnavailableError as exc:
+        if opts.cards_beyond is not None:
+            raise
+        if progress:
+            progress(f"far columns drawn in full: cannot bake cards ({exc})")
+        note["columns"] = 0
+        return None, None
+    note["column_baked"] = 1
+    if progress:
+        progress(f"baked cards {rel}")
+    return cards, rel
 
 
 def write_summary(summary: dict, path: str | os.PathLike) -> None:

@@ -2,8 +2,10 @@
 
 For each face of the card box (:data:`ionic_usd.usd.draw_mode.CARD_FACES`) the model is drawn
 with an orthographic camera looking along the face's inward normal, framing exactly the face of
-the given bound (image right and up as the table says), lit by the same sun the preview uses
-for its default camera, on a transparent background: an RGBA PNG with straight alpha per face.
+the given bound (image right and up as the table says — Hydra's mapping, so the four side
+faces of a Y-up model are images turned a quarter turn: their up is the model's +Z), lit by the
+same sun the preview uses for its default camera, on a transparent background: an RGBA PNG with
+straight alpha per face.
 """
 
 from __future__ import annotations

@@ -15,7 +15,10 @@ Files written into the city folder by :func:`compose_city` (the temple folders u
         Field                  or a UsdGeom.PointInstancer (kind = group) whose prototypes
                                (Prototypes, Scope, kind = group) are the unique temple choices
       /City/Porticus           UsdGeom.PointInstancer (kind = group) of the column asset, one
-                               prototype per LOD used (Prototypes/Column_<lod>, components)
+                               prototype per LOD used (Prototypes/Column_<lod>, components),
+                               and for the far columns (``ColumnInstances.cards``) Column_cards:
+                               the asset at lod low carrying card draw mode (a box of
+                               ./Temples/Cards/<column key>/<Face>.png)
     Temples/<name>-<key>/      one folder per unique temple build (content-addressed)
 
 Every model's parent is a model (assembly › group › component/assembly). Instance arrays are
@@ -42,13 +45,17 @@ from ionic_usd.usd.stage import new_layer, save_layer
 
 __all__ = ["CityReport", "TempleInstances", "ColumnInstances", "compose_city", "ROOT_LAYER",
            "INSTANCES_LAYER", "DEFAULT_INSTANCER_THRESHOLD", "temple_variant_sets",
-           "temple_selection", "temple_card_bound", "CARD_TRIANGLES"]
+           "temple_selection", "temple_card_bound", "model_card_bound", "CARD_TRIANGLES",
+           "COLUMN_CARD_SELECTION"]
 
 #: triangles of a box of cards as a renderer draws it: six quads
 CARD_TRIANGLES = 12
 
 ROOT_LAYER = "City.usda"
 INSTANCES_LAYER = "Instances.usdc"
+#: the variant selections of the street columns' card prototype (besides ``finish``): what a
+#: consumer that ignores draw modes draws for a far column, and what its cards are baked from
+COLUMN_CARD_SELECTION = {"lod": "low", "form": "full"}
 _T = Sdf.ValueTypeNames
 
 
@@ -86,12 +93,14 @@ class TempleInstances:
 @dataclass(frozen=True)
 class ColumnInstances:
     """Street columns as arrays: ``asset`` (city-relative path of the column asset folder's
-    root layer), ``xz`` (m, 2), ``yaw`` (m,) degrees, ``lod`` (m,) int8 (None: all low)."""
+    root layer), ``xz`` (m, 2), ``yaw`` (m,) degrees, ``lod`` (m,) int8 (None: all low),
+    ``cards`` (m,) bool — drawn by the card prototype (far field), or None (none)."""
 
     asset: str
     xz: np.ndarray
     yaw: np.ndarray
     lod: np.ndarray | None = None
+    cards: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.xz)
@@ -135,21 +144,27 @@ def temple_selection(vsets: Mapping[str, Sequence[str]], selections: Mapping[str
     return sel
 
 
-def temple_card_bound(temple_root: Path, selections: Mapping[str, str]
-                      ) -> tuple[np.ndarray, np.ndarray]:
-    """The card box of a temple with ``selections`` (its own frame, metres): the box a viewer
-    draws its cards on (:func:`ionic_usd.usd.draw_mode.card_bound`)."""
-    stage = Usd.Stage.Open(str(temple_root))
+def model_card_bound(root_layer: Path, selections: Mapping[str, str]
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """The card box of the default prim of ``root_layer`` with ``selections`` (its own frame,
+    metres): the box a viewer draws its cards on (:func:`ionic_usd.usd.draw_mode.card_bound`)."""
+    stage = Usd.Stage.Open(str(root_layer))
     if stage is None:
-        raise UsdAuthoringError(f"cannot open {temple_root}")
+        raise UsdAuthoringError(f"cannot open {root_layer}")
     prim = stage.GetDefaultPrim()
     with Usd.EditContext(stage, stage.GetSessionLayer()):
         for name, value in selections.items():
             prim.GetVariantSet(name).SetVariantSelection(value)
     bound = card_bound(prim, card_bbox_cache())
     if bound is None:
-        raise UsdAuthoringError(f"{temple_root}: the temple has no bound to put cards on")
+        raise UsdAuthoringError(f"{root_layer}: the model has no bound to put cards on")
     return bound
+
+
+def temple_card_bound(temple_root: Path, selections: Mapping[str, str]
+                      ) -> tuple[np.ndarray, np.ndarray]:
+    """The card box of a temple with ``selections`` (:func:`model_card_bound`)."""
+    return model_card_bound(temple_root, selections)
 
 
 def _stats(stage: Usd.Stage, root: str, selections: Mapping[str, str]
@@ -289,6 +304,7 @@ def compose_city(folder: str | os.PathLike, temples: TempleInstances,
                  instancer_threshold: int = DEFAULT_INSTANCER_THRESHOLD,
                  finish: str = "stucco", summary: Mapping | None = None,
                  card_dirs: Mapping[tuple[int, tuple], str] | None = None,
+                 column_card_dir: str | None = None,
                  force: bool = False) -> CityReport:
     """Write ``City.usda`` + ``Instances.usdc`` into ``folder`` (its ``Temples/`` must hold
     the builds named in ``temples.folders``).
@@ -301,6 +317,8 @@ def compose_city(folder: str | os.PathLike, temples: TempleInstances,
     card_dirs : for the temples drawn as cards (``temples.cards``): ``(build, selections)`` →
         the city-relative folder of the baked card images (``XPos.png`` …), where
         ``selections`` is ``tuple(sorted(temple_selection(...).items()))`` without a lod
+    column_card_dir : the city-relative folder of the street column's card images, needed
+        when ``columns.cards`` has any far column (baked with :data:`COLUMN_CARD_SELECTION`)
     """
     t0 = time.perf_counter()
     folder = Path(folder)
@@ -347,18 +365,30 @@ def compose_city(folder: str | os.PathLike, temples: TempleInstances,
                 ttri[lod][k] = _stats(stage, "/Temple", {**dict(sel), "lod": lod})[2]
             else:  # before the temple has a lod set its columns draw as authored
                 ttri[lod][k] = _stats(stage, "/Temple", dict(sel))[2]
-    # the street columns' prototypes: the column asset at each LOD used
-    col_lods = sorted(set(np.unique(columns.lod).tolist())) if columns.lod is not None else [2]
-    cidx = (np.searchsorted(col_lods, columns.lod).astype(np.int32) if columns.lod is not None
-            else np.zeros(len(columns), dtype=np.int32))
-    clo, chi = np.zeros((len(col_lods), 3)), np.zeros((len(col_lods), 3))
+    # the street columns' prototypes: the column asset at each LOD used by a near column,
+    # then (index len(col_lods)) the card prototype for the far ones
+    ccard = (np.zeros(len(columns), dtype=bool) if columns.cards is None
+             else np.asarray(columns.cards, dtype=bool))
+    if ccard.shape != (len(columns),):
+        raise ParameterError("column cards", ccard.shape, f"({len(columns)},) bools")
+    if ccard.any() and not column_card_dir:
+        raise ParameterError("column card images", "none", "a folder of baked cards for the "
+                             "far street columns (column_card_dir)")
+    near_lod = (np.asarray(columns.lod)[~ccard] if columns.lod is not None
+                else np.full(int((~ccard).sum()), 2))
+    col_lods = sorted(set(np.unique(near_lod).tolist()))
+    cidx = np.full(len(columns), len(col_lods), dtype=np.int32)
+    cidx[~ccard] = np.searchsorted(col_lods, near_lod).astype(np.int32)
+    card_li = LOD_NAMES.index(COLUMN_CARD_SELECTION["lod"])
+    box_lods = col_lods + ([card_li] if ccard.any() else [])
+    clo, chi = np.zeros((len(box_lods), 3)), np.zeros((len(box_lods), 3))
     col_tri = {}
     if len(columns):
         cstage = Usd.Stage.Open(str(folder / columns.asset))
         if cstage is None:
             raise UsdAuthoringError(f"cannot open the column asset {folder / columns.asset}")
         root = str(cstage.GetDefaultPrim().GetPath())
-        for k, li in enumerate(col_lods):
+        for k, li in enumerate(box_lods):
             clo[k], chi[k], _ = _stats(cstage, root, {"lod": LOD_NAMES[li], "form": "full",
                                                       "finish": finish})
         for lod in LOD_NAMES:
@@ -401,10 +431,15 @@ def compose_city(folder: str | os.PathLike, temples: TempleInstances,
                 _set_xform(spec, float(temples.xz[i, 0]), float(temples.xz[i, 1]),
                            float(temples.yaw[i]), float(temples.scale[i]))
         if len(columns):
-            _instancer(body, "/City/Porticus",
-                       [(f"Column_{LOD_NAMES[li]}", f"./{columns.asset}",
-                         {"lod": LOD_NAMES[li], "form": "full", "finish": finish}, None)
-                        for li in col_lods], cidx, columns.xz, columns.yaw, None, c_ext)
+            cprotos: list[tuple[str, str, dict[str, str], str | None]] = [
+                (f"Column_{LOD_NAMES[li]}", f"./{columns.asset}",
+                 {"lod": LOD_NAMES[li], "form": "full", "finish": finish}, None)
+                for li in col_lods]
+            if ccard.any():
+                cprotos.append(("Column_cards", f"./{columns.asset}",
+                                {**COLUMN_CARD_SELECTION, "finish": finish}, column_card_dir))
+            _instancer(body, "/City/Porticus", cprotos, cidx, columns.xz, columns.yaw, None,
+                       c_ext)
     have = [e for e, n in ((t_ext, len(temples)), (c_ext, len(columns))) if n]
     lo = np.min([e[0] for e in have], axis=0) if have else np.zeros(3)
     hi = np.max([e[1] for e in have], axis=0) if have else np.zeros(3)
@@ -415,7 +450,7 @@ def compose_city(folder: str | os.PathLike, temples: TempleInstances,
     Sdf.AttributeSpec(city, "extentsHint", _T.Float3Array).default = Vt.Vec3fArray(
         [Gf.Vec3f(*map(float, lo)), Gf.Vec3f(*map(float, hi))])
     counts = np.bincount(proto_of, minlength=len(protos))
-    ccounts = np.bincount(cidx, minlength=len(col_lods))
+    ccounts = np.bincount(cidx[~ccard], minlength=len(col_lods))
     triangles = {}
     for s in ("as authored", *LOD_NAMES):
         if not len(columns):
@@ -423,18 +458,30 @@ def compose_city(folder: str | os.PathLike, temples: TempleInstances,
         elif s == "as authored":
             col = int(sum(col_tri[LOD_NAMES[li]] * int(c)
                           for li, c in zip(col_lods, ccounts, strict=True)))
+            col += CARD_TRIANGLES * int(ccard.sum())
         else:
             col = col_tri[s] * len(columns)
         triangles[s] = int(np.dot(counts, ttri[s])) + col
-    if temples.cards is not None and temples.cards.any():
+    far_t = temples.cards is not None and bool(np.any(temples.cards))
+    if far_t or ccard.any():
+        # the same city with each card temple and column at its LOD by distance instead
+        instead = 0
+        if ccard.any():
+            clods = (np.asarray(columns.lod)[ccard] if columns.lod is not None
+                     else np.full(int(ccard.sum()), 2))
+            per_lod = np.bincount(clods.astype(np.int64), minlength=len(LOD_NAMES))
+            instead += int(sum(col_tri[name] * int(c) for name, c in zip(LOD_NAMES, per_lod,
+                                                                          strict=True)))
+        triangles["without cards"] = triangles["as authored"] + instead - CARD_TRIANGLES * int(
+            ccard.sum())
+    if far_t and temples.cards is not None:
         # the same city with each card temple at its LOD by distance instead of its cards
         far = np.flatnonzero(temples.cards)
         lods = (np.asarray(temples.lod)[far] if temples.lod is not None
                 else np.zeros(len(far), dtype=np.int8))
         instead = sum(int(ttri[LOD_NAMES[int(li)]][proto_of[i]]) for i, li in
                       zip(far, lods, strict=True))
-        triangles["without cards"] = triangles["as authored"] - CARD_TRIANGLES * len(far) + \
-            instead
+        triangles["without cards"] += instead - CARD_TRIANGLES * len(far)
     if summary is not None:
         city.customData = {"ionic_usd": _vt_dict(summary)}
     secs["author"] = time.perf_counter() - t2
@@ -445,7 +492,7 @@ def compose_city(folder: str | os.PathLike, temples: TempleInstances,
     secs["save"] = time.perf_counter() - t3
     secs["total"] = time.perf_counter() - t0
     return CityReport(root_path, len(temples), len(protos), len(temples.folders), len(columns),
-                      len(col_lods) if len(columns) else 0,
+                      len(col_lods) + int(ccard.any()) if len(columns) else 0,
                       "point-instancer" if as_instancer else "references", triangles,
                       (tuple(map(float, lo)), tuple(map(float, hi))), secs)
 

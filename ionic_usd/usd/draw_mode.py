@@ -7,10 +7,17 @@ model's bound, ``cross`` — three quads through its centre, one per axis, each 
 sides. ``model:cardTexture{X,Y,Z}{Pos,Neg}`` are the images: the face ``XPos`` shows the model
 seen from +X (an orthographic view along −X), and so on.
 
-Our image convention for the view along each face normal ``n`` (kept by the baker,
-:func:`ionic_usd.preview.bake_cards`, and by the reader): image right is the vector ``right``,
-image up ``up`` of :data:`CARD_FACES` (``right × up = n``), so a face shows its view unmirrored
-from outside; ``st`` (0, 0) is the image's bottom-left corner (UsdUVTexture's convention).
+The image convention is Hydra's (UsdImaging ``drawModeAdapter.cpp``
+``_GenerateCardsGeometry`` + ``_GenerateTextureCoordinates``, and ``drawModeStandin.cpp``
+``_CardsDataCache::_CardsData::_ComputePoints`` / ``_ComputeUVs``, which agree): for the face with
+outward normal ``n`` the image's ``s`` (right) runs along ``right`` and its ``t`` (up) along
+``up`` of :data:`CARD_FACES`. The four side faces have ``t`` along the model's +Z whatever the
+stage's ``upAxis`` — Hydra's cards are Z-up — and ``ZPos``/``ZNeg`` have ``s`` along +X, ``t``
+along +Y/−Y. Every face shows its view from outside unmirrored (``right × up = n``). ``st``
+(0, 0) is the image's bottom-left corner (UsdUVTexture's convention). A face whose texture is
+not authored shows the opposite face's image with the opposite face's mapping (the model seen
+through), and an axis with no texture on either side has no faces, unless no face has a
+texture, when all six are drawn in ``model:drawModeColor``.
 
 The card bound is what a viewer uses: the model's ``extentsHint`` where authored, else the
 bound of its default/render geometry (``UsdGeom.BBoxCache`` with extents hints).
@@ -25,16 +32,16 @@ import numpy as np
 from pxr import Sdf, Usd, UsdGeom
 
 __all__ = ["CARD_FACES", "CARD_GEOMETRIES", "CardFace", "card_faces", "card_bound",
-           "card_bbox_cache", "card_colour", "author_cards", "face_quad"]
+           "card_bbox_cache", "card_colour", "author_cards", "face_quad", "face_st"]
 
 #: face name → (outward normal, image right, image up), all unit axis vectors
 CARD_FACES: dict[str, tuple[tuple[int, int, int], tuple[int, int, int], tuple[int, int, int]]] = {
-    "XPos": ((1, 0, 0), (0, 0, -1), (0, 1, 0)),
-    "XNeg": ((-1, 0, 0), (0, 0, 1), (0, 1, 0)),
-    "YPos": ((0, 1, 0), (1, 0, 0), (0, 0, -1)),
+    "XPos": ((1, 0, 0), (0, 1, 0), (0, 0, 1)),
+    "XNeg": ((-1, 0, 0), (0, -1, 0), (0, 0, 1)),
+    "YPos": ((0, 1, 0), (-1, 0, 0), (0, 0, 1)),
     "YNeg": ((0, -1, 0), (1, 0, 0), (0, 0, 1)),
     "ZPos": ((0, 0, 1), (1, 0, 0), (0, 1, 0)),
-    "ZNeg": ((0, 0, -1), (-1, 0, 0), (0, 1, 0)),
+    "ZNeg": ((0, 0, -1), (1, 0, 0), (0, -1, 0)),
 }
 CARD_GEOMETRIES = ("box", "cross")
 _T = Sdf.ValueTypeNames
@@ -48,7 +55,8 @@ class CardFace:
     ----------
     name : ``XPos`` … ``ZNeg``
     points : (4, 3) float64, counter-clockwise seen from the side the face shows
-    st : (4, 2) float64 texture coordinates of the corners
+    st : (4, 2) float64 texture coordinates of the corners (in the mapping of the face whose
+        image it shows: its own, or the opposite face's when it borrows that image)
     texture : the resolved image file, or "" (drawn in ``model:drawModeColor``)
     """
 
@@ -71,15 +79,29 @@ def face_quad(name: str, lo: np.ndarray, hi: np.ndarray, geometry: str = "box"
                      for sr, su in ((-1, -1), (1, -1), (1, 1), (-1, 1))])
 
 
-_ST = np.array([(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)])
+def face_st(name: str, points: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """(n, 2) texture coordinates of ``points`` (n, 3) in face ``name``'s image of the bound
+    ``lo``, ``hi``: ``s`` along the face's ``right``, ``t`` along its ``up``, 0..1 on the bound."""
+    _, r, u = (np.asarray(v, dtype=np.float64) for v in CARD_FACES[name])
+    lo, hi = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
+    c, h = (lo + hi) / 2, np.maximum((hi - lo) / 2, 1e-300)
+    d = np.asarray(points, dtype=np.float64) - c
+    return np.stack([0.5 + 0.5 * (d @ r) / (np.abs(r) @ h),
+                     0.5 + 0.5 * (d @ u) / (np.abs(u) @ h)], axis=-1)
+
+
+def _opposite(name: str) -> str:
+    return name[0] + ("Neg" if name.endswith("Pos") else "Pos")
 
 
 def card_faces(prim: Usd.Prim, bbox: UsdGeom.BBoxCache) -> list[CardFace] | None:
     """The card quads a viewer draws for ``prim``, or None when its draw mode is not cards.
 
     Cards apply on a model (``prim.IsModel()``) with ``model:applyDrawMode = true`` and a
-    resolved ``model:drawMode`` of ``cards``. A face with no texture is drawn in the draw mode
-    colour; a ``box`` face whose texture is missing takes the opposite face's (as Hydra does).
+    resolved ``model:drawMode`` of ``cards``. As Hydra does (``drawModeStandin.cpp``,
+    ``_CardsDataCache::_SchemaValues``): an axis is drawn (both its faces) when either of its
+    faces has a texture; a face without one borrows the opposite face's image and mapping; with
+    no texture at all, all six faces are drawn in the draw mode colour.
     """
     if not prim.IsModel():
         return None
@@ -100,12 +122,14 @@ def card_faces(prim: Usd.Prim, bbox: UsdGeom.BBoxCache) -> list[CardFace] | None
         attr = prim.GetAttribute(f"model:cardTexture{name}")
         asset = attr.Get() if attr else None
         textures[name] = getattr(asset, "resolvedPath", "") or ""
+    authored = {name for name in CARD_FACES if textures[name]}
     out = []
     for name in CARD_FACES:
-        tex = textures[name]
-        if not tex and geometry == "box":
-            tex = textures[name[0] + ("Neg" if name.endswith("Pos") else "Pos")]
-        out.append(CardFace(name, face_quad(name, lo, hi, geometry), _ST.copy(), tex))
+        if authored and not authored & {name, _opposite(name)}:
+            continue  # Hydra draws no face on an axis without any texture
+        owner = name if name in authored or not authored else _opposite(name)
+        points = face_quad(name, lo, hi, geometry)
+        out.append(CardFace(name, points, face_st(owner, points, lo, hi), textures[owner]))
     return out
 
 
