@@ -47,7 +47,9 @@ def test_asset_estimate_bounds_the_asset_meshes():
     both = sum(m.mesh.n_triangles for m in meshes)
     est1 = estimate_asset(opts.params, 16, flutes=(24, 20), forms=1, **kw).triangles
     est3 = estimate_asset(opts.params, 16, flutes=(24, 20), forms=3, **kw).triangles
-    assert full <= est1 <= 1.3 * full
+    # an upper bound (1.31 measured: the capitals' sliver clean-up removes triangles the
+    # estimate counts)
+    assert full <= est1 <= 1.35 * full
     # engaged and corner meshes are cut, counted as whole ones: a looser upper bound (the
     # capitals, doubled by the volute variant, lose the most to the cuts: 1.55 measured)
     assert both <= est3 <= 1.65 * both

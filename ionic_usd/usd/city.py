@@ -41,6 +41,7 @@ from pxr import Gf, Sdf, Tf, Usd, UsdGeom, Vt
 from ionic_usd.city.layout import DEFAULT_INSTANCER_THRESHOLD, LOD_NAMES, yaw_quaternions
 from ionic_usd.errors import OutputExistsError, ParameterError, UsdAuthoringError
 from ionic_usd.usd.draw_mode import CARD_FACES, author_cards, card_bbox_cache, card_bound
+from ionic_usd.usd.instancer import drawn_triangles
 from ionic_usd.usd.stage import new_layer, save_layer
 
 __all__ = ["CityReport", "TempleInstances", "ColumnInstances", "compose_city", "ROOT_LAYER",
@@ -180,23 +181,7 @@ def _stats(stage: Usd.Stage, root: str, selections: Mapping[str, str]
     cache = UsdGeom.BBoxCache(Usd.TimeCode.Default(), [UsdGeom.Tokens.default_,
                                                        UsdGeom.Tokens.render])
     rng = cache.ComputeWorldBound(prim).ComputeAlignedRange()
-    tris = 0
-    counted: dict[str, int] = {}
-    it = iter(Usd.PrimRange(prim, Usd.TraverseInstanceProxies()))
-    for p in it:
-        img = UsdGeom.Imageable(p)
-        if img and (img.ComputeVisibility() == UsdGeom.Tokens.invisible
-                    or img.ComputePurpose() in (UsdGeom.Tokens.proxy, UsdGeom.Tokens.guide)):
-            it.PruneChildren()
-            continue
-        if p.IsA(UsdGeom.Mesh):
-            # instance proxies of one prototype share their arrays: count each source once
-            src = str(p.GetPrimInPrototype().GetPath()) if p.IsInstanceProxy() else str(
-                p.GetPath())
-            if src not in counted:
-                counts = UsdGeom.Mesh(p).GetFaceVertexCountsAttr().Get()
-                counted[src] = int(np.sum(np.asarray(counts) - 2)) if counts else 0
-            tris += counted[src]
+    tris = drawn_triangles(prim)
     return np.array(rng.GetMin()), np.array(rng.GetMax()), tris
 
 

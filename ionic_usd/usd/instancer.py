@@ -44,13 +44,23 @@ def instances_extent(inst: Instances) -> np.ndarray:
 
 
 def drawn_triangles(root: Usd.Prim, _memo: dict | None = None) -> int:
-    """Triangles drawn under ``root``: meshes once, every copy of a native instance or a
-    PointInstancer counted (prototypes under an instancer are drawn only through it)."""
-    memo = {} if _memo is None else _memo
+    """Triangles a renderer draws under ``root``: the one count every scene report uses.
+
+    Meshes count once; every copy of a native instance and of a PointInstancer counts
+    (prototypes under an instancer are drawn only through it, nested instancers multiply);
+    default and render purpose only (proxy and guide subtrees skipped), invisible subtrees
+    and inactive prims skipped.
+    """
+    memo: dict[str, int] = {} if _memo is None else _memo
     total = 0
     it = iter(Usd.PrimRange(root))
     for prim in it:
-        if prim.IsInstance():
+        img = UsdGeom.Imageable(prim)
+        if img and (img.GetPurposeAttr().Get() in (UsdGeom.Tokens.proxy, UsdGeom.Tokens.guide)
+                    or img.GetVisibilityAttr().Get() == UsdGeom.Tokens.invisible):
+            it.PruneChildren()
+            continue
+        if prim != root and prim.IsInstance():
             it.PruneChildren()
             proto = prim.GetPrototype()
             key = str(proto.GetPath())

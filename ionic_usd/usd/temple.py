@@ -53,8 +53,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-from pxr import Sdf, Usd, UsdGeom
+from pxr import Sdf, Usd
 
 from ionic_usd import __version__
 from ionic_usd.column.column import LODS, ColumnParams, portunus_column_params
@@ -104,6 +103,7 @@ from ionic_usd.usd.hypotheses import (
     hypothesis_paradata,
     temple_keys,
 )
+from ionic_usd.usd.instancer import drawn_triangles
 from ionic_usd.usd.materials import bind_material_spec, stone_material
 from ionic_usd.usd.mesh import author_mesh, define_prim
 from ionic_usd.usd.stage import new_layer, save_layer
@@ -435,41 +435,10 @@ def _check_resolves(root: Path, generated: Path) -> None:
 
 
 def temple_triangles(stage: Usd.Stage) -> int:
-    """Triangles drawn by the composed stage: native instances and PointInstancer copies each
-    counted once per copy (nested instances included); default and render purpose, active and
-    visible-by-default."""
-    memo: dict[Sdf.Path, int] = {}
-
-    def count(root: Usd.Prim) -> int:
-        n = 0
-        it = iter(Usd.PrimRange(root))
-        for prim in it:
-            if prim != root and prim.IsInstance():
-                proto = prim.GetPrototype().GetPath()
-                if proto not in memo:
-                    memo[proto] = count(prim.GetPrototype())
-                n += memo[proto]
-                it.PruneChildren()
-                continue
-            img = UsdGeom.Imageable(prim)
-            if img and img.GetPurposeAttr().Get() in ("proxy", "guide"):
-                it.PruneChildren()
-                continue
-            if prim.IsA(UsdGeom.PointInstancer):
-                it.PruneChildren()  # its prototypes are drawn only through it
-                pi = UsdGeom.PointInstancer(prim)
-                idx = np.asarray(pi.GetProtoIndicesAttr().Get() or [], dtype=np.int64)
-                per = [count(stage.GetPrimAtPath(t))
-                       for t in pi.GetPrototypesRel().GetForwardedTargets()]
-                if len(idx) and per:
-                    n += int(np.asarray(per)[idx[idx < len(per)]].sum())
-            elif prim.IsA(UsdGeom.Mesh):
-                counts = UsdGeom.Mesh(prim).GetFaceVertexCountsAttr().Get()
-                if counts is not None and len(counts):
-                    n += int(np.sum(np.asarray(counts) - 2))
-        return n
-
-    return count(stage.GetPseudoRoot())
+    """Triangles drawn by the composed stage (:func:`ionic_usd.usd.instancer.drawn_triangles`:
+    every native instance and PointInstancer copy, nested ones included; default and render
+    purpose, visible, active)."""
+    return drawn_triangles(stage.GetPseudoRoot())
 
 
 def _triangles_with(stage: Usd.Stage, selections: dict[str, str]) -> int:
