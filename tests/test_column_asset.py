@@ -3,6 +3,7 @@ capital, UVs, materials, textures, cache."""
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import json
 
@@ -236,8 +237,10 @@ def test_textures_readable_with_declared_size(column_asset):
         inp.close()
 
 
-def test_rebuild_does_no_unwrapping(tmp_path):
+def test_rebuild_does_no_unwrapping(tmp_path, monkeypatch):
     from ionic_usd.texture.uv import UVCache
+
+    monkeypatch.setenv("IONIC_USD_CACHE", str(tmp_path / "cache"))  # its own mesh cache
 
     cache = UVCache(tmp_path / "uv")
     opts = ColumnAssetOptions(lods=("low",), bases=("G1",), scrolls=("S1",), flutes=("f24",),
@@ -256,7 +259,16 @@ def test_rebuild_does_no_unwrapping(tmp_path):
     # a fresh process (new in-memory layer) reads the files: still no unwrapping
     again = UVCache(tmp_path / "uv")
     build_column_asset(tmp_path / "b" / "IonicColumn", opts, cache=again)
-    assert again.misses == 0 and again.hits > 0
+    assert again.misses == 0  # (the generated meshes, charts included, came from their cache)
+    # without the mesh cache the capitals are charted again: from the UV files, no xatlas
+    import shutil
+
+    from ionic_usd.pipeline.mesh_cache import mesh_cache_folder
+
+    shutil.rmtree(mesh_cache_folder())
+    fresh = UVCache(tmp_path / "uv")
+    build_column_asset(tmp_path / "c" / "IonicColumn", opts, cache=fresh)
+    assert fresh.misses == 0 and fresh.hits > 0
 
 
 def test_force_replaces_atomically(tmp_path):
@@ -411,3 +423,43 @@ def test_volute_option_builds_one_model_without_the_set(tmp_path):
     assert validate_stage(stage) == []
     with pytest.raises(ParameterError, match="log_spiral"):
         ColumnAssetOptions(volutes=("ionic_scroll",))
+
+
+def test_generated_meshes_are_cached_by_content(tmp_path, monkeypatch):
+    """A rebuild of unchanged options reads the generated meshes back (no generation) and
+    writes byte-identical files; a damaged cache entry is produced again."""
+    import hashlib
+
+    from ionic_usd.pipeline import asset as pipeline_asset
+    from ionic_usd.pipeline.mesh_cache import mesh_cache_folder
+    from ionic_usd.texture.uv import UVCache
+
+    monkeypatch.setenv("IONIC_USD_CACHE", str(tmp_path / "cache"))
+    opts = ColumnAssetOptions(lods=("low",), bases=("G1",), scrolls=("S1",), flutes=("f24",),
+                              texture_size=16)
+    calls = []
+    real = pipeline_asset.column_asset_meshes
+    monkeypatch.setattr(pipeline_asset, "column_asset_meshes",
+                        lambda *a, **k: calls.append(1) or real(*a, **k))
+
+    def build(name):
+        build_column_asset(tmp_path / name / "IonicColumn", opts,
+                           cache=UVCache(tmp_path / "cache" / "uv"))
+        return {p.relative_to(tmp_path / name): hashlib.sha256(p.read_bytes()).hexdigest()
+                for p in sorted((tmp_path / name).rglob("*")) if p.is_file()}
+
+    first = build("a")
+    assert len(calls) == 1
+    second = build("b")
+    assert len(calls) == 1 and second == first  # read back, same bytes
+    entries = list(mesh_cache_folder().iterdir())
+    assert len(entries) == 1
+    npz = entries[0] / "meshes.npz"
+    npz.write_bytes(npz.read_bytes()[:100])  # truncated: its manifest no longer matches
+    third = build("c")
+    assert len(calls) == 2 and third == first
+    # other options are another entry
+    build_column_asset(tmp_path / "d" / "IonicColumn",
+                       dataclasses.replace(opts, bases=("G2",)),
+                       cache=UVCache(tmp_path / "cache" / "uv"))
+    assert len(calls) == 3 and len(list(mesh_cache_folder().iterdir())) == 2

@@ -37,6 +37,7 @@ from ionic_usd.column.column import (
 )
 from ionic_usd.errors import GeometryError, OutputExistsError
 from ionic_usd.geometry.mesh import Mesh
+from ionic_usd.pipeline.mesh_cache import cached_meshes
 from ionic_usd.texture.uv import UVCache, attach_uvs, unwrap_parts
 from ionic_usd.usd.asset import AssetInstancer, AssetMesh
 from ionic_usd.usd.column_asset import (
@@ -363,7 +364,12 @@ def build_column_asset(
             validate_user_texture(src)
     cache = cache if cache is not None else default_cache()
     misses0 = cache.misses
-    meshes, _ = _with_uvs(column_asset_meshes(opts, uv_cache=cache), cache)
+    # the generated meshes (unions, cuts, the capital's charts) are a pure function of the
+    # options and the code: a rebuild of unchanged parameters reads them back
+    generated, _ = cached_meshes("column_asset", opts,
+                                 lambda: column_asset_meshes(opts, uv_cache=cache),
+                                 extra=str(cache.folder))
+    meshes, _ = _with_uvs(generated, cache)
     unwraps = cache.misses - misses0
     path = author_column_asset(dest, opts, meshes, column_asset_ornament(opts),
                                populate=_textures_writer(opts), force=force)

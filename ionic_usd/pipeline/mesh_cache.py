@@ -1,0 +1,124 @@
+"""Generated asset meshes cached by content: a rebuild of unchanged parameters generates nothing.
+
+The column asset's meshes cost most of a build (the capital's manifold3d unions, the form cuts
+and their sliver clean-up: ~15 s of a ~20 s temple on 2 cores), and they are a pure function of
+the asset options and of the code that generates them. So they are kept in
+``$IONIC_USD_CACHE/meshes/<key>/`` (beside the UV and texture caches) as one ``.npz`` of plain
+arrays (no pickle) plus a JSON index, written and read through
+:func:`ionic_usd.io.verified_cache` (SHA-256 manifest, atomic rename: a truncated or edited
+entry is discarded and produced again).
+
+The key hashes ``repr(opts)`` (frozen dataclasses of numbers, strings and tuples: stable across
+runs), the UV cache's folder (the capital's charts come from it), the package version and the
+bytes of every module of the package, so any change to the generators — released or not —
+misses the cache instead of returning stale geometry.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import logging
+from collections.abc import Callable
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+
+from ionic_usd import __version__
+from ionic_usd.geometry.mesh import Mesh
+from ionic_usd.usd.asset import AssetMesh
+
+__all__ = ["cached_meshes", "source_digest", "mesh_cache_folder"]
+
+log = logging.getLogger(__name__)
+
+_FIELDS = ("points", "face_vertex_counts", "face_vertex_indices", "normals", "st",
+           "st_indices", "normals_indices")
+_INDEX = "meshes.json"
+_ARRAYS = "meshes.npz"
+
+
+@lru_cache(maxsize=1)
+def source_digest() -> str:
+    """SHA-256 of every ``.py`` file of the installed package (names and bytes, sorted)."""
+    root = Path(__file__).resolve().parents[1]
+    h = hashlib.sha256()
+    for f in sorted(root.rglob("*.py")):
+        h.update(str(f.relative_to(root)).encode())
+        h.update(f.read_bytes())
+    return h.hexdigest()
+
+
+def mesh_cache_folder() -> Path:
+    """``meshes/`` beside the UV cache (``$IONIC_USD_CACHE/meshes`` or ``~/.cache/...``)."""
+    from ionic_usd.texture.uv import default_cache_folder
+
+    return default_cache_folder().parent / "meshes"
+
+
+def _key(tag: str, opts: object, extra: str) -> str:
+    h = hashlib.sha256()
+    for part in (tag, repr(opts), extra, __version__, source_digest()):
+        h.update(part.encode())
+        h.update(b"\0")
+    return h.hexdigest()[:32]
+
+
+def _write(folder: Path, meshes: list[AssetMesh]) -> None:
+    index = []
+    arrays: dict[str, np.ndarray] = {}
+    for i, am in enumerate(meshes):
+        m = am.mesh
+        present = []
+        for f in _FIELDS:
+            v = getattr(m, f)
+            if v is not None:
+                arrays[f"{i}.{f}"] = np.asarray(v)
+                present.append(f)
+        index.append({"part": am.part, "name": am.name, "tags": dict(am.tags),
+                      "mesh_name": m.name, "interpolation": m.normals_interpolation,
+                      "fields": present})
+    np.savez(folder / _ARRAYS, **arrays)
+    (folder / _INDEX).write_text(json.dumps(index))
+
+
+def _read(folder: Path) -> list[AssetMesh]:
+    index = json.loads((folder / _INDEX).read_text())
+    out = []
+    with np.load(folder / _ARRAYS, allow_pickle=False) as z:
+        for i, e in enumerate(index):
+            kw = {f: z[f"{i}.{f}"] for f in e["fields"]}
+            mesh = Mesh(normals_interpolation=e["interpolation"], name=e["mesh_name"], **kw)
+            out.append(AssetMesh(e["part"], e["name"], mesh, e["tags"]))
+    return out
+
+
+def cached_meshes(tag: str, opts: object, produce: Callable[[], list[AssetMesh]], *,
+                  extra: str = "") -> tuple[list[AssetMesh], bool]:
+    """``produce()``'s meshes, from the cache when ``(tag, opts, extra)`` and the code match.
+
+    Returns the meshes and whether they came from the cache. A cache that cannot be written
+    (read-only or full disk) is no error: the meshes are produced and returned.
+    """
+    from ionic_usd.io import verified_cache
+
+    entry = mesh_cache_folder() / _key(tag, opts, extra)
+    produced: list[list[AssetMesh]] = []
+
+    def write(tmp: Path) -> None:
+        produced.append(produce())
+        _write(tmp, produced[0])
+
+    try:
+        store = verified_cache(entry, write)
+    except OSError as exc:
+        log.info("mesh cache not written (%s); building without it", exc)
+        return (produced[0] if produced else produce()), False
+    if produced:
+        return produced[0], False
+    try:
+        return _read(store), True
+    except (OSError, ValueError, KeyError) as exc:  # unreadable despite its manifest
+        log.info("mesh cache entry %s unreadable (%s); rebuilding", store, exc)
+        return produce(), False
