@@ -60,8 +60,10 @@ from ionic_usd.geometry.mesh import Mesh, box_st, face_normals, smooth_normals
 from ionic_usd.grammar.base import (
     BaseGrammar,
     BezierBase,
+    BezierModule,
     TorusBase,
     TorusFloor,
+    TorusModule,
     parse_base_grammar,
 )
 
@@ -90,7 +92,7 @@ BASE_PARAMETER_DOCS: dict[str, tuple[str, str]] = {
 _BOTTOM, _TOP = -1, -2  # smoothing-group ids of the caps (modules use 0, 1, …)
 
 
-def _default_grammar() -> str:
+def _default_grammar() -> str | TorusBase | BezierBase:
     return load_base_preset("G2").grammar
 
 
@@ -166,8 +168,9 @@ class BaseParams:
 def _check_axis(g: BaseGrammar, d: float, scale: float) -> None:
     """Every radius must keep d + r > 0: the Bézier curve stays in its control points' hull and
     an elliptic arc between its end radii, so checking the tokens suffices."""
-    for k, m in enumerate(g.modules, 1):
-        if isinstance(g, TorusBase):
+    modules: tuple[TorusModule | BezierModule, ...] = g.modules
+    for k, m in enumerate(modules, 1):
+        if isinstance(m, TorusModule):
             items = [(f.r_bottom, f.r_bottom_at) for f in m.floors]
             items.append((m.floors[-1].r_top, m.floors[-1].r_top_at))
         else:
@@ -206,8 +209,9 @@ def torus_arc(floor: TorusFloor, slices: int) -> np.ndarray:
 def _module_curves(g: BaseGrammar, slices: int) -> list[tuple[np.ndarray, bool]]:
     """(nodes (n, 2) as (r, h) relative to d and the module bottom, joins_previous) each."""
     out = []
-    for k, m in enumerate(g.modules):
-        if isinstance(g, TorusBase):
+    modules: tuple[TorusModule | BezierModule, ...] = g.modules
+    for k, m in enumerate(modules):
+        if isinstance(m, TorusModule):
             arcs = [torus_arc(f, slices) for f in m.floors]
             nodes = np.concatenate([arcs[0]] + [
                 a[1:] + [0.0, sum(f.height for f in m.floors[:i + 1])]

@@ -19,6 +19,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass, field
+from typing import TypedDict
 
 import numpy as np
 
@@ -82,6 +83,14 @@ def _lod(name: str) -> Lod | None:
     return LODS[name]
 
 
+class _BaseSampling(TypedDict):
+    """The BaseParams fields a column imposes on every base (its shaft's radius, its LOD)."""
+
+    shaft_radius: float
+    segments: int
+    profile_slices: int
+
+
 @dataclass(frozen=True)
 class ColumnParams:
     """A column: its parts' parameters and a level of detail.
@@ -114,7 +123,7 @@ class ColumnParams:
         """BaseParams for ``base`` (default: this column's), at this LOD and base height."""
         lod = _lod(self.lod)
         shaft = self.shaft_params()
-        common = {
+        common: _BaseSampling = {
             "shaft_radius": shaft.bottom_radius,
             "segments": shaft.ring_segments,
             "profile_slices": lod.base_slices if lod else 8,
@@ -144,7 +153,7 @@ class ColumnParams:
 
     def capital_params(self, scroll: str | None = None) -> CapitalParams:
         lod = _lod(self.lod)
-        changes = {} if lod is None else {
+        changes: dict[str, int | str] = {} if lod is None else {
             "spiral_samples": lod.spiral_samples, "ring_segments": lod.ring_segments,
             "bolster_rows": lod.bolster_rows}
         if scroll is not None:

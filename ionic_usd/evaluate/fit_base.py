@@ -276,13 +276,13 @@ def fit_base(
     # parameter vector: the first point's R, then per module its points after the first as
     # (R, h above the module bottom); bounds keep R > 0 and h >= 0 (the grammar's rules)
     size = float(np.ptp(ref_c, axis=0).max())
-    x0 = [ctrls[0][0, 0]]
+    xs = [ctrls[0][0, 0]]
     y_bottom = 0.0
     for c in ctrls:
         for r, y in c[1:]:
-            x0 += [r, max(y - y_bottom, 0.0)]
+            xs += [r, max(y - y_bottom, 0.0)]
         y_bottom = max(float(c[-1, 1]), y_bottom)
-    x0 = np.asarray(x0)
+    x0 = np.asarray(xs)
     lo = np.where(np.arange(len(x0)) % 2 == 0, 1e-4 * size, 0.0)  # R (even), h (odd)
     lo = np.minimum(lo, x0)
     box = core.Box(lo, np.maximum(x0 + 0.5 * size, lo + 1e-6))

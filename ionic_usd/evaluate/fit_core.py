@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.optimize import differential_evolution, least_squares, minimize
 
 from ionic_usd.column.column import ColumnParams
@@ -317,7 +318,7 @@ class FitResult:
 
     def as_dict(self) -> dict[str, object]:
         """The ``ionic_usd.evaluate/1`` entry of this part (see :mod:`.report`)."""
-        out: dict[str, object] = self.after.as_dict()
+        out: dict[str, object] = dict(self.after.as_dict())
         out.update(
             model=self.model or self.part, measure=self.measure,
             before=self.before.as_dict(), alignment=self.alignment.as_dict(),
@@ -386,13 +387,13 @@ def check_fit_inputs(reference: object, measure: str, seed: object) -> np.ndarra
 class Box:
     """Parameter bounds; optimisers work on u ∈ [0, 1]^k."""
 
-    def __init__(self, lo: Sequence[float], hi: Sequence[float]) -> None:
+    def __init__(self, lo: ArrayLike, hi: ArrayLike) -> None:
         self.lo, self.hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
 
-    def x(self, u: np.ndarray) -> np.ndarray:
+    def x(self, u: ArrayLike) -> np.ndarray:
         return self.lo + np.asarray(u) * (self.hi - self.lo)
 
-    def u(self, x: np.ndarray) -> np.ndarray:
+    def u(self, x: ArrayLike) -> np.ndarray:
         return np.clip((np.asarray(x) - self.lo) / (self.hi - self.lo), 0.0, 1.0)
 
     def hit(self, u: np.ndarray, names: Sequence[str], *, tol: float = 1e-3) -> tuple[str, ...]:

@@ -26,7 +26,7 @@ import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypedDict
 
 import numpy as np
 
@@ -37,7 +37,23 @@ from ionic_usd.evaluate.polyline import PolylineIndex, closest_on_polyline
 from ionic_usd.evaluate.scan_axis import ColumnFrame, estimate_axis, find_parts
 from ionic_usd.evaluate.scan_parts import base_meridian, has_square_plinth, to_column
 
-__all__ = ["ScanFit", "fit_column_scan", "heat_colours", "scan_deviation"]
+__all__ = ["ScanFit", "ScanSummary", "fit_column_scan", "heat_colours", "scan_deviation"]
+
+
+class ScanSummary(TypedDict):
+    """:meth:`ScanFit.summary`: the R.json keys (lengths in metres, seconds)."""
+
+    diameter: float
+    flutes: int
+    axis: dict[str, list[float]]  # "point", "direction": (3,) each
+    parts_found: list[str]
+    part_heights: dict[str, list[float]]  # part -> [h0, h1]
+    deviation: dict[str, float]  # "rms", "p95", "max"
+    points: int
+    section: dict[str, float]
+    seconds: float
+    parts: dict[str, dict[str, Any]]
+    notes: list[str]
 
 
 @dataclass(eq=False)
@@ -73,7 +89,7 @@ class ScanFit:
     notes: list[str] = field(default_factory=list)
     fits: dict[str, dict[str, Any]] = field(default_factory=dict)
 
-    def summary(self) -> dict[str, object]:
+    def summary(self) -> ScanSummary:
         """The R.json keys: diameter, flutes, axis, parts_found, deviation, …"""
         d = self.deviation
         return {
@@ -108,7 +124,8 @@ def _flutes_from_points(xy: np.ndarray) -> tuple[int, float]:
     return k, math.degrees(centre)
 
 
-def _fit_section_e(xy: np.ndarray, r0: float, e: int, centre_deg: float):
+def _fit_section_e(xy: np.ndarray, r0: float, e: int, centre_deg: float
+                   ) -> tuple[int, float, np.ndarray, np.ndarray, np.ndarray]:
     """Fluted section with ``e`` flutes through scattered points (points → model, robust)."""
     from scipy.optimize import least_squares
 
@@ -124,13 +141,10 @@ def _fit_section_e(xy: np.ndarray, r0: float, e: int, centre_deg: float):
         poly = fluted_section(x[0], e, x[1], x[2], x[3], x[4:6], slices=12)
         return closest_on_polyline(pts, np.ascontiguousarray(poly))[0]
 
-    best = None
-    for f0 in (0.6, 0.8):
-        x0 = np.array([r0, f0 * period, 1.0, rot0, 0.0, 0.0])
-        sol = least_squares(res, x0, bounds=(lo, hi), loss="soft_l1", f_scale=0.002 * r0,
-                            x_scale=hi - lo, max_nfev=300)
-        if best is None or sol.cost < best.cost:
-            best = sol
+    sols = [least_squares(res, np.array([r0, f0 * period, 1.0, rot0, 0.0, 0.0]),
+                          bounds=(lo, hi), loss="soft_l1", f_scale=0.002 * r0,
+                          x_scale=hi - lo, max_nfev=300) for f0 in (0.6, 0.8)]
+    best = min(sols, key=lambda sol: sol.cost)  # the first of equal costs, as before
     x = best.x
     return e, best.cost, x, lo, hi
 
@@ -165,7 +179,7 @@ def _section_at(loc: np.ndarray, h: float, s0: float, s1: float, ra: float, rb: 
                 flutes: int | None) -> tuple[int, dict[str, float], np.ndarray, float]:
     """Fit the section through a slab at height ``h``, thick enough for ~1500 points, each
     point scaled radially to the slab's middle by the taper."""
-    in_band = np.count_nonzero((loc[:, 2] >= s0) & (loc[:, 2] <= s1))
+    in_band = int(np.count_nonzero((loc[:, 2] >= s0) & (loc[:, 2] <= s1)))
     half = min(max(0.004, 0.5 * (s1 - s0) * 1500.0 / max(in_band, 1)), 0.15 * (s1 - s0))
     sel = np.abs(loc[:, 2] - h) < half
     if np.count_nonzero(sel) < 200:
@@ -295,13 +309,12 @@ def fit_column_scan(points: np.ndarray, *, seed: int = 0, max_fit_points: int = 
     # volutes (180° symmetric) choose among the periods: the one nearest the scan wins
     tree = _other_parts_tree(col)
     probe = sub[rng.choice(len(sub), min(len(sub), 5000), replace=False)]
-    best = None
+    turns: list[tuple[float, np.ndarray, int]] = []
     for j in range(e // 2 if (has_base or has_cap) else 1):
         m = _matrix(frame, sec["rotation_deg"] + j * 360.0 / e, h_col0)
         d = scan_deviation(probe, col, m, tree=tree)
-        score = float(np.sqrt(np.mean(d**2)))
-        if best is None or score < best[0]:
-            best = (score, m, j)
+        turns.append((float(np.sqrt(np.mean(d**2))), m, j))
+    best = min(turns, key=lambda t: t[0])  # the first of equal scores
     m = best[1]
     sec["rotation_deg"] += best[2] * 360.0 / e
     base_fit = None
@@ -415,8 +428,8 @@ def _other_parts_tree(col: ColumnParams):
     pp = P[T]
     area = 0.5 * np.linalg.norm(np.cross(pp[:, 1] - pp[:, 0], pp[:, 2] - pp[:, 0]),
                                 axis=1).sum()
-    n = int(min(1_500_000, max(50_000, area / 1e-6)))
-    samples, _ = sample_surface(P, T, n, seed=1)
+    count = int(min(1_500_000, max(50_000, area / 1e-6)))
+    samples, _ = sample_surface(P, T, count, seed=1)
     return cKDTree(samples)
 
 

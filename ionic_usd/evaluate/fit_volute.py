@@ -30,7 +30,7 @@ import numpy as np
 
 from ionic_usd.column.column import ColumnParams, portunus_column_params
 from ionic_usd.column.volute import VOLUTE_MODELS, VoluteParams, volute_curve
-from ionic_usd.errors import IonicError, ParameterError
+from ionic_usd.errors import GeometryError, IonicError, ParameterError
 from ionic_usd.evaluate import fit_core as core
 from ionic_usd.evaluate.fit_core import FitResult, compare_aligned, densify, orient_like
 from ionic_usd.evaluate.metrics import compare, resample
@@ -211,8 +211,10 @@ def _fit_one(ref: np.ndarray, model: _Model, *, measure: str, samples: int, seed
     hit = box.hit(stages.best_u, names)
     values = dict(zip(names, (float(v) for v in x), strict=True))
     pose = Alignment((float(x[5]), float(x[6])), sign < 0, 0.0, 0.0)
-    return (model.params(x), ref_o, hit, values, pose, make(box.u(x0)), stages.iterations,
-            obj.calls)
+    start = make(box.u(x0))
+    if start is None:  # x0 traced ``first`` above, so the start is a volute
+        raise GeometryError(f"volute fit ({model.name}): the start parameters trace no volute")
+    return (model.params(x), ref_o, hit, values, pose, start, stages.iterations, obj.calls)
 
 
 def fit_volute(

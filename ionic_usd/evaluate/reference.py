@@ -403,6 +403,8 @@ def _search(ref: np.ndarray, gen: np.ndarray, mirrored: bool, ang: float | None,
     g = gen.copy()
     if mirrored:
         g[:, 0] = -g[:, 0]
+    ref_index: _Brute | PolylineIndex
+    g_index: _Brute | PolylineIndex
     if len(ref) * len(g) <= 250_000:  # brute force (numba) beats the index on small curves
         ref_index, g_index = _Brute(ref), _Brute(g)
     else:
@@ -427,7 +429,7 @@ def _search(ref: np.ndarray, gen: np.ndarray, mirrored: bool, ang: float | None,
         starts = [start]
     else:
         starts = [cr - cg] if mirrored else [cr - cg, np.zeros(dim)]
-        if rotate:
+        if ang is not None:  # (= rotate)
             starts = [np.append(s, ang) for s in starts]
     x0 = min(starts, key=cost)
     f0 = cost(x0)

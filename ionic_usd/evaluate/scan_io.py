@@ -44,7 +44,7 @@ def _need(module: str):
 def _text_points(path: Path) -> np.ndarray:
     import re
 
-    rows = []
+    rows: list[list[float]] = []
     split = re.compile(r"[,;\s]+")
     with path.open("r", encoding="utf-8", errors="strict") as fh:
         for k, line in enumerate(fh, 1):

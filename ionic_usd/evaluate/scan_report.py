@@ -9,7 +9,7 @@ from typing import IO, Any
 
 import numpy as np
 
-from ionic_usd.evaluate.fit_scan import ScanFit, fit_column_scan, heat_colours
+from ionic_usd.evaluate.fit_scan import ScanFit, ScanSummary, fit_column_scan, heat_colours
 
 __all__ = ["cmd_fit_column", "plot_scan_fit", "write_outputs"]
 
@@ -69,7 +69,7 @@ def plot_scan_fit(fit: ScanFit, path: Path) -> Path:
 
 
 def write_outputs(fit: ScanFit, points: np.ndarray, files: dict[str, Path], args: Any,
-                  summary: dict[str, object]) -> None:
+                  summary: ScanSummary) -> None:
     """Write every output of ``ionic-usd fit column`` (paths in ``files``; JSON at
     ``args.json``)."""
     from ionic_usd.column.column import COLUMN_DOCS, build_column, column_params_to_tables

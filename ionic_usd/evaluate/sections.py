@@ -447,7 +447,7 @@ def section_from_usd(
         half = _half_outline([c[:, :2] for c in loops])
         scale = 1.0 + float(np.abs(half).max())
         return _strip_profile_ends(half, 1e-7 * scale)
-    if part == "shaft":
+    if part == "shaft" and y is not None:  # (y is None returned above)
         loops = slice_mesh(pts, tris, np.array([0.0, float(y), 0.0]), np.array([0.0, 1.0, 0.0]))
         closed = [c for c in loops if np.allclose(c[0], c[-1])]
         if not closed:

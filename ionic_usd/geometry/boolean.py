@@ -25,8 +25,9 @@ def _as_triangles(mesh: Mesh) -> Mesh:
     corners = triangulate_fan(mesh.face_vertex_counts,
                               np.arange(len(mesh.face_vertex_indices))).reshape(-1)
     nrm, interp = mesh.normals, mesh.normals_interpolation
-    if nrm is not None and interp == "faceVarying":
-        nrm = corner_normals(mesh)[corners]
+    cn = corner_normals(mesh) if interp == "faceVarying" else None  # None without normals
+    if cn is not None:
+        nrm = cn[corners]
     return Mesh(mesh.points, np.full(len(corners) // 3, 3, np.int32),
                 mesh.face_vertex_indices[corners], nrm, interp, name=mesh.name)
 

@@ -130,7 +130,9 @@ def normals_against_winding(mesh: Mesh) -> int:
     else:  # corners of the fan triangles, in the order ``triangles`` uses
         corners = triangulate_fan(mesh.face_vertex_counts,
                                   np.arange(len(mesh.face_vertex_indices)))
-        cn = corner_normals(mesh)[corners].astype(np.float64)
+        full = corner_normals(mesh)
+        assert full is not None  # mesh.normals is not None (checked above)
+        cn = full[corners].astype(np.float64)
     dots = np.einsum("ikj,ij->ik", cn, fn).min(axis=1)
     return int(((dots < 0) & (area > 0)).sum())
 

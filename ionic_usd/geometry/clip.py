@@ -129,8 +129,9 @@ def clip_mesh(
     corner = triangulate_fan(mesh.face_vertex_counts,
                              np.arange(mesh.face_vertex_indices.size)).astype(np.int64)
     fv = None
-    if mesh.normals is not None:
-        fv = corner_normals(mesh).astype(np.float64)
+    cn0 = corner_normals(mesh)  # None iff the mesh has no normals
+    if cn0 is not None:
+        fv = cn0.astype(np.float64)
     if mesh.st is not None and mesh.st_indices is not None:
         # st rides along with the normals (3 more columns, interpolated the same way)
         cst = mesh.st[mesh.st_indices].astype(np.float64)
@@ -189,7 +190,7 @@ def clip_mesh(
     faces_all = np.concatenate(faces)
     used, remap = np.unique(faces_all, return_inverse=True)
     out_nrm = st = sti = None
-    if normals is not None:
+    if normals is not None and fv is not None:  # (normals exist only when fv does)
         out_nrm = np.concatenate([np.reshape(x, (-1, fv.shape[1])) for x in normals])
         if out_nrm.shape[1] == 5:
             key = np.concatenate([faces_all.reshape(-1, 1),

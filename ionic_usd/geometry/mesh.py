@@ -379,7 +379,7 @@ def merge(meshes: list[Mesh] | tuple[Mesh, ...], name: str = "mesh") -> Mesh:
             nidx = np.concatenate([i + o for (_, i), o in zip(parts, no, strict=True)])
             interp = "faceVarying"
         else:
-            normals = np.concatenate([m.corner_normals() for m in meshes])  # type: ignore[misc]
+            normals = np.concatenate([m.corner_normals() for m in meshes])
             interp = "faceVarying"
     st = sti = None
     sts = [(m.st, m.st_indices) for m in meshes if m.st is not None and m.st_indices is not None]

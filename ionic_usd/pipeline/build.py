@@ -224,7 +224,7 @@ def build_prototypes(specs: Sequence[TempleSpec], *, cache: PrototypeCache | Non
                        for s in todo]
             by_key = {f.key: s for f, s in zip(futures, todo, strict=True)}
             workers: set[str] = set()
-            task_seconds = {}
+            task_seconds: dict[str, float] = {}
             from ionic_usd.progress import progress as bar_over
 
             with bar_over(len(futures), "building temple prototypes (Dask)", unit="temple") as bar:

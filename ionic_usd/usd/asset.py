@@ -23,6 +23,7 @@ import os
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from pxr import Sdf, Usd
 
@@ -37,6 +38,9 @@ from ionic_usd.usd.materials import (
 )
 from ionic_usd.usd.mesh import author_mesh, define_prim
 from ionic_usd.usd.stage import new_layer, save_layer
+
+if TYPE_CHECKING:  # the ornament module is imported only when an asset has instancers
+    from ionic_usd.column.ornament import Instances
 
 __all__ = ["AssetMesh", "AssetInstancer", "AssetSpec", "class_path", "write_asset",
            "write_asset_layers",
@@ -60,7 +64,7 @@ class AssetInstancer:
 
     part: str
     name: str
-    instances: object  # ionic_usd.column.ornament.Instances
+    instances: Instances
     tags: Mapping[str, str]
 
 
@@ -92,7 +96,7 @@ class AssetSpec:
             sel = self.defaults.get(vset)
             if sel not in variants:
                 raise ParameterError(f"defaults[{vset!r}]", sel, f"one of {', '.join(variants)}")
-        for m in (*self.meshes, *self.instancers):
+        for m in _tagged(self):
             for vset, v in m.tags.items():
                 if vset not in self.variant_sets or v not in self.variant_sets[vset]:
                     raise ParameterError(f"tags of {m.part}/{m.name}", dict(m.tags),
@@ -139,6 +143,11 @@ def _geometry_layer(spec: AssetSpec) -> Sdf.Layer:
 def _purpose(spec: Sdf.PrimSpec, purpose: str) -> None:
     Sdf.AttributeSpec(spec, "purpose", Sdf.ValueTypeNames.Token,
                       Sdf.VariabilityUniform).default = purpose
+
+
+def _tagged(spec: AssetSpec) -> tuple[AssetMesh | AssetInstancer, ...]:
+    """Every mesh and instancer of the asset (what variant tags switch)."""
+    return (*spec.meshes, *spec.instancers)
 
 
 def _proxy_meshes(spec: AssetSpec) -> list[AssetMesh]:
@@ -197,7 +206,7 @@ def _interface_layer(spec: AssetSpec) -> Sdf.Layer:
             for v in variants:
                 var = Sdf.VariantSpec(vs_spec, v)
                 vprim = var.primSpec
-                for m in (*spec.meshes, *spec.instancers):
+                for m in _tagged(spec):
                     if vset in m.tags and m.tags[vset] != v:
                         geom = _over(vprim, "Geom")
                         part = _over(geom, m.part)

@@ -390,7 +390,7 @@ def compose_city(folder: str | os.PathLike, temples: TempleInstances,
     with Sdf.ChangeBlock():
         _group(body, "/City/Temples")
         refs = [f"./{temples.folders[b]}/Temple.usda" for b, _, _ in protos]
-        dirs = [card_dirs[(b, sel)] if card and card_dirs else None  # type: ignore[index]
+        dirs = [card_dirs[(b, sel)] if card and card_dirs else None
                 for b, sel, card in protos]
         if as_instancer:
             _instancer(body, "/City/Temples/Field",
