@@ -22,6 +22,7 @@ import logging
 from collections.abc import Callable
 from functools import lru_cache
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -67,7 +68,7 @@ def _key(tag: str, opts: object, extra: str) -> str:
 
 def _write(folder: Path, meshes: list[AssetMesh]) -> None:
     index = []
-    arrays: dict[str, np.ndarray] = {}
+    arrays: dict[str, Any] = {}  # (numpy types savez's keywords as its flags)
     for i, am in enumerate(meshes):
         m = am.mesh
         present = []
