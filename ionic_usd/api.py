@@ -72,9 +72,15 @@ class Column:
         from ionic_usd.usd import check_output_path, write_meshes
 
         out = check_output_path(path, force=force)
-        return Path(write_meshes(out, self.parts(), root="Column", force=force,
-                                 comment=f"ionic_usd column ({self.params.lod}, "
-                                 f"base {self.params.base})"))
+        return Path(
+            write_meshes(
+                out,
+                self.parts(),
+                root="Column",
+                force=force,
+                comment=f"ionic_usd column ({self.params.lod}, base {self.params.base})",
+            )
+        )
 
 
 def column(params: ColumnParams | None = None) -> Column:
@@ -142,8 +148,7 @@ class Temple:
         temple = cls(layout_from_mapping(data, context=str(path)), None, mouldings)
         if not tables:
             return temple
-        column = column_params_from_mapping(tables, context=str(path),
-                                            base=temple.column_params)
+        column = column_params_from_mapping(tables, context=str(path), base=temple.column_params)
         return dataclasses.replace(temple, column=column)
 
     @property
@@ -155,8 +160,9 @@ class Temple:
         from ionic_usd.column.column import portunus_column_params
 
         p = self.layout.params
-        return portunus_column_params(height=p.columns_height,
-                                      lower_diameter=p.columns_lower_diameter)
+        return portunus_column_params(
+            height=p.columns_height, lower_diameter=p.columns_lower_diameter
+        )
 
     def with_hypotheses(self, *ids: str) -> Temple:
         """The Portunus layout with the named hypotheses applied in the geometry itself."""
@@ -164,8 +170,9 @@ class Temple:
 
         return dataclasses.replace(self, layout=portunus_layout(apply=ids))
 
-    def save(self, folder: str | os.PathLike, *, force: bool = False,
-             **options: Any) -> TempleReport:
+    def save(
+        self, folder: str | os.PathLike, *, force: bool = False, **options: Any
+    ) -> TempleReport:
         """Compose the temple folder (``Temple.usda`` + layers + the column asset).
 
         ``options`` go to :func:`ionic_usd.usd.temple.compose_temple` (``texture_size``,
@@ -173,5 +180,6 @@ class Temple:
         """
         from ionic_usd.usd.temple import compose_temple
 
-        return compose_temple(folder, self.layout, self.column, force=force,
-                              mouldings=self.mouldings, **options)
+        return compose_temple(
+            folder, self.layout, self.column, force=force, mouldings=self.mouldings, **options
+        )

@@ -43,8 +43,7 @@ def check_number(
     naming ``name``, the value and what was expected.
     """
     if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ParameterError(name, value, "an integer" if integer else "a number",
-                             context=context)
+        raise ParameterError(name, value, "an integer" if integer else "a number", context=context)
     if not math.isfinite(value):
         raise ParameterError(name, value, "a finite number", context=context)
     out: float | int = value
@@ -53,11 +52,16 @@ def check_number(
             raise ParameterError(name, value, "an integer", context=context)
         out = int(value)
     if positive and not value > 0:
-        raise ParameterError(name, value, f"{'an integer' if integer else 'a finite number'} "
-                             "> 0", context=context)
+        raise ParameterError(
+            name, value, f"{'an integer' if integer else 'a finite number'} > 0", context=context
+        )
     if minimum is not None and value < minimum:
-        raise ParameterError(name, value, f"{'an integer' if integer else 'a number'} >= "
-                             f"{minimum:g}", context=context)
+        raise ParameterError(
+            name,
+            value,
+            f"{'an integer' if integer else 'a number'} >= {minimum:g}",
+            context=context,
+        )
     return out
 
 
@@ -89,7 +93,13 @@ def check_fields(
         low = minima.get(f.name)
         if f.name in non_negative:
             low = 0.0 if low is None else max(low, 0)
-        v = check_number(f.name, getattr(obj, f.name), context=context, integer=integer,
-                         minimum=low, positive=f.name in positive)
+        v = check_number(
+            f.name,
+            getattr(obj, f.name),
+            context=context,
+            integer=integer,
+            minimum=low,
+            positive=f.name in positive,
+        )
         if integer:
             object.__setattr__(obj, f.name, v)

@@ -54,8 +54,11 @@ def cmd_shaft(args: argparse.Namespace) -> int:
     params = _shaft_params(args)
     if args.print_config:
         sys.stdout.write(
-            to_toml({"shaft": params.to_dict()}, {"shaft": SHAFT_PARAMETER_DOCS},
-                    header="ionic_usd shaft parameters (edit and pass with --config)")
+            to_toml(
+                {"shaft": params.to_dict()},
+                {"shaft": SHAFT_PARAMETER_DOCS},
+                header="ionic_usd shaft parameters (edit and pass with --config)",
+            )
         )
         return 0
     from ionic_usd.usd import check_output_path, write_meshes
@@ -65,8 +68,9 @@ def cmd_shaft(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     from ionic_usd.geometry.guard import guarded
 
-    mesh = guarded(lambda: build_shaft(params, max_triangles=args.max_triangles), "shaft",
-                   "parameters")
+    mesh = guarded(
+        lambda: build_shaft(params, max_triangles=args.max_triangles), "shaft", "parameters"
+    )
     t1 = time.perf_counter()
     write_meshes(out, {"Shaft": mesh}, root="Shaft", force=args.force)
     t2 = time.perf_counter()
@@ -86,8 +90,7 @@ def _column_params(args: argparse.Namespace):
         params = column_params_from_mapping(load_toml(args.config), context=str(args.config))
     flags = {k: getattr(args, k) for k in ("lod", "base", "scroll") if getattr(args, k, None)}
     if flags:
-        params = column_params_from_mapping({"column": flags}, context="command line",
-                                            base=params)
+        params = column_params_from_mapping({"column": flags}, context="command line", base=params)
     return params
 
 
@@ -110,11 +113,20 @@ def cmd_column(args: argparse.Namespace) -> int:
         from ionic_usd.column.capital import CAPITAL_PARAMETER_DOCS
         from ionic_usd.column.volute import VOLUTE_PARAMETER_DOCS
 
-        docs = {"column": COLUMN_DOCS, "shaft": SHAFT_PARAMETER_DOCS,
-                "capital": CAPITAL_PARAMETER_DOCS, "volute": VOLUTE_PARAMETER_DOCS}
-        sys.stdout.write(to_toml(column_params_to_tables(params), docs,
-                                 header="ionic_usd column parameters (edit and pass with "
-                                 "--config); lengths in metres, angles in degrees"))
+        docs = {
+            "column": COLUMN_DOCS,
+            "shaft": SHAFT_PARAMETER_DOCS,
+            "capital": CAPITAL_PARAMETER_DOCS,
+            "volute": VOLUTE_PARAMETER_DOCS,
+        }
+        sys.stdout.write(
+            to_toml(
+                column_params_to_tables(params),
+                docs,
+                header="ionic_usd column parameters (edit and pass with "
+                "--config); lengths in metres, angles in degrees",
+            )
+        )
         return 0
     from ionic_usd.usd import check_output_path, write_meshes
 
@@ -126,12 +138,19 @@ def cmd_column(args: argparse.Namespace) -> int:
     col = build_column(params)
     t1 = time.perf_counter()
     meshes = {k: v for k, v in col.parts().items() if k in _PARTS[args.part]}
-    write_meshes(out, meshes, root="Column", force=args.force,
-                 comment=f"ionic_usd column ({params.lod}, base {params.base})")
+    write_meshes(
+        out,
+        meshes,
+        root="Column",
+        force=args.force,
+        comment=f"ionic_usd column ({params.lod}, base {params.base})",
+    )
     t2 = time.perf_counter()
     tris = sum(m.n_triangles for m in meshes.values())
-    print(f"wrote {out}: {', '.join(meshes)}; {tris:,} triangles, height {col.height:.3f} m "
-          f"(generate {1e3 * (t1 - t0):.1f} ms, write {1e3 * (t2 - t1):.1f} ms)")
+    print(
+        f"wrote {out}: {', '.join(meshes)}; {tris:,} triangles, height {col.height:.3f} m "
+        f"(generate {1e3 * (t1 - t0):.1f} ms, write {1e3 * (t2 - t1):.1f} ms)"
+    )
     return 0
 
 
@@ -149,19 +168,28 @@ def cmd_asset(args: argparse.Namespace) -> int:
         for item in args.texture:
             role, sep, path = item.partition("=")
             if not sep or role not in roles or not path:
-                raise ParameterError("--texture", item, "ROLE=FILE with ROLE basecolor, "
-                                     "roughness or normal")
+                raise ParameterError(
+                    "--texture", item, "ROLE=FILE with ROLE basecolor, roughness or normal"
+                )
             if role in user:  # the last one silently winning would hide a typo
-                raise ParameterError("--texture", item, f"each role once ({role} is also "
-                                     f"{user[role]!r})")
+                raise ParameterError(
+                    "--texture", item, f"each role once ({role} is also {user[role]!r})"
+                )
             user[role] = path
     check_estimate(estimate_asset(params, args.texture_size), args.max_memory)
-    opts = ColumnAssetOptions(params=params, texture_size=args.texture_size, seed=args.seed,
-                              make_tx=args.tx, user_textures=user)
+    opts = ColumnAssetOptions(
+        params=params,
+        texture_size=args.texture_size,
+        seed=args.seed,
+        make_tx=args.tx,
+        user_textures=user,
+    )
     rep = build_column_asset(args.output, opts, force=args.force)
     lods = ", ".join(f"{k} {v:,}" for k, v in rep.triangles_per_lod.items())
-    print(f"wrote {rep.path}: {rep.meshes} meshes, triangles per LOD: {lods}; "
-          f"{rep.uv_unwraps} UV unwraps, {rep.bytes_on_disk / 1e6:.1f} MB, {rep.seconds:.2f} s")
+    print(
+        f"wrote {rep.path}: {rep.meshes} meshes, triangles per LOD: {lods}; "
+        f"{rep.uv_unwraps} UV unwraps, {rep.bytes_on_disk / 1e6:.1f} MB, {rep.seconds:.2f} s"
+    )
     return 0
 
 
@@ -176,21 +204,34 @@ def cmd_temple(args: argparse.Namespace) -> int:
     else:
         layouts = {"portunus": Temple.portunus}
         if args.layout not in layouts:
-            raise ParameterError("--layout", args.layout,
-                                 f"one of the built-in layouts: {', '.join(layouts)} "
-                                 "(or describe a temple in a TOML file: --config)")
+            raise ParameterError(
+                "--layout",
+                args.layout,
+                f"one of the built-in layouts: {', '.join(layouts)} "
+                "(or describe a temple in a TOML file: --config)",
+            )
         temple = layouts[args.layout]()
     layout = temple.layout
     n_cuboids = sum(len(c) for c in layout.cuboids.values())
-    check_estimate(estimate_temple(temple.column_params, args.texture_size, n_cuboids),
-                   args.max_memory)
-    rep = temple.save(args.output, force=args.force, texture_size=args.texture_size,
-                      seed=args.seed, detail=args.detail)
-    print(f"wrote {rep.root} ({layout.name}): {rep.files} files, {rep.prims} prims, "
-          f"{rep.instances} column instances of {rep.prototypes} prototypes, "
-          f"{rep.triangles:,} triangles, {len(rep.hypotheses)} hypotheses, {rep.seconds:.2f} s")
-    print(f"  open {rep.root} in usdview, Blender, Houdini or Omniverse; put your own edits in "
-          f"{Path(args.output) / 'overrides.usda'} (kept on rebuilds)")
+    check_estimate(
+        estimate_temple(temple.column_params, args.texture_size, n_cuboids), args.max_memory
+    )
+    rep = temple.save(
+        args.output,
+        force=args.force,
+        texture_size=args.texture_size,
+        seed=args.seed,
+        detail=args.detail,
+    )
+    print(
+        f"wrote {rep.root} ({layout.name}): {rep.files} files, {rep.prims} prims, "
+        f"{rep.instances} column instances of {rep.prototypes} prototypes, "
+        f"{rep.triangles:,} triangles, {len(rep.hypotheses)} hypotheses, {rep.seconds:.2f} s"
+    )
+    print(
+        f"  open {rep.root} in usdview, Blender, Houdini or Omniverse; put your own edits in "
+        f"{Path(args.output) / 'overrides.usda'} (kept on rebuilds)"
+    )
     return 0
 
 
@@ -202,11 +243,22 @@ def cmd_preview(args: argparse.Namespace) -> int:
     except ValueError:
         raise ParameterError("--background", args.background, "three numbers R,G,B") from None
     background = (red, green, blue)
-    s = render_preview(args.scene, args.output, width=args.width, height=args.height,
-                       camera=args.camera, lod=args.lod, background=background,
-                       samples=args.samples, ground=not args.no_ground, force=args.force)
-    print(f"wrote {args.output}: {s.triangles:,} triangles, {s.meshes} meshes, "
-          f"{s.instances} instances ({s.seconds:.2f} s)")
+    s = render_preview(
+        args.scene,
+        args.output,
+        width=args.width,
+        height=args.height,
+        camera=args.camera,
+        lod=args.lod,
+        background=background,
+        samples=args.samples,
+        ground=not args.no_ground,
+        force=args.force,
+    )
+    print(
+        f"wrote {args.output}: {s.triangles:,} triangles, {s.meshes} meshes, "
+        f"{s.instances} instances ({s.seconds:.2f} s)"
+    )
     return 0
 
 
@@ -218,8 +270,10 @@ def _check_memory(what: str, triangles: int, args: argparse.Namespace) -> None:
         check_estimate,
     )
 
-    check_estimate(Estimate(what, triangles, 0, BASELINE_BYTES + BYTES_PER_TRIANGLE * triangles),
-                   args.max_memory)
+    check_estimate(
+        Estimate(what, triangles, 0, BASELINE_BYTES + BYTES_PER_TRIANGLE * triangles),
+        args.max_memory,
+    )
 
 
 # -- parser --------------------------------------------------------------------------------------
@@ -231,103 +285,157 @@ class _Parser(argparse.ArgumentParser):
 _AddCommand = Callable[[Any, bool], None]
 
 
-def _command(sub: Any, name: str, help: str, description: str,
-             func: Callable[[argparse.Namespace], int]) -> argparse.ArgumentParser:
+def _command(
+    sub: Any, name: str, help: str, description: str, func: Callable[[argparse.Namespace], int]
+) -> argparse.ArgumentParser:
     return add_command(sub, name, func, help=help, description=description)
 
 
 def _add_shaft(sub: Any, full: bool) -> None:
-    p = _command(sub, "shaft", "write the fluted column shaft as USD",
-                 "Build the fluted shaft (paper Table 1, parameters $a-$i) and write it as "
-                 "USD (.usda text, .usdc/.usd binary, by extension). Parameters come from "
-                 "defaults (the Temple of Portunus), then --config TOML ([shaft] table), then "
-                 "flags.", cmd_shaft)
+    p = _command(
+        sub,
+        "shaft",
+        "write the fluted column shaft as USD",
+        "Build the fluted shaft (paper Table 1, parameters $a-$i) and write it as "
+        "USD (.usda text, .usdc/.usd binary, by extension). Parameters come from "
+        "defaults (the Temple of Portunus), then --config TOML ([shaft] table), then "
+        "flags.",
+        cmd_shaft,
+    )
     if not full:
         return
     from ionic_usd.column.shaft import DEFAULT_TRIANGLE_BUDGET, SHAFT_PARAMETER_DOCS, ShaftParams
 
     add_output_flags(p, "output USD file", default="shaft.usda")
     add_config_flags(p, "TOML file with a [shaft] table", print_config=True)
-    p.add_argument("--max-triangles", type=int, default=DEFAULT_TRIANGLE_BUDGET,
-                   help="refuse a level of detail above this triangle count "
-                   f"[default {DEFAULT_TRIANGLE_BUDGET:,}]")
+    p.add_argument(
+        "--max-triangles",
+        type=int,
+        default=DEFAULT_TRIANGLE_BUDGET,
+        help="refuse a level of detail above this triangle count "
+        f"[default {DEFAULT_TRIANGLE_BUDGET:,}]",
+    )
     add_dataclass_flags(p, ShaftParams, SHAFT_PARAMETER_DOCS, title="shaft parameters")
     add_memory_flag(p)
 
 
 def _add_column(sub: Any, full: bool) -> None:
-    p = _command(sub, "column", "write a whole column (base, shaft, capital) as USD",
-                 "Build base + shaft + capital (default: the Temple of Portunus column) and "
-                 "write the parts as separate meshes under one Xform. Parameters: defaults, "
-                 "then --config TOML ([column], [shaft], [capital], [volute] tables; see "
-                 "--print-config), then flags.", cmd_column)
+    p = _command(
+        sub,
+        "column",
+        "write a whole column (base, shaft, capital) as USD",
+        "Build base + shaft + capital (default: the Temple of Portunus column) and "
+        "write the parts as separate meshes under one Xform. Parameters: defaults, "
+        "then --config TOML ([column], [shaft], [capital], [volute] tables; see "
+        "--print-config), then flags.",
+        cmd_column,
+    )
     if not full:
         return
     add_output_flags(p, "output USD file", default="column.usda")
     add_config_flags(p, "TOML file (see --print-config)", print_config=True)
     p.add_argument("--part", choices=list(_PARTS), default="all", help="which parts to write")
     p.add_argument("--lod", help="level of detail: high, medium, low or custom")
-    p.add_argument("--base", help="base preset (G1, G2, attic_bezier, attic_bezier_plinth) or "
-                   "a base grammar string")
+    p.add_argument(
+        "--base",
+        help="base preset (G1, G2, attic_bezier, attic_bezier_plinth) or a base grammar string",
+    )
     p.add_argument("--scroll", help="scroll preset (S1, S2) or ring grammar 'R0.7 P0.05, …'")
     add_memory_flag(p)
 
 
 def _add_temple(sub: Any, full: bool) -> None:
-    p = _command(sub, "temple",
-                 "compose a temple scene (default: the Temple of Portunus) — the main job",
-                 "Write a temple as a USD assembly: Temple.usda (root) with podium, cella, "
-                 "entablature, roof and colonnade layers, the instanced column asset, "
-                 "textures, and one variant set per reconstruction hypothesis (layers/). Your "
-                 "overrides.usda is kept.", cmd_temple)
+    p = _command(
+        sub,
+        "temple",
+        "compose a temple scene (default: the Temple of Portunus) — the main job",
+        "Write a temple as a USD assembly: Temple.usda (root) with podium, cella, "
+        "entablature, roof and colonnade layers, the instanced column asset, "
+        "textures, and one variant set per reconstruction hypothesis (layers/). Your "
+        "overrides.usda is kept.",
+        cmd_temple,
+    )
     if not full:
         return
-    add_output_flags(p, "output folder", default="PortunusTemple",
-                     force_help="rebuild an existing folder (atomically; overrides.usda is "
-                     "kept)")
-    add_config_flags(p, "temple TOML (schema of ionic_usd/data/portunus.toml; may add "
-                     "[column], [shaft], [capital], [volute] tables for the column)")
+    add_output_flags(
+        p,
+        "output folder",
+        default="PortunusTemple",
+        force_help="rebuild an existing folder (atomically; overrides.usda is kept)",
+    )
+    add_config_flags(
+        p,
+        "temple TOML (schema of ionic_usd/data/portunus.toml; may add "
+        "[column], [shaft], [capital], [volute] tables for the column)",
+    )
     p.add_argument("--layout", default="portunus", help="built-in temple layout (portunus)")
     add_stone_flags(p)
-    p.add_argument("--detail", choices=("plain", "moulded", "carved"), default=None,
-                   help="the default selection of the temple's variant set `detail`: plain "
-                   "(cuboids), moulded (swept mouldings) or carved (mouldings, dentils, roof "
-                   "tiles, frieze relief hypothesis) [default: carved]")
+    p.add_argument(
+        "--detail",
+        choices=("plain", "moulded", "carved"),
+        default=None,
+        help="the default selection of the temple's variant set `detail`: plain "
+        "(cuboids), moulded (swept mouldings) or carved (mouldings, dentils, roof "
+        "tiles, frieze relief hypothesis) [default: carved]",
+    )
     add_memory_flag(p)
 
 
 def _add_asset(sub: Any, full: bool) -> None:
-    p = _command(sub, "asset", "write the column as a USD component asset with variant sets",
-                 "Write IonicColumn/IonicColumn.usda (interface: kind=component, assetInfo, "
-                 "variant sets lod/base/scroll/flutes/form/finish, payload) with "
-                 "Payload/Contents.usda, Geometry.usdc, Materials.usda and Textures/ (xatlas "
-                 "UVs, OpenImageIO stone maps).", cmd_asset)
+    p = _command(
+        sub,
+        "asset",
+        "write the column as a USD component asset with variant sets",
+        "Write IonicColumn/IonicColumn.usda (interface: kind=component, assetInfo, "
+        "variant sets lod/base/scroll/flutes/form/finish, payload) with "
+        "Payload/Contents.usda, Geometry.usdc, Materials.usda and Textures/ (xatlas "
+        "UVs, OpenImageIO stone maps).",
+        cmd_asset,
+    )
     if not full:
         return
-    add_output_flags(p, "asset folder", default="IonicColumn",
-                     force_help="replace an existing asset folder (atomically)")
+    add_output_flags(
+        p,
+        "asset folder",
+        default="IonicColumn",
+        force_help="replace an existing asset folder (atomically)",
+    )
     add_config_flags(p, "column TOML (see ionic-usd column --print-config)")
     p.add_argument("--base", help="default base (variants are always all four presets)")
     p.add_argument("--scroll", help=argparse.SUPPRESS)
     p.add_argument("--lod", help=argparse.SUPPRESS)
     add_stone_flags(p)
     p.add_argument("--tx", action="store_true", help="also write mipmapped .tx textures")
-    p.add_argument("--texture", action="append", metavar="ROLE=FILE",
-                   help="use your own travertine map (png/jpg) for ROLE basecolor, roughness "
-                   "or normal; give all three")
+    p.add_argument(
+        "--texture",
+        action="append",
+        metavar="ROLE=FILE",
+        help="use your own travertine map (png/jpg) for ROLE basecolor, roughness "
+        "or normal; give all three",
+    )
     add_memory_flag(p)
 
 
 def _add_preview(sub: Any, full: bool) -> None:
-    p = _command(sub, "preview", "render a USD scene to a PNG thumbnail (headless OpenGL)",
-                 "Render SCENE with moderngl on a software EGL context (needs the preview "
-                 "extra: pip install 'ionic_usd[preview]'). Instances are drawn from one "
-                 "upload each.", cmd_preview)
+    p = _command(
+        sub,
+        "preview",
+        "render a USD scene to a PNG thumbnail (headless OpenGL)",
+        "Render SCENE with moderngl on a software EGL context (needs the preview "
+        "extra: pip install 'ionic_usd[preview]'). Instances are drawn from one "
+        "upload each.",
+        cmd_preview,
+    )
     if not full:
         return
     p.add_argument("scene", type=Path, help="USD file to render")
-    add_output_flags(p, "PNG file", default=Path("preview.png"), type=Path,
-                     force_help="overwrite an existing PNG")
+    add_output_flags(
+        p,
+        "PNG file",
+        default=Path("preview.png"),
+        type=Path,
+        force_help="overwrite an existing PNG",
+    )
     p.add_argument("--width", type=int, default=800)
     p.add_argument("--height", type=int, default=600)
     p.add_argument("--camera", choices=["auto", "front", "three-quarter"], default="auto")
@@ -363,8 +471,14 @@ def _add_export(sub: Any, full: bool) -> None:
 
 #: subcommand → the function that adds it (in the order ``--help`` lists them)
 _COMMANDS: dict[str, _AddCommand] = {
-    "shaft": _add_shaft, "column": _add_column, "temple": _add_temple, "city": _add_city,
-    "asset": _add_asset, "preview": _add_preview, "evaluate": _add_evaluate, "fit": _add_fit,
+    "shaft": _add_shaft,
+    "column": _add_column,
+    "temple": _add_temple,
+    "city": _add_city,
+    "asset": _add_asset,
+    "preview": _add_preview,
+    "evaluate": _add_evaluate,
+    "fit": _add_fit,
     "export": _add_export,
 }
 
@@ -386,10 +500,16 @@ def build_parser(commands: Collection[str] | None = None) -> argparse.ArgumentPa
         description="Procedural Ionic-order columns and temples authored as OpenUSD scenes.",
     )
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
-    parser.add_argument("-v", "--verbose", action="count", default=0,
-                        help="say what each step does (-vv: debugging detail) on stderr")
-    parser.add_argument("-q", "--quiet", action="store_true",
-                        help="no progress bars and no messages but errors")
+    parser.add_argument(
+        "-v",
+        "--verbose",
+        action="count",
+        default=0,
+        help="say what each step does (-vv: debugging detail) on stderr",
+    )
+    parser.add_argument(
+        "-q", "--quiet", action="store_true", help="no progress bars and no messages but errors"
+    )
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     for name, add in _COMMANDS.items():
         add(sub, commands is None or name in commands)
@@ -411,10 +531,12 @@ def _os_message(exc: OSError) -> str:
     import errno
 
     what = exc.strerror or _one_line(str(exc)) or type(exc).__name__
-    hint = {errno.ENOSPC: " (free some space or write elsewhere)",
-            errno.EROFS: " (write elsewhere)",
-            errno.EACCES: " (check the folder's permissions)",
-            errno.ENAMETOOLONG: " (use a shorter name)"}.get(exc.errno or 0, "")
+    hint = {
+        errno.ENOSPC: " (free some space or write elsewhere)",
+        errno.EROFS: " (write elsewhere)",
+        errno.EACCES: " (check the folder's permissions)",
+        errno.ENAMETOOLONG: " (use a shorter name)",
+    }.get(exc.errno or 0, "")
     where = f": {exc.filename}" if exc.filename else ""
     if getattr(exc, "filename2", None):
         where += f" -> {exc.filename2}"
@@ -427,8 +549,9 @@ def _library_error(exc: Exception) -> str | None:
     Recognised by its type, without importing ``pxr`` here (only ``ionic_usd.usd`` does).
     """
     t = type(exc)
-    if t.__module__.startswith("pxr") or (t.__name__ == "ArgumentError" \
-            and "Boost" in t.__module__):
+    if t.__module__.startswith("pxr") or (
+        t.__name__ == "ArgumentError" and "Boost" in t.__module__
+    ):
         lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
         return "OpenUSD: " + (lines[-1] if lines else t.__name__)
     return None
@@ -464,8 +587,10 @@ def main(argv: list[str] | None = None) -> int:
     except RecursionError:
         return _fail("input nested too deeply to read")
     except MemoryError:
-        return _fail("out of memory; lower the level of detail or texture size, or run on a "
-                     "machine with more memory (see --max-memory)")
+        return _fail(
+            "out of memory; lower the level of detail or texture size, or run on a "
+            "machine with more memory (see --max-memory)"
+        )
     except OSError as exc:
         return _fail(_os_message(exc))
     except KeyboardInterrupt:
@@ -476,8 +601,11 @@ def main(argv: list[str] | None = None) -> int:
             return _fail(_one_line(msg))
         if os.environ.get("IONIC_USD_DEBUG"):
             raise
-        return _fail(f"internal error, please report it: {type(exc).__name__}: "
-                     f"{_one_line(str(exc))[:300]} (IONIC_USD_DEBUG=1 shows the traceback)", 70)
+        return _fail(
+            f"internal error, please report it: {type(exc).__name__}: "
+            f"{_one_line(str(exc))[:300]} (IONIC_USD_DEBUG=1 shows the traceback)",
+            70,
+        )
 
 
 if __name__ == "__main__":  # pragma: no cover

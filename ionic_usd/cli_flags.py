@@ -31,8 +31,14 @@ __all__ = [
 ]
 
 
-def add_command(subparsers: Any, name: str, func: Callable[[argparse.Namespace], int], *,
-                help: str, description: str) -> argparse.ArgumentParser:
+def add_command(
+    subparsers: Any,
+    name: str,
+    func: Callable[[argparse.Namespace], int],
+    *,
+    help: str,
+    description: str,
+) -> argparse.ArgumentParser:
     """Add subcommand ``name`` running ``func(args)``; its flags are the caller's to add.
 
     A caller building only the name and help (``ionic-usd --help`` lists every command, but
@@ -72,32 +78,42 @@ def add_output_flags(
     p.add_argument("--force", action="store_true", help=force_help)
 
 
-def add_config_flags(p: argparse.ArgumentParser, help: str, *,
-                     print_config: bool = False) -> None:
+def add_config_flags(p: argparse.ArgumentParser, help: str, *, print_config: bool = False) -> None:
     """``--config TOML`` and, with ``print_config``, ``--print-config``."""
     p.add_argument("--config", type=Path, help=help)
     if print_config:
-        p.add_argument("--print-config", action="store_true",
-                       help="print the full parameter set as TOML and exit")
+        p.add_argument(
+            "--print-config",
+            action="store_true",
+            help="print the full parameter set as TOML and exit",
+        )
 
 
 def add_stone_flags(p: argparse.ArgumentParser) -> None:
     """``--texture-size`` and ``--seed`` of the procedural stone textures."""
-    p.add_argument("--texture-size", type=int, default=1024,
-                   help="texture resolution in pixels: a power of two, 16-4096 within the "
-                   "default memory limit; 8192 needs about 10 GB (--max-memory 10) "
-                   "[default 1024]")
-    p.add_argument("--seed", type=int, default=7, help="seed of the procedural stone "
-                   "[default 7]")
+    p.add_argument(
+        "--texture-size",
+        type=int,
+        default=1024,
+        help="texture resolution in pixels: a power of two, 16-4096 within the "
+        "default memory limit; 8192 needs about 10 GB (--max-memory 10) "
+        "[default 1024]",
+    )
+    p.add_argument("--seed", type=int, default=7, help="seed of the procedural stone [default 7]")
 
 
 def add_memory_flag(p: argparse.ArgumentParser) -> None:
     """``--max-memory GB``: refuse work whose estimated peak exceeds it."""
     from ionic_usd.resources import DEFAULT_MAX_MEMORY_GB
 
-    p.add_argument("--max-memory", type=float, metavar="GB", default=None,
-                   help="refuse work whose estimated peak memory exceeds this "
-                   f"[default {DEFAULT_MAX_MEMORY_GB:g} GB]")
+    p.add_argument(
+        "--max-memory",
+        type=float,
+        metavar="GB",
+        default=None,
+        help="refuse work whose estimated peak memory exceeds this "
+        f"[default {DEFAULT_MAX_MEMORY_GB:g} GB]",
+    )
 
 
 def add_variant_flag(p: argparse.ArgumentParser, help: str) -> None:

@@ -128,8 +128,9 @@ def _existing_ancestor(p: Path) -> Path:
 def _check_target(p: Path, what: str) -> Path:
     name = p.name
     if name in ("", ".", "..") or p.parts[-1:] in ((".",), ("..",)):
-        raise ParameterError(what, str(p), "a path ending in a file or folder name (not '.', "
-                             "'..' or '/')")
+        raise ParameterError(
+            what, str(p), "a path ending in a file or folder name (not '.', '..' or '/')"
+        )
     parent = p.parent
     anc = _existing_ancestor(parent)
     if not anc.is_dir():
@@ -137,8 +138,11 @@ def _check_target(p: Path, what: str) -> Path:
     limit = _name_max(anc)
     for part in p.parts:
         if len(os.fsencode(part)) > limit:
-            raise ParameterError(what, str(p)[:60] + "…", f"names of at most {limit} bytes "
-                                 f"(one has {len(os.fsencode(part))})")
+            raise ParameterError(
+                what,
+                str(p)[:60] + "…",
+                f"names of at most {limit} bytes (one has {len(os.fsencode(part))})",
+            )
     if not os.access(anc, os.W_OK | os.X_OK):
         reason = "read-only file system" if _read_only_fs(anc) else "permission denied"
         raise ParameterError(what, str(p), f"a writable location ({anc}: {reason})")
@@ -152,8 +156,13 @@ def _read_only_fs(folder: Path) -> bool:
         return False
 
 
-def check_output_file(path: str | os.PathLike, *, force: bool = False,
-                      what: str = "output", suffixes: Sequence[str] | None = None) -> Path:
+def check_output_file(
+    path: str | os.PathLike,
+    *,
+    force: bool = False,
+    what: str = "output",
+    suffixes: Sequence[str] | None = None,
+) -> Path:
     """Refuse an output file that cannot be written, before any work is done.
 
     Refused: an extension not in ``suffixes`` (lower-case, with the dot; None: any); a name
@@ -171,8 +180,9 @@ def check_output_file(path: str | os.PathLike, *, force: bool = False,
     return p
 
 
-def check_output_folder(path: str | os.PathLike, *, force: bool = False,
-                        what: str = "output") -> Path:
+def check_output_folder(
+    path: str | os.PathLike, *, force: bool = False, what: str = "output"
+) -> Path:
     """Refuse an output folder that cannot be written (as :func:`check_output_file`).
 
     An existing folder needs ``force``; an existing file of that name is always refused.
@@ -187,8 +197,9 @@ def check_output_folder(path: str | os.PathLike, *, force: bool = False,
 
 # -- one atomic file writer ------------------------------------------------------------------
 @contextlib.contextmanager
-def atomic_path(path: str | os.PathLike, *,
-                verify: Callable[[Path], None] | None = None) -> Iterator[Path]:
+def atomic_path(
+    path: str | os.PathLike, *, verify: Callable[[Path], None] | None = None
+) -> Iterator[Path]:
     """Yield a temporary sibling of ``path`` to write; on success it replaces ``path``.
 
     The temporary file keeps ``path``'s extension. After the block: the file is synced to
@@ -312,8 +323,9 @@ def _roll_forward(stage: Path, dest: Path) -> None:
             if p.parent != dest:  # a folder it emptied goes too (rmdir refuses a full one)
                 with contextlib.suppress(OSError):
                     p.parent.rmdir()
-    atomic_write_bytes(dest / MANIFEST_NAME, json.dumps({"files": journal["files"]},
-                                                        indent=1).encode())
+    atomic_write_bytes(
+        dest / MANIFEST_NAME, json.dumps({"files": journal["files"]}, indent=1).encode()
+    )
     _fsync_dir(dest)
     shutil.rmtree(stage, ignore_errors=True)
 
@@ -328,8 +340,13 @@ def recover_folder(dest: str | os.PathLike) -> None:
         return
     for e in entries:
         m = _OURS.match(e.name)
-        if m and m["name"] == dest.name[:100] and m["tag"] == _STAGE_TAG \
-                and not _pid_alive(int(m["pid"])) and (Path(e.path) / _JOURNAL).is_file():
+        if (
+            m
+            and m["name"] == dest.name[:100]
+            and m["tag"] == _STAGE_TAG
+            and not _pid_alive(int(m["pid"]))
+            and (Path(e.path) / _JOURNAL).is_file()
+        ):
             _roll_forward(Path(e.path), dest)
         legacy = _LEGACY.match(e.name)
         if legacy and legacy["name"] == dest.name and e.is_dir(follow_symlinks=False):
@@ -349,13 +366,21 @@ def _looks_generated(p: Path) -> bool:
         names = {c.name for c in p.iterdir()}
     except OSError:
         return False
-    return not names or bool(names & {"Temple.usda", "Payload", "IonicColumn"}) \
+    return (
+        not names
+        or bool(names & {"Temple.usda", "Payload", "IonicColumn"})
         or any(n.endswith(".usda") for n in names)
+    )
 
 
-def replace_folder(build: Callable[[Path], object], dest: str | os.PathLike, *,
-                   force: bool = False, keep_existing: Iterable[str] = (),
-                   root_files: Iterable[str] = ()):
+def replace_folder(
+    build: Callable[[Path], object],
+    dest: str | os.PathLike,
+    *,
+    force: bool = False,
+    keep_existing: Iterable[str] = (),
+    root_files: Iterable[str] = (),
+):
     """Build a generated folder in a staging sibling and move it into ``dest`` kill-safely.
 
     Parameters
@@ -388,17 +413,22 @@ def replace_folder(build: Callable[[Path], object], dest: str | os.PathLike, *,
         keep = [k for k in keep_existing if k in files]
         if not dest.exists():
             # a new folder appears whole with one rename
-            atomic_write_bytes(stage / MANIFEST_NAME,
-                               json.dumps({"files": sorted(set(files) - set(keep))},
-                                          indent=1).encode())
+            atomic_write_bytes(
+                stage / MANIFEST_NAME,
+                json.dumps({"files": sorted(set(files) - set(keep))}, indent=1).encode(),
+            )
             _fsync_dir(stage)
             os.replace(stage, dest)
             _fsync_dir(parent)
             return result
         new = sorted(set(files) - set(keep))
         old = generated_files(dest)
-        journal = {"move": _move_order(files, root_files), "keep_existing": keep,
-                   "obsolete": sorted(set(old) - set(new) - set(keep)), "files": new}
+        journal = {
+            "move": _move_order(files, root_files),
+            "keep_existing": keep,
+            "obsolete": sorted(set(old) - set(new) - set(keep)),
+            "files": new,
+        }
         atomic_write_bytes(stage / _JOURNAL, json.dumps(journal, indent=1).encode())
         _fsync_dir(stage)
     except BaseException:
@@ -409,8 +439,11 @@ def replace_folder(build: Callable[[Path], object], dest: str | os.PathLike, *,
     return result
 
 
-def verified_cache(entry: str | os.PathLike, produce: Callable[[Path], object],
-                   verify: Callable[[Path], None] | None = None) -> Path:
+def verified_cache(
+    entry: str | os.PathLike,
+    produce: Callable[[Path], object],
+    verify: Callable[[Path], None] | None = None,
+) -> Path:
     """A cache entry folder that is complete and intact, producing it when it is not.
 
     ``produce(folder)`` writes the entry's files. They are checked with ``verify(file)`` (which

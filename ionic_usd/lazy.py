@@ -14,8 +14,9 @@ from typing import Any
 __all__ = ["lazy_attributes"]
 
 
-def lazy_attributes(package: str, names: Mapping[str, str], namespace: MutableMapping[str, Any]
-                    ) -> tuple[Callable[[str], Any], Callable[[], list[str]]]:
+def lazy_attributes(
+    package: str, names: Mapping[str, str], namespace: MutableMapping[str, Any]
+) -> tuple[Callable[[str], Any], Callable[[], list[str]]]:
     """A module ``__getattr__`` and ``__dir__`` for ``package``.
 
     Parameters
@@ -29,6 +30,7 @@ def lazy_attributes(package: str, names: Mapping[str, str], namespace: MutableMa
 
         __getattr__, __dir__ = lazy_attributes(__name__, _NAMES, globals())
     """
+
     def getattr_(name: str) -> Any:
         module = names.get(name)
         if module is None:

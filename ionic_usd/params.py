@@ -66,8 +66,9 @@ def load_toml(path: str | os.PathLike) -> dict[str, Any]:
     except FileNotFoundError:
         raise ParameterError("config", str(p), "an existing TOML file") from None
     except UnicodeDecodeError as exc:
-        raise ParameterError("config", str(p), f"a UTF-8 text file (byte {exc.start} is "
-                             "not UTF-8)") from None
+        raise ParameterError(
+            "config", str(p), f"a UTF-8 text file (byte {exc.start} is not UTF-8)"
+        ) from None
     except tomllib.TOMLDecodeError as exc:
         raise ParameterError("config", str(p), f"valid TOML ({exc})") from None
     except RecursionError:
@@ -92,8 +93,10 @@ def dataclass_from_mapping(cls, mapping: dict[str, Any], *, context: str, base=N
     unknown = sorted(set(mapping) - names)
     if unknown:
         raise ParameterError(
-            unknown[0], mapping[unknown[0]],
-            f"one of the known keys: {', '.join(sorted(names))}", context=context,
+            unknown[0],
+            mapping[unknown[0]],
+            f"one of the known keys: {', '.join(sorted(names))}",
+            context=context,
         )
     mapping = check_table(mapping, dataclass_schema(cls), context=context)
     if base is not None:
@@ -102,8 +105,15 @@ def dataclass_from_mapping(cls, mapping: dict[str, Any], *, context: str, base=N
 
 
 _BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
-_TOML_ESCAPES = {"\b": "\\b", "\t": "\\t", "\n": "\\n", "\f": "\\f", "\r": "\\r",
-                 '"': '\\"', "\\": "\\\\"}
+_TOML_ESCAPES = {
+    "\b": "\\b",
+    "\t": "\\t",
+    "\n": "\\n",
+    "\f": "\\f",
+    "\r": "\\r",
+    '"': '\\"',
+    "\\": "\\\\",
+}
 
 
 def toml_string(s: str) -> str:
@@ -196,10 +206,16 @@ class FieldSpec:
 
 
 def _kind_name(spec: FieldSpec) -> str:
-    return {"float": "a number", "int": "an integer", "bool": "true or false",
-            "str": "a string", "ident": "an identifier (letters, digits, _, -; ≤ 64)",
-            "vec3": "three numbers [x, y, z]", "strings": "a list of strings",
-            "table": "a table"}.get(spec.kind, "a value")
+    return {
+        "float": "a number",
+        "int": "an integer",
+        "bool": "true or false",
+        "str": "a string",
+        "ident": "an identifier (letters, digits, _, -; ≤ 64)",
+        "vec3": "three numbers [x, y, z]",
+        "strings": "a list of strings",
+        "table": "a table",
+    }.get(spec.kind, "a value")
 
 
 def _number(key: str, v: Any, spec: FieldSpec, context: str, *, integer: bool) -> Any:
@@ -215,8 +231,9 @@ def _number(key: str, v: Any, spec: FieldSpec, context: str, *, integer: bool) -
         raise ParameterError(key, v, f"0 or a magnitude of at least {_TINY:g}", context=context)
     if not spec.lo <= v <= spec.hi:
         unit = f" {spec.unit}" if spec.unit and spec.unit not in ("count",) else ""
-        raise ParameterError(key, v, f"a value in [{spec.lo:g}, {spec.hi:g}]{unit}",
-                             context=context)
+        raise ParameterError(
+            key, v, f"a value in [{spec.lo:g}, {spec.hi:g}]{unit}", context=context
+        )
     return v if integer else float(v)
 
 
@@ -235,19 +252,20 @@ def check_value(key: str, value: Any, spec: FieldSpec, *, context: str = "") -> 
         if not isinstance(value, str):
             raise ParameterError(key, value, _kind_name(spec), context=context)
         if len(value) > spec.max_len:
-            raise ParameterError(key, value[:40] + "…", f"at most {spec.max_len} characters",
-                                 context=context)
+            raise ParameterError(
+                key, value[:40] + "…", f"at most {spec.max_len} characters", context=context
+            )
         if k == "ident":
             check_identifier(key, value, context=context)
         if spec.choices and value not in spec.choices:
-            raise ParameterError(key, value, f"one of {', '.join(spec.choices)}",
-                                 context=context)
+            raise ParameterError(key, value, f"one of {', '.join(spec.choices)}", context=context)
         return value
     if k == "vec3":
         if not isinstance(value, list | tuple) or len(value) != 3:
             raise ParameterError(key, value, "three numbers [x, y, z]", context=context)
-        return [_number(f"{key}[{i}]", x, spec, context, integer=False)
-                for i, x in enumerate(value)]
+        return [
+            _number(f"{key}[{i}]", x, spec, context, integer=False) for i, x in enumerate(value)
+        ]
     if k == "strings":
         if not isinstance(value, list | tuple) or not all(isinstance(x, str) for x in value):
             raise ParameterError(key, value, "a list of strings", context=context)
@@ -268,8 +286,13 @@ def check_value(key: str, value: Any, spec: FieldSpec, *, context: str = "") -> 
 def check_identifier(key: str, value: Any, *, context: str = "") -> str:
     """``value`` if it is an identifier (it names files and prims: no ``/``, ``..``, spaces)."""
     if not isinstance(value, str) or not IDENTIFIER.fullmatch(value):
-        raise ParameterError(key, value, "an identifier: a letter or _ then letters, digits, "
-                             "_ or - (at most 64; no '/', '.' or spaces)", context=context)
+        raise ParameterError(
+            key,
+            value,
+            "an identifier: a letter or _ then letters, digits, "
+            "_ or - (at most 64; no '/', '.' or spaces)",
+            context=context,
+        )
     return value
 
 
@@ -279,16 +302,18 @@ def prim_key(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9_]", "_", name).lower()
 
 
-def check_table(mapping: Mapping[str, Any], schema: Mapping[str, FieldSpec], *,
-                context: str) -> dict[str, Any]:
+def check_table(
+    mapping: Mapping[str, Any], schema: Mapping[str, FieldSpec], *, context: str
+) -> dict[str, Any]:
     """Check every key of ``mapping`` against ``schema`` (unknown keys are errors)."""
     if not isinstance(mapping, Mapping):
         raise ParameterError("table", mapping, "a table of key = value", context=context)
     out = {}
     for key, value in mapping.items():
         if key not in schema:
-            raise ParameterError(key, value, f"one of the known keys: {', '.join(schema)}",
-                                 context=context)
+            raise ParameterError(
+                key, value, f"one of the known keys: {', '.join(schema)}", context=context
+            )
         out[key] = check_value(key, value, schema[key], context=context)
     return out
 
@@ -363,10 +388,15 @@ def check_column_tables(data: Mapping[str, Any], *, context: str) -> None:
     from ionic_usd.column.shaft import ShaftParams
     from ionic_usd.column.volute import VoluteParams
 
-    for table, schema in (("column", _COLUMN_TABLE), ("shaft", dataclass_schema(ShaftParams)),
-                          ("capital", dataclass_schema(CapitalParams)),
-                          ("volute", dataclass_schema(VoluteParams))):
+    for table, schema in (
+        ("column", _COLUMN_TABLE),
+        ("shaft", dataclass_schema(ShaftParams)),
+        ("capital", dataclass_schema(CapitalParams)),
+        ("volute", dataclass_schema(VoluteParams)),
+    ):
         if table in data:
-            check_table(check_value(table, data[table], FieldSpec("table"), context=context),
-                        {k: v for k, v in schema.items() if k != "volute"},
-                        context=f"{context} [{table}]")
+            check_table(
+                check_value(table, data[table], FieldSpec("table"), context=context),
+                {k: v for k, v in schema.items() if k != "volute"},
+                context=f"{context} [{table}]",
+            )

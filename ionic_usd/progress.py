@@ -68,12 +68,18 @@ def progress(total: int | None, desc: str, *, unit: str = "step") -> Iterator[An
     unit : str
         Name of one step, e.g. ``"mesh"``.
     """
-    logging.getLogger("ionic_usd").info("%s (%s %ss)", desc, "?" if total is None else total,
-                                        unit)
+    logging.getLogger("ionic_usd").info("%s (%s %ss)", desc, "?" if total is None else total, unit)
     from tqdm import tqdm
 
-    bar = tqdm(total=total, desc=desc, unit=unit, disable=not bars_enabled(), leave=False,
-               file=sys.stderr, dynamic_ncols=True)
+    bar = tqdm(
+        total=total,
+        desc=desc,
+        unit=unit,
+        disable=not bars_enabled(),
+        leave=False,
+        file=sys.stderr,
+        dynamic_ncols=True,
+    )
     try:
         yield bar
     finally:

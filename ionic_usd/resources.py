@@ -77,8 +77,12 @@ def max_memory_bytes(gb: float | None) -> int:
     """The limit in bytes for ``--max-memory GB`` (None: the default)."""
     if gb is None:
         gb = DEFAULT_MAX_MEMORY_GB
-    if isinstance(gb, bool) or not isinstance(gb, int | float) or not math.isfinite(gb) \
-            or not 0.1 <= gb <= 1 << 20:
+    if (
+        isinstance(gb, bool)
+        or not isinstance(gb, int | float)
+        or not math.isfinite(gb)
+        or not 0.1 <= gb <= 1 << 20
+    ):
         raise ParameterError("--max-memory", gb, "a number of GB in [0.1, 1048576]")
     return int(gb * 1e9)
 
@@ -87,29 +91,36 @@ def check_estimate(est: Estimate, max_memory_gb: float | None = None) -> Estimat
     """Raise :class:`BudgetError` (naming the estimate and the limit) if ``est`` exceeds it."""
     limit = max_memory_bytes(max_memory_gb)
     if est.bytes > limit:
-        raise BudgetError(f"{est.describe()}; the limit is {_gb(limit)} (--max-memory GB "
-                          "raises it on a machine with more memory)")
+        raise BudgetError(
+            f"{est.describe()}; the limit is {_gb(limit)} (--max-memory GB "
+            "raises it on a machine with more memory)"
+        )
     return est
 
 
 # -- triangles from parameters (nothing is built) --------------------------------------------
-def _capital_parts(spiral_samples: int, ring_segments: int, bolster_rows: int,
-                   scroll_rings: int) -> tuple[int, int]:
+def _capital_parts(
+    spiral_samples: int, ring_segments: int, bolster_rows: int, scroll_rings: int
+) -> tuple[int, int]:
     # fit of low/medium/high with S1 and S2: body 48·spiral + 16·ring, bolsters
     # 4·ring·(rows + scroll rings)
-    return (48 * spiral_samples + 16 * ring_segments,
-            4 * ring_segments * (bolster_rows + scroll_rings))
+    return (
+        48 * spiral_samples + 16 * ring_segments,
+        4 * ring_segments * (bolster_rows + scroll_rings),
+    )
 
 
-def capital_triangle_estimate(spiral_samples: int, ring_segments: int, bolster_rows: int,
-                              scroll_rings: int = 5) -> int:
+def capital_triangle_estimate(
+    spiral_samples: int, ring_segments: int, bolster_rows: int, scroll_rings: int = 5
+) -> int:
     """Triangles of a capital (body + bolsters); exact for the named LODs with the S1 and S2
     scrolls, an upper bound within a few percent elsewhere (tests/test_resources.py)."""
     return sum(_capital_parts(spiral_samples, ring_segments, bolster_rows, scroll_rings))
 
 
-def _part_triangles(params: ColumnParams, *, base: str | None = None,
-                    scroll: str | None = None) -> tuple[int, int, int, int]:
+def _part_triangles(
+    params: ColumnParams, *, base: str | None = None, scroll: str | None = None
+) -> tuple[int, int, int, int]:
     """(base, shaft, capital body, bolsters) triangles for ``params`` — from parameters."""
     from ionic_usd.column.base import base_triangle_estimate
     from ionic_usd.column.shaft import shaft_triangle_estimate
@@ -124,13 +135,18 @@ def _part_triangles(params: ColumnParams, *, base: str | None = None,
     else:
         base_t = base_triangle_estimate(params.base_params(base))
     cap = params.capital_params(scroll)
-    body, bolsters = _capital_parts(cap.spiral_samples, cap.ring_segments, cap.bolster_rows,
-                                    len(resolve_scroll(cap.scroll).rings))
+    body, bolsters = _capital_parts(
+        cap.spiral_samples,
+        cap.ring_segments,
+        cap.bolster_rows,
+        len(resolve_scroll(cap.scroll).rings),
+    )
     return base_t, shaft_t, body, bolsters
 
 
-def column_triangle_estimate(params: ColumnParams, *, base: str | None = None,
-                             scroll: str | None = None) -> int:
+def column_triangle_estimate(
+    params: ColumnParams, *, base: str | None = None, scroll: str | None = None
+) -> int:
     """Triangles :func:`ionic_usd.column.column.build_column` will emit for ``params``."""
     return sum(_part_triangles(params, base=base, scroll=scroll))
 
@@ -144,9 +160,19 @@ def _texture_bytes(size: int) -> tuple[int, int]:
     return size * size, BYTES_PER_TEXEL * size * size
 
 
-def estimate_asset(params: ColumnParams, texture_size: int, *, lods=None, bases=None,
-                   scrolls=None, flutes=None, forms: int = 3, capitals: int = 2,
-                   volutes: int = 2, what: str = "the asset") -> Estimate:
+def estimate_asset(
+    params: ColumnParams,
+    texture_size: int,
+    *,
+    lods=None,
+    bases=None,
+    scrolls=None,
+    flutes=None,
+    forms: int = 3,
+    capitals: int = 2,
+    volutes: int = 2,
+    what: str = "the asset",
+) -> Estimate:
     """Every mesh of the column asset (per LOD: each base, a shaft per flute count, one
     capital solid per scroll, capital and volute variant — body and bolsters united;
     ``forms`` times, the cut forms counted as full ones, an upper bound) and one stone
@@ -161,8 +187,14 @@ def estimate_asset(params: ColumnParams, texture_size: int, *, lods=None, bases=
         for n in flutes or tuple(FLUTE_VARIANTS.values()):
             shaft = dataclasses.replace(p.shaft, flutes=n, flute_angle=0.8 * 360.0 / n)
             tris += _part_triangles(dataclasses.replace(p, shaft=shaft))[1]
-        tris += capitals * volutes * sum(_part_triangles(p)[2] + _part_triangles(p, scroll=s)[3]
-                                         for s in scrolls or SCROLL_VARIANTS)
+        tris += (
+            capitals
+            * volutes
+            * sum(
+                _part_triangles(p)[2] + _part_triangles(p, scroll=s)[3]
+                for s in scrolls or SCROLL_VARIANTS
+            )
+        )
     tris *= forms
     px, tex = _texture_bytes(texture_size)
     return Estimate(what, tris, 3 * px, BASELINE_BYTES + 2 * BYTES_PER_TRIANGLE * tris + tex)
@@ -178,5 +210,9 @@ def estimate_temple(params: ColumnParams, texture_size: int, cuboids: int = 0) -
 def estimate_city(rows: int, cols: int, street_columns: int) -> Estimate:
     """A city layer: bytes of City.usda in memory while authored and written (x3)."""
     b = 3 * (rows * cols * _CITY_BYTES_PER_TEMPLE + street_columns * _CITY_BYTES_PER_COLUMN)
-    return Estimate(f"the city ({rows * cols:,} temples, {street_columns:,} street columns)",
-                    0, 0, BASELINE_BYTES + b)
+    return Estimate(
+        f"the city ({rows * cols:,} temples, {street_columns:,} street columns)",
+        0,
+        0,
+        BASELINE_BYTES + b,
+    )

@@ -53,12 +53,14 @@ def tiny_temple(tmp_path_factory):
     from ionic_usd.usd.temple import compose_temple
 
     folder = tmp_path_factory.mktemp("tiny") / "TinyTemple"
-    opts = ColumnAssetOptions(lods=("low",), bases=("attic_bezier_plinth",), scrolls=("S1",),
-                              texture_size=16)
+    opts = ColumnAssetOptions(
+        lods=("low",), bases=("attic_bezier_plinth",), scrolls=("S1",), texture_size=16
+    )
     # detail = plain selected: the cuboid temple the export and reader tests count (the
     # detail variants are tested in test_detail.py)
-    return compose_temple(folder, portunus_layout(), texture_size=16, asset_options=opts,
-                          detail="plain")
+    return compose_temple(
+        folder, portunus_layout(), texture_size=16, asset_options=opts, detail="plain"
+    )
 
 
 @pytest.fixture(scope="session")
@@ -72,9 +74,9 @@ def tiny_city(tiny_temple):
     name = tiny_temple.root.parent.name
     xz = np.array([[0.0, 0.0], [60.0, 0.0], [0.0, 60.0], [60.0, 60.0]])
     sel = [{}, {"roof-pitch-15": "alternative"}, {}, {"flutes-20": "alternative"}]
-    temples = TempleInstances([name], np.zeros(4, dtype=np.int32), ["a", "b", "c", "d"], xz,
-                              np.zeros(4), np.ones(4), sel)
+    temples = TempleInstances(
+        [name], np.zeros(4, dtype=np.int32), ["a", "b", "c", "d"], xz, np.zeros(4), np.ones(4), sel
+    )
     street = np.stack([np.arange(-27.0, 90.0, 3.0), np.full(39, 30.0)], axis=1)
-    columns = ColumnInstances(f"{name}/IonicColumn/IonicColumn.usda", street,
-                              np.zeros(len(street)))
+    columns = ColumnInstances(f"{name}/IonicColumn/IonicColumn.usda", street, np.zeros(len(street)))
     return compose_city(city, temples, columns).path

@@ -21,8 +21,12 @@ ROOT = Path(__file__).resolve().parent.parent
 def _doctests(slow: bool) -> list[doctest.DocTest]:
     """The doctests of the API modules; the temple's (a whole scene build) is the slow one."""
     finder = doctest.DocTestFinder()
-    tests = [t for m in (ionic_usd.api, ionic_usd.checks, ionic_usd.lazy) for t in finder.find(m)
-             if t.examples]
+    tests = [
+        t
+        for m in (ionic_usd.api, ionic_usd.checks, ionic_usd.lazy)
+        for t in finder.find(m)
+        if t.examples
+    ]
     return [t for t in tests if (t.name == "ionic_usd.api.Temple") == slow]
 
 
@@ -55,11 +59,13 @@ def test_every_top_level_name_is_documented():
 
 
 def test_top_level_names_resolve_lazily():
-    code = ("import sys, ionic_usd\n"
-            "assert 'ionic_usd.api' not in sys.modules\n"
-            "assert 'numpy' not in sys.modules\n"
-            "for n in ionic_usd.__all__: getattr(ionic_usd, n)\n"
-            "print('ok')\n")
+    code = (
+        "import sys, ionic_usd\n"
+        "assert 'ionic_usd.api' not in sys.modules\n"
+        "assert 'numpy' not in sys.modules\n"
+        "for n in ionic_usd.__all__: getattr(ionic_usd, n)\n"
+        "print('ok')\n"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
     with pytest.raises(AttributeError):
@@ -71,7 +77,8 @@ def test_one_default_column():
     from ionic_usd.column.column import ColumnParams, build_column, portunus_column_params
 
     assert build_column(ColumnParams()).height == pytest.approx(
-        build_column(portunus_column_params()).height, abs=1e-9)
+        build_column(portunus_column_params()).height, abs=1e-9
+    )
 
 
 def _readme_python() -> str:
@@ -85,8 +92,13 @@ def _readme_python() -> str:
 
 @pytest.mark.slow
 def test_readme_python_example_runs(tmp_path):
-    out = subprocess.run([sys.executable, "-c", _readme_python()], capture_output=True,
-                         text=True, cwd=tmp_path, timeout=600)
+    out = subprocess.run(
+        [sys.executable, "-c", _readme_python()],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        timeout=600,
+    )
     assert out.returncode == 0, out.stderr[-2000:]
     assert (tmp_path / "column.usda").is_file()
     assert (tmp_path / "PortunusTemple" / "Temple.usda").is_file()

@@ -126,8 +126,7 @@ def test_grammar_units_are_metres_and_g2_is_vitruvian():
 
 def test_two_point_module_emits_two_rows_whatever_the_slices():
     for slices in (1, 5, 30):
-        p = BaseParams("R0.1 H0 R0.05 H0.2", shaft_radius=0.5, profile_slices=slices,
-                       segments=16)
+        p = BaseParams("R0.1 H0 R0.05 H0.2", shaft_radius=0.5, profile_slices=slices, segments=16)
         m = build_base(p)
         assert len(np.unique(m.points[:, 1])) == 2
         assert len(base_profile(p)) == 2
@@ -137,8 +136,13 @@ def test_two_point_module_emits_two_rows_whatever_the_slices():
 def _without_c1(p: BaseParams) -> BaseParams:
     g = p.parsed
     text = ", ".join(m.to_string().removesuffix(" C1") for m in g.modules)
-    return BaseParams(text, version=2, shaft_radius=p.shaft_radius, segments=p.segments,
-                      profile_slices=p.profile_slices)
+    return BaseParams(
+        text,
+        version=2,
+        shaft_radius=p.shaft_radius,
+        segments=p.segments,
+        profile_slices=p.profile_slices,
+    )
 
 
 def test_continuity_flag_changes_only_the_normals_at_the_joint():
@@ -214,8 +218,9 @@ def test_presets_are_watertight_with_the_frustum_volume(name, segments, slices):
 def test_volume_converges_to_the_solid_of_revolution():
     # G1 cylinder part check: a base with one straight floor is a cylinder of radius d + r
     p = BaseParams("R0.1 H0.3 C1 R0.1", segments=2000, shaft_radius=0.5)
-    assert inspect_mesh(build_base(p)).signed_volume == pytest.approx(np.pi * 0.6**2 * 0.3,
-                                                                      rel=1e-5)
+    assert inspect_mesh(build_base(p)).signed_volume == pytest.approx(
+        np.pi * 0.6**2 * 0.3, rel=1e-5
+    )
 
 
 @pytest.mark.parametrize("name", ["G1", "G2", "attic_bezier"])
@@ -247,8 +252,10 @@ def test_base_plus_stand_in_shaft_weld_into_one_watertight_solid(name):
     assert joined.n_points == base.n_points + shaft.n_points - 48
     rep = inspect_mesh(joined)
     assert rep.watertight
-    sep = inspect_mesh(build_base(p)).signed_volume + inspect_mesh(
-        _capped_stand_in(48, p.height)).signed_volume
+    sep = (
+        inspect_mesh(build_base(p)).signed_volume
+        + inspect_mesh(_capped_stand_in(48, p.height)).signed_volume
+    )
     assert rep.signed_volume == pytest.approx(sep, rel=1e-9)
 
 
@@ -262,8 +269,9 @@ def test_base_plus_real_shaft_is_watertight(name):
     import ionic_usd.column.shaft as shaft_mod
 
     sp = shaft_mod.ShaftParams(flute_slices=3, flute_slices_per_fillet_slice=1)
-    p = load_base_preset(name, segments=sp.ring_segments, shaft_radius=sp.bottom_radius,
-                         profile_slices=4)
+    p = load_base_preset(
+        name, segments=sp.ring_segments, shaft_radius=sp.bottom_radius, profile_slices=4
+    )
     base = build_base(p, cap_top=False)
     shaft = shaft_mod.build_shaft(sp, cap_bottom=False, y_offset=p.height)
     joined = weld(merge([base, shaft]))
@@ -302,8 +310,12 @@ def test_square_plinth_slab():
 
 
 def test_plinth_of_two_modules_takes_the_larger_radius():
-    p = BaseParams("R0.1 H0 R0.1 H0.1, R0.2 H0 R0.15 H0.05, R0 H0 R0 H0.2", version=2,
-                   plinth_modules=2, segments=12)
+    p = BaseParams(
+        "R0.1 H0 R0.1 H0.1, R0.2 H0 R0.15 H0.05, R0 H0 R0 H0.2",
+        version=2,
+        plinth_modules=2,
+        segments=12,
+    )
     prof = base_profile(p, closed=True)
     assert_allclose(prof[1:3], [[D + 0.2, 0.0], [D + 0.2, 0.15]], atol=1e-15)
     assert inspect_mesh(build_base(p)).watertight
@@ -312,15 +324,17 @@ def test_plinth_of_two_modules_takes_the_larger_radius():
 # -- validation -------------------------------------------------------------------------------
 @pytest.mark.parametrize(
     "text, d, module, token",
-    [("R0 H0.1 C-1 R-0.5, R0 H0.1 C1 R0", 0.475, 1, "R-0.5"),
-     ("R0 H0 R0.2 H0.1, R-0.3 H0 R0 H0.2", 0.3, 2, "R-0.3")],
+    [
+        ("R0 H0.1 C-1 R-0.5, R0 H0.1 C1 R0", 0.475, 1, "R-0.5"),
+        ("R0 H0 R0.2 H0.1, R-0.3 H0 R0 H0.2", 0.3, 2, "R-0.3"),
+    ],
 )
 def test_radius_reaching_the_axis_is_a_pointed_grammar_error(text, d, module, token):
     with pytest.raises(GrammarError) as info:
         BaseParams(text, shaft_radius=d)
     e = info.value
     assert e.module == module
-    assert text[e.offset:e.offset + e.length] == token
+    assert text[e.offset : e.offset + e.length] == token
     assert "axis" in e.message
 
 
@@ -335,9 +349,18 @@ def test_parsed_grammar_objects_are_accepted_and_located():
 
 @pytest.mark.parametrize(
     "kw",
-    [{"shaft_radius": 0}, {"shaft_radius": float("nan")}, {"segments": 2}, {"segments": 7.5},
-     {"profile_slices": 0}, {"plinth_modules": 9}, {"plinth_modules": -1}, {"version": 3},
-     {"scale": -1}, {"grammar": 5}],
+    [
+        {"shaft_radius": 0},
+        {"shaft_radius": float("nan")},
+        {"segments": 2},
+        {"segments": 7.5},
+        {"profile_slices": 0},
+        {"plinth_modules": 9},
+        {"plinth_modules": -1},
+        {"version": 3},
+        {"scale": -1},
+        {"grammar": 5},
+    ],
 )
 def test_bad_parameters_raise_parameter_error(kw):
     with pytest.raises(ParameterError):
@@ -354,15 +377,19 @@ def test_unknown_preset_lists_the_valid_names():
 
 def test_presets_hold_the_spec_strings():
     assert load_base_preset("G1").grammar == "R0 H0.1 C-1 R0.1, R0.1 H0.1 C1 R0.2 H0.1 C1 R0.1"
-    assert load_base_preset("G2").grammar.startswith("R0.12 H0.12 C1 R0.12, R0.12 H0 C1 "
-                                                     "R0.074,R0.074 H0.046")
+    assert load_base_preset("G2").grammar.startswith(
+        "R0.12 H0.12 C1 R0.12, R0.12 H0 C1 R0.074,R0.074 H0.046"
+    )
     assert load_base_preset("attic_bezier").parsed.version == 2
 
 
 # -- fuzz: the generator adds nothing but GrammarError -----------------------------------------
 @settings(max_examples=150, deadline=None)
-@given(st.lists(st.tuples(st.floats(-0.6, 0.5), st.floats(0, 0.3)), min_size=2, max_size=6),
-       st.booleans(), st.integers(1, 4))
+@given(
+    st.lists(st.tuples(st.floats(-0.6, 0.5), st.floats(0, 0.3)), min_size=2, max_size=6),
+    st.booleans(),
+    st.integers(1, 4),
+)
 def test_random_bezier_bases_build_or_raise_grammar_error(pts, c1, slices):
     text = " ".join(f"R{r:.3f} H{h:.3f}" for r, h in pts)
     text = f"R0.1 H0 R0.1 H0.1, {text}{' C1' if c1 else ''}"
@@ -375,6 +402,7 @@ def test_random_bezier_bases_build_or_raise_grammar_error(pts, c1, slices):
 
 
 # -- analytic st ------------------------------------------------------------------------------
+
 
 @pytest.mark.parametrize("name", ["G1", "G2", "attic_bezier", "attic_bezier_plinth"])
 def test_analytic_st_is_finite_wound_and_bounded(name):

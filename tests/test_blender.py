@@ -18,8 +18,11 @@ BPY = os.environ.get("IONIC_USD_BPY_PYTHON")
 
 pytestmark = [
     pytest.mark.slow,
-    pytest.mark.skipif(not BPY, reason="IONIC_USD_BPY_PYTHON is not set: the python of a venv "
-                       "with bpy==5.0.1 (pip install bpy==5.0.1 under Python 3.11)"),
+    pytest.mark.skipif(
+        not BPY,
+        reason="IONIC_USD_BPY_PYTHON is not set: the python of a venv "
+        "with bpy==5.0.1 (pip install bpy==5.0.1 under Python 3.11)",
+    ),
 ]
 
 IMPORT = r"""
@@ -61,11 +64,12 @@ over "Temple" (
 """)
     script = tmp_path / "import.py"
     script.write_text(IMPORT)
-    proc = subprocess.run([BPY, str(script), str(view)], capture_output=True, text=True,
-                          timeout=600)
+    proc = subprocess.run(
+        [BPY, str(script), str(view)], capture_output=True, text=True, timeout=600
+    )
     line = next((x for x in proc.stdout.splitlines() if x.startswith("RESULT")), None)
     assert proc.returncode == 0 and line, proc.stderr[-2000:]
-    rep = json.loads(line[len("RESULT"):])
+    rep = json.loads(line[len("RESULT") :])
     objs = rep["objects"]
     # an Xform carries it on the object, a Mesh on its mesh data
     roof = objs["Roof"]
@@ -85,8 +89,21 @@ over "Temple" (
 
 def test_blender_check_tool_passes_on_the_temple(portunus_temple):
     tool = Path(__file__).resolve().parent.parent / "tools" / "blender_check.py"
-    proc = subprocess.run([sys.executable, str(tool), str(portunus_temple.root),
-                           "--instances", "18", "--prototypes", "3", "--blender-python", BPY],
-                          capture_output=True, text=True, timeout=600)
+    proc = subprocess.run(
+        [
+            sys.executable,
+            str(tool),
+            str(portunus_temple.root),
+            "--instances",
+            "18",
+            "--prototypes",
+            "3",
+            "--blender-python",
+            BPY,
+        ],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert proc.returncode == 0, proc.stdout[-3000:]
     assert "OK:" in proc.stdout

@@ -10,8 +10,12 @@ from pxr import Sdf, Usd, UsdGeom
 
 from ionic_usd.usd.bounds import author_extents_hints, relevant_sets, variant_extents_hints
 
-PURPOSES = [UsdGeom.Tokens.default_, UsdGeom.Tokens.render, UsdGeom.Tokens.proxy,
-            UsdGeom.Tokens.guide]
+PURPOSES = [
+    UsdGeom.Tokens.default_,
+    UsdGeom.Tokens.render,
+    UsdGeom.Tokens.proxy,
+    UsdGeom.Tokens.guide,
+]
 
 
 def bound_per_purpose(prim: Usd.Prim, brute: bool = True) -> list[np.ndarray | None]:
@@ -20,8 +24,11 @@ def bound_per_purpose(prim: Usd.Prim, brute: bool = True) -> list[np.ndarray | N
     out: list[np.ndarray | None] = []
     if not brute:
         for purpose in PURPOSES:
-            r = UsdGeom.BBoxCache(Usd.TimeCode.Default(), [purpose]).ComputeUntransformedBound(
-                prim).ComputeAlignedRange()
+            r = (
+                UsdGeom.BBoxCache(Usd.TimeCode.Default(), [purpose])
+                .ComputeUntransformedBound(prim)
+                .ComputeAlignedRange()
+            )
             out.append(None if r.IsEmpty() else np.array([r.GetMin(), r.GetMax()]))
         return out
     xf = UsdGeom.XformCache()
@@ -51,8 +58,9 @@ def bound_per_purpose(prim: Usd.Prim, brute: bool = True) -> list[np.ndarray | N
     return out
 
 
-def _instancer_points(p: Usd.Prim, xf: UsdGeom.XformCache, root_inv: np.ndarray
-                      ) -> list[np.ndarray]:
+def _instancer_points(
+    p: Usd.Prim, xf: UsdGeom.XformCache, root_inv: np.ndarray
+) -> list[np.ndarray]:
     """The corners of each prototype's point bound at every instance of a PointInstancer, in
     ``root_inv``'s frame — the bound USD defines for an instancer (UsdGeomPointInstancer::
     ComputeExtentAtTime transforms each prototype's box, not its points), computed here from
@@ -75,8 +83,14 @@ def _instancer_points(p: Usd.Prim, xf: UsdGeom.XformCache, root_inv: np.ndarray
             continue
         v = np.concatenate(local)
         lo, hi = v.min(axis=0), v.max(axis=0)
-        v = np.array([[(lo, hi)[i][0], (lo, hi)[j][1], (lo, hi)[k2][2]]
-                      for i in (0, 1) for j in (0, 1) for k2 in (0, 1)])
+        v = np.array(
+            [
+                [(lo, hi)[i][0], (lo, hi)[j][1], (lo, hi)[k2][2]]
+                for i in (0, 1)
+                for j in (0, 1)
+                for k2 in (0, 1)
+            ]
+        )
         for mat in mats[idx == k]:
             full = mat @ world
             out.append(v @ full[:3, :3] + full[3, :3])
@@ -101,8 +115,7 @@ def check_hint(prim: Usd.Prim, where, brute: bool = True) -> None:
     drawn = [h for h in hint[:2] if (h[0] <= h[1]).all()]  # default and render, if not empty
     lo = np.min([h[0] for h in drawn], axis=0)
     hi = np.max([h[1] for h in drawn], axis=0)
-    np.testing.assert_allclose([r.GetMin(), r.GetMax()], [lo, hi], atol=1e-4,
-                               err_msg=str(where))
+    np.testing.assert_allclose([r.GetMin(), r.GetMax()], [lo, hi], atol=1e-4, err_msg=str(where))
 
 
 def every_combination(stage, root, sets):
@@ -119,8 +132,7 @@ def test_column_hints_match_every_combination(column_asset):
     stage = Usd.Stage.Open(str(column_asset.path))
     root = stage.GetDefaultPrim()
     vsets = root.GetVariantSets()
-    sets = {n: vsets.GetVariantSet(n).GetVariantNames() for n in vsets.GetNames()
-            if n != "finish"}
+    sets = {n: vsets.GetVariantSet(n).GetVariantNames() for n in vsets.GetNames() if n != "finish"}
     seen = set()
     for sel in every_combination(stage, "/IonicColumn", sets):
         check_hint(root, sel)
@@ -143,8 +155,14 @@ def _temple_sets(stage):
     return sets
 
 
-PARTS = ["/Temple", "/Temple/Podium", "/Temple/Cella", "/Temple/Entablature", "/Temple/Roof",
-         "/Temple/Colonnade"]
+PARTS = [
+    "/Temple",
+    "/Temple/Podium",
+    "/Temple/Cella",
+    "/Temple/Entablature",
+    "/Temple/Roof",
+    "/Temple/Colonnade",
+]
 
 
 def test_temple_hints_match_sampled_combinations(portunus_temple):
@@ -179,8 +197,9 @@ def test_relevant_sets_and_nesting():
     """A toy: the hint depends on a and c, not on b; authored nested a › c."""
     hints = {}
     for a, b, c in itertools.product("xy", "pq", "mn"):
-        hints[(a, b, c)] = {"/R": np.array([[0, 0, 0], [1 + (a == "y"), 1, 1 + (c == "n")]],
-                                           dtype=float)}
+        hints[(a, b, c)] = {
+            "/R": np.array([[0, 0, 0], [1 + (a == "y"), 1, 1 + (c == "n")]], dtype=float)
+        }
     assert relevant_sets(hints, ["a", "b", "c"]) == ["a", "c"]
     layer = Sdf.Layer.CreateAnonymous(".usda")
     spec = Sdf.CreatePrimInLayer(layer, "/R")
@@ -200,5 +219,4 @@ def test_relevant_sets_and_nesting():
         with Usd.EditContext(stage, stage.GetSessionLayer()):
             for n, v in zip("abc", sel, strict=True):
                 prim.GetVariantSet(n).SetVariantSelection(v)
-        np.testing.assert_allclose(np.array(UsdGeom.ModelAPI(prim).GetExtentsHint()),
-                                   want["/R"])
+        np.testing.assert_allclose(np.array(UsdGeom.ModelAPI(prim).GetExtentsHint()), want["/R"])

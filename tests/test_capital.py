@@ -51,9 +51,21 @@ def _split_shells(m):
     return [tri[roots == r] for r in np.unique(roots)]
 
 
-@pytest.mark.parametrize("name", ["abacus", "echinus", "volute_front_right", "volute_front_left",
-                                  "volute_rear_right", "volute_rear_left", "canalis_front",
-                                  "canalis_rear", "bolster_right", "bolster_left"])
+@pytest.mark.parametrize(
+    "name",
+    [
+        "abacus",
+        "echinus",
+        "volute_front_right",
+        "volute_front_left",
+        "volute_rear_right",
+        "volute_rear_left",
+        "canalis_front",
+        "canalis_rear",
+        "bolster_right",
+        "bolster_left",
+    ],
+)
 def test_every_part_is_watertight(parts, name):
     m = parts.as_dict()[name]
     r = inspect_mesh(m)
@@ -76,10 +88,17 @@ def test_abacus_box_equals_its_parameters(parts):
     p = CapitalParams()
     ext = parts.abacus.extent
     top = capital_height(p)
-    assert_allclose(ext, [[-p.abacus_length / 2, top - p.abacus_height, -p.abacus_width / 2],
-                          [p.abacus_length / 2, top, p.abacus_width / 2]], atol=1e-12)
+    assert_allclose(
+        ext,
+        [
+            [-p.abacus_length / 2, top - p.abacus_height, -p.abacus_width / 2],
+            [p.abacus_length / 2, top, p.abacus_width / 2],
+        ],
+        atol=1e-12,
+    )
     assert inspect_mesh(parts.abacus).signed_volume == pytest.approx(
-        p.abacus_length * p.abacus_width * p.abacus_height)
+        p.abacus_length * p.abacus_width * p.abacus_height
+    )
 
 
 @pytest.mark.parametrize("length, width", [(1.2656, 0.95), (1.0, 0.8), (1.6, 1.3)])
@@ -117,8 +136,7 @@ def test_left_right_front_rear_are_mirrors(parts):
     assert_allclose(rr.points * [1, 1, -1], fr.points)
     assert_allclose(rl.points * [-1, 1, -1], fr.points)
     for m in parts.volutes:
-        assert inspect_mesh(m).signed_volume == pytest.approx(
-            inspect_mesh(fr).signed_volume)
+        assert inspect_mesh(m).signed_volume == pytest.approx(inspect_mesh(fr).signed_volume)
 
 
 def test_echinus_radii(parts):
@@ -131,13 +149,14 @@ def test_echinus_radii(parts):
     assert r[top].max() == pytest.approx(C + p.echinus_projection)
     assert pts[:, 1].min() == 0 and pts[:, 1].max() == pytest.approx(p.echinus_height)
     # convex ovolo: every profile point lies outside the straight chord
-    side = (r > 1e-9)
+    side = r > 1e-9
     t = pts[side, 1] / p.echinus_height
     assert np.all(r[side] >= C + p.echinus_projection * t - 1e-12)
 
 
-@pytest.mark.parametrize("scroll", ["S1", "S2", "R0.5 P0, R1 P0.5, R0.5 P1",
-                                    "R0.7 P0.2, R0.9 P0.2, R0.7 P0.8"])
+@pytest.mark.parametrize(
+    "scroll", ["S1", "S2", "R0.5 P0, R1 P0.5, R0.5 P1", "R0.7 P0.2, R0.9 P0.2, R0.7 P0.8"]
+)
 def test_bolster_rings_follow_the_grammar(scroll):
     p = CapitalParams(scroll=scroll)
     lay = capital_layout(p)
@@ -172,10 +191,12 @@ def test_bolster_profile_is_held_to_the_volutes():
 
 
 def test_lod_changes_triangle_count():
-    lo = capital_mesh(CapitalParams(spiral_samples=64, ring_segments=16, bolster_rows=8),
-                      top_radius=C)
-    hi = capital_mesh(CapitalParams(spiral_samples=384, ring_segments=96, bolster_rows=64),
-                      top_radius=C)
+    lo = capital_mesh(
+        CapitalParams(spiral_samples=64, ring_segments=16, bolster_rows=8), top_radius=C
+    )
+    hi = capital_mesh(
+        CapitalParams(spiral_samples=384, ring_segments=96, bolster_rows=64), top_radius=C
+    )
     assert hi.n_triangles > 4 * lo.n_triangles
     assert inspect_mesh(hi).closed and inspect_mesh(hi).consistent
 
@@ -185,8 +206,7 @@ def test_capital_position_lifts_everything(dy):
     base = build_capital(CapitalParams(), top_radius=C).merged()
     moved = build_capital(CapitalParams(capital_position_y=dy), top_radius=C).merged()
     assert_allclose(moved.points, base.points + [0, dy, 0], atol=1e-12)
-    assert capital_height(CapitalParams(capital_position_y=dy)) == pytest.approx(
-        moved.extent[1, 1])
+    assert capital_height(CapitalParams(capital_position_y=dy)) == pytest.approx(moved.extent[1, 1])
 
 
 def test_scroll_position_moves_scrolls_and_abacus():

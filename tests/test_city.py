@@ -21,8 +21,11 @@ TEX = 64
 
 
 def _files(folder: Path) -> dict[str, bytes]:
-    return {f.relative_to(folder).as_posix(): f.read_bytes()
-            for f in sorted(folder.rglob("*")) if f.is_file()}
+    return {
+        f.relative_to(folder).as_posix(): f.read_bytes()
+        for f in sorted(folder.rglob("*"))
+        if f.is_file()
+    }
 
 
 def _validate_each_layer(folder: Path) -> None:
@@ -62,8 +65,7 @@ def test_grid_city_instances_share_prototypes(grid_city):
     stage = Usd.Stage.Open(str(out / "City.usda"))
     temples = stage.GetPrimAtPath("/City/Temples").GetChildren()
     assert len(temples) == 9 == s["temples"] and all(t.IsInstance() for t in temples)
-    sels = {tuple(sorted(t.GetVariantSets().GetAllVariantSelections().items()))
-            for t in temples}
+    sels = {tuple(sorted(t.GetVariantSets().GetAllVariantSelections().items())) for t in temples}
     assert s["temple_prototypes"] == len(sels) == len({t.GetPrototype() for t in temples})
     assert 1 < len(sels) < 9  # seeded variety, and equal choices share a prototype
     pi = UsdGeom.PointInstancer(stage.GetPrimAtPath("/City/Porticus"))
@@ -84,8 +86,11 @@ def test_grid_city_layers_hierarchy_and_bounds(grid_city):
     assert _model_hierarchy_ok(stage) == []
     assert Usd.ModelAPI(stage.GetPrimAtPath("/City")).GetKind() == "assembly"
     hint = UsdGeom.ModelAPI(stage.GetPrimAtPath("/City")).GetExtentsHintAttr().Get()
-    box = UsdGeom.BBoxCache(Usd.TimeCode.Default(), ["default", "render"]).ComputeWorldBound(
-        stage.GetPrimAtPath("/City")).ComputeAlignedRange()
+    box = (
+        UsdGeom.BBoxCache(Usd.TimeCode.Default(), ["default", "render"])
+        .ComputeWorldBound(stage.GetPrimAtPath("/City"))
+        .ComputeAlignedRange()
+    )
     np.testing.assert_allclose(np.array(hint[0]), np.array(box.GetMin()), atol=1e-3)
     np.testing.assert_allclose(np.array(hint[1]), np.array(box.GetMax()), atol=1e-3)
 
@@ -125,8 +130,12 @@ def test_temples_as_point_instancer_draw_the_same(grid_city, tmp_path):
 @pytest.mark.slow
 def test_plan_city_buildings_on_lots_porticoes_on_lines(tmp_path):
     out = tmp_path / "forum"
-    s = build_city(out, CityOptions(plan=str(FORUM), texture_size=TEX, focus=(0.0, 0.0),
-                                    lod_distances=(60.0, 120.0)))
+    s = build_city(
+        out,
+        CityOptions(
+            plan=str(FORUM), texture_size=TEX, focus=(0.0, 0.0), lod_distances=(60.0, 120.0)
+        ),
+    )
     plan = read_geojson(FORUM)
     stage = Usd.Stage.Open(str(out / "City.usda"))
     assert s["builds"] == 2  # the east temple's thinner columns are a build of their own
@@ -135,8 +144,11 @@ def test_plan_city_buildings_on_lots_porticoes_on_lines(tmp_path):
         assert prim.IsInstance()
         # the corners of the temple's composed bounds (its prototype: its own frame),
         # placed by the temple's transform, land inside the lot
-        rng = UsdGeom.BBoxCache(Usd.TimeCode.Default(), ["default", "render"]
-                                ).ComputeWorldBound(prim.GetPrototype()).ComputeAlignedRange()
+        rng = (
+            UsdGeom.BBoxCache(Usd.TimeCode.Default(), ["default", "render"])
+            .ComputeWorldBound(prim.GetPrototype())
+            .ComputeAlignedRange()
+        )
         m = UsdGeom.Xformable(prim).ComputeLocalToWorldTransform(Usd.TimeCode.Default())
         lo, hi = rng.GetMin(), rng.GetMax()
         corners = [m.Transform((x, 0.0, z)) for x in (lo[0], hi[0]) for z in (lo[2], hi[2])]
@@ -144,8 +156,9 @@ def test_plan_city_buildings_on_lots_porticoes_on_lines(tmp_path):
         lot_poly = shapely.Polygon(lot.outline).buffer(0.05)
         assert shapely.contains(lot_poly, pts).all(), lot.id
     east = stage.GetPrimAtPath("/City/Temples/Temple_aedes_east")
-    assert east.GetVariantSets().GetVariantSet("hyp_flutes_20").GetVariantSelection() == \
-        "alternative"
+    assert (
+        east.GetVariantSets().GetVariantSet("hyp_flutes_20").GetVariantSelection() == "alternative"
+    )
     pi = UsdGeom.PointInstancer(stage.GetPrimAtPath("/City/Porticus"))
     pos = np.asarray(pi.GetPositionsAttr().Get(), dtype=float)
     plan_pts = shapely.points(np.stack([pos[:, 0], -pos[:, 2]], axis=1))
@@ -169,8 +182,9 @@ def test_plan_city_buildings_on_lots_porticoes_on_lines(tmp_path):
 
 def test_memory_estimate_refuses_before_writing(tmp_path):
     with pytest.raises(BudgetError, match="GB"):
-        build_city(tmp_path / "big", CityOptions(columns=10_000_000, memory_limit_gb=1.0,
-                                                 texture_size=TEX))
+        build_city(
+            tmp_path / "big", CityOptions(columns=10_000_000, memory_limit_gb=1.0, texture_size=TEX)
+        )
     assert not (tmp_path / "big").exists()
 
 
@@ -192,8 +206,25 @@ def test_million_columns_arrays(grid_city, tmp_path):
 def test_cli_city_json_and_errors(grid_city, tmp_path, capsys):
     out, s, _ = grid_city
     summary = tmp_path / "s.json"
-    assert main(["city", str(tmp_path / "c"), "--rows", "3", "--cols", "3", "--seed", "1",
-                 "--texture-size", str(TEX), "--json", str(summary)]) == 0
+    assert (
+        main(
+            [
+                "city",
+                str(tmp_path / "c"),
+                "--rows",
+                "3",
+                "--cols",
+                "3",
+                "--seed",
+                "1",
+                "--texture-size",
+                str(TEX),
+                "--json",
+                str(summary),
+            ]
+        )
+        == 0
+    )
     d = json.loads(summary.read_text())
     assert d["prototypes_reused"] == 1 and d["workers"] == []
     assert d["instances"] == 9 + d["columns"] and "timings" in d
@@ -234,8 +265,16 @@ def test_instance_bounds_match_brute_force(n, scaled):
                 px = np.where(ix, hi[idx, 0], lo[idx, 0]) * S
                 py = np.where(iy, hi[idx, 1], lo[idx, 1]) * S
                 pz = np.where(iz, hi[idx, 2], lo[idx, 2]) * S
-                pts.append(np.stack([px * np.cos(a) + pz * np.sin(a) + xz[:, 0], py,
-                                     -px * np.sin(a) + pz * np.cos(a) + xz[:, 1]], axis=1))
+                pts.append(
+                    np.stack(
+                        [
+                            px * np.cos(a) + pz * np.sin(a) + xz[:, 0],
+                            py,
+                            -px * np.sin(a) + pz * np.cos(a) + xz[:, 1],
+                        ],
+                        axis=1,
+                    )
+                )
     pts = np.concatenate(pts)
     np.testing.assert_allclose(got[0], pts.min(axis=0), atol=1e-9)
     np.testing.assert_allclose(got[1], pts.max(axis=0), atol=1e-9)
@@ -252,21 +291,37 @@ def test_lod_by_distance_selects_the_temple_lod_set(grid_city, tmp_path):
     src = next((out / "Temples").iterdir())
     shutil.copytree(src, tmp_path / "Temples" / src.name)
     xz = np.array([[0.0, 0.0], [200.0, 0.0], [600.0, 0.0], [610.0, 0.0]])
-    temples = TempleInstances([f"Temples/{src.name}"], np.zeros(4, dtype=np.int32),
-                              ["a", "b", "c", "d"], xz, np.zeros(4), np.ones(4),
-                              [{}, {}, {}, {}], lod=np.array([0, 1, 2, 2], dtype=np.int8))
-    columns = ColumnInstances(f"Temples/{src.name}/IonicColumn/IonicColumn.usda",
-                              np.zeros((0, 2)), np.zeros(0))
+    temples = TempleInstances(
+        [f"Temples/{src.name}"],
+        np.zeros(4, dtype=np.int32),
+        ["a", "b", "c", "d"],
+        xz,
+        np.zeros(4),
+        np.ones(4),
+        [{}, {}, {}, {}],
+        lod=np.array([0, 1, 2, 2], dtype=np.int8),
+    )
+    columns = ColumnInstances(
+        f"Temples/{src.name}/IonicColumn/IonicColumn.usda", np.zeros((0, 2)), np.zeros(0)
+    )
     rep = compose_city(tmp_path, temples, columns)
     stage = Usd.Stage.Open(str(rep.path))
-    got = [stage.GetPrimAtPath(f"/City/Temples/Temple_{n}").GetVariantSets()
-           .GetVariantSet("lod").GetVariantSelection() for n in "abcd"]
+    got = [
+        stage.GetPrimAtPath(f"/City/Temples/Temple_{n}")
+        .GetVariantSets()
+        .GetVariantSet("lod")
+        .GetVariantSelection()
+        for n in "abcd"
+    ]
     assert got == ["high", "medium", "low", "low"] and rep.temple_prototypes == 3
     # the lod reaches the columns inside each (instanced) temple
     for n, lod in zip("abcd", got, strict=True):
         temple = stage.GetPrimAtPath(f"/City/Temples/Temple_{n}")
-        cols = [p for p in Usd.PrimRange(temple, Usd.TraverseInstanceProxies())
-                if p.IsInstance() and p.GetVariantSets().HasVariantSet("form")]
+        cols = [
+            p
+            for p in Usd.PrimRange(temple, Usd.TraverseInstanceProxies())
+            if p.IsInstance() and p.GetVariantSets().HasVariantSet("form")
+        ]
         assert cols and {c.GetVariantSets().GetVariantSelection("lod") for c in cols} == {lod}
 
 
@@ -277,8 +332,16 @@ CARD_PX = 64
 @pytest.fixture(scope="module")
 def card_city(tmp_path_factory):
     out = tmp_path_factory.mktemp("cards") / "city"
-    opts = CityOptions(rows=1, cols=3, texture_size=TEX, seed=1, focus=(0.0, 0.0),
-                       cards_beyond=100.0, card_size=CARD_PX, columns=0)
+    opts = CityOptions(
+        rows=1,
+        cols=3,
+        texture_size=TEX,
+        seed=1,
+        focus=(0.0, 0.0),
+        cards_beyond=100.0,
+        card_size=CARD_PX,
+        columns=0,
+    )
     return out, build_city(out, opts), opts
 
 
@@ -306,8 +369,10 @@ def test_far_temples_carry_card_draw_mode_with_baked_images(card_city):
     dist = _temples_by_distance(stage)
     far = {p for p, d in dist.items() if d > opts.cards_beyond}
     assert 0 < len(far) < len(dist) and s["cards"]["temples"] == len(far)
-    folders = {Path(stage.GetPrimAtPath(p).GetAttribute("model:cardTextureXPos").Get()
-                    .resolvedPath).parent for p in far}
+    folders = {
+        Path(stage.GetPrimAtPath(p).GetAttribute("model:cardTextureXPos").Get().resolvedPath).parent
+        for p in far
+    }
     # one set of images per temple prototype (build + hypotheses), shared by its lots
     assert len(folders) == s["cards"]["prototypes"] == s["cards"]["baked"]
     assert folders == set((out / "Temples" / "Cards").iterdir())
@@ -365,21 +430,23 @@ def test_reader_and_preview_draw_cards_far_and_meshes_near(card_city, tmp_path):
     full = read_scene(out / "City.usda")
 
     def tris(scene, temple):
-        return sum(scene.meshes[p.mesh].n_triangles for p in scene.placements
-                   if p.path == temple or p.path.startswith(temple + "/"))
+        return sum(
+            scene.meshes[p.mesh].n_triangles
+            for p in scene.placements
+            if p.path == temple or p.path.startswith(temple + "/")
+        )
 
     for temple in dist:
-        cards = [p for p in drawn.placements if drawn.meshes[p.mesh].card_face
-                 and p.path == temple]
+        cards = [p for p in drawn.placements if drawn.meshes[p.mesh].card_face and p.path == temple]
         if temple in far:
             assert len(cards) == 6 and tris(drawn, temple) == 12 < tris(full, temple)
         else:
             assert not cards and tris(drawn, temple) == tris(full, temple) > 10_000
     assert drawn.n_triangles == s["triangles"]["as authored"]
     assert s["triangles"]["without cards"] - drawn.n_triangles == sum(
-        tris(full, t) - 12 for t in far)
-    stats = render_preview(out / "City.usda", tmp_path / "c.png", width=96, height=64,
-                           samples=0)
+        tris(full, t) - 12 for t in far
+    )
+    stats = render_preview(out / "City.usda", tmp_path / "c.png", width=96, height=64, samples=0)
     assert stats.triangles == drawn.n_triangles and stats.cards == 6 * len(far)
 
 
@@ -402,8 +469,10 @@ def test_cards_are_reused_and_work_in_a_temple_point_instancer(card_city, tmp_pa
     assert carded and all(p.IsModel() for p in carded)
     assert _model_hierarchy_ok(stage) == []
     _validate_each_layer(tmp_path / "pi")
-    assert read_scene(tmp_path / "pi" / "City.usda", draw_modes=True).n_triangles == \
-        s["triangles"]["as authored"]
+    assert (
+        read_scene(tmp_path / "pi" / "City.usda", draw_modes=True).n_triangles
+        == s["triangles"]["as authored"]
+    )
 
 
 def test_composer_counts_what_the_reader_draws(grid_city):
@@ -420,8 +489,15 @@ def column_card_city(tmp_path_factory):
     """Two temples (at 0 m and 60 m from the focus, both near) and their street columns, the
     ones beyond 65 m drawn as cards."""
     out = tmp_path_factory.mktemp("colcards") / "city"
-    opts = CityOptions(rows=1, cols=2, texture_size=TEX, seed=1, focus=(0.0, 0.0),
-                       cards_beyond=65.0, card_size=CARD_PX)
+    opts = CityOptions(
+        rows=1,
+        cols=2,
+        texture_size=TEX,
+        seed=1,
+        focus=(0.0, 0.0),
+        cards_beyond=65.0,
+        card_size=CARD_PX,
+    )
     return out, build_city(out, opts), opts
 
 
@@ -456,8 +532,10 @@ def test_far_street_columns_use_the_card_prototype(column_card_city, tmp_path):
         assert (alpha == 0).any() and (alpha == 255).any()  # the column's silhouette
     for p in protos:  # the near prototypes are full geometry
         if p != card:
-            assert not p.HasAPI(UsdGeom.ModelAPI) or UsdGeom.ModelAPI(
-                p).ComputeModelDrawMode() != UsdGeom.Tokens.cards
+            assert (
+                not p.HasAPI(UsdGeom.ModelAPI)
+                or UsdGeom.ModelAPI(p).ComputeModelDrawMode() != UsdGeom.Tokens.cards
+            )
     assert _model_hierarchy_ok(stage) == []
     _validate_each_layer(out)
     # the reader and the preview draw what the composer counted
@@ -467,8 +545,11 @@ def test_far_street_columns_use_the_card_prototype(column_card_city, tmp_path):
 
     def column_tris(scene, instance: int) -> int:
         key = f"/City/Porticus[{instance}]"
-        return sum(scene.meshes[p.mesh].n_triangles for p in scene.placements
-                   if p.path == key or p.path.startswith(key + "/"))
+        return sum(
+            scene.meshes[p.mesh].n_triangles
+            for p in scene.placements
+            if p.path == key or p.path.startswith(key + "/")
+        )
 
     i_far, i_near = int(np.flatnonzero(far)[0]), int(np.flatnonzero(~far)[0])
     assert column_tris(drawn, i_far) == 12 < column_tris(full, i_far)
@@ -476,7 +557,7 @@ def test_far_street_columns_use_the_card_prototype(column_card_city, tmp_path):
     # "without cards" puts each far column at its lod by distance: high (all are within the
     # default near distance, 150 m), as the near column draws
     assert s["triangles"]["without cards"] - drawn.n_triangles == int(far.sum()) * (
-        column_tris(full, i_near) - 12)
-    stats = render_preview(out / "City.usda", tmp_path / "c.png", width=96, height=64,
-                           samples=0)
+        column_tris(full, i_near) - 12
+    )
+    stats = render_preview(out / "City.usda", tmp_path / "c.png", width=96, height=64, samples=0)
     assert stats.triangles == drawn.n_triangles and stats.cards == 6 * int(far.sum())

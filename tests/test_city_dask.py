@@ -42,15 +42,37 @@ def loopback_cluster(tmp_path_factory):
     log = tmp_path_factory.mktemp("dask")
     port = _free_port()
     address = f"tcp://127.0.0.1:{port}"
-    procs = [subprocess.Popen([str(DASK), "scheduler", "--host", "127.0.0.1", "--port",
-                               str(port), "--no-dashboard"], env=env,
-                              stdout=open(log / "scheduler.log", "w"), stderr=subprocess.STDOUT)]
+    procs = [
+        subprocess.Popen(
+            [str(DASK), "scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard"],
+            env=env,
+            stdout=open(log / "scheduler.log", "w"),
+            stderr=subprocess.STDOUT,
+        )
+    ]
     try:
         for k in range(2):
-            procs.append(subprocess.Popen(
-                [str(DASK), "worker", address, "--host", "127.0.0.1", "--nthreads", "1",
-                 "--nworkers", "1", "--no-dashboard", "--name", f"w{k}"], env=env,
-                stdout=open(log / f"worker{k}.log", "w"), stderr=subprocess.STDOUT))
+            procs.append(
+                subprocess.Popen(
+                    [
+                        str(DASK),
+                        "worker",
+                        address,
+                        "--host",
+                        "127.0.0.1",
+                        "--nthreads",
+                        "1",
+                        "--nworkers",
+                        "1",
+                        "--no-dashboard",
+                        "--name",
+                        f"w{k}",
+                    ],
+                    env=env,
+                    stdout=open(log / f"worker{k}.log", "w"),
+                    stderr=subprocess.STDOUT,
+                )
+            )
         deadline = time.monotonic() + 90
         while True:  # the scheduler needs a moment before it accepts connections
             try:
@@ -74,27 +96,46 @@ def loopback_cluster(tmp_path_factory):
 
 
 def _files(folder: Path) -> dict[str, bytes]:
-    return {f.relative_to(folder).as_posix(): f.read_bytes()
-            for f in sorted(folder.rglob("*")) if f.is_file()}
+    return {
+        f.relative_to(folder).as_posix(): f.read_bytes()
+        for f in sorted(folder.rglob("*"))
+        if f.is_file()
+    }
 
 
 def _plan(tmp_path: Path) -> Path:
     """Two temple lots needing two builds (a lower podium is a temple of its own) and a
     porticus between them."""
     text = (resources.files("ionic_usd") / "data" / "portunus.toml").read_text()
-    (tmp_path / "low_podium.toml").write_text(text.replace("\nheight = 2.40\n",
-                                                           "\nheight = 2.10\n", 1))
-    doc = {"type": "FeatureCollection", "features": [
-        {"type": "Feature", "properties": {"id": "a", "type": "temple", "orientation": 180},
-         "geometry": {"type": "Polygon",
-                      "coordinates": [[[-20, 0], [0, 0], [0, 30], [-20, 30], [-20, 0]]]}},
-        {"type": "Feature", "properties": {"id": "b", "type": "temple",
-                                           "temple": "low_podium.toml"},
-         "geometry": {"type": "Polygon",
-                      "coordinates": [[[10, 0], [40, 0], [40, 16], [10, 16], [10, 0]]]}},
-        {"type": "Feature", "properties": {"id": "street", "type": "porticus", "sides": 2},
-         "geometry": {"type": "LineString", "coordinates": [[-30, -10], [50, -10]]}},
-    ]}
+    (tmp_path / "low_podium.toml").write_text(
+        text.replace("\nheight = 2.40\n", "\nheight = 2.10\n", 1)
+    )
+    doc = {
+        "type": "FeatureCollection",
+        "features": [
+            {
+                "type": "Feature",
+                "properties": {"id": "a", "type": "temple", "orientation": 180},
+                "geometry": {
+                    "type": "Polygon",
+                    "coordinates": [[[-20, 0], [0, 0], [0, 30], [-20, 30], [-20, 0]]],
+                },
+            },
+            {
+                "type": "Feature",
+                "properties": {"id": "b", "type": "temple", "temple": "low_podium.toml"},
+                "geometry": {
+                    "type": "Polygon",
+                    "coordinates": [[[10, 0], [40, 0], [40, 16], [10, 16], [10, 0]]],
+                },
+            },
+            {
+                "type": "Feature",
+                "properties": {"id": "street", "type": "porticus", "sides": 2},
+                "geometry": {"type": "LineString", "coordinates": [[-30, -10], [50, -10]]},
+            },
+        ],
+    }
     p = tmp_path / "plan.geojson"
     p.write_text(json.dumps(doc))
     return p
@@ -105,11 +146,21 @@ def test_cluster_build_equals_local_build(portunus_temple, loopback_cluster, tmp
     # (the session's temple has warmed the UV cache the workers share through the environment)
     address, workers = loopback_cluster
     plan = str(_plan(tmp_path))
-    local = build_city(tmp_path / "local", CityOptions(
-        plan=plan, texture_size=TEX, workers=2, prototype_cache=str(tmp_path / "cache_local")))
-    remote = build_city(tmp_path / "remote", CityOptions(
-        plan=plan, texture_size=TEX, scheduler=address,
-        prototype_cache=str(tmp_path / "cache_remote")))
+    local = build_city(
+        tmp_path / "local",
+        CityOptions(
+            plan=plan, texture_size=TEX, workers=2, prototype_cache=str(tmp_path / "cache_local")
+        ),
+    )
+    remote = build_city(
+        tmp_path / "remote",
+        CityOptions(
+            plan=plan,
+            texture_size=TEX,
+            scheduler=address,
+            prototype_cache=str(tmp_path / "cache_remote"),
+        ),
+    )
     assert local["prototypes_built"] == remote["prototypes_built"] == 2
     assert local["cluster_workers"] == 2 and remote["cluster_workers"] == 2
     assert remote["workers"] and set(remote["workers"]) <= workers
@@ -125,7 +176,14 @@ def test_unreachable_scheduler_is_a_parameter_error(tmp_path, monkeypatch):
     monkeypatch.setattr(build, "CONNECT_TIMEOUT", "1s")
     port = _free_port()  # nothing listens there
     with pytest.raises(ParameterError, match="--scheduler"):
-        build_city(tmp_path / "x", CityOptions(
-            rows=1, cols=1, texture_size=TEX, scheduler=f"tcp://127.0.0.1:{port}",
-            prototype_cache=str(tmp_path / "empty_cache")))
+        build_city(
+            tmp_path / "x",
+            CityOptions(
+                rows=1,
+                cols=1,
+                texture_size=TEX,
+                scheduler=f"tcp://127.0.0.1:{port}",
+                prototype_cache=str(tmp_path / "empty_cache"),
+            ),
+        )
     assert not (tmp_path / "x").exists()

@@ -57,26 +57,60 @@ def _fc(*features, **extra):
 
 
 def _feature(props, gtype, coords):
-    return {"type": "Feature", "properties": props,
-            "geometry": {"type": gtype, "coordinates": coords}}
+    return {
+        "type": "Feature",
+        "properties": props,
+        "geometry": {"type": gtype, "coordinates": coords},
+    }
 
 
-@pytest.mark.parametrize("doc, match", [
-    (_fc(_feature({"type": "temple"}, "Polygon", [[[0, 0], [1, 0], [1, 1]]]),
-         crs={"type": "name", "properties": {"name": "urn:ogc:def:crs:OGC:1.3:CRS84"}}),
-     "geographic"),
-    (_fc(_feature({"type": "villa", "id": "v1"}, "Polygon", [[[0, 0], [1, 0], [1, 1]]])),
-     r"features\[0\] \(v1\).*type = 'villa'"),
-    (_fc(_feature({"type": "porticus", "id": "p"}, "LineString", [[0, 0], [1, "x"]])),
-     r"\(p\).*coordinates\[1\]\[1\]"),
-    (_fc(_feature({"type": "porticus", "id": "p", "sides": 3}, "LineString", [[0, 0], [9, 0]])),
-     "sides = 3"),
-    (_fc(_feature({"type": "temple", "id": "t", "hypotheses": {"a": "maybe"}}, "Polygon",
-                  [[[0, 0], [1, 0], [1, 1]]])), "hypotheses"),
-    (_fc(_feature({"type": "porticus", "spacing": float("nan")}, "LineString",
-                  [[0, 0], [9, 0]])), "spacing"),
-    ({"type": "Feature"}, "FeatureCollection"),
-])
+@pytest.mark.parametrize(
+    "doc, match",
+    [
+        (
+            _fc(
+                _feature({"type": "temple"}, "Polygon", [[[0, 0], [1, 0], [1, 1]]]),
+                crs={"type": "name", "properties": {"name": "urn:ogc:def:crs:OGC:1.3:CRS84"}},
+            ),
+            "geographic",
+        ),
+        (
+            _fc(_feature({"type": "villa", "id": "v1"}, "Polygon", [[[0, 0], [1, 0], [1, 1]]])),
+            r"features\[0\] \(v1\).*type = 'villa'",
+        ),
+        (
+            _fc(_feature({"type": "porticus", "id": "p"}, "LineString", [[0, 0], [1, "x"]])),
+            r"\(p\).*coordinates\[1\]\[1\]",
+        ),
+        (
+            _fc(
+                _feature(
+                    {"type": "porticus", "id": "p", "sides": 3}, "LineString", [[0, 0], [9, 0]]
+                )
+            ),
+            "sides = 3",
+        ),
+        (
+            _fc(
+                _feature(
+                    {"type": "temple", "id": "t", "hypotheses": {"a": "maybe"}},
+                    "Polygon",
+                    [[[0, 0], [1, 0], [1, 1]]],
+                )
+            ),
+            "hypotheses",
+        ),
+        (
+            _fc(
+                _feature(
+                    {"type": "porticus", "spacing": float("nan")}, "LineString", [[0, 0], [9, 0]]
+                )
+            ),
+            "spacing",
+        ),
+        ({"type": "Feature"}, "FeatureCollection"),
+    ],
+)
 def test_bad_plans_name_the_feature(tmp_path, doc, match):
     with pytest.raises(ParameterError, match=match):
         read_geojson(_write(tmp_path, doc))
@@ -114,10 +148,12 @@ def test_fit_uses_the_lot_and_its_long_axis_towards_the_centre():
     np.testing.assert_allclose(_front(fit), u, atol=1e-9)
     # as large as the lot allows: 16 m / 11.87 m or 36 m / 25.6 m, whichever binds
     assert fit.scale == pytest.approx(min(16 / FP.width, 36 / FP.length), rel=1e-6)
-    assert shapely.Polygon(ring + [100, 50]).buffer(1e-3).contains(
-        shapely.Polygon(fit.footprint_plan(FP)))
-    flipped = fit_temple(lot, FP, scale_range=(0.6, 2.0), toward=(100 - 50 * u[0],
-                                                                  50 - 50 * u[1]))
+    assert (
+        shapely.Polygon(ring + [100, 50])
+        .buffer(1e-3)
+        .contains(shapely.Polygon(fit.footprint_plan(FP)))
+    )
+    flipped = fit_temple(lot, FP, scale_range=(0.6, 2.0), toward=(100 - 50 * u[0], 50 - 50 * u[1]))
     np.testing.assert_allclose(_front(flipped), -u, atol=1e-9)
 
 
@@ -150,8 +186,9 @@ def test_porticus_columns_line_the_street(sides):
         # every column faces the line: its front points at the nearest point of the line
         a = np.radians(yaw)
         front = np.stack([np.sin(a), -np.cos(a)], axis=1)
-        near = shapely.get_coordinates(shapely.shortest_line(
-            shapely.points(plan), shapely.LineString(line)))[1::2]
+        near = shapely.get_coordinates(
+            shapely.shortest_line(shapely.points(plan), shapely.LineString(line))
+        )[1::2]
         to_line = (near - plan) / 4.0
         ok = np.einsum("ij,ij->i", front, to_line) > 0.99
         assert ok.mean() > 0.95  # all but the columns at the corner's mitre
@@ -186,17 +223,24 @@ def test_drop_inside_and_lod():
 
 
 def test_city_packages_import_without_pxr():
-    code = ("import sys; sys.modules['pxr'] = None\n"
-            "import ionic_usd.city, ionic_usd.city.plan, ionic_usd.city.layout\n"
-            "import ionic_usd.pipeline.spec, ionic_usd.pipeline.build\n")
+    code = (
+        "import sys; sys.modules['pxr'] = None\n"
+        "import ionic_usd.city, ionic_usd.city.plan, ionic_usd.city.layout\n"
+        "import ionic_usd.pipeline.spec, ionic_usd.pipeline.build\n"
+    )
     subprocess.run([sys.executable, "-c", code], check=True)
 
 
 def test_unknown_hypothesis_in_a_plan_is_an_error(tmp_path):
     from ionic_usd.pipeline.city import CityOptions, build_city
 
-    doc = _fc(_feature({"type": "temple", "id": "t", "hypotheses": {"roof-flat": "alternative"}},
-                       "Polygon", [[[0, 0], [30, 0], [30, 40], [0, 40]]]))
+    doc = _fc(
+        _feature(
+            {"type": "temple", "id": "t", "hypotheses": {"roof-flat": "alternative"}},
+            "Polygon",
+            [[[0, 0], [30, 0], [30, 40], [0, 40]]],
+        )
+    )
     with pytest.raises(ParameterError, match=r"lot t: hypotheses = \['roof-flat'\].*flutes-20"):
         build_city(tmp_path / "c", CityOptions(plan=str(_write(tmp_path, doc))))
     assert not (tmp_path / "c").exists()

@@ -70,21 +70,23 @@ def test_existing_output_needs_force(tmp_path, capsys):
 
 # -- the TOML writer behind --print-config ------------------------------------------------------
 @settings(max_examples=300, deadline=None)
-@given(st.text(alphabet=st.characters(exclude_categories=("Cs",)), max_size=40),
-       st.text(alphabet=st.characters(exclude_categories=("Cs",)), min_size=1, max_size=12))
+@given(
+    st.text(alphabet=st.characters(exclude_categories=("Cs",)), max_size=40),
+    st.text(alphabet=st.characters(exclude_categories=("Cs",)), min_size=1, max_size=12),
+)
 def test_toml_writer_round_trips_any_string(value, key):
     """Newlines, quotes, backslashes, control characters, odd keys: tomllib reads back what
     was written."""
     from ionic_usd.params import to_toml
 
-    tables = {"t": {key: value, "plain": "a \"quoted\" \\ line\nand\ta\r\nnext"}}
+    tables = {"t": {key: value, "plain": 'a "quoted" \\ line\nand\ta\r\nnext'}}
     if key == "plain":
         tables["t"] = {key: value}
     assert tomllib.loads(to_toml(tables, header="a header\nof two lines")) == tables
 
 
 def test_print_config_with_a_newline_in_a_grammar_is_valid_toml(capsys):
-    grammar = 'R0.02 H0.05\nR0.03 H0.1'  # whitespace (a newline) is free in the grammar
+    grammar = "R0.02 H0.05\nR0.03 H0.1"  # whitespace (a newline) is free in the grammar
     assert main(["column", "--print-config", "--base", grammar]) == 0
     data = tomllib.loads(capsys.readouterr().out)
     assert data["column"]["base"] == grammar

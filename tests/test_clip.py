@@ -14,20 +14,24 @@ from ionic_usd.geometry.clip import clip_mesh
 from ionic_usd.geometry.mesh import face_normals, smooth_normals
 
 # -- fixtures -------------------------------------------------------------------------------
-_CUBE_PTS = np.array(
-    [[x, y, z] for x in (0.0, 1.0) for y in (0.0, 1.0) for z in (0.0, 1.0)]
-)
+_CUBE_PTS = np.array([[x, y, z] for x in (0.0, 1.0) for y in (0.0, 1.0) for z in (0.0, 1.0)])
 # quads wound counter-clockwise seen from outside; vertex index = 4x + 2y + z
-_CUBE_QUADS = np.array([
-    [0, 1, 3, 2], [4, 6, 7, 5],  # x = 0, x = 1
-    [0, 4, 5, 1], [2, 3, 7, 6],  # y = 0, y = 1
-    [0, 2, 6, 4], [1, 5, 7, 3],  # z = 0, z = 1
-])
+_CUBE_QUADS = np.array(
+    [
+        [0, 1, 3, 2],
+        [4, 6, 7, 5],  # x = 0, x = 1
+        [0, 4, 5, 1],
+        [2, 3, 7, 6],  # y = 0, y = 1
+        [0, 2, 6, 4],
+        [1, 5, 7, 3],  # z = 0, z = 1
+    ]
+)
 
 
 def cube_quads(lo=(0.0, 0.0, 0.0), size=1.0) -> Mesh:
-    return Mesh(_CUBE_PTS * size + np.asarray(lo), np.full(6, 4), _CUBE_QUADS.reshape(-1),
-                name="cube")
+    return Mesh(
+        _CUBE_PTS * size + np.asarray(lo), np.full(6, 4), _CUBE_QUADS.reshape(-1), name="cube"
+    )
 
 
 def cube_tris(lo=(0.0, 0.0, 0.0), size=1.0) -> Mesh:
@@ -102,7 +106,7 @@ def border_loops(m: Mesh) -> int:
         ((0.5, 0.5, 0.5), (1, -1, 0), 0.5),  # through four cube vertices (on-plane vertices)
         ((0.5, 0.5, 0.5), (1, 1, 1), 0.5),  # a hexagonal section
         ((1, 0, 0), (1, 1, 0), 0.5),  # through the edges x + y = 1
-        ((0.1, 0.1, 0.2), (1, 2, 3), 1 - 0.9 ** 3 / 36),  # cuts off the corner at 0 (a tetrahedron)
+        ((0.1, 0.1, 0.2), (1, 2, 3), 1 - 0.9**3 / 36),  # cuts off the corner at 0 (a tetrahedron)
     ],
 )
 def test_cube_cut_is_watertight_with_the_right_volume(make, point, normal, volume):
@@ -135,8 +139,9 @@ def test_both_halves_add_up_for_random_planes(rng, sign):
         a, b = clip_mesh(ring, p, n), clip_mesh(ring, p, -n)
         check_closed(a)
         check_closed(b)
-        assert_allclose(inspect_mesh(a).signed_volume + inspect_mesh(b).signed_volume, total,
-                        rtol=1e-10)
+        assert_allclose(
+            inspect_mesh(a).signed_volume + inspect_mesh(b).signed_volume, total, rtol=1e-10
+        )
         # both caps are the same section
         assert_allclose(cap_area(a, p, n), cap_area(b, p, -n), rtol=1e-10)
 
@@ -212,8 +217,9 @@ def test_torus_cut_through_the_axis_gives_two_loops():
     assert border_loops(open_half) == 2
     out = clip_mesh(torus, (0, 0, 0), (0, 0, 1))
     check_closed(out)
-    assert_allclose(inspect_mesh(out).signed_volume, inspect_mesh(torus).signed_volume / 2,
-                    rtol=1e-12)
+    assert_allclose(
+        inspect_mesh(out).signed_volume, inspect_mesh(torus).signed_volume / 2, rtol=1e-12
+    )
     assert_allclose(cap_area(out, (0, 0, 0), (0, 0, 1)), 2 * polygon_area(24, 0.5), rtol=1e-12)
 
 
@@ -238,10 +244,14 @@ def test_hollow_ball_hole_comes_from_another_shell():
     ball = merge([outer, inner])
     out = clip_mesh(ball, (0, 0, 0), (0, 1, 0))
     check_closed(out)
-    assert_allclose(inspect_mesh(out).signed_volume, inspect_mesh(ball).signed_volume / 2,
-                    rtol=1e-12)
-    assert_allclose(cap_area(out, (0, 0, 0), (0, 1, 0)),
-                    polygon_area(24, 1.0) - polygon_area(24, 0.6), rtol=1e-12)
+    assert_allclose(
+        inspect_mesh(out).signed_volume, inspect_mesh(ball).signed_volume / 2, rtol=1e-12
+    )
+    assert_allclose(
+        cap_area(out, (0, 0, 0), (0, 1, 0)),
+        polygon_area(24, 1.0) - polygon_area(24, 0.6),
+        rtol=1e-12,
+    )
 
 
 def test_overlapping_shells_are_capped_each_on_its_own():
@@ -300,8 +310,9 @@ def test_half_shaft_is_watertight_and_half_the_volume(shaft):
     check_closed(out)
     # the shaft's points are mirror-symmetric about z = 0 (a flute axis lies at angle 0) but
     # its quad diagonals are not, which shifts the halves' volumes by ~1e-9 of the whole
-    assert_allclose(inspect_mesh(out).signed_volume, inspect_mesh(shaft).signed_volume / 2,
-                    rtol=1e-7)
+    assert_allclose(
+        inspect_mesh(out).signed_volume, inspect_mesh(shaft).signed_volume / 2, rtol=1e-7
+    )
     assert out.points[:, 2].min() >= 0.0
 
 
@@ -317,8 +328,8 @@ def test_engaged_shaft_keeps_more_than_half(shaft):
 
 
 @pytest.mark.parametrize(
-    ("point", "normal"), [((0, 0, 0), (0, 0, 1)), ((0, 0.1, 0), (0, 1, 0)),
-                          ((0.05, 0, 0), (1, 0, 0.3))],
+    ("point", "normal"),
+    [((0, 0, 0), (0, 0, 1)), ((0, 0.1, 0), (0, 1, 0)), ((0.05, 0, 0), (1, 0, 0.3))],
 )
 def test_base_and_capital_stay_closed(point, normal):
     from ionic_usd.column.base import build_base

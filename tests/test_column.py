@@ -55,14 +55,22 @@ def test_base_variants_weld_to_shaft_and_keep_height(base):
     p = portunus_column_params(lod="low", base=base)
     bp = p.base_params()
     assert bp.height == pytest.approx(p.base_height)
-    solid = weld(merge([build_base(bp, cap_top=False),
-                        build_shaft(p.shaft_params(), cap_bottom=False, y_offset=bp.height)]))
+    solid = weld(
+        merge(
+            [
+                build_base(bp, cap_top=False),
+                build_shaft(p.shaft_params(), cap_bottom=False, y_offset=bp.height),
+            ]
+        )
+    )
     assert inspect_mesh(solid).watertight
 
 
 def test_lod_monotonic_in_triangles():
-    counts = [build_column(portunus_column_params(lod=lod)).n_triangles
-              for lod in ("low", "medium", "high")]
+    counts = [
+        build_column(portunus_column_params(lod=lod)).n_triangles
+        for lod in ("low", "medium", "high")
+    ]
     assert counts == sorted(counts) and len(set(counts)) == 3
 
 
@@ -101,8 +109,9 @@ def test_cli_print_config_is_accepted_back(tmp_path, capsys):
     assert tomllib.loads(text)["column"]["scroll"] == "S2"
     cfg = tmp_path / "c.toml"
     cfg.write_text(text)
-    assert main(["column", "--config", str(cfg), "--lod", "low", "-o",
-                 str(tmp_path / "c.usda")]) == 0
+    assert (
+        main(["column", "--config", str(cfg), "--lod", "low", "-o", str(tmp_path / "c.usda")]) == 0
+    )
 
 
 def test_cli_bad_grammar_points_at_token(tmp_path, capsys):

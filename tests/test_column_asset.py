@@ -37,9 +37,13 @@ def open_stage(report) -> Usd.Stage:
 def active_meshes(stage, purpose: str = "render") -> dict[str, Usd.Prim]:
     """Active part meshes of one purpose (render: the selected lod under Geom; proxy: Proxy),
     not the ornament prototypes under PointInstancers."""
-    return {str(p.GetPath()): p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh)
-            and UsdGeom.Imageable(p).ComputePurpose() == purpose
-            and not _prototype_of_instancer(p)}
+    return {
+        str(p.GetPath()): p
+        for p in stage.Traverse()
+        if p.IsA(UsdGeom.Mesh)
+        and UsdGeom.Imageable(p).ComputePurpose() == purpose
+        and not _prototype_of_instancer(p)
+    }
 
 
 def test_low_lod_is_the_proxy_of_every_selection(column_asset):
@@ -82,9 +86,13 @@ def _ancestors(p: Usd.Prim):
 def mesh_value(prim) -> Mesh:
     g = UsdGeom.Mesh(prim)
     st = UsdGeom.PrimvarsAPI(prim).GetPrimvar("st")
-    return Mesh(np.array(g.GetPointsAttr().Get()), np.array(g.GetFaceVertexCountsAttr().Get()),
-                np.array(g.GetFaceVertexIndicesAttr().Get()), st=np.array(st.Get()),
-                st_indices=np.array(st.GetIndices()))
+    return Mesh(
+        np.array(g.GetPointsAttr().Get()),
+        np.array(g.GetFaceVertexCountsAttr().Get()),
+        np.array(g.GetFaceVertexIndicesAttr().Get()),
+        st=np.array(st.Get()),
+        st_indices=np.array(st.GetIndices()),
+    )
 
 
 def test_layout_on_disk_and_interface(column_asset):
@@ -144,8 +152,13 @@ def test_every_selection_has_one_mesh_per_part(column_asset):
 def test_every_mesh_closed_with_uvs_in_unit_square(column_asset):
     layer = Sdf.Layer.FindOrOpen(str(column_asset.path.parent / "Payload/Geometry.usdc"))
     stage = Usd.Stage.Open(layer)
-    prims = [p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh)
-             and "Proxy" not in str(p.GetPath()) and not _prototype_of_instancer(p)]
+    prims = [
+        p
+        for p in stage.Traverse()
+        if p.IsA(UsdGeom.Mesh)
+        and "Proxy" not in str(p.GetPath())
+        and not _prototype_of_instancer(p)
+    ]
     assert len(prims) == column_asset.meshes == 3 * (4 + 2 + 2 * 2 * 2) * 3
     for prim in prims:
         m = mesh_value(prim)
@@ -164,8 +177,11 @@ def test_charts_do_not_overlap_in_any_mesh(column_asset):
     stage = Usd.Stage.Open(layer)
     res = 2048  # raster of the normalised [0,1] square
     for prim in stage.Traverse():
-        if not prim.IsA(UsdGeom.Mesh) or prim.GetParent().GetName() == "Proxy" \
-                or _prototype_of_instancer(prim):
+        if (
+            not prim.IsA(UsdGeom.Mesh)
+            or prim.GetParent().GetName() == "Proxy"
+            or _prototype_of_instancer(prim)
+        ):
             continue
         m = mesh_value(prim)
         charts = uv_charts(m.st_indices, len(m.st))
@@ -176,10 +192,15 @@ def test_charts_do_not_overlap_in_any_mesh(column_asset):
 def test_switching_variants_changes_exactly_their_part(column_asset):
     stage = open_stage(column_asset)
     vsets = stage.GetDefaultPrim().GetVariantSets()
-    expect = {"lod": {"Base", "Shaft", "CapitalBody"}, "base": {"Base"},
-              "scroll": {"CapitalBody"}, "capital": {"CapitalBody"}, "volute": {"CapitalBody"},
-              "flutes": {"Shaft"},
-              "form": {"Base", "Shaft", "CapitalBody"}}
+    expect = {
+        "lod": {"Base", "Shaft", "CapitalBody"},
+        "base": {"Base"},
+        "scroll": {"CapitalBody"},
+        "capital": {"CapitalBody"},
+        "volute": {"CapitalBody"},
+        "flutes": {"Shaft"},
+        "form": {"Base", "Shaft", "CapitalBody"},
+    }
     for name, parts in expect.items():
         vs = vsets.GetVariantSet(name)
         default = vs.GetVariantSelection()
@@ -196,8 +217,10 @@ def test_switching_variants_changes_exactly_their_part(column_asset):
     for v in VARIANTS["finish"]:
         vs.SetVariantSelection(v)
         assert set(active_meshes(stage)) == before
-        bound = {UsdShade.MaterialBindingAPI(p).ComputeBoundMaterial()[0].GetPath()
-                 for p in active_meshes(stage).values()}
+        bound = {
+            UsdShade.MaterialBindingAPI(p).ComputeBoundMaterial()[0].GetPath()
+            for p in active_meshes(stage).values()
+        }
         assert len(bound) == 1
         mats |= bound
     assert {p.name for p in mats} == {"Travertine", "PaintedStucco"}
@@ -243,8 +266,9 @@ def test_rebuild_does_no_unwrapping(tmp_path, monkeypatch):
     monkeypatch.setenv("IONIC_USD_CACHE", str(tmp_path / "cache"))  # its own mesh cache
 
     cache = UVCache(tmp_path / "uv")
-    opts = ColumnAssetOptions(lods=("low",), bases=("G1",), scrolls=("S1",), flutes=("f24",),
-                              texture_size=16)
+    opts = ColumnAssetOptions(
+        lods=("low",), bases=("G1",), scrolls=("S1",), flutes=("f24",), texture_size=16
+    )
     cold = build_column_asset(tmp_path / "a" / "IonicColumn", opts, cache=cache)
     # the base and shaft carry analytic charts (no xatlas), and the cut forms carry the charts
     # of the mesh they were cut from: xatlas runs once per uncut capital
@@ -272,8 +296,14 @@ def test_rebuild_does_no_unwrapping(tmp_path, monkeypatch):
 
 
 def test_force_replaces_atomically(tmp_path):
-    opts = ColumnAssetOptions(lods=("low",), bases=("G1",), scrolls=("S1",), flutes=("f24",),
-                              forms=("full",), texture_size=16)
+    opts = ColumnAssetOptions(
+        lods=("low",),
+        bases=("G1",),
+        scrolls=("S1",),
+        flutes=("f24",),
+        forms=("full",),
+        texture_size=16,
+    )
     dest = tmp_path / "IonicColumn"
     build_column_asset(dest, opts)
     (dest / "stray.txt").write_text("from the old asset")
@@ -286,18 +316,24 @@ def test_force_replaces_atomically(tmp_path):
 
     listed = generated_files(dest)
     assert "Payload/Geometry.usdc" in listed and "stray.txt" not in listed
-    (dest / MANIFEST_NAME).write_text(json.dumps(
-        {"files": [*listed, "Payload/Textures/old_generated.png"]}))
+    (dest / MANIFEST_NAME).write_text(
+        json.dumps({"files": [*listed, "Payload/Textures/old_generated.png"]})
+    )
     build_column_asset(dest, opts, force=True)
     assert (dest / "stray.txt").read_text() == "from the old asset"
     assert not (dest / "Payload" / "Textures" / "old_generated.png").exists()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["IonicColumn"]
 
 
-@pytest.mark.parametrize("kw,needle", [({"bases": ("G9",)}, "G1"),
-                                       ({"lods": ("ultra",)}, "high"),
-                                       ({"scrolls": ()}, "S1"),
-                                       ({"forms": ("quarter",)}, "engaged")])
+@pytest.mark.parametrize(
+    "kw,needle",
+    [
+        ({"bases": ("G9",)}, "G1"),
+        ({"lods": ("ultra",)}, "high"),
+        ({"scrolls": ()}, "S1"),
+        ({"forms": ("quarter",)}, "engaged"),
+    ],
+)
 def test_unknown_variants_list_valid_ones(kw, needle):
     with pytest.raises(ParameterError, match=needle):
         ColumnAssetOptions(**kw)
@@ -306,12 +342,15 @@ def test_unknown_variants_list_valid_ones(kw, needle):
 def test_bad_user_textures_refused_before_writing(tmp_path):
     bad = tmp_path / "fake.png"
     bad.write_bytes(b"not an image")
-    for textures in ({"basecolor": tmp_path / "missing.png", "roughness": bad, "normal": bad},
-                     {"basecolor": bad, "roughness": bad, "normal": bad}):
+    for textures in (
+        {"basecolor": tmp_path / "missing.png", "roughness": bad, "normal": bad},
+        {"basecolor": bad, "roughness": bad, "normal": bad},
+    ):
         with pytest.raises(TextureError):
-            build_column_asset(tmp_path / "IonicColumn",
-                               ColumnAssetOptions(user_textures={k: str(v) for k, v in
-                                                                 textures.items()}))
+            build_column_asset(
+                tmp_path / "IonicColumn",
+                ColumnAssetOptions(user_textures={k: str(v) for k, v in textures.items()}),
+            )
         assert not (tmp_path / "IonicColumn").exists()
 
 
@@ -353,8 +392,14 @@ def test_volute_variant_switches_the_capital_to_the_centred_arcs(column_asset):
     vs.SetVariantSelection("log_spiral")
 
 
-@pytest.mark.parametrize("lod", ["high", pytest.param("medium", marks=pytest.mark.slow),
-                                 pytest.param("low", marks=pytest.mark.slow)])
+@pytest.mark.parametrize(
+    "lod",
+    [
+        "high",
+        pytest.param("medium", marks=pytest.mark.slow),
+        pytest.param("low", marks=pytest.mark.slow),
+    ],
+)
 def test_every_volute_selection_validates_and_is_one_solid(column_asset, lod):
     """Each capital selection (volute × scroll × capital × form, per lod) has 0 UsdValidation
     errors and its capital is one closed, outward shell."""
@@ -375,8 +420,11 @@ def test_every_volute_selection_validates_and_is_one_solid(column_asset, lod):
     for path in seen:
         prim = stage.GetPrimAtPath(path)
         g = UsdGeom.Mesh(prim)
-        m = Mesh(np.array(g.GetPointsAttr().Get()), np.array(g.GetFaceVertexCountsAttr().Get()),
-                 np.array(g.GetFaceVertexIndicesAttr().Get()))
+        m = Mesh(
+            np.array(g.GetPointsAttr().Get()),
+            np.array(g.GetFaceVertexCountsAttr().Get()),
+            np.array(g.GetFaceVertexIndicesAttr().Get()),
+        )
         assert shell_count(m) == 1, path
 
 
@@ -390,13 +438,16 @@ def test_high_lod_carries_the_carved_capital_cut_by_each_form(column_asset):
         vsets.GetVariantSet("lod").SetVariantSelection(lod)
         for form in VARIANTS["form"]:
             vsets.GetVariantSet("form").SetVariantSelection(form)
-            inst = [UsdGeom.PointInstancer(p) for p in stage.Traverse()
-                    if p.IsA(UsdGeom.PointInstancer)]
+            inst = [
+                UsdGeom.PointInstancer(p) for p in stage.Traverse() if p.IsA(UsdGeom.PointInstancer)
+            ]
             if lod != "high":
                 assert inst == [], (lod, form)
                 continue
-            assert sorted(i.GetPrim().GetName().split("_high")[0] for i in inst) == \
-                ["BeadAndReel", "EggAndDart"], form
+            assert sorted(i.GetPrim().GetName().split("_high")[0] for i in inst) == [
+                "BeadAndReel",
+                "EggAndDart",
+            ], form
             pos = np.concatenate([np.array(i.GetPositionsAttr().Get()) for i in inst])
             counts[form] = len(pos)
             if form != "full":
@@ -414,9 +465,16 @@ def test_high_lod_carries_the_carved_capital_cut_by_each_form(column_asset):
 
 
 def test_volute_option_builds_one_model_without_the_set(tmp_path):
-    opts = ColumnAssetOptions(lods=("low",), bases=("G1",), scrolls=("S1",), flutes=("f24",),
-                              forms=("full",), capitals=("normal",), volutes=("centred_arcs",),
-                              texture_size=16)
+    opts = ColumnAssetOptions(
+        lods=("low",),
+        bases=("G1",),
+        scrolls=("S1",),
+        flutes=("f24",),
+        forms=("full",),
+        capitals=("normal",),
+        volutes=("centred_arcs",),
+        texture_size=16,
+    )
     rep = build_column_asset(tmp_path / "IonicColumn", opts)
     stage = open_stage(rep)
     assert "volute" not in stage.GetDefaultPrim().GetVariantSets().GetNames()
@@ -435,18 +493,24 @@ def test_generated_meshes_are_cached_by_content(tmp_path, monkeypatch):
     from ionic_usd.texture.uv import UVCache
 
     monkeypatch.setenv("IONIC_USD_CACHE", str(tmp_path / "cache"))
-    opts = ColumnAssetOptions(lods=("low",), bases=("G1",), scrolls=("S1",), flutes=("f24",),
-                              texture_size=16)
+    opts = ColumnAssetOptions(
+        lods=("low",), bases=("G1",), scrolls=("S1",), flutes=("f24",), texture_size=16
+    )
     calls = []
     real = pipeline_asset.column_asset_meshes
-    monkeypatch.setattr(pipeline_asset, "column_asset_meshes",
-                        lambda *a, **k: calls.append(1) or real(*a, **k))
+    monkeypatch.setattr(
+        pipeline_asset, "column_asset_meshes", lambda *a, **k: calls.append(1) or real(*a, **k)
+    )
 
     def build(name):
-        build_column_asset(tmp_path / name / "IonicColumn", opts,
-                           cache=UVCache(tmp_path / "cache" / "uv"))
-        return {p.relative_to(tmp_path / name): hashlib.sha256(p.read_bytes()).hexdigest()
-                for p in sorted((tmp_path / name).rglob("*")) if p.is_file()}
+        build_column_asset(
+            tmp_path / name / "IonicColumn", opts, cache=UVCache(tmp_path / "cache" / "uv")
+        )
+        return {
+            p.relative_to(tmp_path / name): hashlib.sha256(p.read_bytes()).hexdigest()
+            for p in sorted((tmp_path / name).rglob("*"))
+            if p.is_file()
+        }
 
     first = build("a")
     assert len(calls) == 1
@@ -459,7 +523,9 @@ def test_generated_meshes_are_cached_by_content(tmp_path, monkeypatch):
     third = build("c")
     assert len(calls) == 2 and third == first
     # other options are another entry
-    build_column_asset(tmp_path / "d" / "IonicColumn",
-                       dataclasses.replace(opts, bases=("G2",)),
-                       cache=UVCache(tmp_path / "cache" / "uv"))
+    build_column_asset(
+        tmp_path / "d" / "IonicColumn",
+        dataclasses.replace(opts, bases=("G2",)),
+        cache=UVCache(tmp_path / "cache" / "uv"),
+    )
     assert len(calls) == 3 and len(list(mesh_cache_folder().iterdir())) == 2

@@ -58,8 +58,10 @@ def test_inclined_vertex_heights(incline):
     at_max_x = np.isclose(p[:, 0], 1)
     assert at_max_x.sum() == 4
     # the max-x top corners rise by 0.8; min-x corners are untouched
-    assert_allclose(np.sort(p[at_max_x, 1]), [2.8, 2.8, 3.8, 3.8] if incline == "shear"
-                    else [2.0, 2.0, 3.8, 3.8])
+    assert_allclose(
+        np.sort(p[at_max_x, 1]),
+        [2.8, 2.8, 3.8, 3.8] if incline == "shear" else [2.0, 2.0, 3.8, 3.8],
+    )
     assert_allclose(np.sort(p[~at_max_x, 1]), [2, 2, 3, 3])
     assert_allclose(c.pitch_deg, math.degrees(math.atan(0.8 / 4)))
 
@@ -86,8 +88,8 @@ def test_sloped_normal_follows_pitch():
     m = cuboid_mesh(c)
     n = m.normals.reshape(6, 4, 3)[:, 0]
     expect = np.array([-math.sin(phi), math.cos(phi), 0.0])
-    assert np.any(np.all(np.abs(n - expect) < 1e-6, axis=1))   # top
-    assert np.any(np.all(np.abs(n + expect) < 1e-6, axis=1))   # soffit (sheared bottom)
+    assert np.any(np.all(np.abs(n - expect) < 1e-6, axis=1))  # top
+    assert np.any(np.all(np.abs(n + expect) < 1e-6, axis=1))  # soffit (sheared bottom)
 
 
 @pytest.mark.parametrize("uv_scale", [0.25, 1.0, 0.1])
@@ -131,10 +133,14 @@ def test_min_not_below_max_names_axis(lo, hi, axis):
 
 @pytest.mark.parametrize(
     "kw",
-    [dict(min=(0, float("nan"), 0), max=(1, 1, 1)), dict(min=(0, 0, 0), max=(1, 1, math.inf)),
-     dict(min=(0, 0), max=(1, 1, 1)), dict(min=(0, 0, 0), max=(1, 1, 1), rise=math.nan),
-     dict(min=(0, 0, 0), max=(1, 1, 1), incline="twist"),
-     dict(min=(0, 0, 0), max=(1, 1, 1), rise=-1.0, incline="wedge")],
+    [
+        dict(min=(0, float("nan"), 0), max=(1, 1, 1)),
+        dict(min=(0, 0, 0), max=(1, 1, math.inf)),
+        dict(min=(0, 0), max=(1, 1, 1)),
+        dict(min=(0, 0, 0), max=(1, 1, 1), rise=math.nan),
+        dict(min=(0, 0, 0), max=(1, 1, 1), incline="twist"),
+        dict(min=(0, 0, 0), max=(1, 1, 1), rise=-1.0, incline="wedge"),
+    ],
 )
 def test_invalid_cuboids(kw):
     with pytest.raises(ParameterError):
@@ -150,8 +156,10 @@ def test_uv_scale_validated():
 
 
 def test_parse_example():
-    cs = parse_cuboids("C(-5.25, 0, -9.65, 5.25, 2.4, 9.65),\n"
-                       "C(-5.5,12.8,-9.9,0,13.2,9.9,1.22) , W(0, 1, 0, 1, 1.2, 1, -0.1)")
+    cs = parse_cuboids(
+        "C(-5.25, 0, -9.65, 5.25, 2.4, 9.65),\n"
+        "C(-5.5,12.8,-9.9,0,13.2,9.9,1.22) , W(0, 1, 0, 1, 1.2, 1, -0.1)"
+    )
     assert [c.name for c in cs] == ["cuboid1", "cuboid2", "cuboid3"]
     assert cs[0] == Cuboid((-5.25, 0, -9.65), (5.25, 2.4, 9.65), name="cuboid1")
     assert cs[1].rise == 1.22 and cs[1].incline is Incline.SHEAR
@@ -187,7 +195,7 @@ def test_grammar_errors_point_at_token(src, module, token, phrase):
         assert src[e.offset] == ")"
     else:
         # the caret is under the token that is to blame (the last occurrence for the repeats)
-        assert src[e.offset:e.offset + len(token)] == token
+        assert src[e.offset : e.offset + len(token)] == token
         assert e.offset in {i for i in range(len(src)) if src.startswith(token, i)}
     ctx = e.get_context().splitlines()
     assert ctx[1].index("^") - 2 == e.offset

@@ -74,8 +74,12 @@ def test_variants_switch_geometry_and_counts(stage):
 
 def test_materials_per_role(stage):
     def bound(path):
-        return str(UsdShade.MaterialBindingAPI(stage.GetPrimAtPath(path))
-                   .ComputeBoundMaterial()[0].GetPath().name)
+        return str(
+            UsdShade.MaterialBindingAPI(stage.GetPrimAtPath(path))
+            .ComputeBoundMaterial()[0]
+            .GetPath()
+            .name
+        )
 
     assert bound("/Temple/Roof/Tiles") == "Terracotta"
     assert bound("/Temple/Podium/die") == "Travertine"
@@ -91,8 +95,12 @@ def test_every_detail_layer_is_valid_alone(carved_temple):
     files = [folder / "detail.usdc", *sorted((folder / "layers").glob("*.usdc"))]
     # the detail, the frieze relief, the detail re-placed for the two hypotheses that move the
     # entablature or the roof, and the garlands on the lower frieze
-    assert {f.name for f in files} >= {"detail.usdc", "frieze-garlands.usdc",
-                                        "roof-pitch-15.detail.usdc", "frieze-plain.detail.usdc"}
+    assert {f.name for f in files} >= {
+        "detail.usdc",
+        "frieze-garlands.usdc",
+        "roof-pitch-15.detail.usdc",
+        "frieze-plain.detail.usdc",
+    }
     for f in files:
         assert validate_stage(Usd.Stage.Open(str(f))) == [], f.name
 
@@ -121,8 +129,9 @@ def test_roof_hypothesis_moves_the_tiles_with_the_roof(carved_temple):
     stage = Usd.Stage.Open(str(carved_temple.root))
     tiles = UsdGeom.PointInstancer(stage.GetPrimAtPath("/Temple/Roof/Tiles"))
     before = np.array(tiles.GetPositionsAttr().Get())
-    stage.GetDefaultPrim().GetVariantSets().GetVariantSet("hyp_roof_pitch_15") \
-        .SetVariantSelection("alternative")
+    stage.GetDefaultPrim().GetVariantSets().GetVariantSet("hyp_roof_pitch_15").SetVariantSelection(
+        "alternative"
+    )
     after = np.array(tiles.GetPositionsAttr().Get())
     ridge_before, ridge_after = before[:, 1].max(), after[:, 1].max()
     assert ridge_after > ridge_before + 0.2  # a steeper roof raises the ridge tiles

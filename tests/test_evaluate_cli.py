@@ -52,8 +52,26 @@ def test_evaluate_identical_curve_from_config(tmp_path, capsys):
     # the reference in millimetres, shifted: --scale brings it back, the alignment undoes it
     ref = _csv(tmp_path / "base.csv", base_section(p) + [0.2, -0.1], scale=1e-3)
     out_json, out_png = tmp_path / "m.json", tmp_path / "m.png"
-    assert run(["evaluate", "--part", "base", "--config", str(cfg), "--reference", str(ref),
-                "--scale", "0.001", "--json", str(out_json), "--plot", str(out_png)]) == 0
+    assert (
+        run(
+            [
+                "evaluate",
+                "--part",
+                "base",
+                "--config",
+                str(cfg),
+                "--reference",
+                str(ref),
+                "--scale",
+                "0.001",
+                "--json",
+                str(out_json),
+                "--plot",
+                str(out_png),
+            ]
+        )
+        == 0
+    )
     text = capsys.readouterr().out
     assert "weak Fréchet" in text and "translated by" in text
     doc = json.loads(out_json.read_text("utf-8"))
@@ -63,8 +81,19 @@ def test_evaluate_identical_curve_from_config(tmp_path, capsys):
     assert doc["metadata"]["scale"] == 0.001
     assert out_png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     # outputs are not overwritten without --force
-    argv = ["evaluate", "--part", "base", "--config", str(cfg), "--reference", str(ref),
-            "--scale", "0.001", "--json", str(out_json)]
+    argv = [
+        "evaluate",
+        "--part",
+        "base",
+        "--config",
+        str(cfg),
+        "--reference",
+        str(ref),
+        "--scale",
+        "0.001",
+        "--json",
+        str(out_json),
+    ]
     with pytest.raises(OutputExistsError):
         run(argv)
     assert run([*argv, "--force"]) == 0
@@ -79,8 +108,24 @@ def test_evaluate_from_usd_and_spacing(tmp_path, capsys):
     changed = dataclasses.replace(p, shaft=dataclasses.replace(p.shaft, top_radius=0.39))
     ref = _csv(tmp_path / "shaft.csv", shaft_silhouette_section(changed))
     out_json = tmp_path / "s.json"
-    assert run(["evaluate", "--part", "shaft", "--usd", str(usd), "--reference", str(ref),
-                "--spacing", "0.01", "--json", str(out_json)]) == 0
+    assert (
+        run(
+            [
+                "evaluate",
+                "--part",
+                "shaft",
+                "--usd",
+                str(usd),
+                "--reference",
+                str(ref),
+                "--spacing",
+                "0.01",
+                "--json",
+                str(out_json),
+            ]
+        )
+        == 0
+    )
     part = json.loads(out_json.read_text("utf-8"))["parts"]["shaft"]
     # top radius 0.407 → 0.39: the curves differ by at most that much, and by something
     assert 1e-3 < part["hausdorff"] <= 0.0175
@@ -91,8 +136,19 @@ def test_evaluate_from_usd_and_spacing(tmp_path, capsys):
 def test_evaluate_errors(tmp_path):
     ref = _csv(tmp_path / "r.csv", np.array([[0.0, 0.0], [1.0, 1.0]]))
     with pytest.raises(SystemExit):  # --usd and --config exclude each other (argparse)
-        run(["evaluate", "--part", "base", "--usd", "a.usda", "--config", "b.toml",
-             "--reference", str(ref)])
+        run(
+            [
+                "evaluate",
+                "--part",
+                "base",
+                "--usd",
+                "a.usda",
+                "--config",
+                "b.toml",
+                "--reference",
+                str(ref),
+            ]
+        )
     with pytest.raises(ReferenceCurveError):
         run(["evaluate", "--part", "base", "--reference", str(tmp_path / "missing.csv")])
     with pytest.raises(ParameterError):
@@ -100,14 +156,24 @@ def test_evaluate_errors(tmp_path):
     with pytest.raises(ParameterError):
         run(["evaluate", "--part", "base", "--reference", str(ref), "--variant", "lod=high"])
     with pytest.raises(IonicError):
-        run(["evaluate", "--part", "volute", "--usd", str(tmp_path / "none.usda"),
-             "--reference", str(ref)])
+        run(
+            [
+                "evaluate",
+                "--part",
+                "volute",
+                "--usd",
+                str(tmp_path / "none.usda"),
+                "--reference",
+                str(ref),
+            ]
+        )
 
 
 def test_fit_shaft_command_writes_accepted_toml(tmp_path, capsys):
     p = portunus_column_params()
-    true = dataclasses.replace(p, shaft=dataclasses.replace(p.shaft, bottom_radius=0.45,
-                                                            top_radius=0.40, entasis=0.01))
+    true = dataclasses.replace(
+        p, shaft=dataclasses.replace(p.shaft, bottom_radius=0.45, top_radius=0.40, entasis=0.01)
+    )
     ref = _csv(tmp_path / "shaft.csv", shaft_silhouette_section(true))
     out = tmp_path / "fitted.toml"
     argv = ["fit", "shaft", "--reference", str(ref), "-o", str(out), "--seed", "3"]
@@ -153,8 +219,10 @@ def test_closed_curve_without_section_is_refused_by_the_cli(tmp_path, capsys):
     from ionic_usd.cli import main
 
     ref = _csv(tmp_path / "sec.csv", _closed_section(0.95, 7.0, [2.0, 1.0]))
-    for argv in (["fit", "shaft", "--reference", str(ref)],
-                 ["evaluate", "--part", "shaft", "--reference", str(ref)]):
+    for argv in (
+        ["fit", "shaft", "--reference", str(ref)],
+        ["evaluate", "--part", "shaft", "--reference", str(ref)],
+    ):
         capsys.readouterr()
         assert main(argv) == 2
         err = capsys.readouterr().err.strip().splitlines()
@@ -164,8 +232,24 @@ def test_closed_curve_without_section_is_refused_by_the_cli(tmp_path, capsys):
 def test_fit_shaft_section_command_json_and_curves(tmp_path, capsys):
     ref = _csv(tmp_path / "sec.csv", _closed_section(0.95, 7.0, [2.0, 1.0]))
     out, js, cv = tmp_path / "f.toml", tmp_path / "f.json", tmp_path / "f.csv"
-    assert run(["fit", "shaft", "--section", "--reference", str(ref), "-o", str(out),
-                "--json", str(js), "--curves", str(cv)]) == 0
+    assert (
+        run(
+            [
+                "fit",
+                "shaft",
+                "--section",
+                "--reference",
+                str(ref),
+                "-o",
+                str(out),
+                "--json",
+                str(js),
+                "--curves",
+                str(cv),
+            ]
+        )
+        == 0
+    )
     doc = json.loads(js.read_text("utf-8"))
     assert doc["schema"] == "ionic_usd.evaluate/1"
     part = doc["parts"]["shaft"]
@@ -189,8 +273,20 @@ def test_evaluate_identical_curves_read_zero_and_several_references(tmp_path, ca
     base = _csv(tmp_path / "b.csv", densify(base_section(p), 0.003))  # more nodes, same curve
     shaft = _csv(tmp_path / "s.csv", shaft_silhouette_section(p, samples=57))
     js = tmp_path / "t6.json"
-    assert run(["evaluate", "--reference", f"base={base}", "--reference", f"shaft={shaft}",
-                "--json", str(js)]) == 0
+    assert (
+        run(
+            [
+                "evaluate",
+                "--reference",
+                f"base={base}",
+                "--reference",
+                f"shaft={shaft}",
+                "--json",
+                str(js),
+            ]
+        )
+        == 0
+    )
     text = capsys.readouterr().out
     assert "resampled at" in text and "node-to-node" in text
     doc = json.loads(js.read_text("utf-8"))
@@ -210,7 +306,22 @@ def test_evaluate_shaft_section(tmp_path, capsys):
     rot = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
     ref = _csv(tmp_path / "s.csv", sec @ rot.T + [1.0, 1.0])
     js = tmp_path / "e.json"
-    assert run(["evaluate", "--part", "shaft", "--section", "--height", str(y),
-                "--reference", str(ref), "--json", str(js)]) == 0
+    assert (
+        run(
+            [
+                "evaluate",
+                "--part",
+                "shaft",
+                "--section",
+                "--height",
+                str(y),
+                "--reference",
+                str(ref),
+                "--json",
+                str(js),
+            ]
+        )
+        == 0
+    )
     part = json.loads(js.read_text("utf-8"))["parts"]["shaft"]
     assert part["hausdorff"] < 1e-6 and part["discrete_frechet"] < 1e-3

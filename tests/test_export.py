@@ -48,7 +48,7 @@ def _image_pixels(g: pygltflib.GLTF2, i: int, tmp_path) -> np.ndarray:
 
     img = g.images[i]
     bv = g.bufferViews[img.bufferView]
-    data = g.binary_blob()[bv.byteOffset: bv.byteOffset + bv.byteLength]
+    data = g.binary_blob()[bv.byteOffset : bv.byteOffset + bv.byteLength]
     assert data[:8] == b"\x89PNG\r\n\x1a\n" and img.mimeType == "image/png"
     f = tmp_path / f"image{i}.png"
     f.write_bytes(data)
@@ -91,8 +91,12 @@ def test_glb_keeps_instancing_as_gpu_instances(temple_glb, tiny_temple):
 def test_glb_materials_textures_and_transform(temple_glb):
     _, g, scene = temple_glb
     assert len(g.images) >= 3
-    column_mats = [m for m in g.materials if m.pbrMetallicRoughness.baseColorTexture
-                   and m.pbrMetallicRoughness.baseColorTexture.extensions]
+    column_mats = [
+        m
+        for m in g.materials
+        if m.pbrMetallicRoughness.baseColorTexture
+        and m.pbrMetallicRoughness.baseColorTexture.extensions
+    ]
     assert column_mats, "the column material tiles its maps through KHR_texture_transform"
     for m in g.materials:
         pbr = m.pbrMetallicRoughness
@@ -153,8 +157,9 @@ def test_texcoords_are_flipped_and_plain_nodes_fallback(tmp_path):
         m.CreatePointsAttr([(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0)])
         m.CreateFaceVertexCountsAttr([4])
         m.CreateFaceVertexIndicesAttr([0, 1, 2, 3])
-        pv = UsdGeom.PrimvarsAPI(m).CreatePrimvar("st", Sdf.ValueTypeNames.TexCoord2fArray,
-                                                  UsdGeom.Tokens.vertex)
+        pv = UsdGeom.PrimvarsAPI(m).CreatePrimvar(
+            "st", Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.vertex
+        )
         pv.Set([Gf.Vec2f(*s) for s in st_in])
         UsdGeom.Xformable(m).AddTranslateOp().Set((3.0 * i, 0, 0))
     stage.Save()
@@ -167,27 +172,37 @@ def test_texcoords_are_flipped_and_plain_nodes_fallback(tmp_path):
     pos = _accessor(g, g.meshes[0].primitives[0].attributes.POSITION)
     uv = _accessor(g, g.meshes[0].primitives[0].attributes.TEXCOORD_0)
     for p, t in zip(pos, uv, strict=True):
-        k = int(np.argmin(np.linalg.norm(np.array([(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0)])
-                                         - p, axis=1)))
+        k = int(
+            np.argmin(
+                np.linalg.norm(np.array([(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0)]) - p, axis=1)
+            )
+        )
         assert_allclose(t, (st_in[k, 0], 1.0 - st_in[k, 1]))
-    xs = sorted(np.array(n.matrix).reshape(4, 4)[3, 0] if n.matrix else 0.0
-                for n in mesh_nodes)
+    xs = sorted(np.array(n.matrix).reshape(4, 4)[3, 0] if n.matrix else 0.0 for n in mesh_nodes)
     assert_allclose(xs, [0.0, 3.0, 6.0])
 
 
 @settings(max_examples=60, deadline=None)
-@given(st.floats(0.1, 20), st.floats(0.1, 20), st.floats(-180, 180), st.floats(-3, 3),
-       st.floats(-3, 3), st.floats(0, 1), st.floats(0, 1))
+@given(
+    st.floats(0.1, 20),
+    st.floats(0.1, 20),
+    st.floats(-180, 180),
+    st.floats(-3, 3),
+    st.floats(-3, 3),
+    st.floats(0, 1),
+    st.floats(0, 1),
+)
 def test_texture_transform_samples_the_same_texel(sx, sy, rot, tx, ty, s, t):
     """USD: st' = T + R(θ)·S·st, image row from the top 1 − t'. glTF (KHR_texture_transform
     spec matrix, uv = (s, 1 − t)): uv' = offset + [[c, s], [−s, c]]·S·uv, row from the top v'."""
-    tex = TextureRef("x.png", "rgb", "sRGB", st_scale=(sx, sy), st_rotation=rot,
-                     st_translation=(tx, ty))
+    tex = TextureRef(
+        "x.png", "rgb", "sRGB", st_scale=(sx, sy), st_rotation=rot, st_translation=(tx, ty)
+    )
     k = texture_transform(tex)
     th = math.radians(rot)
-    usd = np.array([tx, ty]) + np.array([[math.cos(th), -math.sin(th)],
-                                         [math.sin(th), math.cos(th)]]) @ (np.array([sx, sy])
-                                                                           * [s, t])
+    usd = np.array([tx, ty]) + np.array(
+        [[math.cos(th), -math.sin(th)], [math.sin(th), math.cos(th)]]
+    ) @ (np.array([sx, sy]) * [s, t])
     r = k.get("rotation", 0.0)
     kr = np.array([[math.cos(r), math.sin(r)], [-math.sin(r), math.cos(r)]])
     gl = np.array(k.get("offset", [0.0, 0.0])) + kr @ (np.array(k["scale"]) * [s, 1.0 - t])
@@ -195,9 +210,12 @@ def test_texture_transform_samples_the_same_texel(sx, sy, rot, tx, ty, s, t):
 
 
 @settings(max_examples=60, deadline=None)
-@given(st.lists(st.floats(-1, 1), min_size=4, max_size=4).filter(lambda q: np.linalg.norm(q) > .1),
-       st.lists(st.floats(0.1, 5), min_size=3, max_size=3),
-       st.lists(st.floats(-100, 100), min_size=3, max_size=3), st.booleans())
+@given(
+    st.lists(st.floats(-1, 1), min_size=4, max_size=4).filter(lambda q: np.linalg.norm(q) > 0.1),
+    st.lists(st.floats(0.1, 5), min_size=3, max_size=3),
+    st.lists(st.floats(-100, 100), min_size=3, max_size=3),
+    st.booleans(),
+)
 def test_trs_decompose_recomposes(q, scale, t, mirror):
     from scipy.spatial.transform import Rotation
 
@@ -226,8 +244,11 @@ def test_usdz_is_flat_valid_and_self_contained(tiny_temple, tmp_path):
     assert sum(n.endswith(".png") for n in names) >= 3
     stage = Usd.Stage.Open(str(out))
     assert not any(p.HasVariantSets() for p in stage.Traverse())
-    meshes = {p.GetName() for p in Usd.PrimRange.Stage(stage, Usd.TraverseInstanceProxies())
-              if p.IsA(UsdGeom.Mesh) and p.GetName().startswith("Shaft")}
+    meshes = {
+        p.GetName()
+        for p in Usd.PrimRange.Stage(stage, Usd.TraverseInstanceProxies())
+        if p.IsA(UsdGeom.Mesh) and p.GetName().startswith("Shaft")
+    }
     assert meshes and all(n.endswith("_engaged") for n in meshes)
     for prim in Usd.PrimRange.Stage(stage, Usd.TraverseInstanceProxies()):
         f = prim.GetAttribute("inputs:file")
@@ -243,13 +264,22 @@ def _cubes_stage(path, boxes):
     for i, (lo, hi) in enumerate(boxes):
         x0, y0, z0 = lo
         x1, y1, z1 = hi
-        pts = [(x0, y0, z0), (x1, y0, z0), (x1, y1, z0), (x0, y1, z0),
-               (x0, y0, z1), (x1, y0, z1), (x1, y1, z1), (x0, y1, z1)]
+        pts = [
+            (x0, y0, z0),
+            (x1, y0, z0),
+            (x1, y1, z0),
+            (x0, y1, z0),
+            (x0, y0, z1),
+            (x1, y0, z1),
+            (x1, y1, z1),
+            (x0, y1, z1),
+        ]
         m = UsdGeom.Mesh.Define(stage, f"/Col/Part{i}")
         m.CreatePointsAttr(pts)
         m.CreateFaceVertexCountsAttr([4] * 6)
-        m.CreateFaceVertexIndicesAttr([0, 3, 2, 1, 4, 5, 6, 7, 0, 1, 5, 4,
-                                       2, 3, 7, 6, 1, 2, 6, 5, 0, 4, 7, 3])
+        m.CreateFaceVertexIndicesAttr(
+            [0, 3, 2, 1, 4, 5, 6, 7, 0, 1, 5, 4, 2, 3, 7, 6, 1, 2, 6, 5, 0, 4, 7, 3]
+        )
     stage.Save()
     return path
 
@@ -272,10 +302,13 @@ def test_parts_union_into_one_closed_solid_with_hand_computed_volume(tmp_path, e
             root = ElementTree.fromstring(z.read("3D/3dmodel.model"))
         ns = {"m": "http://schemas.microsoft.com/3dmanufacturing/core/2015/02"}
         assert root.get("unit") == "millimeter"
-        v = np.array([[float(e.get(k)) for k in "xyz"]
-                      for e in root.iterfind(".//m:vertex", ns)])
-        t = np.array([[int(e.get(k)) for k in ("v1", "v2", "v3")]
-                      for e in root.iterfind(".//m:triangle", ns)])
+        v = np.array([[float(e.get(k)) for k in "xyz"] for e in root.iterfind(".//m:vertex", ns)])
+        t = np.array(
+            [
+                [int(e.get(k)) for k in ("v1", "v2", "v3")]
+                for e in root.iterfind(".//m:triangle", ns)
+            ]
+        )
         tri = v[t].astype(np.float32)
     # re-check the file's own numbers, welded by position as a slicer does
     uniq, inv = np.unique(tri.reshape(-1, 3), axis=0, return_inverse=True)
@@ -300,8 +333,12 @@ def test_temple_stl_one_closed_solid_per_column(tiny_temple, tmp_path):
 def test_cli_export_formats(tiny_temple, tmp_path, capsys):
     for ext in (".glb", ".gltf"):
         out = tmp_path / f"t{ext}"
-        assert main(["export", str(tiny_temple.root), "-o", str(out), "--variant",
-                     "finish=travertine"]) == 0
+        assert (
+            main(
+                ["export", str(tiny_temple.root), "-o", str(out), "--variant", "finish=travertine"]
+            )
+            == 0
+        )
         g = pygltflib.GLTF2().load(str(out))
         assert g.scenes[0].extras["requestedVariants"] == {"finish": "travertine"}
         # columns switch to travertine; the building keeps its (stucco) binding
@@ -309,18 +346,21 @@ def test_cli_export_formats(tiny_temple, tmp_path, capsys):
     assert "draw calls" in capsys.readouterr().out
 
 
-@pytest.mark.parametrize("args,needle", [
-    (["-o", "{tmp}/x.obj"], "one of .glb"),
-    (["-o", "{tmp}/x.glb", "--variant", "lod"], "SET=VALUE"),
-    (["-o", "{tmp}/x.glb", "--variant", "form=sideways"], "engaged, full"),
-    (["-o", "{tmp}/x.glb", "--lod", "ultra"], "--variant lod"),
-    (["-o", "{tmp}/x.stl", "--scale", "0"], "--scale"),
-    (["-o", "{tmp}/x.stl", "--scale", "1:0"], "--scale"),
-    (["-o", "{tmp}/x.glb", "--scale", "1:20"], "--scale"),
-    (["-o", "{tmp}/nodir/x.glb"], "does not exist"),
-    (["-o", "{tmp}/x.stl", "--compress", "draco"], "--compress"),
-    (["-o", "{tmp}/x.glb", "--compress", "zip"], "invalid choice"),
-])
+@pytest.mark.parametrize(
+    "args,needle",
+    [
+        (["-o", "{tmp}/x.obj"], "one of .glb"),
+        (["-o", "{tmp}/x.glb", "--variant", "lod"], "SET=VALUE"),
+        (["-o", "{tmp}/x.glb", "--variant", "form=sideways"], "engaged, full"),
+        (["-o", "{tmp}/x.glb", "--lod", "ultra"], "--variant lod"),
+        (["-o", "{tmp}/x.stl", "--scale", "0"], "--scale"),
+        (["-o", "{tmp}/x.stl", "--scale", "1:0"], "--scale"),
+        (["-o", "{tmp}/x.glb", "--scale", "1:20"], "--scale"),
+        (["-o", "{tmp}/nodir/x.glb"], "does not exist"),
+        (["-o", "{tmp}/x.stl", "--compress", "draco"], "--compress"),
+        (["-o", "{tmp}/x.glb", "--compress", "zip"], "invalid choice"),
+    ],
+)
 def test_cli_errors_are_one_line_and_write_nothing(tiny_temple, tmp_path, capsys, args, needle):
     args = [a.replace("{tmp}", str(tmp_path)) for a in args]
     try:
@@ -361,7 +401,7 @@ def test_draco_compressed_glb_decodes_to_the_same_geometry(tmp_path):
     for mp, md in zip(gp.meshes, gd.meshes, strict=True):
         ext = md.primitives[0].extensions["KHR_draco_mesh_compression"]
         bv = gd.bufferViews[ext["bufferView"]]
-        dec = DracoPy.decode(gd.binary_blob()[bv.byteOffset: bv.byteOffset + bv.byteLength])
+        dec = DracoPy.decode(gd.binary_blob()[bv.byteOffset : bv.byteOffset + bv.byteLength])
         want = _accessor(gp, mp.primitives[0].attributes.POSITION)
         tri_p = _canonical(want[_accessor(gp, mp.primitives[0].indices).reshape(-1, 3)])
         tri_d = _canonical(np.asarray(dec.points)[np.asarray(dec.faces)])

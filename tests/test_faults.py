@@ -32,8 +32,11 @@ def _can_mount() -> str | None:
 @contextlib.contextmanager
 def tmpfs(path: Path, size: str):
     path.mkdir(parents=True, exist_ok=True)
-    r = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size}", "tmpfs", str(path)],
-                       capture_output=True, text=True)
+    r = subprocess.run(
+        ["mount", "-t", "tmpfs", "-o", f"size={size}", "tmpfs", str(path)],
+        capture_output=True,
+        text=True,
+    )
     if r.returncode != 0:
         pytest.skip(f"cannot mount a tmpfs here: {r.stderr.strip()}")
     try:
@@ -96,8 +99,10 @@ def test_full_disk_preview_not_reported_written(tmp_path, capsys):
     assert _run(["shaft", "--flute-slices", "2", "-o", str(scene)], capsys)[0] == 0
     with tmpfs(tmp_path / "full", "1m") as full:
         _fill(full, 4096)
-        code, out, err = _run(["preview", str(scene), "-o", str(full / "p.png"),
-                               "--width", "400", "--height", "300"], capsys)
+        code, out, err = _run(
+            ["preview", str(scene), "-o", str(full / "p.png"), "--width", "400", "--height", "300"],
+            capsys,
+        )
         if "EGL" in err or "context" in err:
             pytest.skip(f"no headless OpenGL here: {err.strip()}")
         _one_line_refusal(code, err)
@@ -134,9 +139,11 @@ def test_read_only_folder_refused_before_work(tmp_path, capsys):
     with tmpfs(tmp_path / "ro", "1m") as ro:
         (ro / "keep.txt").write_text("x")
         subprocess.run(["mount", "-o", "remount,ro", str(ro)], check=True)
-        for argv in (["shaft", "-o", str(ro / "x.usda")],
-                     ["temple", "-o", str(ro / "T")],
-                     ["asset", "-o", str(ro / "A")]):
+        for argv in (
+            ["shaft", "-o", str(ro / "x.usda")],
+            ["temple", "-o", str(ro / "T")],
+            ["asset", "-o", str(ro / "A")],
+        ):
             t0 = time.perf_counter()
             code, _, err = _run(argv, capsys)
             _one_line_refusal(code, err)
@@ -154,9 +161,11 @@ def test_corrupt_texture_cache_is_recomputed(tmp_path, monkeypatch):
     copy_stone_textures(tmp_path / "a", "marble", 32, 5)
     entry = next((tmp_path / "cache" / "textures").iterdir())
     png = entry / "marble_basecolor.png"
-    for damage in (lambda: png.write_bytes(png.read_bytes()[: png.stat().st_size // 2]),
-                   lambda: png.write_bytes(b"garbage under the right name"),
-                   lambda: (entry / "marble_normal.png").unlink()):
+    for damage in (
+        lambda: png.write_bytes(png.read_bytes()[: png.stat().st_size // 2]),
+        lambda: png.write_bytes(b"garbage under the right name"),
+        lambda: (entry / "marble_normal.png").unlink(),
+    ):
         damage()
         out = copy_stone_textures(tmp_path / "b", "marble", 32, 5)
         for f in out:  # the asset gets the true maps, never the damaged cache entry
@@ -178,8 +187,7 @@ def _temple_ok(x: Path) -> None:
 def _kill_rebuilds(tmp_path: Path, kills: int, *, final_run: bool) -> None:
     x = tmp_path / "X"
     env = {**os.environ, "PYTHONPATH": str(REPO)}
-    cmd = [sys.executable, "-m", "ionic_usd.cli", "temple", "-o", str(x), "--texture-size",
-           "16"]
+    cmd = [sys.executable, "-m", "ionic_usd.cli", "temple", "-o", str(x), "--texture-size", "16"]
     t0 = time.perf_counter()
     assert main(cmd[3:]) == 0  # the first build in-process (no interpreter start-up)
     full = time.perf_counter() - t0 + 4.0  # + a new interpreter's imports
@@ -187,13 +195,14 @@ def _kill_rebuilds(tmp_path: Path, kills: int, *, final_run: bool) -> None:
     (x / "Textures").mkdir(exist_ok=True)  # the user's own folder (the temple shares the
     (x / "Textures" / "my_decal.png").write_bytes(b"decal")  # asset's maps, no Textures/)
     shared = tmp_path / "X" / "shared_overrides.usda"  # the user's layer, linked in
-    shared.write_text("#usda 1.0\n(\n    doc = \"my edits\"\n)\n")
+    shared.write_text('#usda 1.0\n(\n    doc = "my edits"\n)\n')
     (x / "overrides.usda").unlink()
     (x / "overrides.usda").symlink_to(shared.name)
     rng = random.Random(11)
     for _ in range(kills):
-        p = subprocess.Popen([*cmd, "--force"], env=env, stdout=subprocess.DEVNULL,
-                             stderr=subprocess.DEVNULL)
+        p = subprocess.Popen(
+            [*cmd, "--force"], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
+        )
         time.sleep(rng.uniform(0.3, full))
         p.send_signal(signal.SIGKILL)
         p.wait()
@@ -208,8 +217,7 @@ def _kill_rebuilds(tmp_path: Path, kills: int, *, final_run: bool) -> None:
 
         recover_folder(x)
     else:  # the next run completes and removes every temporary of the killed ones
-        subprocess.run([*cmd, "--force"], env=env, check=True, capture_output=True,
-                       timeout=300)
+        subprocess.run([*cmd, "--force"], env=env, check=True, capture_output=True, timeout=300)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["X"]
     _temple_ok(x)
     assert (x / "notes.txt").read_text() == "my notes"

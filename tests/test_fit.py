@@ -27,8 +27,9 @@ from ionic_usd.evaluate.sections import base_section, shaft_silhouette_section, 
 
 V0 = VoluteParams()
 # a volute clearly unlike the Vitruvian start: 10 % larger, tighter, rotated start, fewer turns
-TRUE_VOLUTE = V0.with_(capital_spiral_radius=0.26, c=V0.c * 1.1, d=V0.d * 0.97,
-                       start_angle=100.0, spiral_circuits=2.9)
+TRUE_VOLUTE = V0.with_(
+    capital_spiral_radius=0.26, c=V0.c * 1.1, d=V0.d * 0.97, start_angle=100.0, spiral_circuits=2.9
+)
 
 
 def _roundtrip(res, tmp_path):
@@ -42,8 +43,9 @@ def _roundtrip(res, tmp_path):
 # -- shaft (fast) ---------------------------------------------------------------------------------
 def test_fit_shaft_recovers_parameters(tmp_path):
     p = portunus_column_params()
-    true = dataclasses.replace(p.shaft, bottom_radius=0.5, top_radius=0.42, height=6.5,
-                               entasis=0.02)
+    true = dataclasses.replace(
+        p.shaft, bottom_radius=0.5, top_radius=0.42, height=6.5, entasis=0.02
+    )
     ref = shaft_silhouette_section(dataclasses.replace(p, shaft=true)) + [0.0, 0.3]
     res = fit_shaft(ref[::-1])  # either direction
     s = res.params
@@ -90,8 +92,14 @@ def test_fit_volute_log_spiral_recovers_own_parameters(tmp_path):
     assert how.hausdorff_after < 2e-3 * curve_length(ref)
 
 
-ARCS = V0.with_(volute_model="centred_arcs", capital_circle_radius=0.03, arc_square=0.035,
-                arc_ratio=0.5, start_angle=80.0, spiral_circuits=2.75)
+ARCS = V0.with_(
+    volute_model="centred_arcs",
+    capital_circle_radius=0.03,
+    arc_square=0.035,
+    arc_ratio=0.5,
+    start_angle=80.0,
+    spiral_circuits=2.75,
+)
 
 
 def test_fit_volute_centred_arcs_recovers_own_parameters():
@@ -194,8 +202,9 @@ def test_fit_base_noise_free(tmp_path):
     assert_allclose(base_section(col), base_section(res.column), atol=1e-9)
     assert col.base_params().scale == pytest.approx(1.0)
     # the convention: the top end meets the shaft (radius d), up to the fit error
-    assert base_section(col)[-1, 0] == pytest.approx(p.shaft.bottom_radius,
-                                                     abs=2 * res.after.hausdorff)
+    assert base_section(col)[-1, 0] == pytest.approx(
+        p.shaft.bottom_radius, abs=2 * res.after.hausdorff
+    )
 
 
 @pytest.mark.slow
@@ -203,8 +212,12 @@ def test_fit_base_noise_free(tmp_path):
 def test_fit_base_given_modules(measure):
     p = portunus_column_params()
     ref = base_section(dataclasses.replace(p, base="G2"))
-    res = fit_base(ref, modules=[2, 2, 4, 4, 4, 2, 4, 4, 2, 4, 4, 4, 4], measure=measure,
-                   initial=dataclasses.replace(p, base="G1"))
+    res = fit_base(
+        ref,
+        modules=[2, 2, 4, 4, 4, 2, 4, 4, 2, 4, 4, 4, 4],
+        measure=measure,
+        initial=dataclasses.replace(p, base="G1"),
+    )
     assert res.params.count(",") == 12
     assert res.after.hausdorff_pct < 0.5
     assert res.after.percent(measure) < res.before.percent(measure)

@@ -17,9 +17,17 @@ def _scan(diameter: float, n: int, seed: int, y_range=None, holes: int = 4):
     p = portunus_column_params(lower_diameter=diameter)
     bh, length = p.base_params().height, p.shaft_params().length
     hidden = ((0.0, 99.0), (bh, 9.0), (bh + length, 9.0))  # the ground and the joints
-    pts, rot, t = synthetic_scan(build_column(p).parts(), n=n, noise=5e-4, holes=holes,
-                                 missing_sector=(40.0, 100.0), hidden=hidden, seed=seed,
-                                 y_range=y_range, hole_radius=0.05)
+    pts, rot, t = synthetic_scan(
+        build_column(p).parts(),
+        n=n,
+        noise=5e-4,
+        holes=holes,
+        missing_sector=(40.0, 100.0),
+        hidden=hidden,
+        seed=seed,
+        y_range=y_range,
+        hole_radius=0.05,
+    )
     return p, pts, rot, t
 
 
@@ -91,8 +99,9 @@ def test_read_scan_formats_and_errors(tmp_path):
     xyz = tmp_path / "a.xyz"
     xyz.write_text("x y z\n" + "\n".join(" ".join(map(repr, r)) for r in pts.tolist()))
     np.testing.assert_allclose(read_scan(xyz), pts)
-    np.testing.assert_allclose(read_scan(_write_ply(tmp_path / "a.ply", pts), scale=0.001),
-                               pts * 0.001)
+    np.testing.assert_allclose(
+        read_scan(_write_ply(tmp_path / "a.ply", pts), scale=0.001), pts * 0.001
+    )
     with pytest.raises(ReferenceCurveError):
         read_scan(tmp_path / "missing.ply")
     bad = tmp_path / "b.csv"
@@ -124,8 +133,9 @@ def _column_points(meshes, n, seed, **kw):
     return (pts - t) @ rot
 
 
-@pytest.mark.parametrize("diameter,base,square", [(0.8, "attic_bezier_plinth", True),
-                                                  (1.2, "attic_bezier", False)])
+@pytest.mark.parametrize(
+    "diameter,base,square", [(0.8, "attic_bezier_plinth", True), (1.2, "attic_bezier", False)]
+)
 def test_base_meridian_follows_the_visible_profile(diameter, base, square):
     """The meridian at the plinth's face normals, from a noisy scan with holes and a missing
     sector, lies within 0.6 of a height bin (1/60 of the base's height) + 2 mm of the true
@@ -140,11 +150,13 @@ def test_base_meridian_follows_the_visible_profile(diameter, base, square):
     p = dataclasses.replace(portunus_column_params(lower_diameter=diameter), base=base)
     bh = p.base_params().height
     mesh = {"Base": build_base_part(p)}
-    pts = _column_points(mesh, 20_000, 2, noise=5e-4, holes=3, missing_sector=(40.0, 100.0),
-                         hole_radius=0.05)
+    pts = _column_points(
+        mesh, 20_000, 2, noise=5e-4, holes=3, missing_sector=(40.0, 100.0), hole_radius=0.05
+    )
     mer = base_meridian(pts, 0.0, bh)
-    truth = base_meridian(_column_points(mesh, 100_000, 5, noise=0.0, holes=0,
-                                         missing_sector=None), 0.0, bh)
+    truth = base_meridian(
+        _column_points(mesh, 100_000, 5, noise=0.0, holes=0, missing_sector=None), 0.0, bh
+    )
     assert hausdorff_distance(mer, truth) < 0.6 * bh / 60 + 0.002
     assert mer[0, 1] == 0.0 and mer[-1, 1] == pytest.approx(bh)
     assert has_square_plinth(pts, 0.0, bh) is square
@@ -170,9 +182,16 @@ def test_scan_fits_the_base_and_names_the_rebuilt_parts(diameter, base):
     p = dataclasses.replace(portunus_column_params(lower_diameter=diameter), base=base)
     bh, length = p.base_params().height, p.shaft_params().length
     hidden = ((0.0, 99.0), (bh, 9.0), (bh + length, 9.0))
-    pts, rot, t = synthetic_scan(build_column(p).parts(), n=120_000, noise=5e-4, holes=4,
-                                 missing_sector=(40.0, 100.0), hidden=hidden, seed=4,
-                                 hole_radius=0.05)
+    pts, rot, t = synthetic_scan(
+        build_column(p).parts(),
+        n=120_000,
+        noise=5e-4,
+        holes=4,
+        missing_sector=(40.0, 100.0),
+        hidden=hidden,
+        seed=4,
+        hole_radius=0.05,
+    )
     fit = fit_column_scan(pts)
     s = fit.summary()
     parts = s["parts"]
@@ -183,11 +202,19 @@ def test_scan_fits_the_base_and_names_the_rebuilt_parts(diameter, base):
     b = fit.base.column
     h_fit = b.base_params().height
     assert h_fit == pytest.approx(bh, rel=0.10)
-    truth = base_meridian(_column_points({"Base": build_base_part(p)}, 100_000, 5, noise=0.0,
-                                         holes=0, missing_sector=None), 0.0, bh)
+    truth = base_meridian(
+        _column_points(
+            {"Base": build_base_part(p)}, 100_000, 5, noise=0.0, holes=0, missing_sector=None
+        ),
+        0.0,
+        bh,
+    )
     fm = build_base_part(b)
-    fitted = base_meridian(_column_points({"Base": fm}, 100_000, 6, noise=0.0, holes=0,
-                                          missing_sector=None), 0.0, b.base_params().height)
+    fitted = base_meridian(
+        _column_points({"Base": fm}, 100_000, 6, noise=0.0, holes=0, missing_sector=None),
+        0.0,
+        b.base_params().height,
+    )
     # the fit is at the fitted diameter (±2 %): compare in units of the true one
     k = diameter / fit.diameter
     assert hausdorff_distance(fitted * k, truth[truth[:, 1] <= h_fit * k]) < 0.010 + 0.02 * bh

@@ -153,13 +153,16 @@ def test_replace_never_keeps_stale_triangles():
     from ionic_usd.geometry.mesh import triangulate_fan
 
     expected = triangulate_fan(m.face_vertex_counts, flipped)
-    for other in (dataclasses.replace(m, face_vertex_indices=flipped),
-                  m.with_(face_vertex_indices=flipped)):
+    for other in (
+        dataclasses.replace(m, face_vertex_indices=flipped),
+        m.with_(face_vertex_indices=flipped),
+    ):
         np.testing.assert_array_equal(other.triangles, expected)
         assert not np.array_equal(other.triangles, before)
 
 
 # -- indexed normals -------------------------------------------------------------------------
+
 
 def _lathe_with_groups():
     from ionic_usd.geometry.curves import revolve
@@ -193,8 +196,11 @@ def test_indexed_normals_survive_merge_transform_weld():
     c = smooth_normals(m, groups)  # faceVarying, not indexed
     ab = merge([a, b, c])
     assert ab.normals_indices is not None
-    assert_allclose(ab.corner_normals(), np.concatenate(
-        [a.corner_normals(), b.corner_normals(), c.corner_normals()]), atol=1e-6)
+    assert_allclose(
+        ab.corner_normals(),
+        np.concatenate([a.corner_normals(), b.corner_normals(), c.corner_normals()]),
+        atol=1e-6,
+    )
     mirror = np.diag([-1.0, 1.0, 1.0, 1.0])
     t = transform(a, mirror)
     assert t.normals_indices is not None

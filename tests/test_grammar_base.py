@@ -56,18 +56,26 @@ G2_EXPECTED = _v1(
     (0.044, (0.030, 1, 0.044)),
     (0.044, (0.053, -1, 0)),
 )
-B_EXPECTED = BezierBase((
-    BezierModule((ControlPoint(1, 0), ControlPoint(2, 0), ControlPoint(2, 1),
-                  ControlPoint(1, 1))),
-    BezierModule((ControlPoint(1, 0), ControlPoint(1, 1)), continuous=True),
-))
+B_EXPECTED = BezierBase(
+    (
+        BezierModule(
+            (ControlPoint(1, 0), ControlPoint(2, 0), ControlPoint(2, 1), ControlPoint(1, 1))
+        ),
+        BezierModule((ControlPoint(1, 0), ControlPoint(1, 1)), continuous=True),
+    )
+)
 
 
 # -- expected values ------------------------------------------------------------------------
 @pytest.mark.parametrize(
     "text, expected",
-    [(G1, G1_EXPECTED), (G2, G2_EXPECTED), (B_LETTER, B_EXPECTED), (B_PAPER, B_EXPECTED),
-     ("M(0, 0.1, -1, 0.1), M(0.1, 0.1, 1, 0.2, 0.1, 1, 0.1)", G1_EXPECTED)],
+    [
+        (G1, G1_EXPECTED),
+        (G2, G2_EXPECTED),
+        (B_LETTER, B_EXPECTED),
+        (B_PAPER, B_EXPECTED),
+        ("M(0, 0.1, -1, 0.1), M(0.1, 0.1, 1, 0.2, 0.1, 1, 0.1)", G1_EXPECTED),
+    ],
 )
 def test_presets_parse_to_hand_written_floors(text, expected):
     assert parse_base_grammar(text) == expected
@@ -76,8 +84,9 @@ def test_presets_parse_to_hand_written_floors(text, expected):
 def test_g2_module_heights_sum_by_hand():
     g = parse_base_grammar(G2)
     assert [len(m.floors) for m in g.modules] == [1, 1, 2, 1, 2, 1, 2, 1, 1]
-    assert g.height == pytest.approx(0.12 + 0 + 0.092 + 0.015 + 0.045 + 0.015 + 0.076 + 0.030
-                                     + 0.053)
+    assert g.height == pytest.approx(
+        0.12 + 0 + 0.092 + 0.015 + 0.045 + 0.015 + 0.076 + 0.030 + 0.053
+    )
 
 
 @pytest.mark.parametrize("text", [G1, G2, B_LETTER])
@@ -100,19 +109,30 @@ def test_token_offsets_point_into_the_source():
     g = parse_base_v1(G1)
     f = g.modules[1].floors[0]
     off, ln = f.r_top_at
-    assert G1[off:off + ln] == "R0.2"
+    assert G1[off : off + ln] == "R0.2"
     b = parse_base_v2(B_LETTER)
     off, ln = b.modules[0].points[2].h_at
-    assert B_LETTER[off:off + ln] == "H1"
+    assert B_LETTER[off : off + ln] == "H1"
     assert B_LETTER.index("R2 H1") + 3 == off
 
 
 # -- detection --------------------------------------------------------------------------------
 @pytest.mark.parametrize(
     "text, version",
-    [(G1, 1), (G2, 1), (B_LETTER, 2), (B_PAPER, 2), ("R0 H1 C1 R1", 1), ("R0 H0 R1 H1", 2),
-     ("R0 H0 R1 H1 C1", 2), ("M(0, 0.1, -1, 0.1)", 1), ("M(1,0,1,1)", 1), ("M(1,0,1,1,1)", 2),
-     ("M(1,0,2,0,2,1,1,1)", 2), ("M(1,0,0.5,1)", 2)],
+    [
+        (G1, 1),
+        (G2, 1),
+        (B_LETTER, 2),
+        (B_PAPER, 2),
+        ("R0 H1 C1 R1", 1),
+        ("R0 H0 R1 H1", 2),
+        ("R0 H0 R1 H1 C1", 2),
+        ("M(0, 0.1, -1, 0.1)", 1),
+        ("M(1,0,1,1)", 1),
+        ("M(1,0,1,1,1)", 2),
+        ("M(1,0,2,0,2,1,1,1)", 2),
+        ("M(1,0,0.5,1)", 2),
+    ],
 )
 def test_version_detection(text, version):
     assert detect_base_version(text) == version
@@ -132,8 +152,13 @@ def test_version_can_be_forced():
     [
         ("R0 H0.1 C2 R0.1", 1, 9, 1, "curvature"),
         ("R0 H0.1 C0.5 R0.1", 1, 9, 1, "curvature"),
-        (G1.replace("H0.1 C1 R0.2", "H-0.1 C1 R0.2"), 1, G1.index("H0.1 C1 R0.2") + 1, 2,
-         "negative height"),
+        (
+            G1.replace("H0.1 C1 R0.2", "H-0.1 C1 R0.2"),
+            1,
+            G1.index("H0.1 C1 R0.2") + 1,
+            2,
+            "negative height",
+        ),
         ("R0 Hx C1 R1", 1, 4, 1, "not a number"),
         ("R0 H C1 R1", 1, 3, 1, "missing height"),
         ("R0 H0.1 C1", 1, 10, 1, "ends early"),
@@ -178,8 +203,9 @@ def test_error_message_names_module_and_renders_source():
     with pytest.raises(GrammarError) as info:
         parse_base_grammar(G2.replace("C-1 R0.026", "C-2 R0.026"))
     text = str(info.value)
-    assert "module 5" in text and "base v1" in text and G2.replace("C-1 R0.026", "C-2 R0.026") \
-        in text
+    assert (
+        "module 5" in text and "base v1" in text and G2.replace("C-1 R0.026", "C-2 R0.026") in text
+    )
 
 
 def test_direct_construction_is_validated():
@@ -198,9 +224,16 @@ def test_lexer_tokens_carry_letter_text_and_offset():
     toks = tokenize("R0.12 H-1e-3,R5 M(1, 2)")
     items = [(t.kind, t.letter, t.text, t.offset) for t in toks]
     assert items == [
-        ("item", "R", "0.12", 0), ("item", "H", "-1e-3", 6), (",", "", "", 12),
-        ("item", "R", "5", 13), ("item", "M", "", 16), ("(", "", "", 17),
-        ("item", "", "1", 18), (",", "", "", 19), ("item", "", "2", 21), (")", "", "", 22),
+        ("item", "R", "0.12", 0),
+        ("item", "H", "-1e-3", 6),
+        (",", "", "", 12),
+        ("item", "R", "5", 13),
+        ("item", "M", "", 16),
+        ("(", "", "", 17),
+        ("item", "", "1", 18),
+        (",", "", "", 19),
+        ("item", "", "2", 21),
+        (")", "", "", 22),
     ]
 
 
@@ -225,19 +258,28 @@ def test_random_strings_raise_only_grammar_errors(text):
 
 
 @settings(max_examples=300, deadline=None)
-@given(st.sampled_from([G1, G2, B_LETTER, B_PAPER]),
-       st.lists(st.tuples(st.integers(0, 400), st.sampled_from(["del", "ins", "rep"]),
-                          st.sampled_from(list(_ALPHABET))), min_size=1, max_size=4))
+@given(
+    st.sampled_from([G1, G2, B_LETTER, B_PAPER]),
+    st.lists(
+        st.tuples(
+            st.integers(0, 400),
+            st.sampled_from(["del", "ins", "rep"]),
+            st.sampled_from(list(_ALPHABET)),
+        ),
+        min_size=1,
+        max_size=4,
+    ),
+)
 def test_mutated_presets_raise_only_grammar_errors(base, edits):
     text = base
     for pos, op, ch in edits:
         pos %= len(text) + 1
         if op == "del":
-            text = text[:pos] + text[pos + 1:]
+            text = text[:pos] + text[pos + 1 :]
         elif op == "ins":
             text = text[:pos] + ch + text[pos:]
         else:
-            text = text[:pos] + ch + text[pos + 1:]
+            text = text[:pos] + ch + text[pos + 1 :]
     _parse_all(text)
 
 
@@ -246,17 +288,30 @@ _pos = st.floats(0, 2, allow_nan=False).map(lambda x: round(x, 4))
 
 
 @settings(max_examples=100, deadline=None)
-@given(st.lists(st.tuples(_num, st.lists(st.tuples(_pos, st.sampled_from([1, -1]), _num),
-                                         min_size=1, max_size=3)), min_size=1, max_size=4))
+@given(
+    st.lists(
+        st.tuples(
+            _num, st.lists(st.tuples(_pos, st.sampled_from([1, -1]), _num), min_size=1, max_size=3)
+        ),
+        min_size=1,
+        max_size=4,
+    )
+)
 def test_generated_v1_grammars_round_trip(mods):
     g = _v1(*[(r0, *floors) for r0, floors in mods])
     assert parse_base_grammar(g.to_string()) == g
 
 
 @settings(max_examples=100, deadline=None)
-@given(st.lists(st.tuples(st.lists(st.tuples(_num, _pos), min_size=2, max_size=5),
-                          st.booleans()), min_size=1, max_size=4))
+@given(
+    st.lists(
+        st.tuples(st.lists(st.tuples(_num, _pos), min_size=2, max_size=5), st.booleans()),
+        min_size=1,
+        max_size=4,
+    )
+)
 def test_generated_v2_grammars_round_trip(mods):
-    g = BezierBase(tuple(BezierModule(tuple(ControlPoint(r, h) for r, h in pts), c)
-                         for pts, c in mods))
+    g = BezierBase(
+        tuple(BezierModule(tuple(ControlPoint(r, h) for r, h in pts), c) for pts, c in mods)
+    )
     assert parse_base_grammar(g.to_string()) == g

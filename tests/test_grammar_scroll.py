@@ -18,12 +18,26 @@ from ionic_usd.grammar.scroll import (
 )
 
 S1 = "R0.7 P0.05, R0.7 P0.4, R0.8 P0.5, R0.7 P0.6, R0.7 P0.95"
-S2 = ("R0.7 P0.05, R0.6 P0.1, R0.6 P0.3, R0.7 P0.35, R0.6 P0.4, R0.6 P0.45, R0.7 P0.5, "
-      "R0.6 P0.55, R0.6 P0.6, R0.7 P0.65, R0.6 P0.7, R0.6 P0.9, R0.7 P0.95")
+S2 = (
+    "R0.7 P0.05, R0.6 P0.1, R0.6 P0.3, R0.7 P0.35, R0.6 P0.4, R0.6 P0.45, R0.7 P0.5, "
+    "R0.6 P0.55, R0.6 P0.6, R0.7 P0.65, R0.6 P0.7, R0.6 P0.9, R0.7 P0.95"
+)
 S1_RINGS = [(0.7, 0.05), (0.7, 0.4), (0.8, 0.5), (0.7, 0.6), (0.7, 0.95)]
-S2_RINGS = [(0.7, 0.05), (0.6, 0.1), (0.6, 0.3), (0.7, 0.35), (0.6, 0.4), (0.6, 0.45),
-            (0.7, 0.5), (0.6, 0.55), (0.6, 0.6), (0.7, 0.65), (0.6, 0.7), (0.6, 0.9),
-            (0.7, 0.95)]
+S2_RINGS = [
+    (0.7, 0.05),
+    (0.6, 0.1),
+    (0.6, 0.3),
+    (0.7, 0.35),
+    (0.6, 0.4),
+    (0.6, 0.45),
+    (0.7, 0.5),
+    (0.6, 0.55),
+    (0.6, 0.6),
+    (0.7, 0.65),
+    (0.6, 0.7),
+    (0.6, 0.9),
+    (0.7, 0.95),
+]
 
 
 @pytest.mark.parametrize("text, rings", [(S1, S1_RINGS), (S2, S2_RINGS)])
@@ -49,8 +63,13 @@ def test_unknown_preset_lists_names():
 
 @pytest.mark.parametrize(
     "text",
-    ["R0.7 P0.05,R0.8 P1", " R0.7\tP0.05 ,\nR0.8  P1 ", "r0.7 p0.05, R.8 P1.0",
-     "R0.7P0.05,R8e-1P1", "R+0.7 P5e-2, R0.80 P1"],
+    [
+        "R0.7 P0.05,R0.8 P1",
+        " R0.7\tP0.05 ,\nR0.8  P1 ",
+        "r0.7 p0.05, R.8 P1.0",
+        "R0.7P0.05,R8e-1P1",
+        "R+0.7 P5e-2, R0.80 P1",
+    ],
 )
 def test_whitespace_case_and_number_forms(text):
     assert parse_scroll(text).rings == (ScrollRing(0.7, 0.05), ScrollRing(0.8, 1.0))
@@ -94,7 +113,7 @@ def test_pointed_errors(text, token, module, message):
     assert e.length == len(token)
     src_line, caret_line = e.get_context().splitlines()
     assert caret_line.index("^") - 2 == start
-    assert src_line[2 + start:2 + start + len(token)] == token
+    assert src_line[2 + start : 2 + start + len(token)] == token
     assert f"module {module}" in str(e)
 
 
@@ -134,9 +153,13 @@ def test_fuzz_any_text(text):
 
 ring_lists = st.lists(
     st.tuples(st.floats(0, 2, allow_nan=False), st.floats(0, 1, allow_nan=False)),
-    min_size=1, max_size=12,
-).map(lambda xs: [ScrollRing(r, p) for r, p in
-                  zip([x[0] for x in xs], sorted(x[1] for x in xs), strict=True)])
+    min_size=1,
+    max_size=12,
+).map(
+    lambda xs: [
+        ScrollRing(r, p) for r, p in zip([x[0] for x in xs], sorted(x[1] for x in xs), strict=True)
+    ]
+)
 
 
 @settings(max_examples=200, deadline=None)

@@ -23,8 +23,9 @@ from ionic_usd.errors import GrammarError, ParameterError
 from ionic_usd.geometry.analysis import inspect_mesh
 from ionic_usd.geometry.mesh import Mesh
 
-FAST = settings(max_examples=20, deadline=None, derandomize=True,
-                suppress_health_check=[HealthCheck.too_slow])
+FAST = settings(
+    max_examples=20, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow]
+)
 SWEEP = settings(max_examples=600, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 
 # numbers as a user types them: mostly in the documented ranges (so many grammars build), one
@@ -50,8 +51,11 @@ def base_v1(draw) -> str:
     for _ in range(draw(st.integers(1, 4))):
         parts = [f"R{_fmt(draw(_num))}"]
         for _ in range(draw(st.integers(1, 3))):
-            parts += [f"H{_fmt(draw(_h))}", f"C{draw(st.sampled_from([1, -1]))}",
-                      f"R{_fmt(draw(_num))}"]
+            parts += [
+                f"H{_fmt(draw(_h))}",
+                f"C{draw(st.sampled_from([1, -1]))}",
+                f"R{_fmt(draw(_num))}",
+            ]
         mods.append(" ".join(parts))
     return ", ".join(mods)
 
@@ -68,10 +72,23 @@ def base_v2(draw) -> str:
 @st.composite
 def scroll(draw) -> str:
     n = draw(st.integers(1, 8))
-    ps = sorted(draw(st.lists(st.floats(0, 1, allow_nan=False).map(lambda x: round(x, 3)),
-                              min_size=n, max_size=n)))
-    rs = draw(st.lists(st.one_of(st.floats(0, 2, allow_nan=False).map(lambda x: round(x, 3)),
-                                 st.sampled_from([0.0, 2.0, 1e-9])), min_size=n, max_size=n))
+    ps = sorted(
+        draw(
+            st.lists(
+                st.floats(0, 1, allow_nan=False).map(lambda x: round(x, 3)), min_size=n, max_size=n
+            )
+        )
+    )
+    rs = draw(
+        st.lists(
+            st.one_of(
+                st.floats(0, 2, allow_nan=False).map(lambda x: round(x, 3)),
+                st.sampled_from([0.0, 2.0, 1e-9]),
+            ),
+            min_size=n,
+            max_size=n,
+        )
+    )
     return ", ".join(f"R{_fmt(r)} P{_fmt(p)}" for r, p in zip(rs, ps, strict=True))
 
 
@@ -129,8 +146,7 @@ def test_any_text_is_a_solid_or_a_grammar_error(text):
     _scroll_property(text)
 
 
-@pytest.mark.parametrize("text", ["R0.1 H0 R0.2 H0", "R0.074 H4 R0.074 H0.05",
-                                  "R1e308 H1 R0 H2"])
+@pytest.mark.parametrize("text", ["R0.1 H0 R0.2 H0", "R0.074 H4 R0.074 H0.05", "R1e308 H1 R0 H2"])
 def test_issue_11_bases_are_refused_naming_the_base(text):
     with pytest.raises(ParameterError, match="base"):
         build_base_part(ColumnParams(base=text, lod="low"))

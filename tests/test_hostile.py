@@ -34,54 +34,99 @@ CASES: list[tuple[list[str], dict[str, bytes | None], str]] = [
     (["shaft", "-o", "afile/x.usda"], {"afile": b"x"}, "afile is a file"),
     (["temple", "-o", "afile/T"], {"afile": b"x"}, "afile is a file"),
     (["shaft", "-o", "d.usda", "--force"], {"d.usda": None}, "folder"),
-    (["preview", "scene.usda", "-o", "p.png", "--force"],
-     {"p.png": None, "scene.usda": b"#usda 1.0\n"}, "folder"),
+    (
+        ["preview", "scene.usda", "-o", "p.png", "--force"],
+        {"p.png": None, "scene.usda": b"#usda 1.0\n"},
+        "folder",
+    ),
     (["temple", "-o", "T", "--force"], {"T": b"a file"}, "existing file"),
     # TOML: types, encoding, nesting, ranges
     (["column", "--config", "bin.toml"], {"bin.toml": bytes(range(256)) * 4}, "UTF-8"),
     (["column", "--config", "a.toml"], {"a.toml": b'[column]\nlod = ["high"]\n'}, "lod"),
     (["column", "--config", "a.toml"], {"a.toml": b"[column]\nbase = 5\n"}, "base"),
-    (["column", "--config", "a.toml"], {"a.toml": b'[column]\nbase_height = "x"\n'},
-     "base_height"),
+    (["column", "--config", "a.toml"], {"a.toml": b'[column]\nbase_height = "x"\n'}, "base_height"),
     (["column", "--config", "a.toml"], {"a.toml": b"column = 5\n"}, "column"),
     (["column", "--config", "a.toml"], {"a.toml": b"[shaft]\nflutes = true\n"}, "flutes"),
     (["column", "--config", "a.toml"], {"a.toml": b"[shaft]\nheight = 1e308\n"}, "height"),
     (["column", "--config", "a.toml"], {"a.toml": b"[shaft]\nheight = nan\n"}, "height"),
     (["column", "--config", "a.toml"], {"a.toml": b"[volute]\nthickness = inf\n"}, "thickness"),
-    (["column", "--config", "a.toml"], {"a.toml": b"[capital]\nring_segments = 1e7\n"},
-     "ring_segments"),
-    (["column", "--config", "a.toml"], {"a.toml": b"[capital]\nspiral_samples = 100000000\n"},
-     "spiral_samples"),
-    (["column", "--config", "a.toml"], {"a.toml": b"a = " + b"[" * 5000 + b"]" * 5000 + b"\n"},
-     "nested"),
+    (
+        ["column", "--config", "a.toml"],
+        {"a.toml": b"[capital]\nring_segments = 1e7\n"},
+        "ring_segments",
+    ),
+    (
+        ["column", "--config", "a.toml"],
+        {"a.toml": b"[capital]\nspiral_samples = 100000000\n"},
+        "spiral_samples",
+    ),
+    (
+        ["column", "--config", "a.toml"],
+        {"a.toml": b"a = " + b"[" * 5000 + b"]" * 5000 + b"\n"},
+        "nested",
+    ),
     (["column", "--config", "missing.toml"], {}, "missing.toml"),
     (["column", "--config", "dir.toml"], {"dir.toml": None}, "folder"),
     (["temple", "--config", "a.toml", "-o", "T"], {"a.toml": b"temple = 5\n"}, "temple"),
     (["temple", "--config", "a.toml", "-o", "T"], {"a.toml": b"podium = 5\n"}, "podium"),
     (["temple", "--config", "a.toml", "-o", "T"], {"a.toml": b"[temple]\nname = 5\n"}, "name"),
-    (["temple", "--config", "a.toml", "-o", "T"], {"a.toml": b"[podium]\nheight = 1e300\n"},
-     "podium.height"),
-    (["temple", "--config", "a.toml", "-o", "T"],
-     {"a.toml": b'[[hypothesis]]\nid = "h"\ndescription = ""\nsources = []\ncertainty = "low"\n'
-                b'changes = { "column.flute_count" = "abc" }\n'}, "column.flute_count"),
-    (["temple", "--config", "a.toml", "-o", "T"],
-     {"a.toml": b'[[hypothesis]]\nid = "../../ESCAPED"\ndescription = ""\nsources = []\n'
-                b'certainty = "low"\nchanges = { "roof.tympanum_ratio" = 8.0 }\n'}, "id"),
-    (["temple", "--config", "a.toml", "-o", "T"],
-     {"a.toml": b'[[hypothesis]]\nid = "a/b"\ndescription = ""\nsources = []\n'
-                b'certainty = "low"\nchanges = { "roof.tympanum_ratio" = 8.0 }\n'}, "id"),
-    (["temple", "--config", "a.toml", "-o", "T"],
-     {"a.toml": b'[[hypothesis]]\nid = "a-b"\ndescription = ""\nsources = []\n'
-                b'certainty = "low"\nchanges = { "roof.tympanum_ratio" = 8.0 }\n'
-                b'[[hypothesis]]\nid = "a_b"\ndescription = ""\nsources = []\n'
-                b'certainty = "low"\nchanges = { "roof.tympanum_ratio" = 7.0 }\n'}, "a-b"),
-    (["temple", "--config", "a.toml", "-o", "T"],
-     {"a.toml": b'[[cuboid]]\nname = "a-b"\nmin = [0, 0, 0]\nmax = [1, 1, 1]\nlayer = "cella"\n'
-                b'[[cuboid]]\nname = "a_b"\nmin = [2, 0, 0]\nmax = [3, 1, 1]\nlayer = "cella"\n'},
-     "a-b"),
-    (["temple", "--config", "a.toml", "-o", "T"],
-     {"a.toml": b'[[cuboid]]\nname = "big"\nmin = [-1e300, 0, 0]\nmax = [1e300, 1, 1]\n'
-                b'layer = "cella"\n'}, "min"),
+    (
+        ["temple", "--config", "a.toml", "-o", "T"],
+        {"a.toml": b"[podium]\nheight = 1e300\n"},
+        "podium.height",
+    ),
+    (
+        ["temple", "--config", "a.toml", "-o", "T"],
+        {
+            "a.toml": b'[[hypothesis]]\nid = "h"\ndescription = ""\nsources = []\n'
+            b'certainty = "low"\n'
+            b'changes = { "column.flute_count" = "abc" }\n'
+        },
+        "column.flute_count",
+    ),
+    (
+        ["temple", "--config", "a.toml", "-o", "T"],
+        {
+            "a.toml": b'[[hypothesis]]\nid = "../../ESCAPED"\ndescription = ""\nsources = []\n'
+            b'certainty = "low"\nchanges = { "roof.tympanum_ratio" = 8.0 }\n'
+        },
+        "id",
+    ),
+    (
+        ["temple", "--config", "a.toml", "-o", "T"],
+        {
+            "a.toml": b'[[hypothesis]]\nid = "a/b"\ndescription = ""\nsources = []\n'
+            b'certainty = "low"\nchanges = { "roof.tympanum_ratio" = 8.0 }\n'
+        },
+        "id",
+    ),
+    (
+        ["temple", "--config", "a.toml", "-o", "T"],
+        {
+            "a.toml": b'[[hypothesis]]\nid = "a-b"\ndescription = ""\nsources = []\n'
+            b'certainty = "low"\nchanges = { "roof.tympanum_ratio" = 8.0 }\n'
+            b'[[hypothesis]]\nid = "a_b"\ndescription = ""\nsources = []\n'
+            b'certainty = "low"\nchanges = { "roof.tympanum_ratio" = 7.0 }\n'
+        },
+        "a-b",
+    ),
+    (
+        ["temple", "--config", "a.toml", "-o", "T"],
+        {
+            "a.toml": b'[[cuboid]]\nname = "a-b"\nmin = [0, 0, 0]\nmax = [1, 1, 1]\n'
+            b'layer = "cella"\n'
+            b'[[cuboid]]\nname = "a_b"\nmin = [2, 0, 0]\nmax = [3, 1, 1]\nlayer = "cella"\n'
+        },
+        "a-b",
+    ),
+    (
+        ["temple", "--config", "a.toml", "-o", "T"],
+        {
+            "a.toml": b'[[cuboid]]\nname = "big"\nmin = [-1e300, 0, 0]\nmax = [1e300, 1, 1]\n'
+            b'layer = "cella"\n'
+        },
+        "min",
+    ),
     # non-finite or absurd numbers on the command line
     (["shaft", "--height", "1e308"], {}, "height"),
     (["shaft", "--top-radius", "1e308"], {}, "top_radius"),
@@ -93,16 +138,25 @@ CASES: list[tuple[list[str], dict[str, bytes | None], str]] = [
     (["column", "--base", "R0.074 H4 R0.074 H0.05", "-o", "c.usda"], {}, "inside out or flat"),
     # resources: refused with the estimate and the limit, before any allocation
     (["shaft", "--flute-slices", "100000"], {}, "triangles"),
-    (["column", "--config", "a.toml"],
-     {"a.toml": b'[column]\nlod = "custom"\n[shaft]\nflute_slices = 100000\n'}, "limit"),
-    (["column", "--config", "a.toml"],
-     {"a.toml": b'[column]\nlod = "custom"\n[capital]\nspiral_samples = 900000\n'}, "limit"),
+    (
+        ["column", "--config", "a.toml"],
+        {"a.toml": b'[column]\nlod = "custom"\n[shaft]\nflute_slices = 100000\n'},
+        "limit",
+    ),
+    (
+        ["column", "--config", "a.toml"],
+        {"a.toml": b'[column]\nlod = "custom"\n[capital]\nspiral_samples = 900000\n'},
+        "limit",
+    ),
     (["city", "c", "--rows", "1000", "--cols", "1000"], {"c": None}, "limit"),
     (["asset", "--texture-size", "8192", "-o", "A"], {}, "--max-memory"),
     (["asset", "--max-memory", "nan", "-o", "A"], {}, "--max-memory"),
     # collisions and bad user textures
-    (["asset", "--texture", "basecolor=a.png", "--texture", "basecolor=b.png", "-o", "A"], {},
-     "basecolor"),
+    (
+        ["asset", "--texture", "basecolor=a.png", "--texture", "basecolor=b.png", "-o", "A"],
+        {},
+        "basecolor",
+    ),
     (["asset", "--texture", "albedo=a.png", "-o", "A"], {}, "--texture"),
     # argparse's own refusals stay one line too
     (["shaft", "--height", "tall"], {}, "height"),
@@ -149,8 +203,7 @@ def assert_clean_refusal(code: int, err: str, needle: str) -> None:
     assert needle in err, err
 
 
-@pytest.mark.parametrize("argv,files,needle", CASES,
-                         ids=[" ".join(c[0])[:60] for c in CASES])
+@pytest.mark.parametrize("argv,files,needle", CASES, ids=[" ".join(c[0])[:60] for c in CASES])
 def test_refused_cleanly_and_nothing_written(tmp_path, capsys, argv, files, needle):
     for name, data in files.items():
         if data is None:
@@ -172,8 +225,14 @@ def test_process_level_no_traceback(tmp_path):
     env.pop("IONIC_USD_DEBUG", None)
     for cfg in ("deep.toml",):  # bin.toml and the rest: in-process above
         before = _listing(tmp_path)
-        r = subprocess.run([sys.executable, "-m", "ionic_usd.cli", "column", "--config", cfg],
-                           cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120)
+        r = subprocess.run(
+            [sys.executable, "-m", "ionic_usd.cli", "column", "--config", cfg],
+            cwd=tmp_path,
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
         assert r.returncode == 2 and len(r.stderr.splitlines()) == 1, r.stderr
         assert "Traceback" not in r.stderr and cfg in r.stderr
         assert _listing(tmp_path) == before
@@ -187,8 +246,12 @@ def test_big_png_refused_before_decoding(tmp_path):
     from ionic_usd.texture.stone import TextureError, validate_user_texture
 
     def chunk(tag: bytes, data: bytes) -> bytes:
-        return struct.pack(">I", len(data)) + tag + data + struct.pack(
-            ">I", zlib.crc32(tag + data) & 0xFFFFFFFF)
+        return (
+            struct.pack(">I", len(data))
+            + tag
+            + data
+            + struct.pack(">I", zlib.crc32(tag + data) & 0xFFFFFFFF)
+        )
 
     n = 20000
     z = zlib.compressobj(1)

@@ -47,8 +47,14 @@ def _inside(c: Cuboid, pts: np.ndarray, tol: float = 1e-7) -> np.ndarray:
     t = (x - c.min[0]) / (c.max[0] - c.min[0])
     top = c.max[1] + c.rise * t
     bottom = c.min[1] + (c.rise * t if c.incline is Incline.SHEAR else 0.0)
-    return ((c.min[0] + tol < x) & (x < c.max[0] - tol) & (c.min[2] + tol < z)
-            & (z < c.max[2] - tol) & (bottom + tol < y) & (y < top - tol))
+    return (
+        (c.min[0] + tol < x)
+        & (x < c.max[0] - tol)
+        & (c.min[2] + tol < z)
+        & (z < c.max[2] - tol)
+        & (bottom + tol < y)
+        & (y < top - tol)
+    )
 
 
 def _samples(c: Cuboid, n: int, rng) -> np.ndarray:
@@ -83,7 +89,11 @@ def test_column_counts(lay):
     assert len(lay.columns_of("engaged")) == 8
     # three-quarter columns on the cella's four wall corners
     assert sorted(c.name for c in lay.columns_of("corner")) == [
-        "left_3", "rear_1", "rear_4", "right_3"]
+        "left_3",
+        "rear_1",
+        "rear_4",
+        "right_3",
+    ]
     pos = np.array([c.position for c in lay.columns])
     assert len(np.unique(np.round(pos, 6), axis=0)) == 18  # no column placed twice
     # 4 x 7 perimeter: 2 * (4 + 7) - 4 = 18 axes
@@ -103,8 +113,9 @@ def test_free_columns_on_stylobate(lay):
 
 
 def test_front_columns_evenly_spaced(lay):
-    front = sorted((c for c in lay.columns if c.name.startswith("front")),
-                   key=lambda c: c.position[0])
+    front = sorted(
+        (c for c in lay.columns if c.name.startswith("front")), key=lambda c: c.position[0]
+    )
     assert len(front) == 4
     x = np.array([c.position[0] for c in front])
     # documented derivation: 3 s + 2 m = W and 6 s + 2 m = L  =>  s = (L - W) / 3
@@ -166,8 +177,9 @@ def test_roof_halves_meet_at_ridge_and_pediment_fills_gable(lay):
         # as wide as the cornice: nothing between the cornice top and the slabs
         cornice = lay.cuboid("cornice")
         assert_allclose(sorted([abs(ped.min[0]), abs(ped.max[0])]), [0.0, cornice.max[0]])
-        assert_allclose(ped.top_at(cornice.max[0] * np.sign(ped.max[0] + ped.min[0])),
-                        cornice.max[1] + ROOF_BED)
+        assert_allclose(
+            ped.top_at(cornice.max[0] * np.sign(ped.max[0] + ped.min[0])), cornice.max[1] + ROOF_BED
+        )
 
 
 def test_all_cuboid_meshes_watertight(lay):
@@ -197,8 +209,7 @@ def test_columns_clear_of_walls(lay, rng):
             for c in cs:
                 assert not _inside(c, axis).any(), (col.name, c.name)
             ang = np.linspace(0, 2 * np.pi, 16, endpoint=False)
-            ring = np.concatenate([axis + 0.45 * np.array([np.cos(t), 0, -np.sin(t)])
-                                   for t in ang])
+            ring = np.concatenate([axis + 0.45 * np.array([np.cos(t), 0, -np.sin(t)]) for t in ang])
             for c in cs:
                 assert not _inside(c, ring).any(), (col.name, c.name)
         else:
@@ -228,8 +239,9 @@ def test_engaged_face_outward(lay):
 
 
 def test_steps_climb_to_stylobate(lay):
-    steps = sorted((c for c in lay.cuboids[Layer.PODIUM] if c.name.startswith("step")),
-                   key=lambda c: c.min[1])
+    steps = sorted(
+        (c for c in lay.cuboids[Layer.PODIUM] if c.name.startswith("step")), key=lambda c: c.min[1]
+    )
     assert len(steps) == 10
     assert steps[0].min[1] == 0.0
     assert_allclose(steps[-1].max[1], PODIUM_H)
@@ -253,16 +265,23 @@ def test_entablature_rule(lay):
     assert_allclose(a.min[1], PODIUM_H + H_COL)
     ha, hf, hc = (x.max[1] - x.min[1] for x in (a, f, c))
     assert_allclose(ha, H_COL / 12)  # Vitruvius III.5.8 for 25-30 ft columns
-    assert_allclose(hf, 1.25 * ha)   # III.5.10, frieze with reliefs
+    assert_allclose(hf, 1.25 * ha)  # III.5.10, frieze with reliefs
     assert_allclose(hc, ha)
     assert_allclose(c.max[0] - f.max[0], hc)  # III.5.11: projection = height
 
 
-@pytest.mark.parametrize("hid,check", [
-    ("roof-pitch-15", lambda L0, L1: np.isclose(L1.pitch_deg, 15.0)),
-    ("frieze-plain", lambda L0, L1: np.isclose(
-        L0.cuboid("cornice").max[1] - L1.cuboid("cornice").max[1], 0.5 * H_COL / 12)),
-])
+@pytest.mark.parametrize(
+    "hid,check",
+    [
+        ("roof-pitch-15", lambda L0, L1: np.isclose(L1.pitch_deg, 15.0)),
+        (
+            "frieze-plain",
+            lambda L0, L1: np.isclose(
+                L0.cuboid("cornice").max[1] - L1.cuboid("cornice").max[1], 0.5 * H_COL / 12
+            ),
+        ),
+    ],
+)
 def test_hypotheses_apply(lay, hid, check):
     alt = portunus_layout(apply=[hid])
     assert alt.applied == (hid,)
@@ -317,14 +336,17 @@ def test_column_placement_validation():
     assert_allclose(ColumnPlacement((0, 0, 0), 90.0).facing, [1, 0, 0], atol=1e-12)
 
 
-@pytest.mark.parametrize("kw,key", [
-    (dict(columns_side=4), "columns.side"),
-    (dict(columns_porch_depth=6), "columns.porch_depth"),
-    (dict(stylobate_width=12.0, stylobate_length=13.0), "stylobate.width"),
-    (dict(podium_height=-1.0), "podium.height"),
-    (dict(steps_count=2.5), "steps.count"),
-    (dict(podium_base_length=20.0), "podium.base_length"),
-])
+@pytest.mark.parametrize(
+    "kw,key",
+    [
+        (dict(columns_side=4), "columns.side"),
+        (dict(columns_porch_depth=6), "columns.porch_depth"),
+        (dict(stylobate_width=12.0, stylobate_length=13.0), "stylobate.width"),
+        (dict(podium_height=-1.0), "podium.height"),
+        (dict(steps_count=2.5), "steps.count"),
+        (dict(podium_base_length=20.0), "podium.base_length"),
+    ],
+)
 def test_params_validation(kw, key):
     with pytest.raises(ParameterError, match=key.replace(".", r"\.")):
         TempleParams(**kw)
@@ -339,18 +361,22 @@ def test_cuboid_toml_round_trip(tmp_path, lay):
     back = load_cuboids_toml(path)
     assert set(back) == set(lay.cuboids)
     for layer, cs in lay.cuboids.items():
-        assert [(c.name, c.min, c.max, c.rise, c.incline) for c in back[layer]] == \
-               [(c.name, c.min, c.max, c.rise, c.incline) for c in cs]
+        assert [(c.name, c.min, c.max, c.rise, c.incline) for c in back[layer]] == [
+            (c.name, c.min, c.max, c.rise, c.incline) for c in cs
+        ]
 
 
-@pytest.mark.parametrize("entry,key", [
-    ('name = "a"\nlayer = "podium"\nmin = [0, 0, 0]\nmax = [1, 0, 1]', "max.y"),
-    ('name = "a"\nlayer = "attic"\nmin = [0, 0, 0]\nmax = [1, 1, 1]', "layer"),
-    ('name = "a"\nlayer = "podium"\nmax = [1, 1, 1]', "min"),
-    ('name = "a"\nlayer = "podium"\nmin = [0, 0]\nmax = [1, 1, 1]', "min"),
-    ('name = "a"\nlayer = "roof"\nmin = [0, 0, 0]\nmax = [1, 1, 1]\ncolour = 3', "colour"),
-    ('name = "a"\nlayer = "roof"\nmin = [0, 0, 0]\nmax = [1, 1, 1]\nrise = "x"', "rise"),
-])
+@pytest.mark.parametrize(
+    "entry,key",
+    [
+        ('name = "a"\nlayer = "podium"\nmin = [0, 0, 0]\nmax = [1, 0, 1]', "max.y"),
+        ('name = "a"\nlayer = "attic"\nmin = [0, 0, 0]\nmax = [1, 1, 1]', "layer"),
+        ('name = "a"\nlayer = "podium"\nmax = [1, 1, 1]', "min"),
+        ('name = "a"\nlayer = "podium"\nmin = [0, 0]\nmax = [1, 1, 1]', "min"),
+        ('name = "a"\nlayer = "roof"\nmin = [0, 0, 0]\nmax = [1, 1, 1]\ncolour = 3', "colour"),
+        ('name = "a"\nlayer = "roof"\nmin = [0, 0, 0]\nmax = [1, 1, 1]\nrise = "x"', "rise"),
+    ],
+)
 def test_cuboid_toml_errors_name_file_entry_key(tmp_path, entry, key):
     path = tmp_path / "bad.toml"
     good = '[[cuboid]]\nname = "ok"\nlayer = "cella"\nmin = [0, 0, 0]\nmax = [1, 1, 1]\n'
@@ -368,13 +394,16 @@ def test_temple_toml_unknown_key_and_extra_cuboids(tmp_path):
     with pytest.raises(ParameterError, match=r"roof\.pich"):
         layout_from_toml(bad)
     ok = tmp_path / "altar.toml"
-    ok.write_text(src + '\n[[cuboid]]\nname = "altar"\nlayer = "podium"\n'
-                  'min = [-1, 0, 17]\nmax = [1, 1, 18]\n')
+    ok.write_text(
+        src + '\n[[cuboid]]\nname = "altar"\nlayer = "podium"\n'
+        "min = [-1, 0, 17]\nmax = [1, 1, 18]\n"
+    )
     lay = layout_from_toml(ok)
     assert lay.cuboid("altar").max == (1.0, 1.0, 18.0)
 
 
 def test_build_layout_rejects_duplicate_names():
     with pytest.raises(ParameterError, match="die"):
-        build_layout(TempleParams(), extra_cuboids={"podium": [Cuboid((0, 0, 0), (1, 1, 1),
-                                                                      name="die")]})
+        build_layout(
+            TempleParams(), extra_cuboids={"podium": [Cuboid((0, 0, 0), (1, 1, 1), name="die")]}
+        )

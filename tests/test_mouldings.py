@@ -28,11 +28,23 @@ def members():
 def test_every_member_is_a_closed_outward_solid(members):
     import manifold3d as m3
 
-    assert set(members) == {"architrave", "cornice", "sima_left", "sima_right", "podium_base",
-                            "podium_crown", "raking_cornice_front", "raking_cornice_rear"}
+    assert set(members) == {
+        "architrave",
+        "cornice",
+        "sima_left",
+        "sima_right",
+        "podium_base",
+        "podium_crown",
+        "raking_cornice_front",
+        "raking_cornice_rear",
+    }
     for m in members.values():
-        man = m3.Manifold(m3.Mesh(vert_properties=m.mesh.points.astype(np.float32),
-                                  tri_verts=m.mesh.triangles.astype(np.uint32)))
+        man = m3.Manifold(
+            m3.Mesh(
+                vert_properties=m.mesh.points.astype(np.float32),
+                tri_verts=m.mesh.triangles.astype(np.uint32),
+            )
+        )
         assert str(man.status()) == "Error.NoError", m.name
         assert man.volume() > 0, m.name
         assert np.all(np.isfinite(m.mesh.st)) and m.mesh.normals is not None
@@ -51,8 +63,9 @@ def test_architrave_volume_by_pappus_for_a_mitred_rectangle(members):
     lay = portunus_layout()
     lv = cornice_levels(lay)
     a = lay.params.entablature_heights[0]
-    sec = _close(moulding_section(MouldingParams().architrave, a), 2 * lv["half_top"],
-                 chamfer=False)
+    sec = _close(
+        moulding_section(MouldingParams().architrave, a), 2 * lv["half_top"], chamfer=False
+    )
     area, ubar = _centroid_u(sec)
     want = area * (4 * lv["xe"] + 4 * lv["ze"] + 8 * ubar)
     m = members["architrave"].mesh
@@ -82,8 +95,9 @@ def test_sections_follow_vitruvius(members):
     for side, sgn in (("sima_left", -1), ("sima_right", 1)):
         e = members[side].mesh.extent
         assert_allclose(e[1 if sgn > 0 else 0, 0], sgn * (lv["xe"] + lv["projection"]))
-        assert_allclose([e[0, 2], e[1, 2]], [-lv["ze"] - lv["projection"],
-                                             lv["ze"] + lv["projection"]])
+        assert_allclose(
+            [e[0, 2], e[1, 2]], [-lv["ze"] - lv["projection"], lv["ze"] + lv["projection"]]
+        )
         assert_allclose(e[1, 1], lv["y_top"])
     # raking cornice: under the roof slab's soffit, projecting as far as the cornice
     rk = members["raking_cornice_front"].mesh.extent

@@ -33,25 +33,41 @@ def layout():
 @pytest.fixture(scope="module")
 def capital():
     p = portunus_column_params()
-    return capital_ornament(y_capital=7.0, top_radius=p.shaft.top_radius,
-                            echinus_height=p.capital.echinus_height,
-                            echinus_projection=p.capital.echinus_projection,
-                            ring_top=p.shaft.ring_top)
+    return capital_ornament(
+        y_capital=7.0,
+        top_radius=p.shaft.top_radius,
+        echinus_height=p.capital.echinus_height,
+        echinus_projection=p.capital.echinus_projection,
+        ring_top=p.shaft.ring_top,
+    )
 
 
 def _closed(m) -> bool:
     import manifold3d as m3
 
-    man = m3.Manifold(m3.Mesh(vert_properties=m.points.astype(np.float32),
-                              tri_verts=m.triangles.astype(np.uint32)))
+    man = m3.Manifold(
+        m3.Mesh(
+            vert_properties=m.points.astype(np.float32), tri_verts=m.triangles.astype(np.uint32)
+        )
+    )
     return str(man.status()) == "Error.NoError" and man.volume() > 0
 
 
 def test_every_prototype_is_a_small_closed_solid(layout, capital):
     sets = [dentils(layout), roof_tiles(layout), frieze_garlands(layout), *capital]
     protos = [p for s in sets for p in s.prototypes]
-    assert {p.name for p in protos} == {"Dentil", "Tegula", "Imbrex", "Antefix", "Candelabrum",
-                                        "Garland", "Egg", "Dart", "Bead", "Reel"}
+    assert {p.name for p in protos} == {
+        "Dentil",
+        "Tegula",
+        "Imbrex",
+        "Antefix",
+        "Candelabrum",
+        "Garland",
+        "Egg",
+        "Dart",
+        "Bead",
+        "Reel",
+    }
     for p in protos:
         assert _closed(p), p.name
         assert p.n_triangles <= 300, p.name
@@ -100,8 +116,11 @@ def test_roof_tiles_cover_both_slabs(layout):
     rows = math.ceil((xc / math.cos(phi) - tp.tegula_length) / (tp.tegula_length - tp.overlap)) + 1
     cols = round(2 * zc / tp.tegula_width)
     c = t.counts()
-    assert c == {"Tegula": 2 * rows * cols, "Imbrex": 2 * rows * (cols - 1),
-                 "Antefix": 2 * (cols - 1)}
+    assert c == {
+        "Tegula": 2 * rows * cols,
+        "Imbrex": 2 * rows * (cols - 1),
+        "Antefix": 2 * (cols - 1),
+    }
     # every tegula's origin lies on its slab's top plane
     teg = t.positions[t.proto_indices == 0]
     top = lv["y_top"] + p.roof_slab_thickness + (xc - np.abs(teg[:, 0])) * math.tan(phi)
@@ -124,8 +143,7 @@ def test_capital_ornament_rings(capital):
     assert np.all((bead.positions[:, 1] < 7.0) & (bead.positions[:, 1] > 7.0 - p.shaft.ring_top))
     # eggs face outwards and down the ovolo: local +Z has a positive radial component
     z = quaternion_matrices(egg.orientations)[:, :, 2]
-    radial = egg.positions * [1, 0, 1] / np.hypot(egg.positions[:, 0],
-                                                   egg.positions[:, 2])[:, None]
+    radial = egg.positions * [1, 0, 1] / np.hypot(egg.positions[:, 0], egg.positions[:, 2])[:, None]
     assert np.all(np.einsum("ij,ij->i", z, radial) > 0.5) and np.all(z[:, 1] < 0)
 
 
@@ -154,8 +172,13 @@ def test_every_prototype_has_outward_normals(layout, capital):
             # fan triangulation: triangle t of face f uses corners 0, k, k+1 of that face
             counts = p.face_vertex_counts
             starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
-            corner = np.concatenate([starts[f] + np.array([0, k, k + 1])
-                                     for f, cnt in enumerate(counts) for k in range(1, cnt - 1)])
+            corner = np.concatenate(
+                [
+                    starts[f] + np.array([0, k, k + 1])
+                    for f, cnt in enumerate(counts)
+                    for k in range(1, cnt - 1)
+                ]
+            )
             per = n[corner].reshape(-1, 3, 3)
         else:
             per = n[tri]

@@ -43,11 +43,7 @@ def _import_names(dist: str) -> set[str]:
 
 RUNTIME = {_dist_name(r) for r in PYPROJECT["project"]["dependencies"]}
 OPTIONAL = sorted(
-    {
-        _dist_name(r)
-        for reqs in PYPROJECT["project"]["optional-dependencies"].values()
-        for r in reqs
-    }
+    {_dist_name(r) for reqs in PYPROJECT["project"]["optional-dependencies"].values() for r in reqs}
     - RUNTIME
     - {"pytest", "hypothesis", "ruff", "mypy"}
 )
@@ -81,8 +77,11 @@ LAZY_RUNTIME = sorted(RUNTIME - {"numpy"})
 def test_optional_dependencies_are_known():
     assert OPTIONAL, "no optional dependencies found in pyproject.toml"
     assert {"usd-core", "numpy", "shapely", "tqdm"} <= RUNTIME
-    extras = {_dist_name(r) for reqs in PYPROJECT["project"]["optional-dependencies"].values()
-              for r in reqs}
+    extras = {
+        _dist_name(r)
+        for reqs in PYPROJECT["project"]["optional-dependencies"].values()
+        for r in reqs
+    }
     # every extra is blocked in turn below (or is a runtime dependency, blocked as lazy)
     assert extras - {"pytest", "hypothesis", "mypy", "ruff"} <= set(OPTIONAL) | RUNTIME
 
@@ -143,16 +142,25 @@ def test_geometry_kernel_is_numpy_only_at_import():
 
 
 #: what parsing a command line must not load (each costs 0.1-1 s of every run)
-HEAVY_AT_STARTUP = ("scipy", "numba", "pxr", "matplotlib", "xatlas", "OpenImageIO",
-                    "manifold3d", "shapely")
+HEAVY_AT_STARTUP = (
+    "scipy",
+    "numba",
+    "pxr",
+    "matplotlib",
+    "xatlas",
+    "OpenImageIO",
+    "manifold3d",
+    "shapely",
+)
 
 
 def _modules_after(code: str) -> set[str]:
-    probe = (code + "\nimport sys, json\n"
-             "sys.__stdout__.write('\\n' + json.dumps(sorted({m.split('.')[0] "
-             "for m in sys.modules})))\n")
-    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
-                         timeout=300)
+    probe = (
+        code + "\nimport sys, json\n"
+        "sys.__stdout__.write('\\n' + json.dumps(sorted({m.split('.')[0] "
+        "for m in sys.modules})))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stderr[-2000:]
     import json
 
@@ -165,14 +173,18 @@ def test_building_the_whole_parser_loads_no_heavy_library():
     assert not mods & set(HEAVY_AT_STARTUP), sorted(mods & set(HEAVY_AT_STARTUP))
 
 
-@pytest.mark.parametrize("argv", [["--version"], ["--help"], ["temple", "--help"],
-                                  ["shaft", "--help"], ["evaluate", "--help"]])
+@pytest.mark.parametrize(
+    "argv",
+    [["--version"], ["--help"], ["temple", "--help"], ["shaft", "--help"], ["evaluate", "--help"]],
+)
 def test_parsing_loads_no_heavy_library(argv):
-    code = ("from ionic_usd.cli import main\n"
-            "try:\n"
-            f"    main({argv!r})\n"
-            "except SystemExit as e:\n"
-            "    assert e.code == 0, e.code\n")
+    code = (
+        "from ionic_usd.cli import main\n"
+        "try:\n"
+        f"    main({argv!r})\n"
+        "except SystemExit as e:\n"
+        "    assert e.code == 0, e.code\n"
+    )
     mods = _modules_after(code)
     assert not mods & set(HEAVY_AT_STARTUP), sorted(mods & set(HEAVY_AT_STARTUP))
     if argv in (["--version"], ["--help"], ["temple", "--help"]):

@@ -19,8 +19,16 @@ needs_gl = pytest.mark.skipif(
     reason="moderngl is not installed (pip install 'ionic_usd[preview]')",
 )
 
-CUBE_POINTS = [(-0.5, 0, -0.5), (0.5, 0, -0.5), (0.5, 0, 0.5), (-0.5, 0, 0.5),
-               (-0.5, 1, -0.5), (0.5, 1, -0.5), (0.5, 1, 0.5), (-0.5, 1, 0.5)]
+CUBE_POINTS = [
+    (-0.5, 0, -0.5),
+    (0.5, 0, -0.5),
+    (0.5, 0, 0.5),
+    (-0.5, 0, 0.5),
+    (-0.5, 1, -0.5),
+    (0.5, 1, -0.5),
+    (0.5, 1, 0.5),
+    (-0.5, 1, 0.5),
+]
 CUBE_FACES = [0, 3, 2, 1, 4, 5, 6, 7, 0, 1, 5, 4, 1, 2, 6, 5, 2, 3, 7, 6, 3, 0, 4, 7]
 RED = (0.8, 0.03, 0.03)
 
@@ -37,8 +45,9 @@ def _cube(stage: Usd.Stage, path: str, colour=RED) -> UsdGeom.Mesh:
 def _pyramid(stage: Usd.Stage, path: str) -> UsdGeom.Mesh:
     """A square pyramid: 1 quad + 4 triangles = 6 triangles after fan triangulation."""
     mesh = UsdGeom.Mesh.Define(stage, path)
-    mesh.CreatePointsAttr([(-0.4, 0, -0.4), (0.4, 0, -0.4), (0.4, 0, 0.4), (-0.4, 0, 0.4),
-                           (0, 1.5, 0)])
+    mesh.CreatePointsAttr(
+        [(-0.4, 0, -0.4), (0.4, 0, -0.4), (0.4, 0, 0.4), (-0.4, 0, 0.4), (0, 1.5, 0)]
+    )
     mesh.CreateFaceVertexCountsAttr([4, 3, 3, 3, 3])
     mesh.CreateFaceVertexIndicesAttr([0, 1, 2, 3, 0, 4, 1, 1, 4, 2, 2, 4, 3, 3, 4, 0])
     return mesh
@@ -131,15 +140,20 @@ def test_instancing_does_not_change_the_picture(tmp_path):
 
 
 @needs_gl
-@pytest.mark.parametrize("edit", [
-    lambda m: m.CreateVisibilityAttr(UsdGeom.Tokens.invisible),
-    lambda m: m.CreatePurposeAttr(UsdGeom.Tokens.guide),
-    lambda m: m.CreatePurposeAttr(UsdGeom.Tokens.proxy),
-    lambda m: m.GetPrim().SetActive(False),
-], ids=["invisible", "guide", "proxy", "inactive"])
+@pytest.mark.parametrize(
+    "edit",
+    [
+        lambda m: m.CreateVisibilityAttr(UsdGeom.Tokens.invisible),
+        lambda m: m.CreatePurposeAttr(UsdGeom.Tokens.guide),
+        lambda m: m.CreatePurposeAttr(UsdGeom.Tokens.proxy),
+        lambda m: m.GetPrim().SetActive(False),
+    ],
+    ids=["invisible", "guide", "proxy", "inactive"],
+)
 def test_hidden_meshes_are_skipped(tmp_path, edit):
-    stats = render_preview(make_scene(tmp_path, plain_edit=edit), tmp_path / "p.png",
-                           width=64, height=48, samples=0)
+    stats = render_preview(
+        make_scene(tmp_path, plain_edit=edit), tmp_path / "p.png", width=64, height=48, samples=0
+    )
     assert stats.triangles == 2 * 12
     assert stats.meshes == 1
 
@@ -245,8 +259,9 @@ def test_point_instancer(tmp_path):
     pi.CreateProtoIndicesAttr([0, 0, 0])
     stage.GetRootLayer().Save()
     out = tmp_path / "pi.png"
-    stats = render_preview(tmp_path / "pi.usda", out, width=240, height=120, camera="front",
-                           ground=False)
+    stats = render_preview(
+        tmp_path / "pi.usda", out, width=240, height=120, camera="front", ground=False
+    )
     assert (stats.meshes, stats.prototypes, stats.instances) == (1, 1, 3)
     assert stats.triangles == 36
     red = red_mask(read_png(out))
@@ -262,17 +277,21 @@ def test_missing_file(tmp_path):
 
 def test_unreadable_stage(tmp_path):
     bad = tmp_path / "bad.usda"
-    bad.write_text("#usda 1.0\ndef Xform \"A\" {{{ garbage\n")
+    bad.write_text('#usda 1.0\ndef Xform "A" {{{ garbage\n')
     with pytest.raises(UsdAuthoringError, match="cannot open"):
         render_preview(bad, tmp_path / "x.png")
 
 
-@pytest.mark.parametrize("kwargs, name", [
-    ({"camera": "top"}, "camera"),
-    ({"width": 0}, "width"),
-    ({"samples": -1}, "samples"),
-    ({"background": (1, 2, 3)}, "background"),
-], ids=["camera", "width", "samples", "background"])
+@pytest.mark.parametrize(
+    "kwargs, name",
+    [
+        ({"camera": "top"}, "camera"),
+        ({"width": 0}, "width"),
+        ({"samples": -1}, "samples"),
+        ({"background": (1, 2, 3)}, "background"),
+    ],
+    ids=["camera", "width", "samples", "background"],
+)
 def test_bad_arguments(tmp_path, kwargs, name):
     with pytest.raises(ParameterError, match=name):
         render_preview(make_scene(tmp_path), tmp_path / "x.png", **kwargs)
@@ -311,8 +330,11 @@ def _hypothesis_selection(root) -> dict[str, str]:
     from ionic_usd.usd.city import temple_variant_sets
 
     sets = temple_variant_sets(root)
-    return {name: "alternative" for name in sorted(sets) if name.startswith("hyp_")
-            and "alternative" in sets[name]}
+    return {
+        name: "alternative"
+        for name in sorted(sets)
+        if name.startswith("hyp_") and "alternative" in sets[name]
+    }
 
 
 @needs_gl
@@ -324,18 +346,34 @@ def test_preview_and_export_read_the_same_meshes(tiny_temple, tmp_path, which):
     from ionic_usd.preview.scene import draw_items
     from ionic_usd.usd.reader import read_scene
 
-    sel = {} if which == "authored" else {**_hypothesis_selection(tiny_temple.root),
-                                          "form": "engaged"}
+    sel = (
+        {}
+        if which == "authored"
+        else {**_hypothesis_selection(tiny_temple.root), "form": "engaged"}
+    )
     assert which == "authored" or len(sel) >= 3
     res = export_scene(tiny_temple.root, tmp_path / "t.glb", variants=sel, gpu_instancing=False)
     glb = trimesh.load(tmp_path / "t.glb", force="scene", process=False).to_geometry()
-    stats = render_preview(tiny_temple.root, tmp_path / "t.png", width=64, height=48,
-                           samples=0, ground=False, variants=sel)
+    stats = render_preview(
+        tiny_temple.root,
+        tmp_path / "t.png",
+        width=64,
+        height=48,
+        samples=0,
+        ground=False,
+        variants=sel,
+    )
     assert stats.triangles == res.report.triangles_drawn == len(glb.faces)
     # the preview's draw lists, placed: the same world bounds as the exported file's
     items = draw_items(read_scene(tiny_temple.root, variants=sel, draw_modes=True))
-    pts = np.concatenate([np.einsum("vi,nij->nvj", np.c_[d.vertices[:, :3], np.ones(
-        len(d.vertices))], d.placements)[..., :3].reshape(-1, 3) for d in items])
+    pts = np.concatenate(
+        [
+            np.einsum(
+                "vi,nij->nvj", np.c_[d.vertices[:, :3], np.ones(len(d.vertices))], d.placements
+            )[..., :3].reshape(-1, 3)
+            for d in items
+        ]
+    )
     np.testing.assert_allclose(pts.min(axis=0), glb.bounds[0], atol=1e-4)
     np.testing.assert_allclose(pts.max(axis=0), glb.bounds[1], atol=1e-4)
     if sel:  # the selection changed what is drawn
@@ -349,9 +387,12 @@ def test_preview_and_export_read_the_same_meshes(tiny_temple, tmp_path, which):
 # uv). drawModeStandin.cpp (_CardsDataCache::_CardsData::_ComputePoints/_ComputeUVs, the scene
 # index path) builds the same quads and uvs. UsdUVTexture's st (0, 0) is the image's bottom left.
 _HYDRA_CORNERS = {
-    "XPos": ["111", "101", "100", "110"], "XNeg": ["001", "011", "010", "000"],
-    "YPos": ["011", "111", "110", "010"], "YNeg": ["101", "001", "000", "100"],
-    "ZPos": ["111", "011", "001", "101"], "ZNeg": ["010", "110", "100", "000"],
+    "XPos": ["111", "101", "100", "110"],
+    "XNeg": ["001", "011", "010", "000"],
+    "YPos": ["011", "111", "110", "010"],
+    "YNeg": ["101", "001", "000", "100"],
+    "ZPos": ["111", "011", "001", "101"],
+    "ZNeg": ["010", "110", "100", "000"],
 }  # x, y, z digits; cardGeometry box (cross puts the face's own axis at the middle)
 
 
@@ -399,8 +440,12 @@ def test_card_images_follow_hydras_uv_mapping(tmp_path):
     Usd.ModelAPI(model).SetKind("component")
     UsdGeom.ModelAPI.Apply(model).SetExtentsHint([Gf.Vec3f(*lo), Gf.Vec3f(*hi)])
     mesh = UsdGeom.Mesh.Define(stage, "/World/Marker")
-    mesh.CreatePointsAttr([tuple(centre + 0.15 * (np.array(p) * 2 - (1, 1, 1))) for p in
-                           [(c[0] + 0.5, c[1], c[2] + 0.5) for c in CUBE_POINTS]])
+    mesh.CreatePointsAttr(
+        [
+            tuple(centre + 0.15 * (np.array(p) * 2 - (1, 1, 1)))
+            for p in [(c[0] + 0.5, c[1], c[2] + 0.5) for c in CUBE_POINTS]
+        ]
+    )
     mesh.CreateFaceVertexCountsAttr([4] * 6)
     mesh.CreateFaceVertexIndicesAttr(CUBE_FACES)
     mesh.CreateDisplayColorPrimvar().Set([RED])

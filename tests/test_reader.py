@@ -56,7 +56,8 @@ def test_st_per_corner_whatever_the_primvar_layout(tmp_path, mode):
     (mesh,) = scene.meshes.values()
     assert_allclose(mesh.st, QUAD_ST)
     assert mesh.paradata == {} and scene.placements[0].paradata == {
-        "userProperties": {"source": "hand"}}
+        "userProperties": {"source": "hand"}
+    }
     assert scene.paradata["ionic_usd"]["note"] == "root paradata"  # key path: nested
 
 
@@ -87,8 +88,9 @@ def test_point_instancer_and_equal_prims_share_one_mesh(tmp_path):
     pi.CreateProtoIndicesAttr([0, 0, 0])
     copy = UsdGeom.Mesh.Define(stage, "/W/Copy")  # the same triangle authored again
     for name in ("points", "faceVertexCounts", "faceVertexIndices"):
-        copy.GetPrim().CreateAttribute(name, proto.GetPrim().GetAttribute(name).GetTypeName()
-                                       ).Set(proto.GetPrim().GetAttribute(name).Get())
+        copy.GetPrim().CreateAttribute(name, proto.GetPrim().GetAttribute(name).GetTypeName()).Set(
+            proto.GetPrim().GetAttribute(name).Get()
+        )
     UsdGeom.Xformable(copy).AddTranslateOp().Set((-1, 0, 0))
     stage.Save()
     scene = read_scene(path)
@@ -122,20 +124,22 @@ def test_variant_selection_reaches_nested_instances(tiny_city):
     names = {m.name for m in engaged.meshes.values()}
     column_names = {n for n in names if n.startswith(("Shaft", "Base", "Capital", "Scroll"))}
     assert column_names and all(n.endswith("_engaged") for n in column_names)
-    assert any(not m.name.endswith("_engaged") for m in base.meshes.values()
-               if m.name.startswith("Shaft"))
+    assert any(
+        not m.name.endswith("_engaged") for m in base.meshes.values() if m.name.startswith("Shaft")
+    )
 
 
-@pytest.mark.parametrize("sel,needle", [({"nope": "x"}, "variant set of the scene"),
-                                        ({"form": "sideways"}, "one of .*engaged, full")])
+@pytest.mark.parametrize(
+    "sel,needle",
+    [({"nope": "x"}, "variant set of the scene"), ({"form": "sideways"}, "one of .*engaged, full")],
+)
 def test_bad_variant_selection_names_the_valid_ones(tiny_temple, sel, needle):
     with pytest.raises(ParameterError, match=needle):
         read_scene(tiny_temple.root, variants=sel)
 
 
 def test_parse_variant_args():
-    assert parse_variant_args(["lod=low", " form = engaged "]) == {"lod": "low",
-                                                                  "form": "engaged"}
+    assert parse_variant_args(["lod=low", " form = engaged "]) == {"lod": "low", "form": "engaged"}
     for bad in (["lod"], ["=x"], ["lod="]):
         with pytest.raises(ParameterError):
             parse_variant_args(bad)
@@ -168,9 +172,16 @@ def test_non_finite_transform_is_refused(tmp_path):
         read_scene(path)
 
 
-@pytest.mark.parametrize("apply, kind, geometry", [
-    (True, "component", "box"), (True, "component", "cross"), (False, "component", "box"),
-    (True, "", "box")], ids=["box", "cross", "not-applied", "not-a-model"])
+@pytest.mark.parametrize(
+    "apply, kind, geometry",
+    [
+        (True, "component", "box"),
+        (True, "component", "cross"),
+        (False, "component", "box"),
+        (True, "", "box"),
+    ],
+    ids=["box", "cross", "not-applied", "not-a-model"],
+)
 def test_card_draw_mode_replaces_a_model_by_its_cards(tmp_path, apply, kind, geometry):
     from ionic_usd.usd.draw_mode import author_cards
 
@@ -188,11 +199,11 @@ def test_card_draw_mode_replaces_a_model_by_its_cards(tmp_path, apply, kind, geo
     m = UsdGeom.Mesh.Define(stage, "/W/M/Box")  # a 2 x 3 x 4 box of 6 quads
     m.CreatePointsAttr([(x, y, z) for x in (-1, 1) for y in (0, 3) for z in (-2, 2)])
     m.CreateFaceVertexCountsAttr([4] * 6)
-    m.CreateFaceVertexIndicesAttr([0, 1, 3, 2, 4, 6, 7, 5, 0, 4, 5, 1, 2, 3, 7, 6,
-                                   0, 2, 6, 4, 1, 5, 7, 3])
+    m.CreateFaceVertexIndicesAttr(
+        [0, 1, 3, 2, 4, 6, 7, 5, 0, 4, 5, 1, 2, 3, 7, 6, 0, 2, 6, 4, 1, 5, 7, 3]
+    )
     (tmp_path / "x.png").write_bytes(b"")  # only XPos: a box's XNeg takes it too
-    author_cards(stage.GetRootLayer().GetPrimAtPath("/W/M"), {"XPos": "./x.png"},
-                 geometry=geometry)
+    author_cards(stage.GetRootLayer().GetPrimAtPath("/W/M"), {"XPos": "./x.png"}, geometry=geometry)
     if not apply:
         model.GetPrim().GetAttribute("model:applyDrawMode").Set(False)
     stage.Save()

@@ -19,8 +19,10 @@ from ionic_usd.resources import (
 )
 
 
-@pytest.mark.parametrize("lod,base,scroll", [("low", "G1", "S1"), ("high", "G1", "S2"),
-                                             ("medium", "attic_bezier_plinth", "S2")])
+@pytest.mark.parametrize(
+    "lod,base,scroll",
+    [("low", "G1", "S1"), ("high", "G1", "S2"), ("medium", "attic_bezier_plinth", "S2")],
+)
 def test_column_estimate_bounds_the_build(lod, base, scroll):
     p = portunus_column_params(lod=lod, base=base, scroll=scroll)
     built = build_column(p).n_triangles

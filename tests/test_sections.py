@@ -143,15 +143,24 @@ def small_asset(tmp_path_factory):
     from ionic_usd.usd.column_asset import ColumnAssetOptions
 
     folder = tmp_path_factory.mktemp("sections_asset") / "IonicColumn"
-    opts = ColumnAssetOptions(lods=("high", "low"), bases=("attic_bezier_plinth", "G2"),
-                              scrolls=("S1",), flutes=("f24",), forms=("full",), texture_size=16)
+    opts = ColumnAssetOptions(
+        lods=("high", "low"),
+        bases=("attic_bezier_plinth", "G2"),
+        scrolls=("S1",),
+        flutes=("f24",),
+        forms=("full",),
+        texture_size=16,
+    )
     return build_column_asset(folder, opts).path, opts.params
 
 
 def test_usd_sections_match_api(column_usd):
     path, p = column_usd
-    for part, api in (("base", base_section(p)), ("shaft", shaft_silhouette_section(p)),
-                      ("volute", volute_section(p))):
+    for part, api in (
+        ("base", base_section(p)),
+        ("shaft", shaft_silhouette_section(p)),
+        ("volute", volute_section(p)),
+    ):
         # the capital is one solid: its band joins the eye boss, which the parameters locate
         cut = section_from_usd(path, part, params=p if part == "volute" else None)
         assert hausdorff_distance(api, cut) < 1e-5, part  # float32 points: ~1e-7 m

@@ -81,8 +81,13 @@ def test_crisp_fillet_edges_smooth_flutes():
     v_sorted = tri[order]
     starts = np.flatnonzero(np.r_[True, np.diff(v_sorted) != 0])
     spread = np.maximum.reduceat(
-        np.linalg.norm(normals[order] - normals[order][starts].repeat(
-            np.diff(np.r_[starts, len(order)]), axis=0), axis=1), starts)
+        np.linalg.norm(
+            normals[order]
+            - normals[order][starts].repeat(np.diff(np.r_[starts, len(order)]), axis=0),
+            axis=1,
+        ),
+        starts,
+    )
     pts = m.points[v_sorted[starts]]
     body = (pts[:, 1] > 1.0) & (pts[:, 1] < 6.0)
     crisp = spread[body] > 0.3
@@ -97,8 +102,13 @@ def test_volume_close_to_analytic(h):
     p = ShaftParams(flute_slices=h, entasis=0.02, entasis_rows=64)
     m = build_shaft(p)
     # the analytic solid has round circles: compare with the polygon's inscribed factor
-    exact, _ = quad(lambda y: analytic_area(p, y), 0, p.length, limit=400,
-                    points=[p.ring_bottom, p.length - p.ring_top])
+    exact, _ = quad(
+        lambda y: analytic_area(p, y),
+        0,
+        p.length,
+        limit=400,
+        points=[p.ring_bottom, p.length - p.ring_top],
+    )
     got = inspect_mesh(m).signed_volume
     rel = abs(got - exact) / exact
     # the flute polygon is inscribed in the ellipse: O(1/h^2) more material than the ideal
@@ -133,8 +143,9 @@ def test_flute_count_visible_in_cross_section(flutes):
     p = ShaftParams(flutes=flutes, flute_angle=0.8 * 360 / flutes)
     m = build_shaft(p)
     y = p.length / 2
-    section = m.points[np.abs(m.points[:, 1] - m.points[:, 1][np.argmin(
-        np.abs(m.points[:, 1] - y))]) < 1e-9]
+    section = m.points[
+        np.abs(m.points[:, 1] - m.points[:, 1][np.argmin(np.abs(m.points[:, 1] - y))]) < 1e-9
+    ]
     ang = np.arctan2(-section[:, 2], section[:, 0])
     rad = np.hypot(section[:, 0], section[:, 2])
     order = np.argsort(ang)
@@ -162,8 +173,10 @@ def test_open_ends_weld_to_rings():
     upper = build_shaft(p, cap_bottom=False, y_offset=p.length)
     # the rings must coincide: same radius at both ends for the test
     q = ShaftParams(top_radius=p.bottom_radius)
-    lower, upper = build_shaft(q, cap_top=False), build_shaft(q, cap_bottom=False,
-                                                              y_offset=q.length)
+    lower, upper = (
+        build_shaft(q, cap_top=False),
+        build_shaft(q, cap_bottom=False, y_offset=q.length),
+    )
     w = weld(merge([lower, upper]), tol=1e-9)
     assert inspect_mesh(w).watertight
 
@@ -196,6 +209,7 @@ def test_budget_refused_with_estimate():
 
 # -- indexed normals and analytic st -----------------------------------------------------------
 
+
 def _st_ratio(m):
     """Per triangle: signed st area / 3D area, and the 3D areas."""
     st = m.st[m.st_indices].reshape(-1, 3, 2).astype(np.float64)
@@ -205,8 +219,14 @@ def _st_ratio(m):
     return a_st / a3, a3
 
 
-@pytest.mark.parametrize("params", [ShaftParams(), ShaftParams(flute_slices=3, entasis=0.01),
-                                    ShaftParams(ring_bottom=0.0, ring_top=0.0)])
+@pytest.mark.parametrize(
+    "params",
+    [
+        ShaftParams(),
+        ShaftParams(flute_slices=3, entasis=0.01),
+        ShaftParams(ring_bottom=0.0, ring_top=0.0),
+    ],
+)
 def test_indexed_normals_compact_and_consistent(params):
     from ionic_usd.geometry.check import normals_against_winding
 
@@ -225,8 +245,14 @@ def test_indexed_normals_compact_and_consistent(params):
     assert_allclose(again.corner_normals(), corner, atol=0)
 
 
-@pytest.mark.parametrize("params", [ShaftParams(), ShaftParams(flute_slices=3, entasis=0.01),
-                                    ShaftParams(flute_slices=16, entasis=-0.01)])
+@pytest.mark.parametrize(
+    "params",
+    [
+        ShaftParams(),
+        ShaftParams(flute_slices=3, entasis=0.01),
+        ShaftParams(flute_slices=16, entasis=-0.01),
+    ],
+)
 def test_analytic_st_is_finite_wound_and_nearly_isometric(params):
     from ionic_usd.texture.atlas import chart_labels
 
@@ -257,14 +283,18 @@ def test_readme_lod_table_matches_the_generator():
     from ionic_usd.column.column import build_column, portunus_column_params
 
     readme = (Path(__file__).resolve().parents[1] / "README.md").read_text("utf-8")
-    rows = re.findall(r"^\| (high|medium|low) \| (\d+) / (\d+) \| (\d+) \| ([\d,]+) \|$",
-                      readme, flags=re.M)
+    rows = re.findall(
+        r"^\| (high|medium|low) \| (\d+) / (\d+) \| (\d+) \| ([\d,]+) \|$", readme, flags=re.M
+    )
     assert [r[0] for r in rows] == ["high", "medium", "low"]
     for lod, h, i, body_rows, tris in rows:
         p = portunus_column_params(lod=lod)
         sp = p.shaft_params()  # the shaft as the column builds it at this LOD
-        assert (sp.flute_slices, sp.flute_slices_per_fillet_slice, sp.body_rows) == \
-            (int(h), int(i), int(body_rows))
+        assert (sp.flute_slices, sp.flute_slices_per_fillet_slice, sp.body_rows) == (
+            int(h),
+            int(i),
+            int(body_rows),
+        )
         col = build_column(p)
         assert col.n_triangles == int(tris.replace(",", ""))
         assert col.parts()["Shaft"].n_triangles == shaft_triangle_estimate(sp, caps=2)

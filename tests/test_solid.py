@@ -55,8 +55,9 @@ def test_checks_see_each_defect():
     opened = Mesh(c.points, c.face_vertex_counts[:-1], c.face_vertex_indices[:-3])
     o = solid_report(opened)
     assert o.open_edges == 3
-    inside_out = c.with_(face_vertex_indices=c.face_vertex_indices.reshape(-1, 3)[:, ::-1]
-                         .reshape(-1), normals=None)
+    inside_out = c.with_(
+        face_vertex_indices=c.face_vertex_indices.reshape(-1, 3)[:, ::-1].reshape(-1), normals=None
+    )
     assert solid_report(inside_out).volume < 0
 
 
@@ -77,14 +78,20 @@ def _check(m, label):
     return r
 
 
-SUBSET = ColumnAssetOptions(lods=("low",), bases=("attic_bezier_plinth", "G1"), scrolls=("S2",),
-                            flutes=("f20",))
+SUBSET = ColumnAssetOptions(
+    lods=("low",), bases=("attic_bezier_plinth", "G1"), scrolls=("S2",), flutes=("f20",)
+)
 
 
 @pytest.mark.parametrize("form", FORM_VARIANTS)
 def test_asset_meshes_are_solids_subset(form):
-    opts = ColumnAssetOptions(lods=SUBSET.lods, bases=SUBSET.bases, scrolls=SUBSET.scrolls,
-                              flutes=SUBSET.flutes, forms=(form,))
+    opts = ColumnAssetOptions(
+        lods=SUBSET.lods,
+        bases=SUBSET.bases,
+        scrolls=SUBSET.scrolls,
+        flutes=SUBSET.flutes,
+        forms=(form,),
+    )
     meshes = column_asset_meshes(opts)
     assert {m.part for m in meshes} == {"Base", "Shaft", "CapitalBody"}
     for m in meshes:
@@ -105,8 +112,9 @@ def test_every_asset_mesh_is_a_solid(lod):
 def _without_cap(mesh: Mesh, y: float, r: float) -> Mesh:
     """Drop the flat disc of radius ``r`` at height ``y`` (the cap between base and shaft)."""
     p = mesh.points[mesh.triangles]
-    on = (np.abs(p[:, :, 1] - y).max(axis=1) < 1e-9) & \
-        (np.hypot(p[:, :, 0], p[:, :, 2]).max(axis=1) <= r + 1e-9)
+    on = (np.abs(p[:, :, 1] - y).max(axis=1) < 1e-9) & (
+        np.hypot(p[:, :, 0], p[:, :, 2]).max(axis=1) <= r + 1e-9
+    )
     keep = ~on
     return Mesh(mesh.points, np.full(int(keep.sum()), 3), mesh.triangles[keep].reshape(-1))
 
@@ -197,8 +205,9 @@ def test_every_cut_face_lies_inside_a_wall():
             centre = tri.mean(axis=1, keepdims=True)
             samples = np.concatenate([tri, centre, 0.5 * (tri + np.roll(tri, 1, axis=1))], 1)
             for rot in rotations:
-                pts = _world(samples.reshape(-1, 3), type(c)(c.position, rot, c.kind, c.scale,
-                                                            c.name))
+                pts = _world(
+                    samples.reshape(-1, 3), type(c)(c.position, rot, c.kind, c.scale, c.name)
+                )
                 inside = np.zeros(len(pts), dtype=bool)
                 for w in walls:
                     lo, hi = np.asarray(w.min) - 1e-6, np.asarray(w.max) + 1e-6
@@ -254,11 +263,12 @@ def _cube_with_cap(offset):
     tri = c.triangles.tolist()
     groups = np.repeat(np.arange(6), 2).tolist()
     k = tri.index([0, 3, 1])
-    tri[k:k + 1] = [[0, 3, 8], [3, 1, 8], [1, 0, 8]]
-    groups[k:k + 1] = [groups[k]] * 3
+    tri[k : k + 1] = [[0, 3, 8], [3, 1, 8], [1, 0, 8]]
+    groups[k : k + 1] = [groups[k]] * 3
     pts = np.vstack([c.points, [0.5, 0.5, 0.0] + np.asarray(offset)])
-    return smooth_normals(Mesh(pts, np.full(len(tri), 3), np.asarray(tri).reshape(-1)),
-                          np.asarray(groups))
+    return smooth_normals(
+        Mesh(pts, np.full(len(tri), 3), np.asarray(tri).reshape(-1)), np.asarray(groups)
+    )
 
 
 def test_remove_slivers_mends_a_cap_without_moving_the_surface():

@@ -66,8 +66,9 @@ def test_explicit_sequence_matches_paper_semantics():
 def test_closed_stitch_of_rings_forms_outward_band():
     n, m = 12, 30
     pts = np.concatenate([ring(1.0, 0.0, n), ring(1.0, 1.0, m)])
-    tri = stitch(np.arange(n), np.arange(n, n + m), is_closed=True, a_points=pts[:n],
-                 b_points=pts[n:])
+    tri = stitch(
+        np.arange(n), np.arange(n, n + m), is_closed=True, a_points=pts[:n], b_points=pts[n:]
+    )
     p = pts[tri]
     normal = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
     centre = p.mean(axis=1)
@@ -81,10 +82,12 @@ def test_stitched_cylinder_of_unequal_rings_is_watertight():
     n, m = 9, 23
     pts = np.concatenate([ring(1.0, 0.0, n), ring(1.0, 1.0, m), [[0, 0, 0], [0, 1, 0]]])
     a, b = np.arange(n), np.arange(n, n + m)
-    tri = np.concatenate([
-        stitch(a, b, is_closed=True),
-        stitch(a, np.array([n + m]), is_closed=True, direction=-1),
-        stitch(b, np.array([n + m + 1]), is_closed=True),
-    ])
+    tri = np.concatenate(
+        [
+            stitch(a, b, is_closed=True),
+            stitch(a, np.array([n + m]), is_closed=True, direction=-1),
+            stitch(b, np.array([n + m + 1]), is_closed=True),
+        ]
+    )
     r = inspect_mesh(Mesh(pts, [3] * len(tri), tri.reshape(-1)))
     assert r.watertight, r

@@ -14,8 +14,12 @@ from ionic_usd.geometry.sweep import polygon_area, sweep
 def _manifold(mesh):
     import manifold3d as m3
 
-    return m3.Manifold(m3.Mesh(vert_properties=mesh.points.astype(np.float32),
-                               tri_verts=mesh.triangles.astype(np.uint32)))
+    return m3.Manifold(
+        m3.Mesh(
+            vert_properties=mesh.points.astype(np.float32),
+            tri_verts=mesh.triangles.astype(np.uint32),
+        )
+    )
 
 
 def _directed_edges_unique(mesh) -> bool:
@@ -102,11 +106,14 @@ def test_curved_section_is_smooth():
     assert len(np.unique(m.normals.round(5), axis=0)) < len(m.normals) / 3
 
 
-@pytest.mark.parametrize("path, err", [
-    (np.array([[0, 0, 0], [1, 0, 0], [0, 0, 0.0]]), "turns back"),
-    (np.array([[0, 0, 0], [1, 0.5, 0], [1, 0, 1.0]]), "plane"),
-    (np.array([[0, 0, 0], [0, 0, 0], [1, 0, 1.0]]), "coincident"),
-])
+@pytest.mark.parametrize(
+    "path, err",
+    [
+        (np.array([[0, 0, 0], [1, 0, 0], [0, 0, 0.0]]), "turns back"),
+        (np.array([[0, 0, 0], [1, 0.5, 0], [1, 0, 1.0]]), "plane"),
+        (np.array([[0, 0, 0], [0, 0, 0], [1, 0, 1.0]]), "coincident"),
+    ],
+)
 def test_bad_paths_raise(path, err):
     sec = np.array([[0.0, 0.0], [0.2, 0.0], [0.2, 0.3]])
     with pytest.raises(GeometryError, match=err):

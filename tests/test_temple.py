@@ -35,11 +35,14 @@ def test_counts_and_shared_prototypes(portunus_temple):
     protos = {p.GetPrototype() for p in inst}
     assert len(protos) == 3 == len(stage.GetPrototypes())
     assert {p.GetVariantSets().GetVariantSet("form").GetVariantSelection() for p in free} == {
-        "full"}
-    assert {p.GetVariantSets().GetVariantSet("form").GetVariantSelection()
-            for p in engaged} == {"engaged"}
-    assert {p.GetVariantSets().GetVariantSet("form").GetVariantSelection()
-            for p in corner} == {"corner"}
+        "full"
+    }
+    assert {p.GetVariantSets().GetVariantSet("form").GetVariantSelection() for p in engaged} == {
+        "engaged"
+    }
+    assert {p.GetVariantSets().GetVariantSet("form").GetVariantSelection() for p in corner} == {
+        "corner"
+    }
     folder = portunus_temple.root.parent
     assert len(list(folder.rglob("IonicColumn.usda"))) == 1
     assert portunus_temple.instances == 18
@@ -50,8 +53,10 @@ def test_columns_stand_on_the_stylobate_at_the_documented_spacing(portunus_templ
     layout = portunus_layout()
     stage = stage_of(portunus_temple)
     cache = UsdGeom.XformCache()
-    pos = {p.GetName(): np.array(cache.GetLocalToWorldTransform(p).ExtractTranslation())
-           for p in instances(stage)}
+    pos = {
+        p.GetName(): np.array(cache.GetLocalToWorldTransform(p).ExtractTranslation())
+        for p in instances(stage)
+    }
     assert all(abs(v[1] - layout.stylobate_height) < 1e-9 for v in pos.values())
     s = layout.axial_spacing
     assert s == pytest.approx(8.80 / 3)
@@ -71,8 +76,9 @@ def test_columns_stand_on_the_stylobate_at_the_documented_spacing(portunus_templ
 def test_roof_inclined_by_the_documented_pitch(portunus_temple):
     stage = stage_of(portunus_temple)
     layout = portunus_layout()
-    pts = np.array(UsdGeom.Mesh(stage.GetPrimAtPath("/Temple/Roof/roof_left"))
-                   .GetPointsAttr().Get())
+    pts = np.array(
+        UsdGeom.Mesh(stage.GetPrimAtPath("/Temple/Roof/roof_left")).GetPointsAttr().Get()
+    )
     # the slab's top face: the four highest points over x
     top = pts[np.argsort(pts[:, 1])[-4:]]
     low = pts[np.argsort(pts[:, 1])[-8:-4]]
@@ -90,17 +96,31 @@ def composed_values(stage) -> dict[str, tuple]:
             if a.GetName() == "extentsHint":  # per combination; tests/test_bounds.py
                 continue
             v = a.Get()
-            vals.append((a.GetName(), np.asarray(v).tobytes() if v is not None and hasattr(
-                v, "__len__") and not isinstance(v, str) else v))
+            vals.append(
+                (
+                    a.GetName(),
+                    np.asarray(v).tobytes()
+                    if v is not None and hasattr(v, "__len__") and not isinstance(v, str)
+                    else v,
+                )
+            )
         rels = tuple((r.GetName(), tuple(r.GetTargets())) for r in prim.GetRelationships())
         sel = tuple(sorted(prim.GetVariantSets().GetAllVariantSelections().items()))
         out[str(prim.GetPath())] = (tuple(vals), rels, sel)
     return out
 
 
-@pytest.mark.parametrize("hid", ["flutes-20", "roof-pitch-15", "frieze-plain",
-                                 "finish-bare-stone", "corner-capitals-angled",
-                                 "frieze-garlands"])
+@pytest.mark.parametrize(
+    "hid",
+    [
+        "flutes-20",
+        "roof-pitch-15",
+        "frieze-plain",
+        "finish-bare-stone",
+        "corner-capitals-angled",
+        "frieze-garlands",
+    ],
+)
 def test_each_hypothesis_switches_exactly_its_prims(portunus_temple, hid):
     stage = stage_of(portunus_temple)
     root = stage.GetDefaultPrim()
@@ -113,8 +133,14 @@ def test_each_hypothesis_switches_exactly_its_prims(portunus_temple, hid):
     layers = portunus_temple.root.parent / "layers"
     for f in [f for f in layers.iterdir() if f.name.split(".")[0] == hid]:
         layer = Sdf.Layer.FindOrOpen(str(f))
-        layer.Traverse(Sdf.Path("/Temple"), lambda p, la=layer: named.add(str(p)) if (
-            p.IsPrimPath() and la.GetPrimAtPath(p).customData.get("ionic_usd")) else None)
+        layer.Traverse(
+            Sdf.Path("/Temple"),
+            lambda p, la=layer: (
+                named.add(str(p))
+                if (p.IsPrimPath() and la.GetPrimAtPath(p).customData.get("ionic_usd"))
+                else None
+            ),
+        )
     assert named
     before = composed_values(stage)
     root.GetVariantSets().GetVariantSet(vset).SetVariantSelection("alternative")
@@ -130,7 +156,8 @@ def test_each_hypothesis_switches_exactly_its_prims(portunus_temple, hid):
     assert changed == named, hid
     for p in named:
         meta = stage.GetPrimAtPath(p).GetCustomData()["ionic_usd"]["hypotheses"][
-            hid.replace("-", "_")]
+            hid.replace("-", "_")
+        ]
         assert meta["id"] == hid and meta["certainty"] in ("high", "medium", "low")
         assert len(meta["sources"]) >= 1
     assert validate_stage(stage) == []
@@ -149,17 +176,23 @@ def test_angle_capitals_on_the_four_corners(portunus_temple):
     stage = stage_of(portunus_temple)
     root = stage.GetDefaultPrim()
     root.GetVariantSets().GetVariantSet("hyp_corner_capitals_angled").SetVariantSelection(
-        "alternative")
-    angled = {p.GetName(): p for p in instances(stage)
-              if p.GetVariantSets().GetVariantSet("capital").GetVariantSelection() == "angle"}
+        "alternative"
+    )
+    angled = {
+        p.GetName(): p
+        for p in instances(stage)
+        if p.GetVariantSets().GetVariantSet("capital").GetVariantSelection() == "angle"
+    }
     assert sorted(angled) == ["front_1", "front_4", "rear_1", "rear_4"]
     for name, prim in angled.items():
         m = np.array(UsdGeom.Xformable(prim).ComputeLocalToWorldTransform(0))[:3, :3]
         local_z, local_x = m[2], m[0]  # row vectors: images of the local axes
         pos = np.array(UsdGeom.Xformable(prim).ComputeLocalToWorldTransform(0))[3, :3]
         out = {(int(np.sign(pos[0])), 0, 0), (0, 0, int(np.sign(pos[2])))}
-        assert {tuple(np.round(local_z).astype(int)), tuple(np.round(local_x).astype(int))} \
-            == out, name
+        assert {
+            tuple(np.round(local_z).astype(int)),
+            tuple(np.round(local_x).astype(int)),
+        } == out, name
     assert validate_stage(stage) == []
 
 
@@ -183,8 +216,9 @@ def test_user_overrides_survive_regeneration(tmp_path):
     prim = stage.GetPrimAtPath("/Temple/Colonnade/Free/front_1")
     assert prim.GetAttribute("xformOp:rotateXYZ").Get() == Gf.Vec3f(0, 33, 0)
     xf = UsdGeom.Xformable(prim).ComputeLocalToWorldTransform(Usd.TimeCode.Default())
-    assert Gf.IsClose(xf.ExtractRotation().GetAxis() * xf.ExtractRotation().GetAngle(),
-                      Gf.Vec3d(0, 33, 0), 1e-6)
+    assert Gf.IsClose(
+        xf.ExtractRotation().GetAxis() * xf.ExtractRotation().GetAngle(), Gf.Vec3d(0, 33, 0), 1e-6
+    )
 
 
 def test_cli_temple_errors(tmp_path, capsys):
@@ -208,6 +242,7 @@ def test_shipped_hypothesis_layers_are_up_to_date(portunus_temple):
     for hid, layer in layers.items():
         fresh = layer.ExportToString()
         assert Sdf.Layer.FindOrOpen(str(shipped / f"{hid}.usda")).ExportToString() == fresh, (
-            f"layers/portunus/{hid}.usda is stale: run python tools/make_layers.py")
+            f"layers/portunus/{hid}.usda is stale: run python tools/make_layers.py"
+        )
         written = portunus_temple.root.parent / "layers" / f"{hid}.usda"
         assert Sdf.Layer.FindOrOpen(str(written)).ExportToString() == fresh

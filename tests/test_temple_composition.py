@@ -47,10 +47,20 @@ def test_every_layer_alone_is_a_valid_stage(portunus_temple):
     folder = folder_of(portunus_temple)
     files = layer_files(folder)
     names = {f.relative_to(folder).as_posix() for f in files}
-    assert {"Temple.usda", "generated.usda", "overrides.usda", "materials.usda", "podium.usda",
-            "cella.usda", "entablature.usda", "roof.usda", "colonnade.usda",
-            "IonicColumn/IonicColumn.usda", "IonicColumn/Payload/Geometry.usdc",
-            "layers/roof-pitch-15.usda"} <= names
+    assert {
+        "Temple.usda",
+        "generated.usda",
+        "overrides.usda",
+        "materials.usda",
+        "podium.usda",
+        "cella.usda",
+        "entablature.usda",
+        "roof.usda",
+        "colonnade.usda",
+        "IonicColumn/IonicColumn.usda",
+        "IonicColumn/Payload/Geometry.usdc",
+        "layers/roof-pitch-15.usda",
+    } <= names
     for f in files:
         layer = Sdf.Layer.FindOrOpen(str(f))
         where = f.relative_to(folder).as_posix()
@@ -68,7 +78,7 @@ def test_every_layer_alone_is_a_valid_stage(portunus_temple):
         # material bindings resolve in the layer alone
         for p in stage.Traverse():
             rel = UsdShade.MaterialBindingAPI(p).GetDirectBindingRel()
-            for target in (rel.GetTargets() if rel else []):
+            for target in rel.GetTargets() if rel else []:
                 assert UsdShade.Material(stage.GetPrimAtPath(target)), (where, target)
     # big arrays live in crate files: no text layer holds an array of over 1,000 values
     for f in files:
@@ -81,8 +91,7 @@ def test_every_layer_alone_is_a_valid_stage(portunus_temple):
             if path.IsPropertyPath():
                 spec = layer.GetPropertyAtPath(path)
                 value = getattr(spec, "default", None)
-                if value is not None and hasattr(value, "__len__") and not isinstance(
-                        value, str):
+                if value is not None and hasattr(value, "__len__") and not isinstance(value, str):
                     sizes.append(len(value))
 
         layer.Traverse(layer.pseudoRoot.path, visit)
@@ -114,10 +123,13 @@ def test_one_material_library_one_copy_of_the_maps(portunus_temple):
     folder = folder_of(portunus_temple)
     # the stone maps are the column asset's; the temple adds only the roof's terracotta
     assert sorted(p.name for p in (folder / "Textures").iterdir()) == [
-        f"terracotta_{m}.png" for m in ("basecolor", "normal", "roughness")]
+        f"terracotta_{m}.png" for m in ("basecolor", "normal", "roughness")
+    ]
     pngs = sorted(folder.rglob("*.png"))
-    assert {p.parent for p in pngs} == {folder / "IonicColumn" / "Payload" / "Textures",
-                                        folder / "Textures"}
+    assert {p.parent for p in pngs} == {
+        folder / "IonicColumn" / "Payload" / "Textures",
+        folder / "Textures",
+    }
     stage = Usd.Stage.Open(str(portunus_temple.root))
     used = set()
     for p in Usd.PrimRange(stage.GetPseudoRoot(), EVERYTHING):
@@ -157,8 +169,9 @@ def test_overrides_are_strongest_and_survive_a_rebuild(tmp_path):
     temple.variantSelections["lod"] = "low"
     podium = Sdf.CreatePrimInLayer(user, "/Temple/Podium")
     podium.specifier = Sdf.SpecifierOver
-    Sdf.AttributeSpec(podium, "visibility", Sdf.ValueTypeNames.Token,
-                      Sdf.VariabilityUniform).default = "invisible"
+    Sdf.AttributeSpec(
+        podium, "visibility", Sdf.ValueTypeNames.Token, Sdf.VariabilityUniform
+    ).default = "invisible"
     altar = Sdf.CreatePrimInLayer(user, "/Temple/Altar")
     altar.specifier, altar.typeName = Sdf.SpecifierDef, "Cube"
     col = Sdf.CreatePrimInLayer(user, "/Temple/Colonnade/Free/front_2")
@@ -173,11 +186,16 @@ def test_overrides_are_strongest_and_survive_a_rebuild(tmp_path):
         assert root.GetVariantSet("hyp_roof_pitch_15").GetVariantSelection() == "alternative"
         pitch = stage.GetPrimAtPath("/Temple/Roof/roof_left").GetCustomData()["ionic_usd"]
         assert "roof_pitch_15" in pitch["hypotheses"]
-        assert UsdGeom.Imageable(stage.GetPrimAtPath("/Temple/Podium")).ComputeVisibility() \
+        assert (
+            UsdGeom.Imageable(stage.GetPrimAtPath("/Temple/Podium")).ComputeVisibility()
             == UsdGeom.Tokens.invisible
+        )
         assert stage.GetPrimAtPath("/Temple/Altar").GetTypeName() == "Cube"
-        lods = {p.GetName(): p.GetVariantSet("lod").GetVariantSelection()
-                for p in stage.Traverse() if p.IsInstance()}
+        lods = {
+            p.GetName(): p.GetVariantSet("lod").GetVariantSelection()
+            for p in stage.Traverse()
+            if p.IsInstance()
+        }
         assert lods.pop("front_2") == "medium" and set(lods.values()) == {"low"}
         assert validate_stage(stage) == []
 
@@ -196,8 +214,7 @@ def layer_paradata(folder: Path) -> dict[str, dict[str, set[str]]]:
 
         def visit(path, layer=layer, found=found):
             if path.IsPrimPath():
-                hyps = layer.GetPrimAtPath(path).customData.get("ionic_usd", {}).get(
-                    "hypotheses")
+                hyps = layer.GetPrimAtPath(path).customData.get("ionic_usd", {}).get("hypotheses")
                 if hyps:
                     found[str(path)] = set(hyps)
 
@@ -211,10 +228,12 @@ def check_combination(stage, hyps, chosen, detail, recorded, layout) -> None:
     (columns between stylobate and architrave, roof on the cornice, ornament on its member),
     that the geometry is finite, that every prim lists the selected hypotheses touching it,
     and that the stage validates."""
-    select(stage, detail=detail,
-           **{h: ("alternative" if h in chosen else "baseline") for h in hyps})
-    bbox = UsdGeom.BBoxCache(Usd.TimeCode.Default(), [UsdGeom.Tokens.default_,
-                                                      UsdGeom.Tokens.render])
+    select(
+        stage, detail=detail, **{h: ("alternative" if h in chosen else "baseline") for h in hyps}
+    )
+    bbox = UsdGeom.BBoxCache(
+        Usd.TimeCode.Default(), [UsdGeom.Tokens.default_, UsdGeom.Tokens.render]
+    )
     where = (chosen, detail)
 
     def world(path: str) -> Gf.Range3d:
@@ -230,10 +249,15 @@ def check_combination(stage, hyps, chosen, detail, recorded, layout) -> None:
     cornice = world(member + "cornice")
     cornice_top = cornice.GetMax()[1]
     # the gable wedges sit on the cornice; the slabs rest on their bed at the eaves
-    for slab, bed in (("roof_left", ROOF_BED), ("roof_right", ROOF_BED),
-                      ("pediment_left", 0.0), ("pediment_right", 0.0)):
+    for slab, bed in (
+        ("roof_left", ROOF_BED),
+        ("roof_right", ROOF_BED),
+        ("pediment_left", 0.0),
+        ("pediment_right", 0.0),
+    ):
         assert world(f"/Temple/Roof/{slab}").GetMin()[1] == pytest.approx(
-            cornice_top + bed, abs=1e-3), (where, slab)
+            cornice_top + bed, abs=1e-3
+        ), (where, slab)
     stylobate = world("/Temple/Podium/die").GetMax()[1]
     architrave = world(member + "architrave").GetMin()[1]
     assert stylobate == pytest.approx(layout.stylobate_height, abs=1e-6)
@@ -299,7 +323,7 @@ def test_sampled_combinations_of_hypotheses_and_detail_compose(portunus_temple):
 
 @pytest.mark.slow
 def test_every_combination_of_hypotheses_and_detail_composes(portunus_temple):
-    assert _combinations(portunus_temple, sample=None) == 2 ** 6 * 3
+    assert _combinations(portunus_temple, sample=None) == 2**6 * 3
 
 
 def test_interacting_hypotheses_get_a_combination_layer(tmp_path):
@@ -311,25 +335,43 @@ def test_interacting_hypotheses_get_a_combination_layer(tmp_path):
     from ionic_usd.usd.temple import CUBOID_UV_SCALE
 
     data = load_toml(Path(__file__).resolve().parent.parent / "ionic_usd/data/portunus.toml")
-    data["hypothesis"] = [h for h in data["hypothesis"] if h["id"] == "roof-pitch-15"] + [{
-        "id": "deep-cornice", "description": "a cornice projecting 1.6 times its height",
-        "sources": ["test"], "certainty": "low",
-        "changes": {"entablature.cornice_projection_ratio": 1.6}}]
+    data["hypothesis"] = [h for h in data["hypothesis"] if h["id"] == "roof-pitch-15"] + [
+        {
+            "id": "deep-cornice",
+            "description": "a cornice projecting 1.6 times its height",
+            "sources": ["test"],
+            "certainty": "low",
+            "changes": {"entablature.cornice_projection_ratio": 1.6},
+        }
+    ]
     layout = layout_from_mapping(data, context="test")
     rep = compose_temple(tmp_path / "T", layout, texture_size=16)
     # each hypothesis re-places the detail it moves; together they reshape the roof
-    assert rep.combination_layers == ("roof-pitch-15.detail", "deep-cornice.detail",
-                                      "roof-pitch-15+deep-cornice")
+    assert rep.combination_layers == (
+        "roof-pitch-15.detail",
+        "deep-cornice.detail",
+        "roof-pitch-15+deep-cornice",
+    )
     folder = tmp_path / "T"
     assert (folder / "layers" / "roof-pitch-15+deep-cornice.usdc").is_file()
     stage = Usd.Stage.Open(str(folder / "Temple.usda"))
-    for a, b, d in itertools.product(("baseline", "alternative"), ("baseline", "alternative"),
-                                     ("plain", "moulded", "carved")):
+    for a, b, d in itertools.product(
+        ("baseline", "alternative"), ("baseline", "alternative"), ("plain", "moulded", "carved")
+    ):
         select(stage, hyp_roof_pitch_15=a, hyp_deep_cornice=b, detail=d)
         ids = [i for i, s in (("roof-pitch-15", a), ("deep-cornice", b)) if s == "alternative"]
         want = build_layout(layout.params, hypotheses=layout.hypotheses, apply=ids)
-        assert mismatches(stage, want, layout.params.columns_height, uv_scale=CUBOID_UV_SCALE,
-                          variant=d, detail=detail_geometry(want)) == {}, (ids, d)
+        assert (
+            mismatches(
+                stage,
+                want,
+                layout.params.columns_height,
+                uv_scale=CUBOID_UV_SCALE,
+                variant=d,
+                detail=detail_geometry(want),
+            )
+            == {}
+        ), (ids, d)
         assert validate_stage(stage) == []
     listed = stage.GetPrimAtPath("/Temple/Roof/roof_left").GetCustomData()["ionic_usd"]
     assert set(listed["hypotheses"]) == {"roof_pitch_15", "deep_cornice"}
@@ -337,17 +379,21 @@ def test_interacting_hypotheses_get_a_combination_layer(tmp_path):
         assert validate_stage(Usd.Stage.Open(str(f))) == [], f
 
 
-@pytest.mark.parametrize(("changes", "key"), [
-    ({"column.flute_count": 7}, "column.flute_count"),
-    ({"material.finish": "gold"}, "material.finish"),
-    ({"column.volute_turns": 4}, "column.volute_turns"),
-    ({"roof.colour": 1}, "roof.colour"),
-    ({"columns.lower_diameter": 1.2}, "columns.lower_diameter"),
-])
+@pytest.mark.parametrize(
+    ("changes", "key"),
+    [
+        ({"column.flute_count": 7}, "column.flute_count"),
+        ({"material.finish": "gold"}, "material.finish"),
+        ({"column.volute_turns": 4}, "column.volute_turns"),
+        ({"roof.colour": 1}, "roof.colour"),
+        ({"columns.lower_diameter": 1.2}, "columns.lower_diameter"),
+    ],
+)
 def test_unrealisable_hypothesis_changes_are_errors(tmp_path, changes, key):
     data = load_toml(Path(__file__).resolve().parent.parent / "ionic_usd/data/portunus.toml")
-    data["hypothesis"] = [{"id": "bad", "description": "x", "sources": ["y"],
-                           "certainty": "low", "changes": changes}]
+    data["hypothesis"] = [
+        {"id": "bad", "description": "x", "sources": ["y"], "certainty": "low", "changes": changes}
+    ]
     with pytest.raises(ParameterError, match=key.replace(".", r"\.")):
         hypothesis_layers(layout_from_mapping(data, context="t.toml"))
     with pytest.raises(ParameterError):
@@ -362,8 +408,10 @@ def test_cli_rejects_unknown_temple_key_and_bad_change(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "[temple]" in err and "colour" in err and "Traceback" not in err
     assert len(err.strip().splitlines()) == 1
-    cfg.write_text('[[hypothesis]]\nid = "h"\ndescription = "d"\nsources = ["s"]\n'
-                   'certainty = "low"\nchanges = { "column.flute_count" = 7 }\n')
+    cfg.write_text(
+        '[[hypothesis]]\nid = "h"\ndescription = "d"\nsources = ["s"]\n'
+        'certainty = "low"\nchanges = { "column.flute_count" = 7 }\n'
+    )
     assert main(["temple", "--config", str(cfg), "-o", str(tmp_path / "b")]) == 2
     err = capsys.readouterr().err
     assert "column.flute_count" in err and "7" in err and "Traceback" not in err
@@ -379,13 +427,16 @@ def test_one_edit_in_a_class_changes_every_instance(portunus_temple):
     assert cls and cls.IsAbstract()
     with Usd.EditContext(stage, stage.GetSessionLayer()):
         UsdGeom.Imageable(stage.OverridePrim("/_class_IonicColumn")).CreateVisibilityAttr(
-            "invisible")
+            "invisible"
+        )
         stage.OverridePrim("/_class_Temple").CreateAttribute(
-            "userProperties:note", Sdf.ValueTypeNames.String).Set("checked")
+            "userProperties:note", Sdf.ValueTypeNames.String
+        ).Set("checked")
     assert all(UsdGeom.Imageable(c).ComputeVisibility() == "invisible" for c in columns)
     assert stage.GetPrimAtPath("/Temple").GetAttribute("userProperties:note").Get() == "checked"
-    assert UsdGeom.Imageable(stage.GetPrimAtPath("/Temple/Podium")).ComputeVisibility() \
-        == "inherited"
+    assert (
+        UsdGeom.Imageable(stage.GetPrimAtPath("/Temple/Podium")).ComputeVisibility() == "inherited"
+    )
 
 
 def test_column_xform_ops_are_xform_common_api_compatible(portunus_temple):
@@ -408,8 +459,9 @@ def test_temple_lod_passes_to_every_column(portunus_temple):
     assert tris["high"] == portunus_temple.triangles == temple_triangles(stage)
     for lod in ("high", "medium", "low"):
         select(stage, lod=lod)
-        assert {p.GetVariantSet("lod").GetVariantSelection()
-                for p in stage.Traverse() if p.IsInstance()} == {lod}
+        assert {
+            p.GetVariantSet("lod").GetVariantSelection() for p in stage.Traverse() if p.IsInstance()
+        } == {lod}
         assert temple_triangles(stage) == tris[lod]
     assert tris["high"] > 2 * tris["medium"] > 2 * tris["low"] > 0
     # the count is by hand: instances × their prototype's rendered triangles + the cuboids
@@ -422,11 +474,12 @@ def test_temple_lod_passes_to_every_column(portunus_temple):
         proxies += len(meshes) - len(drawn)
         per_proto[proto.GetPath()] = sum(
             int(np.sum(np.array(UsdGeom.Mesh(p).GetFaceVertexCountsAttr().Get()) - 2))
-            for p in drawn)
+            for p in drawn
+        )
     # each prototype (form full, engaged, corner): its three low-lod parts as proxy
     assert len(stage.GetPrototypes()) == 3 and proxies == 3 * 3
-    inst = sum(per_proto[p.GetPrototype().GetPath()] for p in stage.Traverse()
-               if p.IsInstance())
+    inst = sum(per_proto[p.GetPrototype().GetPath()] for p in stage.Traverse() if p.IsInstance())
+
     # the temple's own meshes (cuboids, mouldings) and every copy of the PointInstancers'
     # prototypes (dentils, tiles)
     def tris(p) -> int:

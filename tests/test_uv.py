@@ -57,8 +57,9 @@ def uv_charts(st_indices: np.ndarray, n_st: int) -> np.ndarray:
     return connected_components(g, directed=False)[1][tri[:, 0]]
 
 
-def rasterise(st_px: np.ndarray, st_indices: np.ndarray, width: int, height: int,
-              labels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def rasterise(
+    st_px: np.ndarray, st_indices: np.ndarray, width: int, height: int, labels: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Count triangles covering each pixel centre (strictly inside) and record a label.
 
     Returns (coverage (h, w) int, label (h, w) int with -1 where empty).
@@ -73,8 +74,10 @@ def rasterise(st_px: np.ndarray, st_indices: np.ndarray, width: int, height: int
             continue
         x0, y0 = np.floor(t.min(axis=0)).astype(int)
         x1, y1 = np.ceil(t.max(axis=0)).astype(int)
-        xs, ys = np.meshgrid(np.arange(max(x0, 0), min(x1, width)) + 0.5,
-                             np.arange(max(y0, 0), min(y1, height)) + 0.5)
+        xs, ys = np.meshgrid(
+            np.arange(max(x0, 0), min(x1, width)) + 0.5,
+            np.arange(max(y0, 0), min(y1, height)) + 0.5,
+        )
         l1 = ((xs - a[0]) * (c[1] - a[1]) - (ys - a[1]) * (c[0] - a[0])) / det
         l2 = ((b[0] - a[0]) * (ys - a[1]) - (b[1] - a[1]) * (xs - a[0])) / det
         eps = 1e-6  # pixel centres on a shared edge belong to neither triangle
@@ -100,6 +103,7 @@ def cache(tmp_path) -> UVCache:
 
 # -- unwrap ----------------------------------------------------------------------------------
 
+
 @pytest.mark.parametrize("which", sorted(MESHES))
 def test_unwrap_shapes_and_bounds(which, cache):
     mesh = MESHES[which]()
@@ -120,8 +124,11 @@ def test_unwrap_keeps_corner_order_cube(cache):
     p3 = mesh.points[mesh.triangles]
     p2 = a.st_px.astype(np.float64)[a.st_indices.reshape(-1, 3)]
     for i, j in ((0, 1), (1, 2), (2, 0)):
-        assert_allclose(np.linalg.norm(p2[:, j] - p2[:, i], axis=1),
-                        TPM * np.linalg.norm(p3[:, j] - p3[:, i], axis=1), rtol=0.02)
+        assert_allclose(
+            np.linalg.norm(p2[:, j] - p2[:, i], axis=1),
+            TPM * np.linalg.norm(p3[:, j] - p3[:, i], axis=1),
+            rtol=0.02,
+        )
     # 6 square faces: 6 charts unless xatlas merges coplanar-free neighbours (it must not)
     assert a.chart_count == 6
 
@@ -152,14 +159,18 @@ def test_unwrap_tolerates_zero_area_triangles(cache):
 
 
 def test_unwrap_rejects_polygons_and_bad_options(cache):
-    quad = Mesh(np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float), [4],
-                [0, 1, 2, 3])
+    quad = Mesh(np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float), [4], [0, 1, 2, 3])
     with pytest.raises(GeometryError, match="triangle"):
         unwrap(quad, texels_per_metre=TPM, cache=cache)
     with pytest.raises(GeometryError, match="no faces"):
         unwrap(Mesh(np.zeros((0, 3)), [], []), texels_per_metre=TPM, cache=cache)
-    for kw in ({"texels_per_metre": 0.0}, {"texels_per_metre": float("nan")},
-               {"padding": -1}, {"padding": 1.5}, {"resolution_cap": 4}):
+    for kw in (
+        {"texels_per_metre": 0.0},
+        {"texels_per_metre": float("nan")},
+        {"padding": -1},
+        {"padding": 1.5},
+        {"resolution_cap": 4},
+    ):
         opts = {"texels_per_metre": TPM, **kw}
         with pytest.raises(ParameterError):
             unwrap(cube(1.0), cache=cache, **opts)
@@ -169,6 +180,7 @@ def test_unwrap_rejects_polygons_and_bad_options(cache):
 
 
 # -- overlap ---------------------------------------------------------------------------------
+
 
 @pytest.mark.parametrize("which,padding", [("cube3", 2), ("cylinder", 4), ("shaft", 4)])
 def test_charts_do_not_overlap_and_keep_padding(which, padding, cache):
@@ -189,8 +201,9 @@ def test_charts_do_not_overlap_and_keep_padding(which, padding, cache):
     size = 2 * padding + 1
     hi = ndimage.maximum_filter(label, size=size, mode="constant", cval=-1)
     empty = int(label.max()) + 1
-    lo = ndimage.minimum_filter(np.where(label < 0, empty, label), size=size,
-                                mode="constant", cval=empty)
+    lo = ndimage.minimum_filter(
+        np.where(label < 0, empty, label), size=size, mode="constant", cval=empty
+    )
     covered = label >= 0
     assert np.all(hi[covered] == label[covered]) and np.all(lo[covered] == label[covered])
     assert len(np.unique(charts)) == a.chart_count
@@ -210,6 +223,7 @@ def test_rasteriser_sees_overlaps_but_not_shared_edges():
 
 
 # -- apply_uvs and texel density -------------------------------------------------------------
+
 
 def test_apply_uvs_consistent_texel_density(cache):
     parts = {"small": cube(1.0, "small"), "big": cube(3.0, "big"), "cyl": cylinder()}
@@ -231,8 +245,12 @@ def test_apply_uvs_consistent_texel_density(cache):
 
 def test_apply_uvs_keeps_geometry(cache):
     mesh = smooth_normals(cylinder(segments=24))
-    before = (mesh.points.copy(), mesh.face_vertex_counts.copy(),
-              mesh.face_vertex_indices.copy(), mesh.normals.copy())
+    before = (
+        mesh.points.copy(),
+        mesh.face_vertex_counts.copy(),
+        mesh.face_vertex_indices.copy(),
+        mesh.normals.copy(),
+    )
     out = apply_uvs({"c": mesh}, texels_per_metre=TPM, cache=cache)["c"]
     assert_array_equal(out.points, before[0])
     assert_array_equal(out.face_vertex_counts, before[1])
@@ -262,8 +280,11 @@ def test_variant_alternatives_share_scale(cache):
     s = common_atlas_size(unwrap_parts(alts, texels_per_metre=TPM, cache=cache).values())
     narrow = apply_uvs({"b": alts["narrow"]}, texels_per_metre=TPM, cache=cache, atlas_size=s)
     wide = apply_uvs({"b": alts["wide"]}, texels_per_metre=TPM, cache=cache, atlas_size=s)
-    d = [np.abs(uv_areas(m["b"].st, m["b"].st_indices)).sum()
-         / face_normals(m["b"].points, m["b"].triangles)[1].sum() for m in (narrow, wide)]
+    d = [
+        np.abs(uv_areas(m["b"].st, m["b"].st_indices)).sum()
+        / face_normals(m["b"].points, m["b"].triangles)[1].sum()
+        for m in (narrow, wide)
+    ]
     assert_allclose(d[0], d[1], rtol=0.15)
 
 
@@ -275,8 +296,10 @@ def test_resolution_cap_lowers_density_for_all_parts(cache):
     assert big.size <= cap and big.texels_per_metre < 64.0
     assert atlases["small"].texels_per_metre == big.texels_per_metre
     out = apply_uvs(parts, texels_per_metre=64.0, resolution_cap=cap, cache=cache)
-    d = {k: np.abs(uv_areas(m.st, m.st_indices)).sum()
-         / face_normals(m.points, m.triangles)[1].sum() for k, m in out.items()}
+    d = {
+        k: np.abs(uv_areas(m.st, m.st_indices)).sum() / face_normals(m.points, m.triangles)[1].sum()
+        for k, m in out.items()
+    }
     assert_allclose(d["small"], d["big"], rtol=0.15)
 
 
@@ -301,6 +324,7 @@ def test_uvatlas_validates():
 
 # -- cache ------------------------------------------------------------------------------------
 
+
 def test_cache_hit_and_persistence(tmp_path):
     folder = tmp_path / "uv"
     c = UVCache(folder)
@@ -318,7 +342,10 @@ def test_cache_hit_and_persistence(tmp_path):
     assert_array_equal(third.st_px, first.st_px)
     assert_array_equal(third.st_indices, first.st_indices)
     assert (third.width, third.height, third.chart_count) == (
-        first.width, first.height, first.chart_count)
+        first.width,
+        first.height,
+        first.chart_count,
+    )
     # a rebuild of several parts does no unwrapping at all
     parts = {"a": cube(1.0), "b": mesh}
     apply_uvs(parts, texels_per_metre=TPM, cache=fresh)
@@ -340,8 +367,11 @@ def test_cache_key_depends_on_inputs():
         uv_cache_key(m, texels_per_metre=TPM, padding=2),
         uv_cache_key(m, texels_per_metre=TPM, padding=4, resolution_cap=1024),
         uv_cache_key(moved, texels_per_metre=TPM, padding=4),
-        uv_cache_key(m.with_(face_vertex_indices=m.face_vertex_indices[::-1]),
-                     texels_per_metre=TPM, padding=4),
+        uv_cache_key(
+            m.with_(face_vertex_indices=m.face_vertex_indices[::-1]),
+            texels_per_metre=TPM,
+            padding=4,
+        ),
     }
     assert len(others) == 5 and k not in others
 
@@ -404,12 +434,15 @@ def test_default_cache_folder(monkeypatch, tmp_path):
 
 # -- analytic charts ---------------------------------------------------------------------------
 
+
 def test_analytic_charts_are_packed_without_xatlas_at_the_density(cache):
     from ionic_usd.column.base import build_base, load_base_preset
     from ionic_usd.column.shaft import ShaftParams, build_shaft
 
-    parts = {"shaft": build_shaft(ShaftParams(flute_slices=3)),
-             "base": build_base(load_base_preset("G2", segments=48))}
+    parts = {
+        "shaft": build_shaft(ShaftParams(flute_slices=3)),
+        "base": build_base(load_base_preset("G2", segments=48)),
+    }
     atlases = unwrap_parts(parts, texels_per_metre=TPM, cache=cache)
     assert cache.misses == 0 and cache.hits == 0  # no xatlas run, no cache entry
     for name, a in atlases.items():
@@ -417,8 +450,11 @@ def test_analytic_charts_are_packed_without_xatlas_at_the_density(cache):
         assert a.texels_per_metre == TPM
         _, area3 = face_normals(m.points, m.triangles)
         # charts are only translated: pixel area = metric st area × density²
-        assert_allclose(uv_areas(a.st_px, a.st_indices).sum(),
-                        uv_areas(m.st, m.st_indices).sum() * TPM**2, rtol=1e-4)
+        assert_allclose(
+            uv_areas(a.st_px, a.st_indices).sum(),
+            uv_areas(m.st, m.st_indices).sum() * TPM**2,
+            rtol=1e-4,
+        )
         assert 0.2 < a.utilisation <= 1.0
     out = apply_uvs(parts, texels_per_metre=TPM, cache=cache)
     for m in out.values():

@@ -38,18 +38,36 @@ PART = D / 18
 def closed_form(p: VoluteParams, th: np.ndarray) -> np.ndarray:
     """Paper formula 3 written out independently."""
     rr = p.a / (p.b * np.exp(p.c * th)) - p.d
-    return np.stack([p.capital_spiral_radius * rr * np.cos(th),
-                     p.capital_spiral_radius * rr * np.sin(th)], axis=1)
+    return np.stack(
+        [p.capital_spiral_radius * rr * np.cos(th), p.capital_spiral_radius * rr * np.sin(th)],
+        axis=1,
+    )
 
 
 # an inward-winding set (c > 0): the same spiral read backwards
-INWARD = dict(start_angle=90.0, spiral_circuits=3, a=2.0, b=1.0, c=0.1, d=0.0,
-              thickness=0.05, min_thickness=0.05, increasing_max=0.0)
+INWARD = dict(
+    start_angle=90.0,
+    spiral_circuits=3,
+    a=2.0,
+    b=1.0,
+    c=0.1,
+    d=0.0,
+    thickness=0.05,
+    min_thickness=0.05,
+    increasing_max=0.0,
+)
 
 
-@pytest.mark.parametrize("params", [VoluteParams(), VoluteParams(**INWARD),
-                                    VoluteParams(a=-3.0, b=-2.0, c=-0.05, d=0.5, thickness=0.1,
-                                                 min_thickness=0.1, offset_x=0.01)])
+@pytest.mark.parametrize(
+    "params",
+    [
+        VoluteParams(),
+        VoluteParams(**INWARD),
+        VoluteParams(
+            a=-3.0, b=-2.0, c=-0.05, d=0.5, thickness=0.1, min_thickness=0.1, offset_x=0.01
+        ),
+    ],
+)
 @pytest.mark.parametrize("samples", [2, 17, 192])
 def test_curve_matches_closed_form(params, samples):
     th = volute_theta(params, samples)
@@ -59,8 +77,12 @@ def test_curve_matches_closed_form(params, samples):
 
 @pytest.mark.parametrize("n", [1, 2, 3, 4, 5.5])
 def test_circuit_limit(n):
-    p = VoluteParams(spiral_circuits=n, start_angle=90.0 if n >= 3 else 400.0 - 360 * (n < 2),
-                     min_thickness=0.01, thickness=0.02)
+    p = VoluteParams(
+        spiral_circuits=n,
+        start_angle=90.0 if n >= 3 else 400.0 - 360 * (n < 2),
+        min_thickness=0.01,
+        thickness=0.02,
+    )
     want = 2.5 * math.pi + 2 * math.pi * (n - 1)
     assert spiral_limit(n) == pytest.approx(want)
     assert volute_theta(p, 50)[-1] == pytest.approx(want)
@@ -92,8 +114,9 @@ def test_inner_curve_is_radius_minus_thickness(params):
     r_in = np.linalg.norm(inner, axis=1)
     assert_allclose(r_out - r_in, R * volute_thickness(params, th), atol=1e-12)
     # same direction from the origin
-    assert_allclose(np.arctan2(inner[:, 1], inner[:, 0]), np.arctan2(outer[:, 1], outer[:, 0]),
-                    atol=1e-9)
+    assert_allclose(
+        np.arctan2(inner[:, 1], inner[:, 0]), np.arctan2(outer[:, 1], outer[:, 0]), atol=1e-9
+    )
 
 
 def test_eye_circle():
@@ -202,9 +225,14 @@ def _shell_ok(m, expected_volume=None, rel=None):
     return r
 
 
-@pytest.mark.parametrize("params", [VoluteParams(), VoluteParams(**INWARD),
-                                    VoluteParams(spiral_circuits=1, start_angle=200,
-                                                 min_thickness=0.05)])
+@pytest.mark.parametrize(
+    "params",
+    [
+        VoluteParams(),
+        VoluteParams(**INWARD),
+        VoluteParams(spiral_circuits=1, start_angle=200, min_thickness=0.05),
+    ],
+)
 def test_volute_shells_are_watertight(params):
     relief, slab = 0.015, 0.03
     R = params.capital_spiral_radius
@@ -258,8 +286,7 @@ def test_centred_arcs_are_quarter_circles_joined_tangentially():
     for j in range(11):
         t = th0[j + 1]
         u = np.array([math.cos(t), math.sin(t)])
-        assert_allclose(centres[j] + radii[j] * u, centres[j + 1] + radii[j + 1] * u,
-                        atol=1e-12)
+        assert_allclose(centres[j] + radii[j] * u, centres[j + 1] + radii[j + 1] * u, atol=1e-12)
     curve = volute_curve(ARCS, 12 * 64 + 1)
     th = np.linspace(ARCS.theta_start, ARCS.theta_end, len(curve))
     j = np.minimum(((th - ARCS.theta_start) // (math.pi / 2)).astype(int), 11)

@@ -29,8 +29,10 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=5)
     args = ap.parse_args(argv)
-    print(f"{'preset':22s} {'segments':>8s} {'slices':>6s} {'triangles':>10s} "
-          f"{'ms':>8s} {'Mtri/s':>8s} {'vs LOD0':>8s}")
+    print(
+        f"{'preset':22s} {'segments':>8s} {'slices':>6s} {'triangles':>10s} "
+        f"{'ms':>8s} {'Mtri/s':>8s} {'vs LOD0':>8s}"
+    )
     for name in PRESETS:
         base_rate = None
         for segments, slices in LODS:
@@ -39,8 +41,10 @@ def main(argv: list[str] | None = None) -> int:
             t = _best(lambda p=p: build_base(p), args.repeat)
             rate = mesh.n_triangles / t
             base_rate = base_rate or rate
-            print(f"{name:22s} {segments:8d} {slices:6d} {mesh.n_triangles:10d} "
-                  f"{t * 1e3:8.2f} {rate / 1e6:8.2f} {rate / base_rate:8.2f}x")
+            print(
+                f"{name:22s} {segments:8d} {slices:6d} {mesh.n_triangles:10d} "
+                f"{t * 1e3:8.2f} {rate / 1e6:8.2f} {rate / base_rate:8.2f}x"
+            )
     t_parse = _best(lambda: load_base_preset("G2"), 50)
     print(f"\nparse + validate G2 preset (incl. TOML read): {t_parse * 1e6:.0f} µs")
     return 0

@@ -34,8 +34,13 @@ TEX = "64"
 
 
 def _child(argv: list[str]) -> dict:
-    out = subprocess.run([sys.executable, __file__, *argv], capture_output=True, text=True,
-                         env=os.environ, check=False)
+    out = subprocess.run(
+        [sys.executable, __file__, *argv],
+        capture_output=True,
+        text=True,
+        env=os.environ,
+        check=False,
+    )
     if out.returncode != 0:
         raise SystemExit(f"bench case {argv} failed:\n{out.stderr[-3000:]}")
     return json.loads(out.stdout.strip().splitlines()[-1])
@@ -50,8 +55,7 @@ def case_city(folder: str, *args: str) -> dict:
 
     summary = Path(folder + ".json")
     t0 = time.perf_counter()
-    rc = main(["city", folder, "--texture-size", TEX, "--json", str(summary), "--force",
-               *args])
+    rc = main(["city", folder, "--texture-size", TEX, "--json", str(summary), "--force", *args])
     wall = time.perf_counter() - t0
     s = json.loads(summary.read_text())
     t = s["timings"]
@@ -60,11 +64,21 @@ def case_city(folder: str, *args: str) -> dict:
     for f in sorted(Path(folder).rglob("*")):
         if f.is_file():
             digest.update(f.relative_to(folder).as_posix().encode() + b"\0" + f.read_bytes())
-    return {"rc": rc, "wall": wall, "author_save": t["usd author"] + t["usd save"],
-            "build": t["build"], "peak_mib": _peak_mib(), "bytes": size,
-            "columns": s["columns"], "temples": s["temples"], "temples_as": s["temples_as"],
-            "built": s["prototypes_built"], "workers": s["workers"],
-            "cluster_workers": s["cluster_workers"], "digest": digest.hexdigest()[:16]}
+    return {
+        "rc": rc,
+        "wall": wall,
+        "author_save": t["usd author"] + t["usd save"],
+        "build": t["build"],
+        "peak_mib": _peak_mib(),
+        "bytes": size,
+        "columns": s["columns"],
+        "temples": s["temples"],
+        "temples_as": s["temples_as"],
+        "built": s["prototypes_built"],
+        "workers": s["workers"],
+        "cluster_workers": s["cluster_workers"],
+        "digest": digest.hexdigest()[:16],
+    }
 
 
 def case_open(path: str) -> dict:
@@ -103,23 +117,25 @@ def case_raw(n: int, path: str) -> dict:
     pi.CreatePositionsAttr().Set(Vt.Vec3fArray.FromNumpy(pos))
     pi.CreateOrientationsAttr().Set(Vt.QuathArray.FromNumpy(q))
     pi.CreateProtoIndicesAttr().Set(Vt.IntArray.FromNumpy(np.zeros(n, dtype=np.int32)))
-    pi.CreateExtentAttr().Set(Vt.Vec3fArray([Gf.Vec3f(-1, -1, -1), Gf.Vec3f(1001, 1001,
-                                                                          1001)]))
+    pi.CreateExtentAttr().Set(Vt.Vec3fArray([Gf.Vec3f(-1, -1, -1), Gf.Vec3f(1001, 1001, 1001)]))
     stage.GetRootLayer().Save()
     t1 = time.perf_counter()
     return {"author_save": t1 - t0, "peak_mib": _peak_mib(), "bytes": Path(path).stat().st_size}
 
 
 def _row(name: str, c: dict, o: dict) -> str:
-    return (f"| {name} | {c.get('instances', o['instances']):,} | {c['author_save']:.2f} | "
-            f"{c.get('wall', float('nan')):.2f} | {c['peak_mib']:.0f} | {o['open_count']:.3f} | "
-            f"{c['bytes'] / 1e6:.1f} |")
+    return (
+        f"| {name} | {c.get('instances', o['instances']):,} | {c['author_save']:.2f} | "
+        f"{c.get('wall', float('nan')):.2f} | {c['peak_mib']:.0f} | {o['open_count']:.3f} | "
+        f"{c['bytes'] / 1e6:.1f} |"
+    )
 
 
 def main() -> None:
     if len(sys.argv) > 1 and sys.argv[1].startswith("_"):
-        fn = {"_city": case_city, "_open": case_open,
-              "_raw": lambda n, p: case_raw(int(n), p)}[sys.argv[1]]
+        fn = {"_city": case_city, "_open": case_open, "_raw": lambda n, p: case_raw(int(n), p)}[
+            sys.argv[1]
+        ]
         print(json.dumps(fn(*sys.argv[2:])))
         return
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -131,21 +147,32 @@ def main() -> None:
     # a private cache: the runs below delete its prototypes, never the user's
     os.environ["IONIC_USD_CACHE"] = str(tmp / "cache")
     results: dict[str, dict] = {}
-    rows = ["| case | instances | author+save s | whole build s | peak MiB | open+count s | "
-            "MB on disk |", "|---|---:|---:|---:|---:|---:|---:|"]
+    rows = [
+        "| case | instances | author+save s | whole build s | peak MiB | open+count s | "
+        "MB on disk |",
+        "|---|---:|---:|---:|---:|---:|---:|",
+    ]
     try:
         _child(["_city", str(tmp / "warm")])  # builds (or reuses) the temple once
         counts = [1000, 100_000] + ([] if args.quick else [1_000_000])
         cases = [("default city (4×4 temples)", [])]
         cases += [(f"4×4 temples + {n:,} columns", ["--columns", str(n)]) for n in counts]
         if not args.quick:
-            cases += [("100×100 temples, PointInstancer", ["--rows", "100", "--cols", "100"]),
-                      ("100×100 temples, references",
-                       ["--rows", "100", "--cols", "100", "--instancer-threshold", "100000"]),
-                      ("50×50 temples, PointInstancer",
-                       ["--rows", "50", "--cols", "50", "--instancer-threshold", "0"]),
-                      ("50×50 temples, references",
-                       ["--rows", "50", "--cols", "50", "--instancer-threshold", "100000"])]
+            cases += [
+                ("100×100 temples, PointInstancer", ["--rows", "100", "--cols", "100"]),
+                (
+                    "100×100 temples, references",
+                    ["--rows", "100", "--cols", "100", "--instancer-threshold", "100000"],
+                ),
+                (
+                    "50×50 temples, PointInstancer",
+                    ["--rows", "50", "--cols", "50", "--instancer-threshold", "0"],
+                ),
+                (
+                    "50×50 temples, references",
+                    ["--rows", "50", "--cols", "50", "--instancer-threshold", "100000"],
+                ),
+            ]
         for name, extra in cases:
             folder = tmp / f"c{len(results)}"
             c = _child(["_city", str(folder), *extra])
@@ -162,8 +189,12 @@ def main() -> None:
             rows.append(_row(f"raw usd-core PointInstancer, {n:,}", r, o))
             print(rows[-1], file=sys.stderr)
         if not args.skip_workers:
-            rows += ["", "| prototype build (2 temple builds, empty prototype cache) | workers |"
-                     " build s | whole s | output digest |", "|---|---:|---:|---:|---|"]
+            rows += [
+                "",
+                "| prototype build (2 temple builds, empty prototype cache) | workers |"
+                " build s | whole s | output digest |",
+                "|---|---:|---:|---:|---|",
+            ]
             variety = ["--column-variety", "2", "--rows", "2", "--cols", "2", "--seed", "3"]
             proto = Path(os.environ["IONIC_USD_CACHE"]) / "prototypes"
             _child(["_city", str(tmp / "wwarm"), *variety])  # warms the UV/texture caches
@@ -171,8 +202,10 @@ def main() -> None:
                 shutil.rmtree(proto, ignore_errors=True)  # each run builds both temples
                 c = _child(["_city", str(tmp / f"w{w}"), *variety, "--workers", str(w)])
                 results[f"workers {w}"] = {"city": c}
-                rows.append(f"| local cluster | {c['cluster_workers']} | {c['build']:.1f} | "
-                            f"{c['wall']:.1f} | {c['digest']} |")
+                rows.append(
+                    f"| local cluster | {c['cluster_workers']} | {c['build']:.1f} | "
+                    f"{c['wall']:.1f} | {c['digest']} |"
+                )
                 print(rows[-1], file=sys.stderr)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)

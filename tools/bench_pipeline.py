@@ -41,18 +41,26 @@ def main() -> None:
     out = Path(tempfile.mkdtemp())
     cold = build_column_asset(out / "a" / "IonicColumn", ColumnAssetOptions())
     warm = build_column_asset(out / "a" / "IonicColumn", ColumnAssetOptions(), force=True)
-    print(f"column asset: {cold.meshes} meshes, triangles per LOD {cold.triangles_per_lod}, "
-          f"{cold.bytes_on_disk / 1e6:.1f} MB")
-    print(f"  cold {cold.seconds:.2f} s ({cold.uv_unwraps} unwraps), warm {warm.seconds:.2f} s "
-          f"({warm.uv_unwraps} unwraps), ratio {cold.seconds / warm.seconds:.1f}x\n")
+    print(
+        f"column asset: {cold.meshes} meshes, triangles per LOD {cold.triangles_per_lod}, "
+        f"{cold.bytes_on_disk / 1e6:.1f} MB"
+    )
+    print(
+        f"  cold {cold.seconds:.2f} s ({cold.uv_unwraps} unwraps), warm {warm.seconds:.2f} s "
+        f"({warm.uv_unwraps} unwraps), ratio {cold.seconds / warm.seconds:.1f}x\n"
+    )
 
     os.environ["IONIC_USD_CACHE"] = tempfile.mkdtemp(prefix="ionic_bench_cache_")
     t = compose_temple(out / "t", portunus_layout())
     w = compose_temple(out / "t", portunus_layout(), force=True)
-    print(f"Portunus temple: {t.files} files, {t.prims} prims, {t.instances} instances of "
-          f"{t.prototypes} prototypes, {t.triangles:,} triangles")
-    print(f"  cold {t.seconds:.2f} s, warm {w.seconds:.2f} s, ratio {t.seconds / w.seconds:.1f}x"
-          f"  (target: cold <= 5 s on 2 cores)")
+    print(
+        f"Portunus temple: {t.files} files, {t.prims} prims, {t.instances} instances of "
+        f"{t.prototypes} prototypes, {t.triangles:,} triangles"
+    )
+    print(
+        f"  cold {t.seconds:.2f} s, warm {w.seconds:.2f} s, ratio {t.seconds / w.seconds:.1f}x"
+        f"  (target: cold <= 5 s on 2 cores)"
+    )
 
 
 def _cli(args: list[str], env: dict[str, str]) -> tuple[float, float]:
@@ -61,9 +69,14 @@ def _cli(args: list[str], env: dict[str, str]) -> tuple[float, float]:
     t0 = time.perf_counter()
     # cwd: a neutral folder, so ``-m`` does not put a checkout in the working directory
     # ahead of PYTHONPATH
-    subprocess.run([sys.executable, "-m", "ionic_usd", *args], env=env, check=True,
-                   cwd=tempfile.gettempdir(), stdout=subprocess.DEVNULL,
-                   stderr=subprocess.DEVNULL)
+    subprocess.run(
+        [sys.executable, "-m", "ionic_usd", *args],
+        env=env,
+        check=True,
+        cwd=tempfile.gettempdir(),
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
     wall = time.perf_counter() - t0
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
@@ -79,19 +92,28 @@ def cli_temple(baseline: str | None = None) -> None:
     if baseline:
         env["PYTHONPATH"] = baseline
     out = str(Path(tempfile.mkdtemp()) / "t")
-    probe = subprocess.run([sys.executable, "-c", "import ionic_usd; print(ionic_usd.__file__)"],
-                           env=env, cwd=tempfile.gettempdir(), capture_output=True, text=True)
+    probe = subprocess.run(
+        [sys.executable, "-c", "import ionic_usd; print(ionic_usd.__file__)"],
+        env=env,
+        cwd=tempfile.gettempdir(),
+        capture_output=True,
+        text=True,
+    )
     print(f"package: {probe.stdout.strip()}")
     ver = min(_cli(["--version"], env) for _ in range(3))
     cold = _cli(["temple", "-o", out, "--force"], env)
     warm = min(_cli(["temple", "-o", out, "--force"], env) for _ in range(2))
-    print(f"CLI {baseline or 'this checkout'} (load average {os.getloadavg()[0]:.1f} on "
-          f"{os.cpu_count()} cores):")
+    print(
+        f"CLI {baseline or 'this checkout'} (load average {os.getloadavg()[0]:.1f} on "
+        f"{os.cpu_count()} cores):"
+    )
     print(f"  ionic-usd --version  wall {ver[0]:.2f} s  cpu {ver[1]:.2f} s")
     print(f"  temple cold          wall {cold[0]:.2f} s  cpu {cold[1]:.2f} s  (target 2.5 s)")
     print(f"  temple warm          wall {warm[0]:.2f} s  cpu {warm[1]:.2f} s  (target 0.6 s)")
-    print(f"  cold/warm wall ratio {cold[0] / warm[0]:.1f}x, warm minus start-up "
-          f"{warm[0] - ver[0]:.2f} s")
+    print(
+        f"  cold/warm wall ratio {cold[0] / warm[0]:.1f}x, warm minus start-up "
+        f"{warm[0] - ver[0]:.2f} s"
+    )
 
 
 def _timed(fn) -> float:

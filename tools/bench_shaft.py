@@ -61,18 +61,21 @@ def main() -> None:
         if indexed:
             lo, hi = mesh.extent  # same cheap extent as the package
             pv = UsdGeom.PrimvarsAPI(m).CreatePrimvar(
-                "normals", Sdf.ValueTypeNames.Normal3fArray, UsdGeom.Tokens.faceVarying)
+                "normals", Sdf.ValueTypeNames.Normal3fArray, UsdGeom.Tokens.faceVarying
+            )
             pv.Set(Vt.Vec3fArray.FromNumpy(mesh.normals))
             pv.SetIndices(Vt.IntArray.FromNumpy(mesh.normals_indices))
             if mesh.st is not None:  # the analytic st the generator now emits
                 sv = UsdGeom.PrimvarsAPI(m).CreatePrimvar(
-                    "st", Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.faceVarying)
+                    "st", Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.faceVarying
+                )
                 sv.Set(Vt.Vec2fArray.FromNumpy(mesh.st))
                 sv.SetIndices(Vt.IntArray.FromNumpy(mesh.st_indices))
         else:
             lo, hi = mesh.points.min(axis=0), mesh.points.max(axis=0)
-            m.CreateNormalsAttr(Vt.Vec3fArray.FromNumpy(
-                np.ascontiguousarray(mesh.corner_normals())))
+            m.CreateNormalsAttr(
+                Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(mesh.corner_normals()))
+            )
             m.SetNormalsInterpolation(UsdGeom.Tokens.faceVarying)
         m.CreateExtentAttr(Vt.Vec3fArray.FromNumpy(np.array([lo, hi], dtype=np.float32)))
         stage.GetRootLayer().Save()
@@ -87,9 +90,11 @@ def main() -> None:
         m.SetNormalsInterpolation("faceVarying")
         stage.GetRootLayer().Save()
 
-    head = (f"{'h':>3} {'triangles':>10} {'gen ms':>7} {'gen M/s':>7} {'author ms':>9} "
-            f"{'auth M/s':>8} {'MB':>5} {'raw idx ms':>10} {'MB':>5} {'raw fv ms':>9} "
-            f"{'MB':>5} {'vs raw idx':>10} {'vs raw fv':>9} {'lists ms':>8}")
+    head = (
+        f"{'h':>3} {'triangles':>10} {'gen ms':>7} {'gen M/s':>7} {'author ms':>9} "
+        f"{'auth M/s':>8} {'MB':>5} {'raw idx ms':>10} {'MB':>5} {'raw fv ms':>9} "
+        f"{'MB':>5} {'vs raw idx':>10} {'vs raw fv':>9} {'lists ms':>8}"
+    )
     print(head)
     for h in args.slices:
         p = ShaftParams(flute_slices=h, entasis=0.01, entasis_rows=4 * h)
@@ -114,19 +119,25 @@ def main() -> None:
         rf = best_of(raw_fv, args.repeat)
         raw(mesh, tmp / f"size_idx{h}.usdc", True)
         raw(mesh, tmp / f"size_fv{h}.usdc", False)
-        mb = [(tmp / n).stat().st_size / 1e6
-              for n in (f"fast{h}.usdc", f"size_idx{h}.usdc", f"size_fv{h}.usdc")]
+        mb = [
+            (tmp / n).stat().st_size / 1e6
+            for n in (f"fast{h}.usdc", f"size_idx{h}.usdc", f"size_fv{h}.usdc")
+        ]
         n = mesh.n_triangles
         lst = float("nan")
         if n <= 400_000:
             lst = best_of(lambda mesh=mesh: lists(mesh, tmp / f"l{time.perf_counter_ns()}.usdc"), 1)
-        print(f"{h:>3} {n:>10,} {1e3 * gen:>7.1f} {n / gen / 1e6:>7.2f} {1e3 * auth:>9.1f} "
-              f"{n / auth / 1e6:>8.2f} {mb[0]:>5.1f} {1e3 * ri:>10.1f} {mb[1]:>5.1f} "
-              f"{1e3 * rf:>9.1f} {mb[2]:>5.1f} {ri / auth:>9.2f}x {rf / auth:>8.2f}x "
-              f"{1e3 * lst:>8.0f}")
-    print("targets: generation >= 10 Mtri/s, authoring >= 20 Mtri/s at 1.25 M triangles (one "
-          "core). 'vs raw' > 1: this package is faster than raw usd-core writing the same "
-          "attributes (idx) or the before layout with per-corner normals (fv).")
+        print(
+            f"{h:>3} {n:>10,} {1e3 * gen:>7.1f} {n / gen / 1e6:>7.2f} {1e3 * auth:>9.1f} "
+            f"{n / auth / 1e6:>8.2f} {mb[0]:>5.1f} {1e3 * ri:>10.1f} {mb[1]:>5.1f} "
+            f"{1e3 * rf:>9.1f} {mb[2]:>5.1f} {ri / auth:>9.2f}x {rf / auth:>8.2f}x "
+            f"{1e3 * lst:>8.0f}"
+        )
+    print(
+        "targets: generation >= 10 Mtri/s, authoring >= 20 Mtri/s at 1.25 M triangles (one "
+        "core). 'vs raw' > 1: this package is faster than raw usd-core writing the same "
+        "attributes (idx) or the before layout with per-corner normals (fv)."
+    )
 
 
 if __name__ == "__main__":

@@ -36,8 +36,9 @@ def _env(src: Path, cache: Path) -> dict[str, str]:
 
 def _run(cmd: list[str], env: dict[str, str], cwd: Path) -> float:
     t0 = time.perf_counter()
-    subprocess.run(cmd, env=env, check=True, stdout=subprocess.DEVNULL,
-                   stderr=subprocess.DEVNULL, cwd=cwd)  # not the repo: -m puts cwd first
+    subprocess.run(
+        cmd, env=env, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, cwd=cwd
+    )  # not the repo: -m puts cwd first
     return time.perf_counter() - t0
 
 
@@ -47,9 +48,14 @@ def measure(trees: list[Path], runs: int, temple: bool, work: Path) -> list[dict
     py = sys.executable
     envs = [_env(src, work / f"cache-{i}") for i, src in enumerate(trees)]
     for src, env in zip(trees, envs, strict=True):
-        where = subprocess.run([py, "-c", "import ionic_usd; print(ionic_usd.__file__)"],
-                               env=env, cwd=work, capture_output=True, text=True,
-                               check=True).stdout
+        where = subprocess.run(
+            [py, "-c", "import ionic_usd; print(ionic_usd.__file__)"],
+            env=env,
+            cwd=work,
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout
         assert where.startswith(str(src)), f"{src}: imported {where}"
     cli = [py, "-m", "ionic_usd"]
     cases: dict[str, list[list[str]]] = {
@@ -60,8 +66,19 @@ def measure(trees: list[Path], runs: int, temple: bool, work: Path) -> list[dict
     }
     n = {case: runs for case in cases}
     if temple:
-        builds = [[*cli, "-q", "temple", "-o", str(work / f"temple-{i}"), "--force",
-                   "--texture-size", "256"] for i in range(len(trees))]
+        builds = [
+            [
+                *cli,
+                "-q",
+                "temple",
+                "-o",
+                str(work / f"temple-{i}"),
+                "--force",
+                "--texture-size",
+                "256",
+            ]
+            for i in range(len(trees))
+        ]
         for cmd, env in zip(builds, envs, strict=True):
             _run(cmd, env, work)  # fill the cache: what follows are warm rebuilds
         cases["warm temple rebuild (256 px)"] = builds
@@ -89,8 +106,10 @@ def main(argv: list[str] | None = None) -> int:
         after, *rest = measure(trees, args.runs, args.temple, work)
         before = rest[0] if rest else None
     floor = after["python -c pass"]
-    print(f"median of {args.runs} runs, {os.cpu_count()} cores, load "
-          f"{os.getloadavg()[0]:.1f}; python {sys.version.split()[0]}")
+    print(
+        f"median of {args.runs} runs, {os.cpu_count()} cores, load "
+        f"{os.getloadavg()[0]:.1f}; python {sys.version.split()[0]}"
+    )
     head = f"{'case':34s} {'this tree':>10s}"
     if before:
         head += f" {'compare':>10s} {'ratio':>7s}"

@@ -44,8 +44,10 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     tpm, pad = args.texels_per_metre, args.padding
     print(f"xatlas {XATLAS_VERSION}, {tpm:g} px/m, padding {pad}")
-    head = (f"{'h':>3} {'triangles':>9} {'charts':>6} {'atlas':>11} {'util':>5} {'S':>5} "
-            f"{'cold ms':>8} {'mem ms':>7} {'disk ms':>8} {'cold/disk':>9}")
+    head = (
+        f"{'h':>3} {'triangles':>9} {'charts':>6} {'atlas':>11} {'util':>5} {'S':>5} "
+        f"{'cold ms':>8} {'mem ms':>7} {'disk ms':>8} {'cold/disk':>9}"
+    )
     print(head)
     print("-" * len(head))
     with tempfile.TemporaryDirectory() as tmp:
@@ -62,10 +64,12 @@ def main(argv: list[str] | None = None) -> int:
             _, disk = timed(unwrap, mesh, texels_per_metre=tpm, padding=pad, cache=fresh)
             assert (cache.hits, fresh.disk_hits, fresh.misses) == (1, 1, 0)
             best = min(cold)
-            print(f"{h:>3} {mesh.n_triangles:>9} {atlas.chart_count:>6} "
-                  f"{f'{atlas.width}x{atlas.height}':>11} {atlas.utilisation:>5.2f} "
-                  f"{common_atlas_size([atlas]):>5} {best * 1e3:>8.0f} {mem * 1e3:>7.2f} "
-                  f"{disk * 1e3:>8.2f} {best / disk:>8.0f}x")
+            print(
+                f"{h:>3} {mesh.n_triangles:>9} {atlas.chart_count:>6} "
+                f"{f'{atlas.width}x{atlas.height}':>11} {atlas.utilisation:>5.2f} "
+                f"{common_atlas_size([atlas]):>5} {best * 1e3:>8.0f} {mem * 1e3:>7.2f} "
+                f"{disk * 1e3:>8.2f} {best / disk:>8.0f}x"
+            )
     return 0
 
 

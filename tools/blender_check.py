@@ -35,8 +35,9 @@ def inside_blender(path: str) -> dict:
     import bpy
 
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    result = bpy.ops.wm.usd_import(filepath=path, support_scene_instancing=True,
-                                   import_usd_preview=True)
+    result = bpy.ops.wm.usd_import(
+        filepath=path, support_scene_instancing=True, import_usd_preview=True
+    )
     objects = []
     for o in bpy.data.objects:
         entry = {"name": o.name, "type": o.type, "parent": o.parent.name if o.parent else None}
@@ -52,12 +53,20 @@ def inside_blender(path: str) -> dict:
     for m in bpy.data.materials:
         images = []
         if m.node_tree:
-            images = [n.image.name for n in m.node_tree.nodes
-                      if n.type == "TEX_IMAGE" and n.image is not None]
+            images = [
+                n.image.name
+                for n in m.node_tree.nodes
+                if n.type == "TEX_IMAGE" and n.image is not None
+            ]
         materials[m.name] = images
-    return {"result": sorted(result), "blender": bpy.app.version_string, "objects": objects,
-            "materials": materials, "meshes": len(bpy.data.meshes),
-            "images": [i.name for i in bpy.data.images]}
+    return {
+        "result": sorted(result),
+        "blender": bpy.app.version_string,
+        "objects": objects,
+        "materials": materials,
+        "meshes": len(bpy.data.meshes),
+        "images": [i.name for i in bpy.data.images],
+    }
 
 
 def stage_facts(path: str) -> dict:
@@ -66,22 +75,29 @@ def stage_facts(path: str) -> dict:
     stage = Usd.Stage.Open(path)
     root = stage.GetDefaultPrim()
     selections = dict(root.GetVariantSets().GetAllVariantSelections())
+
     def drawn(p) -> bool:  # Blender imports render and default purpose (not proxy, guide)
         return p.IsA(UsdGeom.Mesh) and UsdGeom.Imageable(p).ComputePurpose() in (
-            UsdGeom.Tokens.default_, UsdGeom.Tokens.render)
+            UsdGeom.Tokens.default_,
+            UsdGeom.Tokens.render,
+        )
 
     active = [p for p in stage.Traverse() if drawn(p)]
-    proto_meshes = sum(1 for pr in stage.GetPrototypes() for p in Usd.PrimRange(pr)
-                       if drawn(p))
+    proto_meshes = sum(1 for pr in stage.GetPrototypes() for p in Usd.PrimRange(pr) if drawn(p))
     # Blender makes one collection-instance object per instance, nested ones included (an
     # instance inside a prototype — a column of an instanced temple — is an object of that
     # prototype's collection), so count the instances inside every prototype too
     instances = sum(1 for p in stage.Traverse() if p.IsInstance())
-    instances += sum(1 for pr in stage.GetPrototypes() for p in Usd.PrimRange(pr)
-                     if p != pr and p.IsInstance())
-    return {"variant_selections": selections, "active_meshes": len(active),
-            "prototype_meshes": proto_meshes, "instances": instances,
-            "prototypes": len(stage.GetPrototypes())}
+    instances += sum(
+        1 for pr in stage.GetPrototypes() for p in Usd.PrimRange(pr) if p != pr and p.IsInstance()
+    )
+    return {
+        "variant_selections": selections,
+        "active_meshes": len(active),
+        "prototype_meshes": proto_meshes,
+        "instances": instances,
+        "prototypes": len(stage.GetPrototypes()),
+    }
 
 
 def blender_python(args) -> str:
@@ -92,16 +108,19 @@ def blender_python(args) -> str:
     py = DEFAULT_VENV / "bin" / "python"
     if not py.exists():
         if not args.setup:
-            sys.exit(f"no Blender Python: run with --setup to create {DEFAULT_VENV} "
-                     "(pip install bpy==5.0.1), or pass --blender-python")
+            sys.exit(
+                f"no Blender Python: run with --setup to create {DEFAULT_VENV} "
+                "(pip install bpy==5.0.1), or pass --blender-python"
+            )
         venv.create(DEFAULT_VENV, with_pip=True)
         subprocess.run([str(py), "-m", "pip", "install", "-q", "bpy==5.0.1"], check=True)
     return str(py)
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     ap.add_argument("usd")
     ap.add_argument("--inside", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--blender-python", help="python of a venv with bpy==5.0.1")
@@ -116,8 +135,9 @@ def main() -> int:
         return 0
 
     facts = stage_facts(path)
-    out = subprocess.run([blender_python(args), __file__, path, "--inside"],
-                         capture_output=True, text=True)
+    out = subprocess.run(
+        [blender_python(args), __file__, path, "--inside"], capture_output=True, text=True
+    )
     line = next((x for x in reversed(out.stdout.splitlines()) if x.startswith("{")), None)
     if out.returncode != 0 or line is None:
         print(out.stdout[-2000:], out.stderr[-2000:], sep="\n")
@@ -156,12 +176,16 @@ def main() -> int:
 
     print(f"Blender {rep['blender']} imported {Path(path).name}")
     print(f"  variant selections: {facts['variant_selections']}")
-    print(f"  objects: {len(rep['objects'])} ({len(meshes)} meshes, {len(inst)} collection "
-          f"instances of {len({o['instance_of'] for o in inst})} prototypes); mesh datablocks: "
-          f"{rep['meshes']}")
+    print(
+        f"  objects: {len(rep['objects'])} ({len(meshes)} meshes, {len(inst)} collection "
+        f"instances of {len({o['instance_of'] for o in inst})} prototypes); mesh datablocks: "
+        f"{rep['meshes']}"
+    )
     for m in meshes:
-        print(f"    {m['name']:<40} polygons {m['polygons']:>6}  uv {m['uv_layers']}  "
-              f"materials {m['materials']}")
+        print(
+            f"    {m['name']:<40} polygons {m['polygons']:>6}  uv {m['uv_layers']}  "
+            f"materials {m['materials']}"
+        )
     mats = ", ".join(f"{k} ({len(v)} images)" for k, v in rep["materials"].items())
     print(f"  materials: {mats}")
     if args.json:

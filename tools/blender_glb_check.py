@@ -44,22 +44,34 @@ def inside_blender(path: str) -> dict:
     for m in bpy.data.materials:
         if m.users == 0 or not m.node_tree:
             continue
-        materials[m.name] = sorted(n.image.name for n in m.node_tree.nodes
-                                   if n.type == "TEX_IMAGE" and n.image is not None)
+        materials[m.name] = sorted(
+            n.image.name for n in m.node_tree.nodes if n.type == "TEX_IMAGE" and n.image is not None
+        )
     scene_props = {k: str(type(bpy.context.scene[k]).__name__) for k in bpy.context.scene.keys()}
-    return {"result": sorted(result), "blender": bpy.app.version_string,
-            "mesh_objects": sum(1 for o in bpy.data.objects if o.type == "MESH"),
-            "drawn_objects": objects, "mesh_datablocks": len(bpy.data.meshes),
-            "triangles": tris, "materials": materials, "scene_properties": scene_props}
+    return {
+        "result": sorted(result),
+        "blender": bpy.app.version_string,
+        "mesh_objects": sum(1 for o in bpy.data.objects if o.type == "MESH"),
+        "drawn_objects": objects,
+        "mesh_datablocks": len(bpy.data.meshes),
+        "triangles": tris,
+        "materials": materials,
+        "scene_properties": scene_props,
+    }
 
 
 def _bpy_python(given: str | None) -> str:
-    for c in (given, os.environ.get("IONIC_USD_BPY_PYTHON"), "/work/venv-bpy/bin/python",
-              str(ROOT / ".venv-bpy" / "bin" / "python")):
+    for c in (
+        given,
+        os.environ.get("IONIC_USD_BPY_PYTHON"),
+        "/work/venv-bpy/bin/python",
+        str(ROOT / ".venv-bpy" / "bin" / "python"),
+    ):
         if c and Path(c).is_file():
             return c
-    sys.exit("blender_glb_check: no Python with bpy (give --blender-python or set "
-             "IONIC_USD_BPY_PYTHON)")
+    sys.exit(
+        "blender_glb_check: no Python with bpy (give --blender-python or set IONIC_USD_BPY_PYTHON)"
+    )
 
 
 def main() -> int:
@@ -72,8 +84,12 @@ def main() -> int:
     if a.inside:
         print("RESULT " + json.dumps(inside_blender(str(a.glb.resolve()))))
         return 0
-    run = subprocess.run([_bpy_python(a.blender_python), __file__, "--inside", str(a.glb)],
-                         capture_output=True, text=True, timeout=900)
+    run = subprocess.run(
+        [_bpy_python(a.blender_python), __file__, "--inside", str(a.glb)],
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
     line = next((x for x in run.stdout.splitlines() if x.startswith("RESULT ")), None)
     if run.returncode != 0 or line is None:
         print(f"Blender: import of {a.glb} FAILED\n{run.stdout[-2000:]}\n{run.stderr[-2000:]}")
@@ -84,17 +100,20 @@ def main() -> int:
         problems.append(f"import returned {r['result']}")
     if r["drawn_objects"] == 0:
         problems.append("no mesh arrived")
-    problems += [f"material {m} has no image texture" for m, imgs in r["materials"].items()
-                 if not imgs]
+    problems += [
+        f"material {m} has no image texture" for m, imgs in r["materials"].items() if not imgs
+    ]
     if not r["scene_properties"]:
         problems.append("the scene's paradata (glTF extras) did not arrive")
     if a.triangles is not None and r["triangles"] != a.triangles:
         problems.append(f"{r['triangles']} triangles, expected {a.triangles}")
-    print(f"Blender {r['blender']} import_scene.gltf: {a.glb}: {r['drawn_objects']} mesh "
-          f"objects drawn from {r['mesh_datablocks']} meshes, {r['triangles']} triangles, "
-          f"{len(r['materials'])} materials with "
-          f"{sum(len(v) for v in r['materials'].values())} image textures, scene properties "
-          f"{sorted(r['scene_properties'])}: {'OK' if not problems else 'FAILED'}")
+    print(
+        f"Blender {r['blender']} import_scene.gltf: {a.glb}: {r['drawn_objects']} mesh "
+        f"objects drawn from {r['mesh_datablocks']} meshes, {r['triangles']} triangles, "
+        f"{len(r['materials'])} materials with "
+        f"{sum(len(v) for v in r['materials'].values())} image textures, scene properties "
+        f"{sorted(r['scene_properties'])}: {'OK' if not problems else 'FAILED'}"
+    )
     for p in problems:
         print(f"  {p}")
     return 1 if problems else 0

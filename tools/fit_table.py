@@ -24,18 +24,45 @@ def rows(diameters: tuple[float, ...]) -> list[tuple]:
     for d in diameters:
         res = fit_volute(twelve_centre_volute(eye_radius=d / 36))
         for r in (res, *res.alternatives):
-            out.append(("volute (12 centres)", r.model, d, r.after.hausdorff_pct,
-                        r.after.discrete_frechet_pct, r.seconds, ",".join(r.bounds_hit),
-                        r.diameter))
+            out.append(
+                (
+                    "volute (12 centres)",
+                    r.model,
+                    d,
+                    r.after.hausdorff_pct,
+                    r.after.discrete_frechet_pct,
+                    r.seconds,
+                    ",".join(r.bounds_hit),
+                    r.diameter,
+                )
+            )
         r = fit_shaft_section(semicircle_flutes(radius=d / 2 * 0.93))
-        out.append(("shaft section (semicircles)", r.model, d, r.after.hausdorff_pct,
-                    r.after.discrete_frechet_pct, r.seconds, ",".join(r.bounds_hit),
-                    r.diameter))
+        out.append(
+            (
+                "shaft section (semicircles)",
+                r.model,
+                d,
+                r.after.hausdorff_pct,
+                r.after.discrete_frechet_pct,
+                r.seconds,
+                ",".join(r.bounds_hit),
+                r.diameter,
+            )
+        )
         t0 = time.perf_counter()
         r = fit_base(attic_base(d))
-        out.append(("base (Attic)", r.model, d, r.after.hausdorff_pct,
-                    r.after.discrete_frechet_pct, time.perf_counter() - t0,
-                    f"{len(r.bounds_hit)} coords", r.diameter))
+        out.append(
+            (
+                "base (Attic)",
+                r.model,
+                d,
+                r.after.hausdorff_pct,
+                r.after.discrete_frechet_pct,
+                time.perf_counter() - t0,
+                f"{len(r.bounds_hit)} coords",
+                r.diameter,
+            )
+        )
         for row in out[-4:]:
             print(row, flush=True)
     return out
@@ -47,11 +74,15 @@ def main() -> None:
     ap.add_argument("--diameters", default="0.6,0.95,1.2")
     args = ap.parse_args()
     ds = tuple(float(x) for x in args.diameters.split(","))
-    table = ["| part | model | D (m) | paper's measure % | discrete Fréchet % | fit s | "
-             "bounds hit | D estimate (m) |", "|---|---|---|---|---|---|---|---|"]
+    table = [
+        "| part | model | D (m) | paper's measure % | discrete Fréchet % | fit s | "
+        "bounds hit | D estimate (m) |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
     for p, m, d, h, f, s, hit, de in rows(ds):
-        table.append(f"| {p} | {m} | {d:g} | {h:.3f} | {f:.3f} | {s:.1f} | {hit or '-'} | "
-                     f"{de:.3f} |")
+        table.append(
+            f"| {p} | {m} | {d:g} | {h:.3f} | {f:.3f} | {s:.1f} | {hit or '-'} | {de:.3f} |"
+        )
     text = "\n".join(table)
     print(text)
     if args.out:

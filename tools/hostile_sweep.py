@@ -30,8 +30,19 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 BAD_NUMBERS = ["nan", "inf", "-inf", "1e308", "-1e308", "1e-320", "abc", "", "0x10", "1e400"]
-TOML_BAD = ["nan", "inf", "-inf", "1e308", "-1e308", '"x"', "[1, 2]", "{ a = 1 }", "true",
-            "1979-05-27", '"' + "x" * 5000 + '"']
+TOML_BAD = [
+    "nan",
+    "inf",
+    "-inf",
+    "1e308",
+    "-1e308",
+    '"x"',
+    "[1, 2]",
+    "{ a = 1 }",
+    "true",
+    "1979-05-27",
+    '"' + "x" * 5000 + '"',
+]
 GRAMMAR_ALPHABET = "RHCPM0123456789.-+e, ()"
 
 
@@ -114,95 +125,183 @@ def cases(quick: bool) -> list[tuple[list[str], dict[str, bytes | None]]]:
         for v in BAD_NUMBERS:
             out.append((["shaft", flag, v, "-o", "s.usda"], {}))
     # 2. every TOML key of the column tables x bad values
-    for table, cls in (("shaft", ShaftParams), ("capital", CapitalParams),
-                       ("volute", VoluteParams)):
+    for table, cls in (
+        ("shaft", ShaftParams),
+        ("capital", CapitalParams),
+        ("volute", VoluteParams),
+    ):
         for key in dataclass_schema(cls):
             if key == "volute":
                 continue
             for v in TOML_BAD[:: 2 if quick else 1]:
-                out.append((["column", "--config", "c.toml", "-o", "c.usda"],
-                            {"c.toml": f"[{table}]\n{key} = {v}\n".encode()}))
+                out.append(
+                    (
+                        ["column", "--config", "c.toml", "-o", "c.usda"],
+                        {"c.toml": f"[{table}]\n{key} = {v}\n".encode()},
+                    )
+                )
     for key in ("lod", "base", "base_height", "scroll"):
         for v in TOML_BAD:
-            out.append((["column", "--config", "c.toml"],
-                        {"c.toml": f"[column]\n{key} = {v}\n".encode()}))
+            out.append(
+                (["column", "--config", "c.toml"], {"c.toml": f"[column]\n{key} = {v}\n".encode()})
+            )
     # 3. the temple's dimension sections, ids, cuboids, hypotheses
     for f in list(dataclass_schema(TempleParams))[:: 3 if quick else 1]:
         if f == "name":
             continue
         sec, key = f.split("_", 1)
         for v in ("nan", "1e308", '"x"', "-1", "0"):
-            out.append((["temple", "--config", "t.toml", "-o", "T"],
-                        {"t.toml": f"[{sec}]\n{key} = {v}\n".encode()}))
+            out.append(
+                (
+                    ["temple", "--config", "t.toml", "-o", "T"],
+                    {"t.toml": f"[{sec}]\n{key} = {v}\n".encode()},
+                )
+            )
     for hid in ("../../ESCAPED", "a/b", "", " ", ".", "..", "x" * 100, "a b", "ü", "1abc"):
-        out.append((["temple", "--config", "t.toml", "-o", "T"],
-                    {"t.toml": (f'[[hypothesis]]\nid = "{hid}"\ndescription = ""\nsources = []\n'
-                                'certainty = "low"\nchanges = { "roof.tympanum_ratio" = 8.0 }\n'
-                                ).encode()}))
-    for lo, hi in (("[0,0,0]", "[1,1,1e300]"), ("[0,0,0]", "[nan,1,1]"), ("[0,0]", "[1,1,1]"),
-                   ('"a"', "[1,1,1]"), ("[0,0,0]", "[0,0,0]"), ("[1,1,1]", "[0,0,0]")):
-        out.append((["temple", "--config", "t.toml", "-o", "T"],
-                    {"t.toml": f'[[cuboid]]\nname = "c"\nmin = {lo}\nmax = {hi}\n'
-                               f'layer = "cella"\n'.encode()}))
-    for doc in ("temple = 5", "podium = 5", "[temple]\nname = 5", "hypothesis = 5",
-                "cuboid = 5", "[[cuboid]]\nname = 5", "[nonsense]\na = 1", "x = 1"):
+        out.append(
+            (
+                ["temple", "--config", "t.toml", "-o", "T"],
+                {
+                    "t.toml": (
+                        f'[[hypothesis]]\nid = "{hid}"\ndescription = ""\nsources = []\n'
+                        'certainty = "low"\nchanges = { "roof.tympanum_ratio" = 8.0 }\n'
+                    ).encode()
+                },
+            )
+        )
+    for lo, hi in (
+        ("[0,0,0]", "[1,1,1e300]"),
+        ("[0,0,0]", "[nan,1,1]"),
+        ("[0,0]", "[1,1,1]"),
+        ('"a"', "[1,1,1]"),
+        ("[0,0,0]", "[0,0,0]"),
+        ("[1,1,1]", "[0,0,0]"),
+    ):
+        out.append(
+            (
+                ["temple", "--config", "t.toml", "-o", "T"],
+                {
+                    "t.toml": f'[[cuboid]]\nname = "c"\nmin = {lo}\nmax = {hi}\n'
+                    f'layer = "cella"\n'.encode()
+                },
+            )
+        )
+    for doc in (
+        "temple = 5",
+        "podium = 5",
+        "[temple]\nname = 5",
+        "hypothesis = 5",
+        "cuboid = 5",
+        "[[cuboid]]\nname = 5",
+        "[nonsense]\na = 1",
+        "x = 1",
+    ):
         out.append((["temple", "--config", "t.toml", "-o", "T"], {"t.toml": doc.encode()}))
     # 4. grammar garbage for --base and --scroll
     for _ in range(40 if quick else 150):
         text = "".join(rng.choice(GRAMMAR_ALPHABET) for _ in range(rng.randint(1, 30)))
         out.append((["column", "--lod", "low", "--base", text, "-o", "c.usda"], {}))
         out.append((["column", "--lod", "low", "--scroll", text, "-o", "c.usda"], {}))
-    for text in ("R0.1 H0 R0.2 H0", "R0.074 H4 R0.074 H0.05", "R1e308 H1 R0 H2", "R0 H0",
-                 "R-5 H1 R0 H1"):
+    for text in (
+        "R0.1 H0 R0.2 H0",
+        "R0.074 H4 R0.074 H0.05",
+        "R1e308 H1 R0 H2",
+        "R0 H0",
+        "R-5 H1 R0 H1",
+    ):
         out.append((["column", "--lod", "low", "--base", text, "-o", "c.usda"], {}))
     for text in ("R0 P0, R0 P1", "R3 P0", "R1 P0.5, R1 P0.2", "R1e308 P0"):
         out.append((["column", "--lod", "low", "--scroll", text, "-o", "c.usda"], {}))
     # 5. outputs that cannot be written
     long = "a" * 300
     for argv, files in (
-        (["shaft", "-o", "."], {}), (["shaft", "-o", ".."], {}), (["shaft", "-o", "/"], {}),
-        (["shaft", "-o", long + ".usda"], {}), (["shaft", "-o", "f/x.usda"], {"f": b""}),
+        (["shaft", "-o", "."], {}),
+        (["shaft", "-o", ".."], {}),
+        (["shaft", "-o", "/"], {}),
+        (["shaft", "-o", long + ".usda"], {}),
+        (["shaft", "-o", "f/x.usda"], {"f": b""}),
         (["shaft", "-o", "d.usda", "--force"], {"d.usda": None}),
-        (["shaft", "-o", "x.txt"], {}), (["shaft", "-o", "e.usda"], {"e.usda": b"mine"}),
-        (["temple", "-o", "."], {}), (["temple", "-o", ".", "--force"], {}),
-        (["temple", "-o", long], {}), (["temple", "-o", "f/T"], {"f": b""}),
-        (["temple", "-o", "T"], {"T": None}), (["temple", "-o", "T", "--force"], {"T": b"x"}),
-        (["asset", "-o", ".", "--force"], {}), (["asset", "-o", "f/A"], {"f": b""}),
+        (["shaft", "-o", "x.txt"], {}),
+        (["shaft", "-o", "e.usda"], {"e.usda": b"mine"}),
+        (["temple", "-o", "."], {}),
+        (["temple", "-o", ".", "--force"], {}),
+        (["temple", "-o", long], {}),
+        (["temple", "-o", "f/T"], {"f": b""}),
+        (["temple", "-o", "T"], {"T": None}),
+        (["temple", "-o", "T", "--force"], {"T": b"x"}),
+        (["asset", "-o", ".", "--force"], {}),
+        (["asset", "-o", "f/A"], {"f": b""}),
         (["preview", "s.usda", "-o", "p.png"], {}),
         (["preview", "s.usda", "-o", "p.jpg"], {"s.usda": b"#usda 1.0\n"}),
-        (["city", "c"], {}), (["city", "c"], {"c": None}),
+        (["city", "c"], {}),
+        (["city", "c"], {"c": None}),
     ):
         out.append((argv, files))
     # 6. flags of city, asset, preview, evaluate
-    for flag, vals in (("--rows", ["0", "-1", "100000", "x"]), ("--cols", ["0", "1e3"]),
-                       ("--block", ["0", "-5", "nan", "inf", "1e308"]),
-                       ("--seed", ["-1", "1e30", "x"]), ("--temple", ["../x", "a/b", ""]),
-                       ("--max-memory", ["nan", "-1", "0", "inf"])):
+    for flag, vals in (
+        ("--rows", ["0", "-1", "100000", "x"]),
+        ("--cols", ["0", "1e3"]),
+        ("--block", ["0", "-5", "nan", "inf", "1e308"]),
+        ("--seed", ["-1", "1e30", "x"]),
+        ("--temple", ["../x", "a/b", ""]),
+        ("--max-memory", ["nan", "-1", "0", "inf"]),
+    ):
         for v in vals:
             out.append((["city", "c", flag, v], {"c/PortunusTemple/Temple.usda": b"#usda 1.0\n"}))
-    for argv in (["--texture-size", "8192"], ["--texture-size", "1000"], ["--texture-size", "-1"],
-                 ["--texture-size", "0"], ["--seed", "-1"], ["--texture", "basecolor"],
-                 ["--texture", "basecolor=a.png", "--texture", "basecolor=b.png"],
-                 ["--texture", "albedo=a.png"], ["--texture", "basecolor=missing.png",
-                                                 "--texture", "roughness=missing.png",
-                                                 "--texture", "normal=missing.png"],
-                 ["--max-memory", "0.001"], ["--base", "G9"], ["--lod", "ultra"]):
+    for argv in (
+        ["--texture-size", "8192"],
+        ["--texture-size", "1000"],
+        ["--texture-size", "-1"],
+        ["--texture-size", "0"],
+        ["--seed", "-1"],
+        ["--texture", "basecolor"],
+        ["--texture", "basecolor=a.png", "--texture", "basecolor=b.png"],
+        ["--texture", "albedo=a.png"],
+        [
+            "--texture",
+            "basecolor=missing.png",
+            "--texture",
+            "roughness=missing.png",
+            "--texture",
+            "normal=missing.png",
+        ],
+        ["--max-memory", "0.001"],
+        ["--base", "G9"],
+        ["--lod", "ultra"],
+    ):
         out.append((["asset", "-o", "A", *argv], {}))
-    for argv in (["--width", "0"], ["--width", "100000"], ["--height", "-5"],
-                 ["--samples", "1000"], ["--background", "1,2"], ["--background", "nan,0,0"],
-                 ["--camera", "top"]):
+    for argv in (
+        ["--width", "0"],
+        ["--width", "100000"],
+        ["--height", "-5"],
+        ["--samples", "1000"],
+        ["--background", "1,2"],
+        ["--background", "nan,0,0"],
+        ["--camera", "top"],
+    ):
         out.append((["preview", "s.usda", "-o", "p.png", *argv], {"s.usda": b"#usda 1.0\n"}))
     csv = b"0,0\n0.1,0.05\n0.2,0.1\n"
-    for argv in (["--spacing", "1e-12"], ["--spacing", "0"], ["--spacing", "-1"],
-                 ["--spacing", "nan"], ["--spacing", "inf"], ["--scale", "nan"],
-                 ["--usd", "r.csv"], ["--usd", "missing.usda"]):
-        out.append((["evaluate", "--part", "base", "--reference", "r.csv", *argv],
-                    {"r.csv": csv}))
+    for argv in (
+        ["--spacing", "1e-12"],
+        ["--spacing", "0"],
+        ["--spacing", "-1"],
+        ["--spacing", "nan"],
+        ["--spacing", "inf"],
+        ["--scale", "nan"],
+        ["--usd", "r.csv"],
+        ["--usd", "missing.usda"],
+    ):
+        out.append((["evaluate", "--part", "base", "--reference", "r.csv", *argv], {"r.csv": csv}))
     for ref in (b"", b"x,y\n", b"nan,1\n1,2\n", b"\xff\xfe\x00", b"1,2\n" * 3):
         out.append((["evaluate", "--part", "base", "--reference", "r.csv"], {"r.csv": ref}))
     # 7. config files that are not TOML
-    for data in (os.urandom(2048), b"\x00" * 10, b"a = " + b"[" * 5000 + b"]" * 5000,
-                 b"[column", "ü = 1".encode("latin-1")):
+    for data in (
+        os.urandom(2048),
+        b"\x00" * 10,
+        b"a = " + b"[" * 5000 + b"]" * 5000,
+        b"[column",
+        "ü = 1".encode("latin-1"),
+    ):
         out.append((["column", "--config", "c.toml"], {"c.toml": data}))
     out.append((["column", "--config", "d.toml"], {"d.toml": None}))
     out.append((["column", "--config", "missing.toml"], {}))
@@ -211,22 +310,28 @@ def cases(quick: bool) -> list[tuple[list[str], dict[str, bytes | None]]]:
 
 def fault_cases() -> list[tuple[list[str], dict[str, bytes | None]]]:
     """Outputs onto a read-only and onto a full file system ({RO}, {FULL}; root only)."""
-    outs = [["shaft", "-o", "{D}/s.usda"], ["column", "--lod", "low", "-o", "{D}/c.usda"],
-            ["column", "--lod", "low", "-o", "{D}/c.usdc"],
-            ["temple", "-o", "{D}/T", "--texture-size", "16"],
-            ["asset", "-o", "{D}/A", "--texture-size", "16"],
-            ["preview", "s.usda", "-o", "{D}/p.png", "--width", "64", "--height", "64"],
-            ["city", "{D}"],
-            ["evaluate", "--part", "base", "--reference", "r.csv", "--json", "{D}/e.json"],
-            ["fit", "shaft", "--reference", "r.csv", "-o", "{D}/f.toml"]]
+    outs = [
+        ["shaft", "-o", "{D}/s.usda"],
+        ["column", "--lod", "low", "-o", "{D}/c.usda"],
+        ["column", "--lod", "low", "-o", "{D}/c.usdc"],
+        ["temple", "-o", "{D}/T", "--texture-size", "16"],
+        ["asset", "-o", "{D}/A", "--texture-size", "16"],
+        ["preview", "s.usda", "-o", "{D}/p.png", "--width", "64", "--height", "64"],
+        ["city", "{D}"],
+        ["evaluate", "--part", "base", "--reference", "r.csv", "--json", "{D}/e.json"],
+        ["fit", "shaft", "--reference", "r.csv", "-o", "{D}/f.toml"],
+    ]
     files: dict[str, bytes | None] = {"s.usda": _SCENE, "r.csv": b"0,0\n0.1,0.05\n0.2,0.1\n"}
-    return [([a.replace("{D}", d) for a in argv], files) for d in ("{RO}", "{FULL}")
-            for argv in outs]
+    return [
+        ([a.replace("{D}", d) for a in argv], files) for d in ("{RO}", "{FULL}") for argv in outs
+    ]
 
 
-_SCENE = (b'#usda 1.0\n(defaultPrim = "C")\ndef Mesh "C" {\n  int[] faceVertexCounts = [3, 3, 3, 3]'
-          b"\n  int[] faceVertexIndices = [0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3]\n"
-          b"  point3f[] points = [(0,0,0), (1,0,0), (0,1,0), (0,0,1)]\n}\n")
+_SCENE = (
+    b'#usda 1.0\n(defaultPrim = "C")\ndef Mesh "C" {\n  int[] faceVertexCounts = [3, 3, 3, 3]'
+    b"\n  int[] faceVertexIndices = [0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3]\n"
+    b"  point3f[] points = [(0,0,0), (1,0,0), (0,1,0), (0,0,1)]\n}\n"
+)
 
 
 @contextlib.contextmanager
@@ -244,8 +349,7 @@ def fault_mounts():
     try:
         subprocess.run(["mount", "-t", "tmpfs", "-o", "size=1m", "tmpfs", str(ro)], check=True)
         subprocess.run(["mount", "-o", "remount,ro", str(ro)], check=True)
-        subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(full)],
-                       check=True)
+        subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(full)], check=True)
         st = os.statvfs(full)  # leave 2 kB: even a small JSON or TOML does not fit
         with contextlib.suppress(OSError), open(full / "filler", "wb") as fh:
             fh.write(b"\0" * max(0, st.f_bavail * st.f_frsize - 2048))
@@ -272,8 +376,9 @@ def main(argv: list[str] | None = None) -> int:
         else:
             for cmd, files in fault_cases():
                 folder = mounts[0] if "{RO}" in cmd[-1] + " ".join(cmd) else mounts[1]
-                cmd = [a.replace("{RO}", str(mounts[0])).replace("{FULL}", str(mounts[1]))
-                       for a in cmd]
+                cmd = [
+                    a.replace("{RO}", str(mounts[0])).replace("{FULL}", str(mounts[1])) for a in cmd
+                ]
                 before = _listing(folder)
                 kind, detail = run_case(cmd, files)
                 if kind == "refused" and _listing(folder) != before:
@@ -290,9 +395,11 @@ def main(argv: list[str] | None = None) -> int:
         if i % 50 == 0:
             print(f"... {i}/{len(todo)} {dict(counts)}", file=sys.stderr, flush=True)
     total = len(todo) + counts["fault cases"]
-    print(f"cases {total} ({counts['fault cases']} on read-only/full file systems): refused "
-          f"cleanly {counts['refused']}, accepted (valid, finite) {counts['accepted']}, "
-          f"anything else {counts['other']}")
+    print(
+        f"cases {total} ({counts['fault cases']} on read-only/full file systems): refused "
+        f"cleanly {counts['refused']}, accepted (valid, finite) {counts['accepted']}, "
+        f"anything else {counts['other']}"
+    )
     return 1 if counts["other"] else 0
 
 

@@ -24,8 +24,7 @@ import numpy as np
 OUT = Path(__file__).resolve().parent.parent / "examples"
 
 
-def twelve_centre_volute(eye_radius: float = 0.95 / 36, samples_per_arc: int = 40
-                         ) -> np.ndarray:
+def twelve_centre_volute(eye_radius: float = 0.95 / 36, samples_per_arc: int = 40) -> np.ndarray:
     """(n, 2) outer spiral from the eye outward (metres, eye centre at the origin)."""
     s = eye_radius  # the square's side
     # corners of three nested squares (sides s, 2s/3, s/3), rotated 45° (on the diagonals)
@@ -68,20 +67,25 @@ def attic_base(d: float = 0.95) -> np.ndarray:
     pts += [(inner + 0.6 * sco, y), (inner + 0.6 * sco, y + fil)]
     # scotia: a concave quarter ellipse pair between the fillets
     t = np.linspace(0, math.pi, 50)
-    pts += list(zip(inner + 0.6 * sco - 0.6 * sco * np.sin(t), y + fil + sco * (1 - np.cos(t)) / 2,
-                    strict=True))
+    pts += list(
+        zip(
+            inner + 0.6 * sco - 0.6 * sco * np.sin(t),
+            y + fil + sco * (1 - np.cos(t)) / 2,
+            strict=True,
+        )
+    )
     y += fil + sco
     pts += [(inner + 0.3 * sco, y), (inner + 0.3 * sco, y + fil)]
     y += fil
     t = np.linspace(-math.pi / 2, math.pi / 2, 40)
-    pts += list(zip(r0 + up / 2 * np.cos(t) + 0.02 * d, y + up / 2 + up / 2 * np.sin(t),
-                    strict=True))
+    pts += list(
+        zip(r0 + up / 2 * np.cos(t) + 0.02 * d, y + up / 2 + up / 2 * np.sin(t), strict=True)
+    )
     pts.append((r0, h))
     return np.asarray(pts)
 
 
-def semicircle_flutes(radius: float = 0.475 * 0.93, flutes: int = 24, per: int = 24
-                      ) -> np.ndarray:
+def semicircle_flutes(radius: float = 0.475 * 0.93, flutes: int = 24, per: int = 24) -> np.ndarray:
     """(n, 2) closed section, counter-clockwise, first node repeated."""
     period = 2 * math.pi / flutes
     rho = radius * math.sin(period * 0.8 / 2)  # flute half-width: fillets 1/4 of a flute

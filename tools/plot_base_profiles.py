@@ -33,16 +33,22 @@ def main(argv: list[str] | None = None) -> int:
         ax.plot(curve[:, 0], curve[:, 1], ".", color="k", ms=2.5, label="rows")
         d = p.shaft_radius
         ax.axvline(d, color="tab:blue", lw=0.8, ls="--", label="shaft radius d")
-        ax.set_title(f"{name} (v{p.parsed.version}): {p.height:.3f} m in the column\n"
-                     f"(grammar's own height {own:.3f} m, scaled)", fontsize=9)
+        ax.set_title(
+            f"{name} (v{p.parsed.version}): {p.height:.3f} m in the column\n"
+            f"(grammar's own height {own:.3f} m, scaled)",
+            fontsize=9,
+        )
         ax.set_aspect("equal")
         ax.set_xlim(min(d, curve[:, 0].min()) - 0.15, curve[:, 0].max() + 0.04)
         ax.set_xlabel("r (m)")
         ax.grid(lw=0.3)
     axes[0].set_ylabel("y (m)")
     axes[0].legend(fontsize=7, loc="upper left")
-    fig.suptitle("Column base half-profiles as built for the Portunus column (d = 0.475 m, "
-                 "every base scaled to half a diameter)", fontsize=11)
+    fig.suptitle(
+        "Column base half-profiles as built for the Portunus column (d = 0.475 m, "
+        "every base scaled to half a diameter)",
+        fontsize=11,
+    )
     fig.tight_layout()
     out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out, dpi=110)

@@ -26,8 +26,9 @@ from ionic_usd.column.volute import (  # noqa: E402
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("output", nargs="?", default=str(Path(__file__).parents[1] / "docs"
-                                                      / "volute.png"))
+    ap.add_argument(
+        "output", nargs="?", default=str(Path(__file__).parents[1] / "docs" / "volute.png")
+    )
     ap.add_argument("--samples", type=int, default=600)
     ap.add_argument("--margin", type=float, default=0.12, help="canalis margin drawn (m)")
     args = ap.parse_args(argv)
@@ -38,9 +39,11 @@ def main(argv: list[str] | None = None) -> int:
     ext = volute_extent(p)
     height = ext[1, 1] - ext[0, 1]
     d = 4 * p.capital_spiral_radius  # R = D/4 for the Vitruvian defaults
-    print(f"volute height {height:.4f} m = {height / (d / 18):.3f} parts "
-          f"(Vitruvius: 8); eye diameter / height = {2 * p.capital_circle_radius / height:.4f} "
-          f"(Vitruvius: 1/8 = 0.125)")
+    print(
+        f"volute height {height:.4f} m = {height / (d / 18):.3f} parts "
+        f"(Vitruvius: 8); eye diameter / height = {2 * p.capital_circle_radius / height:.4f} "
+        f"(Vitruvius: 1/8 = 0.125)"
+    )
 
     fig, ax = plt.subplots(figsize=(6.4, 6.4), dpi=120)
     band = np.vstack([outer, inner[::-1]])
@@ -55,8 +58,9 @@ def main(argv: list[str] | None = None) -> int:
     ax.set_aspect("equal")
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
-    ax.set_title("Ionic volute, r(θ) = a/(b e^{cθ}) − d  (Vitruvian defaults, D = 0.95 m)",
-                 fontsize=9)
+    ax.set_title(
+        "Ionic volute, r(θ) = a/(b e^{cθ}) − d  (Vitruvian defaults, D = 0.95 m)", fontsize=9
+    )
     ax.legend(loc="lower left", fontsize=7, frameon=False)
     out = Path(args.output)
     out.parent.mkdir(parents=True, exist_ok=True)

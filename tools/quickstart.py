@@ -29,8 +29,10 @@ def quickstart_commands(text: str) -> list[str]:
 def main(argv: list[str]) -> int:
     cmds = quickstart_commands(README.read_text(encoding="utf-8"))
     if len(cmds) != 2 or len(argv) != 1 or argv[0] not in ("1", "2"):
-        print(f"quickstart: expected two commands and an argument 1 or 2, found {cmds!r}",
-              file=sys.stderr)
+        print(
+            f"quickstart: expected two commands and an argument 1 or 2, found {cmds!r}",
+            file=sys.stderr,
+        )
         return 1
     print(cmds[int(argv[0]) - 1])
     return 0

@@ -35,15 +35,17 @@ def main() -> None:
         "no focus (temples high, columns low)": CityOptions(**base),
         "LOD by distance": CityOptions(**base, focus=(0.0, 0.0), cards=False),
         f"LOD + cards beyond {args.cards_beyond:g} m": CityOptions(
-            **base, focus=(0.0, 0.0), cards_beyond=args.cards_beyond),
+            **base, focus=(0.0, 0.0), cards_beyond=args.cards_beyond
+        ),
     }
     if not args.skip_counts:
         rows = []
         for i, (name, opts) in enumerate(settings.items()):
             out = args.work / f"city{i}"
             s = build_city(out, opts)
-            st = render_preview(out / "City.usda", args.work / f"city{i}.png", width=400,
-                                height=300, samples=0)
+            st = render_preview(
+                out / "City.usda", args.work / f"city{i}.png", width=400, height=300, samples=0
+            )
             rows.append((name, st.triangles, s["triangles"]["as authored"], st.cards // 6))
             if i == 0:  # the composer's count with every temple and street column at high
                 everything_high = s["triangles"]["high"]
@@ -55,11 +57,25 @@ def main() -> None:
     # the picture: a 6 x 6 grid, LOD by distance from the corner nearest the camera (the
     # three-quarter view looks from +x, +z: plan (300, 0)), cards beyond --cards-beyond
     big = args.work / "big"
-    build_city(big, CityOptions(rows=6, cols=6, focus=(300.0, 0.0),
-                                lod_distances=(100.0, 200.0), cards_beyond=args.cards_beyond,
-                                **base))
-    st = render_preview(big / "City.usda", DOCS / "city_cards.png", width=1400, height=800,
-                        camera="three-quarter", force=True)
+    build_city(
+        big,
+        CityOptions(
+            rows=6,
+            cols=6,
+            focus=(300.0, 0.0),
+            lod_distances=(100.0, 200.0),
+            cards_beyond=args.cards_beyond,
+            **base,
+        ),
+    )
+    st = render_preview(
+        big / "City.usda",
+        DOCS / "city_cards.png",
+        width=1400,
+        height=800,
+        camera="three-quarter",
+        force=True,
+    )
     print(f"docs/city_cards.png: {st.triangles:,} triangles, {st.cards // 6} temples as cards")
 
 

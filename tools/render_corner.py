@@ -30,6 +30,7 @@ DOCS = Path(__file__).resolve().parent.parent / "docs"
 
 def _placement_matrix(pos, rot_deg: float, turn_deg: float) -> np.ndarray:
     """Column frame → world, then the whole scene turned by ``turn_deg`` about +Y."""
+
     def rot_y(deg: float) -> np.ndarray:
         t = math.radians(deg)
         m = np.eye(4)
@@ -51,9 +52,16 @@ def cella_corner(lod: str, out: Path) -> None:
     layout = portunus_layout()
     cols = {c.name: c for c in layout.columns}
     names = ("rear_3", "rear_4", "right_6", "right_5")
-    meshes = column_asset_meshes(ColumnAssetOptions(
-        lods=(lod,), bases=("attic_bezier_plinth",), scrolls=("S1",), capitals=("normal",),
-        flutes=("f24",), forms=("engaged", "corner")))
+    meshes = column_asset_meshes(
+        ColumnAssetOptions(
+            lods=(lod,),
+            bases=("attic_bezier_plinth",),
+            scrolls=("S1",),
+            capitals=("normal",),
+            flutes=("f24",),
+            forms=("engaged", "corner"),
+        )
+    )
     by_form: dict[str, list[Mesh]] = {}
     for m in meshes:
         by_form.setdefault(m.tags["form"], []).append(m.mesh)
@@ -103,8 +111,7 @@ def angle_capital(lod: str, out: Path) -> None:
         m = transform(cap, _placement_matrix((0, 0, 0), 0.0, turn))
         src = write_meshes(tmp / f"capital{k}.usda", {"AngleCapital": m}, root="Capital")
         pngs.append(tmp / f"capital{k}.png")
-        s = render_preview(src, pngs[-1], width=700, height=560, camera="three-quarter",
-                           force=True)
+        s = render_preview(src, pngs[-1], width=700, height=560, camera="three-quarter", force=True)
     _join(pngs, out)
     print(f"{out.name}: {s.triangles:,} triangles, {s.seconds:.2f} s per view")
 

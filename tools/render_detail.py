@@ -53,8 +53,9 @@ def _tilt(elev_deg: float, az_deg: float = 35.0) -> np.ndarray:
     return m
 
 
-def _stage(path: Path, meshes: dict[str, Mesh], inst: dict[str, Instances],
-           xform: np.ndarray | None = None) -> Path:
+def _stage(
+    path: Path, meshes: dict[str, Mesh], inst: dict[str, Instances], xform: np.ndarray | None = None
+) -> Path:
     lay = new_layer("Scene", kind="component")
     with Sdf.ChangeBlock():
         for name, m in meshes.items():
@@ -64,16 +65,27 @@ def _stage(path: Path, meshes: dict[str, Mesh], inst: dict[str, Instances],
                 from ionic_usd.column.ornament import frames_to_quaternions, quaternion_matrices
 
                 r = xform[:3, :3] @ quaternion_matrices(i.orientations)
-                i = Instances(i.name, i.prototypes, i.proto_indices,
-                              i.positions @ xform[:3, :3].T + xform[:3, 3],
-                              frames_to_quaternions(r[:, :, 0], r[:, :, 1]), i.scales)
+                i = Instances(
+                    i.name,
+                    i.prototypes,
+                    i.proto_indices,
+                    i.positions @ xform[:3, :3].T + xform[:3, 3],
+                    frames_to_quaternions(r[:, :, 0], r[:, :, 1]),
+                    i.scales,
+                )
             author_point_instancer(lay, f"/Scene/{name}", i)
     return save_layer(lay, path, force=True)
 
 
 def _keep(i: Instances, mask: np.ndarray) -> Instances:
-    return Instances(i.name, i.prototypes, i.proto_indices[mask], i.positions[mask],
-                     i.orientations[mask], i.scales[mask])
+    return Instances(
+        i.name,
+        i.prototypes,
+        i.proto_indices[mask],
+        i.positions[mask],
+        i.orientations[mask],
+        i.scales[mask],
+    )
 
 
 def capital(tmp: Path) -> Path:
@@ -120,8 +132,9 @@ def cornice_corner(tmp: Path) -> Path:
             if cm is not None:
                 meshes[name] = cm
     # the corner column's capital and the top of its shaft
-    p = portunus_column_params(height=lay.params.columns_height,
-                               lower_diameter=lay.params.columns_lower_diameter)
+    p = portunus_column_params(
+        height=lay.params.columns_height, lower_diameter=lay.params.columns_lower_diameter
+    )
     col = build_column(p)
     front = next(c for c in lay.columns if c.name == "front_4")
     place = np.eye(4)
@@ -137,9 +150,14 @@ def cornice_corner(tmp: Path) -> Path:
         inst[rel.split("/")[-1]] = _keep(i, keep)
     for a in column_ornament(ColumnAssetOptions(params=p)):
         i = a.instances
-        inst[a.name] = Instances(i.name, i.prototypes, i.proto_indices,
-                                 i.positions + np.asarray(front.position), i.orientations,
-                                 i.scales)
+        inst[a.name] = Instances(
+            i.name,
+            i.prototypes,
+            i.proto_indices,
+            i.positions + np.asarray(front.position),
+            i.orientations,
+            i.scales,
+        )
     return _stage(tmp / "corner.usda", meshes, inst, xform=_tilt(-30.0))
 
 
@@ -158,15 +176,35 @@ def main() -> None:
         lay.pseudoRoot.SetInfo("upAxis", "Y")
         lay.pseudoRoot.SetInfo("metersPerUnit", 1.0)
         lay.Save()
-        s = render_preview(sel, DOCS / f"temple_{v}.png", width=1200, height=800,
-                           camera="three-quarter", force=True)
+        s = render_preview(
+            sel,
+            DOCS / f"temple_{v}.png",
+            width=1200,
+            height=800,
+            camera="three-quarter",
+            force=True,
+        )
         print(f"temple_{v}.png: {s.triangles:,} triangles, {s.instances} instances")
     del root
-    s = render_preview(capital(tmp), DOCS / "capital_carved.png", width=900, height=700,
-                       camera="three-quarter", ground=False, force=True)
+    s = render_preview(
+        capital(tmp),
+        DOCS / "capital_carved.png",
+        width=900,
+        height=700,
+        camera="three-quarter",
+        ground=False,
+        force=True,
+    )
     print(f"capital_carved.png: {s.triangles:,} triangles, {s.instances} instances")
-    s = render_preview(cornice_corner(tmp), DOCS / "cornice_corner.png", width=1000,
-                       height=800, camera="three-quarter", ground=False, force=True)
+    s = render_preview(
+        cornice_corner(tmp),
+        DOCS / "cornice_corner.png",
+        width=1000,
+        height=800,
+        camera="three-quarter",
+        ground=False,
+        force=True,
+    )
     print(f"cornice_corner.png: {s.triangles:,} triangles, {s.instances} instances")
 
 

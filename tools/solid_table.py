@@ -35,51 +35,68 @@ def sliver_counts(mesh: Mesh) -> tuple[int, int]:
     cos = []
     for i in range(3):
         a, b = e[:, i], -e[:, (i + 2) % 3]
-        cos.append(np.einsum("ij,ij->i", a, b) / np.maximum(ln[:, i] * ln[:, (i + 2) % 3],
-                                                              1e-300))
+        cos.append(np.einsum("ij,ij->i", a, b) / np.maximum(ln[:, i] * ln[:, (i + 2) % 3], 1e-300))
     ang = np.degrees(np.arccos(np.clip(np.stack(cos, axis=1), -1.0, 1.0))).min(axis=1)
     return int((area < ZERO_AREA).sum()), int((ang < SLIVER_DEG).sum())
 
 
 def capital_table(lods: tuple[str, ...]) -> None:
-    print(f"{'capital family':28s} {'tris':>6s} {'shells':>6s} {'open':>5s} {'nonman':>6s} "
-          f"{'coloc':>5s} {'cross':>5s} {'minang':>8s} {'zero':>5s} {'<0.5°':>5s} manifold3d")
-    opts = ColumnAssetOptions(lods=lods, bases=("attic_bezier_plinth",), flutes=("f24",),
-                              scrolls=("S1",), forms=("full", "engaged", "corner"))
+    print(
+        f"{'capital family':28s} {'tris':>6s} {'shells':>6s} {'open':>5s} {'nonman':>6s} "
+        f"{'coloc':>5s} {'cross':>5s} {'minang':>8s} {'zero':>5s} {'<0.5°':>5s} manifold3d"
+    )
+    opts = ColumnAssetOptions(
+        lods=lods,
+        bases=("attic_bezier_plinth",),
+        flutes=("f24",),
+        scrolls=("S1",),
+        forms=("full", "engaged", "corner"),
+    )
     for m in column_asset_meshes(opts):
         if m.part != "CapitalBody":
             continue
         r = solid_report(m.mesh)
         st, genus, _ = manifold_status(m.mesh)
         zero, sliver = sliver_counts(m.mesh)
-        print(f"{m.tags['capital'] + '/' + m.tags.get('form', 'full') + '/' + m.tags['lod']:28s} "
-              f"{r.triangles:6d} {r.shells:6d} {r.open_edges:5d} {r.nonmanifold_edges:6d} "
-              f"{r.colocated_points:5d} {r.self_intersections:5d} {r.min_angle:8.4f} "
-              f"{zero:5d} {sliver:5d} {st} g={genus}", flush=True)
+        print(
+            f"{m.tags['capital'] + '/' + m.tags.get('form', 'full') + '/' + m.tags['lod']:28s} "
+            f"{r.triangles:6d} {r.shells:6d} {r.open_edges:5d} {r.nonmanifold_edges:6d} "
+            f"{r.colocated_points:5d} {r.self_intersections:5d} {r.min_angle:8.4f} "
+            f"{zero:5d} {sliver:5d} {st} g={genus}",
+            flush=True,
+        )
 
 
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--lod", default="high")
     ap.add_argument("--form", action="append")
-    ap.add_argument("--capitals", action="store_true",
-                    help="the capital families at every LOD (or --lod, repeated)")
+    ap.add_argument(
+        "--capitals",
+        action="store_true",
+        help="the capital families at every LOD (or --lod, repeated)",
+    )
     args = ap.parse_args()
     if args.capitals:
         capital_table(("high", "medium", "low") if args.lod == "all" else (args.lod,))
         return
     kw = {"forms": tuple(args.form)} if args.form else {}
     opts = ColumnAssetOptions(lods=(args.lod,), **kw)
-    print(f"{'mesh':34s} {'tris':>6s} {'shells':>6s} {'open':>5s} {'nonman':>6s} "
-          f"{'coloc':>5s} {'cross':>6s} {'vs_n':>5s} {'minang':>7s} {'vol_l':>9s} manifold3d")
+    print(
+        f"{'mesh':34s} {'tris':>6s} {'shells':>6s} {'open':>5s} {'nonman':>6s} "
+        f"{'coloc':>5s} {'cross':>6s} {'vs_n':>5s} {'minang':>7s} {'vol_l':>9s} manifold3d"
+    )
     for m in column_asset_meshes(opts):
         t0 = time.perf_counter()
         r = solid_report(m.mesh)
         st, genus, _ = manifold_status(m.mesh)
-        print(f"{m.part + '/' + m.name:34s} {r.triangles:6d} {r.shells:6d} {r.open_edges:5d} "
-              f"{r.nonmanifold_edges:6d} {r.colocated_points:5d} {r.self_intersections:6d} "
-              f"{r.against_normals:5d} {r.min_angle:7.3f} {r.volume * 1000:9.2f} {st} g={genus}"
-              f"  ({time.perf_counter() - t0:.1f}s)", flush=True)
+        print(
+            f"{m.part + '/' + m.name:34s} {r.triangles:6d} {r.shells:6d} {r.open_edges:5d} "
+            f"{r.nonmanifold_edges:6d} {r.colocated_points:5d} {r.self_intersections:6d} "
+            f"{r.against_normals:5d} {r.min_angle:7.3f} {r.volume * 1000:9.2f} {st} g={genus}"
+            f"  ({time.perf_counter() - t0:.1f}s)",
+            flush=True,
+        )
     # base + shaft welded (caps between them removed): one watertight solid?
     from ionic_usd.column.base import build_base
     from ionic_usd.column.shaft import build_shaft
@@ -95,8 +112,11 @@ def main() -> None:
             shaft = build_shaft(fp, cap_bottom=False, y_offset=bp.height)
             w = weld(merge([base, shaft]), 1e-6)
             r = solid_report(w, intersections=False)
-            print(f"{'weld Base_' + b + '+Shaft_' + fname:34s} {r.triangles:6d} {r.shells:6d} "
-                  f"{r.open_edges:5d} {r.nonmanifold_edges:6d} {r.colocated_points:5d}", flush=True)
+            print(
+                f"{'weld Base_' + b + '+Shaft_' + fname:34s} {r.triangles:6d} {r.shells:6d} "
+                f"{r.open_edges:5d} {r.nonmanifold_edges:6d} {r.colocated_points:5d}",
+                flush=True,
+            )
 
 
 if __name__ == "__main__":

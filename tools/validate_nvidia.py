@@ -32,20 +32,30 @@ LAYER_SUFFIXES = (".usda", ".usdc", ".usd")
 
 
 def find_validator(given: str | None) -> str:
-    for cand in (given, os.environ.get("IONIC_USD_NV_VALIDATE"),
-                 shutil.which("nvidia_usd_validate"), "/work/venv-nv/bin/nvidia_usd_validate"):
+    for cand in (
+        given,
+        os.environ.get("IONIC_USD_NV_VALIDATE"),
+        shutil.which("nvidia_usd_validate"),
+        "/work/venv-nv/bin/nvidia_usd_validate",
+    ):
         if cand and Path(cand).is_file():
             return cand
-    sys.exit("validate_nvidia: no nvidia_usd_validate found: pass --validator PATH or set "
-             "IONIC_USD_NV_VALIDATE (pip install 'usd-validation-nvidia[usd]' in its own venv)")
+    sys.exit(
+        "validate_nvidia: no nvidia_usd_validate found: pass --validator PATH or set "
+        "IONIC_USD_NV_VALIDATE (pip install 'usd-validation-nvidia[usd]' in its own venv)"
+    )
 
 
 def validate(validator: str, path: Path, timeout: float) -> dict:
     """The validator's JSON report for one layer (``{"status", "rules": [...]}``)."""
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "report.json"
-        proc = subprocess.run([validator, str(path), "--no-variants", "--json-output", str(out)],
-                              capture_output=True, text=True, timeout=timeout)
+        proc = subprocess.run(
+            [validator, str(path), "--no-variants", "--json-output", str(out)],
+            capture_output=True,
+            text=True,
+            timeout=timeout,
+        )
         if not out.is_file():
             return {"status": "CRASH", "rules": [], "stderr": proc.stderr[-2000:]}
         return json.loads(out.read_text())
@@ -66,8 +76,9 @@ def summarise(report: dict) -> dict[str, dict[str, object]]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     ap.add_argument("folder", type=Path, help="a temple or asset folder (or one layer)")
     ap.add_argument("--validator", help="path of nvidia_usd_validate")
     ap.add_argument("--timeout", type=float, default=900.0, help="seconds per layer")
@@ -75,8 +86,11 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     validator = find_validator(args.validator)
     root = args.folder
-    files = [root] if root.is_file() else sorted(
-        f for f in root.rglob("*") if f.suffix in LAYER_SUFFIXES and f.is_file())
+    files = (
+        [root]
+        if root.is_file()
+        else sorted(f for f in root.rglob("*") if f.suffix in LAYER_SUFFIXES and f.is_file())
+    )
     if not files:
         print(f"validate_nvidia: no USD layers under {root}", file=sys.stderr)
         return 2

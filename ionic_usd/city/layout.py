@@ -20,9 +20,19 @@ import numpy as np
 from ionic_usd.city.plan import Lot, Porticus
 from ionic_usd.errors import IonicError, ParameterError
 
-__all__ = ["Footprint", "TempleFit", "fit_temple", "porticus_columns", "extra_columns",
-           "drop_inside", "lod_by_distance", "distance_from", "LOD_NAMES", "yaw_quaternions",
-           "DEFAULT_INSTANCER_THRESHOLD"]
+__all__ = [
+    "Footprint",
+    "TempleFit",
+    "fit_temple",
+    "porticus_columns",
+    "extra_columns",
+    "drop_inside",
+    "lod_by_distance",
+    "distance_from",
+    "LOD_NAMES",
+    "yaw_quaternions",
+    "DEFAULT_INSTANCER_THRESHOLD",
+]
 
 LOD_NAMES = ("high", "medium", "low")
 # above this many temples the city uses a PointInstancer of temple prototypes instead of
@@ -54,8 +64,9 @@ class Footprint:
 
     def corners(self) -> np.ndarray:
         """(4, 2) float — (x, z) corners, counter-clockwise seen from above."""
-        return np.array([[self.x0, self.z0], [self.x1, self.z0], [self.x1, self.z1],
-                         [self.x0, self.z1]])
+        return np.array(
+            [[self.x0, self.z0], [self.x1, self.z0], [self.x1, self.z1], [self.x0, self.z1]]
+        )
 
 
 @dataclass(frozen=True)
@@ -92,8 +103,13 @@ def _azimuth(de: float, dn: float) -> float:
     return math.degrees(math.atan2(de, dn)) % 360.0
 
 
-def fit_temple(lot: Lot, fp: Footprint, *, scale_range: tuple[float, float],
-               toward: Sequence[float] | None = None) -> TempleFit:
+def fit_temple(
+    lot: Lot,
+    fp: Footprint,
+    *,
+    scale_range: tuple[float, float],
+    toward: Sequence[float] | None = None,
+) -> TempleFit:
     """Fit a temple's footprint inside a lot: rotated to the lot, uniformly scaled.
 
     The front faces ``lot.orientation`` or, when None, along the lot's long axis (of its
@@ -114,8 +130,9 @@ def fit_temple(lot: Lot, fp: Footprint, *, scale_range: tuple[float, float],
     poly = shapely.Polygon(lot.outline)
     ctx = f"lot {lot.id}"
     if not poly.is_valid or poly.area <= 0:
-        raise ParameterError("outline", shapely.is_valid_reason(poly), "a simple polygon",
-                             context=ctx)
+        raise ParameterError(
+            "outline", shapely.is_valid_reason(poly), "a simple polygon", context=ctx
+        )
     smin, smax = lot.scale or scale_range
     cen = np.array(poly.centroid.coords[0])
     if lot.orientation is not None:
@@ -165,10 +182,13 @@ def fit_temple(lot: Lot, fp: Footprint, *, scale_range: tuple[float, float],
             break
         if best is not None:
             return best
-    raise ParameterError("outline", f"{fp.width:.1f} × {fp.length:.1f} m temple",
-                         f"a lot that holds the temple at scale >= {smin:g} (facing "
-                         f"{az:.0f}°); enlarge the lot, lower its scale minimum or turn it",
-                         context=ctx)
+    raise ParameterError(
+        "outline",
+        f"{fp.width:.1f} × {fp.length:.1f} m temple",
+        f"a lot that holds the temple at scale >= {smin:g} (facing "
+        f"{az:.0f}°); enlarge the lot, lower its scale minimum or turn it",
+        context=ctx,
+    )
 
 
 def _containment(poly, ring: np.ndarray):
@@ -186,16 +206,19 @@ def _containment(poly, ring: np.ndarray):
             rel = corners[:, None, :] - pts[None, :, :]
             cross = edge[None, :, 0] * rel[..., 1] - edge[None, :, 1] * rel[..., 0]
             return bool((cross / length >= -1e-3).all())
+
         return convex
     grown = poly.buffer(1e-3)
 
     def general(corners: np.ndarray) -> bool:
         return bool(grown.contains(shapely.Polygon(corners)))
+
     return general
 
 
-def _sample_polyline(line: np.ndarray, spacing: float, closed: bool) -> tuple[np.ndarray,
-                                                                               np.ndarray]:
+def _sample_polyline(
+    line: np.ndarray, spacing: float, closed: bool
+) -> tuple[np.ndarray, np.ndarray]:
     """Points every ``spacing`` along a polyline (centred on an open line; evenly round a
     closed one) and the unit tangent there. Returns ((n, 2), (n, 2))."""
     pts = np.vstack([line, line[:1]]) if closed else line
@@ -259,8 +282,9 @@ def porticus_columns(p: Porticus, spacing: float) -> tuple[np.ndarray, np.ndarra
     return np.concatenate(xs), np.concatenate(yaws)
 
 
-def extra_columns(count: int, bounds: tuple[float, float, float, float], spacing: float,
-                  pitch: float = 6.0) -> tuple[np.ndarray, np.ndarray]:
+def extra_columns(
+    count: int, bounds: tuple[float, float, float, float], spacing: float, pitch: float = 6.0
+) -> tuple[np.ndarray, np.ndarray]:
     """``count`` more columns in colonnade rows south of the city (USD ``+z``), each row as
     wide as the city (at least 300 m), ``pitch`` m apart; the columns face south.
 
@@ -276,15 +300,17 @@ def extra_columns(count: int, bounds: tuple[float, float, float, float], spacing
     return xz, np.zeros(count)
 
 
-def drop_inside(xz: np.ndarray, footprints: Sequence[np.ndarray], margin: float = 1.0
-                ) -> np.ndarray:
+def drop_inside(
+    xz: np.ndarray, footprints: Sequence[np.ndarray], margin: float = 1.0
+) -> np.ndarray:
     """(n,) bool — which columns stand clear of every temple footprint (plan (m, 2) corner
     arrays, grown by ``margin`` m)."""
     if not footprints or len(xz) == 0:
         return np.ones(len(xz), dtype=bool)
     shapely = _shapely()
-    tree = shapely.STRtree([shapely.Polygon(f).buffer(margin, join_style="mitre")
-                            for f in footprints])
+    tree = shapely.STRtree(
+        [shapely.Polygon(f).buffer(margin, join_style="mitre") for f in footprints]
+    )
     pts = shapely.points(xz[:, 0], -xz[:, 1])
     hit = tree.query(pts, predicate="intersects")[0]
     keep = np.ones(len(xz), dtype=bool)
@@ -292,8 +318,9 @@ def drop_inside(xz: np.ndarray, footprints: Sequence[np.ndarray], margin: float 
     return keep
 
 
-def lod_by_distance(xz: np.ndarray, focus: Sequence[float] | None,
-                    distances: tuple[float, float]) -> np.ndarray:
+def lod_by_distance(
+    xz: np.ndarray, focus: Sequence[float] | None, distances: tuple[float, float]
+) -> np.ndarray:
     """(n,) int8 index into :data:`LOD_NAMES`: high within ``distances[0]`` m of the focus
     (plan (e, n)), medium within ``distances[1]``, low beyond; all high without a focus."""
     if focus is None:

@@ -44,8 +44,15 @@ import numpy as np
 
 from ionic_usd.errors import ParameterError
 
-__all__ = ["Lot", "Porticus", "CityPlan", "read_geojson", "grid_plan", "FEATURE_TYPES",
-           "GEOGRAPHIC_CRS"]
+__all__ = [
+    "Lot",
+    "Porticus",
+    "CityPlan",
+    "read_geojson",
+    "grid_plan",
+    "FEATURE_TYPES",
+    "GEOGRAPHIC_CRS",
+]
 
 FEATURE_TYPES = ("temple", "porticus", "plaza")
 GEOGRAPHIC_CRS = ("EPSG:4326", "OGC:CRS84", "CRS84", "EPSG:4258", "EPSG:4269", "EPSG:4979")
@@ -109,10 +116,15 @@ class CityPlan:
 
 
 def _num(value: object, name: str, ctx: str, *, positive: bool = False) -> float:
-    if (not isinstance(value, (int, float)) or isinstance(value, bool)
-            or not math.isfinite(value) or (positive and value <= 0)):
-        raise ParameterError(name, value, "a finite number" + (" > 0" if positive else ""),
-                             context=ctx)
+    if (
+        not isinstance(value, (int, float))
+        or isinstance(value, bool)
+        or not math.isfinite(value)
+        or (positive and value <= 0)
+    ):
+        raise ParameterError(
+            name, value, "a finite number" + (" > 0" if positive else ""), context=ctx
+        )
     return float(value)
 
 
@@ -123,15 +135,17 @@ def _ring(coords: object, ctx: str, *, closed: bool) -> np.ndarray:
     for i, c in enumerate(coords):
         if not isinstance(c, list) or len(c) < 2:
             raise ParameterError(f"coordinates[{i}]", c, "[x, y] in metres", context=ctx)
-        pts.append([_num(c[0], f"coordinates[{i}][0]", ctx), _num(c[1], f"coordinates[{i}][1]",
-                                                                   ctx)])
+        pts.append(
+            [_num(c[0], f"coordinates[{i}][0]", ctx), _num(c[1], f"coordinates[{i}][1]", ctx)]
+        )
     a = np.asarray(pts, dtype=float)
     if closed and len(a) > 1 and np.array_equal(a[0], a[-1]):
         a = a[:-1]
     need = 3 if closed else 2
     if len(a) < need:
-        raise ParameterError("coordinates", len(a), f"at least {need} distinct positions",
-                             context=ctx)
+        raise ParameterError(
+            "coordinates", len(a), f"at least {need} distinct positions", context=ctx
+        )
     return a
 
 
@@ -142,26 +156,32 @@ def _check_crs(doc: Mapping[str, Any], where: str) -> None:
     name = crs.get("properties", {}).get("name", "") if isinstance(crs, dict) else crs
     text = str(name).upper()
     if any(g.upper() in text for g in GEOGRAPHIC_CRS):
-        raise ParameterError("crs", str(name), "metres in a local projected frame (the plan is "
-                             "in geographic degrees: project it first)", context=where)
+        raise ParameterError(
+            "crs",
+            str(name),
+            "metres in a local projected frame (the plan is "
+            "in geographic degrees: project it first)",
+            context=where,
+        )
 
 
 def _lot(fid: str, geom: Mapping, props: Mapping, ctx: str) -> Lot:
     if geom.get("type") != "Polygon":
-        raise ParameterError("geometry.type", geom.get("type"), "Polygon for a temple",
-                             context=ctx)
+        raise ParameterError("geometry.type", geom.get("type"), "Polygon for a temple", context=ctx)
     outline = _ring((geom.get("coordinates") or [None])[0], ctx, closed=True)
     orient = props.get("orientation")
     if orient is not None:
         orient = _num(orient, "orientation", ctx) % 360.0
     hyps = props.get("hypotheses", {})
     if not isinstance(hyps, dict) or any(v not in _HYP_CHOICES for v in hyps.values()):
-        raise ParameterError("hypotheses", hyps, "an object {id: \"baseline\" | "
-                             "\"alternative\"}", context=ctx)
+        raise ParameterError(
+            "hypotheses", hyps, 'an object {id: "baseline" | "alternative"}', context=ctx
+        )
     column = props.get("column", {})
     if not isinstance(column, dict) or set(column) - {"height", "lower_diameter"}:
-        raise ParameterError("column", column, "an object with height and/or lower_diameter "
-                             "(m)", context=ctx)
+        raise ParameterError(
+            "column", column, "an object with height and/or lower_diameter (m)", context=ctx
+        )
     column = {k: _num(v, f"column.{k}", ctx, positive=True) for k, v in column.items()}
     scale = props.get("scale")
     if scale is not None:
@@ -194,13 +214,18 @@ def _porticoes(fid: str, geom: Mapping, props: Mapping, ctx: str) -> list[Portic
     elif kind == "Polygon" and isinstance(coords, list) and coords:
         lines, closed = [coords[0]], True
     else:
-        raise ParameterError("geometry.type", kind, "LineString, MultiLineString or Polygon "
-                             "for a porticus", context=ctx)
+        raise ParameterError(
+            "geometry.type",
+            kind,
+            "LineString, MultiLineString or Polygon for a porticus",
+            context=ctx,
+        )
     out = []
     for k, line in enumerate(lines):
         name = fid if len(lines) == 1 else f"{fid}_{k}"
-        out.append(Porticus(name, _ring(line, ctx, closed=closed), spacing, int(sides), offset,
-                            closed))
+        out.append(
+            Porticus(name, _ring(line, ctx, closed=closed), spacing, int(sides), offset, closed)
+        )
     return out
 
 
@@ -218,11 +243,16 @@ def read_geojson(path: str | os.PathLike) -> CityPlan:
     except (OSError, UnicodeDecodeError) as exc:
         raise ParameterError("--plan", where, f"a readable UTF-8 file ({exc})") from None
     except json.JSONDecodeError as exc:
-        raise ParameterError("--plan", where, f"valid JSON (line {exc.lineno}, column "
-                             f"{exc.colno}: {exc.msg})") from None
+        raise ParameterError(
+            "--plan", where, f"valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})"
+        ) from None
     if not isinstance(doc, dict) or doc.get("type") != "FeatureCollection":
-        raise ParameterError("type", doc.get("type") if isinstance(doc, dict) else doc,
-                             "a GeoJSON FeatureCollection", context=where)
+        raise ParameterError(
+            "type",
+            doc.get("type") if isinstance(doc, dict) else doc,
+            "a GeoJSON FeatureCollection",
+            context=where,
+        )
     _check_crs(doc, where)
     feats = doc.get("features")
     if not isinstance(feats, list):
@@ -249,13 +279,15 @@ def read_geojson(path: str | os.PathLike) -> CityPlan:
         elif kind == "porticus":
             porticoes += _porticoes(fid, f["geometry"], props, ctx)
     if not lots and not porticoes:
-        raise ParameterError("features", len(feats), "at least one temple or porticus",
-                             context=where)
+        raise ParameterError(
+            "features", len(feats), "at least one temple or porticus", context=where
+        )
     return CityPlan(tuple(lots), tuple(porticoes), source=where, base_dir=p.parent)
 
 
-def grid_plan(rows: int = 4, cols: int = 4, block: float = 60.0, *, street: float = 8.0,
-              spacing: float = 3.0) -> CityPlan:
+def grid_plan(
+    rows: int = 4, cols: int = 4, block: float = 60.0, *, street: float = 8.0, spacing: float = 3.0
+) -> CityPlan:
     """The default city: ``rows × cols`` square lots, fronts facing south, temples at their
     own size (scale 1), with a colonnade on both sides of every street running east–west
     between the rows.
@@ -275,11 +307,14 @@ def grid_plan(rows: int = 4, cols: int = 4, block: float = 60.0, *, street: floa
     for i in range(rows):
         for j in range(cols):
             cx, cy = j * block, i * block
-            ring = np.array([[cx - h, cy - h], [cx + h, cy - h], [cx + h, cy + h],
-                             [cx - h, cy + h]])
+            ring = np.array(
+                [[cx - h, cy - h], [cx + h, cy - h], [cx + h, cy + h], [cx - h, cy + h]]
+            )
             lots.append(Lot(f"{i}_{j}", ring, orientation=180.0, scale=(1.0, 1.0)))
     x0, x1 = -block / 2, (cols - 0.5) * block
     ys = [(i + 0.5) * block for i in range(rows - 1)] or [-block / 2]
-    porticoes = tuple(Porticus(f"Street_{k}", np.array([[x0, y], [x1, y]]), spacing, 2,
-                               street / 2) for k, y in enumerate(ys))
+    porticoes = tuple(
+        Porticus(f"Street_{k}", np.array([[x0, y], [x1, y]]), spacing, 2, street / 2)
+        for k, y in enumerate(ys)
+    )
     return CityPlan(tuple(lots), porticoes)

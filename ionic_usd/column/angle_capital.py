@@ -87,41 +87,64 @@ def build_angle_capital(p: CapitalParams, lay: CapitalLayout, top_radius: float)
     top_dx = float(volute_curve(p.volute, 2)[-1, 0]) - p.volute.offset_x
 
     def volute(margin: float) -> Mesh:
-        return build_volute(p.volute, samples=p.spiral_samples, eye_segments=p.ring_segments,
-                            relief_depth=r, slab_depth=slab, margin=margin)
+        return build_volute(
+            p.volute,
+            samples=p.spiral_samples,
+            eye_segments=p.ring_segments,
+            relief_depth=r,
+            slab_depth=slab,
+            margin=margin,
+        )
 
     # the +Z face's own volute (front-left), its margin running along the canalis' top to
     # half a relief past the side face's band plane, inside the corner volute's band
     reach = lay.face_z + 0.5 * r
     right = volute(lay.eye_x + top_dx + reach)
-    fl = rigid(rigid(right, np.eye(3), (lay.eye_x, lay.eye_y, lay.face_z)), MIRROR_X,
-               name="volute_front_left")
+    fl = rigid(
+        rigid(right, np.eye(3), (lay.eye_x, lay.eye_y, lay.face_z)),
+        MIRROR_X,
+        name="volute_front_left",
+    )
     side = rigid(fl, SWAP_XZ, name="volute_side_rear")  # the +X face's, at z = −eye_x
     # the corner volute: the front-right one (a short margin into the listels' corner) turned
     # 45° about its eye's vertical onto the outer diagonal; its disc, band and eye are united
     # first, while their touching faces are still exactly coplanar
-    corner = rigid(union([volute(r)]), rot_y(45.0),
-                   corner_eye(p, lay), "volute_corner")
+    corner = rigid(union([volute(r)]), rot_y(45.0), corner_eye(p, lay), "volute_corner")
     # the canalis plates: an L whose outer corner edge is buried in the corner volute's disc
     slab_front = lay.face_z - r
     lo = canalis_bottom(p, lay)
-    front = box_mesh((-lay.eye_x, lo, lay.back_z), (slab_front, lay.abacus_y, slab_front),
-                     "canalis_front")
+    front = box_mesh(
+        (-lay.eye_x, lo, lay.back_z), (slab_front, lay.abacus_y, slab_front), "canalis_front"
+    )
     side_canalis = rigid(front, SWAP_XZ, name="canalis_side")
     # the core: between the canales' backs (into them by half a slab), the bolster axes (1 cm
     # inside them), the echinus' top and the abacus (into it by half its height)
     inner = -lay.eye_x + 0.01
     outer = lay.back_z + 0.5 * slab
-    core = box_mesh((inner, p.echinus_height, inner),
-                    (outer, lay.abacus_y + 0.5 * p.abacus_height, outer), "core")
+    core = box_mesh(
+        (inner, p.echinus_height, inner),
+        (outer, lay.abacus_y + 0.5 * p.abacus_height, outer),
+        "core",
+    )
     # the bolsters: grammar from the volute's back (p = 0) to the crossing of the two bolster
     # axes (p = 1), carried on past it and cut by the mitre plane x − z = overlap
     length = lay.back_z + lay.eye_x
     reach_out = lay.total_radius * max(1.0, max(g.radius for g in p.scroll_grammar.rings))
-    bol = bolster_mesh(p, length, lay.total_radius, extend=reach_out + 2 * MITRE_OVERLAP + 0.01,
-                       name="bolster_left")
+    bol = bolster_mesh(
+        p,
+        length,
+        lay.total_radius,
+        extend=reach_out + 2 * MITRE_OVERLAP + 0.01,
+        name="bolster_left",
+    )
     bol = rigid(bol, np.eye(3), (-lay.eye_x, lay.eye_y, lay.back_z))
     bl = clip_mesh(bol, (MITRE_OVERLAP, 0.0, 0.0), (-1.0, 0.0, 1.0), name="bolster_left")
     br = rigid(bl, SWAP_XZ, name="bolster_rear")
-    return CapitalParts(abacus_mesh(p, lay), echinus_mesh(p, top_radius, p.ring_segments),
-                        (fl, corner, side), (front, side_canalis), (bl, br), (core,))
+    return CapitalParts(
+        abacus_mesh(p, lay),
+        echinus_mesh(p, top_radius, p.ring_segments),
+        (fl, corner, side),
+        (front, side_canalis),
+        (bl, br),
+        (core,),
+    )

@@ -118,8 +118,12 @@ class BaseParams:
         ctx = "base"
         for name in ("shaft_radius", "scale"):
             v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v) \
-                    or v <= 0:
+            if (
+                isinstance(v, bool)
+                or not isinstance(v, int | float)
+                or not math.isfinite(v)
+                or v <= 0
+            ):
                 raise ParameterError(name, v, "a finite number > 0", context=ctx)
         for name, lo in (("segments", 3), ("profile_slices", 1), ("plinth_modules", 0)):
             v = getattr(self, name)
@@ -133,16 +137,19 @@ class BaseParams:
             g = parse_base_grammar(g, self.version)
         elif isinstance(g, TorusBase | BezierBase):
             if self.version is not None and g.version != self.version:
-                raise ParameterError("version", self.version, f"{g.version} (the grammar's)",
-                                     context=ctx)
+                raise ParameterError(
+                    "version", self.version, f"{g.version} (the grammar's)", context=ctx
+                )
             g = g.located()
         else:
-            raise ParameterError("grammar", g, "grammar text or a parsed base grammar",
-                                 context=ctx)
+            raise ParameterError("grammar", g, "grammar text or a parsed base grammar", context=ctx)
         if self.plinth_modules >= len(g.modules):
-            raise ParameterError("plinth_modules", self.plinth_modules,
-                                 f"fewer than the grammar's {len(g.modules)} modules",
-                                 context=ctx)
+            raise ParameterError(
+                "plinth_modules",
+                self.plinth_modules,
+                f"fewer than the grammar's {len(g.modules)} modules",
+                context=ctx,
+            )
         _check_axis(g, self.shaft_radius, self.scale)
         object.__setattr__(self, "_parsed", g)
 
@@ -180,7 +187,11 @@ def _check_axis(g: BaseGrammar, d: float, scale: float) -> None:
                 raise GrammarError(
                     f"radius {r:g} reaches the column axis: d + r = {d:g} + {scale * r:g} "
                     f"<= 0 (r must be > {-d / scale:g})",
-                    g.source, off, length=ln, module=k, grammar=g.grammar_name,
+                    g.source,
+                    off,
+                    length=ln,
+                    module=k,
+                    grammar=g.grammar_name,
                 )
 
 
@@ -213,10 +224,13 @@ def _module_curves(g: BaseGrammar, slices: int) -> list[tuple[np.ndarray, bool]]
     for k, m in enumerate(modules):
         if isinstance(m, TorusModule):
             arcs = [torus_arc(f, slices) for f in m.floors]
-            nodes = np.concatenate([arcs[0]] + [
-                a[1:] + [0.0, sum(f.height for f in m.floors[:i + 1])]
-                for i, a in enumerate(arcs[1:])
-            ])
+            nodes = np.concatenate(
+                [arcs[0]]
+                + [
+                    a[1:] + [0.0, sum(f.height for f in m.floors[: i + 1])]
+                    for i, a in enumerate(arcs[1:])
+                ]
+            )
             out.append((nodes, False))
         else:
             ctrl = np.array([[p.r, p.h] for p in m.points])
@@ -289,7 +303,7 @@ def _layout(p: BaseParams) -> tuple[np.ndarray, np.ndarray, float, float, float]
         y0 = top
     outer = np.array(pr.nodes, dtype=np.float64).reshape(-1, 2)
     seg = np.array(pr.groups[1:], dtype=np.int64)
-    plinth_top = sc * sum(m.height for m in g.modules[:p.plinth_modules])
+    plinth_top = sc * sum(m.height for m in g.modules[: p.plinth_modules])
     return outer, seg, plinth_half, plinth_top, tol
 
 
@@ -362,8 +376,7 @@ def base_profile(p: BaseParams | None = None, *, closed: bool = False) -> np.nda
     return outer
 
 
-def base_triangle_estimate(p: BaseParams, *, cap_bottom: bool = True,
-                           cap_top: bool = True) -> int:
+def base_triangle_estimate(p: BaseParams, *, cap_bottom: bool = True, cap_top: bool = True) -> int:
     """Triangles :func:`build_base` emits (the profile is built, not the mesh)."""
     nodes, _, _, _ = _closed_profile(p, cap_bottom=cap_bottom, cap_top=cap_top)
     on_axis = nodes[:, 0] <= 1e-12
@@ -374,8 +387,9 @@ def base_triangle_estimate(p: BaseParams, *, cap_bottom: bool = True,
     return int(band.sum()) + box
 
 
-def _plinth_box(half: float, top: float, ring: np.ndarray, ring_pts: np.ndarray,
-                cap_bottom: bool, first: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _plinth_box(
+    half: float, top: float, ring: np.ndarray, ring_pts: np.ndarray, cap_bottom: bool, first: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The square plinth around the revolved part's open bottom ring, as one shell with it.
 
     Its top face is the square minus the ring's disc (constrained Delaunay, shapely).
@@ -464,8 +478,9 @@ def build_base(
     return mesh
 
 
-def _with_plinth(mesh: Mesh, ring: np.ndarray, half: float, top: float, cap_bottom: bool,
-                 name: str) -> Mesh:
+def _with_plinth(
+    mesh: Mesh, ring: np.ndarray, half: float, top: float, cap_bottom: bool, name: str
+) -> Mesh:
     """Close the revolved part's bottom ring with the square plinth (one shell, flat normals)."""
     if len(ring) == 1 or half <= float(np.linalg.norm(mesh.points[ring[0]][[0, 2]])):
         raise GeometryError("build_base: the plinth must be wider than the moulding on it")
@@ -483,8 +498,9 @@ def _with_plinth(mesh: Mesh, ring: np.ndarray, half: float, top: float, cap_bott
     fn[flip] = -fn[flip]
     assert mesh.normals is not None and mesh.normals_indices is not None
     normals = np.concatenate([mesh.normals, fn.astype(np.float32)])
-    nidx = np.concatenate([mesh.normals_indices,
-                           len(mesh.normals) + np.repeat(np.arange(len(tri)), 3)])
+    nidx = np.concatenate(
+        [mesh.normals_indices, len(mesh.normals) + np.repeat(np.arange(len(tri)), 3)]
+    )
     idx = np.concatenate([mesh.face_vertex_indices, tri.reshape(-1)])
     st, sti = mesh.st, mesh.st_indices
     if st is not None and sti is not None:
@@ -492,13 +508,23 @@ def _with_plinth(mesh: Mesh, ring: np.ndarray, half: float, top: float, cap_bott
         corners = tri.reshape(-1)
         axis = np.argmax(np.abs(fn), axis=1)
         key = np.repeat(axis * 2 + (fn[np.arange(len(fn)), axis] > 0), 3)
-        uniq, first, inv = np.unique(key * len(points) + corners, return_index=True,
-                                     return_inverse=True)
+        uniq, first, inv = np.unique(
+            key * len(points) + corners, return_index=True, return_inverse=True
+        )
         slab = box_st(points[uniq % len(points)], np.repeat(fn, 3, axis=0)[first])
         sti = np.concatenate([sti, len(st) + inv.reshape(-1)])
         st = np.concatenate([st, slab.astype(np.float32)])
-    return Mesh(points, np.full(len(idx) // 3, 3, np.int32), idx, normals, "faceVarying",
-                st, sti, name=name, normals_indices=nidx)
+    return Mesh(
+        points,
+        np.full(len(idx) // 3, 3, np.int32),
+        idx,
+        normals,
+        "faceVarying",
+        st,
+        sti,
+        name=name,
+        normals_indices=nidx,
+    )
 
 
 # -- presets --------------------------------------------------------------------------------
@@ -538,8 +564,11 @@ def load_base_preset(name: str, **overrides) -> BaseParams:
     entry = presets[name]
     extra = set(entry) - _PRESET_KEYS
     if extra:
-        raise ParameterError(f"base preset {name!r} key", sorted(extra)[0],
-                             f"one of {', '.join(sorted(_PRESET_KEYS))}")
+        raise ParameterError(
+            f"base preset {name!r} key",
+            sorted(extra)[0],
+            f"one of {', '.join(sorted(_PRESET_KEYS))}",
+        )
     kw = {k: v for k, v in entry.items() if k != "description"}
     kw.update(overrides)
     return BaseParams(**kw)

@@ -75,8 +75,9 @@ __all__ = [
 ]
 
 
-def build_capital(p: CapitalParams | None = None, *, top_radius: float,
-                  angle: bool = False) -> CapitalParts:
+def build_capital(
+    p: CapitalParams | None = None, *, top_radius: float, angle: bool = False
+) -> CapitalParts:
     """Build the Ionic capital's parts.
 
     Parameters
@@ -94,34 +95,57 @@ def build_capital(p: CapitalParams | None = None, *, top_radius: float,
     CapitalParts, every mesh a union of closed, outward-wound triangle shells with normals.
     """
     p = p or CapitalParams()
-    if (isinstance(top_radius, bool) or not isinstance(top_radius, int | float)
-            or not math.isfinite(top_radius) or top_radius <= 0):
-        raise ParameterError("top_radius", top_radius, "a length > 0 (the shaft's $c)",
-                             context="capital")
+    if (
+        isinstance(top_radius, bool)
+        or not isinstance(top_radius, int | float)
+        or not math.isfinite(top_radius)
+        or top_radius <= 0
+    ):
+        raise ParameterError(
+            "top_radius", top_radius, "a length > 0 (the shaft's $c)", context="capital"
+        )
     lay = capital_layout(p)
     if angle:
         return build_angle_capital(p, lay, float(top_radius)).lifted(p.capital_position_y)
-    vol = build_volute(p.volute, samples=p.spiral_samples, eye_segments=p.ring_segments,
-                       relief_depth=p.relief_depth, slab_depth=p.slab_depth,
-                       margin=lay.margin)
+    vol = build_volute(
+        p.volute,
+        samples=p.spiral_samples,
+        eye_segments=p.ring_segments,
+        relief_depth=p.relief_depth,
+        slab_depth=p.slab_depth,
+        margin=lay.margin,
+    )
     fr = rigid(vol, np.eye(3), (lay.eye_x, lay.eye_y, lay.face_z), "volute_front_right")
     fl = rigid(fr, MIRROR_X, name="volute_front_left")
     rr = rigid(fr, MIRROR_Z, name="volute_rear_right")
     rl = rigid(fl, MIRROR_Z, name="volute_rear_left")
     slab_front = lay.face_z - p.relief_depth
-    front = box_mesh((-lay.eye_x, canalis_bottom(p, lay), lay.back_z),
-                     (lay.eye_x, lay.abacus_y, slab_front), "canalis_front")
+    front = box_mesh(
+        (-lay.eye_x, canalis_bottom(p, lay), lay.back_z),
+        (lay.eye_x, lay.abacus_y, slab_front),
+        "canalis_front",
+    )
     rear = rigid(front, MIRROR_Z, name="canalis_rear")
-    br = rigid(bolster_mesh(p, 2 * lay.back_z, lay.total_radius), np.eye(3),
-               (lay.eye_x, lay.eye_y, lay.back_z), "bolster_right")
+    br = rigid(
+        bolster_mesh(p, 2 * lay.back_z, lay.total_radius),
+        np.eye(3),
+        (lay.eye_x, lay.eye_y, lay.back_z),
+        "bolster_right",
+    )
     bl = rigid(br, MIRROR_X, name="bolster_left")
-    parts = CapitalParts(abacus_mesh(p, lay), echinus_mesh(p, float(top_radius), p.ring_segments),
-                         (fr, fl, rr, rl), (front, rear), (br, bl))
+    parts = CapitalParts(
+        abacus_mesh(p, lay),
+        echinus_mesh(p, float(top_radius), p.ring_segments),
+        (fr, fl, rr, rl),
+        (front, rear),
+        (br, bl),
+    )
     return parts.lifted(p.capital_position_y)
 
 
-def capital_mesh(p: CapitalParams | None = None, *, top_radius: float,
-                 name: str = "capital", angle: bool = False) -> Mesh:
+def capital_mesh(
+    p: CapitalParams | None = None, *, top_radius: float, name: str = "capital", angle: bool = False
+) -> Mesh:
     """All capital parts united into one closed solid (manifold3d boolean union)."""
     from ionic_usd.geometry.boolean import union
 

@@ -49,10 +49,16 @@ CAPITAL_PARAMETER_DOCS: dict[str, tuple[str, str, str]] = {
     "capital_length": ("capital length", "m", "X extent of the volutes (outer edge to edge)"),
     "capital_width": ("capital width", "m", "Z extent of the volutes (front to rear face)"),
     "spiral_margin": ("spiral margin length", "m", "straight band from a volute's top inward"),
-    "scroll_position_y": ("vertical position of the scrolls", "m",
-                          "eye centre height above the capital bottom"),
-    "capital_position_y": ("vertical position of the capital", "m",
-                           "capital bottom above the shaft top"),
+    "scroll_position_y": (
+        "vertical position of the scrolls",
+        "m",
+        "eye centre height above the capital bottom",
+    ),
+    "capital_position_y": (
+        "vertical position of the capital",
+        "m",
+        "capital bottom above the shaft top",
+    ),
     "abacus_length": ("", "m", "abacus X size"),
     "abacus_width": ("", "m", "abacus Z size"),
     "abacus_height": ("", "m", "abacus thickness"),
@@ -96,8 +102,9 @@ class CapitalParams:
         if not isinstance(self.volute, VoluteParams):
             raise ParameterError("volute", self.volute, "a VoluteParams", context=ctx)
         if not isinstance(self.scroll, str | ScrollGrammar):
-            raise ParameterError("scroll", self.scroll, "a grammar string or preset name",
-                                 context=ctx)
+            raise ParameterError(
+                "scroll", self.scroll, "a grammar string or preset name", context=ctx
+            )
         object.__setattr__(self, "_scroll", resolve_scroll(self.scroll))
         for f in fields(self):
             if f.name in ("volute", "scroll", "_scroll"):
@@ -110,8 +117,16 @@ class CapitalParams:
             if int(v) != v:
                 raise ParameterError(name, v, "an integer", context=ctx)
             object.__setattr__(self, name, int(v))
-        positive = ("capital_length", "capital_width", "abacus_length", "abacus_width",
-                    "abacus_height", "echinus_height", "relief_depth", "slab_depth")
+        positive = (
+            "capital_length",
+            "capital_width",
+            "abacus_length",
+            "abacus_width",
+            "abacus_height",
+            "echinus_height",
+            "relief_depth",
+            "slab_depth",
+        )
         for name in positive:
             if getattr(self, name) <= 0:
                 raise ParameterError(name, getattr(self, name), "a length > 0", context=ctx)
@@ -120,26 +135,32 @@ class CapitalParams:
                 raise ParameterError(name, getattr(self, name), "a length >= 0", context=ctx)
         for name, lo in (("spiral_samples", 8), ("ring_segments", 3), ("bolster_rows", 1)):
             if getattr(self, name) < lo:
-                raise ParameterError(name, getattr(self, name), f"an integer >= {lo}",
-                                     context=ctx)
+                raise ParameterError(name, getattr(self, name), f"an integer >= {lo}", context=ctx)
         depth = 2 * (self.relief_depth + self.slab_depth)
         if self.capital_width <= depth:
             raise ParameterError(
-                "capital_width", self.capital_width,
+                "capital_width",
+                self.capital_width,
                 f"> 2 × (relief_depth + slab_depth) = {depth:.4g} m (room for the bolsters)",
-                context=ctx)
+                context=ctx,
+            )
         ext = volute_extent(self.volute, self.spiral_samples, self.ring_segments)
         need = 2 * float(ext[1, 0] - ext[0, 0])
         if self.capital_length < need:
             raise ParameterError(
-                "capital_length", self.capital_length,
+                "capital_length",
+                self.capital_length,
                 f">= {need:.4g} m: two volutes {need / 2:.4g} m wide must not overlap",
-                context=ctx)
+                context=ctx,
+            )
         top = capital_height(self)
         if top <= 0:
-            raise ParameterError("capital_position_y", self.capital_position_y,
-                                 f"a value that keeps the abacus top above the shaft top "
-                                 f"(it is at {top:.4g} m)", context=ctx)
+            raise ParameterError(
+                "capital_position_y",
+                self.capital_position_y,
+                f"a value that keeps the abacus top above the shaft top (it is at {top:.4g} m)",
+                context=ctx,
+            )
 
     @property
     def scroll_grammar(self) -> ScrollGrammar:
@@ -174,8 +195,9 @@ def capital_layout(p: CapitalParams) -> CapitalLayout:
     # the band's top end lies on the eye's vertical line only for zero offsets: measure it
     top_end_x = eye_x + _top_end_dx(p.volute)
     margin = min(p.spiral_margin, max(0.0, top_end_x))
-    return CapitalLayout(eye_x, eye_y, abacus_y, face_z, back_z,
-                         volute_total_radius(p.volute), margin)
+    return CapitalLayout(
+        eye_x, eye_y, abacus_y, face_z, back_z, volute_total_radius(p.volute), margin
+    )
 
 
 def _top_end_dx(v: VoluteParams) -> float:
@@ -188,8 +210,6 @@ def capital_height(p: CapitalParams) -> float:
     ext = volute_extent(p.volute, p.spiral_samples, p.ring_segments)
     abacus_y = max(p.scroll_position_y + float(ext[1, 1]), p.echinus_height)
     return p.capital_position_y + abacus_y + p.abacus_height
-
-
 
 
 def echinus_mesh(p: CapitalParams, top_radius: float, segments: int) -> Mesh:
@@ -205,12 +225,13 @@ def echinus_mesh(p: CapitalParams, top_radius: float, segments: int) -> Mesh:
     return lathe(prof, segments, "echinus")
 
 
-
 def abacus_mesh(p: CapitalParams, lay: CapitalLayout) -> Mesh:
     """The abacus: a slab ``abacus_length`` × ``abacus_width`` on the volutes' top."""
-    return box_mesh((-p.abacus_length / 2, lay.abacus_y, -p.abacus_width / 2),
-                    (p.abacus_length / 2, lay.abacus_y + p.abacus_height, p.abacus_width / 2),
-                    "abacus")
+    return box_mesh(
+        (-p.abacus_length / 2, lay.abacus_y, -p.abacus_width / 2),
+        (p.abacus_length / 2, lay.abacus_y + p.abacus_height, p.abacus_width / 2),
+        "abacus",
+    )
 
 
 def canalis_bottom(p: CapitalParams, lay: CapitalLayout) -> float:
@@ -302,13 +323,19 @@ class CapitalParts:
         def up(ms: tuple[Mesh, ...]) -> tuple[Mesh, ...]:
             return tuple(rigid(m, np.eye(3), t) for m in ms)
 
-        return CapitalParts(rigid(self.abacus, np.eye(3), t), rigid(self.echinus, np.eye(3), t),
-                            up(self.volutes), up(self.canales), up(self.bolsters),
-                            up(self.cores))
+        return CapitalParts(
+            rigid(self.abacus, np.eye(3), t),
+            rigid(self.echinus, np.eye(3), t),
+            up(self.volutes),
+            up(self.canales),
+            up(self.bolsters),
+            up(self.cores),
+        )
 
 
-def bolster_mesh(p: CapitalParams, length: float, radius: float, *, extend: float = 0.0,
-                 name: str = "bolster") -> Mesh:
+def bolster_mesh(
+    p: CapitalParams, length: float, radius: float, *, extend: float = 0.0, name: str = "bolster"
+) -> Mesh:
     """A bolster (pulvinus) on the −Z axis: the scroll grammar's rings from z = 0 (p = 0, the
     front volute's back) to z = −``length`` (p = 1), then, for ``extend`` > 0, a cylinder of the
     last ring's radius on to z = −(length + extend) (for a mitre cut, see the angle capital).

@@ -46,8 +46,10 @@ def split_seam(st: np.ndarray, corners: np.ndarray, period: float) -> tuple[np.n
     dup = np.unique(corners[low])
     copy_of = np.zeros(len(st), dtype=np.int64)
     copy_of[dup] = len(st) + np.arange(len(dup))
-    return (np.concatenate([st, st[dup] + [period, 0.0]]),
-            np.where(low, copy_of[corners], corners).astype(np.int64))
+    return (
+        np.concatenate([st, st[dup] + [period, 0.0]]),
+        np.where(low, copy_of[corners], corners).astype(np.int64),
+    )
 
 
 def _charts(nodes: np.ndarray) -> tuple[np.ndarray, list[tuple[str, float]]]:
@@ -63,8 +65,11 @@ def _charts(nodes: np.ndarray) -> tuple[np.ndarray, list[tuple[str, float]]]:
         else:
             kind = "side"
         r0, r1 = sorted((float(nodes[k, 0]), float(nodes[k + 1, 0])))
-        same = bool(kinds) and kinds[-1][0] == kind and (
-            kind != "side" or max(hi, r1) <= SIDE_RADIUS_SPREAD * min(lo, r0))
+        same = (
+            bool(kinds)
+            and kinds[-1][0] == kind
+            and (kind != "side" or max(hi, r1) <= SIDE_RADIUS_SPREAD * min(lo, r0))
+        )
         if same:
             lo, hi = min(lo, r0), max(hi, r1)
         else:
@@ -75,8 +80,13 @@ def _charts(nodes: np.ndarray) -> tuple[np.ndarray, list[tuple[str, float]]]:
     return chart, kinds
 
 
-def revolved_st(nodes: np.ndarray, rows: list[np.ndarray], points: np.ndarray,
-                triangles: np.ndarray, per_band: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def revolved_st(
+    nodes: np.ndarray,
+    rows: list[np.ndarray],
+    points: np.ndarray,
+    triangles: np.ndarray,
+    per_band: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
     """Metric ``st`` of a mesh from :func:`ionic_usd.geometry.curves.revolve`.
 
     Parameters
@@ -104,8 +114,9 @@ def revolved_st(nodes: np.ndarray, rows: list[np.ndarray], points: np.ndarray,
         verts = np.concatenate([rows[k] for k in range(bands[0], bands[-1] + 2)])
         p = points[verts]
         if kind == "side":
-            node_of = np.concatenate([np.full(len(rows[k]), k)
-                                      for k in range(bands[0], bands[-1] + 2)])
+            node_of = np.concatenate(
+                [np.full(len(rows[k]), k) for k in range(bands[0], bands[-1] + 2)]
+            )
             s = np.where(np.hypot(p[:, 0], p[:, 2]) > 1e-12, theta[verts], np.pi) * radius
             st = np.stack([s, arc[node_of] - arc[bands[0]]], axis=1)
         else:
@@ -119,5 +130,4 @@ def revolved_st(nodes: np.ndarray, rows: list[np.ndarray], points: np.ndarray,
         values.append(st)
         corner[sel] = tri_local + base
         base += len(st)
-    return (np.concatenate(values).astype(np.float32),
-            corner.reshape(-1).astype(np.int32))
+    return (np.concatenate(values).astype(np.float32), corner.reshape(-1).astype(np.int32))

@@ -46,6 +46,7 @@ __all__ = [
     "column_params_to_tables",
 ]
 
+
 @dataclass(frozen=True)
 class Lod:
     """Sampling of every part for one level of detail.
@@ -147,15 +148,24 @@ class ColumnParams:
         lod = _lod(self.lod)
         if lod is None:
             return self.shaft
-        return dataclasses.replace(self.shaft, flute_slices=lod.flute_slices,
-                                   flute_slices_per_fillet_slice=lod.fillet_ratio,
-                                   body_rows=lod.shaft_rows)
+        return dataclasses.replace(
+            self.shaft,
+            flute_slices=lod.flute_slices,
+            flute_slices_per_fillet_slice=lod.fillet_ratio,
+            body_rows=lod.shaft_rows,
+        )
 
     def capital_params(self, scroll: str | None = None) -> CapitalParams:
         lod = _lod(self.lod)
-        changes: dict[str, int | str] = {} if lod is None else {
-            "spiral_samples": lod.spiral_samples, "ring_segments": lod.ring_segments,
-            "bolster_rows": lod.bolster_rows}
+        changes: dict[str, int | str] = (
+            {}
+            if lod is None
+            else {
+                "spiral_samples": lod.spiral_samples,
+                "ring_segments": lod.ring_segments,
+                "bolster_rows": lod.bolster_rows,
+            }
+        )
         if scroll is not None:
             changes["scroll"] = scroll
         return self.capital.with_(**changes)
@@ -174,8 +184,12 @@ class ColumnParams:
         if flutes == sh.flutes:
             return self
         ratio = sh.flute_angle / (360.0 / sh.flutes)
-        probe = dataclasses.replace(sh, flutes=flutes, flute_angle=ratio * 360.0 / flutes,
-                                    ring_vertices=self.shaft_params().ring_segments)
+        probe = dataclasses.replace(
+            sh,
+            flutes=flutes,
+            flute_angle=ratio * 360.0 / flutes,
+            ring_vertices=self.shaft_params().ring_segments,
+        )
         height = sh.length - (probe.length - probe.height)
         if height <= 0:
             raise ParameterError("flutes", flutes, "a count whose flute ends fit the shaft")
@@ -215,18 +229,23 @@ class Column:
 def build_base_part(params: ColumnParams, base: str | None = None, **kwargs) -> Mesh:
     """The base as a closed, outward solid (or a ParameterError naming ``base``)."""
     name = params.base if base is None else base
-    return guarded(lambda: build_base(params.base_params(base), name="base", **kwargs),
-                   "base", name)
+    return guarded(
+        lambda: build_base(params.base_params(base), name="base", **kwargs), "base", name
+    )
 
 
 def build_shaft_part(params: ColumnParams, base_height: float, **kwargs) -> Mesh:
     """The shaft lifted by ``base_height`` (a ParameterError naming ``shaft`` if it fails)."""
-    return guarded(lambda: build_shaft(params.shaft_params(), y_offset=base_height,
-                                       name="shaft", **kwargs), "shaft", "parameters")
+    return guarded(
+        lambda: build_shaft(params.shaft_params(), y_offset=base_height, name="shaft", **kwargs),
+        "shaft",
+        "parameters",
+    )
 
 
-def build_capital_part(params: ColumnParams, y: float, scroll: str | None = None, *,
-                       angle: bool = False) -> Mesh:
+def build_capital_part(
+    params: ColumnParams, y: float, scroll: str | None = None, *, angle: bool = False
+) -> Mesh:
     """The capital lifted to ``y``: abacus, echinus, volutes, canales and the scroll's bolsters
     united into one closed solid (manifold3d); ``angle`` builds the angle capital.
 
@@ -240,8 +259,9 @@ def build_capital_part(params: ColumnParams, y: float, scroll: str | None = None
 
     def build() -> Mesh:
         parts = build_capital(cp, top_radius=params.shaft.top_radius, angle=angle)
-        return union([m.with_(points=m.points + lift) for m in parts.as_dict().values()],
-                     name="capital")
+        return union(
+            [m.with_(points=m.points + lift) for m in parts.as_dict().values()], name="capital"
+        )
 
     return guarded(build, "capital" if text in scroll_preset_names() else "scroll", text)
 
@@ -256,8 +276,9 @@ def build_column(params: ColumnParams | None = None) -> Column:
     shaft = build_shaft_part(params, bp.height)
     y_cap = bp.height + params.shaft.length
     body = build_capital_part(params, y_cap)
-    return Column(params, base, shaft, body, bp.height, params.shaft.length,
-                  capital_height(params.capital))
+    return Column(
+        params, base, shaft, body, bp.height, params.shaft.length, capital_height(params.capital)
+    )
 
 
 def _scroll_text(cp: CapitalParams) -> str:
@@ -286,10 +307,16 @@ def portunus_column_params(
     after Vitruvius III.5.5–8 (see :mod:`ionic_usd.column.capital`).
     """
     cap = CapitalParams()
-    shaft = portunus_shaft_params(height=height, lower_diameter=lower_diameter, flutes=flutes,
-                                  capital=cap)
-    return ColumnParams(shaft=shaft, capital=cap.with_(scroll=scroll), base=base,
-                        base_height=lower_diameter / 2.0, lod=lod)
+    shaft = portunus_shaft_params(
+        height=height, lower_diameter=lower_diameter, flutes=flutes, capital=cap
+    )
+    return ColumnParams(
+        shaft=shaft,
+        capital=cap.with_(scroll=scroll),
+        base=base,
+        base_height=lower_diameter / 2.0,
+        lod=lod,
+    )
 
 
 def portunus_shaft_params(
@@ -303,8 +330,9 @@ def portunus_shaft_params(
     a diameter high: top diameter 6/7 of the lower one, flutes of 4/5 of the period."""
     d = lower_diameter / 2.0
     cap = capital or CapitalParams()
-    probe = ShaftParams(bottom_radius=d, top_radius=d * 6.0 / 7.0, flutes=flutes,
-                        flute_angle=0.8 * 360.0 / flutes)
+    probe = ShaftParams(
+        bottom_radius=d, top_radius=d * 6.0 / 7.0, flutes=flutes, flute_angle=0.8 * 360.0 / flutes
+    )
     fixed = probe.length - probe.height  # rings + flute ends
     shaft_a = height - lower_diameter / 2.0 - capital_height(cap) - fixed
     if not shaft_a > 0:
@@ -313,17 +341,26 @@ def portunus_shaft_params(
 
 
 COLUMN_DOCS: dict[str, tuple[str, str, str]] = {
-    "lod": ("", "name", f"level of detail: {', '.join(LODS)}, or custom (use the sampling "
-            "fields of [shaft] and [capital] as given)"),
-    "base": ("", "name|grammar", "base preset (G1, G2, attic_bezier, attic_bezier_plinth) or a "
-             "base grammar string (tori v1 or Bézier v2, the paper's Tables 2–3)"),
+    "lod": (
+        "",
+        "name",
+        f"level of detail: {', '.join(LODS)}, or custom (use the sampling "
+        "fields of [shaft] and [capital] as given)",
+    ),
+    "base": (
+        "",
+        "name|grammar",
+        "base preset (G1, G2, attic_bezier, attic_bezier_plinth) or a "
+        "base grammar string (tori v1 or Bézier v2, the paper's Tables 2–3)",
+    ),
     "base_height": ("", "m", "height every base is scaled to (unset: the grammar's own)"),
     "scroll": ("", "name|grammar", "scroll-body ring grammar: S1, S2 or 'R<r> P<p>, …'"),
 }
 
 
-def column_params_from_mapping(data: dict, *, context: str = "column config",
-                               base: ColumnParams | None = None) -> ColumnParams:
+def column_params_from_mapping(
+    data: dict, *, context: str = "column config", base: ColumnParams | None = None
+) -> ColumnParams:
     """ColumnParams from TOML-like tables ``[column]``, ``[shaft]``, ``[capital]``, ``[volute]``.
 
     Missing tables keep ``base``'s values (default: the Portunus column); unknown tables or keys
@@ -335,8 +372,12 @@ def column_params_from_mapping(data: dict, *, context: str = "column config",
     cur = base or portunus_column_params()
     unknown = sorted(set(data) - {"column", "shaft", "capital", "volute"})
     if unknown:
-        raise ParameterError("table", f"[{unknown[0]}]", "one of [column], [shaft], [capital], "
-                             "[volute]", context=context)
+        raise ParameterError(
+            "table",
+            f"[{unknown[0]}]",
+            "one of [column], [shaft], [capital], [volute]",
+            context=context,
+        )
     for table in ("column", "shaft", "capital", "volute"):
         if table in data and not isinstance(data[table], dict):
             raise ParameterError(table, data[table], "a table", context=context)
@@ -344,12 +385,18 @@ def column_params_from_mapping(data: dict, *, context: str = "column config",
     col = dict(data.get("column", {}))
     bad = sorted(set(col) - set(COLUMN_DOCS))
     if bad:
-        raise ParameterError(bad[0], col[bad[0]], f"one of the keys {', '.join(COLUMN_DOCS)}",
-                             context=f"{context} [column]")
-    shaft = dataclass_from_mapping(ShaftParams, data.get("shaft", {}),
-                                   context=f"{context} [shaft]", base=cur.shaft)
-    volute = dataclass_from_mapping(VoluteParams, data.get("volute", {}),
-                                    context=f"{context} [volute]", base=cur.capital.volute)
+        raise ParameterError(
+            bad[0],
+            col[bad[0]],
+            f"one of the keys {', '.join(COLUMN_DOCS)}",
+            context=f"{context} [column]",
+        )
+    shaft = dataclass_from_mapping(
+        ShaftParams, data.get("shaft", {}), context=f"{context} [shaft]", base=cur.shaft
+    )
+    volute = dataclass_from_mapping(
+        VoluteParams, data.get("volute", {}), context=f"{context} [volute]", base=cur.capital.volute
+    )
     cap_map = dict(data.get("capital", {}))
     if "scroll" in col:
         cap_map["scroll"] = col.pop("scroll")
@@ -357,14 +404,19 @@ def column_params_from_mapping(data: dict, *, context: str = "column config",
     bad = sorted(set(cap_map) - cap_fields - {"scroll"})
     if bad or "volute" in cap_map:
         key = bad[0] if bad else "volute"
-        raise ParameterError(key, cap_map[key], "a [capital] key (volute parameters go in "
-                             "[volute])", context=f"{context} [capital]")
+        raise ParameterError(
+            key,
+            cap_map[key],
+            "a [capital] key (volute parameters go in [volute])",
+            context=f"{context} [capital]",
+        )
     capital = cur.capital.with_(volute=volute, **cap_map)
     return dataclasses.replace(cur, shaft=shaft, capital=capital, **col)
 
 
 def column_params_to_tables(p: ColumnParams) -> dict[str, dict]:
     """The inverse of :func:`column_params_from_mapping` (for ``--print-config`` and fitting)."""
+
     def plain(obj) -> dict:
         out = {}
         for f in dataclasses.fields(obj):
@@ -381,5 +433,9 @@ def column_params_to_tables(p: ColumnParams) -> dict[str, dict]:
     column = {"lod": p.lod, "base": p.base, "scroll": scroll}
     if p.base_height is not None:
         column["base_height"] = p.base_height
-    return {"column": column, "shaft": plain(p.shaft), "capital": cap,
-            "volute": plain(p.capital.volute)}
+    return {
+        "column": column,
+        "shaft": plain(p.shaft),
+        "capital": cap,
+        "volute": plain(p.capital.volute),
+    }

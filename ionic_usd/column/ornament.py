@@ -111,10 +111,14 @@ class Instances:
         for p in parts:
             idx.append(p.proto_indices + len(protos))
             protos += list(p.prototypes)
-        return Instances(name, tuple(protos), np.concatenate(idx),
-                         np.concatenate([p.positions for p in parts]),
-                         np.concatenate([p.orientations for p in parts]),
-                         np.concatenate([p.scales for p in parts]))
+        return Instances(
+            name,
+            tuple(protos),
+            np.concatenate(idx),
+            np.concatenate([p.positions for p in parts]),
+            np.concatenate([p.orientations for p in parts]),
+            np.concatenate([p.scales for p in parts]),
+        )
 
 
 def frames_to_quaternions(x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -143,20 +147,48 @@ def frames_to_quaternions(x: np.ndarray, y: np.ndarray) -> np.ndarray:
         r = m[s]
         if case == 0:
             t = np.sqrt(1.0 + tr[s]) * 2
-            q[s] = np.stack([0.25 * t, (r[:, 2, 1] - r[:, 1, 2]) / t,
-                             (r[:, 0, 2] - r[:, 2, 0]) / t, (r[:, 1, 0] - r[:, 0, 1]) / t], 1)
+            q[s] = np.stack(
+                [
+                    0.25 * t,
+                    (r[:, 2, 1] - r[:, 1, 2]) / t,
+                    (r[:, 0, 2] - r[:, 2, 0]) / t,
+                    (r[:, 1, 0] - r[:, 0, 1]) / t,
+                ],
+                1,
+            )
         elif case == 1:
             t = np.sqrt(1.0 + r[:, 0, 0] - r[:, 1, 1] - r[:, 2, 2]) * 2
-            q[s] = np.stack([(r[:, 2, 1] - r[:, 1, 2]) / t, 0.25 * t,
-                             (r[:, 0, 1] + r[:, 1, 0]) / t, (r[:, 0, 2] + r[:, 2, 0]) / t], 1)
+            q[s] = np.stack(
+                [
+                    (r[:, 2, 1] - r[:, 1, 2]) / t,
+                    0.25 * t,
+                    (r[:, 0, 1] + r[:, 1, 0]) / t,
+                    (r[:, 0, 2] + r[:, 2, 0]) / t,
+                ],
+                1,
+            )
         elif case == 2:
             t = np.sqrt(1.0 + r[:, 1, 1] - r[:, 0, 0] - r[:, 2, 2]) * 2
-            q[s] = np.stack([(r[:, 0, 2] - r[:, 2, 0]) / t, (r[:, 0, 1] + r[:, 1, 0]) / t,
-                             0.25 * t, (r[:, 1, 2] + r[:, 2, 1]) / t], 1)
+            q[s] = np.stack(
+                [
+                    (r[:, 0, 2] - r[:, 2, 0]) / t,
+                    (r[:, 0, 1] + r[:, 1, 0]) / t,
+                    0.25 * t,
+                    (r[:, 1, 2] + r[:, 2, 1]) / t,
+                ],
+                1,
+            )
         else:
             t = np.sqrt(1.0 + r[:, 2, 2] - r[:, 0, 0] - r[:, 1, 1]) * 2
-            q[s] = np.stack([(r[:, 1, 0] - r[:, 0, 1]) / t, (r[:, 0, 2] + r[:, 2, 0]) / t,
-                             (r[:, 1, 2] + r[:, 2, 1]) / t, 0.25 * t], 1)
+            q[s] = np.stack(
+                [
+                    (r[:, 1, 0] - r[:, 0, 1]) / t,
+                    (r[:, 0, 2] + r[:, 2, 0]) / t,
+                    (r[:, 1, 2] + r[:, 2, 1]) / t,
+                    0.25 * t,
+                ],
+                1,
+            )
     q *= np.where(q[:, :1] < 0, -1.0, 1.0)  # w ≥ 0: one representative
     return q / np.linalg.norm(q, axis=1, keepdims=True)
 
@@ -164,16 +196,20 @@ def frames_to_quaternions(x: np.ndarray, y: np.ndarray) -> np.ndarray:
 def quaternion_matrices(q: np.ndarray) -> np.ndarray:
     """(n, 3, 3) rotation matrices of unit quaternions ``(w, x, y, z)`` (n, 4)."""
     w, x, y, z = np.asarray(q, dtype=np.float64).reshape(-1, 4).T
-    return np.stack([
-        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], 1),
-        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], 1),
-        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], 1),
-    ], axis=1)
+    return np.stack(
+        [
+            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], 1),
+            np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], 1),
+            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], 1),
+        ],
+        axis=1,
+    )
 
 
 # -- prototypes ---------------------------------------------------------------------------------
-def lathe_closed(profile: np.ndarray, segments: int, *, axis: str = "y",
-                 name: str = "lathe") -> Mesh:
+def lathe_closed(
+    profile: np.ndarray, segments: int, *, axis: str = "y", name: str = "lathe"
+) -> Mesh:
     """Revolve a half-profile whose two ends lie on the axis into a closed solid.
 
     Parameters
@@ -188,14 +224,26 @@ def lathe_closed(profile: np.ndarray, segments: int, *, axis: str = "y",
     Mesh: triangles, smooth vertex normals, cylindrical ``st`` (angle / 2π, t)
     """
     prof = np.asarray(profile, dtype=np.float64)
-    if prof.ndim != 2 or len(prof) < 3 or prof[0, 0] != 0 or prof[-1, 0] != 0 \
-            or np.any(prof[1:-1, 0] <= 0) or segments < 3:
+    if (
+        prof.ndim != 2
+        or len(prof) < 3
+        or prof[0, 0] != 0
+        or prof[-1, 0] != 0
+        or np.any(prof[1:-1, 0] <= 0)
+        or segments < 3
+    ):
         raise GeometryError("lathe_closed: (k ≥ 3, 2) profile from pole to pole, r > 0 between")
     rings = prof[1:-1]
     nr, n = len(rings), segments
     a = 2 * np.pi * np.arange(n) / n
-    ring_pts = np.stack([rings[:, None, 0] * np.cos(a)[None], np.broadcast_to(
-        rings[:, None, 1], (nr, n)), rings[:, None, 0] * np.sin(a)[None]], axis=2).reshape(-1, 3)
+    ring_pts = np.stack(
+        [
+            rings[:, None, 0] * np.cos(a)[None],
+            np.broadcast_to(rings[:, None, 1], (nr, n)),
+            rings[:, None, 0] * np.sin(a)[None],
+        ],
+        axis=2,
+    ).reshape(-1, 3)
     pts = np.vstack([[0.0, prof[0, 1], 0.0], ring_pts, [0.0, prof[-1, 1], 0.0]])
     top = len(pts) - 1
     j = np.arange(n)
@@ -219,11 +267,17 @@ def lathe_closed(profile: np.ndarray, segments: int, *, axis: str = "y",
     ang[1:top] = np.tile(np.arange(n) / n, nr)
     t = np.concatenate([[prof[0, 1]], np.repeat(rings[:, 1], n), [prof[-1, 1]]])
     u = ang[tri]
-    wrap = (u.max(axis=1, keepdims=True) - u > 0.5)
+    wrap = u.max(axis=1, keepdims=True) - u > 0.5
     u = np.where(wrap, u + 1.0, u)
     st = np.stack([u.reshape(-1), t[tri].reshape(-1)], axis=1)
-    m = Mesh(pts, np.full(len(tri), 3, np.int32), tri.reshape(-1), name=name,
-             st=st.astype(np.float32), st_indices=np.arange(len(st), dtype=np.int32))
+    m = Mesh(
+        pts,
+        np.full(len(tri), 3, np.int32),
+        tri.reshape(-1),
+        name=name,
+        st=st.astype(np.float32),
+        st_indices=np.arange(len(st), dtype=np.int32),
+    )
     return smooth_normals(m)
 
 
@@ -236,8 +290,15 @@ def box_prototype(size=(1.0, 1.0, 1.0), *, back: float = 0.0, name: str = "box")
     return sweep(sec, path, axis=(0.0, 1.0, 0.0), closed=False, name=name)
 
 
-def egg_prototype(height: float, width: float, depth: float, *, segments: int = 12,
-                  rows: int = 8, name: str = "Egg") -> Mesh:
+def egg_prototype(
+    height: float,
+    width: float,
+    depth: float,
+    *,
+    segments: int = 12,
+    rows: int = 8,
+    name: str = "Egg",
+) -> Mesh:
     """An egg (ovum) with its long axis along Y, centred at the origin, depth along Z.
 
     The meridian is a Hügelschäffer-like egg curve, fuller at the top (the eggs of an echinus
@@ -255,16 +316,23 @@ def egg_prototype(height: float, width: float, depth: float, *, segments: int = 
 
 def dart_prototype(height: float, width: float, depth: float, *, name: str = "Dart") -> Mesh:
     """A dart (arrow-head leaf between two eggs): a flattened double cone along Y, tip down."""
-    prof = np.array([[0.0, -0.5 * height], [0.5 * width, 0.15 * height],
-                     [0.15 * width, 0.5 * height], [0.0, 0.5 * height]])
+    prof = np.array(
+        [
+            [0.0, -0.5 * height],
+            [0.5 * width, 0.15 * height],
+            [0.15 * width, 0.5 * height],
+            [0.0, 0.5 * height],
+        ]
+    )
     m = lathe_closed(prof, 6, name=name)
     from ionic_usd.geometry.mesh import transform
 
     return transform(m, np.diag([1.0, 1.0, depth / width, 1.0]))
 
 
-def bead_prototype(length: float, diameter: float, *, segments: int = 10,
-                   name: str = "Bead") -> Mesh:
+def bead_prototype(
+    length: float, diameter: float, *, segments: int = 10, name: str = "Bead"
+) -> Mesh:
     """An elongated bead along X, centred at the origin."""
     t = np.linspace(-np.pi / 2, np.pi / 2, 7)
     prof = np.stack([0.5 * diameter * np.cos(t), 0.5 * length * np.sin(t)], 1)
@@ -272,12 +340,14 @@ def bead_prototype(length: float, diameter: float, *, segments: int = 10,
     return lathe_closed(prof, segments, axis="x", name=name)
 
 
-def reel_prototype(length: float, diameter: float, *, segments: int = 10,
-                   name: str = "Reel") -> Mesh:
+def reel_prototype(
+    length: float, diameter: float, *, segments: int = 10, name: str = "Reel"
+) -> Mesh:
     """A reel (a pair of discs, waisted) along X, centred at the origin."""
     h, r = 0.5 * length, 0.5 * diameter
-    prof = np.array([[0.0, -h], [r, -h], [r, -0.3 * h], [0.45 * r, 0.0], [r, 0.3 * h],
-                     [r, h], [0.0, h]])
+    prof = np.array(
+        [[0.0, -h], [r, -h], [r, -0.3 * h], [0.45 * r, 0.0], [r, 0.3 * h], [r, h], [0.0, h]]
+    )
     return lathe_closed(prof, segments, axis="x", name=name)
 
 
@@ -335,8 +405,16 @@ def capital_ornament(
         y_dir = tang[0] * radial + tang[1] * np.array([0.0, 1.0, 0.0])
         x_dir = np.stack([np.cos(a), np.zeros(eggs), -np.sin(a)], 1)  # along the ring
         pos = np.stack([r0 * np.sin(a), np.full(eggs, y0), r0 * np.cos(a)], 1)
-        out_parts.append(Instances(proto.name, (proto,), np.zeros(eggs, np.int32), pos,
-                                   frames_to_quaternions(x_dir, y_dir), np.ones((eggs, 3))))
+        out_parts.append(
+            Instances(
+                proto.name,
+                (proto,),
+                np.zeros(eggs, np.int32),
+                pos,
+                frames_to_quaternions(x_dir, y_dir),
+                np.ones((eggs, 3)),
+            )
+        )
         del k
     egg_dart = Instances.concat("EggAndDart", out_parts)
     # bead-and-reel round the astragal (the shaft's plain top ring)
@@ -350,8 +428,14 @@ def capital_ornament(
         a, radial = _ring_frames(pairs, phase)
         x_dir = np.stack([np.cos(a), np.zeros(pairs), -np.sin(a)], 1)
         pos = np.stack([c * np.sin(a), np.full(pairs, yb), c * np.cos(a)], 1)
-        parts.append(Instances(proto.name, (proto,), np.zeros(pairs, np.int32), pos,
-                               frames_to_quaternions(x_dir, np.tile([0.0, 1.0, 0.0],
-                                                                    (pairs, 1))),
-                               np.ones((pairs, 3))))
+        parts.append(
+            Instances(
+                proto.name,
+                (proto,),
+                np.zeros(pairs, np.int32),
+                pos,
+                frames_to_quaternions(x_dir, np.tile([0.0, 1.0, 0.0], (pairs, 1))),
+                np.ones((pairs, 3)),
+            )
+        )
     return egg_dart, Instances.concat("BeadAndReel", parts)

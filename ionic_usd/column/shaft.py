@@ -72,8 +72,12 @@ SHAFT_PARAMETER_DOCS: dict[str, tuple[str, str, str]] = {
     "entasis": ("", "ratio", "entasis amplitude as a fraction of the bottom radius (0 = none)"),
     "entasis_rows": ("", "count", "rows along the fluted body when entasis > 0"),
     "body_rows": ("", "count", "rows along the fluted body (at least; entasis_rows with entasis)"),
-    "ring_vertices": ("", "count", "vertices of the bottom/top rings (0: from the fillet step); "
-                      "the column sets one count for every flute variant so bases fit all"),
+    "ring_vertices": (
+        "",
+        "count",
+        "vertices of the bottom/top rings (0: from the fillet step); "
+        "the column sets one count for every flute variant so bases fit all",
+    ),
 }
 
 
@@ -104,8 +108,18 @@ class ShaftParams:
 
     def __post_init__(self) -> None:
         ctx = "shaft"
-        check_fields(self, context=ctx, integers=("flutes", "flute_slices", "entasis_rows",
-                     "flute_slices_per_fillet_slice", "body_rows", "ring_vertices"))
+        check_fields(
+            self,
+            context=ctx,
+            integers=(
+                "flutes",
+                "flute_slices",
+                "entasis_rows",
+                "flute_slices_per_fillet_slice",
+                "body_rows",
+                "ring_vertices",
+            ),
+        )
         _pos = "a finite number > 0"
         if self.height <= 0:
             raise ParameterError("height ($a)", self.height, _pos, context=ctx)
@@ -118,40 +132,52 @@ class ShaftParams:
         period = 360.0 / self.flutes
         if not 0 < self.flute_angle < period:
             raise ParameterError(
-                "flute_angle ($f)", self.flute_angle,
-                f"0 < f < 360/e = {period:g} deg (the rest of 360/e is the fillet)", context=ctx,
+                "flute_angle ($f)",
+                self.flute_angle,
+                f"0 < f < 360/e = {period:g} deg (the rest of 360/e is the fillet)",
+                context=ctx,
             )
         if not 0 < self.flute_depth <= 4:
             raise ParameterError("flute_depth ($g)", self.flute_depth, "0 < g <= 4", context=ctx)
         if self.arc_ratio < 0:
             raise ParameterError("arc_ratio ($b)", self.arc_ratio, "a number >= 0", context=ctx)
         if self.flute_slices < 1:
-            raise ParameterError("flute_slices ($h)", self.flute_slices, "an integer >= 1",
-                                 context=ctx)
+            raise ParameterError(
+                "flute_slices ($h)", self.flute_slices, "an integer >= 1", context=ctx
+            )
         if self.flute_slices_per_fillet_slice < 1:
-            raise ParameterError("flute_slices_per_fillet_slice ($i)",
-                                 self.flute_slices_per_fillet_slice, "an integer >= 1",
-                                 context=ctx)
+            raise ParameterError(
+                "flute_slices_per_fillet_slice ($i)",
+                self.flute_slices_per_fillet_slice,
+                "an integer >= 1",
+                context=ctx,
+            )
         for name in ("ring_bottom", "ring_top"):
             if getattr(self, name) < 0:
                 raise ParameterError(name, getattr(self, name), "a number >= 0", context=ctx)
         if not -0.2 <= self.entasis <= 0.2:
             raise ParameterError("entasis", self.entasis, "-0.2 <= entasis <= 0.2", context=ctx)
         if self.entasis_rows < 1:
-            raise ParameterError("entasis_rows", self.entasis_rows, "an integer >= 1",
-                                 context=ctx)
+            raise ParameterError("entasis_rows", self.entasis_rows, "an integer >= 1", context=ctx)
         if self.body_rows < 1:
             raise ParameterError("body_rows", self.body_rows, "an integer >= 1", context=ctx)
         if self.ring_vertices != 0 and self.ring_vertices < 3:
-            raise ParameterError("ring_vertices", self.ring_vertices, "0 (automatic) or an "
-                                 "integer >= 3", context=ctx)
+            raise ParameterError(
+                "ring_vertices", self.ring_vertices, "0 (automatic) or an integer >= 3", context=ctx
+            )
         # the flutes must not cut through the axis: chord distance minus depth stays > 0
-        for name, r in (("bottom_radius ($d)", self.bottom_radius),
-                        ("top_radius ($c)", self.top_radius)):
+        for name, r in (
+            ("bottom_radius ($d)", self.bottom_radius),
+            ("top_radius ($c)", self.top_radius),
+        ):
             a = math.radians(self.flute_angle) / 2
             if r * math.cos(a) - self.flute_depth * r * math.sin(a) <= 0.05 * r:
-                raise ParameterError("flute_depth ($g)", self.flute_depth,
-                                     f"flutes shallower than the radius at {name}", context=ctx)
+                raise ParameterError(
+                    "flute_depth ($g)",
+                    self.flute_depth,
+                    f"flutes shallower than the radius at {name}",
+                    context=ctx,
+                )
 
     # -- derived quantities --------------------------------------------------------------
     @property
@@ -185,8 +211,13 @@ class ShaftParams:
     @property
     def length(self) -> float:
         """Total shaft length: rings + arcs + $a."""
-        return (self.ring_bottom + self.arc_height(self.bottom_radius) + self.height
-                + self.arc_height(self.top_radius) + self.ring_top)
+        return (
+            self.ring_bottom
+            + self.arc_height(self.bottom_radius)
+            + self.height
+            + self.arc_height(self.top_radius)
+            + self.ring_top
+        )
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -316,13 +347,15 @@ def build_shaft(
     ring_rows = []
     for yv, ang in zip(ring_ys, rows_ang, strict=True):
         r = float(shaft_radius_at(p, np.array([yv]))[0])
-        ring_rows.append(np.stack([r * np.cos(ang), np.full(len(ang), yv), -r * np.sin(ang)],
-                                  axis=1))
+        ring_rows.append(
+            np.stack([r * np.cos(ang), np.full(len(ang), yv), -r * np.sin(ang)], axis=1)
+        )
     sizes = [len(x) for x in ring_rows]
     starts = np.concatenate([[0], np.cumsum(sizes)])
     base_fl = int(starts[-1])
-    points = np.concatenate(ring_rows + [fl_pts.reshape(-1, 3),
-                                         np.array([[0.0, 0.0, 0.0], [0.0, L, 0.0]])])
+    points = np.concatenate(
+        ring_rows + [fl_pts.reshape(-1, 3), np.array([[0.0, 0.0, 0.0], [0.0, L, 0.0]])]
+    )
     c_bot, c_top = base_fl + nrows * n, base_fl + nrows * n + 1
     plain = [np.arange(starts[k], starts[k + 1]) for k in range(4)]
 
@@ -350,13 +383,17 @@ def build_shaft(
     quads = np.full(n, 2, dtype=np.int64)  # equal rows: one quad per column
     bands = []
     if p.ring_bottom > 0:
-        bands += [(plain[0], plain[1], auto_sequence(u_ring, u_bot, True)),
-                  (plain[1], first_fl, quads)]
+        bands += [
+            (plain[0], plain[1], auto_sequence(u_ring, u_bot, True)),
+            (plain[1], first_fl, quads),
+        ]
     else:
         bands.append((plain[0], first_fl, auto_sequence(u_ring, u_bot, True)))
     if p.ring_top > 0:
-        bands += [(last_fl, plain[2], quads),
-                  (plain[2], plain[3], auto_sequence(u_top, u_ring, True))]
+        bands += [
+            (last_fl, plain[2], quads),
+            (plain[2], plain[3], auto_sequence(u_top, u_ring, True)),
+        ]
     else:
         bands.append((last_fl, plain[3], auto_sequence(u_top, u_ring, True)))
     # a band triangle touching a flute's interior vertex continues that flute's spoon end
@@ -406,13 +443,28 @@ def build_shaft(
         points = points[keep]
     if y_offset:
         points = points + np.array([0.0, y_offset, 0.0])
-    return Mesh(points, np.full(len(tri), 3, np.int32), tri.reshape(-1), normals,
-                "faceVarying", st, st_idx, name=name, normals_indices=nidx)
+    return Mesh(
+        points,
+        np.full(len(tri), 3, np.int32),
+        tri.reshape(-1),
+        normals,
+        "faceVarying",
+        st,
+        st_idx,
+        name=name,
+        normals_indices=nidx,
+    )
 
 
-def _shaft_st(p: ShaftParams, points: np.ndarray, tri: np.ndarray, n_lateral: int,
-              fl_ang: np.ndarray, ring_ang: np.ndarray,
-              starts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _shaft_st(
+    p: ShaftParams,
+    points: np.ndarray,
+    tri: np.ndarray,
+    n_lateral: int,
+    fl_ang: np.ndarray,
+    ring_ang: np.ndarray,
+    starts: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
     """Analytic texture coordinates in metres: the unrolled side and two planar caps.
 
     Side (triangles ``[:n_lateral]``): t = y (the taper's slope changes arc length by
@@ -434,23 +486,30 @@ def _shaft_st(p: ShaftParams, points: np.ndarray, tri: np.ndarray, n_lateral: in
     n = p.fluted_segments
     k_per = n // e  # vertices per flute period in a fluted row
     r_mid = 0.5 * (p.bottom_radius + p.top_radius)
-    ref, _ = _fluted_rows(ShaftParams(**{**p.to_dict(), "entasis": 0.0,
-                                        "bottom_radius": r_mid, "top_radius": r_mid}),
-                          np.array([0.5 * p.length]), np.ones(1))
-    perimeter = float(np.linalg.norm(np.diff(np.vstack([ref[0], ref[0, :1]]), axis=0),
-                                     axis=1).sum())
+    ref, _ = _fluted_rows(
+        ShaftParams(**{**p.to_dict(), "entasis": 0.0, "bottom_radius": r_mid, "top_radius": r_mid}),
+        np.array([0.5 * p.length]),
+        np.ones(1),
+    )
+    perimeter = float(
+        np.linalg.norm(np.diff(np.vstack([ref[0], ref[0, :1]]), axis=0), axis=1).sum()
+    )
     n_pts = len(points)
     # plain rings (other angles): s proportional to the angle
     s = np.zeros(n_pts)
     for k in (0, 3):
-        ring = points[starts[k]:starts[k + 1]]
+        ring = points[starts[k] : starts[k + 1]]
         theta = np.mod(np.arctan2(-ring[:, 2], ring[:, 0]), 2 * np.pi)
-        s[starts[k]:starts[k + 1]] = theta / (2 * np.pi) * perimeter
+        s[starts[k] : starts[k + 1]] = theta / (2 * np.pi) * perimeter
     # rows with the flute columns (the fluted grid and the two plain rows at its angles):
     # s = the flute centre's s + arc length along this row from the flute centre, so every
     # flute centre runs straight up the chart and a narrowing flute end stays narrow
-    rows = np.concatenate([np.arange(starts[1], starts[3]).reshape(2, n),
-                           np.arange(starts[-1], n_pts - 2).reshape(-1, n)])
+    rows = np.concatenate(
+        [
+            np.arange(starts[1], starts[3]).reshape(2, n),
+            np.arange(starts[-1], n_pts - 2).reshape(-1, n),
+        ]
+    )
     q = points[rows]  # (R, n, 3), all rows at once
     seg = np.linalg.norm(np.roll(q, -1, axis=1) - q, axis=2)
     cum = (np.cumsum(seg, axis=1) - seg).reshape(len(rows), e, k_per)
@@ -533,8 +592,14 @@ def _grid_normals(pts: np.ndarray, col: np.ndarray, h: int) -> tuple[np.ndarray,
     left_idx = right_idx + is_crease
     left_next = np.roll(left_idx, -1, axis=1)  # left side of vertex j + 1
     corners = np.stack(
-        [right_idx[:-1], left_next[:-1], right_idx[1:],
-         left_next[:-1], left_next[1:], right_idx[1:]],
+        [
+            right_idx[:-1],
+            left_next[:-1],
+            right_idx[1:],
+            left_next[:-1],
+            left_next[1:],
+            right_idx[1:],
+        ],
         axis=2,
     )
     return values.astype(np.float32), corners.reshape(-1).astype(np.int32)

@@ -17,15 +17,25 @@ __all__ = ["box_mesh", "lathe", "rigid", "rot_y", "MIRROR_X", "MIRROR_Z", "SWAP_
 def box_mesh(lo, hi, name: str) -> Mesh:
     """Axis-aligned box, outward-wound, crisp faceVarying normals."""
     (x0, y0, z0), (x1, y1, z1) = lo, hi
-    pts = np.array([[x0, y0, z0], [x1, y0, z0], [x1, y1, z0], [x0, y1, z0],
-                    [x0, y0, z1], [x1, y0, z1], [x1, y1, z1], [x0, y1, z1]])
-    quads = np.array([[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4],
-                      [3, 7, 6, 2], [0, 4, 7, 3], [1, 2, 6, 5]])
+    pts = np.array(
+        [
+            [x0, y0, z0],
+            [x1, y0, z0],
+            [x1, y1, z0],
+            [x0, y1, z0],
+            [x0, y0, z1],
+            [x1, y0, z1],
+            [x1, y1, z1],
+            [x0, y1, z1],
+        ]
+    )
+    quads = np.array(
+        [[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [3, 7, 6, 2], [0, 4, 7, 3], [1, 2, 6, 5]]
+    )
     tri = np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
     groups = np.tile(np.arange(6), 2)
     m = Mesh(pts, np.full(12, 3, np.int32), tri.reshape(-1), name=name)
     return smooth_normals(m, groups)
-
 
 
 def lathe(profile: np.ndarray, segments: int, name: str, crease_deg: float = 40.0) -> Mesh:
@@ -69,8 +79,7 @@ def lathe(profile: np.ndarray, segments: int, name: str, crease_deg: float = 40.
     def nvec(n2: np.ndarray, c: np.ndarray, sn: np.ndarray) -> np.ndarray:
         """(..., 2) profile normals × (s,) angles → (..., s, 3) normals."""
         n2 = np.asarray(n2)[..., None, :]
-        return np.stack([n2[..., 0] * c, n2[..., 1] * np.ones_like(c), -n2[..., 0] * sn],
-                        axis=-1)
+        return np.stack([n2[..., 0] * c, n2[..., 1] * np.ones_like(c), -n2[..., 0] * sn], axis=-1)
 
     live = (seg_len > 0) & ~(on_axis[:-1] & on_axis[1:])
     grid = np.flatnonzero(live & ~on_axis[:-1] & ~on_axis[1:])
@@ -83,23 +92,32 @@ def lathe(profile: np.ndarray, segments: int, name: str, crease_deg: float = 40.
         na_j, na_j1 = nvec(na, cos, sin), nvec(na, cos[j1], sin[j1])
         nb_j, nb_j1 = nvec(nb, cos, sin), nvec(nb, cos[j1], sin[j1])
         tris += [t1.reshape(-1, 3), t2.reshape(-1, 3)]
-        corner_n += [np.stack([na_j, nb_j1, nb_j], axis=-2).reshape(-1, 3, 3),
-                     np.stack([na_j, na_j1, nb_j1], axis=-2).reshape(-1, 3, 3)]
+        corner_n += [
+            np.stack([na_j, nb_j1, nb_j], axis=-2).reshape(-1, 3, 3),
+            np.stack([na_j, na_j1, nb_j1], axis=-2).reshape(-1, 3, 3),
+        ]
     for k in np.flatnonzero(live & (on_axis[:-1] | on_axis[1:])):  # cap fans and cone tips
         a0, b0 = first[k], first[k + 1]
         na, nb = n_start[k], n_end[k]
         if on_axis[k]:
             tris.append(np.stack([np.full(s, a0), b0 + j1, b0 + j], axis=1))
-            corner_n.append(np.stack([nvec(na, cmid, smid), nvec(nb, cos[j1], sin[j1]),
-                                      nvec(nb, cos, sin)], axis=1))
+            corner_n.append(
+                np.stack(
+                    [nvec(na, cmid, smid), nvec(nb, cos[j1], sin[j1]), nvec(nb, cos, sin)], axis=1
+                )
+            )
         else:
             tris.append(np.stack([a0 + j, a0 + j1, np.full(s, b0)], axis=1))
-            corner_n.append(np.stack([nvec(na, cos, sin), nvec(na, cos[j1], sin[j1]),
-                                      nvec(nb, cmid, smid)], axis=1))
+            corner_n.append(
+                np.stack(
+                    [nvec(na, cos, sin), nvec(na, cos[j1], sin[j1]), nvec(nb, cmid, smid)], axis=1
+                )
+            )
     tri = np.concatenate(tris)
     normals = np.concatenate(corner_n).reshape(-1, 3)
-    return Mesh(points, np.full(len(tri), 3, np.int32), tri.reshape(-1), normals,
-                "faceVarying", name=name)
+    return Mesh(
+        points, np.full(len(tri), 3, np.int32), tri.reshape(-1), normals, "faceVarying", name=name
+    )
 
 
 def rigid(mesh: Mesh, lin: np.ndarray, t=(0.0, 0.0, 0.0), name: str | None = None) -> Mesh:
@@ -117,8 +135,14 @@ def rigid(mesh: Mesh, lin: np.ndarray, t=(0.0, 0.0, 0.0), name: str | None = Non
         idx = idx.reshape(-1, 3)[:, [0, 2, 1]].reshape(-1)
         if normals is not None and mesh.normals_interpolation == "faceVarying":
             normals = normals.reshape(-1, 3, 3)[:, [0, 2, 1]].reshape(-1, 3)
-    return Mesh(pts, mesh.face_vertex_counts, idx, normals, mesh.normals_interpolation,
-                name=name or mesh.name)
+    return Mesh(
+        pts,
+        mesh.face_vertex_counts,
+        idx,
+        normals,
+        mesh.normals_interpolation,
+        name=name or mesh.name,
+    )
 
 
 MIRROR_X = np.diag([-1.0, 1.0, 1.0])
@@ -131,6 +155,5 @@ def rot_y(deg: float) -> np.ndarray:
     """Rotation about +Y taking +Z to (sin θ, 0, cos θ)."""
     t = math.radians(deg)
     # exact for quarter turns, so faces coplanar before the turn stay exactly coplanar
-    c, s = (round(math.cos(t)), round(math.sin(t))) if deg % 90 == 0 else \
-        (math.cos(t), math.sin(t))
+    c, s = (round(math.cos(t)), round(math.sin(t))) if deg % 90 == 0 else (math.cos(t), math.sin(t))
     return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])

@@ -80,16 +80,27 @@ VOLUTE_PARAMETER_DOCS: dict[str, tuple[str, str, str]] = {
     "b": ("b", "", "r = a / (b e^{cθ}) − d, b ≠ 0"),
     "c": ("c", "1/rad", "r = a / (b e^{cθ}) − d; c < 0: r grows with θ"),
     "d": ("d", "spiral units", "r = a / (b e^{cθ}) − d"),
-    "volute_model": ("volute model", "", "log_spiral (paper, formula 3) or centred_arcs "
-                     "(quarter circles about centres in the eye)"),
-    "arc_square": ("arc square", "m", "centred_arcs: side of the outermost square of arc "
-                   "centres (radius step between the last two arcs)"),
-    "arc_ratio": ("arc ratio", "", "centred_arcs: innermost / outermost square side (steps "
-                  "linear in between)"),
+    "volute_model": (
+        "volute model",
+        "",
+        "log_spiral (paper, formula 3) or centred_arcs (quarter circles about centres in the eye)",
+    ),
+    "arc_square": (
+        "arc square",
+        "m",
+        "centred_arcs: side of the outermost square of arc "
+        "centres (radius step between the last two arcs)",
+    ),
+    "arc_ratio": (
+        "arc ratio",
+        "",
+        "centred_arcs: innermost / outermost square side (steps linear in between)",
+    ),
 }
 
 #: The volute curve constructions (``VoluteParams.volute_model``).
 VOLUTE_MODELS = ("log_spiral", "centred_arcs")
+
 
 def vitruvian_coefficients() -> tuple[float, float, float, float]:
     """``(a, b, c, d)`` of the Vitruvian volute in spiral units (R = top radius, b = 1).
@@ -153,8 +164,9 @@ class VoluteParams:
     def __post_init__(self) -> None:
         ctx = "volute"
         if self.volute_model not in VOLUTE_MODELS:
-            raise ParameterError("volute_model", self.volute_model,
-                                 f"one of {', '.join(VOLUTE_MODELS)}", context=ctx)
+            raise ParameterError(
+                "volute_model", self.volute_model, f"one of {', '.join(VOLUTE_MODELS)}", context=ctx
+            )
         for f in fields(self):
             if f.name == "volute_model":
                 continue
@@ -165,29 +177,39 @@ class VoluteParams:
                 raise ParameterError(f.name, v, "a finite number", context=ctx)
             object.__setattr__(self, f.name, float(v))
         if self.b == 0:
-            raise ParameterError("b", self.b, "a number != 0 (r = a / (b e^{cθ}) - d)",
-                                 context=ctx)
+            raise ParameterError("b", self.b, "a number != 0 (r = a / (b e^{cθ}) - d)", context=ctx)
         if self.spiral_circuits < 1:
-            raise ParameterError("spiral_circuits", self.spiral_circuits, "a number >= 1",
-                                 context=ctx)
+            raise ParameterError(
+                "spiral_circuits", self.spiral_circuits, "a number >= 1", context=ctx
+            )
         if self.capital_spiral_radius <= 0:
-            raise ParameterError("capital_spiral_radius", self.capital_spiral_radius,
-                                 "a length > 0 (R)", context=ctx)
+            raise ParameterError(
+                "capital_spiral_radius", self.capital_spiral_radius, "a length > 0 (R)", context=ctx
+            )
         if self.capital_circle_radius <= 0:
-            raise ParameterError("capital_circle_radius", self.capital_circle_radius,
-                                 "a length > 0 (the eye's radius)", context=ctx)
+            raise ParameterError(
+                "capital_circle_radius",
+                self.capital_circle_radius,
+                "a length > 0 (the eye's radius)",
+                context=ctx,
+            )
         if self.thickness <= 0:
             raise ParameterError("thickness", self.thickness, "a number > 0", context=ctx)
         if not 0 <= self.min_thickness <= self.thickness:
-            raise ParameterError("min_thickness", self.min_thickness,
-                                 f"0 <= min_thickness <= thickness ({self.thickness:g})",
-                                 context=ctx)
+            raise ParameterError(
+                "min_thickness",
+                self.min_thickness,
+                f"0 <= min_thickness <= thickness ({self.thickness:g})",
+                context=ctx,
+            )
         limit = math.degrees(self.theta_end)
         if self.start_angle >= limit:
             raise ParameterError(
-                "start_angle", self.start_angle,
+                "start_angle",
+                self.start_angle,
                 f"an angle below the spiral limit 2.5π + 2π(n − 1) = {limit:g} deg "
-                f"for spiral_circuits = {self.spiral_circuits:g}", context=ctx,
+                f"for spiral_circuits = {self.spiral_circuits:g}",
+                context=ctx,
             )
         if self.volute_model == "centred_arcs":
             check_arcs(self)
@@ -230,24 +252,29 @@ class VoluteParams:
         coeffs = "a, b, c, d"
         vals = (self.a, self.b, self.c, self.d)
         if not np.all(np.isfinite(r)):
-            raise ParameterError(coeffs, vals, "a finite spiral radius over the θ range",
-                                 context="volute")
+            raise ParameterError(
+                coeffs, vals, "a finite spiral radius over the θ range", context="volute"
+            )
         if r.min() <= 0:
             k = int(np.argmin(r))
             raise ParameterError(
-                coeffs, vals,
+                coeffs,
+                vals,
                 f"a spiral radius r > 0 for θ in [{self.start_angle:g}, "
                 f"{math.degrees(self.theta_end):g}] deg (r = {r[k]:.4g} at "
-                f"{math.degrees(th[k]):.1f} deg)", context="volute",
+                f"{math.degrees(th[k]):.1f} deg)",
+                context="volute",
             )
         t = volute_thickness(self, th)
         bad = t >= r
         if bad.any():
             k = int(np.argmax(bad))
             raise ParameterError(
-                "thickness/min_thickness", (self.thickness, self.min_thickness),
+                "thickness/min_thickness",
+                (self.thickness, self.min_thickness),
                 f"a band thickness below the spiral radius (t = {t[k]:.4g} >= r = {r[k]:.4g} at "
-                f"θ = {math.degrees(th[k]):.1f} deg)", context="volute",
+                f"θ = {math.degrees(th[k]):.1f} deg)",
+                context="volute",
             )
         dr = np.diff(r)
         if not (np.all(dr > 0) or np.all(dr < 0)):
@@ -292,12 +319,17 @@ def vitruvian_volute(lower_diameter: float = _D_PORTUNUS, **overrides) -> Volute
     R = D/4 (4½ parts of D/18), eye radius D/36 (one part across); ``a, b, c, d`` from
     :func:`vitruvian_coefficients` (dimensionless, so independent of D).
     """
-    if not (isinstance(lower_diameter, int | float) and math.isfinite(lower_diameter)
-            and lower_diameter > 0):
+    if not (
+        isinstance(lower_diameter, int | float)
+        and math.isfinite(lower_diameter)
+        and lower_diameter > 0
+    ):
         raise ParameterError("lower_diameter", lower_diameter, "a length > 0", context="volute")
-    kw: dict[str, Any] = dict(capital_spiral_radius=lower_diameter / 4.0,
-                              capital_circle_radius=lower_diameter / 36.0,
-                              arc_square=lower_diameter / 18.0 * 6.0 / 11.0)
+    kw: dict[str, Any] = dict(
+        capital_spiral_radius=lower_diameter / 4.0,
+        capital_circle_radius=lower_diameter / 36.0,
+        arc_square=lower_diameter / 18.0 * 6.0 / 11.0,
+    )
     kw.update(overrides)
     return VoluteParams(**kw)
 

@@ -65,8 +65,7 @@ def arc_centres(p: VoluteShape) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     span = p.theta_end - p.theta_start
     k = max(1, int(math.ceil(span / (0.5 * math.pi) - 1e-9)))
     th0 = p.theta_start + 0.5 * math.pi * np.arange(k)
-    steps = (p.arc_square * np.linspace(p.arc_ratio, 1.0, k - 1) if k > 1
-             else np.zeros(0))
+    steps = p.arc_square * np.linspace(p.arc_ratio, 1.0, k - 1) if k > 1 else np.zeros(0)
     radii = p.capital_circle_radius + np.concatenate([[0.0], np.cumsum(steps)])
     u = np.stack([np.cos(th0[1:]), np.sin(th0[1:])], axis=1)
     centres = np.vstack([[0.0, 0.0], -np.cumsum(steps[:, None] * u, axis=0)])
@@ -78,7 +77,8 @@ def arc_points(p: VoluteShape, theta: np.ndarray, inner: float) -> np.ndarray:
     """Points of the centred-arc curve at θ; ``inner`` = 1 gives the band's inner edge."""
     th = np.asarray(theta, dtype=np.float64)
     centres, radii, _ = arc_centres(p)
-    j = np.clip(np.floor((th - p.theta_start) / (0.5 * math.pi) + 1e-12).astype(np.int64),
-                0, len(radii) - 1)
+    j = np.clip(
+        np.floor((th - p.theta_start) / (0.5 * math.pi) + 1e-12).astype(np.int64), 0, len(radii) - 1
+    )
     rho = radii[j] - inner * p.capital_spiral_radius * band_thickness(p, th)
     return centres[j] + rho[:, None] * np.stack([np.cos(th), np.sin(th)], axis=1)

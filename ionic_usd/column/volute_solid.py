@@ -81,8 +81,9 @@ def prism(
     if not z1 > z0:
         raise GeometryError(f"prism {name!r}: z1 must exceed z0")
     p = pts[tri]
-    area2 = ((p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1])
-             - (p[:, 1, 1] - p[:, 0, 1]) * (p[:, 2, 0] - p[:, 0, 0]))
+    area2 = (p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1]) - (p[:, 1, 1] - p[:, 0, 1]) * (
+        p[:, 2, 0] - p[:, 0, 0]
+    )
     if np.all(area2 < 0):
         tri, area2 = tri[:, ::-1], -area2
     if not np.all(area2 > 0):
@@ -108,18 +109,26 @@ def prism(
     u, v = loop, np.roll(loop, -1)
     # wall quad (v_top, u_top, u_bot, v_bot): reverses the cap edge u→v on top, runs u→v below
     walls = np.concatenate([np.stack([v + n, u + n, u], axis=1), np.stack([v + n, u, v], axis=1)])
-    wall_n = np.concatenate([np.stack([n_end, n_start, n_start], axis=1),
-                             np.stack([n_end, n_start, n_end], axis=1)])
+    wall_n = np.concatenate(
+        [np.stack([n_end, n_start, n_start], axis=1), np.stack([n_end, n_start, n_end], axis=1)]
+    )
     faces = np.concatenate([tri + n, tri[:, ::-1], walls])
     t = len(tri)
     normals = np.zeros((len(faces), 3, 3), dtype=np.float32)
     normals[:t, :, 2] = 1.0
-    normals[t:2 * t, :, 2] = -1.0
-    normals[2 * t:, :, :2] = wall_n
-    points = np.concatenate([np.column_stack([pts, np.full(n, z0)]),
-                             np.column_stack([pts, np.full(n, z1)])])
-    return Mesh(points, np.full(len(faces), 3, np.int32), faces.reshape(-1),
-                normals.reshape(-1, 3), "faceVarying", name=name)
+    normals[t : 2 * t, :, 2] = -1.0
+    normals[2 * t :, :, :2] = wall_n
+    points = np.concatenate(
+        [np.column_stack([pts, np.full(n, z0)]), np.column_stack([pts, np.full(n, z1)])]
+    )
+    return Mesh(
+        points,
+        np.full(len(faces), 3, np.int32),
+        faces.reshape(-1),
+        normals.reshape(-1, 3),
+        "faceVarying",
+        name=name,
+    )
 
 
 def _lift(p: VoluteParams, xy: np.ndarray) -> np.ndarray:
@@ -128,7 +137,12 @@ def _lift(p: VoluteParams, xy: np.ndarray) -> np.ndarray:
 
 
 def build_volute_band(
-    p: VoluteParams, *, samples: int = 192, margin: float = 0.0, z0: float, z1: float,
+    p: VoluteParams,
+    *,
+    samples: int = 192,
+    margin: float = 0.0,
+    z0: float,
+    z1: float,
     name: str = "volute_band",
 ) -> Mesh:
     """The raised spiral band (the listel) as a closed prism between ``z0`` and ``z1``.
@@ -143,7 +157,12 @@ def build_volute_band(
 
 
 def build_volute_backing(
-    p: VoluteParams, *, samples: int = 192, z0: float, z1: float, name: str = "volute_backing",
+    p: VoluteParams,
+    *,
+    samples: int = 192,
+    z0: float,
+    z1: float,
+    name: str = "volute_backing",
 ) -> Mesh:
     """The volute's disc (the channel floor): the region inside the outermost turn.
 
@@ -181,15 +200,19 @@ def build_volute_backing(
 
 
 def build_volute_eye(
-    p: VoluteParams, *, segments: int = 48, z0: float, z1: float, name: str = "volute_eye",
+    p: VoluteParams,
+    *,
+    segments: int = 48,
+    z0: float,
+    z1: float,
+    name: str = "volute_eye",
 ) -> Mesh:
     """The eye as a cylindrical boss (a closed prism over the eye's circle)."""
     circle = volute_eye(p, segments)
     pts = np.vstack([circle, p.eye_center[None, :]])
     i = np.arange(segments)
     fan = np.stack([np.full(segments, segments), i, (i + 1) % segments], axis=1)
-    return prism(_lift(p, pts), fan, z0, z1, loop=np.arange(segments), crease_deg=90.0,
-                  name=name)
+    return prism(_lift(p, pts), fan, z0, z1, loop=np.arange(segments), crease_deg=90.0, name=name)
 
 
 def build_volute(
@@ -216,7 +239,6 @@ def build_volute(
     if margin < 0 or not math.isfinite(margin):
         raise ParameterError("margin", margin, "a length >= 0", context="volute")
     band = build_volute_band(p, samples=samples, margin=margin, z0=-relief_depth, z1=0.0)
-    back = build_volute_backing(p, samples=samples, z0=-relief_depth - slab_depth,
-                                z1=-relief_depth)
+    back = build_volute_backing(p, samples=samples, z0=-relief_depth - slab_depth, z1=-relief_depth)
     eye = build_volute_eye(p, segments=eye_segments, z0=-relief_depth, z1=0.0)
     return merge([back, band, eye], name=name)

@@ -73,16 +73,21 @@ def _read(path: Path, args: argparse.Namespace) -> np.ndarray:
     p = Path(path)
     limit = MAX_REFERENCE_BYTES.get(p.suffix.lower(), MAX_REFERENCE_BYTES_DEFAULT)
     if p.is_file() and p.stat().st_size > limit:
-        raise ParameterError("--reference", str(p), f"a curve file under {limit >> 20} MB "
-                             f"(this one has {p.stat().st_size / 1e6:.0f} MB)")
-    ref = read_reference(path, scale=args.scale, flip_y=args.flip_y,
-                         element_id=args.element_id)
+        raise ParameterError(
+            "--reference",
+            str(p),
+            f"a curve file under {limit >> 20} MB (this one has {p.stat().st_size / 1e6:.0f} MB)",
+        )
+    ref = read_reference(path, scale=args.scale, flip_y=args.flip_y, element_id=args.element_id)
     spacing = getattr(args, "spacing", None)
     if spacing is not None:  # the resampled node count, before any allocation
         nodes = 2.0 * float(np.linalg.norm(np.diff(ref, axis=0), axis=1).sum()) / spacing
         if nodes > MAX_RESAMPLED_NODES:
-            raise ParameterError("--spacing", spacing, f"a spacing giving at most "
-                                 f"{MAX_RESAMPLED_NODES:,} nodes (about {nodes:,.0f} here)")
+            raise ParameterError(
+                "--spacing",
+                spacing,
+                f"a spacing giving at most {MAX_RESAMPLED_NODES:,} nodes (about {nodes:,.0f} here)",
+            )
     return ref
 
 
@@ -102,25 +107,28 @@ def _references(args: argparse.Namespace) -> list[tuple[str, Path]]:
         elif args.part is not None:
             out.append((args.part, Path(item)))
         else:
-            raise ParameterError("--reference", str(item),
-                                 f"PART=FILE (PART one of {', '.join(PARTS)}) or --part")
+            raise ParameterError(
+                "--reference", str(item), f"PART=FILE (PART one of {', '.join(PARTS)}) or --part"
+            )
     parts = [p for p, _ in out]
     if len(set(parts)) != len(parts):
-        raise ParameterError("--reference", [str(i) for i in args.reference],
-                             "one reference per part")
+        raise ParameterError(
+            "--reference", [str(i) for i in args.reference], "one reference per part"
+        )
     return out
 
 
-def _generated(args: argparse.Namespace, part: str, section_y: float | None
-               ) -> tuple[np.ndarray, str]:
+def _generated(
+    args: argparse.Namespace, part: str, section_y: float | None
+) -> tuple[np.ndarray, str]:
     from ionic_usd.evaluate import sections
 
     if args.usd is not None:
         from ionic_usd.usd.reader import parse_variant_args
 
-        curve = sections.section_from_usd(args.usd, part,
-                                          variants=parse_variant_args(args.variant),
-                                          y=section_y)
+        curve = sections.section_from_usd(
+            args.usd, part, variants=parse_variant_args(args.variant), y=section_y
+        )
         return curve, f"section of {args.usd}"
     params = _column(args.config)
     src = f"parameters from {args.config}" if args.config else "the Portunus column parameters"
@@ -151,13 +159,17 @@ def _compare_one(args: argparse.Namespace, part: str, ref: np.ndarray) -> tuple[
 
     section = part == "shaft" and args.section
     if is_closed_curve(ref) and not section:
-        raise ParameterError("--reference", f"{part}: a closed curve",
-                             "an open profile; a closed shaft cross-section needs --section")
+        raise ParameterError(
+            "--reference",
+            f"{part}: a closed curve",
+            "an open profile; a closed shaft cross-section needs --section",
+        )
     if args.section and part != "shaft":
         raise ParameterError("--section", part, "used only with the shaft")
     gen, source = _generated(args, part, _section_height(args) if section else None)
-    moved, how = align(ref, gen, allow_mirror=args.mirror, allow_rotation=args.rotate or
-                       bool(section))
+    moved, how = align(
+        ref, gen, allow_mirror=args.mirror, allow_rotation=args.rotate or bool(section)
+    )
     moved = closed_like(ref, moved) if section else orient_like(ref, moved)
     spacing = args.spacing if args.spacing is not None else curve_length(ref) / 2000.0
     a, b = resample(ref, spacing=spacing), resample(moved, spacing=spacing)
@@ -169,8 +181,11 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     from ionic_usd.evaluate.report import format_table, plot_overlay, write_json
 
     if args.usd is not None and args.config is not None:
-        raise ParameterError("--usd/--config", (str(args.usd), str(args.config)),
-                             "one source of the generated curve, not both")
+        raise ParameterError(
+            "--usd/--config",
+            (str(args.usd), str(args.config)),
+            "one source of the generated curve, not both",
+        )
     if args.variant and args.usd is None:
         raise ParameterError("--variant", args.variant, "used only with --usd")
     _check_out(args.json, args.force, ".json", "--json")
@@ -186,11 +201,14 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         ref = _read(path, args)
         result, how, a, b, source, spacing, n_gen = _compare_one(args, part, ref)
         rows[part], aligns[part], curves[part] = result, how, (a, b)
-        print(f"{part}: reference {path} ({len(ref)} nodes, scale {args.scale:g} m/unit"
-              f"{', y flipped' if args.flip_y else ''}); generated: {source} ({n_gen} nodes)")
+        print(
+            f"{part}: reference {path} ({len(ref)} nodes, scale {args.scale:g} m/unit"
+            f"{', y flipped' if args.flip_y else ''}); generated: {source} ({n_gen} nodes)"
+        )
         print(f"  alignment: {how.describe()}")
-        how_chosen = (" (the reference's length / 2000; --spacing to change)"
-                      if args.spacing is None else "")
+        how_chosen = (
+            " (the reference's length / 2000; --spacing to change)" if args.spacing is None else ""
+        )
         print(f"  both curves resampled at {spacing:.6g} m spacing{how_chosen}")
         meta[part] = {"reference": str(path), "generated": source, "spacing": spacing}
     print(format_table(rows))
@@ -201,11 +219,12 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     if args.curves is not None:
         from ionic_usd.evaluate.report import write_curves_csv
 
-        write_curves_csv(args.curves, {p: {"reference": c[0], "generated": c[1]}
-                                       for p, c in curves.items()})
+        write_curves_csv(
+            args.curves, {p: {"reference": c[0], "generated": c[1]} for p, c in curves.items()}
+        )
         print(f"wrote {args.curves}")
     if args.plot is not None:
-        (part, (a, b)), = curves.items()
+        ((part, (a, b)),) = curves.items()
         plot_overlay(a, b, args.plot, title=f"{part}: reference vs generated")
         print(f"wrote {args.plot}")
     return 0
@@ -228,23 +247,38 @@ def _fit_part(args: argparse.Namespace, column: ColumnParams, ref: np.ndarray) -
     from ionic_usd.evaluate.fit_shaft import fit_shaft_section, is_closed_curve
 
     if args.part == "volute":
-        return F.fit_volute(ref, column=column, measure=args.measure, seed=args.seed,
-                            eye=_floats(args.eye, 2, "--eye"), models=args.model)
+        return F.fit_volute(
+            ref,
+            column=column,
+            measure=args.measure,
+            seed=args.seed,
+            eye=_floats(args.eye, 2, "--eye"),
+            models=args.model,
+        )
     if args.part == "base":
         mods = None
         if args.modules is not None:
             try:
                 mods = [int(m) for m in args.modules.split(",")]
             except ValueError:
-                raise ParameterError("--modules", args.modules,
-                                     "comma-separated control-point counts, e.g. 2,4,4") from None
-        return F.fit_base(ref, modules=mods, initial=None if args.config is None else column,
-                          measure=args.measure, seed=args.seed)
+                raise ParameterError(
+                    "--modules", args.modules, "comma-separated control-point counts, e.g. 2,4,4"
+                ) from None
+        return F.fit_base(
+            ref,
+            modules=mods,
+            initial=None if args.config is None else column,
+            measure=args.measure,
+            seed=args.seed,
+        )
     if args.section:
         return fit_shaft_section(ref, initial=column, measure=args.measure, seed=args.seed)
     if is_closed_curve(ref):
-        raise ParameterError("--reference", f"{args.reference}: a closed curve",
-                             "a shaft silhouette; fit a closed cross-section with --section")
+        raise ParameterError(
+            "--reference",
+            f"{args.reference}: a closed curve",
+            "a shaft silhouette; fit a closed cross-section with --section",
+        )
     return F.fit_shaft(ref, initial=column, measure=args.measure, seed=args.seed)
 
 
@@ -282,8 +316,10 @@ def cmd_fit(args: argparse.Namespace) -> int:
     ref = _reference(args)
     res = _fit_part(args, column, ref)
     print(f"reference: {args.reference} ({len(ref)} nodes)")
-    print(f"fit {args.part} ({res.model}): minimised {args.measure}; {res.iterations} "
-          f"iterations, {res.evaluations} curve evaluations, {res.seconds:.2f} s")
+    print(
+        f"fit {args.part} ({res.model}): minimised {args.measure}; {res.iterations} "
+        f"iterations, {res.evaluations} curve evaluations, {res.seconds:.2f} s"
+    )
     for note in res.notes:
         print(f"  {note}")
     print(f"alignment after the fit: {res.alignment.describe()}")
@@ -301,43 +337,70 @@ def cmd_fit(args: argparse.Namespace) -> int:
     if args.json is not None:
         from ionic_usd.evaluate.report import write_fit_json
 
-        write_fit_json(args.json, {args.part: res},
-                       metadata={"reference": str(args.reference), "scale": args.scale,
-                                 "flip_y": args.flip_y, "seed": args.seed})
+        write_fit_json(
+            args.json,
+            {args.part: res},
+            metadata={
+                "reference": str(args.reference),
+                "scale": args.scale,
+                "flip_y": args.flip_y,
+                "seed": args.seed,
+            },
+        )
         print(f"wrote {args.json}")
     if args.curves is not None:
         from ionic_usd.evaluate.report import write_curves_csv
 
-        write_curves_csv(args.curves, {args.part: {"reference": res.reference,
-                                                   "fitted": res.fitted}})
+        write_curves_csv(
+            args.curves, {args.part: {"reference": res.reference, "fitted": res.fitted}}
+        )
         print(f"wrote {args.curves}")
     if args.plot is not None:
-        plot_overlay(res.reference, res.fitted, args.plot, title=f"fitted {args.part}",
-                     labels=("reference", "fitted"))
+        plot_overlay(
+            res.reference,
+            res.fitted,
+            args.plot,
+            title=f"fitted {args.part}",
+            labels=("reference", "fitted"),
+        )
         print(f"wrote {args.plot}")
     return 0
 
 
-def _reference_flags(p: argparse.ArgumentParser, *, multiple: bool = False,
-                     required: bool = True) -> None:
+def _reference_flags(
+    p: argparse.ArgumentParser, *, multiple: bool = False, required: bool = True
+) -> None:
     if multiple:
-        p.add_argument("--reference", required=True, action="append", metavar="[PART=]FILE",
-                       help="reference curve .csv/.txt (x,y per line) or .svg (a <path>); "
-                       "repeat as PART=FILE to evaluate several parts (Table 6)")
+        p.add_argument(
+            "--reference",
+            required=True,
+            action="append",
+            metavar="[PART=]FILE",
+            help="reference curve .csv/.txt (x,y per line) or .svg (a <path>); "
+            "repeat as PART=FILE to evaluate several parts (Table 6)",
+        )
     else:
-        p.add_argument("--reference", type=Path, required=required,
-                       help="reference curve: .csv/.txt (x,y per line) or .svg (a <path>)")
-    p.add_argument("--scale", type=float, default=1.0,
-                   help="metres per reference unit [default 1]")
-    p.add_argument("--flip-y", action="store_true",
-                   help="negate the reference's y (SVG and image coordinates point down)")
+        p.add_argument(
+            "--reference",
+            type=Path,
+            required=required,
+            help="reference curve: .csv/.txt (x,y per line) or .svg (a <path>)",
+        )
+    p.add_argument("--scale", type=float, default=1.0, help="metres per reference unit [default 1]")
+    p.add_argument(
+        "--flip-y",
+        action="store_true",
+        help="negate the reference's y (SVG and image coordinates point down)",
+    )
     p.add_argument("--element-id", help="SVG: id of the element to read (default: first path)")
 
 
 def add_evaluate_parser(subparsers: Any, *, arguments: bool = True) -> None:
     """Add the ``evaluate`` subcommand (``arguments=False``: its name and help only)."""
     p = add_command(
-        subparsers, "evaluate", cmd_evaluate,
+        subparsers,
+        "evaluate",
+        cmd_evaluate,
         help="compare a section of the model with a reference curve (paper Table 6)",
         description="Cut a section of the model — from a USD file written by ionic-usd "
         "(--usd; composed, active variants) or built from parameters (--config, default the "
@@ -350,34 +413,57 @@ def add_evaluate_parser(subparsers: Any, *, arguments: bool = True) -> None:
         return
     from ionic_usd.evaluate.sections import PARTS
 
-    p.add_argument("--part", choices=PARTS,
-                   help="which section, for --reference FILE (else --reference PART=FILE)")
+    p.add_argument(
+        "--part",
+        choices=PARTS,
+        help="which section, for --reference FILE (else --reference PART=FILE)",
+    )
     src = p.add_mutually_exclusive_group()
     src.add_argument("--usd", type=Path, help="USD file from `ionic-usd column` or `asset`")
-    src.add_argument("--config", type=Path, help="column TOML (see ionic-usd column "
-                     "--print-config)")
+    src.add_argument(
+        "--config", type=Path, help="column TOML (see ionic-usd column --print-config)"
+    )
     add_variant_flag(p, "with --usd: select a variant (e.g. lod=high, base=G2); repeatable")
     _reference_flags(p, multiple=True)
-    p.add_argument("--mirror", action="store_true",
-                   help="also try the mirrored section (the drawing's handedness is arbitrary)")
-    p.add_argument("--rotate", action="store_true",
-                   help="also fit a rotation (always on with --section)")
-    p.add_argument("--section", action="store_true",
-                   help="shaft: compare a closed cross-section (at --height) not the silhouette")
-    p.add_argument("--height", type=float,
-                   help="--section: column height y (m) of the cut [default 1/3 up the shaft]")
-    p.add_argument("--spacing", type=float,
-                   help="resample both curves at this node spacing (m) [default: the "
-                   "reference's length / 2000], as the paper")
-    add_report_flags(p, curves="write the compared curves as CSV",
-                     json="write the measures as JSON", plot="write an overlay plot (PNG)")
+    p.add_argument(
+        "--mirror",
+        action="store_true",
+        help="also try the mirrored section (the drawing's handedness is arbitrary)",
+    )
+    p.add_argument(
+        "--rotate", action="store_true", help="also fit a rotation (always on with --section)"
+    )
+    p.add_argument(
+        "--section",
+        action="store_true",
+        help="shaft: compare a closed cross-section (at --height) not the silhouette",
+    )
+    p.add_argument(
+        "--height",
+        type=float,
+        help="--section: column height y (m) of the cut [default 1/3 up the shaft]",
+    )
+    p.add_argument(
+        "--spacing",
+        type=float,
+        help="resample both curves at this node spacing (m) [default: the "
+        "reference's length / 2000], as the paper",
+    )
+    add_report_flags(
+        p,
+        curves="write the compared curves as CSV",
+        json="write the measures as JSON",
+        plot="write an overlay plot (PNG)",
+    )
     p.add_argument("--force", action="store_true", help="overwrite existing --json/--plot files")
 
 
 def add_fit_parser(subparsers: Any, *, arguments: bool = True) -> None:
     """Add the ``fit`` subcommand (``arguments=False``: its name and help only)."""
     p = add_command(
-        subparsers, "fit", cmd_fit,
+        subparsers,
+        "fit",
+        cmd_fit,
         help="fit a part's parameters to a reference curve (writes column TOML)",
         description="Fit the volute (R, c, d, start angle, circuits, placement), the base "
         "(Bézier grammar control points; module layout suggested unless --modules) or the "
@@ -391,32 +477,58 @@ def add_fit_parser(subparsers: Any, *, arguments: bool = True) -> None:
     from ionic_usd.evaluate import FIT_MEASURES
     from ionic_usd.evaluate.sections import PARTS
 
-    p.add_argument("part", choices=(*PARTS, "column"),
-                   help="what to fit (column: a whole column from --scan)")
+    p.add_argument(
+        "part", choices=(*PARTS, "column"), help="what to fit (column: a whole column from --scan)"
+    )
     _reference_flags(p, required=False)
-    p.add_argument("--measure", choices=FIT_MEASURES, default="hausdorff",
-                   help="what to minimise [default hausdorff: the paper's 'weak Fréchet']")
-    add_output_flags(p, "TOML file to write (default: print the TOML); `fit column`: the "
-                     "output folder (fitted column USD, scan points USD, PNG)", type=Path,
-                     force_help="overwrite existing output files")
+    p.add_argument(
+        "--measure",
+        choices=FIT_MEASURES,
+        default="hausdorff",
+        help="what to minimise [default hausdorff: the paper's 'weak Fréchet']",
+    )
+    add_output_flags(
+        p,
+        "TOML file to write (default: print the TOML); `fit column`: the "
+        "output folder (fitted column USD, scan points USD, PNG)",
+        type=Path,
+        force_help="overwrite existing output files",
+    )
     p.add_argument("--seed", type=int, default=0, help="seed of the global stage [default 0]")
     add_config_flags(p, "column TOML to start from (default: the Portunus column)")
     p.add_argument("--modules", help="base: control points per module, e.g. 2,4,4,2")
-    p.add_argument("--eye", help="volute: the eye centre X,Y in metres in the reference's "
-                   "frame (after --scale/--flip-y); sets the offsets")
-    add_report_flags(p, curves="write the aligned reference and fitted curves as CSV (part, "
-                     "curve, index, x, y)", json="write the fit (schema ionic_usd.evaluate/1)",
-                     plot="write an overlay of the fitted curve (PNG)")
-    p.add_argument("--model", choices=VOLUTE_MODELS,
-                   help="volute: fit only this model [default: every model, best chosen]")
-    p.add_argument("--section", action="store_true",
-                   help="shaft: the reference is a closed fluted cross-section")
-    p.add_argument("--scan", type=Path,
-                   help="column: point cloud or mesh (.ply, .obj, .xyz, .csv), metres")
+    p.add_argument(
+        "--eye",
+        help="volute: the eye centre X,Y in metres in the reference's "
+        "frame (after --scale/--flip-y); sets the offsets",
+    )
+    add_report_flags(
+        p,
+        curves="write the aligned reference and fitted curves as CSV (part, curve, index, x, y)",
+        json="write the fit (schema ionic_usd.evaluate/1)",
+        plot="write an overlay of the fitted curve (PNG)",
+    )
+    p.add_argument(
+        "--model",
+        choices=VOLUTE_MODELS,
+        help="volute: fit only this model [default: every model, best chosen]",
+    )
+    p.add_argument(
+        "--section",
+        action="store_true",
+        help="shaft: the reference is a closed fluted cross-section",
+    )
+    p.add_argument(
+        "--scan", type=Path, help="column: point cloud or mesh (.ply, .obj, .xyz, .csv), metres"
+    )
 
 
-def add_parsers(subparsers: Any, parser_class: Any = argparse.ArgumentParser, *,
-                only: Sequence[str] | None = None) -> None:
+def add_parsers(
+    subparsers: Any,
+    parser_class: Any = argparse.ArgumentParser,
+    *,
+    only: Sequence[str] | None = None,
+) -> None:
     """Add the ``evaluate`` and ``fit`` subcommands to ``subparsers``.
 
     Parameters

@@ -133,7 +133,7 @@ def suggest_base_layout(
             j = k
             while j + 1 < n and hot[j + 1]:
                 j += 1
-            cand.add(int(k + np.argmax(turn[k:j + 1])))
+            cand.add(int(k + np.argmax(turn[k : j + 1])))
             k = j + 1
         else:
             k += 1
@@ -150,7 +150,7 @@ def suggest_base_layout(
     out: list[tuple[int, int, int]] = []
     while pieces:
         i, j = pieces.pop(0)
-        seg = p[i:j + 1]
+        seg = p[i : j + 1]
         chord_err = float(PolylineIndex(seg[[0, -1]]).distances(seg).max())
         if chord_err <= tol:
             out.append((i, j, 2))
@@ -192,6 +192,7 @@ def base_grammar_string(modules: Sequence[np.ndarray], shaft_radius: float) -> s
     Each module's ``r = R − d`` and ``h = y − (module bottom)``; the bottom of module k is the
     last control point's y of module k − 1 (the first module's bottom is y = 0).
     """
+
     def num(v: float) -> str:
         v = 0.0 if abs(v) < 5e-10 else float(v)
         return f"{v:.9g}"
@@ -270,8 +271,10 @@ def fit_base(
             raise ParameterError("modules", modules, "control points per module, each >= 2")
         layout = _layout_for_modules(ref_c, mods)
     slices = column.base_params().profile_slices
-    ctrls = [_fit_bezier_piece(p[i:j + 1], m)[0] for i, j, m in
-             zip(layout.breaks[:-1], layout.breaks[1:], layout.points, strict=True)]
+    ctrls = [
+        _fit_bezier_piece(p[i : j + 1], m)[0]
+        for i, j, m in zip(layout.breaks[:-1], layout.breaks[1:], layout.points, strict=True)
+    ]
 
     # parameter vector: the first point's R, then per module its points after the first as
     # (R, h above the module bottom); bounds keep R > 0 and h >= 0 (the grammar's rules)
@@ -318,33 +321,54 @@ def fit_base(
 
     obj = core.Objective(ref_c, measure)
     stages = core.Stages(make, obj, penalty=10.0 * size, ls_evals=4, dgen=dgen)
-    stages.run(box.u(x0), seed=seed, global_stage=False, popsize=0, maxiter=0,
-               polish_evals=polish_evals)
+    stages.run(
+        box.u(x0), seed=seed, global_stage=False, popsize=0, maxiter=0, polish_evals=polish_evals
+    )
     grammar = base_grammar_string(controls(box.x(stages.best_u)), d)
     from ionic_usd.grammar.base import parse_base_grammar
 
     height = parse_base_grammar(grammar, 2).height
     col = dataclasses.replace(column, base=grammar, base_height=height)
-    before, _, init_al = compare_aligned(ref, base_section(column), allow_mirror=False,
-                                           max_segment=core.report_spacing(ref))
-    after, al, fit_al = compare_aligned(ref, base_section(col), allow_mirror=False,
-                                           max_segment=core.report_spacing(ref))
+    before, _, init_al = compare_aligned(
+        ref, base_section(column), allow_mirror=False, max_segment=core.report_spacing(ref)
+    )
+    after, al, fit_al = compare_aligned(
+        ref, base_section(col), allow_mirror=False, max_segment=core.report_spacing(ref)
+    )
     names = tuple(f"x{i}" for i in range(len(x0)))
-    hit = tuple(n for n in box.hit(stages.best_u, names)
-                if box.hi[int(n[1:])] - box.lo[int(n[1:])] > 0 and
-                stages.best_u[int(n[1:])] >= 1.0 - 1e-3)  # lower bounds are R > 0, h >= 0
-    notes = [f"{len(counts)} modules, points {list(counts)}",
-             f"reference shifted by ({-shift[0]:+.6g}, {-shift[1]:+.6g}) m into column "
-             f"coordinates (shaft radius d = {d:g} m)",
-             f"diameter estimate {diameter:.4g} m (Vitruvius: the base is D/2 high)"
-             + ("; the starting column scaled to it" if initial is None else "")]
+    hit = tuple(
+        n
+        for n in box.hit(stages.best_u, names)
+        if box.hi[int(n[1:])] - box.lo[int(n[1:])] > 0 and stages.best_u[int(n[1:])] >= 1.0 - 1e-3
+    )  # lower bounds are R > 0, h >= 0
+    notes = [
+        f"{len(counts)} modules, points {list(counts)}",
+        f"reference shifted by ({-shift[0]:+.6g}, {-shift[1]:+.6g}) m into column "
+        f"coordinates (shaft radius d = {d:g} m)",
+        f"diameter estimate {diameter:.4g} m (Vitruvius: the base is D/2 high)"
+        + ("; the starting column scaled to it" if initial is None else ""),
+    ]
     if hit:
         notes.append(f"WARNING: {len(hit)} control-point coordinates ended on a search bound")
-    values = {"modules": float(len(counts)), "base_height": float(height),
-              "shaft_radius": float(d)}
-    return FitResult("base", grammar, col, before, after, measure, stages.iterations,
-                     obj.calls, time.perf_counter() - t0, ref, fit_al, init_al, al,
-                     tuple(notes), model="bezier", bounds_hit=hit, diameter=diameter,
-                     values=values, spacing=core.report_spacing(ref))
-
-
+    values = {"modules": float(len(counts)), "base_height": float(height), "shaft_radius": float(d)}
+    return FitResult(
+        "base",
+        grammar,
+        col,
+        before,
+        after,
+        measure,
+        stages.iterations,
+        obj.calls,
+        time.perf_counter() - t0,
+        ref,
+        fit_al,
+        init_al,
+        al,
+        tuple(notes),
+        model="bezier",
+        bounds_hit=hit,
+        diameter=diameter,
+        values=values,
+        spacing=core.report_spacing(ref),
+    )

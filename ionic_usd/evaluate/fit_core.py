@@ -95,8 +95,12 @@ def densify(curve: np.ndarray, max_segment: float) -> np.ndarray:
 
 
 def compare_aligned(
-    reference: np.ndarray, generated: np.ndarray, *, allow_mirror: bool = True,
-    spacing: float | None = None, max_segment: float | None = None,
+    reference: np.ndarray,
+    generated: np.ndarray,
+    *,
+    allow_mirror: bool = True,
+    spacing: float | None = None,
+    max_segment: float | None = None,
 ) -> tuple[CurveComparison, Alignment, np.ndarray]:
     """Align ``generated`` to ``reference``, orient it the same way, and compare.
 
@@ -112,8 +116,11 @@ def compare_aligned(
     moved, how = align(reference, generated, allow_mirror=allow_mirror)
     moved = orient_like(reference, moved)
     if max_segment is not None:
-        return (compare(densify(reference, max_segment), densify(moved, max_segment),
-                        spacing=spacing), how, moved)
+        return (
+            compare(densify(reference, max_segment), densify(moved, max_segment), spacing=spacing),
+            how,
+            moved,
+        )
     return compare(reference, moved, spacing=spacing), how, moved
 
 
@@ -169,15 +176,18 @@ class Objective:
         m, n = len(gen), len(self.ref)
         da, seg_a, t_a = closest_on_polyline(gen, self.ref)  # generated nodes → reference
         db, seg_b, t_b = closest_on_polyline(self.ref, gen)  # reference nodes → generated
-        foot_a = (self.ref[seg_a] * (1 - t_a)[:, None]
-                  + self.ref[np.minimum(seg_a + 1, n - 1)] * t_a[:, None])
+        foot_a = (
+            self.ref[seg_a] * (1 - t_a)[:, None]
+            + self.ref[np.minimum(seg_a + 1, n - 1)] * t_a[:, None]
+        )
         na = np.divide(gen - foot_a, da[:, None], out=np.zeros_like(gen), where=da[:, None] > 0)
         ja = np.einsum("ic,ick->ik", na, dgen)
         j1 = np.minimum(seg_b + 1, m - 1)
         dq = dgen[seg_b] * (1 - t_b)[:, None, None] + dgen[j1] * t_b[:, None, None]
         foot_b = gen[seg_b] * (1 - t_b)[:, None] + gen[j1] * t_b[:, None]
-        nb = np.divide(self.ref - foot_b, db[:, None], out=np.zeros_like(self.ref),
-                       where=db[:, None] > 0)
+        nb = np.divide(
+            self.ref - foot_b, db[:, None], out=np.zeros_like(self.ref), where=db[:, None] > 0
+        )
         jb = -np.einsum("ic,ick->ik", nb, dq)
         return np.vstack([ja / math.sqrt(m), jb / math.sqrt(n)])
 
@@ -236,33 +246,66 @@ class Stages:
                 dgen[:, :, i] = (g - gen) / step
         return self.objective.jacobian(gen, dgen)
 
-    def run(self, u0: np.ndarray, *, seed: int, global_stage: bool, popsize: int,
-            maxiter: int, polish_evals: int) -> None:
+    def run(
+        self,
+        u0: np.ndarray,
+        *,
+        seed: int,
+        global_stage: bool,
+        popsize: int,
+        maxiter: int,
+        polish_evals: int,
+    ) -> None:
         self.cost(u0)
         k = len(u0)
         if global_stage:
             res = differential_evolution(
-                self.cost, [(0.0, 1.0)] * k, seed=seed, popsize=popsize, maxiter=maxiter,
-                polish=False, tol=1e-10, init="latinhypercube", x0=u0, updating="immediate",
+                self.cost,
+                [(0.0, 1.0)] * k,
+                seed=seed,
+                popsize=popsize,
+                maxiter=maxiter,
+                polish=False,
+                tol=1e-10,
+                init="latinhypercube",
+                x0=u0,
+                updating="immediate",
             )
             self.iterations += int(res.nit)
         gen = self.make(self.best_u)
         assert gen is not None
         self.n_res = len(self.objective.residuals(gen))
-        ls = least_squares(self.residuals, self.best_u.copy(), jac=self.jacobian,
-                           bounds=(0.0, 1.0), method="trf",
-                           tr_solver="lsmr" if k > 24 else "exact", x_scale="jac",
-                           xtol=1e-10, ftol=1e-10, gtol=1e-10,
-                           max_nfev=self.ls_evals * (k + 1))
+        ls = least_squares(
+            self.residuals,
+            self.best_u.copy(),
+            jac=self.jacobian,
+            bounds=(0.0, 1.0),
+            method="trf",
+            tr_solver="lsmr" if k > 24 else "exact",
+            x_scale="jac",
+            xtol=1e-10,
+            ftol=1e-10,
+            gtol=1e-10,
+            max_nfev=self.ls_evals * (k + 1),
+        )
         self.iterations += int(ls.nfev)
         self.cost(ls.x)
         if polish_evals > 0:
             start = self.best_u.copy()
             step = 0.01 if global_stage else 0.002
             simplex = np.vstack([start, start + step * np.eye(k) * np.where(start > 0.5, -1, 1)])
-            nm = minimize(self.cost, start, method="Nelder-Mead", bounds=[(0.0, 1.0)] * k,
-                          options={"initial_simplex": simplex, "maxfev": polish_evals,
-                                   "xatol": 1e-9, "fatol": 1e-12})
+            nm = minimize(
+                self.cost,
+                start,
+                method="Nelder-Mead",
+                bounds=[(0.0, 1.0)] * k,
+                options={
+                    "initial_simplex": simplex,
+                    "maxfev": polish_evals,
+                    "xatol": 1e-9,
+                    "fatol": 1e-12,
+                },
+            )
             self.iterations += int(nm.nit)
 
 
@@ -320,12 +363,17 @@ class FitResult:
         """The ``ionic_usd.evaluate/1`` entry of this part (see :mod:`.report`)."""
         out: dict[str, object] = dict(self.after.as_dict())
         out.update(
-            model=self.model or self.part, measure=self.measure,
-            before=self.before.as_dict(), alignment=self.alignment.as_dict(),
+            model=self.model or self.part,
+            measure=self.measure,
+            before=self.before.as_dict(),
+            alignment=self.alignment.as_dict(),
             parameters={k: float(v) for k, v in self.values.items()},
-            bounds_hit=list(self.bounds_hit), diameter_estimate=self.diameter,
-            resample_spacing=self.spacing, seconds=self.seconds,
-            evaluations=self.evaluations, notes=list(self.notes),
+            bounds_hit=list(self.bounds_hit),
+            diameter_estimate=self.diameter,
+            resample_spacing=self.spacing,
+            seconds=self.seconds,
+            evaluations=self.evaluations,
+            notes=list(self.notes),
         )
         if self.alternatives:
             out["models"] = {a.model: a.as_dict() for a in (self, *self.alternatives)}
@@ -340,8 +388,7 @@ class FitResult:
             return {"volute": t["volute"]}
         if self.part == "shaft":
             return {"shaft": t["shaft"]}
-        return {"column": {"base": t["column"]["base"],
-                           "base_height": t["column"]["base_height"]}}
+        return {"column": {"base": t["column"]["base"], "base_height": t["column"]["base_height"]}}
 
     def to_toml(self) -> str:
         from ionic_usd.column.column import COLUMN_DOCS
@@ -349,8 +396,11 @@ class FitResult:
         from ionic_usd.column.volute import VOLUTE_PARAMETER_DOCS
         from ionic_usd.params import to_toml
 
-        docs = {"column": COLUMN_DOCS, "shaft": SHAFT_PARAMETER_DOCS,
-                "volute": VOLUTE_PARAMETER_DOCS}
+        docs = {
+            "column": COLUMN_DOCS,
+            "shaft": SHAFT_PARAMETER_DOCS,
+            "volute": VOLUTE_PARAMETER_DOCS,
+        }
         a, b = self.before, self.after
         header = (
             f"ionic_usd fit of the {self.part} ({self.measure}); pass to "
@@ -401,5 +451,3 @@ class Box:
         u = np.asarray(u, dtype=float)
         near = (u <= tol) | (u >= 1.0 - tol)
         return tuple(n for n, b in zip(names, near, strict=True) if b)
-
-

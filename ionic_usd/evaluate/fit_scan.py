@@ -93,14 +93,22 @@ class ScanFit:
         """The R.json keys: diameter, flutes, axis, parts_found, deviation, …"""
         d = self.deviation
         return {
-            "diameter": self.diameter, "flutes": self.flutes,
-            "axis": {"point": self.frame.origin.tolist(),
-                     "direction": self.frame.direction.tolist()},
+            "diameter": self.diameter,
+            "flutes": self.flutes,
+            "axis": {
+                "point": self.frame.origin.tolist(),
+                "direction": self.frame.direction.tolist(),
+            },
             "parts_found": sorted(self.frame.parts),
             "part_heights": {k: list(v) for k, v in self.frame.parts.items()},
-            "deviation": {"rms": float(np.sqrt(np.mean(d**2))),
-                          "p95": float(np.percentile(d, 95)), "max": float(d.max())},
-            "points": int(len(d)), "section": self.section, "seconds": self.seconds,
+            "deviation": {
+                "rms": float(np.sqrt(np.mean(d**2))),
+                "p95": float(np.percentile(d, 95)),
+                "max": float(d.max()),
+            },
+            "points": int(len(d)),
+            "section": self.section,
+            "seconds": self.seconds,
             "parts": self.fits,
             "notes": self.notes,
         }
@@ -124,8 +132,9 @@ def _flutes_from_points(xy: np.ndarray) -> tuple[int, float]:
     return k, math.degrees(centre)
 
 
-def _fit_section_e(xy: np.ndarray, r0: float, e: int, centre_deg: float
-                   ) -> tuple[int, float, np.ndarray, np.ndarray, np.ndarray]:
+def _fit_section_e(
+    xy: np.ndarray, r0: float, e: int, centre_deg: float
+) -> tuple[int, float, np.ndarray, np.ndarray, np.ndarray]:
     """Fluted section with ``e`` flutes through scattered points (points → model, robust)."""
     from scipy.optimize import least_squares
 
@@ -141,16 +150,26 @@ def _fit_section_e(xy: np.ndarray, r0: float, e: int, centre_deg: float
         poly = fluted_section(x[0], e, x[1], x[2], x[3], x[4:6], slices=12)
         return closest_on_polyline(pts, np.ascontiguousarray(poly))[0]
 
-    sols = [least_squares(res, np.array([r0, f0 * period, 1.0, rot0, 0.0, 0.0]),
-                          bounds=(lo, hi), loss="soft_l1", f_scale=0.002 * r0,
-                          x_scale=hi - lo, max_nfev=300) for f0 in (0.6, 0.8)]
+    sols = [
+        least_squares(
+            res,
+            np.array([r0, f0 * period, 1.0, rot0, 0.0, 0.0]),
+            bounds=(lo, hi),
+            loss="soft_l1",
+            f_scale=0.002 * r0,
+            x_scale=hi - lo,
+            max_nfev=300,
+        )
+        for f0 in (0.6, 0.8)
+    ]
     best = min(sols, key=lambda sol: sol.cost)  # the first of equal costs, as before
     x = best.x
     return e, best.cost, x, lo, hi
 
 
-def _fit_section(xy: np.ndarray, r0: float, flutes: int | None = None
-                 ) -> tuple[int, dict[str, float]]:
+def _fit_section(
+    xy: np.ndarray, r0: float, flutes: int | None = None
+) -> tuple[int, dict[str, float]]:
     """Fluted section through scattered points: the harmonic's flute count and its two
     neighbours are each fitted (a missing sector blurs the spectrum); the lowest cost wins."""
     e0, centre_deg = _flutes_from_points(xy)
@@ -161,30 +180,34 @@ def _fit_section(xy: np.ndarray, r0: float, flutes: int | None = None
     vals = dict(zip(names, (float(v) for v in x), strict=True))
     vals["flutes"] = float(e)
     span = hi - lo
-    vals["bounds_hit"] = [n for n, u in zip(names, (x - lo) / span, strict=True)
-                          if u < 1e-3 or u > 1 - 1e-3]  # type: ignore[assignment]
+    vals["bounds_hit"] = [
+        n for n, u in zip(names, (x - lo) / span, strict=True) if u < 1e-3 or u > 1 - 1e-3
+    ]  # type: ignore[assignment]
     return e, vals
 
 
 def _taper(loc: np.ndarray, s0: float, s1: float) -> tuple[float, float]:
     """Outer radius along the shaft band (ends trimmed) as a robust line r = a + b h."""
-    prof = _outer_profile(loc, s0 + 0.05 * (s1 - s0), s1 - 0.05 * (s1 - s0),
-                          max((s1 - s0) / 40, 0.004))
+    prof = _outer_profile(
+        loc, s0 + 0.05 * (s1 - s0), s1 - 0.05 * (s1 - s0), max((s1 - s0) / 40, 0.004)
+    )
     if len(prof) < 3:
         raise GeometryError("too few points along the shaft to measure its taper")
     return _robust_line(prof[:, 1], prof[:, 0])
 
 
-def _section_at(loc: np.ndarray, h: float, s0: float, s1: float, ra: float, rb: float,
-                flutes: int | None) -> tuple[int, dict[str, float], np.ndarray, float]:
+def _section_at(
+    loc: np.ndarray, h: float, s0: float, s1: float, ra: float, rb: float, flutes: int | None
+) -> tuple[int, dict[str, float], np.ndarray, float]:
     """Fit the section through a slab at height ``h``, thick enough for ~1500 points, each
     point scaled radially to the slab's middle by the taper."""
     in_band = int(np.count_nonzero((loc[:, 2] >= s0) & (loc[:, 2] <= s1)))
     half = min(max(0.004, 0.5 * (s1 - s0) * 1500.0 / max(in_band, 1)), 0.15 * (s1 - s0))
     sel = np.abs(loc[:, 2] - h) < half
     if np.count_nonzero(sel) < 200:
-        raise GeometryError(f"too few points ({np.count_nonzero(sel)}) at the shaft section "
-                            f"{h:.3f} m up the axis")
+        raise GeometryError(
+            f"too few points ({np.count_nonzero(sel)}) at the shaft section {h:.3f} m up the axis"
+        )
     sl = loc[sel]
     k = (ra + rb * h) / (ra + rb * sl[:, 2])
     slab = (sl[:, :2] * k[:, None])[:4000]
@@ -217,8 +240,13 @@ def _outer_profile(loc: np.ndarray, h0: float, h1: float, width: float) -> np.nd
     return np.asarray(out)
 
 
-def fit_column_scan(points: np.ndarray, *, seed: int = 0, max_fit_points: int = 60_000,
-                    fit_base_grammar: bool = False) -> ScanFit:
+def fit_column_scan(
+    points: np.ndarray,
+    *,
+    seed: int = 0,
+    max_fit_points: int = 60_000,
+    fit_base_grammar: bool = False,
+) -> ScanFit:
     """Fit a column to a scan (module docstring).
 
     Parameters
@@ -236,14 +264,19 @@ def fit_column_scan(points: np.ndarray, *, seed: int = 0, max_fit_points: int = 
     t0 = time.perf_counter()
     pts = np.asarray(points, dtype=np.float64)
     rng = np.random.default_rng(seed)
-    sub = pts if len(pts) <= max_fit_points else pts[rng.choice(len(pts), max_fit_points,
-                                                                replace=False)]
+    sub = (
+        pts
+        if len(pts) <= max_fit_points
+        else pts[rng.choice(len(pts), max_fit_points, replace=False)]
+    )
     a, c, resid = estimate_axis(sub, seed=seed)
     frame = find_parts(sub, a, c)
     notes = [f"axis: normal lines meet it within {resid * 1000:.3g} mm (median)"]
     if "shaft" not in frame.parts:
-        raise GeometryError("no shaft in the scan: a narrow band of at least three bins along "
-                            "the axis is needed to set the diameter")
+        raise GeometryError(
+            "no shaft in the scan: a narrow band of at least three bins along "
+            "the axis is needed to set the diameter"
+        )
     # two sections, a quarter and three quarters up the shaft band: their centres set the
     # axis far better than the normals (a 1 mm error over 4 m is 0.015°); then the final
     # section a third of the way up in the corrected frame
@@ -257,8 +290,12 @@ def fit_column_scan(points: np.ndarray, *, seed: int = 0, max_fit_points: int = 
             for frac in (0.25, 0.75):
                 h = s0 + frac * (s1 - s0)
                 e, sec1, _, _ = _section_at(loc, h, s0, s1, ra, rb, e)
-                cs.append(frame.origin + sec1["centre_u"] * frame.u
-                          + sec1["centre_v"] * frame.v + h * frame.direction)
+                cs.append(
+                    frame.origin
+                    + sec1["centre_u"] * frame.u
+                    + sec1["centre_v"] * frame.v
+                    + h * frame.direction
+                )
             a_new = cs[1] - cs[0]
             frame = find_parts(sub, a_new / np.linalg.norm(a_new), cs[0])
             if "shaft" not in frame.parts:
@@ -266,9 +303,11 @@ def fit_column_scan(points: np.ndarray, *, seed: int = 0, max_fit_points: int = 
     hs = s0 + (s1 - s0) / 3.0
     # the flute count is chosen again in the refined frame (a tilted slab blurs flutes)
     e, sec, slab, half = _section_at(loc, hs, s0, s1, ra, rb, None)
-    notes.append(f"axis through the centres of sections {s0 + 0.25 * (s1 - s0):.3f} and "
-                 f"{s0 + 0.75 * (s1 - s0):.3f} m up; section from {len(slab)} points within "
-                 f"±{half * 1000:.3g} mm of {hs:.3f} m")
+    notes.append(
+        f"axis through the centres of sections {s0 + 0.25 * (s1 - s0):.3f} and "
+        f"{s0 + 0.75 * (s1 - s0):.3f} m up; section from {len(slab)} points within "
+        f"±{half * 1000:.3g} mm of {hs:.3f} m"
+    )
     # recentre the axis on the fitted section centre
     shift = sec["centre_u"] * frame.u + sec["centre_v"] * frame.v
     frame = dataclasses.replace(frame, origin=frame.origin + shift)
@@ -283,9 +322,19 @@ def fit_column_scan(points: np.ndarray, *, seed: int = 0, max_fit_points: int = 
     if has_base and has_cap:
         # the capital's volutes hang below the shaft's top: measure the hang on the model
         built = build_column(col)
-        hang = built.base_height + built.shaft_length - float(
-            np.min([m.points[:, 1].min() for k, m in built.parts().items()
-                    if k.startswith("Capital")]))
+        hang = (
+            built.base_height
+            + built.shaft_length
+            - float(
+                np.min(
+                    [
+                        m.points[:, 1].min()
+                        for k, m in built.parts().items()
+                        if k.startswith("Capital")
+                    ]
+                )
+            )
+        )
         length = frame.parts["capital"][0] + hang - frame.parts["base"][1]
         r_top = (ra + rb * frame.parts["capital"][0]) * scale
         top_ratio = r_top / r_bottom
@@ -293,9 +342,14 @@ def fit_column_scan(points: np.ndarray, *, seed: int = 0, max_fit_points: int = 
         sh = dataclasses.replace(sh, height=max(length - sh.length + sh.height, 0.1))
     else:
         notes.append("fragment: shaft length and top ratio kept from the Vitruvian column")
-    sh = dataclasses.replace(sh, bottom_radius=r_bottom, top_radius=r_bottom * top_ratio,
-                             flutes=e, flute_angle=sec["flute_angle"],
-                             flute_depth=sec["flute_depth"])
+    sh = dataclasses.replace(
+        sh,
+        bottom_radius=r_bottom,
+        top_radius=r_bottom * top_ratio,
+        flutes=e,
+        flute_angle=sec["flute_angle"],
+        flute_depth=sec["flute_depth"],
+    )
     col = dataclasses.replace(col, shaft=sh)
     bprof = None
     if has_base:
@@ -319,22 +373,40 @@ def fit_column_scan(points: np.ndarray, *, seed: int = 0, max_fit_points: int = 
     sec["rotation_deg"] += best[2] * 360.0 / e
     base_fit = None
     if has_base:  # the turn about the axis is known now: the plinth's faces face ±x, ±z
-        col, base_fit = _fit_scanned_base(to_column(sub, m), col, frame, notes,
-                                          fit_base_grammar)
+        col, base_fit = _fit_scanned_base(to_column(sub, m), col, frame, notes, fit_base_grammar)
         if base_fit is not None:
             tree = _other_parts_tree(col)
     if has_cap:
-        notes.append("capital found; rebuilt from Vitruvius' proportions at the diameter "
-                     "(scanned volutes are not fitted yet)")
+        notes.append(
+            "capital found; rebuilt from Vitruvius' proportions at the diameter "
+            "(scanned volutes are not fitted yet)"
+        )
     dev = scan_deviation(pts, col, m, tree=tree)
     fits = _part_report(frame.local(pts)[:, 2], dev, frame, sec, base_fit, col)
-    return ScanFit(col, frame, m, diameter, e, sec, base_fit, dev, time.perf_counter() - t0,
-                   slab, bprof, notes, fits)
+    return ScanFit(
+        col,
+        frame,
+        m,
+        diameter,
+        e,
+        sec,
+        base_fit,
+        dev,
+        time.perf_counter() - t0,
+        slab,
+        bprof,
+        notes,
+        fits,
+    )
 
 
-def _fit_scanned_base(col_pts: np.ndarray, col: ColumnParams, frame: ColumnFrame,
-                      notes: list[str], use_on_plinth: bool
-                      ) -> tuple[ColumnParams, FitResult | None]:
+def _fit_scanned_base(
+    col_pts: np.ndarray,
+    col: ColumnParams,
+    frame: ColumnFrame,
+    notes: list[str],
+    use_on_plinth: bool,
+) -> tuple[ColumnParams, FitResult | None]:
     """The base's meridian (:func:`.scan_parts.base_meridian`) fitted with
     :func:`.fit_base.fit_base`; the column takes the fitted base unless the scanned base has
     a square plinth (a lathe grammar cannot rebuild its corners) and ``use_on_plinth`` is
@@ -348,39 +420,59 @@ def _fit_scanned_base(col_pts: np.ndarray, col: ColumnParams, frame: ColumnFrame
         notes.append("base found but its meridian is too sparse to fit: the Vitruvian base")
         return col, None
     fit = fit_base(mer, initial=col, axis_x=0.0, polish_evals=300)
-    what = (f"base fitted to its meridian ({len(mer)} bins at the plinth's face normals): "
-            f"{fit.after.hausdorff_pct:.3f} % (paper's measure), "
-            f"{fit.after.discrete_frechet_pct:.3f} % (discrete Fréchet)")
+    what = (
+        f"base fitted to its meridian ({len(mer)} bins at the plinth's face normals): "
+        f"{fit.after.hausdorff_pct:.3f} % (paper's measure), "
+        f"{fit.after.discrete_frechet_pct:.3f} % (discrete Fréchet)"
+    )
     if has_square_plinth(col_pts, 0.0, top) and not use_on_plinth:
-        notes.append(f"{what}; square plinth: the column keeps the Vitruvian base (a lathe "
-                     "grammar would round its corners)")
+        notes.append(
+            f"{what}; square plinth: the column keeps the Vitruvian base (a lathe "
+            "grammar would round its corners)"
+        )
         return col, fit
     notes.append(f"{what}; the column takes the fitted base")
     return fit.column, fit
 
 
-def _part_report(h: np.ndarray, dev: np.ndarray, frame: ColumnFrame, sec: dict[str, float],
-                 base_fit: FitResult | None, col: ColumnParams) -> dict[str, dict[str, Any]]:
+def _part_report(
+    h: np.ndarray,
+    dev: np.ndarray,
+    frame: ColumnFrame,
+    sec: dict[str, float],
+    base_fit: FitResult | None,
+    col: ColumnParams,
+) -> dict[str, dict[str, Any]]:
     """Per part found: what was fitted or only rebuilt, and the deviations of its points."""
     out: dict[str, dict[str, Any]] = {}
     for part, (a, b) in frame.parts.items():
         d = dev[(h >= a) & (h <= b)]
         rep: dict[str, Any] = {
             "points": int(len(d)),
-            "deviation": {"rms": float(np.sqrt(np.mean(d**2))) if len(d) else None,
-                          "p95": float(np.percentile(d, 95)) if len(d) else None}}
+            "deviation": {
+                "rms": float(np.sqrt(np.mean(d**2))) if len(d) else None,
+                "p95": float(np.percentile(d, 95)) if len(d) else None,
+            },
+        }
         if part == "shaft":
-            rep.update(status="fitted", model="fluted section",
-                       fitted=["diameter", "flutes", "flute_angle", "flute_depth", "taper",
-                               "rotation"],
-                       values={k: sec[k] for k in ("radius", "flute_angle", "flute_depth")
-                               if k in sec})
+            rep.update(
+                status="fitted",
+                model="fluted section",
+                fitted=["diameter", "flutes", "flute_angle", "flute_depth", "taper", "rotation"],
+                values={k: sec[k] for k in ("radius", "flute_angle", "flute_depth") if k in sec},
+            )
         elif part == "base" and base_fit is not None:
-            rep.update(status="fitted" if col.base == base_fit.column.base else
-                       "fitted (reported; the column keeps the Vitruvian plinth base)",
-                       model="bezier meridian", height=base_fit.column.base_params().height,
-                       measures={"hausdorff_pct": base_fit.after.hausdorff_pct,
-                                 "discrete_frechet_pct": base_fit.after.discrete_frechet_pct})
+            rep.update(
+                status="fitted"
+                if col.base == base_fit.column.base
+                else "fitted (reported; the column keeps the Vitruvian plinth base)",
+                model="bezier meridian",
+                height=base_fit.column.base_params().height,
+                measures={
+                    "hausdorff_pct": base_fit.after.hausdorff_pct,
+                    "discrete_frechet_pct": base_fit.after.discrete_frechet_pct,
+                },
+            )
         else:
             rep.update(status="rebuilt", model="Vitruvian proportions at the diameter")
         out[part] = rep
@@ -404,8 +496,11 @@ def _column_zero(frame: ColumnFrame, col: ColumnParams, shaft_start: float) -> f
     bh = col.base_params().height
     if "capital" in frame.parts:
         built = build_column(col)
-        low = float(np.min([m.points[:, 1].min() for k, m in built.parts().items()
-                            if k.startswith("Capital")]))
+        low = float(
+            np.min(
+                [m.points[:, 1].min() for k, m in built.parts().items() if k.startswith("Capital")]
+            )
+        )
         return frame.parts["capital"][0] - low
     return shaft_start - bh
 
@@ -426,15 +521,15 @@ def _other_parts_tree(col: ColumnParams):
         off += len(mesh.points)
     P, T = np.concatenate(allp), np.concatenate(allt)
     pp = P[T]
-    area = 0.5 * np.linalg.norm(np.cross(pp[:, 1] - pp[:, 0], pp[:, 2] - pp[:, 0]),
-                                axis=1).sum()
+    area = 0.5 * np.linalg.norm(np.cross(pp[:, 1] - pp[:, 0], pp[:, 2] - pp[:, 0]), axis=1).sum()
     count = int(min(1_500_000, max(50_000, area / 1e-6)))
     samples, _ = sample_surface(P, T, count, seed=1)
     return cKDTree(samples)
 
 
-def scan_deviation(points: np.ndarray, col: ColumnParams, matrix: np.ndarray, *,
-                   tree=None) -> np.ndarray:
+def scan_deviation(
+    points: np.ndarray, col: ColumnParams, matrix: np.ndarray, *, tree=None
+) -> np.ndarray:
     """Distance (m) of every scan point from the fitted column's surface.
 
     Parameters
@@ -450,6 +545,7 @@ def scan_deviation(points: np.ndarray, col: ColumnParams, matrix: np.ndarray, *,
 
     from ionic_usd.column.shaft import shaft_radius_at
     from ionic_usd.evaluate.fit_shaft import fluted_section
+
     inv = np.linalg.inv(matrix)
     q = np.column_stack([points, np.ones(len(points))]) @ inv
     x, y, z = q[:, 0], q[:, 1], q[:, 2]
@@ -466,8 +562,7 @@ def scan_deviation(points: np.ndarray, col: ColumnParams, matrix: np.ndarray, *,
         xy = np.column_stack([x[in_shaft], -z[in_shaft]]) / k[:, None]
         dev[in_shaft] = PolylineIndex(sec).distances(xy) * k
         # the plain rings at both ends are circles, not fluted
-        ring = ((y[in_shaft] - y_shaft0 < sp.ring_bottom)
-                | (y_cap - y[in_shaft] < sp.ring_top))
+        ring = (y[in_shaft] - y_shaft0 < sp.ring_bottom) | (y_cap - y[in_shaft] < sp.ring_top)
         idx = np.flatnonzero(in_shaft)[ring]
         dev[idx] = np.abs(r[idx] - k[ring])
     # the capital's volutes hang below the shaft's top: the upper half of the shaft band is
@@ -484,7 +579,6 @@ def scan_deviation(points: np.ndarray, col: ColumnParams, matrix: np.ndarray, *,
             d[far] = tree.query(q_rest[far])[0]
         dev[rest] = np.minimum(dev[rest], d)
     return dev
-
 
 
 def heat_colours(dev: np.ndarray, vmax: float) -> np.ndarray:

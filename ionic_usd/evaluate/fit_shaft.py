@@ -59,8 +59,12 @@ def fit_shaft(
     if is_closed_curve(ref):
         from ionic_usd.errors import ParameterError
 
-        raise ParameterError("reference", "a closed curve", "a silhouette (r, y); fit a closed "
-                             "cross-section with fit_shaft_section (CLI: --section)")
+        raise ParameterError(
+            "reference",
+            "a closed curve",
+            "a silhouette (r, y); fit a closed "
+            "cross-section with fit_shaft_section (CLI: --section)",
+        )
     column = initial or portunus_column_params()
     if ref[0, 1] > ref[-1, 1]:
         ref = ref[::-1].copy()
@@ -79,13 +83,20 @@ def fit_shaft(
     x0[4] = float(ref[:, 1].min())
     x0[0] = float(np.clip(x0[0], 0.3 * rmax, 1.5 * rmax))
     x0[1] = float(np.clip(x0[1], 0.3 * rmax, 1.5 * rmax))
-    box = core.Box([0.3 * rmax, 0.3 * rmax, max(0.3 * x0[2], 1e-3), -0.2, x0[4] - 0.2 * span],
-               [1.5 * rmax, 1.5 * rmax, 1.5 * x0[2] + 1e-3, 0.2, x0[4] + 0.2 * span])
+    box = core.Box(
+        [0.3 * rmax, 0.3 * rmax, max(0.3 * x0[2], 1e-3), -0.2, x0[4] - 0.2 * span],
+        [1.5 * rmax, 1.5 * rmax, 1.5 * x0[2] + 1e-3, 0.2, x0[4] + 0.2 * span],
+    )
     ys01 = np.linspace(0.0, 1.0, samples)
 
     def shaft_of(x: np.ndarray) -> ShaftParams:
-        return dataclasses.replace(s0, bottom_radius=float(x[0]), top_radius=float(x[1]),
-                                   height=float(x[2]), entasis=float(x[3]))
+        return dataclasses.replace(
+            s0,
+            bottom_radius=float(x[0]),
+            top_radius=float(x[1]),
+            height=float(x[2]),
+            entasis=float(x[3]),
+        )
 
     def make(u: np.ndarray) -> np.ndarray | None:
         x = box.x(u)
@@ -101,35 +112,66 @@ def fit_shaft(
 
     obj = core.Objective(ref, measure)
     stages = core.Stages(make, obj, penalty=10.0 * (span + rmax))
-    stages.run(box.u(x0), seed=seed, global_stage=True, popsize=popsize, maxiter=maxiter,
-               polish_evals=polish_evals)
+    stages.run(
+        box.u(x0),
+        seed=seed,
+        global_stage=True,
+        popsize=popsize,
+        maxiter=maxiter,
+        polish_evals=polish_evals,
+    )
     x = box.x(stages.best_u)
     fitted = shaft_of(x)
-    col = dataclasses.replace(column, shaft=dataclasses.replace(
-        column.shaft, bottom_radius=fitted.bottom_radius, top_radius=fitted.top_radius,
-        height=fitted.height, entasis=fitted.entasis))
+    col = dataclasses.replace(
+        column,
+        shaft=dataclasses.replace(
+            column.shaft,
+            bottom_radius=fitted.bottom_radius,
+            top_radius=fitted.top_radius,
+            height=fitted.height,
+            entasis=fitted.entasis,
+        ),
+    )
 
     def section(c: ColumnParams) -> np.ndarray:
         return shaft_silhouette_section(c, samples=samples, ends=ends)
 
-    before, _, init_al = compare_aligned(ref, section(column), allow_mirror=False,
-                                           max_segment=core.report_spacing(ref))
-    after, al, fit_al = compare_aligned(ref, section(col), allow_mirror=False,
-                                           max_segment=core.report_spacing(ref))
+    before, _, init_al = compare_aligned(
+        ref, section(column), allow_mirror=False, max_segment=core.report_spacing(ref)
+    )
+    after, al, fit_al = compare_aligned(
+        ref, section(col), allow_mirror=False, max_segment=core.report_spacing(ref)
+    )
     names = ("bottom_radius", "top_radius", "height", "entasis", "y_bottom")
     hit = box.hit(stages.best_u, names)
-    notes = ["rings, flute-end ratio and flutes kept; r measured from the axis",
-             f"ends {'included' if ends else 'left out'}; shaft bottom at y = {x[4]:.6g} m "
-             "in the reference"]
+    notes = [
+        "rings, flute-end ratio and flutes kept; r measured from the axis",
+        f"ends {'included' if ends else 'left out'}; shaft bottom at y = {x[4]:.6g} m "
+        "in the reference",
+    ]
     if hit:
         notes.append("WARNING: ended on a search bound: " + ", ".join(hit))
-    return FitResult("shaft", fitted, col, before, after, measure, stages.iterations,
-                     obj.calls, time.perf_counter() - t0, ref, fit_al, init_al, al,
-                     tuple(notes), model="silhouette", bounds_hit=hit,
-                     diameter=2.0 * fitted.bottom_radius,
-                     values=dict(zip(names, (float(v) for v in x), strict=True)),
-                     spacing=core.report_spacing(ref))
-
+    return FitResult(
+        "shaft",
+        fitted,
+        col,
+        before,
+        after,
+        measure,
+        stages.iterations,
+        obj.calls,
+        time.perf_counter() - t0,
+        ref,
+        fit_al,
+        init_al,
+        al,
+        tuple(notes),
+        model="silhouette",
+        bounds_hit=hit,
+        diameter=2.0 * fitted.bottom_radius,
+        values=dict(zip(names, (float(v) for v in x), strict=True)),
+        spacing=core.report_spacing(ref),
+    )
 
 
 # -- cross-section --------------------------------------------------------------------------------
@@ -145,9 +187,16 @@ def is_closed_curve(curve: np.ndarray, *, rel_tol: float = 1e-3) -> bool:
     return len(c) >= 4 and float(np.linalg.norm(c[0] - c[-1])) <= rel_tol * size
 
 
-def fluted_section(radius: float, flutes: int, flute_angle: float, flute_depth: float,
-                   rotation: float = 0.0, centre=(0.0, 0.0), *, slices: int = 24
-                   ) -> np.ndarray:
+def fluted_section(
+    radius: float,
+    flutes: int,
+    flute_angle: float,
+    flute_depth: float,
+    rotation: float = 0.0,
+    centre=(0.0, 0.0),
+    *,
+    slices: int = 24,
+) -> np.ndarray:
     """Closed fluted cross-section, as :func:`ionic_usd.column.shaft.shaft_cross_section`.
 
     Each flute is half an ellipse whose chord spans ``flute_angle`` degrees; depth ratio
@@ -178,6 +227,7 @@ def fluted_section(radius: float, flutes: int, flute_angle: float, flute_depth: 
 def closed_like(reference: np.ndarray, curve: np.ndarray) -> np.ndarray:
     """A closed curve run the reference's way round, starting at the node nearest its start
     (the Fréchet measures of closed curves depend on both)."""
+
     def area(c: np.ndarray) -> float:
         return float(np.dot(c[:-1, 0], c[1:, 1]) - np.dot(c[1:, 0], c[:-1, 1]))
 
@@ -243,8 +293,9 @@ def fit_shaft_section(
     if not is_closed_curve(ref):
         from ionic_usd.errors import ParameterError
 
-        raise ParameterError("reference", "an open curve", "a closed cross-section (its last "
-                             "node on its first)")
+        raise ParameterError(
+            "reference", "an open curve", "a closed cross-section (its last node on its first)"
+        )
     column = initial or portunus_column_params()
     from ionic_usd.evaluate.reference import arc_centroid
 
@@ -255,10 +306,10 @@ def fit_shaft_section(
     period = 360.0 / e
     size = r0
     x0 = np.array([r0, 0.8 * period, 1.0, rot0, *c0])
-    box = core.Box([0.8 * r0, 0.2 * period, 0.05, rot0 - 0.5 * period, c0[0] - 0.1 * size,
-                c0[1] - 0.1 * size],
-               [1.2 * r0, 0.98 * period, 1.6, rot0 + 0.5 * period, c0[0] + 0.1 * size,
-                c0[1] + 0.1 * size])
+    box = core.Box(
+        [0.8 * r0, 0.2 * period, 0.05, rot0 - 0.5 * period, c0[0] - 0.1 * size, c0[1] - 0.1 * size],
+        [1.2 * r0, 0.98 * period, 1.6, rot0 + 0.5 * period, c0[0] + 0.1 * size, c0[1] + 0.1 * size],
+    )
     names = ("radius", "flute_angle", "flute_depth", "rotation_deg", "centre_x", "centre_y")
 
     def make(u: np.ndarray) -> np.ndarray | None:
@@ -267,17 +318,30 @@ def fit_shaft_section(
 
     obj = core.Objective(ref, measure)
     stages = core.Stages(make, obj, penalty=10.0 * size)
-    stages.run(box.u(x0), seed=seed, global_stage=True, popsize=popsize, maxiter=maxiter,
-               polish_evals=polish_evals)
+    stages.run(
+        box.u(x0),
+        seed=seed,
+        global_stage=True,
+        popsize=popsize,
+        maxiter=maxiter,
+        polish_evals=polish_evals,
+    )
     x = box.x(stages.best_u)
     hit = box.hit(stages.best_u, names)
     s0 = column.shaft
-    notes = [f"{e} flutes ({'given' if flutes is not None else 'strongest harmonic'}); "
-             "radius, flute angle, depth, rotation and centre fitted"]
+    notes = [
+        f"{e} flutes ({'given' if flutes is not None else 'strongest harmonic'}); "
+        "radius, flute angle, depth, rotation and centre fitted"
+    ]
     try:
-        shaft = dataclasses.replace(s0, bottom_radius=float(x[0]),
-                                    top_radius=float(x[0]) * s0.top_radius / s0.bottom_radius,
-                                    flutes=e, flute_angle=float(x[1]), flute_depth=float(x[2]))
+        shaft = dataclasses.replace(
+            s0,
+            bottom_radius=float(x[0]),
+            top_radius=float(x[0]) * s0.top_radius / s0.bottom_radius,
+            flutes=e,
+            flute_angle=float(x[1]),
+            flute_depth=float(x[2]),
+        )
         col = dataclasses.replace(column, shaft=shaft)
         params = col.shaft_params()
     except IonicError as exc:
@@ -293,14 +357,31 @@ def fit_shaft_section(
     fine = fluted_section(x[0], e, x[1], x[2], x[3], x[4:6], slices=48)
     fitted = closed_like(ref, fine)
     after = compare(densify(ref, h), densify(fitted, h))
-    start = closed_like(ref, fluted_section(x0[0], e, x0[1], x0[2], x0[3], x0[4:6],
-                                             slices=48))
+    start = closed_like(ref, fluted_section(x0[0], e, x0[1], x0[2], x0[3], x0[4:6], slices=48))
     before = compare(densify(ref, h), densify(start, h))
-    al = Alignment((float(x[4]), float(x[5])), False, before.hausdorff, after.hausdorff,
-                   float(x[3]))
+    al = Alignment(
+        (float(x[4]), float(x[5])), False, before.hausdorff, after.hausdorff, float(x[3])
+    )
     values = dict(zip(names, (float(v) for v in x), strict=True))
     values["flutes"] = float(e)
-    return FitResult("shaft", params, col, before, after, measure, stages.iterations, obj.calls,
-                     time.perf_counter() - t0, ref, fitted, start, al, tuple(notes),
-                     model="section", bounds_hit=hit, diameter=2.0 * float(x[0]),
-                     values=values, spacing=h)
+    return FitResult(
+        "shaft",
+        params,
+        col,
+        before,
+        after,
+        measure,
+        stages.iterations,
+        obj.calls,
+        time.perf_counter() - t0,
+        ref,
+        fitted,
+        start,
+        al,
+        tuple(notes),
+        model="section",
+        bounds_hit=hit,
+        diameter=2.0 * float(x[0]),
+        values=values,
+        spacing=h,
+    )

@@ -89,13 +89,16 @@ class _Model:
         self.name = name
         base = v0.with_(volute_model=name)
         if name == "centred_arcs" and v0.volute_model != name:
-            base = base.with_(capital_circle_radius=v0.capital_spiral_radius / 9.0,
-                              arc_square=v0.capital_spiral_radius * 4.0 / 33.0,
-                              arc_ratio=1.0 / 3.0)
+            base = base.with_(
+                capital_circle_radius=v0.capital_spiral_radius / 9.0,
+                arc_square=v0.capital_spiral_radius * 4.0 / 33.0,
+                arc_ratio=1.0 / 3.0,
+            )
         turns = max(1.0, abs(reference_turns(ref)))
         # thin band while fitting: the outer edge does not depend on it, the validity checks do
-        shape = base.with_(start_angle=90.0, spiral_circuits=turns, min_thickness=0.0,
-                           thickness=1e-4)
+        shape = base.with_(
+            start_angle=90.0, spiral_circuits=turns, min_thickness=0.0, thickness=1e-4
+        )
         k = rms_radius(ref) / rms_radius(volute_curve(shape, 256))
         self.k, self.turns, self.v0 = k, turns, base
         if name == "log_spiral":
@@ -108,25 +111,39 @@ class _Model:
             lo = [x0[0] / 1.6, c - dc, d - dd, 0.0, max(1.0, turns - 0.6)]
             hi = [x0[0] * 1.6, c + dc, d + dd, 180.0, turns + 0.6]
         else:
-            self.names = ("eye_radius", "arc_square", "arc_ratio", "start_angle",
-                          "spiral_circuits")
-            self.shape = shape.with_(capital_circle_radius=shape.capital_circle_radius * k,
-                                     arc_square=shape.arc_square * k,
-                                     capital_spiral_radius=shape.capital_spiral_radius * k)
-            x0 = [self.shape.capital_circle_radius, self.shape.arc_square, shape.arc_ratio,
-                  90.0, turns]
+            self.names = ("eye_radius", "arc_square", "arc_ratio", "start_angle", "spiral_circuits")
+            self.shape = shape.with_(
+                capital_circle_radius=shape.capital_circle_radius * k,
+                arc_square=shape.arc_square * k,
+                capital_spiral_radius=shape.capital_spiral_radius * k,
+            )
+            x0 = [
+                self.shape.capital_circle_radius,
+                self.shape.arc_square,
+                shape.arc_ratio,
+                90.0,
+                turns,
+            ]
             lo = [x0[0] / 3.0, x0[1] / 2.0, 0.02, 0.0, max(1.0, turns - 0.6)]
             hi = [x0[0] * 3.0, x0[1] * 2.0, 2.0, 180.0, turns + 0.6]
         self.x0, self.lo, self.hi = np.array(x0), np.array(lo), np.array(hi)
 
     def params(self, x: np.ndarray) -> VoluteParams:
         if self.name == "log_spiral":
-            return self.shape.with_(capital_spiral_radius=float(x[0]), c=float(x[1]),
-                                    d=float(x[2]), start_angle=float(x[3]),
-                                    spiral_circuits=float(x[4]))
-        return self.shape.with_(capital_circle_radius=float(x[0]), arc_square=float(x[1]),
-                                arc_ratio=float(x[2]), start_angle=float(x[3]),
-                                spiral_circuits=float(x[4]))
+            return self.shape.with_(
+                capital_spiral_radius=float(x[0]),
+                c=float(x[1]),
+                d=float(x[2]),
+                start_angle=float(x[3]),
+                spiral_circuits=float(x[4]),
+            )
+        return self.shape.with_(
+            capital_circle_radius=float(x[0]),
+            arc_square=float(x[1]),
+            arc_ratio=float(x[2]),
+            start_angle=float(x[3]),
+            spiral_circuits=float(x[4]),
+        )
 
     def curve(self, x: np.ndarray, samples: int) -> np.ndarray | None:
         """The outer edge for parameters ``x`` without building (and validating) a
@@ -160,20 +177,35 @@ class _Model:
         for _ in range(12):
             try:
                 return fitted.with_(thickness=t, min_thickness=min(t_min, t)), (
-                    None if t == self.v0.thickness else f"band thickness reduced to {t:.4g}")
+                    None if t == self.v0.thickness else f"band thickness reduced to {t:.4g}"
+                )
             except IonicError:
                 t, t_min = 0.5 * t, 0.5 * t_min
         return fitted, "band thickness kept at 1e-4 spiral units (no wider band is valid)"
 
 
-def _fit_one(ref: np.ndarray, model: _Model, *, measure: str, samples: int, seed: int,
-             popsize: int, maxiter: int, polish_evals: int, allow_mirror: bool,
-             ) -> tuple[VoluteParams, np.ndarray, tuple[str, ...], dict[str, float], Alignment,
-                        np.ndarray, int, int]:
+def _fit_one(
+    ref: np.ndarray,
+    model: _Model,
+    *,
+    measure: str,
+    samples: int,
+    seed: int,
+    popsize: int,
+    maxiter: int,
+    polish_evals: int,
+    allow_mirror: bool,
+) -> tuple[
+    VoluteParams, np.ndarray, tuple[str, ...], dict[str, float], Alignment, np.ndarray, int, int
+]:
     first = volute_curve(model.params(model.x0), samples)
     # the pose of the scaled start: coarse copies are enough (the fit refines it)
-    _, how = align(resample(ref, count=96), resample(first, count=96),
-                   allow_mirror=allow_mirror, allow_rotation=True)
+    _, how = align(
+        resample(ref, count=96),
+        resample(first, count=96),
+        allow_mirror=allow_mirror,
+        allow_rotation=True,
+    )
     sign = -1.0 if how.mirrored else 1.0
     # a rotation of the model is exactly a change of its start angle and circuits (the θ
     # range turns with it), so the pose's rotation moves into those and is not fitted
@@ -189,8 +221,9 @@ def _fit_one(ref: np.ndarray, model: _Model, *, measure: str, samples: int, seed
     diag = float(np.linalg.norm(np.ptp(ref, axis=0)))
     t0 = np.asarray(how.translation)
     x0 = np.concatenate([model.x0, t0])
-    box = core.Box(np.concatenate([model.lo, t0 - 0.25 * diag]),
-               np.concatenate([model.hi, t0 + 0.25 * diag]))
+    box = core.Box(
+        np.concatenate([model.lo, t0 - 0.25 * diag]), np.concatenate([model.hi, t0 + 0.25 * diag])
+    )
     ref_o = orient_like(first + t0, ref)
 
     def make(u: np.ndarray) -> np.ndarray | None:
@@ -204,8 +237,14 @@ def _fit_one(ref: np.ndarray, model: _Model, *, measure: str, samples: int, seed
     # the objective on at most 400 reference nodes (arc-length resampled); reports use all
     obj = core.Objective(ref_o if len(ref_o) <= 400 else resample(ref_o, count=400), measure)
     stages = core.Stages(make, obj, penalty=10.0 * diag)
-    stages.run(box.u(x0), seed=seed, global_stage=True, popsize=popsize, maxiter=maxiter,
-               polish_evals=polish_evals)
+    stages.run(
+        box.u(x0),
+        seed=seed,
+        global_stage=True,
+        popsize=popsize,
+        maxiter=maxiter,
+        polish_evals=polish_evals,
+    )
     x = box.x(stages.best_u)
     names = (*model.names, "translation_x", "translation_y")
     hit = box.hit(stages.best_u, names)
@@ -281,18 +320,31 @@ def fit_volute(
             t0 = time.perf_counter()
             model = _Model(name, v0, ref)
             fitted, ref_o, hit, values, pose, start, iters, calls = _fit_one(
-                ref, model, measure=measure, samples=samples, seed=seed, popsize=popsize,
-                maxiter=maxiter, polish_evals=polish_evals, allow_mirror=allow_mirror)
+                ref,
+                model,
+                measure=measure,
+                samples=samples,
+                seed=seed,
+                popsize=popsize,
+                maxiter=maxiter,
+                polish_evals=polish_evals,
+                allow_mirror=allow_mirror,
+            )
             notes = []
             if name == "log_spiral":
-                notes.append("a, b held (the curve depends on R·a/b and R·d); R, c, d, start "
-                             "angle, circuits and the pose fitted")
+                notes.append(
+                    "a, b held (the curve depends on R·a/b and R·d); R, c, d, start "
+                    "angle, circuits and the pose fitted"
+                )
             else:
-                notes.append("eye radius, centres' square and ratio, start angle, turns and the "
-                             "pose fitted")
-            notes.append(f"start scaled ×{model.k:.4g} to the reference's size; "
-                         f"{model.turns:.3g} turns traced; rotation is the start angle and "
-                         "circuits (an exact equivalence)")
+                notes.append(
+                    "eye radius, centres' square and ratio, start angle, turns and the pose fitted"
+                )
+            notes.append(
+                f"start scaled ×{model.k:.4g} to the reference's size; "
+                f"{model.turns:.3g} turns traced; rotation is the start angle and "
+                "circuits (an exact equivalence)"
+            )
             fitted, thin = model.finish(fitted)
             if thin:
                 notes.append(thin)
@@ -309,23 +361,50 @@ def fit_volute(
             # at the top (θ ≡ 90°), as carved (the eye's size varies more between constructions)
             own = _rotate(volute_curve(fitted, 2048), 90.0 - math.degrees(fitted.theta_end))
             diameter = 18.0 / 8.0 * float(np.ptp(own[:, 1]))
-            notes.append(f"diameter estimate {diameter:.4g} m (Vitruvius: the volute is 8/18 D "
-                         "high)")
+            notes.append(
+                f"diameter estimate {diameter:.4g} m (Vitruvius: the volute is 8/18 D high)"
+            )
             col = dataclasses.replace(column, capital=column.capital.with_(volute=fitted))
             h = core.report_spacing(ref_o)
             init_al = orient_like(ref_o, start)
             before = compare(densify(ref_o, h), densify(init_al, h))
-            after, al, fit_al = compare_aligned(ref_o, pose.apply(volute_curve(fitted, samples)),
-                                                allow_mirror=False, max_segment=h)
-            al = Alignment(tuple(np.add(al.translation, pose.translation)), pose.mirrored,
-                           al.hausdorff_before, al.hausdorff_after, pose.rotation)
+            after, al, fit_al = compare_aligned(
+                ref_o, pose.apply(volute_curve(fitted, samples)), allow_mirror=False, max_segment=h
+            )
+            al = Alignment(
+                tuple(np.add(al.translation, pose.translation)),
+                pose.mirrored,
+                al.hausdorff_before,
+                al.hausdorff_after,
+                pose.rotation,
+            )
             values.update(mirrored=float(pose.mirrored))
-            results.append(FitResult(
-                "volute", fitted, col, before, after, measure, iters, calls,
-                time.perf_counter() - t0, ref_o, fit_al, init_al, al, tuple(notes), model=name,
-                bounds_hit=hit, diameter=diameter, values=values, spacing=h))
+            results.append(
+                FitResult(
+                    "volute",
+                    fitted,
+                    col,
+                    before,
+                    after,
+                    measure,
+                    iters,
+                    calls,
+                    time.perf_counter() - t0,
+                    ref_o,
+                    fit_al,
+                    init_al,
+                    al,
+                    tuple(notes),
+                    model=name,
+                    bounds_hit=hit,
+                    diameter=diameter,
+                    values=values,
+                    spacing=h,
+                )
+            )
             bar.update(1)
     results.sort(key=lambda r: getattr(r.after, measure))
     best = results[0]
-    return dataclasses.replace(best, alternatives=tuple(results[1:]),
-                               seconds=sum(r.seconds for r in results))
+    return dataclasses.replace(
+        best, alternatives=tuple(results[1:]), seconds=sum(r.seconds for r in results)
+    )

@@ -17,6 +17,7 @@ from ionic_usd.evaluate.polyline import as_curve_pair, densify_pair, two_way_dis
 
 __all__ = ["discrete_frechet_distance", "frechet_bisect", "frechet_distance"]
 
+
 # --------------------------------------------------------------------------------------------
 # Fréchet distances (numba kernels)
 # --------------------------------------------------------------------------------------------

@@ -25,7 +25,6 @@ and :func:`frechet_distance` (continuous, Alt–Godau). For any two polylines
 ``discrete_frechet >= frechet >= hausdorff_distance``.
 """
 
-
 from __future__ import annotations
 
 import math

@@ -286,8 +286,9 @@ def point_to_polyline_distances(points: np.ndarray, polyline: np.ndarray) -> np.
     return PolylineIndex(c).distances(p)
 
 
-def densify_pair(a: np.ndarray, b: np.ndarray,
-                 densify: float | None) -> tuple[np.ndarray, np.ndarray]:
+def densify_pair(
+    a: np.ndarray, b: np.ndarray, densify: float | None
+) -> tuple[np.ndarray, np.ndarray]:
     """Both curves through :func:`densify_curve` (unchanged when ``densify`` is None)."""
     if densify is None:
         return a, b

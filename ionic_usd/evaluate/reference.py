@@ -393,9 +393,15 @@ class _Brute:
         return closest_on_polyline(np.ascontiguousarray(points, dtype=np.float64), self.poly)[0]
 
 
-def _search(ref: np.ndarray, gen: np.ndarray, mirrored: bool, ang: float | None,
-            before: float, start: np.ndarray | None = None, maxiter: int = 800,
-            ) -> tuple[float, Alignment]:
+def _search(
+    ref: np.ndarray,
+    gen: np.ndarray,
+    mirrored: bool,
+    ang: float | None,
+    before: float,
+    start: np.ndarray | None = None,
+    maxiter: int = 800,
+) -> tuple[float, Alignment]:
     """Nelder–Mead on the Hausdorff distance over translation (and rotation if ``ang``)."""
     from scipy.optimize import minimize
 
@@ -422,8 +428,9 @@ def _search(ref: np.ndarray, gen: np.ndarray, mirrored: bool, ang: float | None,
     def cost(x: np.ndarray) -> float:
         rot, t = pose(x)
         # d(ref node, R g + t) = d(R^T (ref node - t), g): both indexes are built once
-        return float(max(ref_index.distances(g @ rot.T + t).max(),
-                         g_index.distances((ref - t) @ rot).max()))
+        return float(
+            max(ref_index.distances(g @ rot.T + t).max(), g_index.distances((ref - t) @ rot).max())
+        )
 
     if start is not None:
         starts = [start]
@@ -440,9 +447,17 @@ def _search(ref: np.ndarray, gen: np.ndarray, mirrored: bool, ang: float | None,
         span = float(np.linalg.norm(np.ptp(g, axis=0))) or 1.0
         steps[2] = min(math.degrees(step / span) * 2.0, 20.0)
     simplex = np.vstack([x0, x0 + np.diag(steps)])
-    res = minimize(cost, x0, method="Nelder-Mead", options={
-        "initial_simplex": simplex, "xatol": 1e-7 * span_r,
-        "fatol": 1e-9 * span_r, "maxiter": maxiter * len(x0)})
+    res = minimize(
+        cost,
+        x0,
+        method="Nelder-Mead",
+        options={
+            "initial_simplex": simplex,
+            "xatol": 1e-7 * span_r,
+            "fatol": 1e-9 * span_r,
+            "maxiter": maxiter * len(x0),
+        },
+    )
     x, fx = (res.x, float(res.fun)) if res.fun <= f0 else (x0, f0)
     rot, t = pose(x)
     deg = 0.0
@@ -452,8 +467,9 @@ def _search(ref: np.ndarray, gen: np.ndarray, mirrored: bool, ang: float | None,
     return fx, Alignment(tuple(float(v) for v in t), mirrored, before, max(fx, 0.0), deg)
 
 
-def _refine(ref: np.ndarray, gen: np.ndarray, before: float, rough: Alignment
-            ) -> tuple[np.ndarray, Alignment]:
+def _refine(
+    ref: np.ndarray, gen: np.ndarray, before: float, rough: Alignment
+) -> tuple[np.ndarray, Alignment]:
     """Polish a coarse pose on the full curves (translation and rotation)."""
     g = gen.copy()
     if rough.mirrored:
@@ -462,19 +478,31 @@ def _refine(ref: np.ndarray, gen: np.ndarray, before: float, rough: Alignment
     rot = _rot(rough.rotation)
     # translation t about the centroid that reproduces the rough pose: T = cg - R cg + t
     t = np.asarray(rough.translation) - (cg - rot @ cg)
-    fx, how = _search(ref, gen, rough.mirrored, rough.rotation, before,
-                      start=np.append(t, rough.rotation), maxiter=300)
+    fx, how = _search(
+        ref,
+        gen,
+        rough.mirrored,
+        rough.rotation,
+        before,
+        start=np.append(t, rough.rotation),
+        maxiter=300,
+    )
     if fx >= before:
         how = Alignment(tuple(0.0 for _ in range(ref.shape[1])), False, before, before)
     aligned = how.apply(gen)
     after = hausdorff_distance(ref, aligned)
-    return aligned, Alignment(how.translation, how.mirrored, before, min(after, before),
-                              how.rotation)
+    return aligned, Alignment(
+        how.translation, how.mirrored, before, min(after, before), how.rotation
+    )
 
 
 def align(
-    reference: np.ndarray, generated: np.ndarray, *, allow_mirror: bool = False,
-    allow_rotation: bool = False, rotation_starts: int = 8,
+    reference: np.ndarray,
+    generated: np.ndarray,
+    *,
+    allow_mirror: bool = False,
+    allow_rotation: bool = False,
+    rotation_starts: int = 8,
 ) -> tuple[np.ndarray, Alignment]:
     """Move the generated curve onto the reference (translation; optionally mirror, rotation).
 
@@ -522,8 +550,7 @@ def align(
         return _refine(ref, gen, before, rough[1])
     best: tuple[float, Alignment | None] = (before, None)
     for mirrored in (False, True) if allow_mirror else (False,):
-        angles = (np.arange(rotation_starts) * 360.0 / rotation_starts if allow_rotation
-                  else [None])
+        angles = np.arange(rotation_starts) * 360.0 / rotation_starts if allow_rotation else [None]
         for ang in angles:
             fx, how = _search(ref, gen, mirrored, ang, before)
             if fx < best[0]:

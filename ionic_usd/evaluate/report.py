@@ -44,8 +44,15 @@ from ionic_usd.evaluate.metrics import CurveComparison, point_to_polyline_distan
 from ionic_usd.evaluate.polyline import as_curve
 from ionic_usd.evaluate.reference import Alignment
 
-__all__ = ["SCHEMA", "format_table", "plot_overlay", "write_atomically", "write_json",
-           "write_fit_json", "write_curves_csv"]
+__all__ = [
+    "SCHEMA",
+    "format_table",
+    "plot_overlay",
+    "write_atomically",
+    "write_json",
+    "write_fit_json",
+    "write_curves_csv",
+]
 
 SCHEMA = "ionic_usd.evaluate/1"
 
@@ -279,7 +286,10 @@ def plot_overlay(
 
 
 def write_fit_json(
-    path: str | Path, fits: Mapping[str, Any], *, metadata: Mapping[str, Any] | None = None,
+    path: str | Path,
+    fits: Mapping[str, Any],
+    *,
+    metadata: Mapping[str, Any] | None = None,
     extra: Mapping[str, Any] | None = None,
 ) -> Path:
     """Write fits as JSON (schema ``ionic_usd.evaluate/1``): per part its
@@ -294,8 +304,11 @@ def write_fit_json(
     metadata : stored under ``"metadata"``
     extra : top-level keys added as they are (e.g. a scan's ``deviation``)
     """
-    doc: dict[str, Any] = {"schema": SCHEMA, "unit": "m",
-                           "parts": {str(k): f.as_dict() for k, f in fits.items()}}
+    doc: dict[str, Any] = {
+        "schema": SCHEMA,
+        "unit": "m",
+        "parts": {str(k): f.as_dict() for k, f in fits.items()},
+    }
     doc.update(dict(extra or {}))
     doc["metadata"] = dict(metadata or {})
     try:
@@ -317,7 +330,8 @@ def write_curves_csv(path: str | Path, curves: Mapping[str, Mapping[str, np.ndar
     for part, named in curves.items():
         for name, c in named.items():
             c = as_curve(c, f"{part}/{name}", min_nodes=1)
-            lines.extend(f"{part},{name},{i},{x!r},{y!r}" for i, (x, y) in
-                         enumerate(c[:, :2].tolist()))
+            lines.extend(
+                f"{part},{name},{i},{x!r},{y!r}" for i, (x, y) in enumerate(c[:, :2].tolist())
+            )
     text = "\n".join(lines) + "\n"
     return write_atomically(path, lambda fh: fh.write(text.encode("utf-8")))

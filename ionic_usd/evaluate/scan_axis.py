@@ -53,8 +53,9 @@ def _basis(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return u, np.cross(a, u)
 
 
-def _refine(a0: np.ndarray, p: np.ndarray, n: np.ndarray, size: float
-            ) -> tuple[np.ndarray, np.ndarray, float]:
+def _refine(
+    a0: np.ndarray, p: np.ndarray, n: np.ndarray, size: float
+) -> tuple[np.ndarray, np.ndarray, float]:
     from scipy.optimize import least_squares
 
     u, v = _basis(a0)
@@ -79,14 +80,16 @@ def _refine(a0: np.ndarray, p: np.ndarray, n: np.ndarray, size: float
         a, c = unpack(x)
         return _line_residuals(a, c, pk, nk)
 
-    sol = least_squares(res, np.array([0.0, 0.0, c2[0], c2[1]]), loss="soft_l1",
-                        f_scale=0.01 * size, max_nfev=200)
+    sol = least_squares(
+        res, np.array([0.0, 0.0, c2[0], c2[1]]), loss="soft_l1", f_scale=0.01 * size, max_nfev=200
+    )
     a, c = unpack(sol.x)
     return a, c, float(np.median(res(sol.x)))
 
 
-def estimate_axis(points: np.ndarray, *, max_points: int = 30_000, seed: int = 0
-                  ) -> tuple[np.ndarray, np.ndarray, float]:
+def estimate_axis(
+    points: np.ndarray, *, max_points: int = 30_000, seed: int = 0
+) -> tuple[np.ndarray, np.ndarray, float]:
     """The axis of a (fragment of a) column in a scan.
 
     Parameters
@@ -100,8 +103,11 @@ def estimate_axis(points: np.ndarray, *, max_points: int = 30_000, seed: int = 0
     residual : median distance (m) between the normal lines used and the axis
     """
     rng = np.random.default_rng(seed)
-    p = points if len(points) <= max_points else points[rng.choice(len(points), max_points,
-                                                                   replace=False)]
+    p = (
+        points
+        if len(points) <= max_points
+        else points[rng.choice(len(points), max_points, replace=False)]
+    )
     size = float(np.linalg.norm(np.ptp(p, axis=0)))
     n = normals(p)
     cands = [np.linalg.eigh(n.T @ n)[1][:, 0]]  # ⊥ most normals: a prism's direction
@@ -149,8 +155,7 @@ class ColumnFrame:
         return np.column_stack([d @ self.u, d @ self.v, d @ self.direction])
 
 
-def _bins(loc: np.ndarray, width: float) -> tuple[np.ndarray, np.ndarray, np.ndarray,
-                                                   np.ndarray]:
+def _bins(loc: np.ndarray, width: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     h = loc[:, 2]
     r = np.hypot(loc[:, 0], loc[:, 1])
     edges = np.arange(h.min(), h.max() + width, width)
@@ -162,12 +167,15 @@ def _bins(loc: np.ndarray, width: float) -> tuple[np.ndarray, np.ndarray, np.nda
     order = np.argsort(idx, kind="stable")
     splits = np.searchsorted(idx[order], np.arange(nb + 1))
     for b in range(nb):
-        sel = order[splits[b]:splits[b + 1]]
+        sel = order[splits[b] : splits[b + 1]]
         if len(sel) < 20:
             continue
         r95[b] = np.percentile(r[sel], 95)
-        sec = [np.percentile(r[sel][sector[sel] == s], 95) for s in range(8)
-               if np.count_nonzero(sector[sel] == s) >= 5]
+        sec = [
+            np.percentile(r[sel][sector[sel] == s], 95)
+            for s in range(8)
+            if np.count_nonzero(sector[sel] == s) >= 5
+        ]
         if len(sec) >= 3:
             asym[b] = max(sec) / max(min(sec), 1e-12)
     return edges, r95, asym, r
@@ -199,12 +207,12 @@ def find_parts(points: np.ndarray, direction: np.ndarray, point: np.ndarray) -> 
             if run is None:
                 continue
             i, j = run
-            asy = np.nanmedian(asym[i:j + 1]) if np.isfinite(asym[i:j + 1]).any() else 1.0
+            asy = np.nanmedian(asym[i : j + 1]) if np.isfinite(asym[i : j + 1]).any() else 1.0
             kinds[name] = ("capital" if asy > 1.25 else "base", (edges[i], edges[j + 1]))
         # a base belongs at the bottom, a capital at the top: flip once if they disagree
-        flip = (kinds.get("high", ("",))[0] == "base" and kinds.get("low", ("",))[0] != "base"
-                ) or (kinds.get("low", ("",))[0] == "capital"
-                      and kinds.get("high", ("",))[0] != "capital")
+        flip = (kinds.get("high", ("",))[0] == "base" and kinds.get("low", ("",))[0] != "base") or (
+            kinds.get("low", ("",))[0] == "capital" and kinds.get("high", ("",))[0] != "capital"
+        )
         if flip:
             a = -a
             continue
@@ -213,13 +221,13 @@ def find_parts(points: np.ndarray, direction: np.ndarray, point: np.ndarray) -> 
         nidx = np.flatnonzero(narrow)
         if len(nidx) >= 3:
             parts["shaft"] = (float(edges[nidx[0]]), float(edges[nidx[-1] + 1]))
-        return ColumnFrame(a, origin, u, v, parts, float(np.nanmedian(r95[narrow]))
-                           if narrow.any() else r_shaft)
+        return ColumnFrame(
+            a, origin, u, v, parts, float(np.nanmedian(r95[narrow])) if narrow.any() else r_shaft
+        )
     raise GeometryError("cannot orient the column: base and capital both at one end")
 
 
-def _end_run(mask: np.ndarray, ok: np.ndarray, *, from_start: bool
-             ) -> tuple[int, int] | None:
+def _end_run(mask: np.ndarray, ok: np.ndarray, *, from_start: bool) -> tuple[int, int] | None:
     """The run of True at one end of ``mask`` (a few False bins tolerated, empty bins —
     not ``ok`` — skipped), at least 2 long."""
     idx = np.arange(len(mask)) if from_start else np.arange(len(mask))[::-1]

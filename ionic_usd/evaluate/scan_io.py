@@ -38,7 +38,8 @@ def _need(module: str):
     except ImportError:
         raise ReferenceCurveError(
             f"reading this scan needs {module}: install the optional extra "
-            f"`pip install ionic_usd[scan]`") from None
+            f"`pip install ionic_usd[scan]`"
+        ) from None
 
 
 def _text_points(path: Path) -> np.ndarray:
@@ -57,8 +58,7 @@ def _text_points(path: Path) -> np.ndarray:
             except ValueError:
                 if not rows and k <= 2:
                     continue  # a header line
-                raise ReferenceCurveError(f"{path}:{k}: not three numbers: {line[:60]!r}"
-                                          ) from None
+                raise ReferenceCurveError(f"{path}:{k}: not three numbers: {line[:60]!r}") from None
             if len(vals) < 3:
                 raise ReferenceCurveError(f"{path}:{k}: fewer than three numbers")
             rows.append(vals)
@@ -101,8 +101,15 @@ def read_scan(path: str | Path, *, scale: float = 1.0) -> np.ndarray:
             pts = _text_points(path)
     except ReferenceCurveError:
         raise
-    except (OSError, ValueError, KeyError, IndexError, TypeError, AttributeError,
-            UnicodeDecodeError) as exc:
+    except (
+        OSError,
+        ValueError,
+        KeyError,
+        IndexError,
+        TypeError,
+        AttributeError,
+        UnicodeDecodeError,
+    ) as exc:
         raise ReferenceCurveError(f"{path}: cannot read the scan ({exc})") from None
     if pts.ndim != 2 or pts.shape[1] != 3 or len(pts) < 100:
         raise ReferenceCurveError(f"{path}: a scan needs at least 100 points (x, y, z)")
@@ -111,8 +118,9 @@ def read_scan(path: str | Path, *, scale: float = 1.0) -> np.ndarray:
     return pts * scale
 
 
-def sample_surface(points: np.ndarray, triangles: np.ndarray, n: int, *,
-                   seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+def sample_surface(
+    points: np.ndarray, triangles: np.ndarray, n: int, *, seed: int = 0
+) -> tuple[np.ndarray, np.ndarray]:
     """Points spread evenly by area over a triangle mesh (a synthetic scan).
 
     Parameters
@@ -138,9 +146,15 @@ def sample_surface(points: np.ndarray, triangles: np.ndarray, n: int, *,
 
 
 def synthetic_scan(
-    meshes: dict, n: int = 30_000, *, noise: float = 0.0005,
-    missing_sector: tuple[float, float] | None = (40.0, 100.0), holes: int = 5,
-    hole_radius: float = 0.1, y_range: tuple[float, float] | None = None, seed: int = 0,
+    meshes: dict,
+    n: int = 30_000,
+    *,
+    noise: float = 0.0005,
+    missing_sector: tuple[float, float] | None = (40.0, 100.0),
+    holes: int = 5,
+    hole_radius: float = 0.1,
+    y_range: tuple[float, float] | None = None,
+    seed: int = 0,
     hidden: tuple[tuple[float, float], ...] = (),
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """A scan-like point set of meshes in column coordinates (Y up), in a random pose.

@@ -27,8 +27,15 @@ def to_column(points: np.ndarray, matrix: np.ndarray) -> np.ndarray:
     return (np.asarray(points) - matrix[3, :3]) @ np.linalg.inv(matrix[:3, :3])
 
 
-def base_meridian(col_pts: np.ndarray, y0: float, y1: float, *, half_angle: float = 6.0,
-                  width: float | None = None, min_points: int = 4) -> np.ndarray | None:
+def base_meridian(
+    col_pts: np.ndarray,
+    y0: float,
+    y1: float,
+    *,
+    half_angle: float = 6.0,
+    width: float | None = None,
+    min_points: int = 4,
+) -> np.ndarray | None:
     """The base's meridian (r, y) at the plinth's face normals (module docstring).
 
     Parameters

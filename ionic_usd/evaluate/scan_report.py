@@ -31,15 +31,26 @@ def plot_scan_fit(fit: ScanFit, path: Path) -> Path:
     p95 = float(np.percentile(d, 95))
     ax1.hist(np.minimum(d, 3 * p95 + 1e-9), bins=80, color="#4477aa")
     ax1.axvline(p95, color="#cc3311", lw=1, label=f"p95 {p95:.3g} mm")
-    ax1.axvline(float(np.sqrt(np.mean(d**2))), color="#228833", lw=1,
-                label=f"rms {float(np.sqrt(np.mean(d ** 2))):.3g} mm")
+    ax1.axvline(
+        float(np.sqrt(np.mean(d**2))),
+        color="#228833",
+        lw=1,
+        label=f"rms {float(np.sqrt(np.mean(d**2))):.3g} mm",
+    )
     ax1.set_xlabel("distance from the fitted column (mm; last bin: ≥ 3·p95)")
     ax1.set_ylabel("points")
     ax1.set_title(f"deviation of {len(d):,} scan points (max {d.max():.3g} mm)")
     ax1.legend(fontsize=8)
     s = fit.section
-    sec = fluted_section(s["radius"], fit.flutes, s["flute_angle"], s["flute_depth"],
-                         s["rotation_deg"], (s["centre_u"], s["centre_v"]), slices=32)
+    sec = fluted_section(
+        s["radius"],
+        fit.flutes,
+        s["flute_angle"],
+        s["flute_depth"],
+        s["rotation_deg"],
+        (s["centre_u"], s["centre_v"]),
+        slices=32,
+    )
     ax2.plot(fit.slab[:, 0], fit.slab[:, 1], ".", ms=1.5, color="#d4a500", label="scan slab")
     ax2.plot(sec[:, 0], sec[:, 1], "-", lw=0.8, color="#d62728", label="fitted section")
     ax2.set_aspect("equal")
@@ -50,8 +61,14 @@ def plot_scan_fit(fit: ScanFit, path: Path) -> Path:
     if fit.profile is not None and len(fit.profile):
         h0 = fit.frame.parts["base"][0]
         prof = base_section(fit.column)
-        ax3.plot(fit.profile[:, 0], fit.profile[:, 1] - h0, ".", ms=3, color="#d4a500",
-                 label="scan: outer radius per bin")
+        ax3.plot(
+            fit.profile[:, 0],
+            fit.profile[:, 1] - h0,
+            ".",
+            ms=3,
+            color="#d4a500",
+            label="scan: outer radius per bin",
+        )
         ax3.plot(prof[:, 0], prof[:, 1], "-", lw=1, color="#d62728", label="fitted base")
         ax3.set_aspect("equal")
         ax3.set_xlabel("r (m)")
@@ -68,8 +85,9 @@ def plot_scan_fit(fit: ScanFit, path: Path) -> Path:
     return write_atomically(path, write)
 
 
-def write_outputs(fit: ScanFit, points: np.ndarray, files: dict[str, Path], args: Any,
-                  summary: ScanSummary) -> None:
+def write_outputs(
+    fit: ScanFit, points: np.ndarray, files: dict[str, Path], args: Any, summary: ScanSummary
+) -> None:
     """Write every output of ``ionic-usd fit column`` (paths in ``files``; JSON at
     ``args.json``)."""
     from ionic_usd.column.column import COLUMN_DOCS, build_column, column_params_to_tables
@@ -79,23 +97,42 @@ def write_outputs(fit: ScanFit, points: np.ndarray, files: dict[str, Path], args
     from ionic_usd.usd.scan import write_fitted_column, write_scan_points
 
     col = build_column(fit.column)
-    write_fitted_column(files["column"], col.parts(), fit.matrix, force=True,
-                        comment=f"ionic_usd column fitted to {Path(args.scan).name}, placed "
-                        "in the scan's frame")
+    write_fitted_column(
+        files["column"],
+        col.parts(),
+        fit.matrix,
+        force=True,
+        comment=f"ionic_usd column fitted to {Path(args.scan).name}, placed in the scan's frame",
+    )
     vmax = max(float(np.percentile(fit.deviation, 99)), 1e-4)
     width = 0.5 * float(np.linalg.norm(np.ptp(points, axis=0))) / max(len(points), 1) ** 0.5
-    write_scan_points(files["scan"], points, fit.deviation, heat_colours(fit.deviation, vmax),
-                      width=max(width, 1e-4), force=True)
+    write_scan_points(
+        files["scan"],
+        points,
+        fit.deviation,
+        heat_colours(fit.deviation, vmax),
+        width=max(width, 1e-4),
+        force=True,
+    )
     plot_scan_fit(fit, files["png"])
-    text = to_toml(column_params_to_tables(fit.column),
-                   {"column": COLUMN_DOCS, "shaft": SHAFT_PARAMETER_DOCS},
-                   header=f"ionic_usd column fitted to the scan {Path(args.scan).name}")
+    text = to_toml(
+        column_params_to_tables(fit.column),
+        {"column": COLUMN_DOCS, "shaft": SHAFT_PARAMETER_DOCS},
+        header=f"ionic_usd column fitted to the scan {Path(args.scan).name}",
+    )
     write_atomically(files["toml"], lambda fh: fh.write(text.encode("utf-8")))
     if args.json is not None:
         fits = {"base": fit.base} if fit.base is not None else {}
-        write_fit_json(args.json, fits, extra=summary,
-                       metadata={"scan": str(args.scan), "scale": args.scale,
-                                 "outputs": {k: str(v) for k, v in files.items()}})
+        write_fit_json(
+            args.json,
+            fits,
+            extra=summary,
+            metadata={
+                "scan": str(args.scan),
+                "scale": args.scale,
+                "outputs": {k: str(v) for k, v in files.items()},
+            },
+        )
 
 
 def cmd_fit_column(args) -> int:
@@ -112,9 +149,15 @@ def cmd_fit_column(args) -> int:
     out = Path(args.output)
     if out.exists() and not out.is_dir():
         raise ParameterError("-o", str(out), "a folder (created if missing)")
-    files = {k: out / n for k, n in (("column", "fitted_column.usda"),
-                                     ("scan", "scan_deviation.usdc"),
-                                     ("png", "scan_fit.png"), ("toml", "fitted_column.toml"))}
+    files = {
+        k: out / n
+        for k, n in (
+            ("column", "fitted_column.usda"),
+            ("scan", "scan_deviation.usdc"),
+            ("png", "scan_fit.png"),
+            ("toml", "fitted_column.toml"),
+        )
+    }
     clash = [str(p) for p in files.values() if p.exists()]
     if clash and not args.force:
         raise OutputExistsError(f"{clash[0]} exists; pass --force to overwrite it")
@@ -130,22 +173,33 @@ def cmd_fit_column(args) -> int:
     write_outputs(fit, pts, files, args, summary)
     dev = summary["deviation"]
     print(f"scan {args.scan}: {len(pts):,} points; parts {', '.join(summary['parts_found'])}")
-    print(f"  diameter {fit.diameter:.4f} m, {fit.flutes} flutes; axis "
-          f"{np.round(fit.frame.direction, 5).tolist()} through "
-          f"{np.round(fit.frame.origin, 4).tolist()}")
-    print(f"  deviation rms {dev['rms'] * 1000:.3g} mm, p95 {dev['p95'] * 1000:.3g} mm, max "
-          f"{dev['max'] * 1000:.3g} mm; {fit.seconds:.1f} s")
+    print(
+        f"  diameter {fit.diameter:.4f} m, {fit.flutes} flutes; axis "
+        f"{np.round(fit.frame.direction, 5).tolist()} through "
+        f"{np.round(fit.frame.origin, 4).tolist()}"
+    )
+    print(
+        f"  deviation rms {dev['rms'] * 1000:.3g} mm, p95 {dev['p95'] * 1000:.3g} mm, max "
+        f"{dev['max'] * 1000:.3g} mm; {fit.seconds:.1f} s"
+    )
     for part, rep in sorted(fit.fits.items()):
         d = rep["deviation"]
-        dev_txt = ("no points" if d["rms"] is None else
-                   f"rms {d['rms'] * 1000:.3g} mm, p95 {d['p95'] * 1000:.3g} mm")
+        dev_txt = (
+            "no points"
+            if d["rms"] is None
+            else f"rms {d['rms'] * 1000:.3g} mm, p95 {d['p95'] * 1000:.3g} mm"
+        )
         extra = ""
         if "measures" in rep:
             m = rep["measures"]
-            extra = (f"; meridian {m['hausdorff_pct']:.3f} % (paper's measure), "
-                     f"{m['discrete_frechet_pct']:.3f} % (discrete Fréchet)")
-        print(f"  {part}: {rep['status']} ({rep['model']}); {rep['points']:,} points, "
-              f"{dev_txt}{extra}")
+            extra = (
+                f"; meridian {m['hausdorff_pct']:.3f} % (paper's measure), "
+                f"{m['discrete_frechet_pct']:.3f} % (discrete Fréchet)"
+            )
+        print(
+            f"  {part}: {rep['status']} ({rep['model']}); {rep['points']:,} points, "
+            f"{dev_txt}{extra}"
+        )
     for note in fit.notes:
         print(f"  {note}")
     for p in files.values():

@@ -134,8 +134,12 @@ def shaft_cross_section_at(params: ColumnParams, y: float) -> np.ndarray:
     sp = params.shaft_params()
     y0 = params.base_params().height
     if not (math.isfinite(y) and y0 <= y <= y0 + sp.length):
-        raise ParameterError("y", y, f"a height within the shaft [{y0:g}, {y0 + sp.length:g}] m",
-                             context="shaft section")
+        raise ParameterError(
+            "y",
+            y,
+            f"a height within the shaft [{y0:g}, {y0 + sp.length:g}] m",
+            context="shaft section",
+        )
     poly = shaft_cross_section(sp, y - y0)
     return np.vstack([poly, poly[:1]])
 
@@ -243,8 +247,9 @@ def slice_mesh(
                 seen_edges.add((min(cur, nxt), max(cur, nxt)))
                 chain.append(nxt)
                 cur = nxt
-                nxt = next((w for w in nbrs[cur] if (min(cur, w), max(cur, w))
-                            not in seen_edges), None)
+                nxt = next(
+                    (w for w in nbrs[cur] if (min(cur, w), max(cur, w)) not in seen_edges), None
+                )
             chains.append(chain)
     out = []
     for chain in chains:
@@ -353,8 +358,11 @@ def _outer_chain(loop: np.ndarray) -> np.ndarray:
     pieces = []
     for k in range(4):
         i, j = corners[k], corners[(k + 1) % 4]
-        idx = np.arange(i, j + 1) if j > i else np.concatenate([np.arange(i, len(c)),
-                                                                 np.arange(0, j + 1)])
+        idx = (
+            np.arange(i, j + 1)
+            if j > i
+            else np.concatenate([np.arange(i, len(c)), np.arange(0, j + 1)])
+        )
         seg = c[idx]
         pieces.append((float(np.linalg.norm(np.diff(seg, axis=0), axis=1).sum()), seg))
     outer = max(pieces, key=lambda p: p[0])[1]
@@ -482,8 +490,9 @@ def section_from_usd(
     return chain
 
 
-def _united_band(loops: list[np.ndarray], pts: np.ndarray, params: ColumnParams | None
-                 ) -> tuple[list[np.ndarray], np.ndarray | None]:
+def _united_band(
+    loops: list[np.ndarray], pts: np.ndarray, params: ColumnParams | None
+) -> tuple[list[np.ndarray], np.ndarray | None]:
     """The front-right band's outline out of the section of a united capital.
 
     There the band's cut joins the abacus above it, the left volute's band (their margins
@@ -533,6 +542,7 @@ def pick_band(loops: list[np.ndarray]) -> np.ndarray | None:
     -------
     (k, 2) float, or None when no loop qualifies
     """
+
     def length(c: np.ndarray) -> float:
         return float(np.linalg.norm(np.diff(c, axis=0), axis=1).sum())
 
@@ -541,7 +551,5 @@ def pick_band(loops: list[np.ndarray]) -> np.ndarray | None:
         mid = 0.5 * (c[1:, 0] + c[:-1, 0])
         return float((mid * seg).sum() / max(seg.sum(), 1e-300))
 
-    cands = [c for c in loops
-             if len(c) >= 8 and np.allclose(c[0], c[-1]) and centre_x(c) > 0]
+    cands = [c for c in loops if len(c) >= 8 and np.allclose(c[0], c[-1]) and centre_x(c) > 0]
     return max(cands, key=length) if cands else None
-

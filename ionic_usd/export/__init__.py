@@ -59,8 +59,9 @@ def export_scene(
         from ionic_usd.usd.reader import read_scene
 
         s = read_scene(scene, variants=variants, lod=lod)
-        return ExportResult(out, fmt, write_gltf(s, out, gpu_instancing=gpu_instancing,
-                                                 compress=compress))
+        return ExportResult(
+            out, fmt, write_gltf(s, out, gpu_instancing=gpu_instancing, compress=compress)
+        )
     if fmt == "usdz":
         from ionic_usd.usd.package import write_usdz
 

@@ -38,8 +38,11 @@ def cmd_export(args: argparse.Namespace) -> int:
     scale = parse_scale(args.scale)
     fmt = Path(args.output).suffix.lower()
     if scale != 1.0 and fmt not in (".stl", ".3mf"):
-        raise ParameterError("--scale", args.scale, "1 unless the output is .stl or .3mf "
-                             "(glTF and usdz stay in metres)")
+        raise ParameterError(
+            "--scale",
+            args.scale,
+            "1 unless the output is .stl or .3mf (glTF and usdz stay in metres)",
+        )
     if args.compress != "none" and fmt not in (".glb", ".gltf"):
         raise ParameterError("--compress", args.compress, "none unless the output is glTF")
     if args.compress == "draco":
@@ -51,28 +54,45 @@ def cmd_export(args: argparse.Namespace) -> int:
         raise ParameterError("scene", str(args.scene), "an existing USD file")
     if Path(args.output).resolve() == Path(args.scene).resolve():
         raise ParameterError("--output", args.output, "a file other than the scene read")
-    res = export_scene(args.scene, args.output, variants=variants, lod=args.lod,
-                       gpu_instancing=not args.no_gpu_instancing,
-                       compress=None if args.compress == "none" else args.compress, scale=scale,
-                       force=args.force)
+    res = export_scene(
+        args.scene,
+        args.output,
+        variants=variants,
+        lod=args.lod,
+        gpu_instancing=not args.no_gpu_instancing,
+        compress=None if args.compress == "none" else args.compress,
+        scale=scale,
+        force=args.force,
+    )
     r: Any = res.report  # GltfReport, UsdzReport or SolidsReport, by res.format
     if res.format in ("glb", "gltf"):
-        print(f"wrote {res.path}: {r.bytes / 1e6:.2f} MB, {r.meshes} meshes, "
-              f"{r.materials} materials, {r.images} images, {r.triangles_drawn:,} triangles "
-              f"drawn ({r.triangles:,} stored), {r.draw_calls} draw calls, "
-              f"{r.gpu_instanced_meshes} GPU-instanced meshes ({r.seconds:.2f} s)")
+        print(
+            f"wrote {res.path}: {r.bytes / 1e6:.2f} MB, {r.meshes} meshes, "
+            f"{r.materials} materials, {r.images} images, {r.triangles_drawn:,} triangles "
+            f"drawn ({r.triangles:,} stored), {r.draw_calls} draw calls, "
+            f"{r.gpu_instanced_meshes} GPU-instanced meshes ({r.seconds:.2f} s)"
+        )
     elif res.format == "usdz":
-        print(f"wrote {res.path}: {r.bytes / 1e6:.2f} MB, {r.files} files packaged, "
-              f"{r.validation_errors} validation errors ({r.seconds:.2f} s)")
+        print(
+            f"wrote {res.path}: {r.bytes / 1e6:.2f} MB, {r.files} files packaged, "
+            f"{r.validation_errors} validation errors ({r.seconds:.2f} s)"
+        )
     else:
         for s in r.solids:
             ext = " x ".join(f"{1e3 * v:.1f}" for v in s.size)
-            print(f"  {s.name}: volume {1e9 * s.volume:,.0f} mm^3, size {ext} mm, "
-                  f"{'closed' if s.closed else 'NOT closed'}, {s.triangles:,} triangles"
-                  + (f", {s.non_manifold_edges} pinched edges (a part touches itself)"
-                     if s.non_manifold_edges else ""))
-        print(f"wrote {res.path}: {len(r.solids)} solids at scale {scale:g}, "
-              f"{'all closed' if r.all_closed else 'SOME NOT CLOSED'} ({r.seconds:.2f} s)")
+            print(
+                f"  {s.name}: volume {1e9 * s.volume:,.0f} mm^3, size {ext} mm, "
+                f"{'closed' if s.closed else 'NOT closed'}, {s.triangles:,} triangles"
+                + (
+                    f", {s.non_manifold_edges} pinched edges (a part touches itself)"
+                    if s.non_manifold_edges
+                    else ""
+                )
+            )
+        print(
+            f"wrote {res.path}: {len(r.solids)} solids at scale {scale:g}, "
+            f"{'all closed' if r.all_closed else 'SOME NOT CLOSED'} ({r.seconds:.2f} s)"
+        )
         if not r.all_closed:
             return 1
     return 0
@@ -85,7 +105,9 @@ def add_parser(sub: Any, parser_class: Any = None, *, arguments: bool = True) ->
     """
     del parser_class
     p = add_command(
-        sub, "export", cmd_export,
+        sub,
+        "export",
+        cmd_export,
         help="export a USD scene as glTF/GLB, usdz, STL or 3MF",
         description="Export SCENE (any scene ionic_usd writes: shaft, column, asset, temple, "
         "city) by the output's extension: .glb/.gltf (glTF 2.0 for game engines and the web: "
@@ -97,14 +119,27 @@ def add_parser(sub: Any, parser_class: Any = None, *, arguments: bool = True) ->
         return
     p.add_argument("scene", type=Path, help="USD file to export")
     add_output_flags(p, "output file: .glb, .gltf, .usdz, .stl or .3mf", required=True)
-    add_variant_flag(p, "select VALUE in variant set SET on every prim that has it "
-                     "(repeatable; default: the authored selections)")
+    add_variant_flag(
+        p,
+        "select VALUE in variant set SET on every prim that has it "
+        "(repeatable; default: the authored selections)",
+    )
     p.add_argument("--lod", help="level of detail (same as --variant lod=LOD)")
-    p.add_argument("--no-gpu-instancing", action="store_true",
-                   help="glTF: one plain node per copy instead of EXT_mesh_gpu_instancing "
-                   "(meshes are still shared)")
-    p.add_argument("--compress", choices=["none", "draco"], default="none",
-                   help="glTF: compress meshes with Draco (KHR_draco_mesh_compression, a "
-                   "required extension; needs DracoPy) [default none]")
-    p.add_argument("--scale", default="1",
-                   help="STL/3MF: model scale, a number or ratio (1:20 = 0.05) [default 1]")
+    p.add_argument(
+        "--no-gpu-instancing",
+        action="store_true",
+        help="glTF: one plain node per copy instead of EXT_mesh_gpu_instancing "
+        "(meshes are still shared)",
+    )
+    p.add_argument(
+        "--compress",
+        choices=["none", "draco"],
+        default="none",
+        help="glTF: compress meshes with Draco (KHR_draco_mesh_compression, a "
+        "required extension; needs DracoPy) [default none]",
+    )
+    p.add_argument(
+        "--scale",
+        default="1",
+        help="STL/3MF: model scale, a number or ratio (1:20 = 0.05) [default 1]",
+    )

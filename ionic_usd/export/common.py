@@ -9,8 +9,13 @@ from pathlib import Path
 from ionic_usd.errors import IonicError, ParameterError
 from ionic_usd.io import atomic_path, check_output_file
 
-__all__ = ["EXPORT_FORMATS", "MissingDependencyError", "check_export_path", "atomic_write",
-           "require"]
+__all__ = [
+    "EXPORT_FORMATS",
+    "MissingDependencyError",
+    "check_export_path",
+    "atomic_write",
+    "require",
+]
 
 
 class MissingDependencyError(IonicError, RuntimeError):
@@ -24,8 +29,10 @@ def require(module: str, what: str):
     try:
         return importlib.import_module(module)
     except ImportError:
-        raise MissingDependencyError(f"{what} needs the Python package {module!r}: "
-                                     "pip install 'ionic_usd[export]'") from None
+        raise MissingDependencyError(
+            f"{what} needs the Python package {module!r}: pip install 'ionic_usd[export]'"
+        ) from None
+
 
 EXPORT_FORMATS = (".glb", ".gltf", ".usdz", ".stl", ".3mf")
 
@@ -35,8 +42,9 @@ def check_export_path(path: str | os.PathLike, *, force: bool = False) -> Path:
     ``force`` (and the refusals of :func:`ionic_usd.io.check_output_file`)."""
     p = check_output_file(path, force=force, what="--output", suffixes=EXPORT_FORMATS)
     if not p.parent.is_dir():
-        raise ParameterError("--output", str(p), f"a file in an existing folder ({p.parent} "
-                             "does not exist)")
+        raise ParameterError(
+            "--output", str(p), f"a file in an existing folder ({p.parent} does not exist)"
+        )
     return p
 
 

@@ -24,8 +24,14 @@ POSITION_BITS, NORMAL_BITS, TEXCOORD_BITS = 16, 10, 12
 _FLOAT, _U16, _U32 = 5126, 5123, 5125
 
 
-def draco_primitive(b, pos: np.ndarray, nrm: np.ndarray, uv: np.ndarray | None,
-                    tan: np.ndarray | None, tris: np.ndarray):
+def draco_primitive(
+    b,
+    pos: np.ndarray,
+    nrm: np.ndarray,
+    uv: np.ndarray | None,
+    tan: np.ndarray | None,
+    tris: np.ndarray,
+):
     """Encode one primitive; return ``(attributes, indices accessor, extension dict)``.
 
     Parameters
@@ -40,8 +46,13 @@ def draco_primitive(b, pos: np.ndarray, nrm: np.ndarray, uv: np.ndarray | None,
         kw["tex_coord"] = uv.astype(np.float64)
         kw["tex_coord_quantization_bits"] = TEXCOORD_BITS
         kw["generic_attributes"] = {"TANGENT": tan.astype(np.float64)}  # type: ignore[union-attr]
-    data = DracoPy.encode(pos.astype(np.float64), tris.astype(np.uint32),
-                          quantization_bits=POSITION_BITS, compression_level=7, **kw)
+    data = DracoPy.encode(
+        pos.astype(np.float64),
+        tris.astype(np.uint32),
+        quantization_bits=POSITION_BITS,
+        compression_level=7,
+        **kw,
+    )
     dec = DracoPy.decode(data)
     ids: dict[str, int] = {}
     kinds = {0: "POSITION", 1: "NORMAL", 3: "TEXCOORD_0"}
@@ -60,8 +71,9 @@ def draco_primitive(b, pos: np.ndarray, nrm: np.ndarray, uv: np.ndarray | None,
         return len(b.doc.accessors) - 1
 
     pts = np.asarray(dec.points, dtype=np.float32)
-    attrs = g.Attributes(POSITION=acc("VEC3", lo=pts.min(axis=0), hi=pts.max(axis=0)),
-                         NORMAL=acc("VEC3"))
+    attrs = g.Attributes(
+        POSITION=acc("VEC3", lo=pts.min(axis=0), hi=pts.max(axis=0)), NORMAL=acc("VEC3")
+    )
     if uv is not None:
         attrs.TEXCOORD_0 = acc("VEC2")
         attrs.TANGENT = acc("VEC4")

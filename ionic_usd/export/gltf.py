@@ -45,8 +45,7 @@ __all__ = ["GltfReport", "write_gltf", "trs_decompose", "texture_transform", "sp
 
 _GPU = "EXT_mesh_gpu_instancing"
 _XF = "KHR_texture_transform"
-_WRAP = {"repeat": 10497, "clamp": 33071, "mirror": 33648, "black": 33071,
-         "useMetadata": 10497}
+_WRAP = {"repeat": 10497, "clamp": 33071, "mirror": 33648, "black": 33071, "useMetadata": 10497}
 _FLOAT, _U16, _U32 = 5126, 5123, 5125
 _ARRAY, _ELEMENTS = 34962, 34963
 
@@ -162,6 +161,7 @@ def _tangents(pos: np.ndarray, nrm: np.ndarray, st: np.ndarray, tris: np.ndarray
 def split_common(dicts: list[dict]) -> tuple[dict, list[dict]]:
     """``(common, residuals)``: what every dict holds (recursively, compared as JSON), and
     what is left of each. Paradata shared by all copies of a mesh is then stored once."""
+
     def j(v: object) -> str:
         return json.dumps(v, sort_keys=True, default=str)
 
@@ -219,8 +219,9 @@ class _Builder:
     def __init__(self) -> None:
         g = require("pygltflib", "glTF export")
         self.g = g
-        self.doc = g.GLTF2(asset=g.Asset(version="2.0",
-                                         generator=f"ionic_usd {__version__} (pygltflib)"))
+        self.doc = g.GLTF2(
+            asset=g.Asset(version="2.0", generator=f"ionic_usd {__version__} (pygltflib)")
+        )
         self.blob = bytearray()
         self.used: set[str] = set()
         self.required: set[str] = set()
@@ -233,19 +234,28 @@ class _Builder:
     def view(self, data: bytes, target: int | None = None) -> int:
         while len(self.blob) % 4:
             self.blob.append(0)
-        bv = self.g.BufferView(buffer=0, byteOffset=len(self.blob), byteLength=len(data),
-                               target=target)
+        bv = self.g.BufferView(
+            buffer=0, byteOffset=len(self.blob), byteLength=len(data), target=target
+        )
         self.blob.extend(data)
         self.doc.bufferViews.append(bv)
         return len(self.doc.bufferViews) - 1
 
-    def accessor(self, arr: np.ndarray, kind: str, target: int | None = None, *,
-                 bounds: bool = False) -> int:
-        ctype = {np.dtype(np.float32): _FLOAT, np.dtype(np.uint16): _U16,
-                 np.dtype(np.uint32): _U32}[arr.dtype]
+    def accessor(
+        self, arr: np.ndarray, kind: str, target: int | None = None, *, bounds: bool = False
+    ) -> int:
+        ctype = {
+            np.dtype(np.float32): _FLOAT,
+            np.dtype(np.uint16): _U16,
+            np.dtype(np.uint32): _U32,
+        }[arr.dtype]
         arr = np.ascontiguousarray(arr)
-        acc = self.g.Accessor(bufferView=self.view(arr.tobytes(), target), componentType=ctype,
-                              count=len(arr), type=kind)
+        acc = self.g.Accessor(
+            bufferView=self.view(arr.tobytes(), target),
+            componentType=ctype,
+            count=len(arr),
+            type=kind,
+        )
         if bounds:
             flat = arr.reshape(len(arr), -1)
             acc.min = [float(x) for x in flat.min(axis=0)]
@@ -257,21 +267,22 @@ class _Builder:
     def image(self, data: bytes, mime: str, name: str) -> int:
         h = hashlib.blake2b(data, digest_size=16).hexdigest()
         if h not in self._images:
-            self.doc.images.append(self.g.Image(bufferView=self.view(data), mimeType=mime,
-                                                name=name))
+            self.doc.images.append(
+                self.g.Image(bufferView=self.view(data), mimeType=mime, name=name)
+            )
             self._images[h] = len(self.doc.images) - 1
         return self._images[h]
 
     def texture_info(self, tex: TextureRef, image: int, normal: bool = False):
         skey = (_WRAP.get(tex.wrap_s, 10497), _WRAP.get(tex.wrap_t, 10497))
         if skey not in self._samplers:
-            self.doc.samplers.append(self.g.Sampler(magFilter=9729, minFilter=9987,
-                                                    wrapS=skey[0], wrapT=skey[1]))
+            self.doc.samplers.append(
+                self.g.Sampler(magFilter=9729, minFilter=9987, wrapS=skey[0], wrapT=skey[1])
+            )
             self._samplers[skey] = len(self.doc.samplers) - 1
         tkey = (image, skey)
         if tkey not in self._textures:
-            self.doc.textures.append(self.g.Texture(source=image,
-                                                    sampler=self._samplers[skey]))
+            self.doc.textures.append(self.g.Texture(source=image, sampler=self._samplers[skey]))
             self._textures[tkey] = len(self.doc.textures) - 1
         cls = self.g.NormalMaterialTexture if normal else self.g.TextureInfo
         info = cls(index=self._textures[tkey])
@@ -349,8 +360,12 @@ def _channel(px: np.ndarray, ch: str) -> np.ndarray:
 def _material(b: _Builder, mat: MaterialData, double_sided: bool) -> int:
     g = b.g
     pbr = g.PbrMetallicRoughness()
-    out = g.Material(name=mat.name, pbrMetallicRoughness=pbr, doubleSided=double_sided,
-                     extras={"usdPath": mat.path})
+    out = g.Material(
+        name=mat.name,
+        pbrMetallicRoughness=pbr,
+        doubleSided=double_sided,
+        extras={"usdPath": mat.path},
+    )
     alpha = float(np.clip(mat.opacity, 0.0, 1.0))
     if mat.diffuse_texture is not None:
         t = mat.diffuse_texture
@@ -369,8 +384,9 @@ def _material(b: _Builder, mat: MaterialData, double_sided: bool) -> int:
         ref = rt if rt is not None else mt
         assert ref is not None  # one of the two, by the test above
         name = Path(ref.path).stem + "_metallicRoughness"
-        pbr.metallicRoughnessTexture = b.texture_info(ref, b.image(b._packed[key], "image/png",
-                                                                   name))
+        pbr.metallicRoughnessTexture = b.texture_info(
+            ref, b.image(b._packed[key], "image/png", name)
+        )
         pbr.roughnessFactor = 1.0 if rt is not None else float(mat.roughness)
         pbr.metallicFactor = 1.0 if mt is not None else float(mat.metallic)
     else:
@@ -384,8 +400,7 @@ def _material(b: _Builder, mat: MaterialData, double_sided: bool) -> int:
             data, mime = _png_bytes(px), "image/png"
         else:
             data, mime = _file_image(nt.path)
-        out.normalTexture = b.texture_info(nt, b.image(data, mime, Path(nt.path).stem),
-                                           normal=True)
+        out.normalTexture = b.texture_info(nt, b.image(data, mime, Path(nt.path).stem), normal=True)
     if any(c > 0 for c in mat.emissive):
         out.emissiveFactor = [float(np.clip(c, 0, 1)) for c in mat.emissive]
     b.doc.materials.append(out)
@@ -402,9 +417,11 @@ def _pack_metallic_roughness(rt: TextureRef | None, mt: TextureRef | None) -> by
             imgs[name] = np.clip(_channel(px, ch) * abs(t.scale[0]) + t.bias[0], 0.0, 1.0)
     shapes = {v.shape for v in imgs.values()}
     if len(shapes) > 1:
-        raise TextureExportError("the roughness and metallic maps differ in size "
-                                 f"({' vs '.join(str(s) for s in shapes)}); glTF packs them "
-                                 "into one image")
+        raise TextureExportError(
+            "the roughness and metallic maps differ in size "
+            f"({' vs '.join(str(s) for s in shapes)}); glTF packs them "
+            "into one image"
+        )
     shape = next(iter(shapes))
     px = np.ones((*shape, 3), dtype=np.float32)
     px[:, :, 1] = imgs.get("r", 1.0)
@@ -456,20 +473,23 @@ def write_gltf(
             from ionic_usd.export.draco import DRACO, draco_primitive  # noqa: PLC0415
 
             attrs, indices, ext, _ = draco_primitive(b, pos, nrm, uv, tan, tris)
-            prim = g.Primitive(attributes=attrs, mode=4, indices=indices,
-                               extensions={DRACO: ext})
+            prim = g.Primitive(attributes=attrs, mode=4, indices=indices, extensions={DRACO: ext})
             b.used.add(DRACO)
             b.required.add(DRACO)
         else:
-            attrs = g.Attributes(POSITION=b.accessor(pos, "VEC3", _ARRAY, bounds=True),
-                                 NORMAL=b.accessor(nrm, "VEC3", _ARRAY))
+            attrs = g.Attributes(
+                POSITION=b.accessor(pos, "VEC3", _ARRAY, bounds=True),
+                NORMAL=b.accessor(nrm, "VEC3", _ARRAY),
+            )
             if uv is not None:
                 attrs.TEXCOORD_0 = b.accessor(uv, "VEC2", _ARRAY)
                 attrs.TANGENT = b.accessor(tan, "VEC4", _ARRAY)
             itype = np.uint16 if len(pos) < 65536 else np.uint32
-            prim = g.Primitive(attributes=attrs, mode=4,
-                               indices=b.accessor(tris.reshape(-1).astype(itype), "SCALAR",
-                                                  _ELEMENTS))
+            prim = g.Primitive(
+                attributes=attrs,
+                mode=4,
+                indices=b.accessor(tris.reshape(-1).astype(itype), "SCALAR", _ELEMENTS),
+            )
         if m.material is not None and m.material in scene.materials:
             mk = (m.material, m.double_sided)
             if mk not in mat_index:
@@ -499,11 +519,16 @@ def write_gltf(
             r_arr = np.array([t[1] for t in trs], dtype=np.float32)
             s_arr = np.array([t[2] for t in trs], dtype=np.float32)
             r_arr /= np.linalg.norm(r_arr, axis=1, keepdims=True)
-            ext = {"attributes": {"TRANSLATION": b.accessor(t_arr, "VEC3"),
-                                  "ROTATION": b.accessor(r_arr, "VEC4"),
-                                  "SCALE": b.accessor(s_arr, "VEC3")}}
-            node = g.Node(name=name, mesh=mi, extensions={_GPU: ext},
-                          extras={**common, "instances": each})
+            ext = {
+                "attributes": {
+                    "TRANSLATION": b.accessor(t_arr, "VEC3"),
+                    "ROTATION": b.accessor(r_arr, "VEC4"),
+                    "SCALE": b.accessor(s_arr, "VEC3"),
+                }
+            }
+            node = g.Node(
+                name=name, mesh=mi, extensions={_GPU: ext}, extras={**common, "instances": each}
+            )
             b.used.add(_GPU)
             b.doc.nodes.append(node)
             roots.append(len(b.doc.nodes) - 1)
@@ -521,8 +546,9 @@ def write_gltf(
             draws += 1
             instances += int(p.instanced)
         if len(children) > 1:  # one group node per shared mesh, holding the common paradata
-            b.doc.nodes.append(g.Node(name=f"{name} x{len(children)}", children=children,
-                                      extras=common))
+            b.doc.nodes.append(
+                g.Node(name=f"{name} x{len(children)}", children=children, extras=common)
+            )
             roots.append(len(b.doc.nodes) - 1)
         else:
             roots.extend(children)
@@ -530,10 +556,17 @@ def write_gltf(
         raise GeometryError(f"{scene.source}: nothing to export (no triangles)")
     root_name = Path(scene.source).stem
     b.doc.nodes.append(g.Node(name=root_name, children=roots))
-    b.doc.scenes.append(g.Scene(name=root_name, nodes=[len(b.doc.nodes) - 1],
-                                extras={"source": Path(scene.source).name,
-                                        **scene.paradata,
-                                        "requestedVariants": dict(scene.variants)}))
+    b.doc.scenes.append(
+        g.Scene(
+            name=root_name,
+            nodes=[len(b.doc.nodes) - 1],
+            extras={
+                "source": Path(scene.source).name,
+                **scene.paradata,
+                "requestedVariants": dict(scene.variants),
+            },
+        )
+    )
     b.doc.scene = 0
     b.doc.extensionsUsed = sorted(b.used)
     if b.required:
@@ -554,6 +587,17 @@ def write_gltf(
             tmp.write_text(b.doc.gltf_to_json())
 
     atomic_write(path, write)
-    return GltfReport(path, path.stat().st_size, len(b.doc.meshes), len(b.doc.nodes),
-                      len(b.doc.materials), len(b.doc.images), tris_total, drawn, draws,
-                      gpu_meshes, instances, time.perf_counter() - t0)
+    return GltfReport(
+        path,
+        path.stat().st_size,
+        len(b.doc.meshes),
+        len(b.doc.nodes),
+        len(b.doc.materials),
+        len(b.doc.images),
+        tris_total,
+        drawn,
+        draws,
+        gpu_meshes,
+        instances,
+        time.perf_counter() - t0,
+    )

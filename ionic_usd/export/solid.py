@@ -27,8 +27,17 @@ from ionic_usd.export.common import atomic_write, require
 from ionic_usd.geometry.mesh import triangulate_fan
 from ionic_usd.usd.reader import Scene
 
-__all__ = ["Solid", "SolidReport", "SolidsReport", "scene_solids", "check_solid",
-           "write_solids", "write_stl", "write_3mf", "read_stl"]
+__all__ = [
+    "Solid",
+    "SolidReport",
+    "SolidsReport",
+    "scene_solids",
+    "check_solid",
+    "write_solids",
+    "write_stl",
+    "write_3mf",
+    "read_stl",
+]
 
 _Y_TO_Z_UP = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])  # row vectors
 
@@ -90,15 +99,19 @@ def scene_solids(scene: Scene, *, scale: float = 1.0) -> list[Solid]:
             m = scene.meshes[p.mesh]
             if p.mesh not in shells:
                 tris = triangulate_fan(m.face_vertex_counts, m.face_vertex_indices)
-                mesh = m3.Mesh(vert_properties=np.ascontiguousarray(m.points, np.float32),
-                               tri_verts=np.ascontiguousarray(tris, np.uint32))
+                mesh = m3.Mesh(
+                    vert_properties=np.ascontiguousarray(m.points, np.float32),
+                    tri_verts=np.ascontiguousarray(tris, np.uint32),
+                )
                 man = m3.Manifold(mesh)
                 if man.status() != m3.Error.NoError:
                     mesh.merge()  # weld coincident vertices, then try again
                     man = m3.Manifold(mesh)
                 if man.status() != m3.Error.NoError:
-                    raise GeometryError(f"{m.source}: not a closed manifold shell "
-                                        f"({man.status().name}); cannot make a printable solid")
+                    raise GeometryError(
+                        f"{m.source}: not a closed manifold shell "
+                        f"({man.status().name}); cannot make a printable solid"
+                    )
                 shells[p.mesh] = man
             mat = p.matrix @ conv  # row-vector; Manifold.transform takes a column-vector 3x4
             parts.append(shells[p.mesh].transform(np.ascontiguousarray(mat.T[:3, :4])))
@@ -135,8 +148,7 @@ def check_solid(vertices: np.ndarray, triangles: np.ndarray) -> tuple[bool, int,
     b = np.concatenate([t[:, 1], t[:, 2], t[:, 0]])
     fwd_u, fwd_c = np.unique(a * n + b, return_counts=True)
     rev_u, rev_c = np.unique(b * n + a, return_counts=True)
-    closed = bool(np.all(a != b) and np.array_equal(fwd_u, rev_u)
-                  and np.array_equal(fwd_c, rev_c))
+    closed = bool(np.all(a != b) and np.array_equal(fwd_u, rev_u) and np.array_equal(fwd_c, rev_c))
     und_u, und_c = np.unique(np.minimum(a, b) * n + np.maximum(a, b), return_counts=True)
     pinched = int(np.sum(und_c > 2))
     p0, p1, p2 = v[t[:, 0]], v[t[:, 1]], v[t[:, 2]]
@@ -150,9 +162,17 @@ def _report(s: Solid) -> SolidReport:
     uniq, inv = np.unique(v32, axis=0, return_inverse=True)
     tris = inv.reshape(-1)[s.triangles]
     closed, pinched, vol = check_solid(uniq, tris)
-    size = tuple(float(x) * 1e-3 for x in (uniq.max(axis=0) - uniq.min(axis=0)))
-    return SolidReport(s.name, vol * 1e-9, size, closed and vol > 0,  # type: ignore[arg-type]
-                       len(s.triangles), s.parts, pinched)
+    ext = (uniq.max(axis=0) - uniq.min(axis=0)) * 1e-3
+    size = (float(ext[0]), float(ext[1]), float(ext[2]))
+    return SolidReport(
+        s.name,
+        vol * 1e-9,
+        size,
+        bool(closed and vol > 0),
+        len(s.triangles),
+        s.parts,
+        pinched,
+    )
 
 
 def write_stl(path: Path, solids: list[Solid]) -> None:
@@ -179,8 +199,9 @@ def read_stl(path: str | os.PathLike) -> np.ndarray:
     """Triangles (t, 3, 3) float32 of a binary STL."""
     data = Path(path).read_bytes()
     n = int(np.frombuffer(data, "<u4", 1, 80)[0])
-    rec = np.frombuffer(data, dtype=[("n", "<f4", (3,)), ("v", "<f4", (3, 3)), ("a", "<u2")],
-                        count=n, offset=84)
+    rec = np.frombuffer(
+        data, dtype=[("n", "<f4", (3,)), ("v", "<f4", (3, 3)), ("a", "<u2")], count=n, offset=84
+    )
     return rec["v"].copy()
 
 
@@ -214,16 +235,20 @@ def write_3mf(path: Path, solids: list[Solid], *, title: str = "") -> None:
         tfmt = '<triangle v1="{}" v2="{}" v3="{}"/>'.format
         verts = "".join([vfmt(*r) for r in v])
         tris = "".join([tfmt(*r) for r in s.triangles.tolist()])
-        objects.append(f'<object id="{i}" type="model" name={_xml_attr(s.name)}><mesh>'
-                       f"<vertices>{verts}</vertices><triangles>{tris}</triangles></mesh>"
-                       "</object>")
+        objects.append(
+            f'<object id="{i}" type="model" name={_xml_attr(s.name)}><mesh>'
+            f"<vertices>{verts}</vertices><triangles>{tris}</triangles></mesh>"
+            "</object>"
+        )
         items.append(f'<item objectid="{i}"/>')
     meta = f'<metadata name="Title">{_xml_escape(title)}</metadata>' if title else ""
-    model = ('<?xml version="1.0" encoding="UTF-8"?>\n'
-             '<model unit="millimeter" xml:lang="en-US" '
-             'xmlns="http://schemas.microsoft.com/3dmanufacturing/core/2015/02">'
-             f'{meta}<metadata name="Application">ionic_usd</metadata>'
-             f"<resources>{''.join(objects)}</resources><build>{''.join(items)}</build></model>")
+    model = (
+        '<?xml version="1.0" encoding="UTF-8"?>\n'
+        '<model unit="millimeter" xml:lang="en-US" '
+        'xmlns="http://schemas.microsoft.com/3dmanufacturing/core/2015/02">'
+        f'{meta}<metadata name="Application">ionic_usd</metadata>'
+        f"<resources>{''.join(objects)}</resources><build>{''.join(items)}</build></model>"
+    )
 
     def write(tmp: Path) -> None:
         with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as z:

@@ -14,22 +14,35 @@ import numpy as np
 from ionic_usd.errors import GeometryError
 from ionic_usd.geometry.mesh import Mesh, box_st, corner_normals, face_normals, triangulate_fan
 
-__all__ = ["split_shells", "union", "difference", "remove_slivers", "SLIVER_ANGLE_DEG",
-           "SLIVER_TOL"]
+__all__ = [
+    "split_shells",
+    "union",
+    "difference",
+    "remove_slivers",
+    "SLIVER_ANGLE_DEG",
+    "SLIVER_TOL",
+]
 
 
 def _as_triangles(mesh: Mesh) -> Mesh:
     """Fan-triangulate polygons, carrying faceVarying normals corner by corner."""
     if np.all(mesh.face_vertex_counts == 3):
         return mesh
-    corners = triangulate_fan(mesh.face_vertex_counts,
-                              np.arange(len(mesh.face_vertex_indices))).reshape(-1)
+    corners = triangulate_fan(
+        mesh.face_vertex_counts, np.arange(len(mesh.face_vertex_indices))
+    ).reshape(-1)
     nrm, interp = mesh.normals, mesh.normals_interpolation
     cn = corner_normals(mesh) if interp == "faceVarying" else None  # None without normals
     if cn is not None:
         nrm = cn[corners]
-    return Mesh(mesh.points, np.full(len(corners) // 3, 3, np.int32),
-                mesh.face_vertex_indices[corners], nrm, interp, name=mesh.name)
+    return Mesh(
+        mesh.points,
+        np.full(len(corners) // 3, 3, np.int32),
+        mesh.face_vertex_indices[corners],
+        nrm,
+        interp,
+        name=mesh.name,
+    )
 
 
 def split_shells(mesh: Mesh) -> list[Mesh]:
@@ -43,7 +56,8 @@ def split_shells(mesh: Mesh) -> list[Mesh]:
     rows = np.concatenate([tri[:, 0], tri[:, 1]])
     cols = np.concatenate([tri[:, 1], tri[:, 2]])
     ncomp, lab = connected_components(
-        coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n)), directed=False)
+        coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n)), directed=False
+    )
     face_lab = lab[tri[:, 0]]
     fv = _corner_normals(mesh)
     out = []
@@ -51,8 +65,16 @@ def split_shells(mesh: Mesh) -> list[Mesh]:
         sel = np.flatnonzero(face_lab == c)
         used, local = np.unique(tri[sel], return_inverse=True)
         nrm = None if fv is None else fv.reshape(-1, 3, 3)[sel].reshape(-1, 3)
-        out.append(Mesh(mesh.points[used], np.full(len(sel), 3, np.int32), local.reshape(-1),
-                        nrm, "faceVarying", name=mesh.name))
+        out.append(
+            Mesh(
+                mesh.points[used],
+                np.full(len(sel), 3, np.int32),
+                local.reshape(-1),
+                nrm,
+                "faceVarying",
+                name=mesh.name,
+            )
+        )
     return out
 
 
@@ -90,8 +112,10 @@ def _to_manifold(mesh: Mesh, keep_faces: bool = False, st: np.ndarray | None = N
     uk, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
     inv = inv.reshape(-1)
     pv = uk[:, 0]
-    props = np.concatenate([mesh.points[pv], cn[first].astype(np.float64)]
-                           + ([] if st is None else [st[first]]), axis=1)
+    props = np.concatenate(
+        [mesh.points[pv], cn[first].astype(np.float64)] + ([] if st is None else [st[first]]),
+        axis=1,
+    )
     # property vertices at one point are merged for topology
     order = np.argsort(pv, kind="stable")
     head = np.r_[True, pv[order][1:] != pv[order][:-1]]
@@ -106,8 +130,9 @@ def _to_manifold(mesh: Mesh, keep_faces: bool = False, st: np.ndarray | None = N
     )
     man = manifold3d.Manifold(mm)
     if man.status() != manifold3d.Error.NoError:
-        raise GeometryError(f"union: mesh {mesh.name!r} is not a closed manifold "
-                            f"({man.status().name})")
+        raise GeometryError(
+            f"union: mesh {mesh.name!r} is not a closed manifold ({man.status().name})"
+        )
     return man
 
 
@@ -137,8 +162,9 @@ def union(meshes: list[Mesh], name: str = "mesh") -> Mesh:
     return _from_manifold(res, name)
 
 
-def difference(mesh: Mesh, cutters: list[Mesh], name: str | None = None, *,
-               simplify: bool = False) -> Mesh:
+def difference(
+    mesh: Mesh, cutters: list[Mesh], name: str | None = None, *, simplify: bool = False
+) -> Mesh:
     """Boolean difference ``mesh − cutters`` (closed meshes), normals carried as in :func:`union`.
 
     The faces left by a cutter get its normals reversed (they face into the cutter's void).
@@ -150,8 +176,7 @@ def difference(mesh: Mesh, cutters: list[Mesh], name: str | None = None, *,
     if mesh.st is not None:
         # carry the mesh's own (analytic) st through the cut; the cap faces a cutter leaves
         # get planar st (box-mapped, wound like the caps, which face against the cutter)
-        ops = [_to_manifold(mesh, keep_faces=True,
-                            st=mesh.st[mesh.st_indices].astype(np.float64))]
+        ops = [_to_manifold(mesh, keep_faces=True, st=mesh.st[mesh.st_indices].astype(np.float64))]
         cut = []
         for m in map(_as_triangles, cutters):
             fn, _ = face_normals(m.points, m.triangles)
@@ -215,8 +240,16 @@ def _from_manifold(res, name: str, simplify: bool = True) -> Mesh:
         _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
         st = props[first, 6:8].astype(np.float32)
         sti = inv.reshape(-1)[tri.reshape(-1)]
-    out_mesh = Mesh(points, np.full(len(idx), 3, np.int32), idx.reshape(-1),
-                    nrm.astype(np.float32), "faceVarying", st, sti, name=name)
+    out_mesh = Mesh(
+        points,
+        np.full(len(idx), 3, np.int32),
+        idx.reshape(-1),
+        nrm.astype(np.float32),
+        "faceVarying",
+        st,
+        sti,
+        name=name,
+    )
     return remove_slivers(out_mesh, SLIVER_TOL * diag) if simplify else out_mesh
 
 
@@ -246,13 +279,16 @@ def _tet_height(a, b, c, d) -> float:
     """Smallest height of the tetrahedron abcd: how far a flip of edge ab (triangles abc, abd
     → acd, bcd) moves the surface."""
     v = abs(float(np.dot(np.cross(b - a, c - a), d - a)))
-    areas = [float(np.linalg.norm(np.cross(q - o, r - o))) for o, q, r in
-             ((a, b, c), (a, b, d), (a, c, d), (b, c, d))]
+    areas = [
+        float(np.linalg.norm(np.cross(q - o, r - o)))
+        for o, q, r in ((a, b, c), (a, b, d), (a, c, d), (b, c, d))
+    ]
     return v / max(max(areas), 1e-300)
 
 
-def remove_slivers(mesh: Mesh, tol: float, *, min_angle: float = SLIVER_ANGLE_DEG,
-                   max_passes: int = 8) -> Mesh:
+def remove_slivers(
+    mesh: Mesh, tol: float, *, min_angle: float = SLIVER_ANGLE_DEG, max_passes: int = 8
+) -> Mesh:
     """Remove sliver triangles of a closed triangle mesh without moving its surface by more
     than ``tol``.
 
@@ -336,8 +372,13 @@ def remove_slivers(mesh: Mesh, tol: float, *, min_angle: float = SLIVER_ANGLE_DE
 
             def corner(f: int, v: int) -> np.ndarray:
                 return cnl[f][int(np.flatnonzero(tri[f] == v)[0])]
-            n_new = np.array([[corner(t, c), corner(t, a), corner(o, d)],
-                              [corner(o, d), corner(o, b), corner(t, c)]])
+
+            n_new = np.array(
+                [
+                    [corner(t, c), corner(t, a), corner(o, d)],
+                    [corner(o, d), corner(o, b), corner(t, c)],
+                ]
+            )
             cn[t], cn[o] = n_new
         set_tri(t, new[0])
         set_tri(o, new[1])
@@ -436,8 +477,11 @@ def remove_slivers(mesh: Mesh, tol: float, *, min_angle: float = SLIVER_ANGLE_DE
             if a.min() >= min_angle:
                 continue
             ring = tri[t].tolist()
-            if (try_flip(t, int(np.argmax(a))) or try_snap(t, int(np.argmax(a)))
-                    or try_collapse(t, int(np.argmin(a)))):
+            if (
+                try_flip(t, int(np.argmax(a)))
+                or try_snap(t, int(np.argmax(a)))
+                or try_collapse(t, int(np.argmin(a)))
+            ):
                 for v in ring:
                     for f in inc.get(v, ()):
                         touched.update(tri[f].tolist())
@@ -457,5 +501,13 @@ def remove_slivers(mesh: Mesh, tol: float, *, min_angle: float = SLIVER_ANGLE_DE
         rank[order] = np.arange(len(order))
         st = corners[first[order], n_dim:].astype(np.float32)
         sti = rank[inv.reshape(-1)].astype(np.int32)
-    return Mesh(pts[used], np.full(len(tri), 3, np.int32), idx.reshape(-1), nrm, "faceVarying",
-                st, sti, name=mesh.name)
+    return Mesh(
+        pts[used],
+        np.full(len(tri), 3, np.int32),
+        idx.reshape(-1),
+        nrm,
+        "faceVarying",
+        st,
+        sti,
+        name=mesh.name,
+    )

@@ -54,9 +54,15 @@ class SolidReport:
     @property
     def solid(self) -> bool:
         """One closed, outward, consistently wound shell with no cracks or crossings."""
-        return (self.shells == 1 and self.open_edges == 0 and self.nonmanifold_edges == 0
-                and self.colocated_points == 0 and self.self_intersections == 0
-                and self.against_normals == 0 and self.volume > 0)
+        return (
+            self.shells == 1
+            and self.open_edges == 0
+            and self.nonmanifold_edges == 0
+            and self.colocated_points == 0
+            and self.self_intersections == 0
+            and self.against_normals == 0
+            and self.volume > 0
+        )
 
 
 def _tol(mesh: Mesh, tol: float | None) -> float:
@@ -128,8 +134,7 @@ def normals_against_winding(mesh: Mesh) -> int:
     if mesh.normals_interpolation == "vertex":
         cn = mesh.normals[tri].astype(np.float64)
     else:  # corners of the fan triangles, in the order ``triangles`` uses
-        corners = triangulate_fan(mesh.face_vertex_counts,
-                                  np.arange(len(mesh.face_vertex_indices)))
+        corners = triangulate_fan(mesh.face_vertex_counts, np.arange(len(mesh.face_vertex_indices)))
         full = corner_normals(mesh)
         assert full is not None  # mesh.normals is not None (checked above)
         cn = full[corners].astype(np.float64)
@@ -167,8 +172,9 @@ def _candidate_pairs(p: np.ndarray, cell: float) -> np.ndarray:
     return np.unique(pairs, axis=0)
 
 
-def _segments_cross(p: np.ndarray, q0: np.ndarray, q1: np.ndarray, eps: float,
-                    dist: float) -> np.ndarray:
+def _segments_cross(
+    p: np.ndarray, q0: np.ndarray, q1: np.ndarray, eps: float, dist: float
+) -> np.ndarray:
     """Does segment q0→q1 pass through the interior of triangle p (k, 3, 3)? (k,) bool.
 
     The end points must lie strictly on opposite sides of the triangle's plane (farther than
@@ -222,7 +228,7 @@ def self_intersections(mesh: Mesh, *, eps: float = 1e-7, max_pairs: int = 30_000
     if not len(pairs):
         return 0
     a, b = tri[pairs[:, 0]], tri[pairs[:, 1]]
-    shared = (a[:, :, None] == b[:, None, :])
+    shared = a[:, :, None] == b[:, None, :]
     nshared = shared.sum(axis=(1, 2))
     keep = nshared < 2
     pairs, a, b, shared = pairs[keep], a[keep], b[keep], shared[keep]
@@ -241,8 +247,9 @@ def self_intersections(mesh: Mesh, *, eps: float = 1e-7, max_pairs: int = 30_000
     return int(hit.sum())
 
 
-def solid_report(mesh: Mesh, *, tol: float | None = None,
-                 intersections: bool = True) -> SolidReport:
+def solid_report(
+    mesh: Mesh, *, tol: float | None = None, intersections: bool = True
+) -> SolidReport:
     """Measure a triangle mesh as a solid (see :class:`SolidReport`).
 
     Parameters
@@ -273,8 +280,10 @@ def manifold_status(mesh: Mesh) -> tuple[str, int, float]:
     """
     import manifold3d
 
-    mm = manifold3d.Mesh(vert_properties=np.asarray(mesh.points, dtype=np.float32),
-                         tri_verts=np.asarray(mesh.triangles, dtype=np.uint32))
+    mm = manifold3d.Mesh(
+        vert_properties=np.asarray(mesh.points, dtype=np.float32),
+        tri_verts=np.asarray(mesh.triangles, dtype=np.uint32),
+    )
     man = manifold3d.Manifold(mm)
     status = man.status()
     return status.name, int(man.genus()), float(man.volume())

@@ -126,8 +126,9 @@ def clip_mesh(
         )
 
     pts = np.where(near[:, None], pts - raw[:, None] * n, pts)  # snap onto the plane
-    corner = triangulate_fan(mesh.face_vertex_counts,
-                             np.arange(mesh.face_vertex_indices.size)).astype(np.int64)
+    corner = triangulate_fan(
+        mesh.face_vertex_counts, np.arange(mesh.face_vertex_indices.size)
+    ).astype(np.int64)
     fv = None
     cn0 = corner_normals(mesh)  # None iff the mesh has no normals
     if cn0 is not None:
@@ -184,8 +185,9 @@ def clip_mesh(
             if normals is not None:
                 cap_v = np.broadcast_to(-n, (3 * len(cap_tri), 3))
                 if fv is not None and fv.shape[1] == 5:  # planar st on the cap, box-mapped
-                    cap_v = np.concatenate([cap_v, box_st(all_pts[cap_tri.reshape(-1)],
-                                                          cap_v)], axis=1)
+                    cap_v = np.concatenate(
+                        [cap_v, box_st(all_pts[cap_tri.reshape(-1)], cap_v)], axis=1
+                    )
                 normals.append(cap_v)
     faces_all = np.concatenate(faces)
     used, remap = np.unique(faces_all, return_inverse=True)
@@ -193,8 +195,9 @@ def clip_mesh(
     if normals is not None and fv is not None:  # (normals exist only when fv does)
         out_nrm = np.concatenate([np.reshape(x, (-1, fv.shape[1])) for x in normals])
         if out_nrm.shape[1] == 5:
-            key = np.concatenate([faces_all.reshape(-1, 1),
-                                  np.round(out_nrm[:, 3:] * 1e6).astype(np.int64)], axis=1)
+            key = np.concatenate(
+                [faces_all.reshape(-1, 1), np.round(out_nrm[:, 3:] * 1e6).astype(np.int64)], axis=1
+            )
             _, first, sti = np.unique(key, axis=0, return_index=True, return_inverse=True)
             st, sti = out_nrm[first, 3:], sti.reshape(-1)
             out_nrm = out_nrm[:, :3] if mesh.normals is not None else None
@@ -213,8 +216,9 @@ def clip_mesh(
     )
 
 
-def _chain(src: np.ndarray, dst: np.ndarray, xy: dict[int, np.ndarray],
-           mesh_name: str) -> list[np.ndarray]:
+def _chain(
+    src: np.ndarray, dst: np.ndarray, xy: dict[int, np.ndarray], mesh_name: str
+) -> list[np.ndarray]:
     """Chain directed edges into closed loops (vertex index arrays, not repeating the start).
 
     Where loops touch at a vertex (several outgoing edges), the walk takes the outgoing edge
@@ -245,8 +249,9 @@ def _chain(src: np.ndarray, dst: np.ndarray, xy: dict[int, np.ndarray],
             if len(cands) > 1:
                 back = xy[int(src[e])] - xy[v]
                 ab = np.arctan2(back[1], back[0])
-                ang = [(ab - np.arctan2(*(xy[int(dst[k])] - xy[v])[::-1])) % (2 * np.pi)
-                       for k in cands]
+                ang = [
+                    (ab - np.arctan2(*(xy[int(dst[k])] - xy[v])[::-1])) % (2 * np.pi) for k in cands
+                ]
                 nxt = cands[int(np.argmin(ang))]
             else:
                 nxt = cands[0]
@@ -264,8 +269,14 @@ def _signed_area(p: np.ndarray) -> float:
     return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
 
 
-def _plane_loops(points: np.ndarray, triangles: np.ndarray, on_plane: np.ndarray,
-                   normal: np.ndarray, *, mesh_name: str = "mesh") -> list[np.ndarray]:
+def _plane_loops(
+    points: np.ndarray,
+    triangles: np.ndarray,
+    on_plane: np.ndarray,
+    normal: np.ndarray,
+    *,
+    mesh_name: str = "mesh",
+) -> list[np.ndarray]:
     """Closed loops of a clipped mesh's border edges that lie in the cutting plane.
 
     Parameters
@@ -285,7 +296,8 @@ def _plane_loops(points: np.ndarray, triangles: np.ndarray, on_plane: np.ndarray
     directed = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
     npts = len(points)
     und = np.minimum(directed[:, 0], directed[:, 1]) * npts + np.maximum(
-        directed[:, 0], directed[:, 1])
+        directed[:, 0], directed[:, 1]
+    )
     _, inv, cnt = np.unique(und, return_inverse=True, return_counts=True)
     border = (cnt[inv.reshape(-1)] == 1) & on_plane[directed[:, 0]] & on_plane[directed[:, 1]]
     if not border.any():
@@ -299,8 +311,9 @@ def _plane_loops(points: np.ndarray, triangles: np.ndarray, on_plane: np.ndarray
     return _chain(src, dst, xy, mesh_name)
 
 
-def _cap(points: np.ndarray, tri: np.ndarray, on_plane: np.ndarray, normal: np.ndarray,
-         mesh_name: str) -> np.ndarray:
+def _cap(
+    points: np.ndarray, tri: np.ndarray, on_plane: np.ndarray, normal: np.ndarray, mesh_name: str
+) -> np.ndarray:
     """(c, 3) int64 cap triangles over the cut outline, wound to face ``−normal``."""
     import shapely  # optional at import time: the kernel is numpy-only until a cut is made
 
@@ -319,8 +332,7 @@ def _cap(points: np.ndarray, tri: np.ndarray, on_plane: np.ndarray, normal: np.n
     owned: dict[int, list[int]] = {i: [] for i in range(len(outer))}
     for h in holes:
         probe = shapely.Point(rings[h][0])
-        inside = [k for k, pg in enumerate(outer_polys)
-                  if pg.covers(probe) and pg.area > -areas[h]]
+        inside = [k for k, pg in enumerate(outer_polys) if pg.covers(probe) and pg.area > -areas[h]]
         if not inside:
             raise GeometryError(
                 f"clip_mesh: a hole in the cut of mesh {mesh_name!r} lies in no outline "
@@ -330,8 +342,13 @@ def _cap(points: np.ndarray, tri: np.ndarray, on_plane: np.ndarray, normal: np.n
     caps = []
     for k, i in enumerate(outer):
         lp = np.concatenate([loops[i]] + [loops[h] for h in owned[k]])
-        ct = lp[polygon_triangles(rings[i], [rings[h] for h in owned[k]],
-                                  what=f"clip_mesh: the cap of mesh {mesh_name!r}")]
+        ct = lp[
+            polygon_triangles(
+                rings[i],
+                [rings[h] for h in owned[k]],
+                what=f"clip_mesh: the cap of mesh {mesh_name!r}",
+            )
+        ]
         if len(ct) == 0:
             continue
         ct = ct[(ct[:, 0] != ct[:, 1]) & (ct[:, 1] != ct[:, 2]) & (ct[:, 0] != ct[:, 2])]

@@ -53,8 +53,7 @@ def solid_problem(mesh: Mesh) -> str | None:
     if not np.array_equal(fwd, rev):  # every edge must meet its reverse exactly once
         return f"it is not closed ({int(np.count_nonzero(fwd != rev))} open edges)"
     p = mesh.points
-    v = float(np.einsum("ij,ij->i", p[tri[:, 0]], np.cross(p[tri[:, 1]], p[tri[:, 2]])).sum()
-              / 6.0)
+    v = float(np.einsum("ij,ij->i", p[tri[:, 0]], np.cross(p[tri[:, 1]], p[tri[:, 2]])).sum() / 6.0)
     diag = float(np.linalg.norm(np.ptp(p, axis=0)))
     if not v > 1e-9 * diag**3:  # a flat (zero-volume) solid is as wrong as an inverted one
         return f"it is inside out or flat (volume {v:.3g} m³)"
@@ -66,8 +65,12 @@ def check_solid(mesh: Mesh, param: str, value: object, *, context: str = "") -> 
     :class:`ParameterError` naming ``param`` = ``value``."""
     why = solid_problem(mesh)
     if why is not None:
-        raise ParameterError(param, _short(value), f"a shape that builds a closed, outward solid "
-                             f"({mesh.name}: {why})", context=context)
+        raise ParameterError(
+            param,
+            _short(value),
+            f"a shape that builds a closed, outward solid ({mesh.name}: {why})",
+            context=context,
+        )
     return mesh
 
 
@@ -77,8 +80,14 @@ def _short(value: object) -> object:
     return value
 
 
-def guarded(build: Callable[[], T], param: str, value: object, *, context: str = "",
-            check: Callable[[T], list[Mesh]] | None = None) -> T:
+def guarded(
+    build: Callable[[], T],
+    param: str,
+    value: object,
+    *,
+    context: str = "",
+    check: Callable[[T], list[Mesh]] | None = None,
+) -> T:
     """Run ``build()`` with floating-point faults raised, converting any non-package error to
     a :class:`ParameterError` naming ``param``; then check every mesh ``check(result)``
     returns (default: the result itself if it is a Mesh) with :func:`check_solid`."""
@@ -89,8 +98,12 @@ def guarded(build: Callable[[], T], param: str, value: object, *, context: str =
         raise
     except (IonicError, ArithmeticError, ValueError, IndexError) as exc:  # GeometryError too
         msg = " ".join(str(exc).split())[:120] or type(exc).__name__
-        raise ParameterError(param, _short(value), f"a shape that can be built (it fails "
-                             f"with {type(exc).__name__}: {msg})", context=context) from None
+        raise ParameterError(
+            param,
+            _short(value),
+            f"a shape that can be built (it fails with {type(exc).__name__}: {msg})",
+            context=context,
+        ) from None
     if check is not None:
         meshes = check(result)
     else:

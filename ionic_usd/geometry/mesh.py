@@ -100,13 +100,13 @@ class Mesh:
         object.__setattr__(self, "face_vertex_indices", _frozen(idx))
         if self.normals_indices is not None:
             if self.normals is None or self.normals_interpolation != "faceVarying":
-                raise GeometryError(f"mesh {self.name!r}: normals_indices need faceVarying "
-                                    "normals")
+                raise GeometryError(f"mesh {self.name!r}: normals_indices need faceVarying normals")
             ni = np.asarray(self.normals_indices, dtype=np.int32).reshape(-1)
             nv = len(np.asarray(self.normals).reshape(-1, 3))
             if ni.size != idx.size or (ni.size and (ni.min() < 0 or ni.max() >= nv)):
-                raise GeometryError(f"mesh {self.name!r}: normals_indices do not match the "
-                                    "faces and normals")
+                raise GeometryError(
+                    f"mesh {self.name!r}: normals_indices do not match the faces and normals"
+                )
             object.__setattr__(self, "normals_indices", _frozen(ni))
         if self.normals is not None:
             nrm = np.asarray(self.normals, dtype=np.float32).reshape(-1, 3)
@@ -232,9 +232,17 @@ def face_normals(points: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray,
 
 
 # (s, t) axes with s × t = the outward normal -X, +X, -Y, +Y, -Z, +Z (t up on vertical faces)
-_BOX_FRAMES = np.array([[(0, 0, 1), (0, 1, 0)], [(0, 0, -1), (0, 1, 0)],
-                        [(1, 0, 0), (0, 0, 1)], [(1, 0, 0), (0, 0, -1)],
-                        [(-1, 0, 0), (0, 1, 0)], [(1, 0, 0), (0, 1, 0)]], dtype=np.float64)
+_BOX_FRAMES = np.array(
+    [
+        [(0, 0, 1), (0, 1, 0)],
+        [(0, 0, -1), (0, 1, 0)],
+        [(1, 0, 0), (0, 0, 1)],
+        [(1, 0, 0), (0, 0, -1)],
+        [(-1, 0, 0), (0, 1, 0)],
+        [(1, 0, 0), (0, 1, 0)],
+    ],
+    dtype=np.float64,
+)
 
 
 def box_st(points: np.ndarray, normals: np.ndarray) -> np.ndarray:
@@ -257,12 +265,12 @@ def box_st(points: np.ndarray, normals: np.ndarray) -> np.ndarray:
     axis = np.argmax(np.abs(n), axis=1)
     frame = _BOX_FRAMES[2 * axis + (n[np.arange(len(n)), axis] > 0)]
     p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
-    return np.stack([np.einsum("ij,ij->i", p, frame[:, 0]),
-                     np.einsum("ij,ij->i", p, frame[:, 1])], axis=1)
+    return np.stack(
+        [np.einsum("ij,ij->i", p, frame[:, 0]), np.einsum("ij,ij->i", p, frame[:, 1])], axis=1
+    )
 
 
-def smooth_normals(mesh: Mesh, groups: np.ndarray | None = None, *,
-                   indexed: bool = False) -> Mesh:
+def smooth_normals(mesh: Mesh, groups: np.ndarray | None = None, *, indexed: bool = False) -> Mesh:
     """Angle-weighted normals, smooth within smoothing groups and crisp between them.
 
     Parameters
@@ -288,8 +296,11 @@ def smooth_normals(mesh: Mesh, groups: np.ndarray | None = None, *,
     unit = cr / np.where(twice_area > 0, twice_area, 1.0)[:, None]
     # corner angles (atan2 of |cross| and dot) weight each face: independent of how a flat
     # region is triangulated, unlike area weights
-    dots = (-np.einsum("ij,ij->i", e0, e2), -np.einsum("ij,ij->i", e1, e0),
-            -np.einsum("ij,ij->i", e2, e1))
+    dots = (
+        -np.einsum("ij,ij->i", e0, e2),
+        -np.einsum("ij,ij->i", e1, e0),
+        -np.einsum("ij,ij->i", e2, e1),
+    )
     angle = [np.arctan2(twice_area, d) for d in dots]
     corner_vertex = tri.reshape(-1)
     npts = len(pts)
@@ -305,8 +316,11 @@ def smooth_normals(mesh: Mesh, groups: np.ndarray | None = None, *,
         np.stack([by_vertex([unit[:, k] * angle[c] for c in range(3)]) for k in range(3)], axis=1)
     )
     if groups is None:
-        return mesh.with_(normals=per_vertex.astype(np.float32), normals_interpolation="vertex",
-                          normals_indices=None)
+        return mesh.with_(
+            normals=per_vertex.astype(np.float32),
+            normals_interpolation="vertex",
+            normals_indices=None,
+        )
     groups = np.asarray(groups, dtype=np.int64).reshape(-1)
     if groups.size != len(tri):
         raise GeometryError("smooth_normals: one group per triangle expected")
@@ -330,8 +344,10 @@ def smooth_normals(mesh: Mesh, groups: np.ndarray | None = None, *,
         inv = rank[inv.reshape(-1)]
         wcorner = np.stack(angle, axis=1).reshape(-1)[multi]
         acc = np.stack(
-            [np.bincount(inv, weights=unit[face, k] * wcorner, minlength=len(uniq))
-             for k in range(3)],
+            [
+                np.bincount(inv, weights=unit[face, k] * wcorner, minlength=len(uniq))
+                for k in range(3)
+            ],
             axis=1,
         )
         crease = _normalise(acc)
@@ -339,8 +355,11 @@ def smooth_normals(mesh: Mesh, groups: np.ndarray | None = None, *,
         nidx = corner_vertex.astype(np.int64)
         nidx[multi] = npts + inv
         values = np.concatenate([per_vertex, crease]).astype(np.float32)
-        return mesh.with_(normals=values, normals_interpolation="faceVarying",
-                          normals_indices=nidx.astype(np.int32))
+        return mesh.with_(
+            normals=values,
+            normals_interpolation="faceVarying",
+            normals_indices=nidx.astype(np.int32),
+        )
     out = per_vertex.astype(np.float32)[corner_vertex]
     if multi.size:
         out[multi] = crease[inv]
@@ -429,8 +448,9 @@ def transform(mesh: Mesh, matrix: np.ndarray) -> Mesh:
             nidx = nidx[perm]
         elif normals is not None and mesh.normals_interpolation == "faceVarying":
             normals = normals[perm]
-    return mesh.with_(points=pts, face_vertex_indices=idx, normals=normals, st_indices=sti,
-                      normals_indices=nidx)
+    return mesh.with_(
+        points=pts, face_vertex_indices=idx, normals=normals, st_indices=sti, normals_indices=nidx
+    )
 
 
 def _reverse_faces_perm(counts: np.ndarray) -> np.ndarray:

@@ -18,8 +18,9 @@ from ionic_usd.errors import GeometryError
 __all__ = ["polygon_triangles"]
 
 
-def polygon_triangles(outer: np.ndarray, holes: Sequence[np.ndarray] = (), *,
-                      what: str = "polygon") -> np.ndarray:
+def polygon_triangles(
+    outer: np.ndarray, holes: Sequence[np.ndarray] = (), *, what: str = "polygon"
+) -> np.ndarray:
     """Constrained Delaunay triangles of a polygon with holes.
 
     Parameters
@@ -40,8 +41,9 @@ def polygon_triangles(outer: np.ndarray, holes: Sequence[np.ndarray] = (), *,
     """
     import shapely  # optional at import time: the kernel is numpy-only until a polygon is cut
 
-    xy = np.concatenate([np.asarray(outer, dtype=np.float64),
-                         *(np.asarray(h, dtype=np.float64) for h in holes)])
+    xy = np.concatenate(
+        [np.asarray(outer, dtype=np.float64), *(np.asarray(h, dtype=np.float64) for h in holes)]
+    )
     poly = shapely.Polygon(outer, list(holes))
     coords = shapely.get_coordinates(shapely.constrained_delaunay_triangles(poly))
     if coords.size == 0:
@@ -50,8 +52,9 @@ def polygon_triangles(outer: np.ndarray, holes: Sequence[np.ndarray] = (), *,
     index: dict[tuple[float, float], int] = {}
     for i, p in enumerate(map(tuple, xy.tolist())):
         index.setdefault(p, i)
-    j = np.fromiter((index.get(c, -1) for c in map(tuple, corners.tolist())), dtype=np.int64,
-                    count=len(corners))
+    j = np.fromiter(
+        (index.get(c, -1) for c in map(tuple, corners.tolist())), dtype=np.int64, count=len(corners)
+    )
     missing = j < 0
     if missing.any():
         from scipy.spatial import cKDTree

@@ -123,24 +123,28 @@ def stitch(
     if direction not in (1, -1):
         raise ParameterError("direction", direction, "1 or -1", context="stitch")
     if np.intersect1d(a, b).size:
-        raise ParameterError("rows", "shared vertices", "two rows without common vertices",
-                             context="stitch")
+        raise ParameterError(
+            "rows", "shared vertices", "two rows without common vertices", context="stitch"
+        )
     if sequence is None:
         sequence = auto_sequence(
-            row_parameters(a_points, n, is_closed), row_parameters(b_points, m, is_closed),
+            row_parameters(a_points, n, is_closed),
+            row_parameters(b_points, m, is_closed),
             is_closed,
         )
     seq = np.asarray(sequence, dtype=np.int64).reshape(-1)
     # a closed ring against a single vertex is a fan (a cone tip or a cap centre)
     want = (n + m - (m == 1)) if is_closed else n + m - 1
     if len(seq) != n:
-        raise ParameterError("sequence", f"{len(seq)} numbers", f"one number per node of a ({n})",
-                             context="stitch")
+        raise ParameterError(
+            "sequence", f"{len(seq)} numbers", f"one number per node of a ({n})", context="stitch"
+        )
     if seq.min() < 1:
         raise ParameterError("sequence", seq.tolist(), "every count >= 1", context="stitch")
     if int(seq.sum()) != want:
         raise ParameterError(
-            "sequence", f"sum {int(seq.sum())}",
+            "sequence",
+            f"sum {int(seq.sum())}",
             f"sum == {want} for {'closed' if is_closed else 'open'} rows of {n} and {m}",
             context="stitch",
         )

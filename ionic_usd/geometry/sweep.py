@@ -115,8 +115,9 @@ def _check(profile, path, axis, closed) -> tuple[np.ndarray, np.ndarray, np.ndar
     return prof, pts, ax
 
 
-def _check_offsets(pts: np.ndarray, mit: np.ndarray, us: tuple[float, float], ax: np.ndarray,
-                   closed: bool) -> None:
+def _check_offsets(
+    pts: np.ndarray, mit: np.ndarray, us: tuple[float, float], ax: np.ndarray, closed: bool
+) -> None:
     """Refuse sections that reach so far that the sweep would cut through itself.
 
     The sweep is the union of the offset copies of the path for ``u`` in the section's range;
@@ -132,8 +133,10 @@ def _check_offsets(pts: np.ndarray, mit: np.ndarray, us: tuple[float, float], ax
         off = pts + u * mit
         oseg = (np.roll(off, -1, axis=0) - off) if closed else np.diff(off, axis=0)
         if np.any(np.einsum("ij,ij->i", oseg, seg) <= 0):
-            raise GeometryError(f"sweep: the section reaches u = {u:g}, past where a mitre "
-                                "overtakes its neighbour (it would cut through itself)")
+            raise GeometryError(
+                f"sweep: the section reaches u = {u:g}, past where a mitre "
+                "overtakes its neighbour (it would cut through itself)"
+            )
         flat = np.stack([off @ e1, off @ e2], axis=1)
         line = shapely.LinearRing(flat) if closed else shapely.LineString(flat)
         if not line.is_simple:
@@ -151,8 +154,7 @@ def _cap_triangles(prof: np.ndarray) -> np.ndarray:
     coords = shapely.get_coordinates(tris).reshape(-1, 4, 2)[:, :3]
     key = {(float(x), float(y)): i for i, (x, y) in enumerate(prof)}
     try:
-        return np.array([[key[(float(x), float(y))] for x, y in t] for t in coords],
-                        dtype=np.int32)
+        return np.array([[key[(float(x), float(y))] for x, y in t] for t in coords], dtype=np.int32)
     except KeyError:  # pragma: no cover - CDT of a polygon adds no points
         raise GeometryError("sweep: could not triangulate the section") from None
 
@@ -204,17 +206,20 @@ def sweep(
     sides = side_normals(pts, ax, closed)
     mit = mitre_vectors(sides, closed)
     if len(pts) > 2:
-        _check_offsets(pts, mit, (float(prof[:, 0].min()), float(prof[:, 0].max())), ax,
-                       closed)
-    verts = (pts[:, None, :] + prof[None, :, 0, None] * mit[:, None, :]
-             + prof[None, :, 1, None] * ax[None, None, :])  # (m, k, 3)
+        _check_offsets(pts, mit, (float(prof[:, 0].min()), float(prof[:, 0].max())), ax, closed)
+    verts = (
+        pts[:, None, :]
+        + prof[None, :, 0, None] * mit[:, None, :]
+        + prof[None, :, 1, None] * ax[None, None, :]
+    )  # (m, k, 3)
     points = verts.reshape(-1, 3)
     nseg = m if closed else m - 1
     i = np.arange(nseg)[:, None]
     j = np.arange(k)[None, :]
     i1, j1 = (i + 1) % m, (j + 1) % k
-    quads = np.stack(np.broadcast_arrays(i * k + j, i1 * k + j, i1 * k + j1, i * k + j1),
-                     axis=-1)  # (nseg, k, 4)
+    quads = np.stack(
+        np.broadcast_arrays(i * k + j, i1 * k + j, i1 * k + j1, i * k + j1), axis=-1
+    )  # (nseg, k, 4)
     caps = np.zeros((0, 3), dtype=np.int64)
     if not closed:
         # the side quads of the first row hold the edges j+1 → j: the start cap runs the
@@ -225,8 +230,9 @@ def sweep(
         tri_sign = ab[:, 0] * ac[:, 1] - ab[:, 1] * ac[:, 0]
         ct = np.where((tri_sign * polygon_area(prof) > 0)[:, None], ct, ct[:, ::-1])
         caps = np.vstack([ct, ct[:, ::-1] + (m - 1) * k])
-    tris = np.concatenate([quads[..., [0, 1, 2]].reshape(-1, 3),
-                           quads[..., [0, 2, 3]].reshape(-1, 3), caps])
+    tris = np.concatenate(
+        [quads[..., [0, 1, 2]].reshape(-1, 3), quads[..., [0, 2, 3]].reshape(-1, 3), caps]
+    )
     if _signed_volume(points, tris) < 0:
         quads = quads[..., ::-1]
         caps = caps[:, ::-1]
@@ -265,5 +271,13 @@ def sweep(
         # caps: planar projection of the section itself
         st = np.vstack([st, prof[caps.reshape(-1) % k]])
     st = (st * uv_scale).astype(np.float32)
-    return Mesh(points, np.concatenate(counts), np.concatenate(indices), normals.astype(np.float32),
-                "faceVarying", st, np.arange(len(st), dtype=np.int32), name=name)
+    return Mesh(
+        points,
+        np.concatenate(counts),
+        np.concatenate(indices),
+        normals.astype(np.float32),
+        "faceVarying",
+        st,
+        np.arange(len(st), dtype=np.int32),
+        name=name,
+    )

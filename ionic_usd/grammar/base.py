@@ -78,8 +78,12 @@ class TorusFloor:
     r_top_at: Span = field(default=_NOWHERE, compare=False, repr=False)
 
     def __post_init__(self) -> None:
-        check_fields(self, context="base floor", skip=("curvature", "r_bottom_at", "r_top_at"),
-                     non_negative=("height",))
+        check_fields(
+            self,
+            context="base floor",
+            skip=("curvature", "r_bottom_at", "r_top_at"),
+            non_negative=("height",),
+        )
         if self.curvature not in (1, -1):
             raise ParameterError("curvature", self.curvature, "1 or -1", context="base floor")
         object.__setattr__(self, "curvature", int(self.curvature))
@@ -97,9 +101,12 @@ class TorusModule:
             raise ParameterError("floors", (), "at least one floor", context="base module")
         for a, b in zip(self.floors[:-1], self.floors[1:], strict=True):
             if a.r_top != b.r_bottom:
-                raise ParameterError("r_bottom", b.r_bottom,
-                                     f"the previous floor's r_top {a.r_top}",
-                                     context="base module")
+                raise ParameterError(
+                    "r_bottom",
+                    b.r_bottom,
+                    f"the previous floor's r_top {a.r_top}",
+                    context="base module",
+                )
 
     @property
     def height(self) -> float:
@@ -123,8 +130,7 @@ class ControlPoint:
     h_at: Span = field(default=_NOWHERE, compare=False, repr=False)
 
     def __post_init__(self) -> None:
-        check_fields(self, context="base control point", skip=("r_at", "h_at"),
-                     non_negative=("h",))
+        check_fields(self, context="base control point", skip=("r_at", "h_at"), non_negative=("h",))
 
 
 @dataclass(frozen=True)
@@ -137,8 +143,9 @@ class BezierModule:
     def __post_init__(self) -> None:
         object.__setattr__(self, "points", tuple(self.points))
         if len(self.points) < 2:
-            raise ParameterError("points", len(self.points), "at least 2 control points",
-                                 context="base module")
+            raise ParameterError(
+                "points", len(self.points), "at least 2 control points", context="base module"
+            )
 
     @property
     def height(self) -> float:
@@ -206,23 +213,30 @@ BaseGrammar = TorusBase | BezierBase
 def _is_functional(toks: list[Token]) -> bool:
     """The ``M(…)`` form: any parenthesis, or a leading ``M``."""
     return any(t.kind == "(" for t in toks) or (
-        bool(toks) and toks[0].kind == "item" and toks[0].letter == "M")
+        bool(toks) and toks[0].kind == "item" and toks[0].letter == "M"
+    )
 
 
 def _split(source: str, grammar: str) -> tuple[bool, list[tuple[list[Token], int]]]:
     """Tokenize, split into modules, and tell whether the functional ``M(…)`` form is used."""
     toks = tokenize(source, grammar=grammar)
     if not toks:
-        raise GrammarError("empty grammar: expected at least one module", source, 0,
-                           grammar=grammar)
+        raise GrammarError(
+            "empty grammar: expected at least one module", source, 0, grammar=grammar
+        )
     functional = _is_functional(toks)
     parts = split_top_level(toks)
     for k, (part, start) in enumerate(parts, 1):
         if not part:
             # point at the comma that closes the empty module (the opening one if trailing)
             at = parts[k][1] if k < len(parts) else start
-            raise GrammarError("empty module (two commas or a trailing comma)", source,
-                               at, module=k, grammar=grammar)
+            raise GrammarError(
+                "empty module (two commas or a trailing comma)",
+                source,
+                at,
+                module=k,
+                grammar=grammar,
+            )
     return functional, parts
 
 
@@ -230,55 +244,91 @@ def _call_args(part: list[Token], source: str, k: int, grammar: str) -> list[Tok
     """Argument tokens of one ``M(a, b, …)`` module (commas inside are separators)."""
     head = part[0]
     if head.kind != "item" or head.letter != "M" or head.text != "":
-        raise GrammarError(f"expected 'M(' to start module {k}, found {head.raw!r}", source,
-                           head.offset, length=head.length, module=k, grammar=grammar)
+        raise GrammarError(
+            f"expected 'M(' to start module {k}, found {head.raw!r}",
+            source,
+            head.offset,
+            length=head.length,
+            module=k,
+            grammar=grammar,
+        )
     if len(part) < 2 or part[1].kind != "(":
         at = part[1] if len(part) > 1 else head
-        raise GrammarError("expected '(' after M", source, at.offset, length=at.length,
-                           module=k, grammar=grammar)
+        raise GrammarError(
+            "expected '(' after M", source, at.offset, length=at.length, module=k, grammar=grammar
+        )
     if part[-1].kind != ")":
         last = part[-1]
-        raise GrammarError("missing ')' at the end of the module", source,
-                           last.offset + last.length, module=k, grammar=grammar)
+        raise GrammarError(
+            "missing ')' at the end of the module",
+            source,
+            last.offset + last.length,
+            module=k,
+            grammar=grammar,
+        )
     inner = part[2:-1]
     args: list[Token] = []
     expect_value = True
     for t in inner:
         if expect_value:
             if t.kind != "item":
-                raise GrammarError(f"missing value before {t.kind!r}", source, t.offset,
-                                   module=k, grammar=grammar)
+                raise GrammarError(
+                    f"missing value before {t.kind!r}", source, t.offset, module=k, grammar=grammar
+                )
             if t.letter:
-                raise GrammarError(f"unknown token {source[t.offset:t.offset + t.length]!r} "
-                                   "(the M(...) form takes bare numbers)", source, t.offset,
-                                   length=t.length, module=k, grammar=grammar)
+                raise GrammarError(
+                    f"unknown token {source[t.offset : t.offset + t.length]!r} "
+                    "(the M(...) form takes bare numbers)",
+                    source,
+                    t.offset,
+                    length=t.length,
+                    module=k,
+                    grammar=grammar,
+                )
             args.append(t)
         elif t.kind != ",":
-            raise GrammarError(f"expected ',' between values, found "
-                               f"{source[t.offset:t.offset + t.length]!r}", source, t.offset,
-                               length=t.length, module=k, grammar=grammar)
+            raise GrammarError(
+                f"expected ',' between values, found {source[t.offset : t.offset + t.length]!r}",
+                source,
+                t.offset,
+                length=t.length,
+                module=k,
+                grammar=grammar,
+            )
         expect_value = not expect_value
     if expect_value:
         at = part[-1]
-        raise GrammarError("missing value before ')'", source, at.offset, module=k,
-                           grammar=grammar)
+        raise GrammarError("missing value before ')'", source, at.offset, module=k, grammar=grammar)
     return args
 
 
-def _expect(tok: Token | None, letter: str, source: str, k: int, grammar: str, end: int,
-            what: str) -> Token:
+def _expect(
+    tok: Token | None, letter: str, source: str, k: int, grammar: str, end: int, what: str
+) -> Token:
     if tok is None:
-        raise GrammarError(f"module ends early: expected {letter}<{what}>", source, end,
-                           module=k, grammar=grammar)
+        raise GrammarError(
+            f"module ends early: expected {letter}<{what}>", source, end, module=k, grammar=grammar
+        )
     if tok.kind != "item":
-        raise GrammarError(f"expected {letter}<{what}>, found {tok.kind!r}", source,
-                           tok.offset, module=k, grammar=grammar)
+        raise GrammarError(
+            f"expected {letter}<{what}>, found {tok.kind!r}",
+            source,
+            tok.offset,
+            module=k,
+            grammar=grammar,
+        )
     if tok.letter != letter:
-        shown = source[tok.offset:tok.offset + tok.length]
+        shown = source[tok.offset : tok.offset + tok.length]
         known = "R, H or C"
         kind = "unknown token" if tok.letter not in ("R", "H", "C") else "unexpected token"
-        raise GrammarError(f"{kind} {shown!r}: expected {letter}<{what}> (tokens are {known})",
-                           source, tok.offset, length=tok.length, module=k, grammar=grammar)
+        raise GrammarError(
+            f"{kind} {shown!r}: expected {letter}<{what}> (tokens are {known})",
+            source,
+            tok.offset,
+            length=tok.length,
+            module=k,
+            grammar=grammar,
+        )
     return tok
 
 
@@ -289,24 +339,42 @@ def _span(t: Token) -> Span:
 def _height(t: Token, source: str, k: int, grammar: str) -> float:
     h = token_number(t, source, grammar=grammar, module=k, what="height")
     if h < 0:
-        raise GrammarError(f"negative height {t.text}", source, t.text_offset,
-                           length=len(t.text), module=k, grammar=grammar)
+        raise GrammarError(
+            f"negative height {t.text}",
+            source,
+            t.text_offset,
+            length=len(t.text),
+            module=k,
+            grammar=grammar,
+        )
     return h
 
 
 def _curvature(t: Token, source: str, k: int) -> int:
     c = token_number(t, source, grammar=V1, module=k, what="curvature")
     if c not in (1.0, -1.0):
-        raise GrammarError(f"curvature must be 1 (convex) or -1 (concave), got {t.text}",
-                           source, t.text_offset, length=len(t.text), module=k, grammar=V1)
+        raise GrammarError(
+            f"curvature must be 1 (convex) or -1 (concave), got {t.text}",
+            source,
+            t.text_offset,
+            length=len(t.text),
+            module=k,
+            grammar=V1,
+        )
     return int(c)
 
 
 def _flag(t: Token, source: str, k: int) -> bool:
     c = token_number(t, source, grammar=V2, module=k, what="continuity flag")
     if c != 1.0:
-        raise GrammarError(f"the continuity flag can only be 1 (C1), got {t.text}", source,
-                           t.text_offset, length=len(t.text), module=k, grammar=V2)
+        raise GrammarError(
+            f"the continuity flag can only be 1 (C1), got {t.text}",
+            source,
+            t.text_offset,
+            length=len(t.text),
+            module=k,
+            grammar=V2,
+        )
     return True
 
 
@@ -314,8 +382,9 @@ def _end_of(part: list[Token]) -> int:
     return part[-1].offset + part[-1].length
 
 
-def _modules(source: str, grammar: str
-             ) -> Iterator[tuple[int, list[Token], int, list[Token] | None]]:
+def _modules(
+    source: str, grammar: str
+) -> Iterator[tuple[int, list[Token], int, list[Token] | None]]:
     """Each module of ``source``: (1-based number, its tokens, the offset where it ends, its
     call arguments in the functional ``M(…)`` form or None in the letter form)."""
     functional, parts = _split(source, grammar)
@@ -330,15 +399,22 @@ def _v1_floors(vals: list[tuple[str, Token]], source: str, k: int, end: int) -> 
     rb_tok = vals[0][1]
     rb = token_number(rb_tok, source, grammar=V1, module=k, what="radius")
     if len(vals) < 4:
-        raise GrammarError("a module needs at least one floor: R<r> H<h> C<c> R<r>", source,
-                           rb_tok.offset, length=end - rb_tok.offset, module=k, grammar=V1)
+        raise GrammarError(
+            "a module needs at least one floor: R<r> H<h> C<c> R<r>",
+            source,
+            rb_tok.offset,
+            length=end - rb_tok.offset,
+            module=k,
+            grammar=V1,
+        )
     floors = []
     i = 1
     while i < len(vals):
         if i + 2 >= len(vals):
             role = ("height", "curvature", "radius")[len(vals) - i]
-            raise GrammarError(f"module ends early: expected a {role}", source, end,
-                               module=k, grammar=V1)
+            raise GrammarError(
+                f"module ends early: expected a {role}", source, end, module=k, grammar=V1
+            )
         h = _height(vals[i][1], source, k, V1)
         c = _curvature(vals[i + 1][1], source, k)
         rt_tok = vals[i + 2][1]
@@ -364,13 +440,20 @@ def parse_base_v1(source: str) -> TorusBase:
             vals = [(roles[i % 3], t) for i, t in enumerate(args)]
             if len(args) % 3 != 1 or len(args) < 4:
                 if len(args) < 4:
-                    raise GrammarError("a module needs at least one floor: M(r1, h1, c1, r2)",
-                                       source, part[0].offset, length=end - part[0].offset,
-                                       module=k, grammar=V1)
-                msg = (f"{len(args)} values: a v1 module takes 3k + 1 values "
-                       "(r1, h1, c1, r2, …, rk+1)")
-                raise GrammarError(msg, source, args[-1].offset, length=args[-1].length,
-                                   module=k, grammar=V1)
+                    raise GrammarError(
+                        "a module needs at least one floor: M(r1, h1, c1, r2)",
+                        source,
+                        part[0].offset,
+                        length=end - part[0].offset,
+                        module=k,
+                        grammar=V1,
+                    )
+                msg = (
+                    f"{len(args)} values: a v1 module takes 3k + 1 values (r1, h1, c1, r2, …, rk+1)"
+                )
+                raise GrammarError(
+                    msg, source, args[-1].offset, length=args[-1].length, module=k, grammar=V1
+                )
         else:
             vals = []
             want = ("R", "H", "C")
@@ -381,8 +464,13 @@ def parse_base_v1(source: str) -> TorusBase:
                 vals.append((want[j], t))
             if vals and vals[-1][0] != "R":
                 nxt = len(vals) % 3
-                raise GrammarError(f"module ends early: expected {want[nxt]}<{what[nxt]}>",
-                                   source, end, module=k, grammar=V1)
+                raise GrammarError(
+                    f"module ends early: expected {want[nxt]}<{what[nxt]}>",
+                    source,
+                    end,
+                    module=k,
+                    grammar=V1,
+                )
         modules.append(_v1_floors(vals, source, k, end))
     return TorusBase(tuple(modules), source)
 
@@ -411,16 +499,22 @@ def parse_base_v2(source: str) -> BezierBase:
                 flag_tok = toks.pop()
             for i, t in enumerate(toks):
                 if t.kind == "item" and t.letter == "C":
-                    raise GrammarError("the continuity flag C must be the last item of a v2 "
-                                       "module (C after every H means v1: pass version=1?)",
-                                       source, t.offset, length=t.length, module=k,
-                                       grammar=V2)
+                    raise GrammarError(
+                        "the continuity flag C must be the last item of a v2 "
+                        "module (C after every H means v1: pass version=1?)",
+                        source,
+                        t.offset,
+                        length=t.length,
+                        module=k,
+                        grammar=V2,
+                    )
                 want, what = ("R", "radius") if i % 2 == 0 else ("H", "height")
                 _expect(t, want, source, k, V2, end, what)
             if len(toks) % 2 == 1:
                 at = flag_tok.offset if flag_tok is not None else end
-                raise GrammarError("module ends early: expected H<height>", source, at,
-                                   module=k, grammar=V2)
+                raise GrammarError(
+                    "module ends early: expected H<height>", source, at, module=k, grammar=V2
+                )
             pairs = [(toks[i], toks[i + 1]) for i in range(0, len(toks), 2)]
         pts = []
         for rt, ht in pairs:
@@ -430,9 +524,14 @@ def parse_base_v2(source: str) -> BezierBase:
         cont = _flag(flag_tok, source, k) if flag_tok is not None else False
         if len(pts) < 2:
             first = pairs[0][0] if pairs else part[0]
-            raise GrammarError(f"a Bézier module needs at least 2 control points, got "
-                               f"{len(pts)}", source, first.offset,
-                               length=max(1, end - first.offset), module=k, grammar=V2)
+            raise GrammarError(
+                f"a Bézier module needs at least 2 control points, got {len(pts)}",
+                source,
+                first.offset,
+                length=max(1, end - first.offset),
+                module=k,
+                grammar=V2,
+            )
         modules.append(BezierModule(tuple(pts), cont))
     return BezierBase(tuple(modules), source)
 
@@ -480,8 +579,9 @@ def parse_base_grammar(source: str, version: int | None = None) -> BaseGrammar:
     """
     if version is None:
         if not isinstance(source, str):
-            raise GrammarError(f"expected a string, got {type(source).__name__}", "", 0,
-                               grammar="base")
+            raise GrammarError(
+                f"expected a string, got {type(source).__name__}", "", 0, grammar="base"
+            )
         version = detect_base_version(source)
     if version == 1:
         return parse_base_v1(source)

@@ -96,9 +96,7 @@ class Cuboid:
         hi = _vec3("max", self.max, ctx)
         for k, axis in enumerate(_AXES):
             if not lo[k] < hi[k]:
-                raise ParameterError(
-                    f"max.{axis}", hi[k], f"> min.{axis} = {lo[k]!r}", context=ctx
-                )
+                raise ParameterError(f"max.{axis}", hi[k], f"> min.{axis} = {lo[k]!r}", context=ctx)
         try:
             rise = float(self.rise)
         except (TypeError, ValueError):
@@ -108,8 +106,11 @@ class Cuboid:
         incline = Incline.parse(self.incline, context=ctx)
         if incline is Incline.WEDGE and not hi[1] + rise > lo[1]:
             raise ParameterError(
-                "rise", rise, f"> {lo[1] - hi[1]!r} (a wedge's top edge must stay above its "
-                "bottom: max.y + rise > min.y)", context=ctx,
+                "rise",
+                rise,
+                f"> {lo[1] - hi[1]!r} (a wedge's top edge must stay above its "
+                "bottom: max.y + rise > min.y)",
+                context=ctx,
             )
         if not isinstance(self.name, str) or not self.name:
             raise ParameterError("name", self.name, "a non-empty string", context=ctx)
@@ -154,39 +155,59 @@ class Cuboid:
     def translated(self, offset) -> Cuboid:
         d = _vec3("offset", offset, f"cuboid {self.name!r}")
         (x0, y0, z0), (x1, y1, z1) = self.min, self.max
-        return Cuboid((x0 + d[0], y0 + d[1], z0 + d[2]), (x1 + d[0], y1 + d[1], z1 + d[2]),
-                      self.rise, self.incline, self.name)
+        return Cuboid(
+            (x0 + d[0], y0 + d[1], z0 + d[2]),
+            (x1 + d[0], y1 + d[1], z1 + d[2]),
+            self.rise,
+            self.incline,
+            self.name,
+        )
+
+
 _KINDS = {"C": Incline.SHEAR, "W": Incline.WEDGE}
 _NAMES = ("x0", "y0", "z0", "x1", "y1", "z1", "rise")
 
 
 def _err(msg: str, source: str, tok_or_offset: Token | int, k: int, length: int = 1):
     if isinstance(tok_or_offset, Token):
-        return GrammarError(msg, source, tok_or_offset.offset, length=tok_or_offset.length,
-                            module=k, grammar=GRAMMAR)
+        return GrammarError(
+            msg,
+            source,
+            tok_or_offset.offset,
+            length=tok_or_offset.length,
+            module=k,
+            grammar=GRAMMAR,
+        )
     return GrammarError(msg, source, tok_or_offset, length=length, module=k, grammar=GRAMMAR)
 
 
 def _typed(t: Token, source: str) -> str:
-    return source[t.offset:t.offset + t.length] if t.kind == "item" else t.kind
+    return source[t.offset : t.offset + t.length] if t.kind == "item" else t.kind
 
 
 def _args(part: list[Token], source: str, k: int) -> tuple[Token, list[Token], Token]:
     """Head, argument tokens and closing parenthesis of one ``C(…)`` / ``W(…)``."""
     head = part[0]
     if head.kind != "item" or head.letter not in _KINDS:
-        raise _err(f"expected 'C(' or 'W(' to start cuboid {k}, found {_typed(head, source)!r}",
-                   source, head, k)
+        raise _err(
+            f"expected 'C(' or 'W(' to start cuboid {k}, found {_typed(head, source)!r}",
+            source,
+            head,
+            k,
+        )
     if head.text != "":
-        raise _err(f"expected '(' right after {head.letter}, found {head.text!r}", source,
-                   head.text_offset, k, len(head.text))
+        raise _err(
+            f"expected '(' right after {head.letter}, found {head.text!r}",
+            source,
+            head.text_offset,
+            k,
+            len(head.text),
+        )
     if len(part) < 2 or part[1].kind != "(":
         at = part[1] if len(part) > 1 else None
         if at is None:
-            raise _err(f"expected '(' after {head.letter}", source,
-                       head.offset + head.length, k)
-        raise _err(f"expected '(' after {head.letter}, found {_typed(at, source)!r}", source,
-                   at, k)
+            raise _err(f"expected '(' after {head.letter}", source, head.offset + head.length, k)
+        raise _err(f"expected '(' after {head.letter}, found {_typed(at, source)!r}", source, at, k)
     close = None
     for i, t in enumerate(part[2:], 2):
         if t.kind == "(":
@@ -199,18 +220,26 @@ def _args(part: list[Token], source: str, k: int) -> tuple[Token, list[Token], T
         raise _err("missing ')' at the end of the cuboid", source, last.offset + last.length, k)
     if close != len(part) - 1:
         extra = part[close + 1]
-        raise _err(f"unexpected {_typed(extra, source)!r} after the cuboid's ')' (cuboids are "
-                   "separated by commas)", source, extra, k)
+        raise _err(
+            f"unexpected {_typed(extra, source)!r} after the cuboid's ')' (cuboids are "
+            "separated by commas)",
+            source,
+            extra,
+            k,
+        )
     args: list[Token] = []
     expect_value = True
     for t in part[2:close]:
         if expect_value:
             if t.kind != "item":
-                raise _err(f"missing {_NAMES[min(len(args), 6)]} before {t.kind!r}", source,
-                           t, k)
+                raise _err(f"missing {_NAMES[min(len(args), 6)]} before {t.kind!r}", source, t, k)
             if t.letter:
-                raise _err(f"{_NAMES[min(len(args), 6)]} {_typed(t, source)!r} is not a number",
-                           source, t, k)
+                raise _err(
+                    f"{_NAMES[min(len(args), 6)]} {_typed(t, source)!r} is not a number",
+                    source,
+                    t,
+                    k,
+                )
             args.append(t)
         elif t.kind != ",":
             raise _err(f"expected ',' before {_typed(t, source)!r}", source, t, k)
@@ -226,23 +255,36 @@ def _cuboid(part: list[Token], source: str, k: int) -> Cuboid:
     want = "6 or 7" if kind is Incline.SHEAR else "7"
     if len(args) < 6 or (kind is Incline.WEDGE and len(args) == 6):
         missing = _NAMES[len(args)]
-        raise _err(f"missing {missing}: {head.letter}(…) takes {want} values "
-                   f"(x0, y0, z0, x1, y1, z1{', rise' if kind is Incline.WEDGE else '[, rise]'})"
-                   f", found {len(args)}", source, close, k)
+        raise _err(
+            f"missing {missing}: {head.letter}(…) takes {want} values "
+            f"(x0, y0, z0, x1, y1, z1{', rise' if kind is Incline.WEDGE else '[, rise]'})"
+            f", found {len(args)}",
+            source,
+            close,
+            k,
+        )
     if len(args) > 7:
-        raise _err(f"too many values: {head.letter}(…) takes {want}, found {len(args)}",
-                   source, args[7], k)
-    vals = [token_number(t, source, grammar=GRAMMAR, module=k, what=_NAMES[i])
-            for i, t in enumerate(args)]
+        raise _err(
+            f"too many values: {head.letter}(…) takes {want}, found {len(args)}", source, args[7], k
+        )
+    vals = [
+        token_number(t, source, grammar=GRAMMAR, module=k, what=_NAMES[i])
+        for i, t in enumerate(args)
+    ]
     for a in range(3):
         if not vals[a] < vals[a + 3]:
             t = args[a + 3]
-            raise _err(f"{_NAMES[a + 3]} = {t.text} must be greater than "
-                       f"{_NAMES[a]} = {args[a].text}", source, t, k)
+            raise _err(
+                f"{_NAMES[a + 3]} = {t.text} must be greater than {_NAMES[a]} = {args[a].text}",
+                source,
+                t,
+                k,
+            )
     rise = vals[6] if len(vals) == 7 else 0.0
     try:
-        return Cuboid((vals[0], vals[1], vals[2]), (vals[3], vals[4], vals[5]), rise, kind,
-                      name=f"cuboid{k}")
+        return Cuboid(
+            (vals[0], vals[1], vals[2]), (vals[3], vals[4], vals[5]), rise, kind, name=f"cuboid{k}"
+        )
     except ParameterError as exc:  # the wedge turned inside out: point at its rise
         raise _err(str(exc), source, args[6], k) from None
 

@@ -20,9 +20,7 @@ __all__ = ["Token", "tokenize", "split_top_level", "token_number", "NUMBER_RE"]
 
 # a decimal number as written in the grammars; inf/nan are recognised so that they can be
 # rejected with a pointed "non-finite" error instead of a confusing "unknown token"
-NUMBER_RE = re.compile(
-    r"[+-]?(?:(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?|(?i:infinity|inf|nan))"
-)
+NUMBER_RE = re.compile(r"[+-]?(?:(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?|(?i:infinity|inf|nan))")
 _PUNCT = ",()"
 _STOP = re.compile(r"[\s,()]")
 
@@ -67,8 +65,9 @@ def tokenize(source: str, *, grammar: str = "grammar") -> list[Token]:
         Only when ``source`` is not a string.
     """
     if not isinstance(source, str):
-        raise GrammarError(f"expected a string, got {type(source).__name__}", "", 0,
-                           grammar=grammar)
+        raise GrammarError(
+            f"expected a string, got {type(source).__name__}", "", 0, grammar=grammar
+        )
     out: list[Token] = []
     i, n = 0, len(source)
     while i < n:
@@ -92,8 +91,11 @@ def tokenize(source: str, *, grammar: str = "grammar") -> list[Token]:
         if m is not None:
             j = m.end()
             # a number glued to garbage ("0.1.2", "0.1#") is one bad number, not two tokens
-            if j < n and not _STOP.match(source, j) and not (source[j].isascii()
-                                                              and source[j].isalpha()):
+            if (
+                j < n
+                and not _STOP.match(source, j)
+                and not (source[j].isascii() and source[j].isalpha())
+            ):
                 j = _run_end(source, j)
             text_start, i = i, j
         elif letter:
@@ -149,16 +151,39 @@ def token_number(
     what : what the value means, for the message (``"radius"``, ``"height"`` …)
     """
     if tok.kind != "item":
-        raise GrammarError(f"expected a {what}, found {tok.kind!r}", source, tok.offset,
-                           module=module, grammar=grammar)
+        raise GrammarError(
+            f"expected a {what}, found {tok.kind!r}",
+            source,
+            tok.offset,
+            module=module,
+            grammar=grammar,
+        )
     if tok.text == "":
-        raise GrammarError(f"missing {what} after {tok.letter!r}", source, tok.offset,
-                           length=tok.length, module=module, grammar=grammar)
+        raise GrammarError(
+            f"missing {what} after {tok.letter!r}",
+            source,
+            tok.offset,
+            length=tok.length,
+            module=module,
+            grammar=grammar,
+        )
     if NUMBER_RE.fullmatch(tok.text) is None:
-        raise GrammarError(f"{what} {tok.text!r} is not a number", source, tok.text_offset,
-                           length=len(tok.text), module=module, grammar=grammar)
+        raise GrammarError(
+            f"{what} {tok.text!r} is not a number",
+            source,
+            tok.text_offset,
+            length=len(tok.text),
+            module=module,
+            grammar=grammar,
+        )
     value = float(tok.text)
     if not math.isfinite(value):
-        raise GrammarError(f"{what} {tok.text!r} is not finite", source, tok.text_offset,
-                           length=len(tok.text), module=module, grammar=grammar)
+        raise GrammarError(
+            f"{what} {tok.text!r} is not finite",
+            source,
+            tok.text_offset,
+            length=len(tok.text),
+            module=module,
+            grammar=grammar,
+        )
     return value

@@ -42,7 +42,6 @@ RADIUS_RANGE = (0.0, 2.0)
 POSITION_RANGE = (0.0, 1.0)
 
 
-
 @dataclass(frozen=True)
 class ScrollRing:
     """One ring of the scroll body.
@@ -90,15 +89,33 @@ def format_scroll(g: ScrollGrammar | list[ScrollRing] | tuple[ScrollRing, ...]) 
 def _value(t: Token, source: str, mod: int) -> float:
     """The finite number after an R or P (pointed errors for a missing or bad one)."""
     if not t.text:
-        raise GrammarError(f"missing value after {t.letter}", source, t.offset, length=1,
-                           module=mod, grammar=GRAMMAR)
+        raise GrammarError(
+            f"missing value after {t.letter}",
+            source,
+            t.offset,
+            length=1,
+            module=mod,
+            grammar=GRAMMAR,
+        )
     if NUMBER_RE.fullmatch(t.text) is None:
-        raise GrammarError(f"{t.text!r} is not a number", source, t.text_offset,
-                           length=len(t.text), module=mod, grammar=GRAMMAR)
+        raise GrammarError(
+            f"{t.text!r} is not a number",
+            source,
+            t.text_offset,
+            length=len(t.text),
+            module=mod,
+            grammar=GRAMMAR,
+        )
     val = float(t.text)
     if not math.isfinite(val):  # e.g. 1e999
-        raise GrammarError(f"{t.text!r} is not a finite number", source, t.text_offset,
-                           length=len(t.text), module=mod, grammar=GRAMMAR)
+        raise GrammarError(
+            f"{t.text!r} is not a finite number",
+            source,
+            t.text_offset,
+            length=len(t.text),
+            module=mod,
+            grammar=GRAMMAR,
+        )
     return val
 
 
@@ -112,12 +129,18 @@ def parse_scroll(source: str) -> ScrollGrammar:
         or P, an empty module or decreasing positions (the caret points at the token).
     """
     if not isinstance(source, str):
-        raise GrammarError(f"expected a string, got {type(source).__name__}", "", 0,
-                           grammar=GRAMMAR)
+        raise GrammarError(
+            f"expected a string, got {type(source).__name__}", "", 0, grammar=GRAMMAR
+        )
     toks = tokenize(source, grammar=GRAMMAR)
     if not toks:
-        raise GrammarError("empty scroll grammar: expected rings like 'R0.7 P0.05, R0.7 P0.95'",
-                           source, 0, length=max(1, len(source)), grammar=GRAMMAR)
+        raise GrammarError(
+            "empty scroll grammar: expected rings like 'R0.7 P0.05, R0.7 P0.95'",
+            source,
+            0,
+            length=max(1, len(source)),
+            grammar=GRAMMAR,
+        )
     modules = split_top_level(toks)  # runs of items between commas
     rings: list[ScrollRing] = []
     for k, (words, opening) in enumerate(modules):
@@ -125,43 +148,74 @@ def parse_scroll(source: str) -> ScrollGrammar:
         if not words:
             # point at the comma that closes the empty module (the opening one if trailing)
             at = modules[k + 1][1] if k + 1 < len(modules) else opening
-            raise GrammarError(f"empty module {mod}: expected 'R<r> P<p>'", source, at,
-                               module=mod, grammar=GRAMMAR)
+            raise GrammarError(
+                f"empty module {mod}: expected 'R<r> P<p>'", source, at, module=mod, grammar=GRAMMAR
+            )
         values: dict[str, tuple[float, Token]] = {}
         for t in words:
             sym = t.letter if t.kind == "item" else t.kind
             if sym not in ("R", "P"):
-                text = source[t.offset:t.offset + t.length]
+                text = source[t.offset : t.offset + t.length]
                 raise GrammarError(
                     f"unknown token {text!r}: expected R<radius> or P<position>",
-                    source, t.offset, length=t.length, module=mod, grammar=GRAMMAR)
+                    source,
+                    t.offset,
+                    length=t.length,
+                    module=mod,
+                    grammar=GRAMMAR,
+                )
             if sym in values:
-                raise GrammarError(f"second {sym} in one module (separate rings with commas)",
-                                   source, t.offset, length=t.length, module=mod,
-                                   grammar=GRAMMAR)
+                raise GrammarError(
+                    f"second {sym} in one module (separate rings with commas)",
+                    source,
+                    t.offset,
+                    length=t.length,
+                    module=mod,
+                    grammar=GRAMMAR,
+                )
             if sym == "P" and "R" not in values:
-                raise GrammarError("P before R: a ring is written 'R<r> P<p>'",
-                                   source, t.offset, length=t.length, module=mod,
-                                   grammar=GRAMMAR)
+                raise GrammarError(
+                    "P before R: a ring is written 'R<r> P<p>'",
+                    source,
+                    t.offset,
+                    length=t.length,
+                    module=mod,
+                    grammar=GRAMMAR,
+                )
             val = _value(t, source, mod)
             lo, hi = RADIUS_RANGE if sym == "R" else POSITION_RANGE
             if not lo <= val <= hi:
                 what = "radius r" if sym == "R" else "position p"
-                raise GrammarError(f"{what} = {_fmt(val)} is outside [{_fmt(lo)}, {_fmt(hi)}]",
-                                   source, t.text_offset, length=len(t.text), module=mod,
-                                   grammar=GRAMMAR)
+                raise GrammarError(
+                    f"{what} = {_fmt(val)} is outside [{_fmt(lo)}, {_fmt(hi)}]",
+                    source,
+                    t.text_offset,
+                    length=len(t.text),
+                    module=mod,
+                    grammar=GRAMMAR,
+                )
             values[sym] = (val, t)
         if "P" not in values:
             last = words[-1]
-            raise GrammarError("missing position P<p> after the radius", source,
-                               last.offset + last.length, module=mod, grammar=GRAMMAR)
+            raise GrammarError(
+                "missing position P<p> after the radius",
+                source,
+                last.offset + last.length,
+                module=mod,
+                grammar=GRAMMAR,
+            )
         r, p = values["R"][0], values["P"][0]
         if rings and p < rings[-1].position:
             pt = values["P"][1]
             raise GrammarError(
                 f"position p = {_fmt(p)} is below the previous ring's "
                 f"{_fmt(rings[-1].position)}: positions must not decrease",
-                source, pt.text_offset, length=len(pt.text), module=mod, grammar=GRAMMAR)
+                source,
+                pt.text_offset,
+                length=len(pt.text),
+                module=mod,
+                grammar=GRAMMAR,
+            )
         start = words[0].offset
         end = words[-1].offset + words[-1].length
         rings.append(ScrollRing(r, p, (start, end - start)))
@@ -186,8 +240,7 @@ def scroll_preset_text(name: str) -> str:
     """The grammar string of a preset (case-insensitive name)."""
     key = name.upper() if isinstance(name, str) else name
     if key not in _presets():
-        raise ParameterError("scroll preset", name,
-                             f"one of {', '.join(scroll_preset_names())}")
+        raise ParameterError("scroll preset", name, f"one of {', '.join(scroll_preset_names())}")
     return _presets()[key]["grammar"]
 
 

@@ -18,8 +18,14 @@ _NAMES = {
     "temple_spec": "ionic_usd.pipeline.spec",
 }
 
-__all__ = ["CityOptions", "PrototypeCache", "TempleSpec", "build_city", "build_prototypes",
-           "temple_spec"]
+__all__ = [
+    "CityOptions",
+    "PrototypeCache",
+    "TempleSpec",
+    "build_city",
+    "build_prototypes",
+    "temple_spec",
+]
 
 
 __getattr__, __dir__ = lazy_attributes(__name__, _NAMES, globals())

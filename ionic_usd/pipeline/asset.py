@@ -85,8 +85,9 @@ def _wall_cut(mesh: Mesh, x_max: float | None, simplify: bool = False) -> Mesh:
     lo, hi = mesh.extent
     big = float(np.abs(np.concatenate([lo, hi])).max()) + 1.0
     x1 = big if x_max is None else x_max
-    block = cuboid_mesh(Cuboid((-big, lo[1] - 1.0, -big), (x1, hi[1] + 1.0, -ENGAGED_INSET),
-                               name="wall"))
+    block = cuboid_mesh(
+        Cuboid((-big, lo[1] - 1.0, -big), (x1, hi[1] + 1.0, -ENGAGED_INSET), name="wall")
+    )
     return difference(mesh, [block], name=mesh.name, simplify=simplify)
 
 
@@ -137,8 +138,9 @@ def _outside_walls(points: np.ndarray, form: str) -> np.ndarray:
 
 
 # -- generate -----------------------------------------------------------------------------
-def column_asset_meshes(opts: ColumnAssetOptions,
-                        uv_cache: UVCache | None = None) -> list[AssetMesh]:
+def column_asset_meshes(
+    opts: ColumnAssetOptions, uv_cache: UVCache | None = None
+) -> list[AssetMesh]:
     """Every mesh of the asset with its variant tags (geometry only; with ``uv_cache`` the
     capital is charted by xatlas before the form cuts, which carry the charts).
 
@@ -157,8 +159,9 @@ def column_asset_meshes(opts: ColumnAssetOptions,
             groups.append(("Base", f"Base_{b}", build_base_part(p, b), {"base": b}))
         for fname in opts.flutes:
             fp = p.with_flutes(FLUTE_VARIANTS[fname])
-            groups.append(("Shaft", f"Shaft_{fname}", build_shaft_part(fp, base_h),
-                           {"flutes": fname}))
+            groups.append(
+                ("Shaft", f"Shaft_{fname}", build_shaft_part(fp, base_h), {"flutes": fname})
+            )
         y_cap = base_h + p.shaft.length
         for vm in opts.volutes:
             vp = volute_variant_params(p, vm)
@@ -175,8 +178,9 @@ def column_asset_meshes(opts: ColumnAssetOptions,
             from ionic_usd.texture.uv import metric_charts
 
             caps = [i for i, g in enumerate(groups) if g[0] == "CapitalBody"]
-            charted = metric_charts([groups[i][2] for i in caps], ASSET_TEXELS_PER_METRE[lod],
-                                    cache=uv_cache)
+            charted = metric_charts(
+                [groups[i][2] for i in caps], ASSET_TEXELS_PER_METRE[lod], cache=uv_cache
+            )
             for i, m in zip(caps, charted, strict=True):
                 groups[i] = (groups[i][0], groups[i][1], m, groups[i][3])
         for part, name, mesh, tags in groups:
@@ -226,8 +230,12 @@ def column_asset_ornament(opts: ColumnAssetOptions) -> tuple[AssetInstancer, ...
         for form in opts.forms:
             keep = _outside_walls(np.asarray(inst.positions), form)
             sub = dataclasses.replace(
-                inst, proto_indices=inst.proto_indices[keep], positions=inst.positions[keep],
-                orientations=inst.orientations[keep], scales=inst.scales[keep])
+                inst,
+                proto_indices=inst.proto_indices[keep],
+                positions=inst.positions[keep],
+                orientations=inst.orientations[keep],
+                scales=inst.scales[keep],
+            )
             tags = dict(a.tags)
             name = a.name
             if len(opts.forms) > 1:
@@ -247,16 +255,19 @@ def _with_uvs(meshes: list[AssetMesh], cache: UVCache | None) -> tuple[list[Asse
     def boundary(m: AssetMesh) -> float | None:
         return BASE_CHART_BOUNDARY if m.part == "Base" else None
 
-    prefetch([(m.mesh, ASSET_TEXELS_PER_METRE[m.tags["lod"]], boundary(m)) for m in meshes],
-             cache=cache)
+    prefetch(
+        [(m.mesh, ASSET_TEXELS_PER_METRE[m.tags["lod"]], boundary(m)) for m in meshes], cache=cache
+    )
     out = []
     for lod in {m.tags["lod"] for m in meshes}:
         these = [m for m in meshes if m.tags["lod"] == lod]
         tpm = ASSET_TEXELS_PER_METRE[lod]
-        atlases = unwrap_parts({f"{m.part}/{m.name}": m.mesh for m in these},
-                               texels_per_metre=tpm, cache=cache,
-                               chart_boundaries={f"{m.part}/{m.name}": boundary(m)
-                                                 for m in these})
+        atlases = unwrap_parts(
+            {f"{m.part}/{m.name}": m.mesh for m in these},
+            texels_per_metre=tpm,
+            cache=cache,
+            chart_boundaries={f"{m.part}/{m.name}": boundary(m) for m in these},
+        )
         used = min(a.texels_per_metre for a in atlases.values())
         size = max(math.ceil(used * UV_SPAN), max(a.size for a in atlases.values()))
         for m in these:
@@ -269,8 +280,9 @@ def _with_uvs(meshes: list[AssetMesh], cache: UVCache | None) -> tuple[list[Asse
 
 
 # -- texture ------------------------------------------------------------------------------
-def copy_stone_textures(folder: Path, style: str, size: int, seed: int, *,
-                        make_tx: bool = False) -> list[Path]:
+def copy_stone_textures(
+    folder: Path, style: str, size: int, seed: int, *, make_tx: bool = False
+) -> list[Path]:
     """Put a stone style's maps into ``folder``, generating them once per (style, size, seed).
 
     Generated maps are deterministic, so they are kept in the cache folder (beside the UV
@@ -282,11 +294,15 @@ def copy_stone_textures(folder: Path, style: str, size: int, seed: int, *,
 
     key = f"{style}-{size}-{seed}-{__version__}{'-tx' if make_tx else ''}"
     store = default_cache_folder().parent / "textures" / key
-    names = [f"{style}_{r}.{e}" for r in ("basecolor", "roughness", "normal")
-             for e in (("png", "tx") if make_tx else ("png",))]
+    names = [
+        f"{style}_{r}.{e}"
+        for r in ("basecolor", "roughness", "normal")
+        for e in (("png", "tx") if make_tx else ("png",))
+    ]
     try:  # verified on read (SHA-256 manifest), written atomically, rebuilt when bad
-        store = verified_cache(store, lambda tmp: write_stone_textures(
-            tmp, style, size, seed, make_tx=make_tx))
+        store = verified_cache(
+            store, lambda tmp: write_stone_textures(tmp, style, size, seed, make_tx=make_tx)
+        )
     except (OSError, TextureError):  # an unwritable or full cache: write into the asset
         write_stone_textures(folder, style, size, seed, make_tx=make_tx)
         return [folder / n for n in names]
@@ -311,8 +327,9 @@ def _textures_writer(opts: ColumnAssetOptions):
                 if opts.user_textures and style == "travertine":
                     copy_user_textures(opts.user_textures, tex)
                 else:
-                    copy_stone_textures(tex, style, opts.texture_size, opts.seed,
-                                        make_tx=opts.make_tx)
+                    copy_stone_textures(
+                        tex, style, opts.texture_size, opts.seed, make_tx=opts.make_tx
+                    )
                 bar.update(1)
 
     return populate
@@ -321,13 +338,22 @@ def _textures_writer(opts: ColumnAssetOptions):
 # -- the pipeline -------------------------------------------------------------------------
 def _default_triangles(meshes: list[AssetMesh], opts: ColumnAssetOptions) -> dict[str, int]:
     """Triangles per LOD of the default selection (first variant of every set, form full)."""
-    firsts = {"base": opts.bases[0], "scroll": opts.scrolls[0], "capital": opts.capitals[0],
-              "flutes": opts.flutes[0], "volute": opts.volutes[0]}
+    firsts = {
+        "base": opts.bases[0],
+        "scroll": opts.scrolls[0],
+        "capital": opts.capitals[0],
+        "flutes": opts.flutes[0],
+        "volute": opts.volutes[0],
+    }
     tris: dict[str, int] = {}
     for lod in opts.lods:
-        sel = [m for m in meshes if m.tags["lod"] == lod
-               and m.tags.get("form", "full") == "full"
-               and all(m.tags.get(k, v) == v for k, v in firsts.items())]
+        sel = [
+            m
+            for m in meshes
+            if m.tags["lod"] == lod
+            and m.tags.get("form", "full") == "full"
+            and all(m.tags.get(k, v) == v for k, v in firsts.items())
+        ]
         tris[lod] = sum(m.mesh.n_triangles for m in sel)
     return tris
 
@@ -366,14 +392,23 @@ def build_column_asset(
     misses0 = cache.misses
     # the generated meshes (unions, cuts, the capital's charts) are a pure function of the
     # options and the code: a rebuild of unchanged parameters reads them back
-    generated, _ = cached_meshes("column_asset", opts,
-                                 lambda: column_asset_meshes(opts, uv_cache=cache),
-                                 extra=str(cache.folder))
+    generated, _ = cached_meshes(
+        "column_asset",
+        opts,
+        lambda: column_asset_meshes(opts, uv_cache=cache),
+        extra=str(cache.folder),
+    )
     meshes, _ = _with_uvs(generated, cache)
     unwraps = cache.misses - misses0
-    path = author_column_asset(dest, opts, meshes, column_asset_ornament(opts),
-                               populate=_textures_writer(opts), force=force)
+    path = author_column_asset(
+        dest,
+        opts,
+        meshes,
+        column_asset_ornament(opts),
+        populate=_textures_writer(opts),
+        force=force,
+    )
     size = sum(f.stat().st_size for f in dest.rglob("*") if f.is_file())
-    return AssetReport(path, len(meshes), _default_triangles(meshes, opts), unwraps,
-                       time.perf_counter() - t0, size)
-
+    return AssetReport(
+        path, len(meshes), _default_triangles(meshes, opts), unwraps, time.perf_counter() - t0, size
+    )

@@ -36,8 +36,13 @@ from pathlib import Path
 from ionic_usd.errors import IonicError, ParameterError, UsdAuthoringError
 from ionic_usd.pipeline.spec import TempleSpec
 
-__all__ = ["PrototypeCache", "BuildResult", "build_temple_files", "build_prototypes",
-           "default_prototype_cache"]
+__all__ = [
+    "PrototypeCache",
+    "BuildResult",
+    "build_temple_files",
+    "build_prototypes",
+    "default_prototype_cache",
+]
 
 _MANIFEST = "manifest.json"
 CONNECT_TIMEOUT = "10s"  # to reach an existing scheduler
@@ -49,8 +54,7 @@ def default_prototype_cache() -> Path:
     if root:
         return Path(root).expanduser() / "prototypes"
     xdg = os.environ.get("XDG_CACHE_HOME")
-    return (Path(xdg).expanduser() if xdg else Path.home() / ".cache") / "ionic_usd" / \
-        "prototypes"
+    return (Path(xdg).expanduser() if xdg else Path.home() / ".cache") / "ionic_usd" / "prototypes"
 
 
 def build_temple_files(spec: TempleSpec) -> tuple[dict[str, bytes], str, str, float]:
@@ -68,16 +72,19 @@ def build_temple_files(spec: TempleSpec) -> tuple[dict[str, bytes], str, str, fl
     col_tables = {k: data.pop(k) for k in ("column", "shaft", "capital", "volute") if k in data}
     layout = spec.layout()
     p = layout.params
-    column = portunus_column_params(height=p.columns_height,
-                                    lower_diameter=p.columns_lower_diameter)
+    column = portunus_column_params(
+        height=p.columns_height, lower_diameter=p.columns_lower_diameter
+    )
     if col_tables:
-        column = column_params_from_mapping(col_tables, context=f"temple {spec.name}",
-                                            base=column)
+        column = column_params_from_mapping(col_tables, context=f"temple {spec.name}", base=column)
     with tempfile.TemporaryDirectory(prefix="ionic_usd_build_") as tmp:
         root = Path(tmp) / "Temple"
         compose_temple(root, layout, column, texture_size=spec.texture_size, seed=spec.seed)
-        files = {f.relative_to(root).as_posix(): f.read_bytes()
-                 for f in sorted(root.rglob("*")) if f.is_file()}
+        files = {
+            f.relative_to(root).as_posix(): f.read_bytes()
+            for f in sorted(root.rglob("*"))
+            if f.is_file()
+        }
     try:
         from distributed import get_worker
 
@@ -134,8 +141,9 @@ class PrototypeCache:
             for rel, digest in sorted(manifest.items()):
                 data = (src / rel).read_bytes()
                 if hashlib.sha256(data).hexdigest() != digest:
-                    raise UsdAuthoringError(f"prototype cache entry {src} is corrupt ({rel}); "
-                                            "delete it and build again")
+                    raise UsdAuthoringError(
+                        f"prototype cache entry {src} is corrupt ({rel}); delete it and build again"
+                    )
                 f = tmp / rel
                 f.parent.mkdir(parents=True, exist_ok=True)
                 f.write_bytes(data)
@@ -152,25 +160,31 @@ def _matches(folder: Path, manifest: dict[str, str]) -> bool:
     have = {f.relative_to(folder).as_posix() for f in folder.rglob("*") if f.is_file()}
     if have != set(manifest):
         return False
-    return all(hashlib.sha256((folder / r).read_bytes()).hexdigest() == d
-               for r, d in manifest.items())
+    return all(
+        hashlib.sha256((folder / r).read_bytes()).hexdigest() == d for r, d in manifest.items()
+    )
 
 
 @dataclass(frozen=True)
 class BuildResult:
     """What :func:`build_prototypes` did."""
 
-    built: tuple[str, ...]          # keys built now
-    reused: tuple[str, ...]         # keys found in the cache
-    workers: tuple[str, ...]        # addresses of the workers that built prototypes
-    n_workers: int                  # workers of the cluster used (0: none started)
+    built: tuple[str, ...]  # keys built now
+    reused: tuple[str, ...]  # keys found in the cache
+    workers: tuple[str, ...]  # addresses of the workers that built prototypes
+    n_workers: int  # workers of the cluster used (0: none started)
     seconds: float
     task_seconds: dict[str, float]  # key → build time on its worker
 
 
-def build_prototypes(specs: Sequence[TempleSpec], *, cache: PrototypeCache | None = None,
-                     scheduler: str | None = None, n_workers: int | None = None,
-                     progress: Callable[[str], None] | None = None) -> BuildResult:
+def build_prototypes(
+    specs: Sequence[TempleSpec],
+    *,
+    cache: PrototypeCache | None = None,
+    scheduler: str | None = None,
+    n_workers: int | None = None,
+    progress: Callable[[str], None] | None = None,
+) -> BuildResult:
     """Make sure every spec is in the cache, building the missing ones on Dask.
 
     Parameters
@@ -193,35 +207,52 @@ def build_prototypes(specs: Sequence[TempleSpec], *, cache: PrototypeCache | Non
         # two busy cores) and no parallelism; the bytes are the same either way
         files, address, _, secs = build_temple_files(todo[0])
         cache.put(todo[0], files)
-        return BuildResult((todo[0].key,), reused, ("in-process",), 0,
-                           time.perf_counter() - t0, {todo[0].key: round(secs, 3)})
+        return BuildResult(
+            (todo[0].key,),
+            reused,
+            ("in-process",),
+            0,
+            time.perf_counter() - t0,
+            {todo[0].key: round(secs, 3)},
+        )
     try:
         from distributed import Client, LocalCluster, as_completed
     except ImportError:
-        raise IonicError("building prototypes on Dask needs distributed: pip install "
-                         "'ionic_usd[city]'") from None
+        raise IonicError(
+            "building prototypes on Dask needs distributed: pip install 'ionic_usd[city]'"
+        ) from None
 
     cluster = None
     try:
         if scheduler is None:
             n = n_workers or os.cpu_count() or 1
-            cluster = LocalCluster(n_workers=min(n, len(todo)), threads_per_worker=1,
-                                   processes=True, host="127.0.0.1", dashboard_address=None,
-                                   silence_logs=logging.ERROR)
+            cluster = LocalCluster(
+                n_workers=min(n, len(todo)),
+                threads_per_worker=1,
+                processes=True,
+                host="127.0.0.1",
+                dashboard_address=None,
+                silence_logs=logging.ERROR,
+            )
             client = Client(cluster)
         else:
             try:
                 client = Client(scheduler, timeout=CONNECT_TIMEOUT)
             except (OSError, TimeoutError, ValueError, TypeError) as exc:
-                raise ParameterError("--scheduler", scheduler, f"a reachable Dask scheduler "
-                                     f"tcp://HOST:PORT ({type(exc).__name__}: {exc})") from None
+                raise ParameterError(
+                    "--scheduler",
+                    scheduler,
+                    f"a reachable Dask scheduler tcp://HOST:PORT ({type(exc).__name__}: {exc})",
+                ) from None
         with client:
             nw = len(client.scheduler_info().get("workers", {}))
             if nw == 0:
                 client.wait_for_workers(1, timeout=60)
                 nw = len(client.scheduler_info().get("workers", {}))
-            futures = [client.submit(build_temple_files, s, key=f"temple-{s.key}", pure=False)
-                       for s in todo]
+            futures = [
+                client.submit(build_temple_files, s, key=f"temple-{s.key}", pure=False)
+                for s in todo
+            ]
             by_key = {f.key: s for f, s in zip(futures, todo, strict=True)}
             workers: set[str] = set()
             task_seconds: dict[str, float] = {}
@@ -234,20 +265,34 @@ def build_prototypes(specs: Sequence[TempleSpec], *, cache: PrototypeCache | Non
     finally:
         if cluster is not None:
             cluster.close()
-    return BuildResult(tuple(s.key for s in todo), reused, tuple(sorted(workers)), nw,
-                       time.perf_counter() - t0, task_seconds)
+    return BuildResult(
+        tuple(s.key for s in todo),
+        reused,
+        tuple(sorted(workers)),
+        nw,
+        time.perf_counter() - t0,
+        task_seconds,
+    )
 
 
-def _take(fut, by_key: dict, cache: PrototypeCache, workers: set[str],
-          task_seconds: dict[str, float], progress: Callable[[str], None] | None) -> None:
+def _take(
+    fut,
+    by_key: dict,
+    cache: PrototypeCache,
+    workers: set[str],
+    task_seconds: dict[str, float],
+    progress: Callable[[str], None] | None,
+) -> None:
     """Store one finished prototype build in the cache (the client writes every byte)."""
     from ionic_usd import __version__
 
     files, address, version, secs = fut.result()
     spec = by_key[fut.key]
     if version != __version__:
-        raise UsdAuthoringError(f"worker {address} runs ionic_usd {version}, the "
-                                f"client {__version__}: install the same version")
+        raise UsdAuthoringError(
+            f"worker {address} runs ionic_usd {version}, the "
+            f"client {__version__}: install the same version"
+        )
     cache.put(spec, files)
     workers.add(address)
     task_seconds[spec.key] = round(secs, 3)

@@ -62,6 +62,7 @@ _CARD_BAKE = f"cards-v2-{_CARD_LOD}"  # v2: Hydra's face axes (side faces Z-up)
 # the street columns' finish variant
 _COLUMN_FINISH = "stucco"
 
+
 @dataclass(frozen=True)
 class CityOptions:
     """What ``ionic-usd city`` can set (defaults = the CLI's)."""
@@ -90,38 +91,38 @@ class CityOptions:
     prototype_cache: str | None = None  # default: $IONIC_USD_CACHE/prototypes
 
     def __post_init__(self) -> None:
-        if self.columns is not None and (isinstance(self.columns, bool)
-                                         or not isinstance(self.columns, int)
-                                         or self.columns < 0):
+        if self.columns is not None and (
+            isinstance(self.columns, bool) or not isinstance(self.columns, int) or self.columns < 0
+        ):
             raise ParameterError("--columns", self.columns, "an integer >= 0")
         if not (isinstance(self.column_variety, int) and 1 <= self.column_variety <= 16):
             raise ParameterError("--column-variety", self.column_variety, "an integer 1-16")
         near, far = self.lod_distances
         if not (np.isfinite([near, far]).all() and 0 < near <= far):
-            raise ParameterError("--lod-distances", self.lod_distances, "NEAR,FAR with "
-                                 "0 < NEAR <= FAR (m)")
-        if self.cards_beyond is not None and not (np.isfinite(self.cards_beyond)
-                                                  and self.cards_beyond >= 0):
+            raise ParameterError(
+                "--lod-distances", self.lod_distances, "NEAR,FAR with 0 < NEAR <= FAR (m)"
+            )
+        if self.cards_beyond is not None and not (
+            np.isfinite(self.cards_beyond) and self.cards_beyond >= 0
+        ):
             raise ParameterError("--cards-beyond", self.cards_beyond, "a distance >= 0 (m)")
         cs = self.card_size
         if isinstance(cs, bool) or not isinstance(cs, int) or not 16 <= cs <= 4096:
             raise ParameterError("--card-size", cs, "an integer from 16 to 4096 pixels")
         lo, hi = self.scale_range
         if not (np.isfinite([lo, hi]).all() and 0 < lo <= hi):
-            raise ParameterError("--scale-range", self.scale_range, "MIN,MAX with "
-                                 "0 < MIN <= MAX")
+            raise ParameterError("--scale-range", self.scale_range, "MIN,MAX with 0 < MIN <= MAX")
         if self.focus is not None and not np.isfinite(self.focus).all():
             raise ParameterError("--focus", self.focus, "finite X,Y (plan metres)")
         if not (np.isfinite(self.memory_limit_gb) and self.memory_limit_gb > 0):
             raise ParameterError("--memory-limit", self.memory_limit_gb, "GB > 0")
         ts = self.texture_size
-        if isinstance(ts, bool) or not isinstance(ts, int) or not 16 <= ts <= 8192 or ts & (
-                ts - 1):
+        if isinstance(ts, bool) or not isinstance(ts, int) or not 16 <= ts <= 8192 or ts & (ts - 1):
             raise ParameterError("--texture-size", ts, "a power of two in [16, 8192]")
-        if self.scheduler is not None and not (isinstance(self.scheduler, str) and
-                                               "://" in self.scheduler):
-            raise ParameterError("--scheduler", self.scheduler, "an address like "
-                                 "tcp://HOST:PORT")
+        if self.scheduler is not None and not (
+            isinstance(self.scheduler, str) and "://" in self.scheduler
+        ):
+            raise ParameterError("--scheduler", self.scheduler, "an address like tcp://HOST:PORT")
         if self.workers is not None and (not isinstance(self.workers, int) or self.workers < 1):
             raise ParameterError("--workers", self.workers, "an integer >= 1")
 
@@ -130,8 +131,7 @@ def footprint_of(spec: TempleSpec) -> Footprint:
     """The temple's plan box (its own frame) and height, from its cuboids."""
     lay = spec.layout()
     lo = np.min([c.min for c in lay.all_cuboids()], axis=0)
-    hi = np.max([np.asarray(c.max) + [0, max(c.rise, 0), 0] for c in lay.all_cuboids()],
-                axis=0)
+    hi = np.max([np.asarray(c.max) + [0, max(c.rise, 0), 0] for c in lay.all_cuboids()], axis=0)
     return Footprint(float(lo[0]), float(hi[0]), float(lo[2]), float(hi[2]), float(hi[1]))
 
 
@@ -141,8 +141,9 @@ def estimate_memory(temples: int, columns: int, builds: int, threshold: int) -> 
     return _BASE_BYTES + columns * _PER_COLUMN + temples * per_temple + builds * _PER_BUILD
 
 
-def build_city(out: str | os.PathLike, opts: CityOptions, *,
-               progress: Callable[[str], None] | None = None) -> dict:
+def build_city(
+    out: str | os.PathLike, opts: CityOptions, *, progress: Callable[[str], None] | None = None
+) -> dict:
     """Build the city into ``out`` (see the module docstring); returns the summary (JSON)."""
     from ionic_usd.usd.city import (
         DEFAULT_INSTANCER_THRESHOLD,
@@ -162,10 +163,16 @@ def build_city(out: str | os.PathLike, opts: CityOptions, *,
     for name in (ROOT_LAYER, INSTANCES_LAYER):
         if (out / name).exists() and not opts.force:
             raise OutputExistsError(f"{out / name} exists; pass --force to rebuild the city")
-    threshold = (DEFAULT_INSTANCER_THRESHOLD if opts.instancer_threshold is None
-                 else opts.instancer_threshold)
-    plan: CityPlan = (read_geojson(opts.plan) if opts.plan else
-                      grid_plan(opts.rows, opts.cols, opts.block, spacing=opts.column_spacing))
+    threshold = (
+        DEFAULT_INSTANCER_THRESHOLD
+        if opts.instancer_threshold is None
+        else opts.instancer_threshold
+    )
+    plan: CityPlan = (
+        read_geojson(opts.plan)
+        if opts.plan
+        else grid_plan(opts.rows, opts.cols, opts.block, spacing=opts.column_spacing)
+    )
     rng = np.random.default_rng(opts.seed)
 
     # -- 1. builds and per-lot choices -------------------------------------------------------
@@ -178,7 +185,8 @@ def build_city(out: str | os.PathLike, opts: CityOptions, *,
     for i, lot in enumerate(plan.lots):
         ctx = f"{plan.source} lot {lot.id}"
         base = base_specs.get(lot.temple) or temple_spec(
-            lot.temple, base_dir=plan.base_dir, texture_size=opts.texture_size, context=ctx)
+            lot.temple, base_dir=plan.base_dir, texture_size=opts.texture_size, context=ctx
+        )
         base_specs[lot.temple] = base
         column = dict(lot.column)
         if not column and opts.column_variety > 1:
@@ -186,14 +194,18 @@ def build_city(out: str | os.PathLike, opts: CityOptions, *,
                 diameters[lot.temple] = base.layout().params.columns_lower_diameter
             d0 = diameters[lot.temple]
             levels = np.linspace(0.95 * d0, 1.05 * d0, opts.column_variety)
-            column = {"lower_diameter": round(float(levels[rng.integers(opts.column_variety)]),
-                                              4)}
+            column = {"lower_diameter": round(float(levels[rng.integers(opts.column_variety)]), 4)}
         spec = base
         if column:
             vkey = (lot.temple, tuple(sorted(column.items())))
             if vkey not in variants:
-                variants[vkey] = temple_spec(lot.temple, column, base_dir=plan.base_dir,
-                                             texture_size=opts.texture_size, context=ctx)
+                variants[vkey] = temple_spec(
+                    lot.temple,
+                    column,
+                    base_dir=plan.base_dir,
+                    texture_size=opts.texture_size,
+                    context=ctx,
+                )
             spec = variants[vkey]
         build[i] = spec_index.setdefault(spec.key, len(spec_index))
         if build[i] == len(specs):
@@ -204,9 +216,12 @@ def build_city(out: str | os.PathLike, opts: CityOptions, *,
         known = hyp_ids[specs[build[i]].key]
         unknown = sorted(set(lot.hypotheses) - set(known))
         if unknown:
-            raise ParameterError("hypotheses", unknown, f"ids of the temple's hypotheses: "
-                                 f"{', '.join(known) or 'none'}",
-                                 context=f"{plan.source} lot {lot.id}")
+            raise ParameterError(
+                "hypotheses",
+                unknown,
+                f"ids of the temple's hypotheses: {', '.join(known) or 'none'}",
+                context=f"{plan.source} lot {lot.id}",
+            )
         sel = {}
         for h in known:
             draw = rng.random()  # drawn for every id, so plan choices do not shift the others
@@ -219,16 +234,19 @@ def build_city(out: str | os.PathLike, opts: CityOptions, *,
     # -- 2. fitting and colonnades ----------------------------------------------------------
     t1 = time.perf_counter()
     fps = [footprint_of(s) for s in specs]
-    centre = (np.mean([lot.outline.mean(axis=0) for lot in plan.lots], axis=0)
-              if plan.lots else None)
+    centre = np.mean([lot.outline.mean(axis=0) for lot in plan.lots], axis=0) if plan.lots else None
     fits: list[TempleFit] = []
     # a grid's lots differ by a translation only: fit one, move the others
     same_shape: dict[tuple, tuple[TempleFit, np.ndarray]] = {}
     for i, lot in enumerate(plan.lots):
         key = None
         if lot.orientation is not None:
-            key = (int(build[i]), lot.orientation, lot.scale,
-                   (lot.outline - lot.outline[0]).round(9).tobytes())
+            key = (
+                int(build[i]),
+                lot.orientation,
+                lot.scale,
+                (lot.outline - lot.outline[0]).round(9).tobytes(),
+            )
         if key is not None and key in same_shape:
             f0, o0 = same_shape[key]
             d = lot.outline[0] - o0
@@ -247,12 +265,12 @@ def build_city(out: str | os.PathLike, opts: CityOptions, *,
     cxz, cyaw = cxz[clear], cyaw[clear]
     if opts.columns is not None:
         if opts.columns <= len(cxz):
-            cxz, cyaw = cxz[:opts.columns], cyaw[:opts.columns]
+            cxz, cyaw = cxz[: opts.columns], cyaw[: opts.columns]
         else:
-            pts = np.concatenate([np.concatenate(placed) * [1, -1] if placed else
-                                  np.zeros((0, 2)), cxz])
-            bounds = ((*pts.min(axis=0), *pts.max(axis=0)) if len(pts) else (0.0, 0.0, 0.0,
-                                                                                0.0))
+            pts = np.concatenate(
+                [np.concatenate(placed) * [1, -1] if placed else np.zeros((0, 2)), cxz]
+            )
+            bounds = (*pts.min(axis=0), *pts.max(axis=0)) if len(pts) else (0.0, 0.0, 0.0, 0.0)
             exz, eyaw = extra_columns(opts.columns - len(cxz), bounds, opts.column_spacing)
             cxz, cyaw = np.concatenate([cxz, exz]), np.concatenate([cyaw, eyaw])
     txz = np.array([[f.x, f.z] for f in fits]).reshape(-1, 2)
@@ -264,76 +282,103 @@ def build_city(out: str | os.PathLike, opts: CityOptions, *,
     # -- 3. memory estimate ------------------------------------------------------------------
     est = estimate_memory(len(plan.lots), len(cxz), len(specs), threshold)
     if est > opts.memory_limit_gb * 1e9:
-        raise BudgetError(f"this city needs about {est / 1e9:.1f} GB ({len(plan.lots):,} "
-                          f"temples, {len(cxz):,} columns), above --memory-limit "
-                          f"{opts.memory_limit_gb:g} GB; raise the limit to build it anyway")
+        raise BudgetError(
+            f"this city needs about {est / 1e9:.1f} GB ({len(plan.lots):,} "
+            f"temples, {len(cxz):,} columns), above --memory-limit "
+            f"{opts.memory_limit_gb:g} GB; raise the limit to build it anyway"
+        )
     if not plan.lots and not len(cxz):
         raise ParameterError("city", "empty", "at least one temple or column")
 
     # -- 4. builds ------------------------------------------------------------------------
     t2 = time.perf_counter()
-    needed = specs or [base_specs.get("portunus") or temple_spec(
-        "portunus", texture_size=opts.texture_size)]
-    cache = PrototypeCache(Path(opts.prototype_cache)) if opts.prototype_cache else \
-        PrototypeCache()
-    res = build_prototypes(needed, cache=cache, scheduler=opts.scheduler,
-                           n_workers=opts.workers, progress=progress)
+    needed = specs or [
+        base_specs.get("portunus") or temple_spec("portunus", texture_size=opts.texture_size)
+    ]
+    cache = PrototypeCache(Path(opts.prototype_cache)) if opts.prototype_cache else PrototypeCache()
+    res = build_prototypes(
+        needed, cache=cache, scheduler=opts.scheduler, n_workers=opts.workers, progress=progress
+    )
     for s in needed:
         cache.install(s, out / "Temples" / s.folder)
     timings["build"] = time.perf_counter() - t2
 
     # -- 4b. cards for the far field -------------------------------------------------------
     t3 = time.perf_counter()
-    tcards, card_dirs, card_note = _far_cards(out, opts, specs, build, selections, txz,
-                                              progress)
+    tcards, card_dirs, card_note = _far_cards(out, opts, specs, build, selections, txz, progress)
     column_asset = f"Temples/{needed[0].folder}/{ASSET_NAME}/{ASSET_NAME}.usda"
-    ccards, column_card_dir = _far_column_cards(out, opts, needed[0], column_asset, cxz,
-                                                card_note, progress)
+    ccards, column_card_dir = _far_column_cards(
+        out, opts, needed[0], column_asset, cxz, card_note, progress
+    )
     timings["cards"] = time.perf_counter() - t3
 
     # -- 5. USD ---------------------------------------------------------------------------
     temples = TempleInstances(
-        folders=[f"Temples/{s.folder}" for s in specs], build=build,
-        names=[lot.id for lot in plan.lots], xz=txz,
-        yaw=np.array([f.yaw_deg for f in fits]), scale=np.array([f.scale for f in fits]),
-        selections=selections, lod=tlod, cards=tcards)
+        folders=[f"Temples/{s.folder}" for s in specs],
+        build=build,
+        names=[lot.id for lot in plan.lots],
+        xz=txz,
+        yaw=np.array([f.yaw_deg for f in fits]),
+        scale=np.array([f.scale for f in fits]),
+        selections=selections,
+        lod=tlod,
+        cards=tcards,
+    )
     columns = ColumnInstances(column_asset, cxz, cyaw, clod, ccards)
     # what the file records depends on the inputs only (not on who built what, or when)
     summary = {
         "plan": Path(plan.source).name if opts.plan else "grid",
-        "temples": len(plan.lots), "columns": int(len(cxz)),
+        "temples": len(plan.lots),
+        "columns": int(len(cxz)),
         "columns_dropped_inside_temples": dropped,
         "builds": len(needed),
     }
-    rep = compose_city(out, temples, columns, instancer_threshold=threshold,
-                       summary=summary, card_dirs=card_dirs, finish=_COLUMN_FINISH,
-                       column_card_dir=column_card_dir, force=True)
+    rep = compose_city(
+        out,
+        temples,
+        columns,
+        instancer_threshold=threshold,
+        summary=summary,
+        card_dirs=card_dirs,
+        finish=_COLUMN_FINISH,
+        column_card_dir=column_card_dir,
+        force=True,
+    )
     timings.update({f"usd {k}": v for k, v in rep.seconds.items()})
     timings["total"] = time.perf_counter() - t0
-    summary.update({
-        "city": str(rep.path),
-        "prototypes_built": len(res.built), "prototypes_reused": len(res.reused),
-        "workers": list(res.workers),
-        "temples_as": rep.temples_as,
-        "temple_prototypes": rep.temple_prototypes,
-        "column_prototypes": rep.column_prototypes,
-        "unique_prototypes": rep.temple_prototypes + rep.column_prototypes,
-        "instances": len(plan.lots) + int(len(cxz)),
-        "triangles": rep.triangles,
-        "cards": card_note,
-        "extent": [list(rep.extent[0]), list(rep.extent[1])],
-        "memory_estimate_gb": round(est / 1e9, 3),
-        "cluster_workers": res.n_workers,
-        "scheduler": opts.scheduler or ("local" if res.n_workers else "none (all cached)"),
-        "build_task_seconds": res.task_seconds,
-        "timings": {k: round(v, 3) for k, v in timings.items()},
-    })
+    summary.update(
+        {
+            "city": str(rep.path),
+            "prototypes_built": len(res.built),
+            "prototypes_reused": len(res.reused),
+            "workers": list(res.workers),
+            "temples_as": rep.temples_as,
+            "temple_prototypes": rep.temple_prototypes,
+            "column_prototypes": rep.column_prototypes,
+            "unique_prototypes": rep.temple_prototypes + rep.column_prototypes,
+            "instances": len(plan.lots) + int(len(cxz)),
+            "triangles": rep.triangles,
+            "cards": card_note,
+            "extent": [list(rep.extent[0]), list(rep.extent[1])],
+            "memory_estimate_gb": round(est / 1e9, 3),
+            "cluster_workers": res.n_workers,
+            "scheduler": opts.scheduler or ("local" if res.n_workers else "none (all cached)"),
+            "build_task_seconds": res.task_seconds,
+            "timings": {k: round(v, 3) for k, v in timings.items()},
+        }
+    )
     return summary
 
 
-def _far_cards(out: Path, opts: CityOptions, specs: list[TempleSpec], build: np.ndarray,
-               selections: list[dict], txz: np.ndarray,
-               progress: Callable[[str], None] | None) -> tuple[np.ndarray | None, dict, dict]:
+def _far_cards(
+    out: Path,
+    opts: CityOptions,
+    specs: list[TempleSpec],
+    build: np.ndarray,
+    selections: list[dict],
+    txz: np.ndarray,
+    progress: Callable[[str], None] | None,
+) -> tuple[np.ndarray | None, dict, dict]:
     """Which temples draw as cards (beyond ``cards_beyond`` of the focus) and their images.
 
     One set of six images per temple prototype (build + hypothesis selections), baked by the
@@ -345,8 +390,14 @@ def _far_cards(out: Path, opts: CityOptions, specs: list[TempleSpec], build: np.
         return None, {}, {"temples": 0, "why": "no --focus" if opts.cards else "--no-cards"}
     beyond = opts.cards_beyond if opts.cards_beyond is not None else opts.lod_distances[1]
     cards = distance_from(txz, opts.focus) > beyond
-    note: dict = {"beyond_m": beyond, "temples": int(cards.sum()), "prototypes": 0,
-                  "baked": 0, "reused": 0, "size_px": opts.card_size}
+    note: dict = {
+        "beyond_m": beyond,
+        "temples": int(cards.sum()),
+        "prototypes": 0,
+        "baked": 0,
+        "reused": 0,
+        "size_px": opts.card_size,
+    }
     if not cards.any():
         return None, {}, note
     from ionic_usd.preview import PreviewUnavailableError, bake_cards
@@ -364,16 +415,22 @@ def _far_cards(out: Path, opts: CityOptions, specs: list[TempleSpec], build: np.
         key = (b, tuple(sorted(sel.items())))
         if key in dirs:
             continue
-        digest = hashlib.blake2b(json.dumps([specs[b].key, key[1], opts.card_size, _CARD_BAKE]
-                                            ).encode(), digest_size=8).hexdigest()
+        digest = hashlib.blake2b(
+            json.dumps([specs[b].key, key[1], opts.card_size, _CARD_BAKE]).encode(), digest_size=8
+        ).hexdigest()
         rel = f"Temples/Cards/{specs[b].folder}-{digest}"
         if all((out / rel / f"{f}.png").is_file() for f in CARD_FACES):
             note["reused"] += 1
         else:
             try:
                 bake_sel = temple_selection(vsets[b], selections[i], _CARD_LOD)
-                bake_cards(root, out / rel, temple_card_bound(root, sel), variants=bake_sel,
-                           size=opts.card_size)
+                bake_cards(
+                    root,
+                    out / rel,
+                    temple_card_bound(root, sel),
+                    variants=bake_sel,
+                    size=opts.card_size,
+                )
             except PreviewUnavailableError as exc:
                 if opts.cards_beyond is not None:
                     raise  # asked for by name: say why it cannot be done
@@ -388,9 +445,15 @@ def _far_cards(out: Path, opts: CityOptions, specs: list[TempleSpec], build: np.
     return cards, dirs, note
 
 
-def _far_column_cards(out: Path, opts: CityOptions, spec: TempleSpec, asset: str,
-                      cxz: np.ndarray, note: dict, progress: Callable[[str], None] | None
-                      ) -> tuple[np.ndarray | None, str | None]:
+def _far_column_cards(
+    out: Path,
+    opts: CityOptions,
+    spec: TempleSpec,
+    asset: str,
+    cxz: np.ndarray,
+    note: dict,
+    progress: Callable[[str], None] | None,
+) -> tuple[np.ndarray | None, str | None]:
     """Which street columns draw as cards (beyond the temples' card distance from the focus)
     and the folder of the column's six images, baked once by the preview renderer from the
     column asset at :data:`ionic_usd.usd.city.COLUMN_CARD_SELECTION` into
@@ -401,8 +464,9 @@ def _far_column_cards(out: Path, opts: CityOptions, spec: TempleSpec, asset: str
         return None, None
     beyond = opts.cards_beyond if opts.cards_beyond is not None else opts.lod_distances[1]
     cards = distance_from(cxz, opts.focus) > beyond
-    note.update({"beyond_m": beyond, "columns": int(cards.sum()), "column_baked": 0,
-                 "column_reused": 0})
+    note.update(
+        {"beyond_m": beyond, "columns": int(cards.sum()), "column_baked": 0, "column_reused": 0}
+    )
     if not cards.any():
         return None, None
     from ionic_usd.preview import PreviewUnavailableError, bake_cards
@@ -410,17 +474,17 @@ def _far_column_cards(out: Path, opts: CityOptions, spec: TempleSpec, asset: str
     from ionic_usd.usd.draw_mode import CARD_FACES
 
     sel = {**COLUMN_CARD_SELECTION, "finish": _COLUMN_FINISH}
-    digest = hashlib.blake2b(json.dumps([spec.key, "column", sorted(sel.items()),
-                                         opts.card_size, _CARD_BAKE]).encode(),
-                             digest_size=8).hexdigest()
+    digest = hashlib.blake2b(
+        json.dumps([spec.key, "column", sorted(sel.items()), opts.card_size, _CARD_BAKE]).encode(),
+        digest_size=8,
+    ).hexdigest()
     rel = f"Temples/Cards/{Path(asset).stem}-{digest}"
     if all((out / rel / f"{f}.png").is_file() for f in CARD_FACES):
         note["column_reused"] = 1
         return cards, rel
     root = out / asset
     try:
-        bake_cards(root, out / rel, model_card_bound(root, sel), variants=sel,
-                   size=opts.card_size)
+        bake_cards(root, out / rel, model_card_bound(root, sel), variants=sel, size=opts.card_size)
     except PreviewUnavailableError as exc:
         if opts.cards_beyond is not None:
             raise
@@ -444,4 +508,3 @@ def write_summary(summary: dict, path: str | os.PathLike) -> None:
     finally:
         if tmp.exists():
             tmp.unlink()
-

@@ -16,9 +16,11 @@ def _pair(flag: str):
         try:
             a, b = (float(x) for x in text.split(","))
         except ValueError:
-            raise argparse.ArgumentTypeError(f"{flag} expects two numbers A,B, got {text!r}"
-                                             ) from None
+            raise argparse.ArgumentTypeError(
+                f"{flag} expects two numbers A,B, got {text!r}"
+            ) from None
         return a, b
+
     return parse
 
 
@@ -31,12 +33,17 @@ def cmd_city(args: argparse.Namespace) -> int:
         raise ParameterError("--json", str(args.json), "a new file (or pass --force)")
     import math
 
-    for flag, v, lo, hi in (("--rows", args.rows, 1, 10_000), ("--cols", args.cols, 1, 10_000),
-                            ("--seed", args.seed, 0, 2**63 - 1)):
+    for flag, v, lo, hi in (
+        ("--rows", args.rows, 1, 10_000),
+        ("--cols", args.cols, 1, 10_000),
+        ("--seed", args.seed, 0, 2**63 - 1),
+    ):
         if not lo <= v <= hi:
             raise ParameterError(flag, v, f"an integer in [{lo}, {hi:,}]")
-    for flag, length, low, high in (("--block", args.block, 1.0, 10_000.0),
-                                    ("--column-spacing", args.column_spacing, 0.5, 1_000.0)):
+    for flag, length, low, high in (
+        ("--block", args.block, 1.0, 10_000.0),
+        ("--column-spacing", args.column_spacing, 0.5, 1_000.0),
+    ):
         if not (math.isfinite(length) and low <= length <= high):
             raise ParameterError(flag, length, f"a length in [{low:g}, {high:g}] m")
     if args.plan is None:
@@ -51,22 +58,41 @@ def cmd_city(args: argparse.Namespace) -> int:
             street = args.columns
         from ionic_usd.city.layout import DEFAULT_INSTANCER_THRESHOLD
 
-        threshold = (DEFAULT_INSTANCER_THRESHOLD if args.instancer_threshold is None
-                     else args.instancer_threshold)
+        threshold = (
+            DEFAULT_INSTANCER_THRESHOLD
+            if args.instancer_threshold is None
+            else args.instancer_threshold
+        )
         est = estimate_memory(temples, street, 1, threshold)
         if est > args.memory_limit * 1e9:
-            raise BudgetError(f"this city needs about {est / 1e9:.1f} GB ({temples:,} temples, "
-                              f"about {street:,} columns), above --memory-limit "
-                              f"{args.memory_limit:g} GB; raise the limit to build it anyway")
+            raise BudgetError(
+                f"this city needs about {est / 1e9:.1f} GB ({temples:,} temples, "
+                f"about {street:,} columns), above --memory-limit "
+                f"{args.memory_limit:g} GB; raise the limit to build it anyway"
+            )
     opts = CityOptions(
-        plan=str(args.plan) if args.plan else None, rows=args.rows, cols=args.cols,
-        block=args.block, columns=args.columns, column_spacing=args.column_spacing,
-        variety=not args.baseline, column_variety=args.column_variety, seed=args.seed,
-        focus=args.focus, lod_distances=args.lod_distances, scale_range=args.scale_range,
-        cards_beyond=args.cards_beyond, cards=not args.no_cards, card_size=args.card_size,
-        texture_size=args.texture_size, instancer_threshold=args.instancer_threshold,
-        scheduler=args.scheduler, workers=args.workers, memory_limit_gb=args.memory_limit,
-        force=args.force)
+        plan=str(args.plan) if args.plan else None,
+        rows=args.rows,
+        cols=args.cols,
+        block=args.block,
+        columns=args.columns,
+        column_spacing=args.column_spacing,
+        variety=not args.baseline,
+        column_variety=args.column_variety,
+        seed=args.seed,
+        focus=args.focus,
+        lod_distances=args.lod_distances,
+        scale_range=args.scale_range,
+        cards_beyond=args.cards_beyond,
+        cards=not args.no_cards,
+        card_size=args.card_size,
+        texture_size=args.texture_size,
+        instancer_threshold=args.instancer_threshold,
+        scheduler=args.scheduler,
+        workers=args.workers,
+        memory_limit_gb=args.memory_limit,
+        force=args.force,
+    )
     import logging
 
     log = logging.getLogger("ionic_usd.city")  # shown with -v; bars show the builds anyway
@@ -74,11 +100,13 @@ def cmd_city(args: argparse.Namespace) -> int:
     if args.json is not None:
         write_summary(s, args.json)
     tri = s["triangles"]
-    print(f"wrote {s['city']}: {s['temples']:,} temples ({s['temples_as']}, "
-          f"{s['temple_prototypes']} prototypes of {s['builds']} builds), {s['columns']:,} "
-          f"street columns ({s['column_prototypes']} prototypes); builds: "
-          f"{s['prototypes_built']} built, {s['prototypes_reused']} reused; "
-          f"{s['timings']['total']:.2f} s")
+    print(
+        f"wrote {s['city']}: {s['temples']:,} temples ({s['temples_as']}, "
+        f"{s['temple_prototypes']} prototypes of {s['builds']} builds), {s['columns']:,} "
+        f"street columns ({s['column_prototypes']} prototypes); builds: "
+        f"{s['prototypes_built']} built, {s['prototypes_reused']} reused; "
+        f"{s['timings']['total']:.2f} s"
+    )
     print("  triangles drawn: " + ", ".join(f"{k} {v:,}" for k, v in tri.items()))
     return 0
 
@@ -87,7 +115,9 @@ def add_city_parser(sub, parser_class, *, arguments: bool = True) -> None:
     """Add ``city`` to the CLI's subparsers (``parser_class``: the CLI's one-line-error
     parser; ``arguments=False``: its name and help only, for ``ionic-usd --help``)."""
     p = add_command(
-        sub, "city", cmd_city,
+        sub,
+        "city",
+        cmd_city,
         help="build a city of temples and colonnades (grid, or a GeoJSON plan)",
         description="Build FOLDER/City.usda (+ Instances.usdc, crate): temples fitted to their "
         "lots and colonnades along the streets, from a GeoJSON plan (--plan; metres in a local "
@@ -100,48 +130,107 @@ def add_city_parser(sub, parser_class, *, arguments: bool = True) -> None:
     from ionic_usd.city.layout import DEFAULT_INSTANCER_THRESHOLD
 
     p.add_argument("folder", type=Path, help="output folder (created if missing)")
-    p.add_argument("--plan", type=Path, help="GeoJSON FeatureCollection (see examples/"
-                   "forum.geojson); default: a grid")
+    p.add_argument(
+        "--plan",
+        type=Path,
+        help="GeoJSON FeatureCollection (see examples/forum.geojson); default: a grid",
+    )
     p.add_argument("--rows", type=int, default=4, help="grid rows [default 4]")
     p.add_argument("--cols", type=int, default=4, help="grid columns [default 4]")
     p.add_argument("--block", type=float, default=60.0, help="grid spacing (m) [default 60]")
-    p.add_argument("--columns", type=int, help="street columns in all (more than the streets "
-                   "hold: extra colonnades south of the city) [default: what the streets hold]")
-    p.add_argument("--column-spacing", type=float, default=3.0,
-                   help="axial spacing of colonnades (m) [default 3]")
-    p.add_argument("--baseline", action="store_true",
-                   help="no per-lot variety: every temple at the baseline hypotheses")
-    p.add_argument("--column-variety", type=int, default=1, metavar="K",
-                   help="draw each lot's column lower diameter from K levels within ±5%% of "
-                   "the description's (each level is a temple build) [default 1]")
+    p.add_argument(
+        "--columns",
+        type=int,
+        help="street columns in all (more than the streets "
+        "hold: extra colonnades south of the city) [default: what the streets hold]",
+    )
+    p.add_argument(
+        "--column-spacing",
+        type=float,
+        default=3.0,
+        help="axial spacing of colonnades (m) [default 3]",
+    )
+    p.add_argument(
+        "--baseline",
+        action="store_true",
+        help="no per-lot variety: every temple at the baseline hypotheses",
+    )
+    p.add_argument(
+        "--column-variety",
+        type=int,
+        default=1,
+        metavar="K",
+        help="draw each lot's column lower diameter from K levels within ±5%% of "
+        "the description's (each level is a temple build) [default 1]",
+    )
     p.add_argument("--seed", type=int, default=0, help="seed of the per-lot choices [default 0]")
-    p.add_argument("--focus", type=_pair("--focus"), metavar="X,Y",
-                   help="plan point (m) for LOD by distance; default: no LOD selection")
-    p.add_argument("--lod-distances", type=_pair("--lod-distances"), default=(150.0, 400.0),
-                   metavar="NEAR,FAR", help="high within NEAR, medium within FAR, low beyond "
-                   "(m) [default 150,400]")
-    p.add_argument("--cards-beyond", type=float, default=None, metavar="METRES",
-                   help="with --focus: temples farther than this draw as cards (UsdGeomModelAPI "
-                   "draw mode, images baked by the preview renderer; needs the preview extra) "
-                   "[default: FAR of --lod-distances]")
+    p.add_argument(
+        "--focus",
+        type=_pair("--focus"),
+        metavar="X,Y",
+        help="plan point (m) for LOD by distance; default: no LOD selection",
+    )
+    p.add_argument(
+        "--lod-distances",
+        type=_pair("--lod-distances"),
+        default=(150.0, 400.0),
+        metavar="NEAR,FAR",
+        help="high within NEAR, medium within FAR, low beyond (m) [default 150,400]",
+    )
+    p.add_argument(
+        "--cards-beyond",
+        type=float,
+        default=None,
+        metavar="METRES",
+        help="with --focus: temples farther than this draw as cards (UsdGeomModelAPI "
+        "draw mode, images baked by the preview renderer; needs the preview extra) "
+        "[default: FAR of --lod-distances]",
+    )
     p.add_argument("--no-cards", action="store_true", help="no card draw mode for far temples")
-    p.add_argument("--card-size", type=int, default=256, metavar="PX",
-                   help="card image size, longer side (px) [default 256]")
-    p.add_argument("--scale-range", type=_pair("--scale-range"), default=(0.6, 1.4),
-                   metavar="MIN,MAX", help="uniform scales a temple may take to fit its lot "
-                   "[default 0.6,1.4]")
-    p.add_argument("--texture-size", type=int, default=1024, help="texture resolution (px) "
-                   "[default 1024]")
-    p.add_argument("--instancer-threshold", type=int, default=None, metavar="N",
-                   help="above N temples use a PointInstancer of temple prototypes instead of "
-                   f"instanceable references [default {DEFAULT_INSTANCER_THRESHOLD}]")
-    p.add_argument("--scheduler", metavar="tcp://HOST:PORT",
-                   help="build on this Dask scheduler's workers (they return bytes; this "
-                   "process writes) [default: a local cluster on this machine's cores]")
+    p.add_argument(
+        "--card-size",
+        type=int,
+        default=256,
+        metavar="PX",
+        help="card image size, longer side (px) [default 256]",
+    )
+    p.add_argument(
+        "--scale-range",
+        type=_pair("--scale-range"),
+        default=(0.6, 1.4),
+        metavar="MIN,MAX",
+        help="uniform scales a temple may take to fit its lot [default 0.6,1.4]",
+    )
+    p.add_argument(
+        "--texture-size", type=int, default=1024, help="texture resolution (px) [default 1024]"
+    )
+    p.add_argument(
+        "--instancer-threshold",
+        type=int,
+        default=None,
+        metavar="N",
+        help="above N temples use a PointInstancer of temple prototypes instead of "
+        f"instanceable references [default {DEFAULT_INSTANCER_THRESHOLD}]",
+    )
+    p.add_argument(
+        "--scheduler",
+        metavar="tcp://HOST:PORT",
+        help="build on this Dask scheduler's workers (they return bytes; this "
+        "process writes) [default: a local cluster on this machine's cores]",
+    )
     p.add_argument("--workers", type=int, help="local cluster size [default: cores]")
-    p.add_argument("--memory-limit", type=float, default=8.0, metavar="GB",
-                   help="refuse a city estimated to need more memory [default 8]")
-    p.add_argument("--json", type=Path, metavar="SUMMARY",
-                   help="write the build summary (prototypes built/reused, instances, "
-                   "timings, workers) as JSON")
+    p.add_argument(
+        "--memory-limit",
+        type=float,
+        default=8.0,
+        metavar="GB",
+        help="refuse a city estimated to need more memory [default 8]",
+    )
+    p.add_argument(
+        "--json",
+        type=Path,
+        metavar="SUMMARY",
+        help="write the build summary (prototypes built/reused, instances, "
+        "timings, workers) as JSON",
+    )
     p.add_argument("--force", action="store_true", help="rebuild an existing city")

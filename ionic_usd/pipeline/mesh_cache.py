@@ -34,8 +34,15 @@ __all__ = ["cached_meshes", "source_digest", "mesh_cache_folder"]
 
 log = logging.getLogger(__name__)
 
-_FIELDS = ("points", "face_vertex_counts", "face_vertex_indices", "normals", "st",
-           "st_indices", "normals_indices")
+_FIELDS = (
+    "points",
+    "face_vertex_counts",
+    "face_vertex_indices",
+    "normals",
+    "st",
+    "st_indices",
+    "normals_indices",
+)
 _INDEX = "meshes.json"
 _ARRAYS = "meshes.npz"
 
@@ -77,9 +84,16 @@ def _write(folder: Path, meshes: list[AssetMesh]) -> None:
             if v is not None:
                 arrays[f"{i}.{f}"] = np.asarray(v)
                 present.append(f)
-        index.append({"part": am.part, "name": am.name, "tags": dict(am.tags),
-                      "mesh_name": m.name, "interpolation": m.normals_interpolation,
-                      "fields": present})
+        index.append(
+            {
+                "part": am.part,
+                "name": am.name,
+                "tags": dict(am.tags),
+                "mesh_name": m.name,
+                "interpolation": m.normals_interpolation,
+                "fields": present,
+            }
+        )
     np.savez(folder / _ARRAYS, **arrays)
     (folder / _INDEX).write_text(json.dumps(index))
 
@@ -95,8 +109,9 @@ def _read(folder: Path) -> list[AssetMesh]:
     return out
 
 
-def cached_meshes(tag: str, opts: object, produce: Callable[[], list[AssetMesh]], *,
-                  extra: str = "") -> tuple[list[AssetMesh], bool]:
+def cached_meshes(
+    tag: str, opts: object, produce: Callable[[], list[AssetMesh]], *, extra: str = ""
+) -> tuple[list[AssetMesh], bool]:
     """``produce()``'s meshes, from the cache when ``(tag, opts, extra)`` and the code match.
 
     Returns the meshes and whether they came from the cache. A cache that cannot be written

@@ -49,8 +49,13 @@ class TempleSpec:
         """SHA-256 (hex) of everything the build's bytes depend on."""
         from ionic_usd import __version__
 
-        doc = {"name": self.name, "description": self.description,
-               "texture_size": self.texture_size, "seed": self.seed, "version": __version__}
+        doc = {
+            "name": self.name,
+            "description": self.description,
+            "texture_size": self.texture_size,
+            "seed": self.seed,
+            "version": __version__,
+        }
         return hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()
 
     @property
@@ -75,9 +80,15 @@ def _toml_value(v: float) -> str:
     return repr(float(v))
 
 
-def temple_spec(temple: str, column: Mapping[str, float] | None = None, *,
-                base_dir: Path | None = None, texture_size: int = 1024, seed: int = 7,
-                context: str = "") -> TempleSpec:
+def temple_spec(
+    temple: str,
+    column: Mapping[str, float] | None = None,
+    *,
+    base_dir: Path | None = None,
+    texture_size: int = 1024,
+    seed: int = 7,
+    context: str = "",
+) -> TempleSpec:
     """The spec of a lot's temple: a built-in name (``portunus``) or a TOML path (relative to
     ``base_dir``), with column overrides (``height``, ``lower_diameter`` in metres) written into
     its ``[columns]`` table — so the description's own validation checks them."""
@@ -92,9 +103,12 @@ def temple_spec(temple: str, column: Mapping[str, float] | None = None, *,
         try:
             text = path.read_text(encoding="utf-8")
         except (OSError, UnicodeDecodeError):
-            raise ParameterError("temple", temple, f"a built-in description "
-                                 f"({', '.join(BUILTIN_TEMPLES)}) or a readable TOML file",
-                                 context=context) from None
+            raise ParameterError(
+                "temple",
+                temple,
+                f"a built-in description ({', '.join(BUILTIN_TEMPLES)}) or a readable TOML file",
+                context=context,
+            ) from None
         name = "".join(c if c.isalnum() else "_" for c in path.stem) or "temple"
     try:
         tomllib.loads(text)

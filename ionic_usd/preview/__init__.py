@@ -107,7 +107,8 @@ def perspective_view(corners: np.ndarray, camera: str, aspect: float) -> View:
     near = max(dist - 1.5 * radius, dist * 1e-3)
     far = dist + 12.0 * radius
     viewproj = perspective(math.radians(FOV_DEG), aspect, near, far) @ look_at(
-        eye, target, np.array([0.0, 1.0, 0.0]))
+        eye, target, np.array([0.0, 1.0, 0.0])
+    )
     return View(viewproj, eye, direction)
 
 
@@ -174,8 +175,17 @@ def render_preview(
     ctx = create_context()
     try:
         view = perspective_view(corners, camera, width / height)
-        pixels, draws = render(ctx, items, corners, view, width, height,
-                               background=background, samples=samples, ground=ground)
+        pixels, draws = render(
+            ctx,
+            items,
+            corners,
+            view,
+            width,
+            height,
+            background=background,
+            samples=samples,
+            ground=ground,
+        )
     finally:
         ctx.release()
     t_render = time.perf_counter()
@@ -183,9 +193,15 @@ def render_preview(
     write_png(pixels, out)
     t1 = time.perf_counter()
     return PreviewStats(
-        meshes=len(items), prototypes=len(scene.prototypes),
-        instances=sum(d.instanced for d in items), draws=draws,
+        meshes=len(items),
+        prototypes=len(scene.prototypes),
+        instances=sum(d.instanced for d in items),
+        draws=draws,
         triangles=sum(d.triangles * len(d.placements) for d in items),
-        width=width, height=height, seconds=t1 - t0, load_seconds=t_load - t0,
+        width=width,
+        height=height,
+        seconds=t1 - t0,
+        load_seconds=t_load - t0,
         render_seconds=t_render - t_load,
-        cards=sum(len(d.placements) for d in items if d.uv is not None))
+        cards=sum(len(d.placements) for d in items if d.uv is not None),
+    )

@@ -7,8 +7,15 @@ import math
 
 import numpy as np
 
-__all__ = ["FOV_DEG", "look_at", "perspective", "ortho", "camera_direction", "frame",
-           "key_and_fill"]
+__all__ = [
+    "FOV_DEG",
+    "look_at",
+    "perspective",
+    "ortho",
+    "camera_direction",
+    "frame",
+    "key_and_fill",
+]
 
 FOV_DEG = 40.0
 

@@ -34,8 +34,7 @@ class CardBake:
     coverage: dict[str, float]
 
 
-def card_views(lo: np.ndarray, hi: np.ndarray, size: int
-               ) -> dict[str, tuple[View, int, int]]:
+def card_views(lo: np.ndarray, hi: np.ndarray, size: int) -> dict[str, tuple[View, int, int]]:
     """Per face: the orthographic view of the bound ``lo``..``hi`` (each (3,)) and its image
     size (the longer side ``size`` pixels, the other in proportion, at least 16)."""
     from ionic_usd.usd.draw_mode import CARD_FACES  # noqa: PLC0415
@@ -81,21 +80,22 @@ def bake_cards(
     if isinstance(size, bool) or not isinstance(size, int) or not 16 <= size <= 4096:
         raise ParameterError("card size", size, "an integer from 16 to 4096 pixels")
     lo, hi = (np.asarray(b, dtype=np.float64) for b in bound)
-    if lo.shape != (3,) or hi.shape != (3,) or not np.all(np.isfinite([lo, hi])) or np.any(
-            hi < lo):
+    if lo.shape != (3,) or hi.shape != (3,) or not np.all(np.isfinite([lo, hi])) or np.any(hi < lo):
         raise ParameterError("card bound", bound, "(lo, hi), finite 3-vectors with lo <= hi")
     scene = read_scene(usd_path, variants=variants, require_sets=False)
     items = draw_items(scene)
-    box = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
-                    for z in (lo[2], hi[2])])
+    box = np.array(
+        [[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
+    )
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     files, sizes, coverage = {}, {}, {}
     ctx = create_context()
     try:
         for name, (view, w, h) in card_views(lo, hi, size).items():
-            px, _ = render(ctx, items, box, view, w, h, background=None, samples=samples,
-                           ground=False)
+            px, _ = render(
+                ctx, items, box, view, w, h, background=None, samples=samples, ground=False
+            )
             files[name] = out / f"{name}.png"
             write_png(px, files[name])
             sizes[name] = (w, h)

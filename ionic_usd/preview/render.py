@@ -49,13 +49,15 @@ def create_context():
     except ImportError as exc:
         raise PreviewUnavailableError(
             f"moderngl is not importable ({exc}); install the preview extra: "
-            "pip install 'ionic_usd[preview]'") from exc
+            "pip install 'ionic_usd[preview]'"
+        ) from exc
     try:
         return moderngl.create_standalone_context(backend="egl", require=330)
     except Exception as exc:  # glcontext raises plain Exception for a missing libEGL/driver
         raise PreviewUnavailableError(
             f"cannot create a headless OpenGL 3.3 context through EGL ({exc}); no OpenGL/EGL "
-            "driver: apt-get install libegl1 libgl1-mesa-dri") from exc
+            "driver: apt-get install libegl1 libgl1-mesa-dri"
+        ) from exc
 
 
 def instance_block(mats: np.ndarray) -> np.ndarray:
@@ -67,8 +69,9 @@ def instance_block(mats: np.ndarray) -> np.ndarray:
     no inverse, so singular scales cannot fail.
     """
     a = mats[:, :3, :3]
-    cof = np.stack([np.cross(a[:, 1], a[:, 2]), np.cross(a[:, 2], a[:, 0]),
-                    np.cross(a[:, 0], a[:, 1])], axis=1)
+    cof = np.stack(
+        [np.cross(a[:, 1], a[:, 2]), np.cross(a[:, 2], a[:, 0]), np.cross(a[:, 0], a[:, 1])], axis=1
+    )
     det = np.einsum("ij,ij->i", a[:, 0], cof[:, 0])
     cof *= np.where(det < 0, -1.0, 1.0)[:, None, None]
     out = np.empty((len(mats), 25), dtype=np.float32)
@@ -92,8 +95,9 @@ def write_png(pixels: np.ndarray, out: Path) -> None:
         try:
             verify_image(tmp)
         except TextureError:
-            raise UsdAuthoringError(f"cannot write {out}: the written PNG is incomplete "
-                                    "(is the disk full?)") from None
+            raise UsdAuthoringError(
+                f"cannot write {out}: the written PNG is incomplete (is the disk full?)"
+            ) from None
 
     with atomic_path(out, verify=check) as tmp:
         h, w, c = pixels.shape
@@ -110,14 +114,14 @@ class _Uploaded:
     """The GPU side of a draw list: vertex arrays per item, card images as textures."""
 
     def __init__(self, ctx, items: list[DrawItem]) -> None:
-        self.mesh_prog = ctx.program(vertex_shader=shaders.MESH_VS,
-                                     fragment_shader=shaders.MESH_FS)
-        self.depth_prog = ctx.program(vertex_shader=shaders.DEPTH_VS,
-                                      fragment_shader=shaders.DEPTH_FS)
-        self.card_prog = ctx.program(vertex_shader=shaders.CARD_VS,
-                                     fragment_shader=shaders.CARD_FS)
-        self.card_depth_prog = ctx.program(vertex_shader=shaders.CARD_DEPTH_VS,
-                                           fragment_shader=shaders.CARD_DEPTH_FS)
+        self.mesh_prog = ctx.program(vertex_shader=shaders.MESH_VS, fragment_shader=shaders.MESH_FS)
+        self.depth_prog = ctx.program(
+            vertex_shader=shaders.DEPTH_VS, fragment_shader=shaders.DEPTH_FS
+        )
+        self.card_prog = ctx.program(vertex_shader=shaders.CARD_VS, fragment_shader=shaders.CARD_FS)
+        self.card_depth_prog = ctx.program(
+            vertex_shader=shaders.CARD_DEPTH_VS, fragment_shader=shaders.CARD_DEPTH_FS
+        )
         self.meshes: list[tuple[Any, Any, int, tuple[float, float, float]]] = []
         self.cards: list[tuple[Any, Any, int, Any]] = []
         textures: dict[int, Any] = {}
@@ -134,16 +138,27 @@ class _Uploaded:
                     tex.repeat_x = tex.repeat_y = False
                     textures[tid] = tex
                 uvb = ctx.buffer(d.uv.tobytes())
-                layout = [(vbo, "3f 12x", "in_pos"), (uvb, "2f", "in_uv"),
-                          (ibo, "16f 36x/i", "in_model")]
-                self.cards.append((ctx.vertex_array(self.card_prog, layout),
-                                   ctx.vertex_array(self.card_depth_prog, layout), n,
-                                   textures[tid]))
+                layout = [
+                    (vbo, "3f 12x", "in_pos"),
+                    (uvb, "2f", "in_uv"),
+                    (ibo, "16f 36x/i", "in_model"),
+                ]
+                self.cards.append(
+                    (
+                        ctx.vertex_array(self.card_prog, layout),
+                        ctx.vertex_array(self.card_depth_prog, layout),
+                        n,
+                        textures[tid],
+                    )
+                )
                 continue
-            vao = ctx.vertex_array(self.mesh_prog, [(vbo, "3f 3f", "in_pos", "in_nrm"),
-                                                    (ibo, "16f 9f/i", "in_model", "in_nmat")])
-            dvao = ctx.vertex_array(self.depth_prog, [(vbo, "3f 12x", "in_pos"),
-                                                      (ibo, "16f 36x/i", "in_model")])
+            vao = ctx.vertex_array(
+                self.mesh_prog,
+                [(vbo, "3f 3f", "in_pos", "in_nrm"), (ibo, "16f 9f/i", "in_model", "in_nmat")],
+            )
+            dvao = ctx.vertex_array(
+                self.depth_prog, [(vbo, "3f 12x", "in_pos"), (ibo, "16f 36x/i", "in_model")]
+            )
             self.meshes.append((vao, dvao, n, d.colour))
 
     def depth(self, viewproj: np.ndarray) -> None:
@@ -157,9 +172,18 @@ class _Uploaded:
             dvao.render(instances=n)
 
 
-def render(ctx, items: list[DrawItem], corners: np.ndarray, view: View, width: int,
-           height: int, *, background: tuple[float, float, float] | None, samples: int,
-           ground: bool) -> tuple[np.ndarray, int]:
+def render(
+    ctx,
+    items: list[DrawItem],
+    corners: np.ndarray,
+    view: View,
+    width: int,
+    height: int,
+    *,
+    background: tuple[float, float, float] | None,
+    samples: int,
+    ground: bool,
+) -> tuple[np.ndarray, int]:
     """Draw into a multisampled framebuffer, resolve, and return the pixels and draw calls.
 
     Parameters
@@ -182,11 +206,14 @@ def render(ctx, items: list[DrawItem], corners: np.ndarray, view: View, width: i
     ground_y = lo[1] - 1e-4 * radius
     shadow_half = radius * (1.6 if ground else 1.05)
     light = ortho(shadow_half, shadow_half, 0.0, 6.0 * shadow_half) @ look_at(
-        centre + key * 3.0 * shadow_half, centre,
-        np.array([0.0, 0.0, 1.0]) if abs(key[1]) > 0.99 else np.eye(3)[1])
+        centre + key * 3.0 * shadow_half,
+        centre,
+        np.array([0.0, 0.0, 1.0]) if abs(key[1]) > 0.99 else np.eye(3)[1],
+    )
     gpu = _Uploaded(ctx, items)
-    bg_prog = ctx.program(vertex_shader=shaders.BACKGROUND_VS,
-                          fragment_shader=shaders.BACKGROUND_FS)
+    bg_prog = ctx.program(
+        vertex_shader=shaders.BACKGROUND_VS, fragment_shader=shaders.BACKGROUND_FS
+    )
     ground_prog = ctx.program(vertex_shader=shaders.GROUND_VS, fragment_shader=shaders.GROUND_FS)
 
     # shadow map from the key light
@@ -219,8 +246,14 @@ def render(ctx, items: list[DrawItem], corners: np.ndarray, view: View, width: i
 
     shadow_tex.use(location=0)
     texel = 2.0 * shadow_half / SHADOW_SIZE
-    uniforms = {"u_key": tuple(key), "u_fill": tuple(fill), "u_eye": tuple(view.eye),
-                "u_shadow": 0, "u_texel": texel, "u_texel_uv": 1.0 / SHADOW_SIZE}
+    uniforms = {
+        "u_key": tuple(key),
+        "u_fill": tuple(fill),
+        "u_eye": tuple(view.eye),
+        "u_shadow": 0,
+        "u_texel": texel,
+        "u_texel_uv": 1.0 / SHADOW_SIZE,
+    }
     for prog in (gpu.mesh_prog, ground_prog):
         prog["u_viewproj"].write(_gl_mat(view.viewproj))
         prog["u_light"].write(_gl_mat(light))
@@ -245,9 +278,17 @@ def render(ctx, items: list[DrawItem], corners: np.ndarray, view: View, width: i
     if ground:
         h = 8.0 * radius
         cx, cz = centre[0], centre[2]
-        plane = np.array([[cx - h, ground_y, cz - h], [cx + h, ground_y, cz - h],
-                          [cx + h, ground_y, cz + h], [cx - h, ground_y, cz - h],
-                          [cx + h, ground_y, cz + h], [cx - h, ground_y, cz + h]], np.float32)
+        plane = np.array(
+            [
+                [cx - h, ground_y, cz - h],
+                [cx + h, ground_y, cz - h],
+                [cx + h, ground_y, cz + h],
+                [cx - h, ground_y, cz - h],
+                [cx + h, ground_y, cz + h],
+                [cx - h, ground_y, cz + h],
+            ],
+            np.float32,
+        )
         gvao = ctx.vertex_array(ground_prog, [(ctx.buffer(plane.tobytes()), "3f", "in_pos")])
         ground_prog["u_colour"].value = (0.42, 0.40, 0.36)
         ground_prog["u_centre"].value = (float(cx), float(cz))

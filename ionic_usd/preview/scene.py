@@ -72,8 +72,9 @@ def read_rgba(path: str) -> np.ndarray | None:
     px = px[:, :, None] if px.ndim == 2 else px
     if px.shape[2] < 3:
         grey, alpha = px[:, :, :1], px[:, :, 1:2] if px.shape[2] == 2 else None
-        px = np.concatenate([np.repeat(grey, 3, axis=2)] + ([alpha] if alpha is not None
-                                                           else []), axis=2)
+        px = np.concatenate(
+            [np.repeat(grey, 3, axis=2)] + ([alpha] if alpha is not None else []), axis=2
+        )
     if px.shape[2] == 3:
         px = np.concatenate([px, np.full(px.shape[:2] + (1,), 255, np.uint8)], axis=2)
     return np.ascontiguousarray(px[::-1])
@@ -114,8 +115,7 @@ def _mean_texture_colour(tex: TextureRef, cache: dict) -> np.ndarray | None:
     return np.clip(mean * np.asarray(tex.scale[:3]) + np.asarray(tex.bias[:3]), 0.0, None)
 
 
-def _colour(mesh: SceneMesh, mat: MaterialData | None, cache: dict
-            ) -> tuple[float, float, float]:
+def _colour(mesh: SceneMesh, mat: MaterialData | None, cache: dict) -> tuple[float, float, float]:
     if mat is not None:
         if mat.diffuse_texture is not None:
             rgb = _mean_texture_colour(mat.diffuse_texture, cache)
@@ -159,9 +159,15 @@ def draw_items(scene: Scene) -> list[DrawItem]:
         verts[:, :3], verts[:, 3:] = pos, nrm
         used = np.unique(mesh.face_vertex_indices)
         pts = mesh.points[used] if len(used) < len(mesh.points) else mesh.points
-        item = DrawItem(key, verts, _colour(mesh, mat, colours), pts.min(axis=0),
-                        pts.max(axis=0), np.stack([p.matrix for p in places]),
-                        sum(p.via_instancing for p in places))
+        item = DrawItem(
+            key,
+            verts,
+            _colour(mesh, mat, colours),
+            pts.min(axis=0),
+            pts.max(axis=0),
+            np.stack([p.matrix for p in places]),
+            sum(p.via_instancing for p in places),
+        )
         if mesh.card_face:
             tex = mat.diffuse_texture if mat is not None else None
             if tex is not None and tex.path not in images:
@@ -180,7 +186,13 @@ def world_corners(items: list[DrawItem]) -> np.ndarray:
     """(8 Σn, 3) world corners of every placed item's local bound."""
     out = []
     for d in items:
-        box = np.array([[x, y, z, 1.0] for x in (d.lo[0], d.hi[0]) for y in (d.lo[1], d.hi[1])
-                        for z in (d.lo[2], d.hi[2])])
+        box = np.array(
+            [
+                [x, y, z, 1.0]
+                for x in (d.lo[0], d.hi[0])
+                for y in (d.lo[1], d.hi[1])
+                for z in (d.lo[2], d.hi[2])
+            ]
+        )
         out.append(np.einsum("ci,nij->ncj", box, d.placements)[..., :3].reshape(-1, 3))
     return np.concatenate(out)

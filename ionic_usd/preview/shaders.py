@@ -4,9 +4,21 @@ lit), the sky gradient and the fading ground plane."""
 
 from __future__ import annotations
 
-__all__ = ["LIGHTING", "MESH_VS", "MESH_FS", "DEPTH_VS", "DEPTH_FS", "CARD_VS", "CARD_FS",
-           "CARD_DEPTH_VS", "CARD_DEPTH_FS", "BACKGROUND_VS", "BACKGROUND_FS", "GROUND_VS",
-           "GROUND_FS"]
+__all__ = [
+    "LIGHTING",
+    "MESH_VS",
+    "MESH_FS",
+    "DEPTH_VS",
+    "DEPTH_FS",
+    "CARD_VS",
+    "CARD_FS",
+    "CARD_DEPTH_VS",
+    "CARD_DEPTH_FS",
+    "BACKGROUND_VS",
+    "BACKGROUND_FS",
+    "GROUND_VS",
+    "GROUND_FS",
+]
 
 LIGHTING = """
 uniform vec3 u_key, u_fill, u_eye;
@@ -59,7 +71,10 @@ void main() {
 }
 """
 
-MESH_FS = "#version 330\n" + LIGHTING + """
+MESH_FS = (
+    "#version 330\n"
+    + LIGHTING
+    + """
 uniform vec3 u_colour;
 in vec3 v_pos, v_nrm;
 out vec4 f_colour;
@@ -69,6 +84,7 @@ void main() {
     f_colour = vec4(to_srgb(shade(u_colour, v_pos, n, 0.10)), 1.0);
 }
 """
+)
 
 DEPTH_VS = """
 #version 330
@@ -103,7 +119,10 @@ out vec3 v_pos;
 void main() { v_pos = in_pos; gl_Position = u_viewproj * vec4(in_pos, 1.0); }
 """
 
-GROUND_FS = "#version 330\n" + LIGHTING + """
+GROUND_FS = (
+    "#version 330\n"
+    + LIGHTING
+    + """
 uniform vec3 u_colour;
 uniform vec2 u_centre, u_fade;
 in vec3 v_pos;
@@ -114,6 +133,7 @@ void main() {
     f_colour = vec4(to_srgb(shade(u_colour, v_pos, vec3(0.0, 1.0, 0.0), 0.0)), a);
 }
 """
+)
 
 CARD_VS = """
 #version 330

@@ -98,8 +98,9 @@ def _finite(name: str, value: object, context: str, *, positive: bool = False) -
         raise ParameterError(name, value, "a number", context=context)
     v = float(value)
     if not math.isfinite(v) or (positive and v <= 0):
-        raise ParameterError(name, value, "a finite number > 0" if positive else "finite",
-                             context=context)
+        raise ParameterError(
+            name, value, "a finite number > 0" if positive else "finite", context=context
+        )
     return v
 
 
@@ -142,8 +143,11 @@ class ColumnPlacement:
         object.__setattr__(self, "scale", _finite("scale", self.scale, ctx, positive=True))
         object.__setattr__(self, "kind", enum_value(ColumnKind, self.kind, "kind", ctx))
         if self.angle_rotation_deg is not None:
-            object.__setattr__(self, "angle_rotation_deg",
-                               _finite("angle_rotation_deg", self.angle_rotation_deg, ctx))
+            object.__setattr__(
+                self,
+                "angle_rotation_deg",
+                _finite("angle_rotation_deg", self.angle_rotation_deg, ctx),
+            )
 
     @property
     def facing(self) -> np.ndarray:
@@ -170,8 +174,9 @@ class Hypothesis:
     def __post_init__(self) -> None:
         ctx = f"hypothesis {self.id!r}"
         check_identifier("id", self.id, context=ctx)  # it names a file: never a path
-        object.__setattr__(self, "certainty",
-                           enum_value(Certainty, self.certainty, "certainty", ctx))
+        object.__setattr__(
+            self, "certainty", enum_value(Certainty, self.certainty, "certainty", ctx)
+        )
         object.__setattr__(self, "sources", tuple(self.sources))
         if not self.changes:
             raise ParameterError("changes", self.changes, "at least one dotted key", context=ctx)
@@ -232,49 +237,86 @@ class TempleParams:
             else:
                 object.__setattr__(self, f.name, _finite(key, v, ctx, positive=True))
         if self.columns_front < 2 or self.columns_side < self.columns_front + 1:
-            raise ParameterError("columns.side", self.columns_side,
-                                 f"> columns.front = {self.columns_front} (≥ 2)", context=ctx)
+            raise ParameterError(
+                "columns.side",
+                self.columns_side,
+                f"> columns.front = {self.columns_front} (≥ 2)",
+                context=ctx,
+            )
         if not 1 <= self.columns_porch_depth <= self.columns_side - 2:
-            raise ParameterError("columns.porch_depth", self.columns_porch_depth,
-                                 f"1 … {self.columns_side - 2} (a cella needs ≥ 1 bay)",
-                                 context=ctx)
+            raise ParameterError(
+                "columns.porch_depth",
+                self.columns_porch_depth,
+                f"1 … {self.columns_side - 2} (a cella needs ≥ 1 bay)",
+                context=ctx,
+            )
         if self.steps_count < 1:
             raise ParameterError("steps.count", self.steps_count, "≥ 1", context=ctx)
         if self.stylobate_length <= self.stylobate_width:
-            raise ParameterError("stylobate.length", self.stylobate_length,
-                                 f"> stylobate.width = {self.stylobate_width}", context=ctx)
+            raise ParameterError(
+                "stylobate.length",
+                self.stylobate_length,
+                f"> stylobate.width = {self.stylobate_width}",
+                context=ctx,
+            )
         if self.margin <= self.columns_lower_diameter / 2:
             raise ParameterError(
-                "stylobate.width", self.stylobate_width,
+                "stylobate.width",
+                self.stylobate_width,
                 f"a value leaving the corner columns on the stylobate (margin {self.margin:.3f}"
-                f" m ≤ lower radius {self.columns_lower_diameter / 2:.3f} m)", context=ctx)
+                f" m ≤ lower radius {self.columns_lower_diameter / 2:.3f} m)",
+                context=ctx,
+            )
         if self.podium_base_width <= self.stylobate_width:
-            raise ParameterError("podium.base_width", self.podium_base_width,
-                                 f"> stylobate.width = {self.stylobate_width}", context=ctx)
+            raise ParameterError(
+                "podium.base_width",
+                self.podium_base_width,
+                f"> stylobate.width = {self.stylobate_width}",
+                context=ctx,
+            )
         if self.stair_run <= 0:
-            raise ParameterError("podium.base_length", self.podium_base_length,
-                                 "long enough for the stairs (stylobate + projections)",
-                                 context=ctx)
+            raise ParameterError(
+                "podium.base_length",
+                self.podium_base_length,
+                "long enough for the stairs (stylobate + projections)",
+                context=ctx,
+            )
         if self.podium_footing_height >= self.podium_height:
-            raise ParameterError("podium.footing_height", self.podium_footing_height,
-                                 f"< podium.height = {self.podium_height}", context=ctx)
+            raise ParameterError(
+                "podium.footing_height",
+                self.podium_footing_height,
+                f"< podium.height = {self.podium_height}",
+                context=ctx,
+            )
         if self.podium_cheek_wall_width >= self.stylobate_width / 2:
-            raise ParameterError("podium.cheek_wall_width", self.podium_cheek_wall_width,
-                                 f"< half the stylobate width ({self.stylobate_width / 2})",
-                                 context=ctx)
+            raise ParameterError(
+                "podium.cheek_wall_width",
+                self.podium_cheek_wall_width,
+                f"< half the stylobate width ({self.stylobate_width / 2})",
+                context=ctx,
+            )
         inner = 2 * (self.x_axis - self.cella_wall_thickness)
         if self.door_width >= inner or self.door_height >= self.columns_height:
-            raise ParameterError("cella.door_width_ratio", self.cella_door_width_ratio,
-                                 "a door that fits inside the cella's front wall", context=ctx)
+            raise ParameterError(
+                "cella.door_width_ratio",
+                self.cella_door_width_ratio,
+                "a door that fits inside the cella's front wall",
+                context=ctx,
+            )
         if self.cella_wall_thickness >= self.axial_spacing:
-            raise ParameterError("cella.wall_thickness", self.cella_wall_thickness,
-                                 f"< the axial spacing {self.axial_spacing:.3f}", context=ctx)
+            raise ParameterError(
+                "cella.wall_thickness",
+                self.cella_wall_thickness,
+                f"< the axial spacing {self.axial_spacing:.3f}",
+                context=ctx,
+            )
 
     # -- derived dimensions (see the module docstring) -------------------------------------
     @property
     def axial_spacing(self) -> float:
         return (self.stylobate_length - self.stylobate_width) / (
-            self.columns_side - self.columns_front)
+            self.columns_side - self.columns_front
+        )
 
     @property
     def margin(self) -> float:
@@ -337,21 +379,26 @@ def params_from_tables(data: Mapping[str, Any], *, context: str) -> TempleParams
         raise ParameterError("[temple]", temple, "a table", context=context)
     for key, value in temple.items():
         if key != "name":
-            raise ParameterError(f"temple.{key}", value, "name (the only key of [temple])",
-                                 context=context)
+            raise ParameterError(
+                f"temple.{key}", value, "name (the only key of [temple])", context=context
+            )
     if "name" in temple:
         kw["name"] = temple["name"]
     for sec, table in data.items():
         if sec in ("temple", "hypothesis", "cuboid", "mouldings"):  # mouldings: temple.mouldings
             continue
         if sec not in SECTIONS:
-            raise ParameterError(f"[{sec}]", "…", "a known section: "
-                                 + ", ".join(["temple", *SECTIONS, "hypothesis", "cuboid"]),
-                                 context=context)
+            raise ParameterError(
+                f"[{sec}]",
+                "…",
+                "a known section: " + ", ".join(["temple", *SECTIONS, "hypothesis", "cuboid"]),
+                context=context,
+            )
         for key, value in table.items():
             if key not in SECTIONS[sec]:
-                raise ParameterError(f"{sec}.{key}", value,
-                                     f"one of {', '.join(SECTIONS[sec])}", context=context)
+                raise ParameterError(
+                    f"{sec}.{key}", value, f"one of {', '.join(SECTIONS[sec])}", context=context
+                )
             kw[f"{sec}_{key}"] = value
     return TempleParams(**kw)
 
@@ -379,15 +426,17 @@ def cuboids_from_tables(
             where += f" ({e['name']!r})"
         for key in e:
             if key not in allowed:
-                raise ParameterError(key, e[key], f"one of {', '.join(sorted(allowed))}",
-                                     context=where)
+                raise ParameterError(
+                    key, e[key], f"one of {', '.join(sorted(allowed))}", context=where
+                )
         for key in ("name", "min", "max", "layer"):
             if key not in e:
                 raise ParameterError(key, "(missing)", "a value (required key)", context=where)
         layer = enum_value(Layer, e["layer"], "layer", where)
         try:
-            c = Cuboid(e["min"], e["max"], e.get("rise", 0.0), e.get("incline", "shear"),
-                       name=e["name"])
+            c = Cuboid(
+                e["min"], e["max"], e.get("rise", 0.0), e.get("incline", "shear"), name=e["name"]
+            )
         except ParameterError as exc:
             raise ParameterError(exc.name, exc.value, exc.valid, context=where) from None
         out.setdefault(layer, []).append(c)
@@ -399,8 +448,9 @@ def load_cuboids_toml(path: str | os.PathLike) -> dict[Layer, tuple[Cuboid, ...]
     data = load_toml(path)
     entries = data.get("cuboid", [])
     if not isinstance(entries, list):
-        raise ParameterError("cuboid", entries, "an array of tables ([[cuboid]])",
-                             context=str(path))
+        raise ParameterError(
+            "cuboid", entries, "an array of tables ([[cuboid]])", context=str(path)
+        )
     return cuboids_from_tables(entries, context=str(path))
 
 
@@ -411,12 +461,15 @@ def cuboids_to_toml(groups: Mapping[str, Iterable[Cuboid]]) -> str:
     for layer, cs in groups.items():
         lay = enum_value(Layer, layer, "layer", "cuboids_to_toml")
         for c in cs:
-            out += ["[[cuboid]]", f"name = {toml_value(c.name)}",
-                    f"layer = {toml_value(lay.value)}",
-                    f"min = {toml_value(list(c.min))}", f"max = {toml_value(list(c.max))}"]
+            out += [
+                "[[cuboid]]",
+                f"name = {toml_value(c.name)}",
+                f"layer = {toml_value(lay.value)}",
+                f"min = {toml_value(list(c.min))}",
+                f"max = {toml_value(list(c.max))}",
+            ]
             if c.rise != 0.0 or c.incline is not Incline.SHEAR:
-                out += [f"rise = {toml_value(c.rise)}",
-                        f"incline = {toml_value(c.incline.value)}"]
+                out += [f"rise = {toml_value(c.rise)}", f"incline = {toml_value(c.incline.value)}"]
             out.append("")
     return "\n".join(out)
 
@@ -432,8 +485,9 @@ def hypotheses_from_tables(entries, context: str) -> tuple[Hypothesis, ...]:
             raise ParameterError("[[hypothesis]]", e, "a table", context=where)
         for key in e:
             if key not in allowed:
-                raise ParameterError(key, e[key], f"one of {', '.join(sorted(allowed))}",
-                                     context=where)
+                raise ParameterError(
+                    key, e[key], f"one of {', '.join(sorted(allowed))}", context=where
+                )
         for key in sorted(allowed):
             if key not in e:
                 raise ParameterError(key, "(missing)", "a value (required key)", context=where)
@@ -441,8 +495,9 @@ def hypotheses_from_tables(entries, context: str) -> tuple[Hypothesis, ...]:
         if not isinstance(src, list) or not all(isinstance(x, str) for x in src):
             raise ParameterError("sources", src, "a list of strings", context=where)
         try:
-            out.append(Hypothesis(e["id"], e["description"], tuple(src),
-                                  e["certainty"], e["changes"]))
+            out.append(
+                Hypothesis(e["id"], e["description"], tuple(src), e["certainty"], e["changes"])
+            )
         except ParameterError as exc:
             raise ParameterError(exc.name, exc.value, exc.valid, context=where) from None
     seen: dict[str, str] = {}  # ids name files and variant sets: hyp_a_b for a-b and a_b
@@ -450,9 +505,13 @@ def hypotheses_from_tables(entries, context: str) -> tuple[Hypothesis, ...]:
         check_identifier("id", h.id, context=f"{context} [[hypothesis]]")
         if prim_key(h.id) in seen:
             other = seen[prim_key(h.id)]
-            raise ParameterError("id", h.id, f"an id distinct from {other!r} (both would name "
-                                 "the same layer file and variant set)",
-                                 context=f"{context} [[hypothesis]]")
+            raise ParameterError(
+                "id",
+                h.id,
+                f"an id distinct from {other!r} (both would name "
+                "the same layer file and variant set)",
+                context=f"{context} [[hypothesis]]",
+            )
         seen[prim_key(h.id)] = h.id
     for i, h in enumerate(out, 1):
         for key, value in h.changes.items():
@@ -460,10 +519,14 @@ def hypotheses_from_tables(entries, context: str) -> tuple[Hypothesis, ...]:
             if sec in COMPOSER_NAMESPACES:
                 continue  # the composer checks these (ionic_usd.usd.hypotheses)
             if sec not in SECTIONS or k not in SECTIONS[sec]:
-                valid = (f"one of {sec}.{', '.join(SECTIONS[sec])}" if sec in SECTIONS else
-                         "section.key of the temple TOML, or column.… / material.…")
-                raise ParameterError(key, value, valid,
-                                     context=f"{context} [[hypothesis]] #{i} ({h.id!r})")
+                valid = (
+                    f"one of {sec}.{', '.join(SECTIONS[sec])}"
+                    if sec in SECTIONS
+                    else "section.key of the temple TOML, or column.… / material.…"
+                )
+                raise ParameterError(
+                    key, value, valid, context=f"{context} [[hypothesis]] #{i} ({h.id!r})"
+                )
     return tuple(out)
 
 
@@ -489,8 +552,9 @@ _HYPOTHESIS = {
 #: hypothesis changes outside the temple's dimension sections, realised by the composer
 HYPOTHESIS_EXTRA_CHANGES = {
     "column.flute_count": FieldSpec("int", 3, 64, "count"),
-    "material.finish": FieldSpec("str", choices=("bare_stone", "travertine", "stucco",
-                                                 "painted_stucco")),
+    "material.finish": FieldSpec(
+        "str", choices=("bare_stone", "travertine", "stucco", "painted_stucco")
+    ),
     "detail.frieze": FieldSpec("str", choices=("garlands", "plain")),  # usd.detail
 }
 
@@ -510,39 +574,64 @@ def check_temple_tables(data: Mapping[str, Any], *, context: str) -> None:
     column_tables = {"column", "shaft", "capital", "volute"}
     for sec, table in data.items():
         if sec == "temple":
-            check_table(check_value("temple", table, FieldSpec("table"), context=context),
-                        {"name": FieldSpec("str", max_len=256)}, context=f"{context} [temple]")
+            check_table(
+                check_value("temple", table, FieldSpec("table"), context=context),
+                {"name": FieldSpec("str", max_len=256)},
+                context=f"{context} [temple]",
+            )
         elif sec in sections:
             table = check_value(sec, table, FieldSpec("table"), context=context)
-            check_table({f"{sec}.{k}": v for k, v in table.items()},
-                        {f"{sec}.{k}": v for k, v in sections[sec].items()}, context=context)
+            check_table(
+                {f"{sec}.{k}": v for k, v in table.items()},
+                {f"{sec}.{k}": v for k, v in sections[sec].items()},
+                context=context,
+            )
         elif sec == "mouldings":  # sections and sizes: checked by temple.mouldings
             check_value(sec, table, FieldSpec("table"), context=context)
         elif sec in ("cuboid", "hypothesis"):
             if not isinstance(table, list):
-                raise ParameterError(sec, table, f"an array of tables ([[{sec}]])",
-                                     context=context)
+                raise ParameterError(sec, table, f"an array of tables ([[{sec}]])", context=context)
         elif sec not in column_tables:
-            raise ParameterError(f"[{sec}]", "…", "a known table: " + ", ".join(
-                ["temple", *sections, "mouldings", "cuboid", "hypothesis",
-                 *sorted(column_tables)]),
-                context=context)
+            raise ParameterError(
+                f"[{sec}]",
+                "…",
+                "a known table: "
+                + ", ".join(
+                    [
+                        "temple",
+                        *sections,
+                        "mouldings",
+                        "cuboid",
+                        "hypothesis",
+                        *sorted(column_tables),
+                    ]
+                ),
+                context=context,
+            )
     check_column_tables({k: v for k, v in data.items() if k in column_tables}, context=context)
     for i, e in enumerate(data.get("cuboid", []), 1):
         where = f"{context} [[cuboid]] #{i}"
-        check_table(check_value("[[cuboid]]", e, FieldSpec("table"), context=where),
-                    _CUBOID, context=where)
-    changes_schema = {f"{sec}.{k}": spec for sec, keys in sections.items()
-                      for k, spec in keys.items()}
+        check_table(
+            check_value("[[cuboid]]", e, FieldSpec("table"), context=where), _CUBOID, context=where
+        )
+    changes_schema = {
+        f"{sec}.{k}": spec for sec, keys in sections.items() for k, spec in keys.items()
+    }
     changes_schema.update(HYPOTHESIS_EXTRA_CHANGES)
     for i, e in enumerate(data.get("hypothesis", []), 1):
         where = f"{context} [[hypothesis]] #{i}"
-        e = check_table(check_value("[[hypothesis]]", e, FieldSpec("table"), context=where),
-                        _HYPOTHESIS, context=where)
+        e = check_table(
+            check_value("[[hypothesis]]", e, FieldSpec("table"), context=where),
+            _HYPOTHESIS,
+            context=where,
+        )
         for key, value in e.get("changes", {}).items():
             # column.* / material.* record alternatives the generator may not realise yet
             change: FieldSpec | None = changes_schema.get(key)
             if change is None and str(key).split(".")[0] in ("column", "material"):
                 change = FieldSpec("scalar")
-            check_table({key: value}, {key: change} if change else changes_schema,
-                        context=f"{where} changes")
+            check_table(
+                {key: value},
+                {key: change} if change else changes_schema,
+                context=f"{where} changes",
+            )

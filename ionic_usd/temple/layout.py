@@ -165,8 +165,9 @@ class TempleLayout:
     applied: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
-        groups = {enum_value(Layer, k, "layer", self.name): tuple(v)
-                  for k, v in self.cuboids.items()}
+        groups = {
+            enum_value(Layer, k, "layer", self.name): tuple(v) for k, v in self.cuboids.items()
+        }
         object.__setattr__(self, "cuboids", MappingProxyType(groups))
         object.__setattr__(self, "columns", tuple(self.columns))
         object.__setattr__(self, "hypotheses", tuple(self.hypotheses))
@@ -204,8 +205,12 @@ def _box(name, x0, y0, z0, x1, y1, z1, rise=0.0, incline=Incline.SHEAR) -> Cuboi
 
 def _podium(p: TempleParams) -> list[Cuboid]:
     w2, l2, pr = p.stylobate_width / 2, p.stylobate_length / 2, p.footing_projection
-    fh, h, cw, run = p.podium_footing_height, p.podium_height, p.podium_cheek_wall_width, \
-        p.stair_run
+    fh, h, cw, run = (
+        p.podium_footing_height,
+        p.podium_height,
+        p.podium_cheek_wall_width,
+        p.stair_run,
+    )
     front = l2 + run
     out = [
         _box("footing", -w2 - pr, 0.0, -l2 - pr, w2 + pr, fh, l2),
@@ -219,8 +224,17 @@ def _podium(p: TempleParams) -> list[Cuboid]:
     n = p.steps_count
     riser, tread = h / n, run / n
     for i in range(n):
-        out.append(_box(f"step_{i + 1:02d}", -(w2 - cw), i * riser, l2, w2 - cw,
-                        (i + 1) * riser, l2 + (n - i) * tread))
+        out.append(
+            _box(
+                f"step_{i + 1:02d}",
+                -(w2 - cw),
+                i * riser,
+                l2,
+                w2 - cw,
+                (i + 1) * riser,
+                l2 + (n - i) * tread,
+            )
+        )
     return out
 
 
@@ -296,8 +310,11 @@ def _columns(p: TempleParams) -> list[ColumnPlacement]:
     rear = colonnade_positions((-xa, y, -zf), (xa, y, -zf), nf)
     for j, pos in enumerate(front):
         corner = _outer_rotation(np.sign(pos[0]), 1.0) if j in (0, nf - 1) else None
-        out.append(ColumnPlacement(tuple(pos), 0.0, ColumnKind.FREE, name=f"front_{j + 1}",
-                                   angle_rotation_deg=corner))
+        out.append(
+            ColumnPlacement(
+                tuple(pos), 0.0, ColumnKind.FREE, name=f"front_{j + 1}", angle_rotation_deg=corner
+            )
+        )
     for side, sgn in (("left", -1.0), ("right", 1.0)):
         flank = colonnade_positions((sgn * xa, y, zf), (sgn * xa, y, zf - (ns - 1) * s), ns)
         for k in range(1, ns - 1):
@@ -312,8 +329,9 @@ def _columns(p: TempleParams) -> list[ColumnPlacement]:
         if j in (0, nf - 1):
             kind = ColumnKind.CORNER
             rot = corner = _outer_rotation(np.sign(pos[0]), -1.0)
-        out.append(ColumnPlacement(tuple(pos), rot, kind, name=f"rear_{j + 1}",
-                                   angle_rotation_deg=corner))
+        out.append(
+            ColumnPlacement(tuple(pos), rot, kind, name=f"rear_{j + 1}", angle_rotation_deg=corner)
+        )
     return out
 
 
@@ -339,15 +357,23 @@ def build_layout(
     applied = tuple(apply)
     for hid in applied:
         if hid not in by_id:
-            raise ParameterError("hypothesis", hid, "one of: " + (", ".join(by_id) or "(none)"),
-                                 context=f"temple {params.name!r}")
+            raise ParameterError(
+                "hypothesis",
+                hid,
+                "one of: " + (", ".join(by_id) or "(none)"),
+                context=f"temple {params.name!r}",
+            )
         changes = {}
         for key, value in by_id[hid].changes.items():
             sec, k = key.split(".")
             if sec in SECTIONS:
                 if k not in SECTIONS[sec]:
-                    raise ParameterError(key, value, f"one of {sec}.{', '.join(SECTIONS[sec])}",
-                                         context=f"hypothesis {hid!r}")
+                    raise ParameterError(
+                        key,
+                        value,
+                        f"one of {sec}.{', '.join(SECTIONS[sec])}",
+                        context=f"hypothesis {hid!r}",
+                    )
                 changes[f"{sec}_{k}"] = value
         params = replace(params, **changes)
     ent, y_top, xe, ze, proj = _entablature(params)
@@ -363,17 +389,24 @@ def build_layout(
     for c in (c for cs in groups.values() for c in cs):
         if prim_key(c.name) in seen:
             other = seen[prim_key(c.name)]
-            raise ParameterError("cuboid name", c.name, f"a name distinct from {other!r} "
-                                 "(both would author the same prim)",
-                                 context=f"temple {params.name!r}")
+            raise ParameterError(
+                "cuboid name",
+                c.name,
+                f"a name distinct from {other!r} (both would author the same prim)",
+                context=f"temple {params.name!r}",
+            )
         seen[prim_key(c.name)] = c.name
-    return TempleLayout(params.name, {k: tuple(v) for k, v in groups.items()},
-                        tuple(_columns(params)), params, hyps, applied)
+    return TempleLayout(
+        params.name,
+        {k: tuple(v) for k, v in groups.items()},
+        tuple(_columns(params)),
+        params,
+        hyps,
+        applied,
+    )
 
 
-def layout_from_toml(
-    path: str | os.PathLike, *, apply: Iterable[str] = ()
-) -> TempleLayout:
+def layout_from_toml(path: str | os.PathLike, *, apply: Iterable[str] = ()) -> TempleLayout:
     """Build a layout from a temple TOML (schema of ``portunus.toml``)."""
     return layout_from_mapping(load_toml(path), context=str(path), apply=apply)
 

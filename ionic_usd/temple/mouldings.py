@@ -60,18 +60,28 @@ __all__ = [
 REPLACED_CUBOIDS = ("architrave", "cornice")
 
 # Default sections: see portunus.toml [mouldings] for the sources of every number.
-_ARCHITRAVE = ("R0 H0 R0 H0.2143, R0 H0 R0.03 H0, R0.03 H0 R0.03 H0.2857, R0.03 H0 R0.06 H0, "
-               "R0.06 H0 R0.06 H0.3571, "
-               "R0.06 H0 R0.06 H0.0714 R0.2029 H0.0714 R0.2029 H0.1429")
-_CORNICE = ("R0 H0 R0.16 H0 R0.16 H0.16, R0.16 H0 R0.16 H0.255, R0.16 H0 R0.415 H0, "
-            "R0.415 H0 R0.458 H0 R0.458 H0.043, R0.458 H0 R0.85 H0, R0.85 H0 R0.85 H0.255")
+_ARCHITRAVE = (
+    "R0 H0 R0 H0.2143, R0 H0 R0.03 H0, R0.03 H0 R0.03 H0.2857, R0.03 H0 R0.06 H0, "
+    "R0.06 H0 R0.06 H0.3571, "
+    "R0.06 H0 R0.06 H0.0714 R0.2029 H0.0714 R0.2029 H0.1429"
+)
+_CORNICE = (
+    "R0 H0 R0.16 H0 R0.16 H0.16, R0.16 H0 R0.16 H0.255, R0.16 H0 R0.415 H0, "
+    "R0.415 H0 R0.458 H0 R0.458 H0.043, R0.458 H0 R0.85 H0, R0.85 H0 R0.85 H0.255"
+)
 _SIMA = "R0 H0 R0.87 H0, R0.87 H0 R0.87 H0.15 R1.0 H0.137 R1.0 H0.287"
-_RAKING = ("R0 H0 R0.85 H0, R0.85 H0 R0.85 H0.255, R0.85 H0 R0.87 H0, "
-           "R0.87 H0 R0.87 H0.15 R1.0 H0.137 R1.0 H0.287")
-_PODIUM_BASE = ("R0.45 H0 R0.45 H0.15, R0.45 H0 R0.52 H0.15 R0.3 H0.3, R0.3 H0 R0.22 H0, "
-                "R0.22 H0 R0.22 H0.2 R0.05 H0.1 R0.05 H0.3, R0.05 H0 R0.05 H0.25")
-_PODIUM_CROWN = ("R0 H0 R0 H0.15 R0.2 H0.15 R0.2 H0.3, R0.2 H0 R0.25 H0, "
-                 "R0.25 H0 R0.25 H0.4, R0.25 H0 R0.33 H0 R0.33 H0.3")
+_RAKING = (
+    "R0 H0 R0.85 H0, R0.85 H0 R0.85 H0.255, R0.85 H0 R0.87 H0, "
+    "R0.87 H0 R0.87 H0.15 R1.0 H0.137 R1.0 H0.287"
+)
+_PODIUM_BASE = (
+    "R0.45 H0 R0.45 H0.15, R0.45 H0 R0.52 H0.15 R0.3 H0.3, R0.3 H0 R0.22 H0, "
+    "R0.22 H0 R0.22 H0.2 R0.05 H0.1 R0.05 H0.3, R0.05 H0 R0.05 H0.25"
+)
+_PODIUM_CROWN = (
+    "R0 H0 R0 H0.15 R0.2 H0.15 R0.2 H0.3, R0.2 H0 R0.25 H0, "
+    "R0.25 H0 R0.25 H0.4, R0.25 H0 R0.33 H0 R0.33 H0.3"
+)
 
 # the dentil course inside the cornice section (fractions of the cornice height): the band's
 # face, the dentils' front (projection = height, Vitruvius III.5.11) and the course's bottom/top
@@ -104,13 +114,18 @@ class MouldingParams:
             elif f.name == "slices":
                 if isinstance(v, bool) or not isinstance(v, int) or not 1 <= v <= 32:
                     raise ParameterError("mouldings.slices", v, "an integer 1 … 32")
-            elif isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v) \
-                    or v <= 0:
+            elif (
+                isinstance(v, bool)
+                or not isinstance(v, int | float)
+                or not math.isfinite(v)
+                or v <= 0
+            ):
                 raise ParameterError(f"mouldings.{f.name}", v, "a length > 0 (m)")
 
 
-def moulding_section(grammar: str, scale: float, *, slices: int = 6,
-                     name: str = "moulding") -> np.ndarray:
+def moulding_section(
+    grammar: str, scale: float, *, slices: int = 6, name: str = "moulding"
+) -> np.ndarray:
     """The outer curve of a moulding section in metres.
 
     Parameters
@@ -126,20 +141,32 @@ def moulding_section(grammar: str, scale: float, *, slices: int = 6,
 
     d = 1.0  # the grammar's r is added to a radius: any d > max|r| keeps the check happy
     try:
-        p = BaseParams(grammar=grammar, shaft_radius=d * max(1.0, scale), segments=8,
-                       profile_slices=slices, scale=scale)
+        p = BaseParams(
+            grammar=grammar,
+            shaft_radius=d * max(1.0, scale),
+            segments=8,
+            profile_slices=slices,
+            scale=scale,
+        )
     except ParameterError as exc:
         raise ParameterError(name, exc.value, exc.valid) from None
     except GrammarError as exc:  # name the moulding: "mouldings.cornice (base v2) error …"
-        raise GrammarError(exc.message, exc.source, exc.offset, length=exc.length,
-                           module=exc.module, grammar=f"{name} ({exc.grammar})") from None
+        raise GrammarError(
+            exc.message,
+            exc.source,
+            exc.offset,
+            length=exc.length,
+            module=exc.module,
+            grammar=f"{name} ({exc.grammar})",
+        ) from None
     out = base_profile(p).copy()
     out[:, 0] -= d * max(1.0, scale)
     return out
 
 
-def _close(curve: np.ndarray, back: float, *, chamfer: bool,
-           top: float | None = None) -> np.ndarray:
+def _close(
+    curve: np.ndarray, back: float, *, chamfer: bool, top: float | None = None
+) -> np.ndarray:
     """Close an outer curve into a section polygon reaching ``back`` behind the face (u < 0).
 
     ``chamfer``: the back corners are cut at 45° so that the section touches the face plane
@@ -181,15 +208,22 @@ def mouldings_from_tables(data: Mapping[str, Any], *, context: str = "temple") -
     known = {f.name for f in fields(MouldingParams)}
     for k in table:
         if k not in known:
-            raise ParameterError(f"mouldings.{k}", table[k], f"one of {', '.join(sorted(known))}",
-                                 context=context)
+            raise ParameterError(
+                f"mouldings.{k}", table[k], f"one of {', '.join(sorted(known))}", context=context
+            )
     try:
         return MouldingParams(**table)
     except ParameterError as exc:
         raise ParameterError(exc.name, exc.value, exc.valid, context=context) from None
     except GrammarError as exc:
-        raise GrammarError(exc.message, exc.source, exc.offset, length=exc.length,
-                           module=exc.module, grammar=f"{context}: {exc.grammar}") from None
+        raise GrammarError(
+            exc.message,
+            exc.source,
+            exc.offset,
+            length=exc.length,
+            module=exc.module,
+            grammar=f"{context}: {exc.grammar}",
+        ) from None
 
 
 def portunus_mouldings() -> MouldingParams:
@@ -220,9 +254,17 @@ def cornice_levels(layout: TempleLayout) -> dict[str, float]:
     a, f, c = p.entablature_heights
     half_top = p.columns_lower_diameter * p.columns_upper_diameter_ratio / 2
     y = p.podium_height + p.columns_height
-    out = {"y_architrave": y, "y_frieze": y + a, "y_cornice": y + a + f, "y_top": y + a + f + c,
-           "xe": p.x_axis + half_top, "ze": p.z_front_axis + half_top, "cornice": c,
-           "projection": c * p.entablature_cornice_projection_ratio, "half_top": half_top}
+    out = {
+        "y_architrave": y,
+        "y_frieze": y + a,
+        "y_cornice": y + a + f,
+        "y_top": y + a + f + c,
+        "xe": p.x_axis + half_top,
+        "ze": p.z_front_axis + half_top,
+        "cornice": c,
+        "projection": c * p.entablature_cornice_projection_ratio,
+        "half_top": half_top,
+    }
     for k, v in _DENTIL_BAND.items():
         out[f"dentil_{k}"] = v * c if k in ("face", "front") else out["y_cornice"] + v * c
     return out
@@ -241,8 +283,9 @@ def _outward(path: np.ndarray, axis: np.ndarray, inside: np.ndarray | None = Non
     return path if np.dot(side, mid - ref) > 0 else path[::-1].copy()
 
 
-def moulding_meshes(layout: TempleLayout, mp: MouldingParams | None = None, *,
-                    uv_scale: float = 0.5) -> list[MouldedMember]:
+def moulding_meshes(
+    layout: TempleLayout, mp: MouldingParams | None = None, *, uv_scale: float = 0.5
+) -> list[MouldedMember]:
     """The swept members of a layout (closed, outward meshes; see the module docstring)."""
     mp = mp or MouldingParams()
     p = layout.params
@@ -252,10 +295,23 @@ def moulding_meshes(layout: TempleLayout, mp: MouldingParams | None = None, *,
     up = np.array([0.0, 1.0, 0.0])
     out: list[MouldedMember] = []
 
-    def member(name, grammar, scale, path, *, closed, chamfer, back, axis=up, swap=False,
-               replaces=None, top=None, key=None, inside=None):
-        curve = moulding_section(grammar, scale, slices=mp.slices,
-                                 name=f"mouldings.{key or name}")
+    def member(
+        name,
+        grammar,
+        scale,
+        path,
+        *,
+        closed,
+        chamfer,
+        back,
+        axis=up,
+        swap=False,
+        replaces=None,
+        top=None,
+        key=None,
+        inside=None,
+    ):
+        curve = moulding_section(grammar, scale, slices=mp.slices, name=f"mouldings.{key or name}")
         sec = _close(curve, back, chamfer=chamfer, top=top)
         if swap:  # raking: the section's height runs along the slope normal, downward
             sec = np.stack([sec[:, 1] - curve[-1, 1], sec[:, 0]], axis=1)
@@ -264,34 +320,79 @@ def moulding_meshes(layout: TempleLayout, mp: MouldingParams | None = None, *,
         m = sweep(sec, path, axis=axis, closed=closed, uv_scale=uv_scale, name=name)
         out.append(MouldedMember(name, m, replaces))
 
-    member("architrave", mp.architrave, a, _rect(lv["xe"], lv["ze"], lv["y_architrave"]),
-           closed=True, chamfer=False, back=back, replaces="architrave")
-    member("cornice", mp.cornice, c, _rect(lv["xe"], lv["ze"], lv["y_cornice"]),
-           closed=True, chamfer=False, back=back, replaces="cornice", top=c)
+    member(
+        "architrave",
+        mp.architrave,
+        a,
+        _rect(lv["xe"], lv["ze"], lv["y_architrave"]),
+        closed=True,
+        chamfer=False,
+        back=back,
+        replaces="architrave",
+    )
+    member(
+        "cornice",
+        mp.cornice,
+        c,
+        _rect(lv["xe"], lv["ze"], lv["y_cornice"]),
+        closed=True,
+        chamfer=False,
+        back=back,
+        replaces="cornice",
+        top=c,
+    )
     y_sima = lv["y_cornice"] + float(moulding_section(mp.cornice, c)[-1, 1])
     zc = lv["ze"] + lv["projection"]
     for name, sgn in (("sima_left", -1.0), ("sima_right", 1.0)):
         x = sgn * lv["xe"]
         path = np.array([[x, y_sima, -zc], [x, y_sima, zc]])
         if abs(y_sima + float(moulding_section(mp.sima, c)[-1, 1]) - lv["y_top"]) > 1e-6 * c:
-            raise ParameterError("mouldings.sima", mp.sima,
-                                 "heights that, added to the cornice's, make the cornice height",
-                                 context=p.name)
-        member(name, mp.sima, c, path, closed=False, chamfer=False, back=0.0, key="sima",
-               inside=np.array([0.0, y_sima, 0.0]))
+            raise ParameterError(
+                "mouldings.sima",
+                mp.sima,
+                "heights that, added to the cornice's, make the cornice height",
+                context=p.name,
+            )
+        member(
+            name,
+            mp.sima,
+            c,
+            path,
+            closed=False,
+            chamfer=False,
+            back=0.0,
+            key="sima",
+            inside=np.array([0.0, y_sima, 0.0]),
+        )
     # podium: round the die and the cheek walls, stopping at the stairs
     w2, l2, cw = p.stylobate_width / 2, p.stylobate_length / 2, p.podium_cheek_wall_width
     front = l2 + p.stair_run
     for name, grammar, hgt, y0 in (
         ("podium_base", mp.podium_base, mp.podium_base_height, p.podium_footing_height),
-        ("podium_crown", mp.podium_crown, mp.podium_crown_height,
-         p.podium_height - mp.podium_crown_height),
+        (
+            "podium_crown",
+            mp.podium_crown,
+            mp.podium_crown_height,
+            p.podium_height - mp.podium_crown_height,
+        ),
     ):
         if y0 < p.podium_footing_height - 1e-9 or y0 + hgt > p.podium_height + 1e-9:
-            raise ParameterError(f"mouldings.{name}_height", hgt,
-                                 "a height that fits on the podium's die", context=p.name)
-        u = np.array([[-(w2 - cw), y0, front], [-w2, y0, front], [-w2, y0, -l2],
-                      [w2, y0, -l2], [w2, y0, front], [w2 - cw, y0, front]])
+            raise ParameterError(
+                f"mouldings.{name}_height",
+                hgt,
+                "a height that fits on the podium's die",
+                context=p.name,
+            )
+        u = np.array(
+            [
+                [-(w2 - cw), y0, front],
+                [-w2, y0, front],
+                [-w2, y0, -l2],
+                [w2, y0, -l2],
+                [w2, y0, front],
+                [w2 - cw, y0, front],
+            ]
+        )
         member(name, grammar, hgt, u, closed=False, chamfer=True, back=mp.podium_back)
     # raking cornices under the roof slabs' soffit line, on both pediments
     tan = 2.0 / p.roof_tympanum_ratio
@@ -299,8 +400,18 @@ def moulding_meshes(layout: TempleLayout, mp: MouldingParams | None = None, *,
     ridge = xc * tan
     for name, sgn in (("raking_cornice_front", 1.0), ("raking_cornice_rear", -1.0)):
         z = sgn * lv["ze"]
-        path = np.array([[-xc, lv["y_top"], z], [0.0, lv["y_top"] + ridge, z],
-                         [xc, lv["y_top"], z]])
-        member(name, mp.raking_cornice, c, path, closed=False, chamfer=False,
-               back=min(back, lv["ze"]), axis=(0.0, 0.0, sgn), swap=True)
+        path = np.array(
+            [[-xc, lv["y_top"], z], [0.0, lv["y_top"] + ridge, z], [xc, lv["y_top"], z]]
+        )
+        member(
+            name,
+            mp.raking_cornice,
+            c,
+            path,
+            closed=False,
+            chamfer=False,
+            back=min(back, lv["ze"]),
+            axis=(0.0, 0.0, sgn),
+            swap=True,
+        )
     return out

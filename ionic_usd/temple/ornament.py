@@ -77,10 +77,12 @@ class TileParams:
 def _side_frames(x: float, z: float):
     """(name, centre offset along the side's normal, normal, along, half length) of the four
     sides of the rectangle |x|, |z|, front first."""
-    return (("front", np.array([0.0, 0.0, 1.0]), np.array([1.0, 0.0, 0.0]), z, x),
-            ("right", np.array([1.0, 0.0, 0.0]), np.array([0.0, 0.0, -1.0]), x, z),
-            ("rear", np.array([0.0, 0.0, -1.0]), np.array([-1.0, 0.0, 0.0]), z, x),
-            ("left", np.array([-1.0, 0.0, 0.0]), np.array([0.0, 0.0, 1.0]), x, z))
+    return (
+        ("front", np.array([0.0, 0.0, 1.0]), np.array([1.0, 0.0, 0.0]), z, x),
+        ("right", np.array([1.0, 0.0, 0.0]), np.array([0.0, 0.0, -1.0]), x, z),
+        ("rear", np.array([0.0, 0.0, -1.0]), np.array([-1.0, 0.0, 0.0]), z, x),
+        ("left", np.array([-1.0, 0.0, 0.0]), np.array([0.0, 0.0, 1.0]), x, z),
+    )
 
 
 def dentil_spacing(height: float) -> tuple[float, float]:
@@ -104,8 +106,9 @@ def dentils(layout: TempleLayout) -> Instances:
     back = 0.02 * h  # into the band: no face coplanar with it
     proto = box_prototype((w, h, depth), back=back, name="Dentil")
     pos, xs, ys = [], [], []
-    for _, nrm, along, off, half in _side_frames(lv["xe"] + lv["dentil_face"],
-                                                 lv["ze"] + lv["dentil_face"]):
+    for _, nrm, along, off, half in _side_frames(
+        lv["xe"] + lv["dentil_face"], lv["ze"] + lv["dentil_face"]
+    ):
         t = _centred(half, w, s)
         p = t[:, None] * along + (off * nrm + lv["dentil_bottom"] * _UP)[None]
         pos.append(p)
@@ -113,9 +116,14 @@ def dentils(layout: TempleLayout) -> Instances:
         ys.append(np.tile(_UP, (len(t), 1)))
     pos_a = np.concatenate(pos)
     n = len(pos_a)
-    return Instances("Dentils", (proto,), np.zeros(n, np.int32), pos_a,
-                     frames_to_quaternions(np.concatenate(xs), np.concatenate(ys)),
-                     np.ones((n, 3)))
+    return Instances(
+        "Dentils",
+        (proto,),
+        np.zeros(n, np.int32),
+        pos_a,
+        frames_to_quaternions(np.concatenate(xs), np.concatenate(ys)),
+        np.ones((n, 3)),
+    )
 
 
 # -- roof tiles ----------------------------------------------------------------------------------
@@ -136,10 +144,21 @@ def tegula_prototype(tp: TileParams) -> Mesh:
     """A flanged flat tile: x across, z up the slope from its lower edge, y up from its
     underside."""
     w, t, f = tp.tegula_width / 2, tp.thickness, tp.flange
-    sec = np.array([[-w, 0.0], [w, 0.0], [w, t + f], [w - t, t + f], [w - t, t],
-                    [-w + t, t], [-w + t, t + f], [-w, t + f]])
-    m = sweep(sec, np.array([[0.0, 0.0, 0.0], [0.0, 0.0, tp.tegula_length]]), closed=False,
-              name="Tegula")
+    sec = np.array(
+        [
+            [-w, 0.0],
+            [w, 0.0],
+            [w, t + f],
+            [w - t, t + f],
+            [w - t, t],
+            [-w + t, t],
+            [-w + t, t + f],
+            [-w, t + f],
+        ]
+    )
+    m = sweep(
+        sec, np.array([[0.0, 0.0, 0.0], [0.0, 0.0, tp.tegula_length]]), closed=False, name="Tegula"
+    )
     return _shear_tile(m, t, tp.tegula_length)
 
 
@@ -148,11 +167,17 @@ def imbrex_prototype(tp: TileParams, *, segments: int = 8) -> Mesh:
     r = tp.imbrex_diameter / 2
     a = np.linspace(0.0, np.pi, segments + 1)
     outer = np.stack([r * np.cos(a), r * np.sin(a)], 1)
-    inner = np.stack([(r - tp.thickness) * np.cos(a[::-1]), (r - tp.thickness) * np.sin(a[::-1])],
-                     1)
+    inner = np.stack(
+        [(r - tp.thickness) * np.cos(a[::-1]), (r - tp.thickness) * np.sin(a[::-1])], 1
+    )
     sec = np.vstack([outer, inner]) + [0.0, tp.thickness]
-    m = sweep(sec, np.array([[0.0, 0.0, 0.0], [0.0, 0.0, tp.tegula_length]]), closed=False,
-              crease_deg=50.0, name="Imbrex")
+    m = sweep(
+        sec,
+        np.array([[0.0, 0.0, 0.0], [0.0, 0.0, tp.tegula_length]]),
+        closed=False,
+        crease_deg=50.0,
+        name="Imbrex",
+    )
     return _shear_tile(m, tp.thickness, tp.tegula_length)
 
 
@@ -163,11 +188,17 @@ def antefix_prototype(tp: TileParams) -> Mesh:
     lobes = 1.0 + 0.12 * np.abs(np.sin(3.5 * (a - np.pi / 2)))  # scalloped palmette edge
     rad = 0.55 * h
     fan = np.stack([rad * np.cos(a) * lobes * 0.8, 0.45 * h + rad * 0.75 * np.sin(a) * lobes], 1)
-    sec = np.vstack([[[-r, 0.0], [r, 0.0], [0.6 * r, 0.45 * h]], fan[::-1][1:-1],
-                     [[-0.6 * r, 0.45 * h]]])
+    sec = np.vstack(
+        [[[-r, 0.0], [r, 0.0], [0.6 * r, 0.45 * h]], fan[::-1][1:-1], [[-0.6 * r, 0.45 * h]]]
+    )
     sec = sec[::-1]  # any winding: sweep orients the solid
-    return sweep(sec[:, [0, 1]] * [-1, 1], np.array([[0.0, 0.0, 0.0], [0.0, 0.0, tp.thickness]]),
-                 closed=False, crease_deg=60.0, name="Antefix")
+    return sweep(
+        sec[:, [0, 1]] * [-1, 1],
+        np.array([[0.0, 0.0, 0.0], [0.0, 0.0, tp.thickness]]),
+        closed=False,
+        crease_deg=60.0,
+        name="Antefix",
+    )
 
 
 def roof_tiles(layout: TempleLayout, tp: TileParams | None = None) -> Instances:
@@ -216,10 +247,14 @@ def roof_tiles(layout: TempleLayout, tp: TileParams | None = None) -> Instances:
         ys.append(np.tile(_UP, (len(zi), 1)))
         idx.append(np.full(len(zi), 2))
         sc.append(np.ones((len(zi), 3)))
-    return Instances("RoofTiles", (tegula, imbrex, antefix), np.concatenate(idx),
-                     np.concatenate(pos), frames_to_quaternions(np.concatenate(xs),
-                                                                np.concatenate(ys)),
-                     np.concatenate(sc))
+    return Instances(
+        "RoofTiles",
+        (tegula, imbrex, antefix),
+        np.concatenate(idx),
+        np.concatenate(pos),
+        frames_to_quaternions(np.concatenate(xs), np.concatenate(ys)),
+        np.concatenate(sc),
+    )
 
 
 # -- frieze relief (hypothesis) --------------------------------------------------------------
@@ -229,17 +264,27 @@ def _garland_prototype(span: float, drop: float, thick: float) -> Mesh:
     path = np.stack([0.5 * span * t, -drop * (1 - t * t), np.zeros_like(t)], 1)
     a = np.linspace(0, 2 * np.pi, 9)[:-1]
     sec = np.stack([0.5 * thick * np.cos(a), 0.5 * thick * np.sin(a)], 1)
-    return sweep(sec, path, axis=(0.0, 0.0, 1.0), closed=False, crease_deg=60.0,
-                 name="Garland")
+    return sweep(sec, path, axis=(0.0, 0.0, 1.0), closed=False, crease_deg=60.0, name="Garland")
 
 
 def _candelabrum_prototype(height: float, width: float) -> Mesh:
     """A candelabrum: a baluster-like lathe (half of it sunk in the frieze)."""
     r = 0.5 * width
-    prof = np.array([[0.0, 0.0], [0.9 * r, 0.0], [0.9 * r, 0.06 * height], [0.3 * r, 0.12 * height],
-                     [0.25 * r, 0.45 * height], [0.6 * r, 0.55 * height],
-                     [0.2 * r, 0.62 * height], [0.2 * r, 0.85 * height], [r, 0.9 * height],
-                     [0.7 * r, height], [0.0, height]])
+    prof = np.array(
+        [
+            [0.0, 0.0],
+            [0.9 * r, 0.0],
+            [0.9 * r, 0.06 * height],
+            [0.3 * r, 0.12 * height],
+            [0.25 * r, 0.45 * height],
+            [0.6 * r, 0.55 * height],
+            [0.2 * r, 0.62 * height],
+            [0.2 * r, 0.85 * height],
+            [r, 0.9 * height],
+            [0.7 * r, height],
+            [0.0, height],
+        ]
+    )
     return lathe_closed(prof, 10, name="Candelabrum")
 
 
@@ -255,17 +300,23 @@ def frieze_garlands(layout: TempleLayout) -> Instances:
     for _, nrm, along, off, half in _side_frames(lv["xe"], lv["ze"]):
         # candelabra at k·s from the centre of the side, garlands between them
         n = int(math.floor(half / s))
-        tc = np.arange(-n, n + 1) * s if (half - n * s) > 0.25 * s else \
-            np.arange(-n + 1, n) * s
+        tc = np.arange(-n, n + 1) * s if (half - n * s) > 0.25 * s else np.arange(-n + 1, n) * s
         tg = 0.5 * (tc[1:] + tc[:-1])
-        for proto_i, ts, y in ((0, tc, lv["y_frieze"] + 0.1 * fh),
-                               (1, tg, lv["y_frieze"] + 0.8 * fh)):
+        for proto_i, ts, y in (
+            (0, tc, lv["y_frieze"] + 0.1 * fh),
+            (1, tg, lv["y_frieze"] + 0.8 * fh),
+        ):
             p = ts[:, None] * along + (off * nrm + y * _UP)[None]
             pos.append(p)
             xs.append(np.tile(along, (len(ts), 1)))
             idx.append(np.full(len(ts), proto_i))
     pos_a = np.concatenate(pos)
     n = len(pos_a)
-    return Instances("FriezeGarlands", (cand, garland), np.concatenate(idx), pos_a,
-                     frames_to_quaternions(np.concatenate(xs), np.tile(_UP, (n, 1))),
-                     np.ones((n, 3)))
+    return Instances(
+        "FriezeGarlands",
+        (cand, garland),
+        np.concatenate(idx),
+        pos_a,
+        frames_to_quaternions(np.concatenate(xs), np.tile(_UP, (n, 1))),
+        np.ones((n, 3)),
+    )

@@ -141,7 +141,6 @@ class UVAtlas:
         return (self.st_px.astype(np.float64) / s).astype(np.float32)
 
 
-
 def next_pow2(n: int) -> int:
     return 1 << max(0, int(n) - 1).bit_length()
 
@@ -172,7 +171,6 @@ def check_uv_options(texels_per_metre: float, padding: int, resolution_cap: int)
         raise ParameterError("resolution_cap", resolution_cap, "an integer 16..65536", context="uv")
 
 
-
 def common_atlas_size(atlases: Iterable[UVAtlas]) -> int:
     """The normalising size S: the longest atlas side over all parts, rounded up to 2^n."""
     sides = [a.size for a in atlases]
@@ -192,7 +190,6 @@ def attach_uvs(mesh: Mesh, atlas: UVAtlas, atlas_size: int | None = None) -> Mes
             f"{mesh.face_vertex_indices.size}"
         )
     return mesh.with_(st=atlas.st(atlas_size), st_indices=atlas.st_indices)
-
 
 
 def chart_labels(st_indices: np.ndarray, n_values: int) -> np.ndarray:
@@ -270,8 +267,9 @@ def analytic_atlas(
             break
         tpm *= 0.97 * resolution_cap / max(width, height)
     else:
-        raise GeometryError(f"analytic_atlas: mesh {mesh.name!r} does not fit a "
-                            f"{resolution_cap}² atlas")
+        raise GeometryError(
+            f"analytic_atlas: mesh {mesh.name!r} does not fit a {resolution_cap}² atlas"
+        )
     px = (st - lo[value_chart]) * tpm + padding + offset[value_chart]
     px = np.clip(px, 0.0, [width, height])
     return UVAtlas(

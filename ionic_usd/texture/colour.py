@@ -20,7 +20,6 @@ def linear_to_srgb(c: np.ndarray) -> np.ndarray:
     return np.clip(out, 0.0, 1.0).astype(np.float32)
 
 
-
 def encode_srgb_inplace(c: np.ndarray) -> None:
     """:func:`linear_to_srgb` without temporaries of the full shape beyond one mask."""
     np.clip(c, 0.0, 1.0, out=c)
@@ -31,4 +30,3 @@ def encode_srgb_inplace(c: np.ndarray) -> None:
     c -= 0.055
     c[low] = lin
     np.clip(c, 0.0, 1.0, out=c)
-

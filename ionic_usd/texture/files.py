@@ -75,12 +75,13 @@ def verify_image(path: Path) -> None:
 
     inp = oiio.ImageInput.open(str(path))
     if inp is None:
-        raise TextureError(path, f"written image does not read back ({_one_line(oiio.geterror())})"
-                           "; is the disk full?")
+        raise TextureError(
+            path,
+            f"written image does not read back ({_one_line(oiio.geterror())}); is the disk full?",
+        )
     try:
         spec = inp.spec()
-        ok = inp.read_image(0, 0, 0, spec.nchannels, oiio.UINT8) is not None \
-            and not inp.has_error
+        ok = inp.read_image(0, 0, 0, spec.nchannels, oiio.UINT8) is not None and not inp.has_error
     finally:
         inp.close()
     if not ok:
@@ -106,8 +107,13 @@ def _write_tx(buf: Any, path: Path) -> None:
             raise TextureError(path, f"OpenImageIO make_texture failed: {oiio.geterror()}")
 
 
-def write_maps(folder: Path, prefix: str, planes: Mapping[str, tuple[np.ndarray, str]], *,
-               make_tx: bool = False) -> dict[str, Path]:
+def write_maps(
+    folder: Path,
+    prefix: str,
+    planes: Mapping[str, tuple[np.ndarray, str]],
+    *,
+    make_tx: bool = False,
+) -> dict[str, Path]:
     """Write float maps in [0, 1] as 8-bit ``<prefix>_<key>.png`` (and ``.tx``), in parallel.
 
     Parameters
@@ -196,8 +202,11 @@ def validate_user_texture(path: str | os.PathLike[str]) -> Path:
             raise TextureError(p, "image has no pixels")
         # the header's dimensions, before any pixel is decoded (a small PNG can hold 20000²)
         if max(spec.width, spec.height) > MAX_USER_TEXTURE_SIZE or spec.depth > 1:
-            raise TextureError(p, f"image is {spec.width}x{spec.height}x{spec.depth} pixels; "
-                               f"the limit is {MAX_USER_TEXTURE_SIZE} per side, 2-D")
+            raise TextureError(
+                p,
+                f"image is {spec.width}x{spec.height}x{spec.depth} pixels; "
+                f"the limit is {MAX_USER_TEXTURE_SIZE} per side, 2-D",
+            )
         # Opening only parses the header; decode the pixels to catch truncated files.
         pixels = inp.read_image(0, 0, 0, spec.nchannels, oiio.UINT8)
         if pixels is None:

@@ -17,8 +17,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["KMAX", "CELL", "HIGH_STREAM", "NoiseSpec", "Spectrum", "noise_sigma",
-           "gauss_quantile", "smoothstep"]
+__all__ = [
+    "KMAX",
+    "CELL",
+    "HIGH_STREAM",
+    "NoiseSpec",
+    "Spectrum",
+    "noise_sigma",
+    "gauss_quantile",
+    "smoothstep",
+]
 
 # Highest frequency (cycles per tile) drawn from the size-independent random stream.
 KMAX = 512
@@ -158,4 +166,3 @@ def gauss_quantile(p: float) -> float:
 def smoothstep(e0: float, e1: float, x: np.ndarray) -> np.ndarray:
     t = np.clip((x - e0) / (e1 - e0), 0.0, 1.0)
     return t * t * (3.0 - 2.0 * t)
-

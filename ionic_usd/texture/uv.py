@@ -165,8 +165,9 @@ def unwrap(
             "mesh (fan-triangulate it first)"
         )
     if analytic and mesh.st is not None:
-        return analytic_atlas(mesh, texels_per_metre=texels_per_metre, padding=padding,
-                              resolution_cap=resolution_cap)
+        return analytic_atlas(
+            mesh, texels_per_metre=texels_per_metre, padding=padding, resolution_cap=resolution_cap
+        )
     store = resolve_cache(cache)
     key = uv_cache_key(
         mesh,
@@ -324,8 +325,14 @@ def unwrap_parts(
 
     def run(tpm: float) -> dict[str, UVAtlas]:
         return {
-            k: unwrap(m, texels_per_metre=tpm, max_chart_boundary=bnd.get(k), padding=padding,
-                      resolution_cap=resolution_cap, cache=cache)
+            k: unwrap(
+                m,
+                texels_per_metre=tpm,
+                max_chart_boundary=bnd.get(k),
+                padding=padding,
+                resolution_cap=resolution_cap,
+                cache=cache,
+            )
             for k, m in meshes.items()
         }
 
@@ -334,7 +341,6 @@ def unwrap_parts(
     if lowest < float(texels_per_metre):
         atlases = run(lowest)
     return atlases
-
 
 
 def apply_uvs(
@@ -406,15 +412,24 @@ def metric_charts(
     """
     meshes = list(meshes)
     todo = [m for m in meshes if m.st is None]
-    prefetch([(m, texels_per_metre) for m in todo], padding=padding,
-             resolution_cap=resolution_cap, cache=cache)
+    prefetch(
+        [(m, texels_per_metre) for m in todo],
+        padding=padding,
+        resolution_cap=resolution_cap,
+        cache=cache,
+    )
     out = []
     for m in meshes:
         if m.st is not None:
             out.append(m)
             continue
-        a = unwrap(m, texels_per_metre=texels_per_metre, padding=padding,
-                   resolution_cap=resolution_cap, cache=cache, analytic=False)
-        out.append(m.with_(st=a.st_px / np.float32(a.texels_per_metre),
-                           st_indices=a.st_indices))
+        a = unwrap(
+            m,
+            texels_per_metre=texels_per_metre,
+            padding=padding,
+            resolution_cap=resolution_cap,
+            cache=cache,
+            analytic=False,
+        )
+        out.append(m.with_(st=a.st_px / np.float32(a.texels_per_metre), st_indices=a.st_indices))
     return out

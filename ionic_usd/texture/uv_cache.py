@@ -49,8 +49,9 @@ XATLAS_PACK_OPTIONS = {
     "bruteForce": False,
 }
 _FORMAT = "ionic_usd.uv/1"
-_SIGNATURE = (f"{_FORMAT};xatlas={XATLAS_VERSION};chart={XATLAS_CHART_OPTIONS}"
-              f";pack={XATLAS_PACK_OPTIONS}")
+_SIGNATURE = (
+    f"{_FORMAT};xatlas={XATLAS_VERSION};chart={XATLAS_CHART_OPTIONS};pack={XATLAS_PACK_OPTIONS}"
+)
 
 
 def default_cache_folder() -> Path:
@@ -226,4 +227,3 @@ def uv_cache_key(
     h.update(b";indices")
     h.update(np.ascontiguousarray(mesh.face_vertex_indices, dtype="<i4").tobytes())
     return h.hexdigest()
-

@@ -42,9 +42,15 @@ from ionic_usd.usd.stage import new_layer, save_layer
 if TYPE_CHECKING:  # the ornament module is imported only when an asset has instancers
     from ionic_usd.column.ornament import Instances
 
-__all__ = ["AssetMesh", "AssetInstancer", "AssetSpec", "class_path", "write_asset",
-           "write_asset_layers",
-           "replace_folder"]
+__all__ = [
+    "AssetMesh",
+    "AssetInstancer",
+    "AssetSpec",
+    "class_path",
+    "write_asset",
+    "write_asset_layers",
+    "replace_folder",
+]
 
 
 @dataclass(frozen=True)
@@ -99,17 +105,22 @@ class AssetSpec:
         for m in _tagged(self):
             for vset, v in m.tags.items():
                 if vset not in self.variant_sets or v not in self.variant_sets[vset]:
-                    raise ParameterError(f"tags of {m.part}/{m.name}", dict(m.tags),
-                                         "variant sets and variants declared by the asset")
+                    raise ParameterError(
+                        f"tags of {m.part}/{m.name}",
+                        dict(m.tags),
+                        "variant sets and variants declared by the asset",
+                    )
         if self.proxy_lod is not None and self.proxy_lod not in self.variant_sets.get("lod", ()):
             raise ParameterError("proxy_lod", self.proxy_lod, "a variant of the lod set")
         if self.default_material not in self.materials:
-            raise ParameterError("default_material", self.default_material,
-                                 f"one of {', '.join(self.materials)}")
+            raise ParameterError(
+                "default_material", self.default_material, f"one of {', '.join(self.materials)}"
+            )
         for fin, mat in self.finishes.items():
             if mat not in self.materials:
-                raise ParameterError(f"finishes[{fin!r}]", mat,
-                                     f"one of {', '.join(self.materials)}")
+                raise ParameterError(
+                    f"finishes[{fin!r}]", mat, f"one of {', '.join(self.materials)}"
+                )
 
 
 def _geometry_layer(spec: AssetSpec) -> Sdf.Layer:
@@ -124,8 +135,7 @@ def _geometry_layer(spec: AssetSpec) -> Sdf.Layer:
 
             for a in spec.instancers:
                 define_prim(layer, f"/{spec.name}/Geom/{a.part}", "Scope")
-                author_point_instancer(layer, f"/{spec.name}/Geom/{a.part}/{a.name}",
-                                       a.instances)
+                author_point_instancer(layer, f"/{spec.name}/Geom/{a.part}/{a.name}", a.instances)
         if spec.proxy_lod is not None:
             # render/proxy split: Geom (the selected lod) renders; Proxy shows the light lod's
             # meshes in viewports. Each proxy mesh is an internal reference (no second copy
@@ -135,14 +145,16 @@ def _geometry_layer(spec: AssetSpec) -> Sdf.Layer:
             _purpose(proxy, "proxy")
             for m in _proxy_meshes(spec):
                 ref = define_prim(layer, f"/{spec.name}/Proxy/{m.name}", "Mesh")
-                ref.referenceList.Prepend(Sdf.Reference(
-                    primPath=Sdf.Path(f"/{spec.name}/Geom/{m.part}/{m.name}")))
+                ref.referenceList.Prepend(
+                    Sdf.Reference(primPath=Sdf.Path(f"/{spec.name}/Geom/{m.part}/{m.name}"))
+                )
     return layer
 
 
 def _purpose(spec: Sdf.PrimSpec, purpose: str) -> None:
-    Sdf.AttributeSpec(spec, "purpose", Sdf.ValueTypeNames.Token,
-                      Sdf.VariabilityUniform).default = purpose
+    Sdf.AttributeSpec(
+        spec, "purpose", Sdf.ValueTypeNames.Token, Sdf.VariabilityUniform
+    ).default = purpose
 
 
 def _tagged(spec: AssetSpec) -> tuple[AssetMesh | AssetInstancer, ...]:
@@ -159,8 +171,9 @@ def _materials_layer(spec: AssetSpec) -> Sdf.Layer:
     stage = Usd.Stage.Open(layer)
     stage.DefinePrim(f"/{spec.name}/Materials", "Scope")
     for mat_name, tex in spec.materials.items():
-        author_preview_material(stage, f"/{spec.name}/Materials/{mat_name}", tex,
-                                st_scale=spec.st_scale)
+        author_preview_material(
+            stage, f"/{spec.name}/Materials/{mat_name}", tex, st_scale=spec.st_scale
+        )
     geom = stage.DefinePrim(f"/{spec.name}/Geom", "Scope")
     bind_material(geom, f"/{spec.name}/Materials/{spec.default_material}")
     if spec.proxy_lod is not None:
@@ -218,8 +231,9 @@ def _interface_layer(spec: AssetSpec) -> Sdf.Layer:
                 if vset == "finish" and v in spec.finishes:
                     scopes = ["Geom"] + (["Proxy"] if spec.proxy_lod is not None else [])
                     for scope in scopes:
-                        bind_material_spec(_over(vprim, scope),
-                                           f"/{name}/Materials/{spec.finishes[v]}")
+                        bind_material_spec(
+                            _over(vprim, scope), f"/{name}/Materials/{spec.finishes[v]}"
+                        )
             root.variantSelections[vset] = spec.defaults[vset]
     return layer
 
@@ -245,8 +259,11 @@ def write_asset_layers(spec: AssetSpec, folder: Path) -> dict[str, Path]:
     written["interface"] = save_layer(interface, folder / f"{spec.name}.usda", force=True)
     # extentsHint lets a renderer cull and a DCC frame the asset before its payload loads;
     # computed on the composed asset for every combination of the sets that switch meshes
-    tagging = {vs: spec.variant_sets[vs] for vs in spec.variant_sets
-               if any(vs in m.tags for m in spec.meshes)}
+    tagging = {
+        vs: spec.variant_sets[vs]
+        for vs in spec.variant_sets
+        if any(vs in m.tags for m in spec.meshes)
+    }
     stage = Usd.Stage.Open(str(written["interface"]))
     hints = variant_extents_hints(stage, f"/{spec.name}", [f"/{spec.name}"], tagging)
     del stage
@@ -255,8 +272,14 @@ def write_asset_layers(spec: AssetSpec, folder: Path) -> dict[str, Path]:
     return written
 
 
-def replace_folder(build: Callable[[Path], object], dest: Path, *, force: bool = False,
-                   keep_existing: tuple[str, ...] = (), root_files: tuple[str, ...] = ()):
+def replace_folder(
+    build: Callable[[Path], object],
+    dest: Path,
+    *,
+    force: bool = False,
+    keep_existing: tuple[str, ...] = (),
+    root_files: tuple[str, ...] = (),
+):
     """Build a folder in a staging sibling and move it into place kill-safely.
 
     See :func:`ionic_usd.io.replace_folder`: an existing ``dest`` is refused unless ``force``;
@@ -267,8 +290,7 @@ def replace_folder(build: Callable[[Path], object], dest: Path, *, force: bool =
     from ionic_usd.io import replace_folder as _replace
 
     dest = Path(dest)
-    result = _replace(build, dest, force=force, keep_existing=keep_existing,
-                      root_files=root_files)
+    result = _replace(build, dest, force=force, keep_existing=keep_existing, root_files=root_files)
     # layers cached under the old content must be re-read
     for layer in Sdf.Layer.GetLoadedLayers():
         real = layer.realPath

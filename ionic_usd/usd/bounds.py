@@ -19,8 +19,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 from pxr import Sdf, Usd, UsdGeom, Vt
 
-__all__ = [
-    "bound_changing_sets","variant_extents_hints", "author_extents_hints", "relevant_sets"]
+__all__ = ["bound_changing_sets", "variant_extents_hints", "author_extents_hints", "relevant_sets"]
 
 Combo = tuple[str, ...]
 
@@ -47,11 +46,14 @@ def variant_extents_hints(
                 with Sdf.ChangeBlock():
                     for n, v in zip(names, combo, strict=True):
                         prim.GetVariantSet(n).SetVariantSelection(v)
-                cache = UsdGeom.BBoxCache(Usd.TimeCode.Default(),
-                                          UsdGeom.Imageable.GetOrderedPurposeTokens())
+                cache = UsdGeom.BBoxCache(
+                    Usd.TimeCode.Default(), UsdGeom.Imageable.GetOrderedPurposeTokens()
+                )
                 out[combo] = {
-                    p: np.array(UsdGeom.ModelAPI(stage.GetPrimAtPath(p)).ComputeExtentsHint(
-                        cache), dtype=np.float64).reshape(-1, 3)
+                    p: np.array(
+                        UsdGeom.ModelAPI(stage.GetPrimAtPath(p)).ComputeExtentsHint(cache),
+                        dtype=np.float64,
+                    ).reshape(-1, 3)
                     for p in prims
                 }
         finally:
@@ -60,8 +62,7 @@ def variant_extents_hints(
 
 
 def _same(a: dict[str, np.ndarray], b: dict[str, np.ndarray], tol: float) -> bool:
-    return all(a[k].shape == b[k].shape and np.allclose(a[k], b[k], atol=tol, rtol=0)
-               for k in a)
+    return all(a[k].shape == b[k].shape and np.allclose(a[k], b[k], atol=tol, rtol=0) for k in a)
 
 
 def relevant_sets(
@@ -100,15 +101,16 @@ def _variant_prim(spec: Sdf.PrimSpec, vset: str, variant: str) -> Sdf.PrimSpec:
 
 def _author_hint(spec: Sdf.PrimSpec, rel: Sdf.Path, hint: np.ndarray) -> None:
     target = spec
-    for name in ([] if rel == Sdf.Path(".") else rel.pathString.split("/")):
+    for name in [] if rel == Sdf.Path(".") else rel.pathString.split("/"):
         child = target.nameChildren.get(name)
         if child is None:
             child = Sdf.PrimSpec(target, name, Sdf.SpecifierOver)
         target = child
     attr = target.attributes.get("extentsHint")
     if attr is None:
-        attr = Sdf.AttributeSpec(target, "extentsHint", Sdf.ValueTypeNames.Float3Array,
-                                 Sdf.VariabilityUniform)
+        attr = Sdf.AttributeSpec(
+            target, "extentsHint", Sdf.ValueTypeNames.Float3Array, Sdf.VariabilityUniform
+        )
     attr.default = Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(hint, dtype=np.float32))
 
 
@@ -142,8 +144,13 @@ def author_extents_hints(
 
 
 def bound_changing_sets(
-    stage: Usd.Stage, root: str, prims: Sequence[str], vsets: Mapping[str, Sequence[str]],
-    *, base: str | None = None, tol: float = 1e-6,
+    stage: Usd.Stage,
+    root: str,
+    prims: Sequence[str],
+    vsets: Mapping[str, Sequence[str]],
+    *,
+    base: str | None = None,
+    tol: float = 1e-6,
 ) -> dict[str, Sequence[str]]:
     """The sets of ``vsets`` whose selection changes some hint when switched alone — under
     each variant of ``base`` (e.g. ``lod``: a level of detail can hide a change), the other sets

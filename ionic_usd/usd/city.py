@@ -44,10 +44,21 @@ from ionic_usd.usd.draw_mode import CARD_FACES, author_cards, card_bbox_cache, c
 from ionic_usd.usd.instancer import drawn_triangles
 from ionic_usd.usd.stage import new_layer, save_layer
 
-__all__ = ["CityReport", "TempleInstances", "ColumnInstances", "compose_city", "ROOT_LAYER",
-           "INSTANCES_LAYER", "DEFAULT_INSTANCER_THRESHOLD", "temple_variant_sets",
-           "temple_selection", "temple_card_bound", "model_card_bound", "CARD_TRIANGLES",
-           "COLUMN_CARD_SELECTION"]
+__all__ = [
+    "CityReport",
+    "TempleInstances",
+    "ColumnInstances",
+    "compose_city",
+    "ROOT_LAYER",
+    "INSTANCES_LAYER",
+    "DEFAULT_INSTANCER_THRESHOLD",
+    "temple_variant_sets",
+    "temple_selection",
+    "temple_card_bound",
+    "model_card_bound",
+    "CARD_TRIANGLES",
+    "COLUMN_CARD_SELECTION",
+]
 
 #: triangles of a box of cards as a renderer draws it: six quads
 CARD_TRIANGLES = 12
@@ -115,8 +126,8 @@ class CityReport:
     temple_builds: int
     street_columns: int
     column_prototypes: int
-    temples_as: str                      # "references" or "point-instancer"
-    triangles: dict[str, int]            # LOD setting → triangles drawn
+    temples_as: str  # "references" or "point-instancer"
+    triangles: dict[str, int]  # LOD setting → triangles drawn
     extent: tuple[tuple[float, ...], tuple[float, ...]]
     seconds: dict[str, float] = field(default_factory=dict)
 
@@ -131,12 +142,12 @@ def temple_variant_sets(temple_root: Path) -> dict[str, tuple[str, ...]]:
     if not prim:
         raise UsdAuthoringError(f"{temple_root} has no default prim")
     vsets = prim.GetVariantSets()
-    return {name: tuple(vsets.GetVariantSet(name).GetVariantNames())
-            for name in vsets.GetNames()}
+    return {name: tuple(vsets.GetVariantSet(name).GetVariantNames()) for name in vsets.GetNames()}
 
 
-def temple_selection(vsets: Mapping[str, Sequence[str]], selections: Mapping[str, str],
-                     lod: str | None = None) -> dict[str, str]:
+def temple_selection(
+    vsets: Mapping[str, Sequence[str]], selections: Mapping[str, str], lod: str | None = None
+) -> dict[str, str]:
     """The variant selections of one temple: hypothesis id → ``hyp_<id>`` where the build has
     that set (others are ignored), plus ``lod`` where the build has a lod set."""
     sel = {f"hyp_{_ident(h)}": v for h, v in selections.items() if f"hyp_{_ident(h)}" in vsets}
@@ -145,8 +156,9 @@ def temple_selection(vsets: Mapping[str, Sequence[str]], selections: Mapping[str
     return sel
 
 
-def model_card_bound(root_layer: Path, selections: Mapping[str, str]
-                     ) -> tuple[np.ndarray, np.ndarray]:
+def model_card_bound(
+    root_layer: Path, selections: Mapping[str, str]
+) -> tuple[np.ndarray, np.ndarray]:
     """The card box of the default prim of ``root_layer`` with ``selections`` (its own frame,
     metres): the box a viewer draws its cards on (:func:`ionic_usd.usd.draw_mode.card_bound`)."""
     stage = Usd.Stage.Open(str(root_layer))
@@ -162,14 +174,16 @@ def model_card_bound(root_layer: Path, selections: Mapping[str, str]
     return bound
 
 
-def temple_card_bound(temple_root: Path, selections: Mapping[str, str]
-                      ) -> tuple[np.ndarray, np.ndarray]:
+def temple_card_bound(
+    temple_root: Path, selections: Mapping[str, str]
+) -> tuple[np.ndarray, np.ndarray]:
     """The card box of a temple with ``selections`` (:func:`model_card_bound`)."""
     return model_card_bound(temple_root, selections)
 
 
-def _stats(stage: Usd.Stage, root: str, selections: Mapping[str, str]
-           ) -> tuple[np.ndarray, np.ndarray, int]:
+def _stats(
+    stage: Usd.Stage, root: str, selections: Mapping[str, str]
+) -> tuple[np.ndarray, np.ndarray, int]:
     """Bounds (lo (3,), hi (3,)) and drawn triangles of ``root`` with ``selections`` made in
     the stage's session layer (default + render purposes, visible prims only); earlier
     selections there are cleared first, so "as authored" means the file's own."""
@@ -178,8 +192,9 @@ def _stats(stage: Usd.Stage, root: str, selections: Mapping[str, str]
     with Usd.EditContext(stage, stage.GetSessionLayer()):
         for name, value in selections.items():
             prim.GetVariantSet(name).SetVariantSelection(value)
-    cache = UsdGeom.BBoxCache(Usd.TimeCode.Default(), [UsdGeom.Tokens.default_,
-                                                       UsdGeom.Tokens.render])
+    cache = UsdGeom.BBoxCache(
+        Usd.TimeCode.Default(), [UsdGeom.Tokens.default_, UsdGeom.Tokens.render]
+    )
     rng = cache.ComputeWorldBound(prim).ComputeAlignedRange()
     tris = drawn_triangles(prim)
     return np.array(rng.GetMin()), np.array(rng.GetMax()), tris
@@ -193,8 +208,9 @@ def _set_xform(spec: Sdf.PrimSpec, x: float, z: float, yaw: float, scale: float)
     Sdf.AttributeSpec(spec, "xformOp:translate", _T.Double3).default = Gf.Vec3d(x, 0.0, z)
     Sdf.AttributeSpec(spec, "xformOp:rotateXYZ", _T.Float3).default = Gf.Vec3f(0.0, yaw, 0.0)
     Sdf.AttributeSpec(spec, "xformOp:scale", _T.Float3).default = Gf.Vec3f(scale, scale, scale)
-    Sdf.AttributeSpec(spec, "xformOpOrder", _T.TokenArray, Sdf.VariabilityUniform).default = \
-        Vt.TokenArray(["xformOp:translate", "xformOp:rotateXYZ", "xformOp:scale"])
+    Sdf.AttributeSpec(
+        spec, "xformOpOrder", _T.TokenArray, Sdf.VariabilityUniform
+    ).default = Vt.TokenArray(["xformOp:translate", "xformOp:rotateXYZ", "xformOp:scale"])
 
 
 def _group(layer: Sdf.Layer, path: str, type_name: str = "Xform") -> Sdf.PrimSpec:
@@ -203,10 +219,16 @@ def _group(layer: Sdf.Layer, path: str, type_name: str = "Xform") -> Sdf.PrimSpe
     return spec
 
 
-def _instancer(layer: Sdf.Layer, path: str,
-               protos: list[tuple[str, str, dict[str, str], str | None]],
-               index: np.ndarray, xz: np.ndarray, yaw: np.ndarray, scale: np.ndarray | None,
-               extent: tuple[np.ndarray, np.ndarray]) -> None:
+def _instancer(
+    layer: Sdf.Layer,
+    path: str,
+    protos: list[tuple[str, str, dict[str, str], str | None]],
+    index: np.ndarray,
+    xz: np.ndarray,
+    yaw: np.ndarray,
+    scale: np.ndarray | None,
+    extent: tuple[np.ndarray, np.ndarray],
+) -> None:
     """A PointInstancer (kind = group) with prototypes (name, reference, selections, card
     image folder or None)."""
     pi = _group(layer, path, "PointInstancer")
@@ -228,14 +250,17 @@ def _instancer(layer: Sdf.Layer, path: str,
     Sdf.AttributeSpec(pi, "positions", _T.Point3fArray).default = Vt.Vec3fArray.FromNumpy(pos)
     del pos
     Sdf.AttributeSpec(pi, "protoIndices", _T.IntArray).default = Vt.IntArray.FromNumpy(
-        np.ascontiguousarray(index, dtype=np.int32))
+        np.ascontiguousarray(index, dtype=np.int32)
+    )
     Sdf.AttributeSpec(pi, "orientations", _T.QuathArray).default = Vt.QuathArray.FromNumpy(
-        yaw_quaternions(yaw))
+        yaw_quaternions(yaw)
+    )
     if scale is not None:
         s = np.repeat(np.asarray(scale, dtype=np.float32)[:, None], 3, axis=1)
         Sdf.AttributeSpec(pi, "scales", _T.Float3Array).default = Vt.Vec3fArray.FromNumpy(s)
     Sdf.AttributeSpec(pi, "extent", _T.Float3Array).default = Vt.Vec3fArray(
-        [Gf.Vec3f(*map(float, extent[0])), Gf.Vec3f(*map(float, extent[1]))])
+        [Gf.Vec3f(*map(float, extent[0])), Gf.Vec3f(*map(float, extent[1]))]
+    )
 
 
 def _cards(spec: Sdf.PrimSpec, folder: str) -> None:
@@ -243,8 +268,14 @@ def _cards(spec: Sdf.PrimSpec, folder: str) -> None:
     author_cards(spec, {f: f"./{folder}/{f}.png" for f in CARD_FACES}, geometry="box")
 
 
-def _instance_bounds(lo: np.ndarray, hi: np.ndarray, index: np.ndarray, xz: np.ndarray,
-                     yaw: np.ndarray, scale: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+def _instance_bounds(
+    lo: np.ndarray,
+    hi: np.ndarray,
+    index: np.ndarray,
+    xz: np.ndarray,
+    yaw: np.ndarray,
+    scale: np.ndarray | None,
+) -> tuple[np.ndarray, np.ndarray]:
     """Axis-aligned bounds of every placed prototype box (boxes (p, 3) lo/hi), exact for
     rotations about Y: the rotated box's half-widths are |cos|·hx + |sin|·hz and the like."""
     if len(index) == 0:
@@ -254,11 +285,20 @@ def _instance_bounds(lo: np.ndarray, hi: np.ndarray, index: np.ndarray, xz: np.n
     # inside the positions' extremes cannot hold an extreme (its box starts beyond one that
     # does); so the exact computation runs on a thin rim (1M columns: a few thousand)
     smax = 1.0 if scale is None else float(np.max(scale))
-    reach = np.hypot(np.maximum(np.abs(lo[:, 0]), np.abs(hi[:, 0])),
-                     np.maximum(np.abs(lo[:, 2]), np.abs(hi[:, 2]))).max() * smax
+    reach = (
+        np.hypot(
+            np.maximum(np.abs(lo[:, 0]), np.abs(hi[:, 0])),
+            np.maximum(np.abs(lo[:, 2]), np.abs(hi[:, 2])),
+        ).max()
+        * smax
+    )
     x, z = xz[:, 0], xz[:, 1]
-    rim = ((x <= x.min() + 2 * reach) | (x >= x.max() - 2 * reach)
-           | (z <= z.min() + 2 * reach) | (z >= z.max() - 2 * reach))
+    rim = (
+        (x <= x.min() + 2 * reach)
+        | (x >= x.max() - 2 * reach)
+        | (z <= z.min() + 2 * reach)
+        | (z >= z.max() - 2 * reach)
+    )
     # heights do not depend on position: every instance counts (scale = 1 or per instance)
     if scale is None:
         used = np.bincount(index, minlength=len(lo)) > 0
@@ -284,13 +324,18 @@ def _instance_bounds(lo: np.ndarray, hi: np.ndarray, index: np.ndarray, xz: np.n
     return out_lo, out_hi
 
 
-def compose_city(folder: str | os.PathLike, temples: TempleInstances,
-                 columns: ColumnInstances, *,
-                 instancer_threshold: int = DEFAULT_INSTANCER_THRESHOLD,
-                 finish: str = "stucco", summary: Mapping | None = None,
-                 card_dirs: Mapping[tuple[int, tuple], str] | None = None,
-                 column_card_dir: str | None = None,
-                 force: bool = False) -> CityReport:
+def compose_city(
+    folder: str | os.PathLike,
+    temples: TempleInstances,
+    columns: ColumnInstances,
+    *,
+    instancer_threshold: int = DEFAULT_INSTANCER_THRESHOLD,
+    finish: str = "stucco",
+    summary: Mapping | None = None,
+    card_dirs: Mapping[tuple[int, tuple], str] | None = None,
+    column_card_dir: str | None = None,
+    force: bool = False,
+) -> CityReport:
     """Write ``City.usda`` + ``Instances.usdc`` into ``folder`` (its ``Temples/`` must hold
     the builds named in ``temples.folders``).
 
@@ -327,16 +372,20 @@ def compose_city(folder: str | os.PathLike, temples: TempleInstances,
         sel = temple_selection(vsets[b], temples.selections[i], lod)
         key = (b, tuple(sorted(sel.items())), card)
         if card and (card_dirs is None or key[:2] not in card_dirs):
-            raise ParameterError("card images", f"temple {temples.names[i]}", "a folder of "
-                                 "baked cards for every temple drawn as cards (card_dirs)")
+            raise ParameterError(
+                "card images",
+                f"temple {temples.names[i]}",
+                "a folder of baked cards for every temple drawn as cards (card_dirs)",
+            )
         proto_of[i] = keys.setdefault(key, len(keys))
     protos = list(keys)
 
     # per-prototype bounds and triangles, from each build's own stage (not the city)
     t1 = time.perf_counter()
     tlo, thi = np.zeros((len(protos), 3)), np.zeros((len(protos), 3))
-    ttri: dict[str, np.ndarray] = {s: np.zeros(len(protos), dtype=np.int64)
-                                   for s in ("as authored", *LOD_NAMES)}
+    ttri: dict[str, np.ndarray] = {
+        s: np.zeros(len(protos), dtype=np.int64) for s in ("as authored", *LOD_NAMES)
+    }
     stages: dict[int, Usd.Stage] = {}
     for k, (b, sel, card) in enumerate(protos):
         stage = stages.get(b) or Usd.Stage.Open(str(folder / temples.folders[b] / "Temple.usda"))
@@ -352,15 +401,24 @@ def compose_city(folder: str | os.PathLike, temples: TempleInstances,
                 ttri[lod][k] = _stats(stage, "/Temple", dict(sel))[2]
     # the street columns' prototypes: the column asset at each LOD used by a near column,
     # then (index len(col_lods)) the card prototype for the far ones
-    ccard = (np.zeros(len(columns), dtype=bool) if columns.cards is None
-             else np.asarray(columns.cards, dtype=bool))
+    ccard = (
+        np.zeros(len(columns), dtype=bool)
+        if columns.cards is None
+        else np.asarray(columns.cards, dtype=bool)
+    )
     if ccard.shape != (len(columns),):
         raise ParameterError("column cards", ccard.shape, f"({len(columns)},) bools")
     if ccard.any() and not column_card_dir:
-        raise ParameterError("column card images", "none", "a folder of baked cards for the "
-                             "far street columns (column_card_dir)")
-    near_lod = (np.asarray(columns.lod)[~ccard] if columns.lod is not None
-                else np.full(int((~ccard).sum()), 2))
+        raise ParameterError(
+            "column card images",
+            "none",
+            "a folder of baked cards for the far street columns (column_card_dir)",
+        )
+    near_lod = (
+        np.asarray(columns.lod)[~ccard]
+        if columns.lod is not None
+        else np.full(int((~ccard).sum()), 2)
+    )
     col_lods = sorted(set(np.unique(near_lod).tolist()))
     cidx = np.full(len(columns), len(col_lods), dtype=np.int32)
     cidx[~ccard] = np.searchsorted(col_lods, near_lod).astype(np.int32)
@@ -374,11 +432,11 @@ def compose_city(folder: str | os.PathLike, temples: TempleInstances,
             raise UsdAuthoringError(f"cannot open the column asset {folder / columns.asset}")
         root = str(cstage.GetDefaultPrim().GetPath())
         for k, li in enumerate(box_lods):
-            clo[k], chi[k], _ = _stats(cstage, root, {"lod": LOD_NAMES[li], "form": "full",
-                                                      "finish": finish})
+            clo[k], chi[k], _ = _stats(
+                cstage, root, {"lod": LOD_NAMES[li], "form": "full", "finish": finish}
+            )
         for lod in LOD_NAMES:
-            col_tri[lod] = _stats(cstage, root, {"lod": lod, "form": "full",
-                                                 "finish": finish})[2]
+            col_tri[lod] = _stats(cstage, root, {"lod": lod, "form": "full", "finish": finish})[2]
     secs["prototype stats"] = time.perf_counter() - t1
 
     # -- author ----------------------------------------------------------------------------------
@@ -390,13 +448,21 @@ def compose_city(folder: str | os.PathLike, temples: TempleInstances,
     with Sdf.ChangeBlock():
         _group(body, "/City/Temples")
         refs = [f"./{temples.folders[b]}/Temple.usda" for b, _, _ in protos]
-        dirs = [card_dirs[(b, sel)] if card and card_dirs else None
-                for b, sel, card in protos]
+        dirs = [card_dirs[(b, sel)] if card and card_dirs else None for b, sel, card in protos]
         if as_instancer:
-            _instancer(body, "/City/Temples/Field",
-                       [(f"Temple_{k}", refs[k], dict(sel), dirs[k]) for k, (_, sel, _) in
-                        enumerate(protos)], proto_of, temples.xz, temples.yaw, temples.scale,
-                       t_ext)
+            _instancer(
+                body,
+                "/City/Temples/Field",
+                [
+                    (f"Temple_{k}", refs[k], dict(sel), dirs[k])
+                    for k, (_, sel, _) in enumerate(protos)
+                ],
+                proto_of,
+                temples.xz,
+                temples.yaw,
+                temples.scale,
+                t_ext,
+            )
         else:
             used: set[str] = set()
             for i in range(len(temples)):
@@ -413,27 +479,47 @@ def compose_city(folder: str | os.PathLike, temples: TempleInstances,
                     spec.variantSelections[vs] = v
                 if dirs[k] is not None:
                     _cards(spec, dirs[k])  # type: ignore[arg-type]
-                _set_xform(spec, float(temples.xz[i, 0]), float(temples.xz[i, 1]),
-                           float(temples.yaw[i]), float(temples.scale[i]))
+                _set_xform(
+                    spec,
+                    float(temples.xz[i, 0]),
+                    float(temples.xz[i, 1]),
+                    float(temples.yaw[i]),
+                    float(temples.scale[i]),
+                )
         if len(columns):
             cprotos: list[tuple[str, str, dict[str, str], str | None]] = [
-                (f"Column_{LOD_NAMES[li]}", f"./{columns.asset}",
-                 {"lod": LOD_NAMES[li], "form": "full", "finish": finish}, None)
-                for li in col_lods]
+                (
+                    f"Column_{LOD_NAMES[li]}",
+                    f"./{columns.asset}",
+                    {"lod": LOD_NAMES[li], "form": "full", "finish": finish},
+                    None,
+                )
+                for li in col_lods
+            ]
             if ccard.any():
-                cprotos.append(("Column_cards", f"./{columns.asset}",
-                                {**COLUMN_CARD_SELECTION, "finish": finish}, column_card_dir))
-            _instancer(body, "/City/Porticus", cprotos, cidx, columns.xz, columns.yaw, None,
-                       c_ext)
+                cprotos.append(
+                    (
+                        "Column_cards",
+                        f"./{columns.asset}",
+                        {**COLUMN_CARD_SELECTION, "finish": finish},
+                        column_card_dir,
+                    )
+                )
+            _instancer(body, "/City/Porticus", cprotos, cidx, columns.xz, columns.yaw, None, c_ext)
     have = [e for e, n in ((t_ext, len(temples)), (c_ext, len(columns))) if n]
     lo = np.min([e[0] for e in have], axis=0) if have else np.zeros(3)
     hi = np.max([e[1] for e in have], axis=0) if have else np.zeros(3)
-    root = new_layer("City", kind="assembly", comment="A city of Ionic temples, composed by "
-                     "ionic_usd; the instances live in ./Instances.usdc")
+    root = new_layer(
+        "City",
+        kind="assembly",
+        comment="A city of Ionic temples, composed by "
+        "ionic_usd; the instances live in ./Instances.usdc",
+    )
     root.subLayerPaths.append(f"./{INSTANCES_LAYER}")
     city = root.GetPrimAtPath("/City")
     Sdf.AttributeSpec(city, "extentsHint", _T.Float3Array).default = Vt.Vec3fArray(
-        [Gf.Vec3f(*map(float, lo)), Gf.Vec3f(*map(float, hi))])
+        [Gf.Vec3f(*map(float, lo)), Gf.Vec3f(*map(float, hi))]
+    )
     counts = np.bincount(proto_of, minlength=len(protos))
     ccounts = np.bincount(cidx[~ccard], minlength=len(col_lods))
     triangles = {}
@@ -441,8 +527,11 @@ def compose_city(folder: str | os.PathLike, temples: TempleInstances,
         if not len(columns):
             col = 0
         elif s == "as authored":
-            col = int(sum(col_tri[LOD_NAMES[li]] * int(c)
-                          for li, c in zip(col_lods, ccounts, strict=True)))
+            col = int(
+                sum(
+                    col_tri[LOD_NAMES[li]] * int(c) for li, c in zip(col_lods, ccounts, strict=True)
+                )
+            )
             col += CARD_TRIANGLES * int(ccard.sum())
         else:
             col = col_tri[s] * len(columns)
@@ -452,20 +541,29 @@ def compose_city(folder: str | os.PathLike, temples: TempleInstances,
         # the same city with each card temple and column at its LOD by distance instead
         instead = 0
         if ccard.any():
-            clods = (np.asarray(columns.lod)[ccard] if columns.lod is not None
-                     else np.full(int(ccard.sum()), 2))
+            clods = (
+                np.asarray(columns.lod)[ccard]
+                if columns.lod is not None
+                else np.full(int(ccard.sum()), 2)
+            )
             per_lod = np.bincount(clods.astype(np.int64), minlength=len(LOD_NAMES))
-            instead += int(sum(col_tri[name] * int(c) for name, c in zip(LOD_NAMES, per_lod,
-                                                                          strict=True)))
-        triangles["without cards"] = triangles["as authored"] + instead - CARD_TRIANGLES * int(
-            ccard.sum())
+            instead += int(
+                sum(col_tri[name] * int(c) for name, c in zip(LOD_NAMES, per_lod, strict=True))
+            )
+        triangles["without cards"] = (
+            triangles["as authored"] + instead - CARD_TRIANGLES * int(ccard.sum())
+        )
     if far_t and temples.cards is not None:
         # the same city with each card temple at its LOD by distance instead of its cards
         far = np.flatnonzero(temples.cards)
-        lods = (np.asarray(temples.lod)[far] if temples.lod is not None
-                else np.zeros(len(far), dtype=np.int8))
-        instead = sum(int(ttri[LOD_NAMES[int(li)]][proto_of[i]]) for i, li in
-                      zip(far, lods, strict=True))
+        lods = (
+            np.asarray(temples.lod)[far]
+            if temples.lod is not None
+            else np.zeros(len(far), dtype=np.int8)
+        )
+        instead = sum(
+            int(ttri[LOD_NAMES[int(li)]][proto_of[i]]) for i, li in zip(far, lods, strict=True)
+        )
         triangles["without cards"] += instead - CARD_TRIANGLES * len(far)
     if summary is not None:
         city.customData = {"ionic_usd": _vt_dict(summary)}
@@ -476,10 +574,18 @@ def compose_city(folder: str | os.PathLike, temples: TempleInstances,
     save_layer(root, root_path, force=True)
     secs["save"] = time.perf_counter() - t3
     secs["total"] = time.perf_counter() - t0
-    return CityReport(root_path, len(temples), len(protos), len(temples.folders), len(columns),
-                      len(col_lods) + int(ccard.any()) if len(columns) else 0,
-                      "point-instancer" if as_instancer else "references", triangles,
-                      (tuple(map(float, lo)), tuple(map(float, hi))), secs)
+    return CityReport(
+        root_path,
+        len(temples),
+        len(protos),
+        len(temples.folders),
+        len(columns),
+        len(col_lods) + int(ccard.any()) if len(columns) else 0,
+        "point-instancer" if as_instancer else "references",
+        triangles,
+        (tuple(map(float, lo)), tuple(map(float, hi))),
+        secs,
+    )
 
 
 def _vt_dict(d: Mapping) -> dict:
@@ -496,4 +602,3 @@ def _vt_dict(d: Mapping) -> dict:
         elif isinstance(v, bool) or isinstance(v, (int, float, str)):
             out[str(k)] = v
     return out
-

@@ -99,8 +99,10 @@ FORM_VARIANTS = ("full", "engaged", "corner")
 CAPITAL_VARIANTS = ("normal", "angle")
 VOLUTE_VARIANTS = tuple(VOLUTE_MODELS)  # log_spiral, centred_arcs
 # finish variant -> (material prim name, stone style of its textures)
-FINISHES = {"travertine": ("Travertine", "travertine"),
-            "stucco": ("PaintedStucco", "stucco_painted")}
+FINISHES = {
+    "travertine": ("Travertine", "travertine"),
+    "stucco": ("PaintedStucco", "stucco_painted"),
+}
 ENGAGED_INSET = 0.05  # m: the cut lies this far behind the wall face (axis on the face)
 # Atlas density of the asset's UVs. The materials tile 2 m stone maps, so the atlas density
 # only sets the chart gutters (4 texels = 3 cm at 128 px/m) and the resolution available to a
@@ -147,14 +149,16 @@ class ColumnAssetOptions:
         check("capital", self.capitals, CAPITAL_VARIANTS)
         if not self.volutes:
             own = self.params.capital.volute.volute_model
-            object.__setattr__(self, "volutes",
-                               (own, *(v for v in VOLUTE_VARIANTS if v != own)))
+            object.__setattr__(self, "volutes", (own, *(v for v in VOLUTE_VARIANTS if v != own)))
         check("volute", self.volutes, VOLUTE_VARIANTS)
         if self.user_textures is not None:
             roles = {"basecolor", "roughness", "normal"}
             if set(self.user_textures) != roles:
-                raise ParameterError("user textures", sorted(self.user_textures),
-                                     "exactly the roles basecolor, roughness, normal")
+                raise ParameterError(
+                    "user textures",
+                    sorted(self.user_textures),
+                    "exactly the roles basecolor, roughness, normal",
+                )
 
 
 def volute_variant_params(params: ColumnParams, model: str) -> ColumnParams:
@@ -174,14 +178,19 @@ def volute_variant_params(params: ColumnParams, model: str) -> ColumnParams:
     top = volute_extent(v, cp.spiral_samples, cp.ring_segments)[1, 1]
     if model == "centred_arcs":
         r = v.capital_spiral_radius
-        v = v.with_(volute_model=model, capital_circle_radius=r / 9.0,
-                    arc_square=r * 4.0 / 33.0, arc_ratio=1.0 / 3.0)
+        v = v.with_(
+            volute_model=model,
+            capital_circle_radius=r / 9.0,
+            arc_square=r * 4.0 / 33.0,
+            arc_ratio=1.0 / 3.0,
+        )
         # the same height above the eye as the column's own volute, so the abacus (and all
         # that stands on the column) stays where it was: the arcs scale linearly
         for _ in range(3):
             k = top / volute_extent(v, cp.spiral_samples, cp.ring_segments)[1, 1]
-            v = v.with_(capital_circle_radius=v.capital_circle_radius * k,
-                        arc_square=v.arc_square * k)
+            v = v.with_(
+                capital_circle_radius=v.capital_circle_radius * k, arc_square=v.arc_square * k
+            )
     else:
         v = v.with_(volute_model=model)
     own_gap = _margin_gap(params)[0]
@@ -215,22 +224,35 @@ def _materials(opts: ColumnAssetOptions) -> dict[str, MaterialTextures]:
             names = {r: Path(p).name for r, p in opts.user_textures.items()}
         else:
             names = {r: f"{style}_{r}.png" for r in ("basecolor", "roughness", "normal")}
-        materials[mat] = MaterialTextures(*(f"./Textures/{names[r]}"
-                                            for r in ("basecolor", "roughness", "normal")))
+        materials[mat] = MaterialTextures(
+            *(f"./Textures/{names[r]}" for r in ("basecolor", "roughness", "normal"))
+        )
     return materials
 
 
-def column_asset_spec(opts: ColumnAssetOptions, meshes: Sequence[AssetMesh],
-                      instancers: Sequence[AssetInstancer] = ()) -> AssetSpec:
+def column_asset_spec(
+    opts: ColumnAssetOptions, meshes: Sequence[AssetMesh], instancers: Sequence[AssetInstancer] = ()
+) -> AssetSpec:
     """The asset's description: ``meshes`` (with ``st``) and ``instancers`` under the variant
     sets of ``opts``, the finishes' materials, the parameters as customData."""
-    variant_sets = {"lod": opts.lods, "base": opts.bases, "scroll": opts.scrolls,
-                    "capital": opts.capitals, "volute": opts.volutes, "flutes": opts.flutes,
-                    "form": opts.forms, "finish": tuple(FINISHES)}
+    variant_sets = {
+        "lod": opts.lods,
+        "base": opts.bases,
+        "scroll": opts.scrolls,
+        "capital": opts.capitals,
+        "volute": opts.volutes,
+        "flutes": opts.flutes,
+        "form": opts.forms,
+        "finish": tuple(FINISHES),
+    }
     if len(opts.volutes) == 1:
         del variant_sets["volute"]
-    custom = {"ionic_usd": {"version": __version__,
-                            "parameters": _flatten(column_params_to_tables(opts.params))}}
+    custom = {
+        "ionic_usd": {
+            "version": __version__,
+            "parameters": _flatten(column_params_to_tables(opts.params)),
+        }
+    }
     return AssetSpec(
         name=ASSET_NAME,
         version=__version__,
@@ -250,14 +272,20 @@ def column_asset_spec(opts: ColumnAssetOptions, meshes: Sequence[AssetMesh],
     )
 
 
-def author_column_asset(folder: str | os.PathLike, opts: ColumnAssetOptions,
-                        meshes: Sequence[AssetMesh], instancers: Sequence[AssetInstancer] = (),
-                        *, populate: Callable[[Path], None] | None = None,
-                        force: bool = False) -> Path:
+def author_column_asset(
+    folder: str | os.PathLike,
+    opts: ColumnAssetOptions,
+    meshes: Sequence[AssetMesh],
+    instancers: Sequence[AssetInstancer] = (),
+    *,
+    populate: Callable[[Path], None] | None = None,
+    force: bool = False,
+) -> Path:
     """Author the asset folder from kernel values (see :func:`column_asset_spec`);
     ``populate(tmp)`` puts the textures in first. Returns the interface layer's path."""
-    return write_asset(column_asset_spec(opts, meshes, instancers), folder,
-                       populate=populate, force=force)
+    return write_asset(
+        column_asset_spec(opts, meshes, instancers), folder, populate=populate, force=force
+    )
 
 
 def _flatten(tables: dict[str, dict]) -> dict[str, object]:

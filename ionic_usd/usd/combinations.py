@@ -68,9 +68,11 @@ def select_variants(stage: Usd.Stage, selections: dict[str, str]) -> None:
 
 def expected_column(c: ColumnPlacement, ratio: float) -> Gf.Matrix4d:
     s = c.scale * ratio
-    return (Gf.Matrix4d().SetScale(Gf.Vec3d(s, s, s))
-            * Gf.Matrix4d().SetRotate(Gf.Rotation(Gf.Vec3d(0, 1, 0), c.rotation_deg))
-            * Gf.Matrix4d().SetTranslate(Gf.Vec3d(*c.position)))
+    return (
+        Gf.Matrix4d().SetScale(Gf.Vec3d(s, s, s))
+        * Gf.Matrix4d().SetRotate(Gf.Rotation(Gf.Vec3d(0, 1, 0), c.rotation_deg))
+        * Gf.Matrix4d().SetTranslate(Gf.Vec3d(*c.position))
+    )
 
 
 def _world(cache: UsdGeom.XformCache, prim: Usd.Prim, pts) -> np.ndarray:
@@ -78,16 +80,20 @@ def _world(cache: UsdGeom.XformCache, prim: Usd.Prim, pts) -> np.ndarray:
     return np.asarray(pts, dtype=np.float64).reshape(-1, 3) @ xf[:3, :3] + xf[3, :3]
 
 
-def _differs(stage: Usd.Stage, cache: UsdGeom.XformCache, path: str, want: Mesh | Instances,
-             atol: float) -> bool:
+def _differs(
+    stage: Usd.Stage, cache: UsdGeom.XformCache, path: str, want: Mesh | Instances, atol: float
+) -> bool:
     prim = stage.GetPrimAtPath(path)
     if not prim or not prim.IsActive():
         return True
     if isinstance(want, Instances):
         pi = UsdGeom.PointInstancer(prim)
         pos = pi.GetPositionsAttr().Get()
-        if pos is None or len(pos) != len(want) or \
-                len(pi.GetPrototypesRel().GetTargets()) != len(want.prototypes):
+        if (
+            pos is None
+            or len(pos) != len(want)
+            or len(pi.GetPrototypesRel().GetTargets()) != len(want.prototypes)
+        ):
             return True
         # positions are float32 on disk: compare at their resolution (~1 µm at 20 m)
         return not np.allclose(_world(cache, prim, pos), want.positions, atol=max(atol, 1e-5))
@@ -96,9 +102,17 @@ def _differs(stage: Usd.Stage, cache: UsdGeom.XformCache, path: str, want: Mesh 
     return world.shape != want.points.shape or not np.allclose(world, want.points, atol=atol)
 
 
-def mismatches(stage: Usd.Stage, expected: TempleLayout, column_height: float, *,
-               uv_scale: float, variant: str = "plain", detail: DetailGeometry | None = None,
-               garlands: bool = False, atol: float = 1e-6) -> dict[str, Fix]:
+def mismatches(
+    stage: Usd.Stage,
+    expected: TempleLayout,
+    column_height: float,
+    *,
+    uv_scale: float,
+    variant: str = "plain",
+    detail: DetailGeometry | None = None,
+    garlands: bool = False,
+    atol: float = 1e-6,
+) -> dict[str, Fix]:
     """Prims whose composed values differ from ``expected`` shown in the ``detail`` variant
     ``variant`` (``detail``: its detail geometry): path → the expected value, or None (the prim
     should not be there)."""
@@ -115,31 +129,44 @@ def mismatches(stage: Usd.Stage, expected: TempleLayout, column_height: float, *
     for part in PART_PRIMS.values():
         for holder in (f"/Temple/{part}", f"/Temple/{part}/Mouldings"):
             prim = stage.GetPrimAtPath(holder)
-            for child in (prim.GetChildren() if prim else []):  # active children only
+            for child in prim.GetChildren() if prim else []:  # active children only
                 if child.IsA(UsdGeom.Mesh) and str(child.GetPath()) not in want:
                     out[str(child.GetPath())] = None
     ratio = expected.params.columns_height / column_height
     cols = {column_path(c): c for c in expected.columns}
     for path, c in cols.items():
         prim = stage.GetPrimAtPath(path)
-        if not prim or not prim.IsActive() or not Gf.IsClose(
-                cache.GetLocalToWorldTransform(prim), expected_column(c, ratio), atol):
+        if (
+            not prim
+            or not prim.IsActive()
+            or not Gf.IsClose(cache.GetLocalToWorldTransform(prim), expected_column(c, ratio), atol)
+        ):
             out[path] = c
     for group in GROUPS.values():
         prim = stage.GetPrimAtPath(f"/Temple/Colonnade/{group}")
-        for child in (prim.GetChildren() if prim else []):
+        for child in prim.GetChildren() if prim else []:
             if str(child.GetPath()) not in cols:
                 out[str(child.GetPath())] = None
     return out
 
 
-def _correction_layer(stage: Usd.Stage, fixes: dict[str, Fix], hyps: Sequence[Hypothesis],
-                      ratio: float, inactive: set[str]) -> Sdf.Layer:
+def _correction_layer(
+    stage: Usd.Stage,
+    fixes: dict[str, Fix],
+    hyps: Sequence[Hypothesis],
+    ratio: float,
+    inactive: set[str],
+) -> Sdf.Layer:
     """Absolute values (relative to the composed parents) for the prims in ``fixes``;
     ``inactive``: those a hypothesis deactivated where they were checked."""
-    lay = new_layer("Temple", kind="assembly", comment="values of the hypotheses "
-                    + ", ".join(h.id for h in hyps) + " where composing their layers is not "
-                    "enough (ionic_usd)")
+    lay = new_layer(
+        "Temple",
+        kind="assembly",
+        comment="values of the hypotheses "
+        + ", ".join(h.id for h in hyps)
+        + " where composing their layers is not "
+        "enough (ionic_usd)",
+    )
     cache = UsdGeom.XformCache()
     types: dict[str, str] = {}
     with Sdf.ChangeBlock():
@@ -161,21 +188,32 @@ def _correction_layer(stage: Usd.Stage, fixes: dict[str, Fix], hyps: Sequence[Hy
                     spec = author_mesh(lay, path, want.with_(points=local))
                 else:
                     pos = want.positions @ to_parent[:3, :3] + to_parent[3, :3]
-                    spec = author_point_instancer(lay, path, Instances(
-                        want.name, want.prototypes, want.proto_indices, pos,
-                        want.orientations, want.scales))
+                    spec = author_point_instancer(
+                        lay,
+                        path,
+                        Instances(
+                            want.name,
+                            want.prototypes,
+                            want.proto_indices,
+                            pos,
+                            want.orientations,
+                            want.scales,
+                        ),
+                    )
                 if off:  # deactivated by a hypothesis, needed by the combination
                     spec.active = True
-                Sdf.AttributeSpec(spec, "xformOpOrder", Sdf.ValueTypeNames.TokenArray,
-                                  Sdf.VariabilityUniform).default = Vt.TokenArray([])
+                Sdf.AttributeSpec(
+                    spec, "xformOpOrder", Sdf.ValueTypeNames.TokenArray, Sdf.VariabilityUniform
+                ).default = Vt.TokenArray([])
             else:
                 m = expected_column(want, ratio) * Gf.Matrix4d(to_parent)
                 spec = Sdf.CreatePrimInLayer(lay, path)
                 spec.specifier = Sdf.SpecifierOver
                 if off:
                     spec.active = True
-                column_xform(spec, Gf.Transform(m).GetTranslation(), want.rotation_deg,
-                             want.scale * ratio)
+                column_xform(
+                    spec, Gf.Transform(m).GetTranslation(), want.rotation_deg, want.scale * ratio
+                )
             add_paradata(spec, hyps)
         define_overs(lay, types)
         for path, type_name in types.items():  # the composed types, not the authoring default
@@ -207,9 +245,15 @@ def _is_detail(path: str) -> bool:
     return "/Mouldings/" in path or "/Ornament/" in path or path.endswith("/Tiles")
 
 
-def realise_combinations(gen: Usd.Stage, folder: Path, layout: TempleLayout,
-                         realised: Sequence[Hypothesis], *, uv_scale: float,
-                         detail_of: DetailOf | None = None) -> list[str]:
+def realise_combinations(
+    gen: Usd.Stage,
+    folder: Path,
+    layout: TempleLayout,
+    realised: Sequence[Hypothesis],
+    *,
+    uv_scale: float,
+    detail_of: DetailOf | None = None,
+) -> list[str]:
     """Compose every subset of the realised hypotheses that change geometry in every
     ``detail`` variant (if /Temple has the set), compare it with :func:`build_layout` of that
     subset, and write the layers where composing is not enough (module docstring). Returns the
@@ -220,14 +264,16 @@ def realise_combinations(gen: Usd.Stage, folder: Path, layout: TempleLayout,
     variants = DETAIL_VARIANTS if has_detail and detail_of is not None else ("plain",)
     height = layout.params.columns_height
 
-    def check(sel: dict[str, str], want: TempleLayout, geom: DetailGeometry | None,
-              garlands: bool) -> tuple[dict[str, Fix], set[str]]:
+    def check(
+        sel: dict[str, str], want: TempleLayout, geom: DetailGeometry | None, garlands: bool
+    ) -> tuple[dict[str, Fix], set[str]]:
         bad: dict[str, Fix] = {}
         off: set[str] = set()
         for v in variants:  # the cuboids are checked in plain, the detail where it shows
             select_variants(gen, sel | ({DETAIL_SET: v} if has_detail else {}))
-            found = mismatches(gen, want, height, uv_scale=uv_scale, variant=v, detail=geom,
-                               garlands=garlands)
+            found = mismatches(
+                gen, want, height, uv_scale=uv_scale, variant=v, detail=geom, garlands=garlands
+            )
             off |= {p for p in found if (q := gen.GetPrimAtPath(p)) and not q.IsActive()}
             bad.update(found)
         return bad, off
@@ -248,18 +294,22 @@ def realise_combinations(gen: Usd.Stage, folder: Path, layout: TempleLayout,
                 if size == 0 or (size == 1 and wrong):
                     raise UsdAuthoringError(
                         f"hypotheses {ids or '(none)'} compose to other geometry than the "
-                        f"layout at {', '.join(wrong or sorted(bad))}")
+                        f"layout at {', '.join(wrong or sorted(bad))}"
+                    )
                 name = "+".join(ids) + (".detail" if size == 1 else "")
                 ratio = want.params.columns_height / height
                 select_variants(gen, sel | ({DETAIL_SET: "carved"} if has_detail else {}))
-                save_layer(_correction_layer(gen, bad, subset, ratio, off_prims),
-                           folder / "layers" / f"{name}.usdc")
+                save_layer(
+                    _correction_layer(gen, bad, subset, ratio, off_prims),
+                    folder / "layers" / f"{name}.usdc",
+                )
                 _nest(gen.GetRootLayer(), subset, f"./layers/{name}.usdc")
                 written.append(name)
                 still, _ = check(sel, want, geom, garlands)
                 if still:
-                    raise UsdAuthoringError(f"hypotheses {ids} still compose wrongly at "
-                                            f"{', '.join(sorted(still))}")
+                    raise UsdAuthoringError(
+                        f"hypotheses {ids} still compose wrongly at {', '.join(sorted(still))}"
+                    )
     finally:
         gen.GetSessionLayer().Clear()
     if written:

@@ -86,8 +86,13 @@ FRIEZE_PATH = "/Temple/Entablature/Ornament/FriezeGarlands"
 # material prim name, stone style of its maps (the temple's library, materials.usda)
 TERRACOTTA = ("Terracotta", "terracotta")
 TRAVERTINE = "/Temple/Materials/Travertine"
-_PART = {"podium": "Podium", "architrave": "Entablature", "cornice": "Entablature",
-         "sima": "Entablature", "raking": "Roof"}
+_PART = {
+    "podium": "Podium",
+    "architrave": "Entablature",
+    "cornice": "Entablature",
+    "sima": "Entablature",
+    "raking": "Roof",
+}
 
 
 @dataclass(frozen=True, eq=False)
@@ -105,7 +110,9 @@ class DetailGeometry:
             return {}
         out: dict[str, Mesh | Instances] = {
             f"/Temple/{part}/Mouldings/{name}": m
-            for part, members in self.mouldings.items() for name, m in members.items()}
+            for part, members in self.mouldings.items()
+            for name, m in members.items()
+        }
         if variant == "carved":
             out.update({f"/Temple/{rel}": inst for rel, inst in self.ornament.items()})
             if garlands:
@@ -146,16 +153,23 @@ def detail_counts(geom: DetailGeometry) -> dict[str, dict[str, int]]:
     return {
         "plain": {"triangles": 0, "prototypes": 0, "instances": 0, "meshes": 0},
         "moulded": {"triangles": sweep_tris, "prototypes": 0, "instances": 0, "meshes": meshes},
-        "carved": {"triangles": sweep_tris + sum(i.triangles for i in orn),
-                   "prototypes": sum(len(i.prototypes) for i in orn),
-                   "instances": sum(len(i) for i in orn), "meshes": meshes},
+        "carved": {
+            "triangles": sweep_tris + sum(i.triangles for i in orn),
+            "prototypes": sum(len(i.prototypes) for i in orn),
+            "instances": sum(len(i) for i in orn),
+            "meshes": meshes,
+        },
     }
 
 
 def detail_layer(geom: DetailGeometry, materials_ref: str = "./materials.usda") -> Sdf.Layer:
     """``detail.usdc``: every member and ornament as ``def`` prims (see the module docstring)."""
-    lay = new_layer("Temple", kind=None, comment="architectural detail (ionic_usd): shown by "
-                    "the detail variant set of generated.usda")
+    lay = new_layer(
+        "Temple",
+        kind=None,
+        comment="architectural detail (ionic_usd): shown by "
+        "the detail variant set of generated.usda",
+    )
     lay.subLayerPaths.append(materials_ref)
     with Sdf.ChangeBlock():
         # organising prims are Scopes (no transform of their own), the parts Xforms
@@ -175,8 +189,9 @@ def detail_layer(geom: DetailGeometry, materials_ref: str = "./materials.usda") 
 
 def frieze_layer(h: Hypothesis, geom: DetailGeometry) -> Sdf.Layer:
     """The frieze relief hypothesis: its PointInstancer, with the hypothesis' paradata."""
-    lay = new_layer("Temple", kind="assembly",
-                    comment=f"reconstruction hypothesis {h.id!r} (ionic_usd)")
+    lay = new_layer(
+        "Temple", kind="assembly", comment=f"reconstruction hypothesis {h.id!r} (ionic_usd)"
+    )
     with Sdf.ChangeBlock():
         define_prim(lay, FRIEZE_PATH.rsplit("/", 1)[0], "Scope")
         spec = author_point_instancer(lay, FRIEZE_PATH, geom.frieze)
@@ -199,8 +214,12 @@ def author_detail_variants(spec: Sdf.PrimSpec, geom: DetailGeometry, default: st
     vs = Sdf.VariantSetSpec(spec, DETAIL_SET)
     spec.variantSetNameList.Append(DETAIL_SET)
     sweeps = [f"{part}/Mouldings" for part in geom.mouldings]
-    ornament = sorted({rel.split("/Ornament/")[0] + "/Ornament" if "/Ornament/" in rel else rel
-                       for rel in geom.ornament})
+    ornament = sorted(
+        {
+            rel.split("/Ornament/")[0] + "/Ornament" if "/Ornament/" in rel else rel
+            for rel in geom.ornament
+        }
+    )
     for v in DETAIL_VARIANTS:
         prim = Sdf.VariantSpec(vs, v).primSpec
         if v == "plain":
@@ -222,8 +241,9 @@ def author_detail_variants(spec: Sdf.PrimSpec, geom: DetailGeometry, default: st
     spec.customData = {"ionic_usd": data}
 
 
-def write_frieze_hypotheses(folder: Path, spec: Sdf.PrimSpec, layout: TempleLayout,
-                            geom: DetailGeometry) -> list[Hypothesis]:
+def write_frieze_hypotheses(
+    folder: Path, spec: Sdf.PrimSpec, layout: TempleLayout, geom: DetailGeometry
+) -> list[Hypothesis]:
     """The hypotheses realised by the detail (``detail.frieze``): their layers, their variant
     sets on ``spec`` (/Temple of ``generated.usda``) and their listing. Returns them."""
     from ionic_usd.usd.stage import save_layer
@@ -266,8 +286,14 @@ def column_ornament(opts) -> tuple[AssetInstancer, ...]:
     y_cap = p.base_params().height + p.shaft.length
     cap = p.capital_params()
     egg, bead = capital_ornament(
-        y_capital=y_cap, top_radius=p.shaft.top_radius, echinus_height=cap.echinus_height,
-        echinus_projection=cap.echinus_projection, ring_top=p.shaft.ring_top,
-        capital_lift=cap.capital_position_y)
-    return (AssetInstancer("Ornament", "EggAndDart_high", egg, {"lod": "high"}),
-            AssetInstancer("Ornament", "BeadAndReel_high", bead, {"lod": "high"}))
+        y_capital=y_cap,
+        top_radius=p.shaft.top_radius,
+        echinus_height=cap.echinus_height,
+        echinus_projection=cap.echinus_projection,
+        ring_top=p.shaft.ring_top,
+        capital_lift=cap.capital_position_y,
+    )
+    return (
+        AssetInstancer("Ornament", "EggAndDart_high", egg, {"lod": "high"}),
+        AssetInstancer("Ornament", "BeadAndReel_high", bead, {"lod": "high"}),
+    )

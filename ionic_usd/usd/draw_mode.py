@@ -31,8 +31,18 @@ from dataclasses import dataclass
 import numpy as np
 from pxr import Sdf, Usd, UsdGeom
 
-__all__ = ["CARD_FACES", "CARD_GEOMETRIES", "CardFace", "card_faces", "card_bound",
-           "card_bbox_cache", "card_colour", "author_cards", "face_quad", "face_st"]
+__all__ = [
+    "CARD_FACES",
+    "CARD_GEOMETRIES",
+    "CardFace",
+    "card_faces",
+    "card_bound",
+    "card_bbox_cache",
+    "card_colour",
+    "author_cards",
+    "face_quad",
+    "face_st",
+]
 
 #: face name → (outward normal, image right, image up), all unit axis vectors
 CARD_FACES: dict[str, tuple[tuple[int, int, int], tuple[int, int, int], tuple[int, int, int]]] = {
@@ -66,8 +76,7 @@ class CardFace:
     texture: str
 
 
-def face_quad(name: str, lo: np.ndarray, hi: np.ndarray, geometry: str = "box"
-              ) -> np.ndarray:
+def face_quad(name: str, lo: np.ndarray, hi: np.ndarray, geometry: str = "box") -> np.ndarray:
     """(4, 3) corners of face ``name`` of the bound ``lo``, ``hi`` (each (3,)): on the bound's
     side (``box``) or through its centre (``cross``), ordered as ``st`` (0,0) (1,0) (1,1) (0,1)."""
     n, r, u = (np.asarray(v, dtype=np.float64) for v in CARD_FACES[name])
@@ -75,8 +84,9 @@ def face_quad(name: str, lo: np.ndarray, hi: np.ndarray, geometry: str = "box"
     c, h = (lo + hi) / 2, (hi - lo) / 2
     centre = c + (n * h if geometry == "box" else 0.0)
     hr, hu = np.abs(r) @ h, np.abs(u) @ h
-    return np.array([centre + sr * hr * r + su * hu * u
-                     for sr, su in ((-1, -1), (1, -1), (1, 1), (-1, 1))])
+    return np.array(
+        [centre + sr * hr * r + su * hu * u for sr, su in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
+    )
 
 
 def face_st(name: str, points: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
@@ -86,8 +96,9 @@ def face_st(name: str, points: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np
     lo, hi = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
     c, h = (lo + hi) / 2, np.maximum((hi - lo) / 2, 1e-300)
     d = np.asarray(points, dtype=np.float64) - c
-    return np.stack([0.5 + 0.5 * (d @ r) / (np.abs(r) @ h),
-                     0.5 + 0.5 * (d @ u) / (np.abs(u) @ h)], axis=-1)
+    return np.stack(
+        [0.5 + 0.5 * (d @ r) / (np.abs(r) @ h), 0.5 + 0.5 * (d @ u) / (np.abs(u) @ h)], axis=-1
+    )
 
 
 def _opposite(name: str) -> str:
@@ -145,9 +156,11 @@ def card_bound(prim: Usd.Prim, bbox: UsdGeom.BBoxCache) -> tuple[np.ndarray, np.
 def card_bbox_cache() -> UsdGeom.BBoxCache:
     """The bound cache :func:`card_bound` expects: default time, default + render purposes,
     extents hints used (as Hydra's draw modes read them)."""
-    return UsdGeom.BBoxCache(Usd.TimeCode.Default(), [UsdGeom.Tokens.default_,
-                                                      UsdGeom.Tokens.render],
-                             useExtentsHint=True)
+    return UsdGeom.BBoxCache(
+        Usd.TimeCode.Default(),
+        [UsdGeom.Tokens.default_, UsdGeom.Tokens.render],
+        useExtentsHint=True,
+    )
 
 
 def card_colour(prim: Usd.Prim) -> tuple[float, float, float]:
@@ -157,9 +170,13 @@ def card_colour(prim: Usd.Prim) -> tuple[float, float, float]:
     return tuple(float(x) for x in v) if v is not None else (0.18, 0.18, 0.18)  # type: ignore
 
 
-def author_cards(spec: Sdf.PrimSpec, textures: Mapping[str, str], *,
-                 geometry: str = "box", colour: tuple[float, float, float] | None = None
-                 ) -> None:
+def author_cards(
+    spec: Sdf.PrimSpec,
+    textures: Mapping[str, str],
+    *,
+    geometry: str = "box",
+    colour: tuple[float, float, float] | None = None,
+) -> None:
     """Author card draw mode on a model's prim spec: ``GeomModelAPI`` applied,
     ``model:drawMode = cards``, ``model:applyDrawMode = true``, ``model:cardGeometry`` and one
     ``model:cardTexture<Face>`` asset path per entry of ``textures`` (face name → asset path,
@@ -177,9 +194,9 @@ def author_cards(spec: Sdf.PrimSpec, textures: Mapping[str, str], *,
     Sdf.AttributeSpec(spec, "model:cardGeometry", _T.Token, uniform).default = geometry
     if colour is not None:
         Sdf.AttributeSpec(spec, "model:drawModeColor", _T.Float3, uniform).default = tuple(
-            float(c) for c in colour)
+            float(c) for c in colour
+        )
     for name, asset in textures.items():
         if name not in CARD_FACES:
             raise ValueError(f"card face {name!r}: expected one of {', '.join(CARD_FACES)}")
-        Sdf.AttributeSpec(spec, f"model:cardTexture{name}", _T.Asset).default = Sdf.AssetPath(
-            asset)
+        Sdf.AttributeSpec(spec, f"model:cardTexture{name}", _T.Asset).default = Sdf.AssetPath(asset)

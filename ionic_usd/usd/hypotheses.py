@@ -68,14 +68,22 @@ __all__ = [
     "hypothesis_layer",
 ]
 
-PART_PRIMS = {Layer.PODIUM: "Podium", Layer.CELLA: "Cella", Layer.ENTABLATURE: "Entablature",
-              Layer.ROOF: "Roof"}
+PART_PRIMS = {
+    Layer.PODIUM: "Podium",
+    Layer.CELLA: "Cella",
+    Layer.ENTABLATURE: "Entablature",
+    Layer.ROOF: "Roof",
+}
 GROUPS = {ColumnKind.FREE: "Free", ColumnKind.ENGAGED: "Engaged", ColumnKind.CORNER: "Corner"}
 # the column asset's form variant of each kind of column
 FORMS = {ColumnKind.FREE: "full", ColumnKind.ENGAGED: "engaged", ColumnKind.CORNER: "corner"}
 # material.finish value -> the column asset's finish variant
-FINISH_VALUES = {"bare_stone": "travertine", "travertine": "travertine",
-                 "stucco": "stucco", "painted_stucco": "stucco"}
+FINISH_VALUES = {
+    "bare_stone": "travertine",
+    "travertine": "travertine",
+    "stucco": "stucco",
+    "painted_stucco": "stucco",
+}
 # composer keys recorded for the future (listed with realised = false, never an error)
 RECORDED_ONLY: dict[str, tuple[str, ...]] = {}
 _T = Sdf.ValueTypeNames
@@ -102,8 +110,10 @@ def temple_keys(h: Hypothesis) -> list[str]:
 
 def cuboid_meshes(layout: TempleLayout, uv_scale: float) -> dict[Layer, dict[str, Mesh]]:
     """Meshes of every cuboid, by layer and prim name (``st`` at ``uv_scale`` per metre)."""
-    return {layer: {Tf.MakeValidIdentifier(c.name): cuboid_mesh(c, uv_scale=uv_scale)
-                    for c in cs} for layer, cs in layout.cuboids.items()}
+    return {
+        layer: {Tf.MakeValidIdentifier(c.name): cuboid_mesh(c, uv_scale=uv_scale) for c in cs}
+        for layer, cs in layout.cuboids.items()
+    }
 
 
 @dataclass(frozen=True)
@@ -117,7 +127,9 @@ class HypothesisChanges:
 
 
 def check_composer_changes(
-    h: Hypothesis, flute_variants: Mapping[str, int], finishes: Iterable[str],
+    h: Hypothesis,
+    flute_variants: Mapping[str, int],
+    finishes: Iterable[str],
     capitals: Iterable[str] = ("normal", "angle"),
 ) -> HypothesisChanges:
     """Validate the ``column.…``/``material.…`` changes of ``h`` against what the generator can
@@ -131,8 +143,9 @@ def check_composer_changes(
         if key == "column.flute_count":
             by_count = {n: name for name, n in flute_variants.items()}
             if isinstance(value, bool) or value not in by_count:
-                raise ParameterError(key, value, "one of " + ", ".join(
-                    str(n) for n in sorted(by_count)), context=ctx)
+                raise ParameterError(
+                    key, value, "one of " + ", ".join(str(n) for n in sorted(by_count)), context=ctx
+                )
             flutes, realised = by_count[value], True
         elif key == "material.finish":
             valid = [k for k, v in FINISH_VALUES.items() if v in set(finishes)]
@@ -146,20 +159,30 @@ def check_composer_changes(
             capital, realised = value, True
         elif key in RECORDED_ONLY:
             if value not in RECORDED_ONLY[key]:
-                raise ParameterError(key, value, "one of " + ", ".join(RECORDED_ONLY[key]),
-                                     context=ctx)
+                raise ParameterError(
+                    key, value, "one of " + ", ".join(RECORDED_ONLY[key]), context=ctx
+                )
         else:
-            known = ["column.flute_count", "material.finish", "column.corner_capital",
-                     *RECORDED_ONLY]
-            raise ParameterError(key, value, "a temple key (section.key) or one of "
-                                 + ", ".join(known), context=ctx)
+            known = [
+                "column.flute_count",
+                "material.finish",
+                "column.corner_capital",
+                *RECORDED_ONLY,
+            ]
+            raise ParameterError(
+                key, value, "a temple key (section.key) or one of " + ", ".join(known), context=ctx
+            )
     return HypothesisChanges(flutes, finish, capital, realised)
 
 
 def hypothesis_paradata(h: Hypothesis) -> dict:
     """``{id, description, certainty, sources}`` of ``h`` (customData values)."""
-    return {"id": h.id, "description": " ".join(h.description.split()),
-            "certainty": str(h.certainty), "sources": Vt.StringArray(list(h.sources))}
+    return {
+        "id": h.id,
+        "description": " ".join(h.description.split()),
+        "certainty": str(h.certainty),
+        "sources": Vt.StringArray(list(h.sources)),
+    }
 
 
 def add_paradata(spec: Sdf.PrimSpec, hyps: Sequence[Hypothesis]) -> None:
@@ -170,21 +193,26 @@ def add_paradata(spec: Sdf.PrimSpec, hyps: Sequence[Hypothesis]) -> None:
     for h in hyps:
         ident = hyp_ident(h.id)
         listed[ident] = hypothesis_paradata(h)
-        values = {"id": h.id, "description": listed[ident]["description"],
-                  "certainty": str(h.certainty), "sources": "; ".join(h.sources)}
+        values = {
+            "id": h.id,
+            "description": listed[ident]["description"],
+            "certainty": str(h.certainty),
+            "sources": "; ".join(h.sources),
+        }
         for field, value in values.items():
             name = f"userProperties:ionic_usd:{ident}:{field}"
             attr = spec.attributes.get(name) or Sdf.AttributeSpec(
-                spec, name, _T.String, Sdf.VariabilityUniform, declaresCustom=True)
+                spec, name, _T.String, Sdf.VariabilityUniform, declaresCustom=True
+            )
             attr.default = value
     top["hypotheses"] = listed
     custom["ionic_usd"] = top
     spec.customData = custom
 
 
-def column_xform(spec: Sdf.PrimSpec, pos: Sequence[float], rot_y_deg: float,
-                 scale: float) -> None:
+def column_xform(spec: Sdf.PrimSpec, pos: Sequence[float], rot_y_deg: float, scale: float) -> None:
     """Translate, rotateXYZ and scale ops in XformCommonAPI's order (no pivot)."""
+
     def put(name: str, type_name, value) -> None:
         attr = spec.attributes.get(name) or Sdf.AttributeSpec(spec, name, type_name)
         attr.default = value
@@ -195,7 +223,8 @@ def column_xform(spec: Sdf.PrimSpec, pos: Sequence[float], rot_y_deg: float,
     put("xformOp:rotateXYZ", _T.Float3, Gf.Vec3f(0.0, float(rot_y_deg), 0.0))
     put("xformOp:scale", _T.Float3, Gf.Vec3f(float(scale), float(scale), float(scale)))
     order = spec.attributes.get("xformOpOrder") or Sdf.AttributeSpec(
-        spec, "xformOpOrder", _T.TokenArray, Sdf.VariabilityUniform)
+        spec, "xformOpOrder", _T.TokenArray, Sdf.VariabilityUniform
+    )
     order.default = Vt.TokenArray(["xformOp:translate", "xformOp:rotateXYZ", "xformOp:scale"])
 
 
@@ -211,10 +240,12 @@ def _translate(spec: Sdf.PrimSpec, offset: np.ndarray) -> None:
     from pxr import Gf  # noqa: PLC0415
 
     attr = spec.attributes.get("xformOp:translate") or Sdf.AttributeSpec(
-        spec, "xformOp:translate", _T.Double3)
+        spec, "xformOp:translate", _T.Double3
+    )
     attr.default = Gf.Vec3d(*map(float, offset))
     order = spec.attributes.get("xformOpOrder") or Sdf.AttributeSpec(
-        spec, "xformOpOrder", _T.TokenArray, Sdf.VariabilityUniform)
+        spec, "xformOpOrder", _T.TokenArray, Sdf.VariabilityUniform
+    )
     order.default = Vt.TokenArray(["xformOp:translate"])
 
 
@@ -226,9 +257,16 @@ def _offset(old: Mesh, new: Mesh) -> np.ndarray | None:
     return d[0] if np.allclose(d, d[0], atol=_TOL, rtol=0) else None
 
 
-def _shape_opinions(lay: Sdf.Layer, base: TempleLayout, alt: TempleLayout, uv_scale: float,
-                    asset_ref: str, touched: list[Sdf.PrimSpec], *,
-                    column_height: float) -> None:
+def _shape_opinions(
+    lay: Sdf.Layer,
+    base: TempleLayout,
+    alt: TempleLayout,
+    uv_scale: float,
+    asset_ref: str,
+    touched: list[Sdf.PrimSpec],
+    *,
+    column_height: float,
+) -> None:
     """Relative opinions that turn ``base`` into ``alt`` (cuboids and column placements)."""
     old_m, new_m = cuboid_meshes(base, uv_scale), cuboid_meshes(alt, uv_scale)
     for layer in sorted(set(old_m) | set(new_m)):
@@ -236,8 +274,11 @@ def _shape_opinions(lay: Sdf.Layer, base: TempleLayout, alt: TempleLayout, uv_sc
         olds, news = old_m.get(layer, {}), new_m.get(layer, {})
         moves = {n: _offset(olds[n], news[n]) for n in olds if n in news}
         shifts = [v for v in moves.values() if v is not None]
-        same_move = (set(olds) == set(news) and len(shifts) == len(moves) > 0
-                     and len({tuple(np.round(v, 12)) for v in shifts}) == 1)
+        same_move = (
+            set(olds) == set(news)
+            and len(shifts) == len(moves) > 0
+            and len({tuple(np.round(v, 12)) for v in shifts}) == 1
+        )
         if same_move and np.any(np.abs(shifts[0]) > _TOL):
             spec = _over(lay, part)
             _translate(spec, shifts[0])
@@ -267,8 +308,12 @@ def _shape_opinions(lay: Sdf.Layer, base: TempleLayout, alt: TempleLayout, uv_sc
         path = column_path(c)
         o = olds_c.pop(path, None)
         scale = c.scale * ratio
-        if o is not None and np.allclose(o.position, c.position, atol=_TOL, rtol=0) and \
-                abs(o.rotation_deg - c.rotation_deg) < _TOL and abs(o.scale - scale) < _TOL:
+        if (
+            o is not None
+            and np.allclose(o.position, c.position, atol=_TOL, rtol=0)
+            and abs(o.rotation_deg - c.rotation_deg) < _TOL
+            and abs(o.scale - scale) < _TOL
+        ):
             continue
         spec = _over(lay, path)
         if o is None:
@@ -301,15 +346,17 @@ def hypothesis_layer(
     Returns None when the hypothesis changes nothing the generator can realise.
     """
     (h,) = hyps
-    lay = new_layer("Temple", kind="assembly",
-                    comment=f"reconstruction hypothesis {h.id!r} (ionic_usd)")
+    lay = new_layer(
+        "Temple", kind="assembly", comment=f"reconstruction hypothesis {h.id!r} (ionic_usd)"
+    )
     touched: list[Sdf.PrimSpec] = []
     ch = changes[h.id]
     with Sdf.ChangeBlock():
         if temple_keys(h):
             alt = build_layout(layout.params, hypotheses=layout.hypotheses, apply=[h.id])
-            _shape_opinions(lay, layout, alt, uv_scale, asset_ref, touched,
-                            column_height=column_height)
+            _shape_opinions(
+                lay, layout, alt, uv_scale, asset_ref, touched, column_height=column_height
+            )
         columns = [column_path(c) for c in layout.columns]
         if ch.flutes is not None:
             for p in columns:

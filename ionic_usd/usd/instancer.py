@@ -34,8 +34,9 @@ def instances_extent(inst: Instances) -> np.ndarray:
         if not sel.any():
             continue
         lo, hi = proto.extent
-        corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
-                            for z in (lo[2], hi[2])])
+        corners = np.array(
+            [[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
+        )
         m = inst.matrices()[sel]
         pts = np.einsum("nij,cj->nci", m[:, :3, :3], corners) + m[:, None, :3, 3]
         boxes.append(pts.reshape(-1, 3))
@@ -56,8 +57,10 @@ def drawn_triangles(root: Usd.Prim, _memo: dict | None = None) -> int:
     it = iter(Usd.PrimRange(root))
     for prim in it:
         img = UsdGeom.Imageable(prim)
-        if img and (img.GetPurposeAttr().Get() in (UsdGeom.Tokens.proxy, UsdGeom.Tokens.guide)
-                    or img.GetVisibilityAttr().Get() == UsdGeom.Tokens.invisible):
+        if img and (
+            img.GetPurposeAttr().Get() in (UsdGeom.Tokens.proxy, UsdGeom.Tokens.guide)
+            or img.GetVisibilityAttr().Get() == UsdGeom.Tokens.invisible
+        ):
             it.PruneChildren()
             continue
         if prim != root and prim.IsInstance():
@@ -71,8 +74,10 @@ def drawn_triangles(root: Usd.Prim, _memo: dict | None = None) -> int:
             it.PruneChildren()
             pi = UsdGeom.PointInstancer(prim)
             idx = np.asarray(pi.GetProtoIndicesAttr().Get() or [], dtype=np.int64)
-            per = [drawn_triangles(prim.GetStage().GetPrimAtPath(t), memo)
-                   for t in pi.GetPrototypesRel().GetForwardedTargets()]
+            per = [
+                drawn_triangles(prim.GetStage().GetPrimAtPath(t), memo)
+                for t in pi.GetPrototypesRel().GetForwardedTargets()
+            ]
             if len(idx) and per:
                 total += int(np.asarray(per)[idx[idx < len(per)]].sum())
         elif prim.IsA(UsdGeom.Mesh):
@@ -90,8 +95,9 @@ def bind_spec(spec: Sdf.PrimSpec, material_path: str) -> None:
     rel.targetPathList.explicitItems = [Sdf.Path(material_path)]
 
 
-def author_point_instancer(layer: Sdf.Layer, path: str | Sdf.Path, inst: Instances, *,
-                           material: str | None = None) -> Sdf.PrimSpec:
+def author_point_instancer(
+    layer: Sdf.Layer, path: str | Sdf.Path, inst: Instances, *, material: str | None = None
+) -> Sdf.PrimSpec:
     """Write ``inst`` as a PointInstancer at ``path`` (see the module docstring).
 
     Parameters
@@ -117,12 +123,21 @@ def author_point_instancer(layer: Sdf.Layer, path: str | Sdf.Path, inst: Instanc
         Sdf.AttributeSpec(spec, name, tname).default = value
 
     attr("protoIndices", _T.IntArray, Vt.IntArray.FromNumpy(inst.proto_indices))
-    attr("positions", _T.Point3fArray,
-         Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(inst.positions, dtype=np.float32)))
-    attr("orientations", _T.QuathArray,
-         Vt.QuathArray.FromNumpy(np.ascontiguousarray(q, dtype=np.float16)))
-    attr("scales", _T.Float3Array,
-         Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(inst.scales, dtype=np.float32)))
+    attr(
+        "positions",
+        _T.Point3fArray,
+        Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(inst.positions, dtype=np.float32)),
+    )
+    attr(
+        "orientations",
+        _T.QuathArray,
+        Vt.QuathArray.FromNumpy(np.ascontiguousarray(q, dtype=np.float16)),
+    )
+    attr(
+        "scales",
+        _T.Float3Array,
+        Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(inst.scales, dtype=np.float32)),
+    )
     ext = instances_extent(inst)
     attr("extent", _T.Float3Array, Vt.Vec3fArray([Gf.Vec3f(*ext[0]), Gf.Vec3f(*ext[1])]))
     if material is not None:

@@ -6,8 +6,15 @@ from dataclasses import dataclass
 
 from pxr import Gf, Sdf, Usd, UsdShade
 
-__all__ = ["FALLBACKS", "TILE_METRES", "MaterialTextures", "author_preview_material",
-           "bind_material", "bind_material_spec", "stone_material"]
+__all__ = [
+    "FALLBACKS",
+    "TILE_METRES",
+    "MaterialTextures",
+    "author_preview_material",
+    "bind_material",
+    "bind_material_spec",
+    "stone_material",
+]
 
 TILE_METRES = 2.0  # m of stone per repeat of the tileable maps
 
@@ -117,14 +124,27 @@ def bind_material_spec(spec: Sdf.PrimSpec, material: str) -> None:
     its direct binding to the material path (no stage needed, nothing resolved)."""
     spec.SetInfo("apiSchemas", Sdf.TokenListOp.Create(prependedItems=["MaterialBindingAPI"]))
     rel = spec.relationships.get("material:binding") or Sdf.RelationshipSpec(
-        spec, "material:binding", custom=False)
+        spec, "material:binding", custom=False
+    )
     rel.targetPathList.explicitItems = [Sdf.Path(material)]
 
 
-def stone_material(stage: Usd.Stage, path: str, style: str, *, st_scale: float | None = None,
-                   specular_tint: tuple[float, float, float] | None = None) -> UsdShade.Material:
+def stone_material(
+    stage: Usd.Stage,
+    path: str,
+    style: str,
+    *,
+    st_scale: float | None = None,
+    specular_tint: tuple[float, float, float] | None = None,
+) -> UsdShade.Material:
     """A material reading a stone style's maps from ``./Textures/<style>_<map>.png`` (written by
     :func:`copy_stone_textures`) — the one way every ionic_usd material names its maps."""
-    return author_preview_material(stage, path, MaterialTextures(
-        *(f"./Textures/{style}_{r}.png" for r in ("basecolor", "roughness", "normal"))),
-        st_scale=st_scale, specular_tint=specular_tint)
+    return author_preview_material(
+        stage,
+        path,
+        MaterialTextures(
+            *(f"./Textures/{style}_{r}.png" for r in ("basecolor", "roughness", "normal"))
+        ),
+        st_scale=st_scale,
+        specular_tint=specular_tint,
+    )

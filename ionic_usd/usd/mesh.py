@@ -27,8 +27,15 @@ def define_prim(layer: Sdf.Layer, path: str | Sdf.Path, type_name: str = "Xform"
     return spec
 
 
-def _attr(spec: Sdf.PrimSpec, name: str, type_name, value, *, uniform: bool = False,
-          interpolation: str | None = None) -> Sdf.AttributeSpec:
+def _attr(
+    spec: Sdf.PrimSpec,
+    name: str,
+    type_name,
+    value,
+    *,
+    uniform: bool = False,
+    interpolation: str | None = None,
+) -> Sdf.AttributeSpec:
     attr = spec.attributes.get(name)
     if attr is None:
         variability = Sdf.VariabilityUniform if uniform else Sdf.VariabilityVarying
@@ -63,30 +70,47 @@ def author_mesh(
     spec = define_prim(layer, path, "Mesh")
     pts = np.ascontiguousarray(mesh.points, dtype=np.float32)
     _attr(spec, "points", _T.Point3fArray, Vt.Vec3fArray.FromNumpy(pts))
-    _attr(spec, "faceVertexCounts", _T.IntArray,
-          Vt.IntArray.FromNumpy(np.ascontiguousarray(mesh.face_vertex_counts, dtype=np.int32)))
-    _attr(spec, "faceVertexIndices", _T.IntArray,
-          Vt.IntArray.FromNumpy(np.ascontiguousarray(mesh.face_vertex_indices, dtype=np.int32)))
+    _attr(
+        spec,
+        "faceVertexCounts",
+        _T.IntArray,
+        Vt.IntArray.FromNumpy(np.ascontiguousarray(mesh.face_vertex_counts, dtype=np.int32)),
+    )
+    _attr(
+        spec,
+        "faceVertexIndices",
+        _T.IntArray,
+        Vt.IntArray.FromNumpy(np.ascontiguousarray(mesh.face_vertex_indices, dtype=np.int32)),
+    )
     _attr(spec, "extent", _T.Float3Array, mesh_extent(mesh))
     _attr(spec, "subdivisionScheme", _T.Token, "none", uniform=True)
     _attr(spec, "doubleSided", _T.Bool, bool(double_sided), uniform=True)
     if mesh.normals is not None:
         values = Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(mesh.normals, dtype=np.float32))
         if mesh.normals_indices is None:
-            _attr(spec, "normals", _T.Normal3fArray, values,
-                  interpolation=mesh.normals_interpolation)
+            _attr(
+                spec, "normals", _T.Normal3fArray, values, interpolation=mesh.normals_interpolation
+            )
         else:
             # only a primvar can be indexed; UsdGeomPointBased: "if 'normals' and
             # 'primvars:normals' are both specified, the latter has precedence" (Hydra, Blender
             # and usdview read the primvar first), so exactly one of the two is authored
-            _attr(spec, "primvars:normals", _T.Normal3fArray, values,
-                  interpolation="faceVarying")
-            _attr(spec, "primvars:normals:indices", _T.IntArray, Vt.IntArray.FromNumpy(
-                np.ascontiguousarray(mesh.normals_indices, dtype=np.int32)))
+            _attr(spec, "primvars:normals", _T.Normal3fArray, values, interpolation="faceVarying")
+            _attr(
+                spec,
+                "primvars:normals:indices",
+                _T.IntArray,
+                Vt.IntArray.FromNumpy(np.ascontiguousarray(mesh.normals_indices, dtype=np.int32)),
+            )
     if mesh.st is not None:
         values, indices = indexed_st(mesh.st, mesh.st_indices)
-        _attr(spec, "primvars:st", _T.TexCoord2fArray, Vt.Vec2fArray.FromNumpy(values),
-              interpolation="faceVarying")
+        _attr(
+            spec,
+            "primvars:st",
+            _T.TexCoord2fArray,
+            Vt.Vec2fArray.FromNumpy(values),
+            interpolation="faceVarying",
+        )
         _attr(spec, "primvars:st:indices", _T.IntArray, Vt.IntArray.FromNumpy(indices))
     return spec
 
@@ -114,8 +138,10 @@ def indexed_st(st: np.ndarray, indices: np.ndarray | None) -> tuple[np.ndarray, 
     new[1:] = np.any(srt[1:] != srt[:-1], axis=1)
     inverse = np.empty(len(srt), dtype=np.int64)
     inverse[order] = np.cumsum(new) - 1
-    return (np.ascontiguousarray(srt[new], dtype=np.float32),
-            np.ascontiguousarray(inverse[idx], dtype=np.int32))
+    return (
+        np.ascontiguousarray(srt[new], dtype=np.float32),
+        np.ascontiguousarray(inverse[idx], dtype=np.int32),
+    )
 
 
 def write_meshes(

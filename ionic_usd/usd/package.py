@@ -117,10 +117,10 @@ def write_usdz(
             raise UsdAuthoringError(f"{scene}: UsdUtils could not package it as usdz")
         errors = validate_stage(str(pkg))
         if errors:
-            raise UsdAuthoringError(f"{out}: the usdz package fails validation: {errors[0]} "
-                                    f"({len(errors)} errors)")
+            raise UsdAuthoringError(
+                f"{out}: the usdz package fails validation: {errors[0]} ({len(errors)} errors)"
+            )
         with zipfile.ZipFile(pkg) as z:
             files = len(z.namelist())
         os.replace(pkg, out)
     return UsdzReport(out, out.stat().st_size, files, left, 0, time.perf_counter() - t0)
-

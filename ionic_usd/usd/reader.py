@@ -207,8 +207,9 @@ def _outermost_instance(prim: Usd.Prim) -> Usd.Prim:
     return p
 
 
-def select_variants(stage: Usd.Stage, selections: Mapping[str, str], *,
-                    require_sets: bool = True) -> dict[str, str]:
+def select_variants(
+    stage: Usd.Stage, selections: Mapping[str, str], *, require_sets: bool = True
+) -> dict[str, str]:
     """Select ``set=value`` on every prim that has the set, in the session layer.
 
     Prims reached only through instancing (instance proxies) cannot carry a selection, so the
@@ -236,9 +237,12 @@ def select_variants(stage: Usd.Stage, selections: Mapping[str, str], *,
                     vset = vsets.GetVariantSet(vset_name)
                     valid = vset.GetVariantNames()
                     if value not in valid:
-                        raise ParameterError(f"--variant {vset_name}", value,
-                                             f"one of {', '.join(valid)}",
-                                             context=str(prim.GetPath()))
+                        raise ParameterError(
+                            f"--variant {vset_name}",
+                            value,
+                            f"one of {', '.join(valid)}",
+                            context=str(prim.GetPath()),
+                        )
                     if vset.GetVariantSelection() == value:
                         continue
                     if prim.IsInstanceProxy():
@@ -262,8 +266,11 @@ def select_variants(stage: Usd.Stage, selections: Mapping[str, str], *,
             if prim.HasVariantSets():
                 sets.update(prim.GetVariantSets().GetNames())
         valid = ", ".join(sorted(sets)) or "none: the scene has no variant sets"
-        raise ParameterError("--variant", missing[0], f"a variant set of the scene ({valid}); "
-                             f"the scene has no {missing[0]!r} variant set")
+        raise ParameterError(
+            "--variant",
+            missing[0],
+            f"a variant set of the scene ({valid}); the scene has no {missing[0]!r} variant set",
+        )
     return {k: v for k, v in selections.items() if k in found}
 
 
@@ -283,8 +290,9 @@ def _np(value, dtype) -> np.ndarray:
     return np.asarray(value if value is not None else [], dtype=dtype)
 
 
-def _corner_values(pv: UsdGeom.Primvar, n_points: int, counts: np.ndarray,
-                   idx: np.ndarray, width: int, what: str) -> np.ndarray | None:
+def _corner_values(
+    pv: UsdGeom.Primvar, n_points: int, counts: np.ndarray, idx: np.ndarray, width: int, what: str
+) -> np.ndarray | None:
     """A primvar (indexed or not) expanded to one value per face corner: (k, width)."""
     if not pv or not pv.HasValue():
         return None
@@ -298,8 +306,9 @@ def _corner_values(pv: UsdGeom.Primvar, n_points: int, counts: np.ndarray,
         return np.repeat(vals, counts, axis=0)
     if interp == UsdGeom.Tokens.constant and len(vals) >= 1:
         return np.repeat(vals[:1], len(idx), axis=0)
-    raise GeometryError(f"{pv.GetAttr().GetPath()}: {len(vals)} {what} values do not fit "
-                        f"interpolation {interp}")
+    raise GeometryError(
+        f"{pv.GetAttr().GetPath()}: {len(vals)} {what} values do not fit interpolation {interp}"
+    )
 
 
 def _read_mesh(prim: Usd.Prim, t: Usd.TimeCode):
@@ -310,8 +319,9 @@ def _read_mesh(prim: Usd.Prim, t: Usd.TimeCode):
     if len(pts) == 0 or len(counts) == 0:
         return None
     if counts.sum() != len(idx) or (len(idx) and (idx.min() < 0 or idx.max() >= len(pts))):
-        raise GeometryError(f"{prim.GetPath()}: faceVertexCounts/faceVertexIndices do not match "
-                            f"{len(pts)} points")
+        raise GeometryError(
+            f"{prim.GetPath()}: faceVertexCounts/faceVertexIndices do not match {len(pts)} points"
+        )
     if not np.all(np.isfinite(pts)):
         raise GeometryError(f"{prim.GetPath()}: points contain non-finite values")
     keep = counts >= 3  # points and lines carry no area
@@ -342,8 +352,9 @@ def _read_mesh(prim: Usd.Prim, t: Usd.TimeCode):
         elif ni == UsdGeom.Tokens.constant and len(raw):
             nrm, interp = np.repeat(raw[:1], len(idx), axis=0), "faceVarying"
         else:
-            raise GeometryError(f"{prim.GetPath()}: {len(raw)} normals do not fit "
-                                f"interpolation {ni}")
+            raise GeometryError(
+                f"{prim.GetPath()}: {len(raw)} normals do not fit interpolation {ni}"
+            )
     st = None
     pv = pvapi.GetPrimvar("st")
     if pv and pv.HasValue() and corner_keep is None:
@@ -354,8 +365,9 @@ def _read_mesh(prim: Usd.Prim, t: Usd.TimeCode):
     if mesh.GetOrientationAttr().Get() == UsdGeom.Tokens.leftHanded:
         # reverse each face's corners so the winding is counter-clockwise
         starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
-        order = np.concatenate([s + np.arange(c)[::-1]
-                                for s, c in zip(starts, counts, strict=True)])
+        order = np.concatenate(
+            [s + np.arange(c)[::-1] for s, c in zip(starts, counts, strict=True)]
+        )
         idx = idx[order]
         if st is not None:
             st = st[order]
@@ -378,18 +390,25 @@ def _content_key(arrays: Sequence[np.ndarray | None], extra: str) -> str:
 class _Reader:
     """Walk a stage once; prototypes (native and point instancer) are read once and memoised."""
 
-    def __init__(self, stage: Usd.Stage, t: Usd.TimeCode, scene: Scene,
-                 draw_modes: bool = False) -> None:
+    def __init__(
+        self, stage: Usd.Stage, t: Usd.TimeCode, scene: Scene, draw_modes: bool = False
+    ) -> None:
         self.stage, self.t, self.scene = stage, t, scene
         self.xfc = UsdGeom.XformCache(t)
-        self.bbox = UsdGeom.BBoxCache(t, [UsdGeom.Tokens.default_, UsdGeom.Tokens.render],
-                                      useExtentsHint=True) if draw_modes else None
+        self.bbox = (
+            UsdGeom.BBoxCache(
+                t, [UsdGeom.Tokens.default_, UsdGeom.Tokens.render], useExtentsHint=True
+            )
+            if draw_modes
+            else None
+        )
         self._protos: dict[str, list[tuple[str, np.ndarray, str]]] = {}
         self._by_prim: dict[str, str | None] = {}
         self._materials: dict[str, str | None] = {}
 
-    def walk(self, root: Usd.Prim, relative: bool, chain: dict
-             ) -> list[tuple[str, np.ndarray, str, dict, bool]]:
+    def walk(
+        self, root: Usd.Prim, relative: bool, chain: dict
+    ) -> list[tuple[str, np.ndarray, str, dict, bool]]:
         """``(mesh key, matrix, path, paradata, instanced)`` per drawable under ``root``;
         matrices are relative to ``root`` when ``relative``, else local-to-world; ``path`` is
         the placing instance's path (an instance proxy path when nested) or the mesh's."""
@@ -426,8 +445,9 @@ class _Reader:
                 for key in self._cards(prim, cards):
                     out.append((key, m, str(path), {} if relative else para[path], False))
                 continue
-            if not (prim.IsInstance() or prim.IsA(UsdGeom.PointInstancer)
-                    or prim.IsA(UsdGeom.Mesh)):
+            if not (
+                prim.IsInstance() or prim.IsA(UsdGeom.PointInstancer) or prim.IsA(UsdGeom.Mesh)
+            ):
                 continue
             m = self._matrix(prim, root, relative)
             if prim.IsInstance():
@@ -435,8 +455,15 @@ class _Reader:
                 proto = prim.GetPrototype()
                 n = len(str(proto.GetPath()))
                 for k, rel, ip, pd, via in self._prototype(proto):
-                    out.append((k, rel @ m, str(path) + (ip[n:] if via else ""),
-                                _merge(para[path], pd), True))
+                    out.append(
+                        (
+                            k,
+                            rel @ m,
+                            str(path) + (ip[n:] if via else ""),
+                            _merge(para[path], pd),
+                            True,
+                        )
+                    )
             elif prim.IsA(UsdGeom.PointInstancer):
                 it.PruneChildren()
                 out.extend(self._point_instancer(UsdGeom.PointInstancer(prim), m, para[path]))
@@ -456,15 +483,37 @@ class _Reader:
         keys = []
         colour = card_colour(prim)
         for face in faces:
-            tex = (TextureRef(path=face.texture, channels="rgba", colour_space="sRGB",
-                              wrap_s="clamp", wrap_t="clamp") if face.texture else None)
+            tex = (
+                TextureRef(
+                    path=face.texture,
+                    channels="rgba",
+                    colour_space="sRGB",
+                    wrap_s="clamp",
+                    wrap_t="clamp",
+                )
+                if face.texture
+                else None
+            )
             mat = MaterialData(f"card{face.name}", str(prim.GetPath()), colour, tex)
             self.scene.materials.setdefault(mat.key, mat)
             counts, idx = np.array([4], np.int64), np.arange(4, dtype=np.int64)
             key = _content_key([face.points, counts, idx, face.st], f"card|{mat.key}")
-            self.scene.meshes.setdefault(key, SceneMesh(
-                key, f"card{face.name}", str(prim.GetPath()), face.points, counts, idx, None,
-                "vertex", face.st, mat.key, card_face=face.name))
+            self.scene.meshes.setdefault(
+                key,
+                SceneMesh(
+                    key,
+                    f"card{face.name}",
+                    str(prim.GetPath()),
+                    face.points,
+                    counts,
+                    idx,
+                    None,
+                    "vertex",
+                    face.st,
+                    mat.key,
+                    card_face=face.name,
+                ),
+            )
             keys.append(key)
         return keys
 
@@ -494,14 +543,25 @@ class _Reader:
                 r, g, b = (float(x) for x in vals.mean(axis=0))
                 colour = (r, g, b)
         meta = json.dumps(paradata, sort_keys=True, default=str)
-        key = _content_key([pts, counts, idx, nrm, st],
-                           f"{interp}|{material}|{double}|{meta}|{colour}")
+        key = _content_key(
+            [pts, counts, idx, nrm, st], f"{interp}|{material}|{double}|{meta}|{colour}"
+        )
         if key not in self.scene.meshes:
             self.scene.meshes[key] = SceneMesh(
-                key=key, name=prim.GetName(), source=str(prim.GetPath()), points=pts,
-                face_vertex_counts=counts, face_vertex_indices=idx, normals=nrm,
-                normals_interpolation=interp, st=st, material=material, double_sided=double,
-                paradata=paradata, display_color=colour)
+                key=key,
+                name=prim.GetName(),
+                source=str(prim.GetPath()),
+                points=pts,
+                face_vertex_counts=counts,
+                face_vertex_indices=idx,
+                normals=nrm,
+                normals_interpolation=interp,
+                st=st,
+                material=material,
+                double_sided=double,
+                paradata=paradata,
+                display_color=colour,
+            )
         return key
 
     def _prototype(self, root: Usd.Prim) -> list[tuple[str, np.ndarray, str, dict, bool]]:
@@ -519,8 +579,11 @@ class _Reader:
             return []
         # the prototype root's own transform is part of each instance (IncludeProtoXform)
         xforms = pi.ComputeInstanceTransformsAtTime(
-            self.t, self.t, UsdGeom.PointInstancer.IncludeProtoXform,
-            UsdGeom.PointInstancer.ApplyMask)
+            self.t,
+            self.t,
+            UsdGeom.PointInstancer.IncludeProtoXform,
+            UsdGeom.PointInstancer.ApplyMask,
+        )
         mats = np.array(xforms, dtype=np.float64).reshape(-1, 4, 4)
         mask = pi.ComputeMaskAtTime(self.t)
         keep = np.ones(len(ids), bool) if not mask else np.asarray(mask, bool)
@@ -540,8 +603,9 @@ class _Reader:
             for k, rel, ip, pd, via in self._prototype(proto):
                 tail = ip[n:] if via else ""
                 for i in sel:
-                    out.append((k, rel @ full[i] @ world, f"{base}[{i}]{tail}",
-                                _merge(chain, pd), True))
+                    out.append(
+                        (k, rel @ full[i] @ world, f"{base}[{i}]{tail}", _merge(chain, pd), True)
+                    )
         return out
 
 
@@ -581,8 +645,7 @@ def read_scene(
     if root:
         scene.paradata = _prim_paradata(root)
         vs = root.GetVariantSets()
-        scene.paradata["variantSelections"] = {n: vs.GetVariantSelection(n)
-                                               for n in vs.GetNames()}
+        scene.paradata["variantSelections"] = {n: vs.GetVariantSelection(n) for n in vs.GetNames()}
     conv = _root_matrix(stage)
     reader = _Reader(stage, t, scene, draw_modes)
     for key, m, ppath, pd, via in reader.walk(stage.GetPseudoRoot(), relative=False, chain={}):
@@ -594,4 +657,3 @@ def read_scene(
     if not scene.placements:
         raise GeometryError(f"{path}: the scene has no visible mesh")
     return scene
-

@@ -17,8 +17,15 @@ __all__ = ["write_scan_points", "write_fitted_column"]
 _T = Sdf.ValueTypeNames
 
 
-def write_scan_points(path: str | Path, points: np.ndarray, deviation: np.ndarray,
-                      colours: np.ndarray, *, width: float, force: bool = False) -> Path:
+def write_scan_points(
+    path: str | Path,
+    points: np.ndarray,
+    deviation: np.ndarray,
+    colours: np.ndarray,
+    *,
+    width: float,
+    force: bool = False,
+) -> Path:
     """``/Scan/Points`` (``UsdGeom.Points``) with ``primvars:deviation`` (metres, vertex) and
     a heat-map ``primvars:displayColor`` (vertex).
 
@@ -36,21 +43,40 @@ def write_scan_points(path: str | Path, points: np.ndarray, deviation: np.ndarra
         spec = define_prim(layer, "/Scan/Points", "Points")
         _attr(spec, "points", _T.Point3fArray, Vt.Vec3fArray.FromNumpy(pts))
         lo, hi = pts.min(axis=0), pts.max(axis=0)
-        _attr(spec, "extent", _T.Float3Array,
-              Vt.Vec3fArray([Gf.Vec3f(*map(float, lo)), Gf.Vec3f(*map(float, hi))]))
-        _attr(spec, "widths", _T.FloatArray, Vt.FloatArray([float(width)]),
-              interpolation="constant")
-        _attr(spec, "primvars:deviation", _T.FloatArray,
-              Vt.FloatArray.FromNumpy(np.ascontiguousarray(deviation, dtype=np.float32)),
-              interpolation="vertex")
-        _attr(spec, "primvars:displayColor", _T.Color3fArray,
-              Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(colours, dtype=np.float32)),
-              interpolation="vertex")
+        _attr(
+            spec,
+            "extent",
+            _T.Float3Array,
+            Vt.Vec3fArray([Gf.Vec3f(*map(float, lo)), Gf.Vec3f(*map(float, hi))]),
+        )
+        _attr(
+            spec, "widths", _T.FloatArray, Vt.FloatArray([float(width)]), interpolation="constant"
+        )
+        _attr(
+            spec,
+            "primvars:deviation",
+            _T.FloatArray,
+            Vt.FloatArray.FromNumpy(np.ascontiguousarray(deviation, dtype=np.float32)),
+            interpolation="vertex",
+        )
+        _attr(
+            spec,
+            "primvars:displayColor",
+            _T.Color3fArray,
+            Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(colours, dtype=np.float32)),
+            interpolation="vertex",
+        )
     return save_layer(layer, path, force=force)
 
 
-def write_fitted_column(path: str | Path, meshes: dict[str, Mesh], matrix: np.ndarray, *,
-                        comment: str = "", force: bool = False) -> Path:
+def write_fitted_column(
+    path: str | Path,
+    meshes: dict[str, Mesh],
+    matrix: np.ndarray,
+    *,
+    comment: str = "",
+    force: bool = False,
+) -> Path:
     """The fitted column's meshes under ``/Column/Geom`` with ``/Column`` transformed by
     ``matrix`` (column coordinates → the scan's frame; row-vector convention as USD).
 
@@ -64,8 +90,9 @@ def write_fitted_column(path: str | Path, meshes: dict[str, Mesh], matrix: np.nd
         root = layer.GetPrimAtPath("/Column")
         m = Gf.Matrix4d(*[float(v) for v in np.asarray(matrix, dtype=np.float64).ravel()])
         _attr(root, "xformOp:transform", _T.Matrix4d, m)
-        _attr(root, "xformOpOrder", _T.TokenArray, Vt.TokenArray(["xformOp:transform"]),
-              uniform=True)
+        _attr(
+            root, "xformOpOrder", _T.TokenArray, Vt.TokenArray(["xformOp:transform"]), uniform=True
+        )
         define_prim(layer, "/Column/Geom", "Xform")
         for name, mesh in meshes.items():
             author_mesh(layer, f"/Column/Geom/{name}", mesh)

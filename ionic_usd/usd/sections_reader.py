@@ -51,8 +51,7 @@ def part_triangles(
         mesh = scene.meshes[p.mesh]
         pts = mesh.points @ p.matrix[:3, :3] + p.matrix[3, :3]
         all_pts.append(pts)
-        all_tris.append(triangulate_fan(mesh.face_vertex_counts, mesh.face_vertex_indices)
-                        + offset)
+        all_tris.append(triangulate_fan(mesh.face_vertex_counts, mesh.face_vertex_indices) + offset)
         offset += len(pts)
     if not all_pts:
         raise GeometryError(f"{path}: no active mesh of the part (a prim named {prim_name!r})")
@@ -72,5 +71,3 @@ def stored_tables(path: str | Path, keys: Iterable[str]) -> dict[str, dict]:
         data = dict(nested["parameters"])  # where ``ionic-usd asset`` keeps them
     wanted = set(keys)
     return {k: dict(v) for k, v in data.items() if k in wanted and hasattr(v, "items")}
-
-

@@ -83,8 +83,9 @@ def save_layer(layer: Sdf.Layer, path: str | os.PathLike, *, force: bool = False
 
     def readable(tmp: Path) -> None:  # a full disk can leave a truncated layer behind
         if Sdf.Layer.OpenAsAnonymous(str(tmp)) is None:
-            raise UsdAuthoringError(f"could not write {p} (the written layer does not read "
-                                    "back; is the disk full?)")
+            raise UsdAuthoringError(
+                f"could not write {p} (the written layer does not read back; is the disk full?)"
+            )
 
     with atomic_path(p, verify=readable) as tmp:
         try:

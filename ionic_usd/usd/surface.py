@@ -109,12 +109,14 @@ def read_material(mat: UsdShade.Material) -> MaterialData | None:
     if not shader or shader.GetIdAttr().Get() != "UsdPreviewSurface":
         return None
     kw: dict = {}
-    for name, key, tex_key in (("diffuseColor", "diffuse", "diffuse_texture"),
-                               ("roughness", "roughness", "roughness_texture"),
-                               ("metallic", "metallic", "metallic_texture"),
-                               ("normal", None, "normal_texture"),
-                               ("emissiveColor", "emissive", None),
-                               ("opacity", "opacity", None)):
+    for name, key, tex_key in (
+        ("diffuseColor", "diffuse", "diffuse_texture"),
+        ("roughness", "roughness", "roughness_texture"),
+        ("metallic", "metallic", "metallic_texture"),
+        ("normal", None, "normal_texture"),
+        ("emissiveColor", "emissive", None),
+        ("opacity", "opacity", None),
+    ):
         inp = shader.GetInput(name)
         if not inp:
             continue

@@ -110,17 +110,31 @@ from ionic_usd.usd.stage import new_layer, save_layer
 
 log = logging.getLogger(__name__)
 
-__all__ = ["TempleReport", "compose_temple", "hypothesis_layers", "temple_triangles",
-           "ROOT_LAYER", "GENERATED_LAYER", "OVERRIDES_LAYER", "MATERIALS_LAYER",
-           "PART_LAYERS", "COLONNADE_LAYER", "TEMPLE_CLASS"]
+__all__ = [
+    "TempleReport",
+    "compose_temple",
+    "hypothesis_layers",
+    "temple_triangles",
+    "ROOT_LAYER",
+    "GENERATED_LAYER",
+    "OVERRIDES_LAYER",
+    "MATERIALS_LAYER",
+    "PART_LAYERS",
+    "COLONNADE_LAYER",
+    "TEMPLE_CLASS",
+]
 
 ROOT_LAYER = "Temple.usda"
 GENERATED_LAYER = "generated.usda"
 OVERRIDES_LAYER = "overrides.usda"
 MATERIALS_LAYER = "materials.usda"
 COLONNADE_LAYER = "colonnade.usda"
-PART_LAYERS = {Layer.PODIUM: "podium.usda", Layer.CELLA: "cella.usda",
-               Layer.ENTABLATURE: "entablature.usda", Layer.ROOF: "roof.usda"}
+PART_LAYERS = {
+    Layer.PODIUM: "podium.usda",
+    Layer.CELLA: "cella.usda",
+    Layer.ENTABLATURE: "entablature.usda",
+    Layer.ROOF: "roof.usda",
+}
 TEMPLE_CLASS = "/_class_Temple"
 ASSET_REF = f"./{ASSET_NAME}/{ASSET_NAME}.usda"
 # baseline finish: the ancient painted stucco (see portunus.toml); bare stone is a hypothesis
@@ -155,9 +169,14 @@ def _changes(layout: TempleLayout, opts: ColumnAssetOptions) -> dict[str, Hypoth
     for h in layout.hypotheses:
         for key in temple_keys(h):
             if key in _COLUMN_SHAPE_KEYS:
-                raise ParameterError(key, h.changes[key], "a key the composer can realise "
-                                     "(the column asset is built once; change [columns] "
-                                     "instead)", context=f"hypothesis {h.id!r}")
+                raise ParameterError(
+                    key,
+                    h.changes[key],
+                    "a key the composer can realise "
+                    "(the column asset is built once; change [columns] "
+                    "instead)",
+                    context=f"hypothesis {h.id!r}",
+                )
         out[h.id] = check_composer_changes(h, flutes, FINISHES, opts.capitals)
     return out
 
@@ -171,26 +190,41 @@ def hypothesis_layers(
     """
     opts = opts or ColumnAssetOptions()
     changes = _changes(layout, opts)
-    return {h.id: hypothesis_layer(
-        [h], layout, changes=changes, uv_scale=CUBOID_UV_SCALE, asset_ref=ASSET_REF.replace(
-            "./", "../", 1), materials_ref=f"../{MATERIALS_LAYER}",
-        finish_materials=_finish_materials(), column_height=layout.params.columns_height)
-        for h in layout.hypotheses}
+    return {
+        h.id: hypothesis_layer(
+            [h],
+            layout,
+            changes=changes,
+            uv_scale=CUBOID_UV_SCALE,
+            asset_ref=ASSET_REF.replace("./", "../", 1),
+            materials_ref=f"../{MATERIALS_LAYER}",
+            finish_materials=_finish_materials(),
+            column_height=layout.params.columns_height,
+        )
+        for h in layout.hypotheses
+    }
 
 
 def _materials_layer() -> Sdf.Layer:
     """The temple's one material library: the column asset's (stucco, travertine: one copy of
     their maps) and the roof's Terracotta."""
-    lay = new_layer("Temple", kind="assembly", comment="the temple's materials: the column "
-                    "asset's material library (one copy of every texture map) and Terracotta")
+    lay = new_layer(
+        "Temple",
+        kind="assembly",
+        comment="the temple's materials: the column "
+        "asset's material library (one copy of every texture map) and Terracotta",
+    )
     stage = Usd.Stage.Open(lay)
     stage.DefinePrim("/Temple/Materials", "Scope")
     stone_material(stage, f"/Temple/Materials/{TERRACOTTA[0]}", TERRACOTTA[1])
     del stage
     # after the stage: the asset is not on disk yet
     spec = lay.GetPrimAtPath("/Temple/Materials")
-    spec.referenceList.Prepend(Sdf.Reference(f"./{ASSET_NAME}/Payload/Materials.usda",
-                                             Sdf.Path(f"/{ASSET_NAME}/Materials")))
+    spec.referenceList.Prepend(
+        Sdf.Reference(
+            f"./{ASSET_NAME}/Payload/Materials.usda", Sdf.Path(f"/{ASSET_NAME}/Materials")
+        )
+    )
     return lay
 
 
@@ -231,36 +265,54 @@ def _root_layer(name: str) -> Sdf.Layer:
     lay.defaultPrim = "Temple"
     lay.pseudoRoot.SetInfo("upAxis", "Y")
     lay.pseudoRoot.SetInfo("metersPerUnit", 1.0)
-    lay.comment = (f"{name}, composed by ionic_usd {__version__}. Put your edits in "
-                   f"{OVERRIDES_LAYER} (the strongest layer, never rewritten).")
+    lay.comment = (
+        f"{name}, composed by ionic_usd {__version__}. Put your edits in "
+        f"{OVERRIDES_LAYER} (the strongest layer, never rewritten)."
+    )
     lay.subLayerPaths.append(f"./{OVERRIDES_LAYER}")
     lay.subLayerPaths.append(f"./{GENERATED_LAYER}")
     return lay
 
 
 def _user_overrides_layer() -> Sdf.Layer:
-    lay = new_layer("Temple", kind=None, comment=(
-        "Your overrides: the strongest layer of the temple. ionic_usd creates this file once "
-        "and never writes it again. Author `over` opinions below /Temple, or on "
-        "/_class_IonicColumn to change every column at once."))
+    lay = new_layer(
+        "Temple",
+        kind=None,
+        comment=(
+            "Your overrides: the strongest layer of the temple. ionic_usd creates this file once "
+            "and never writes it again. Author `over` opinions below /Temple, or on "
+            "/_class_IonicColumn to change every column at once."
+        ),
+    )
     return lay
 
 
-def _generated_layer(layout: TempleLayout, hyp_layers: dict[str, Sdf.Layer | None],
-                     lods: Sequence[str]) -> Sdf.Layer:
-    lay = new_layer("Temple", kind="assembly",
-                    comment=f"{layout.name}, generated by ionic_usd {__version__}; "
-                    f"do not edit (rewritten on every build): edit {OVERRIDES_LAYER}")
+def _generated_layer(
+    layout: TempleLayout, hyp_layers: dict[str, Sdf.Layer | None], lods: Sequence[str]
+) -> Sdf.Layer:
+    lay = new_layer(
+        "Temple",
+        kind="assembly",
+        comment=f"{layout.name}, generated by ionic_usd {__version__}; "
+        f"do not edit (rewritten on every build): edit {OVERRIDES_LAYER}",
+    )
     spec = lay.GetPrimAtPath("/Temple")
-    spec.assetInfo = {"name": hyp_ident(layout.name), "version": __version__,
-                      "identifier": Sdf.AssetPath(f"./{ROOT_LAYER}")}
+    spec.assetInfo = {
+        "name": hyp_ident(layout.name),
+        "version": __version__,
+        "identifier": Sdf.AssetPath(f"./{ROOT_LAYER}"),
+    }
     cls = Sdf.CreatePrimInLayer(lay, TEMPLE_CLASS)
     cls.specifier = Sdf.SpecifierClass
     spec.inheritPathList.Prepend(Sdf.Path(TEMPLE_CLASS))
     col_cls = Sdf.CreatePrimInLayer(lay, class_path(ASSET_NAME))
     col_cls.specifier = Sdf.SpecifierClass
-    for ref in [f"./{MATERIALS_LAYER}", *(f"./{PART_LAYERS[la]}" for la in layout.cuboids),
-                f"./{COLONNADE_LAYER}", f"./{DETAIL_LAYER}"]:
+    for ref in [
+        f"./{MATERIALS_LAYER}",
+        *(f"./{PART_LAYERS[la]}" for la in layout.cuboids),
+        f"./{COLONNADE_LAYER}",
+        f"./{DETAIL_LAYER}",
+    ]:
         spec.referenceList.Append(Sdf.Reference(ref))
     # lod: one selection on /Temple passes to every column (a far temple is light)
     vs = Sdf.VariantSetSpec(spec, "lod")
@@ -268,8 +320,10 @@ def _generated_layer(layout: TempleLayout, hyp_layers: dict[str, Sdf.Layer | Non
     for lod in lods:
         var = Sdf.VariantSpec(vs, lod)
         for c in layout.columns:
-            over = Sdf.CreatePrimInLayer(lay, var.path.AppendPath(
-                Sdf.Path(column_path(c)).MakeRelativePath(Sdf.Path("/Temple"))))
+            over = Sdf.CreatePrimInLayer(
+                lay,
+                var.path.AppendPath(Sdf.Path(column_path(c)).MakeRelativePath(Sdf.Path("/Temple"))),
+            )
             over.specifier = Sdf.SpecifierOver
             over.variantSelections["lod"] = lod
     spec.variantSelections["lod"] = lods[0]
@@ -288,8 +342,13 @@ def _generated_layer(layout: TempleLayout, hyp_layers: dict[str, Sdf.Layer | Non
         alt = Sdf.VariantSpec(vs, "alternative")
         alt.primSpec.referenceList.Prepend(Sdf.Reference(f"./layers/{h.id}.usda"))
         spec.variantSelections[hyp_set(h.id)] = "baseline"
-    spec.customData = {"ionic_usd": {"hypotheses": listing, "temple": layout.name,
-                                     "baseline_finish": BASELINE_FINISH}}
+    spec.customData = {
+        "ionic_usd": {
+            "hypotheses": listing,
+            "temple": layout.name,
+            "baseline_finish": BASELINE_FINISH,
+        }
+    }
     return lay
 
 
@@ -324,13 +383,14 @@ def compose_temple(
     t0 = time.perf_counter()
     dest = Path(folder)
     if dest.exists() and not force:
-        raise OutputExistsError(f"{dest} exists; pass --force to rebuild it "
-                                f"(your {OVERRIDES_LAYER} is kept)")
+        raise OutputExistsError(
+            f"{dest} exists; pass --force to rebuild it (your {OVERRIDES_LAYER} is kept)"
+        )
     p = layout.params
-    column = column or portunus_column_params(height=p.columns_height,
-                                              lower_diameter=p.columns_lower_diameter)
-    opts = asset_options or ColumnAssetOptions(params=column, texture_size=texture_size,
-                                               seed=seed)
+    column = column or portunus_column_params(
+        height=p.columns_height, lower_diameter=p.columns_lower_diameter
+    )
+    opts = asset_options or ColumnAssetOptions(params=column, texture_size=texture_size, seed=seed)
     if opts.params != column:
         opts = dataclasses.replace(opts, params=column)
     detail = check_detail(detail or DEFAULT_DETAIL)
@@ -359,8 +419,9 @@ def compose_temple(
         log.info("writing the part, colonnade, detail and hypothesis layers")
         # tiles repeat their map every metre (stone: every TILE_METRES = 2 m): half the size
         # keeps the texel density
-        copy_stone_textures(tmp / "Textures", TERRACOTTA[1], max(16, opts.texture_size // 2),
-                            opts.seed)
+        copy_stone_textures(
+            tmp / "Textures", TERRACOTTA[1], max(16, opts.texture_size // 2), opts.seed
+        )
         save_layer(_materials_layer(), tmp / MATERIALS_LAYER)
         save_layer(detail_layer(geom), tmp / DETAIL_LAYER)
         for layer, meshes in base_meshes.items():
@@ -379,18 +440,26 @@ def compose_temple(
         save_layer(_user_overrides_layer(), tmp / OVERRIDES_LAYER)
         # checks and hints on the generated layer alone: the user's opinions are theirs
         gen = Usd.Stage.Open(str(tmp / GENERATED_LAYER))
-        realised = [h for h in layout.hypotheses
-                    if hyp_layers[h.id] is not None or h in frieze]
+        realised = [h for h in layout.hypotheses if hyp_layers[h.id] is not None or h in frieze]
         log.info("checking the combinations of %d hypotheses x detail", len(realised))
-        stats["combos"] = realise_combinations(gen, tmp, layout, realised,
-                                               uv_scale=CUBOID_UV_SCALE, detail_of=detail_of)
+        stats["combos"] = realise_combinations(
+            gen, tmp, layout, realised, uv_scale=CUBOID_UV_SCALE, detail_of=detail_of
+        )
         stats["lod_triangles"] = {lod: _triangles_with(gen, {"lod": lod}) for lod in lods}
         temple_sets = gen.GetPrimAtPath("/Temple").GetVariantSets()
-        candidates = {"lod": lods, **{
-            n: tuple(temple_sets.GetVariantSet(n).GetVariantNames())
-            for n in temple_sets.GetNames() if n.startswith("hyp_") or n == DETAIL_SET}}
-        parts = ["/Temple", *(f"/Temple/{PART_PRIMS[la]}" for la in layout.cuboids),
-                 "/Temple/Colonnade"]
+        candidates = {
+            "lod": lods,
+            **{
+                n: tuple(temple_sets.GetVariantSet(n).GetVariantNames())
+                for n in temple_sets.GetNames()
+                if n.startswith("hyp_") or n == DETAIL_SET
+            },
+        }
+        parts = [
+            "/Temple",
+            *(f"/Temple/{PART_PRIMS[la]}" for la in layout.cuboids),
+            "/Temple/Colonnade",
+        ]
         log.info("extentsHint per variant combination")
         vsets = bound_changing_sets(gen, "/Temple", parts, candidates, base="lod")
         hints = variant_extents_hints(gen, "/Temple", parts, vsets)
@@ -400,15 +469,19 @@ def compose_temple(
         del gen
         _check_resolves(tmp / ROOT_LAYER, tmp / GENERATED_LAYER)
 
-    replace_folder(build, dest, force=force, keep_existing=(OVERRIDES_LAYER,),
-                   root_files=(ROOT_LAYER,))
+    replace_folder(
+        build, dest, force=force, keep_existing=(OVERRIDES_LAYER,), root_files=(ROOT_LAYER,)
+    )
     root_path = dest / ROOT_LAYER
     stage = Usd.Stage.Open(str(root_path))
     if stage is None:
         raise UsdAuthoringError(f"cannot open the temple written at {root_path}")
     rep = _report(stage, dest, layout, time.perf_counter() - t0)
-    return dataclasses.replace(rep, triangles_per_lod=dict(stats["lod_triangles"]),
-                               combination_layers=tuple(stats["combos"]))
+    return dataclasses.replace(
+        rep,
+        triangles_per_lod=dict(stats["lod_triangles"]),
+        combination_layers=tuple(stats["combos"]),
+    )
 
 
 # ---------------------------------------------------------------------------------------------
@@ -422,11 +495,11 @@ def _check_resolves(root: Path, generated: Path) -> None:
     from pxr import UsdUtils
 
     _, _, unresolved = UsdUtils.ComputeAllDependencies(Sdf.AssetPath(str(generated)))
-    unresolved += [p for p in (OVERRIDES_LAYER, GENERATED_LAYER)
-                   if not (root.parent / p).is_file()]
+    unresolved += [p for p in (OVERRIDES_LAYER, GENERATED_LAYER) if not (root.parent / p).is_file()]
     if unresolved:
-        raise UsdAuthoringError(f"the temple refers to files that do not resolve: "
-                                f"{', '.join(sorted(unresolved))}")
+        raise UsdAuthoringError(
+            f"the temple refers to files that do not resolve: {', '.join(sorted(unresolved))}"
+        )
     stage = Usd.Stage.Open(str(generated))
     for prim in stage.GetPrimAtPath("/Temple/Colonnade").GetAllChildren():
         for inst in prim.GetChildren():
@@ -453,6 +526,13 @@ def _report(stage: Usd.Stage, dest: Path, layout: TempleLayout, seconds: float) 
     prims = sum(1 for _ in stage.Traverse())
     instances = sum(1 for p in stage.Traverse() if p.IsInstance())
     files = sum(1 for f in dest.rglob("*") if f.is_file())
-    return TempleReport(dest / ROOT_LAYER, files, prims, instances, len(stage.GetPrototypes()),
-                        temple_triangles(stage), tuple(h.id for h in layout.hypotheses),
-                        seconds)
+    return TempleReport(
+        dest / ROOT_LAYER,
+        files,
+        prims,
+        instances,
+        len(stage.GetPrototypes()),
+        temple_triangles(stage),
+        tuple(h.id for h in layout.hypotheses),
+        seconds,
+    )
