@@ -46,6 +46,22 @@ def add_command(
     """
     p: argparse.ArgumentParser = subparsers.add_parser(name, help=help, description=description)
     p.set_defaults(func=func)
+    # -v / -q after the command name too (``ionic-usd temple --force -q``); SUPPRESS keeps
+    # the value given before the command when none is given after it
+    p.add_argument(
+        "-v",
+        "--verbose",
+        action="count",
+        default=argparse.SUPPRESS,
+        help="say what each step does (-vv: debugging detail) on stderr",
+    )
+    p.add_argument(
+        "-q",
+        "--quiet",
+        action="store_true",
+        default=argparse.SUPPRESS,
+        help="no progress bars and no messages but errors",
+    )
     return p
 
 

@@ -90,3 +90,33 @@ def test_print_config_with_a_newline_in_a_grammar_is_valid_toml(capsys):
     assert main(["column", "--print-config", "--base", grammar]) == 0
     data = tomllib.loads(capsys.readouterr().out)
     assert data["column"]["base"] == grammar
+
+
+@pytest.mark.parametrize("where", ["before", "after"])
+def test_verbosity_flags_before_or_after_the_command(tmp_path, caplog, where):
+    import logging
+
+    from ionic_usd.cli import build_parser
+
+    flags = ["-q"]
+    argv = (
+        [*flags, "shaft", "-o", "x.usda"]
+        if where == "before"
+        else ["shaft", "-o", "x.usda", *flags]
+    )
+    args = build_parser().parse_args(argv)
+    assert args.quiet is True and args.verbose == 0
+    argv = ["-vv", "shaft"] if where == "before" else ["shaft", "-vv"]
+    args = build_parser().parse_args(argv)
+    assert args.verbose == 2 and args.quiet is False
+    out = tmp_path / "s.usda"
+    with caplog.at_level(logging.DEBUG):
+        assert (
+            main(
+                ["shaft", "-o", str(out), "-q"]
+                if where == "after"
+                else ["-q", "shaft", "-o", str(out)]
+            )
+            == 0
+        )
+    assert out.exists()
