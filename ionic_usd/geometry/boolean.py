@@ -9,6 +9,8 @@ new intersection curves are crisp.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ionic_usd.errors import GeometryError
@@ -270,19 +272,46 @@ def _tri_angles(p: np.ndarray) -> np.ndarray:
     return np.degrees(np.arccos(np.clip(c, -1.0, 1.0)))
 
 
-def _unit_normals(p: np.ndarray) -> np.ndarray:
-    n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
-    return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+def _angles(p: list[float], q: list[float], r: list[float]) -> tuple[float, float, float]:
+    """The corner angles (degrees) of the triangle pqr (3 floats each): :func:`_tri_angles`
+    for one triangle in plain float math (numpy costs ~1 µs a call on 3-vectors)."""
+    out = []
+    for o, u, w in ((p, q, r), (q, r, p), (r, p, q)):
+        ax, ay, az = u[0] - o[0], u[1] - o[1], u[2] - o[2]
+        bx, by, bz = w[0] - o[0], w[1] - o[1], w[2] - o[2]
+        la = math.sqrt(ax * ax + ay * ay + az * az)
+        lb = math.sqrt(bx * bx + by * by + bz * bz)
+        c = (ax * bx + ay * by + az * bz) / max(la * lb, 1e-300)
+        out.append(math.degrees(math.acos(min(max(c, -1.0), 1.0))))
+    return out[0], out[1], out[2]
 
 
-def _tet_height(a, b, c, d) -> float:
+def _normal(p: list[float], q: list[float], r: list[float]) -> tuple[float, float, float]:
+    """The unit normal of the triangle pqr (zero for a degenerate one)."""
+    ux, uy, uz = q[0] - p[0], q[1] - p[1], q[2] - p[2]
+    vx, vy, vz = r[0] - p[0], r[1] - p[1], r[2] - p[2]
+    nx, ny, nz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+    ln = max(math.sqrt(nx * nx + ny * ny + nz * nz), 1e-300)
+    return nx / ln, ny / ln, nz / ln
+
+
+def _cross(p: list[float], q: list[float], r: list[float]) -> tuple[float, float, float]:
+    """(q − p) × (r − p): twice the vector area of the triangle pqr."""
+    ux, uy, uz = q[0] - p[0], q[1] - p[1], q[2] - p[2]
+    vx, vy, vz = r[0] - p[0], r[1] - p[1], r[2] - p[2]
+    return uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+
+
+def _dot(u, v) -> float:
+    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
+
+
+def _tet_height(a: list[float], b: list[float], c: list[float], d: list[float]) -> float:
     """Smallest height of the tetrahedron abcd: how far a flip of edge ab (triangles abc, abd
     → acd, bcd) moves the surface."""
-    v = abs(float(np.dot(np.cross(b - a, c - a), d - a)))
-    areas = [
-        float(np.linalg.norm(np.cross(q - o, r - o)))
-        for o, q, r in ((a, b, c), (a, b, d), (a, c, d), (b, c, d))
-    ]
+    n = _cross(a, b, c)
+    v = abs(n[0] * (d[0] - a[0]) + n[1] * (d[1] - a[1]) + n[2] * (d[2] - a[2]))
+    areas = [math.sqrt(_dot(x, x)) for x in (n, _cross(a, b, d), _cross(a, c, d), _cross(b, c, d))]
     return v / max(max(areas), 1e-300)
 
 
@@ -301,6 +330,9 @@ def remove_slivers(
     stays a closed 2-manifold) and no triangle round it turns over or becomes a new sliver.
     Slivers neither can mend within ``tol`` are left (they are real, thin features).
 
+    The edits run on Python lists (points, triangles, per-corner attributes) with plain float
+    math; only the per-pass sliver scan and the output are numpy.
+
     Parameters
     ----------
     mesh : closed, consistently wound triangle mesh with faceVarying normals (or none)
@@ -311,8 +343,9 @@ def remove_slivers(
     -------
     Mesh with the same name; unused points removed.
     """
-    tri = mesh.triangles.astype(np.int64).copy()
     pts = np.array(mesh.points, dtype=np.float64)
+    P: list[list[float]] = pts.tolist()  # the points as floats (kept equal to pts)
+    T: list[list[int]] = mesh.triangles.astype(np.int64).reshape(-1, 3).tolist()
     # per-corner attributes carried through every edit: the normals (3) and st (2)
     parts = []
     corner_n = corner_normals(mesh)
@@ -320,176 +353,194 @@ def remove_slivers(
         parts.append(np.asarray(corner_n, dtype=np.float64).reshape(-1, 3, 3))
     if mesh.st is not None and mesh.st_indices is not None:
         parts.append(np.asarray(mesh.st, dtype=np.float64)[mesh.st_indices].reshape(-1, 3, 2))
-    cn: np.ndarray | None = np.concatenate(parts, axis=2) if parts else None
+    cn0 = np.concatenate(parts, axis=2) if parts else None
+    n_ch = 0 if cn0 is None else cn0.shape[2]
+    cn: list[np.ndarray] | None = None if cn0 is None else list(cn0)  # (3, n_ch) per face
     n_dim = 3 if corner_n is not None else 0
-    alive = np.ones(len(tri), dtype=bool)
+    alive = [True] * len(T)
 
     inc: dict[int, set[int]] = {}  # vertex → the live triangles using it
-    for f, row in enumerate(tri.tolist()):
+    for f, row in enumerate(T):
         for v in row:
             inc.setdefault(v, set()).add(f)
+    empty: set[int] = set()
 
-    def faces_with(*vs: int) -> np.ndarray:
-        common = set.intersection(*(inc.get(int(v), set()) for v in vs))
-        return np.array(sorted(common), dtype=np.int64)
+    def edge_faces(a: int, b: int) -> set[int]:
+        return inc.get(a, empty) & inc.get(b, empty)
 
-    def set_tri(f: int, new) -> None:
-        if f < len(tri):
-            for v in tri[f].tolist():
+    def set_tri(f: int, new: list[int]) -> None:
+        if f < len(T):
+            for v in T[f]:
                 inc[v].discard(f)
-        for v in np.asarray(new).tolist():
+        for v in new:
             inc.setdefault(v, set()).add(f)
 
     def kill(f: int) -> None:
-        for v in tri[f].tolist():
+        for v in T[f]:
             inc[v].discard(f)
         alive[f] = False
 
+    def min_angle_of(
+        rows: list[list[int]], at: dict[int, list[float]] | list[list[float]] = P
+    ) -> float:
+        return min(min(_angles(at[r[0]], at[r[1]], at[r[2]])) for r in rows)
+
+    def across(t: int, a: int, b: int) -> tuple[int, int] | None:
+        """The one other triangle on edge ab and its vertex off that edge."""
+        other = edge_faces(a, b) - {t}
+        if len(other) != 1:
+            return None
+        (o,) = other
+        d = next(v for v in T[o] if v != a and v != b)
+        return o, d
+
     def try_flip(t: int, k: int) -> bool:
         """Flip the edge opposite corner k of triangle t."""
-        c = tri[t, k]
-        a, b = tri[t, (k + 1) % 3], tri[t, (k + 2) % 3]
-        other = [f for f in faces_with(a, b) if f != t]
-        if len(other) != 1:
+        row = T[t]
+        c, a, b = row[k], row[(k + 1) % 3], row[(k + 2) % 3]
+        od = across(t, a, b)
+        if od is None:
             return False
-        o = other[0]
-        d = int(tri[o][~np.isin(tri[o], (a, b))][0])
-        if len(faces_with(c, d)):
+        o, d = od
+        if edge_faces(c, d):
             return False  # the new edge exists already
-        if _tet_height(pts[a], pts[b], pts[c], pts[d]) > tol:
+        pa, pb, pc, pd = P[a], P[b], P[c], P[d]
+        if _tet_height(pa, pb, pc, pd) > tol:
             return False
-        new = np.array([[c, a, d], [d, b, c]])
-        old = pts[tri[[t, o]]]
-        ref = np.cross(old[:, 1] - old[:, 0], old[:, 2] - old[:, 0]).sum(axis=0)  # vector area
-        new_n = _unit_normals(pts[new])
-        if np.any(new_n @ ref <= 0) or new_n[0] @ new_n[1] <= 0:
+        ro = T[o]
+        r1, r2 = _cross(P[row[0]], P[row[1]], P[row[2]]), _cross(P[ro[0]], P[ro[1]], P[ro[2]])
+        ref = (r1[0] + r2[0], r1[1] + r2[1], r1[2] + r2[2])  # vector area
+        n0, n1 = _normal(pc, pa, pd), _normal(pd, pb, pc)
+        if _dot(n0, ref) <= 0 or _dot(n1, ref) <= 0 or _dot(n0, n1) <= 0:
             return False
-        before = _tri_angles(pts[tri[[t, o]]]).min()
-        if _tri_angles(pts[new]).min() <= before:
+        before = min_angle_of([row, ro])
+        if min(min(_angles(pc, pa, pd)), min(_angles(pd, pb, pc))) <= before:
             return False
         if cn is not None:
-            cnl = cn
-
-            def corner(f: int, v: int) -> np.ndarray:
-                return cnl[f][int(np.flatnonzero(tri[f] == v)[0])]
-
-            n_new = np.array(
-                [
-                    [corner(t, c), corner(t, a), corner(o, d)],
-                    [corner(o, d), corner(o, b), corner(t, c)],
-                ]
-            )
-            cn[t], cn[o] = n_new
-        set_tri(t, new[0])
-        set_tri(o, new[1])
-        tri[t], tri[o] = new
+            ct, co = cn[t], cn[o]
+            ic, ia, id_, ib = row.index(c), row.index(a), ro.index(d), ro.index(b)
+            cn[t] = np.array([ct[ic], ct[ia], co[id_]])
+            cn[o] = np.array([co[id_], co[ib], ct[ic]])
+        set_tri(t, [c, a, d])
+        set_tri(o, [d, b, c])
+        T[t], T[o] = [c, a, d], [d, b, c]
         return True
 
     def try_snap(t: int, k: int) -> bool:
         """Move the vertex at corner k of a cap t onto its opposite edge (at most ``tol``) and
         split the neighbour across that edge there; t vanishes."""
-        nonlocal tri, cn, alive
-        c = int(tri[t, k])
-        a, b = int(tri[t, (k + 1) % 3]), int(tri[t, (k + 2) % 3])
-        other = [f for f in faces_with(a, b) if f != t]
-        if len(other) != 1:
+        row = T[t]
+        c, a, b = row[k], row[(k + 1) % 3], row[(k + 2) % 3]
+        od = across(t, a, b)
+        if od is None:
             return False
-        o = other[0]
-        d = int(tri[o][~np.isin(tri[o], (a, b))][0])
+        o, d = od
         ab = pts[b] - pts[a]
         u = float(np.clip(np.dot(pts[c] - pts[a], ab) / max(float(ab @ ab), 1e-300), 0.0, 1.0))
         foot = pts[a] + u * ab
-        if np.linalg.norm(foot - pts[c]) > tol or len(faces_with(c, d)):
+        if np.linalg.norm(foot - pts[c]) > tol or edge_faces(c, d):
             return False
-        around = np.array([f for f in faces_with(c) if f != t])
-        moved = pts.copy()
-        moved[c] = foot
-        n_old = _unit_normals(pts[tri[around]])
-        n_new = _unit_normals(moved[tri[around]])
-        if np.any(np.einsum("ij,ij->i", n_old, n_new) < 0.5):
-            return False
-        halves = np.array([[b, c, d], [c, a, d]])
-        before = min(_tri_angles(pts[tri[around]]).min(), _tri_angles(pts[tri[[t, o]]]).min())
-        after = min(_tri_angles(moved[tri[around]]).min(), _tri_angles(moved[halves]).min())
+        around = [T[f] for f in sorted(inc[c]) if f != t]
+        fl = foot.tolist()
+        moved = {v: P[v] for r in around for v in r}
+        moved[c] = fl
+        for r in around:
+            n_old = _normal(P[r[0]], P[r[1]], P[r[2]])
+            n_new = _normal(moved[r[0]], moved[r[1]], moved[r[2]])
+            if _dot(n_old, n_new) < 0.5:
+                return False
+        halves = [[b, c, d], [c, a, d]]
+        moved.update({a: P[a], b: P[b], d: P[d]})
+        before = min(min_angle_of(around), min_angle_of([row, T[o]]))
+        after = min(min_angle_of(around, moved), min_angle_of(halves, moved))
         if after <= before:
             return False
         pts[c] = foot
+        P[c] = fl
         if cn is not None:
-            n_a, n_b, n_d = (cn[o][int(np.flatnonzero(tri[o] == v)[0])] for v in (a, b, d))
+            ro, co = T[o], cn[o]
+            ia, ib, id_ = ro.index(a), ro.index(b), ro.index(d)
+            n_a, n_b, n_d = co[ia], co[ib], co[id_]
             nf = (1 - u) * n_a + u * n_b
             if n_dim:
                 nf[:n_dim] /= max(float(np.linalg.norm(nf[:n_dim])), 1e-12)
-            cn[o] = [n_b, nf, n_d]
-            cn = np.concatenate([cn, [[nf, n_a, n_d]]])
+            new_o = np.array([n_b, nf, n_d])
+            cn[o] = new_o
+            # the new half takes the corners of o at a's and d's old places (as written)
+            cn.append(np.array([nf, new_o[ia], new_o[id_]]))
         set_tri(o, halves[0])
-        tri[o] = halves[0]
-        set_tri(len(tri), halves[1])
-        tri = np.vstack([tri, halves[1:]])
-        alive = np.concatenate([alive, [True]])
+        T[o] = halves[0]
+        set_tri(len(T), halves[1])
+        T.append(halves[1])
+        alive.append(True)
         kill(t)
         return True
 
     def try_collapse(t: int, k: int) -> bool:
         """Collapse the edge opposite corner k of triangle t (one end onto the other)."""
-        a, b = int(tri[t, (k + 1) % 3]), int(tri[t, (k + 2) % 3])
+        row = T[t]
+        a, b = row[(k + 1) % 3], row[(k + 2) % 3]
         if np.linalg.norm(pts[a] - pts[b]) > tol:
             return False
-        shared = faces_with(a, b)
+        shared = edge_faces(a, b)
         if len(shared) != 2:
             return False
-        ring_a = set(tri[faces_with(a)].ravel().tolist()) - {a}
-        ring_b = set(tri[faces_with(b)].ravel().tolist()) - {b}
-        opp = {int(v) for f in shared for v in tri[f] if v not in (a, b)}
+        ring_a = {v for f in inc[a] for v in T[f]} - {a}
+        ring_b = {v for f in inc[b] for v in T[f]} - {b}
+        opp = {v for f in shared for v in T[f] if v != a and v != b}
         if ring_a & ring_b != opp:
             return False  # the link condition: a pinch or a fold would follow
         for keep, drop in ((a, b), (b, a)):
-            moved = np.array([f for f in faces_with(drop) if f not in shared])
-            new = tri[moved].copy()
-            new[new == drop] = keep
-            n_old = _unit_normals(pts[tri[moved]])
-            n_new = _unit_normals(pts[new])
-            if np.any(np.einsum("ij,ij->i", n_old, n_new) < 0.5):
+            moved = [f for f in sorted(inc[drop]) if f not in shared]
+            new = [[keep if v == drop else v for v in T[f]] for f in moved]
+            old = [T[f] for f in moved]
+            if any(
+                _dot(_normal(P[r[0]], P[r[1]], P[r[2]]), _normal(P[s[0]], P[s[1]], P[s[2]])) < 0.5
+                for r, s in zip(old, new, strict=True)
+            ):
                 continue
-            if _tri_angles(pts[new]).min() < min(min_angle, _tri_angles(pts[tri[moved]]).min()):
+            if min_angle_of(new) < min(min_angle, min_angle_of(old)):
                 continue
-            for f, row in zip(moved.tolist(), new, strict=True):
-                set_tri(f, row)
-            tri[moved] = new
-            for f in shared.tolist():
+            for f, nr in zip(moved, new, strict=True):
+                set_tri(f, nr)
+                T[f] = nr
+            for f in sorted(shared):
                 kill(f)
             return True
         return False
 
     touched: set[int] | None = None  # vertices near a change in the last pass (None: all)
     for _ in range(max_passes):
-        worst = _tri_angles(pts[tri]).min(axis=1)
-        bad = np.flatnonzero(alive & (worst < min_angle))
+        worst = _tri_angles(pts[np.array(T, dtype=np.int64).reshape(-1, 3)]).min(axis=1)
+        bad = np.flatnonzero(np.array(alive, dtype=bool) & (worst < min_angle))
         if touched is not None:  # a sliver nothing changed around failed before: skip it
-            near = np.isin(tri[bad], np.fromiter(touched, np.int64, len(touched))).any(axis=1)
-            bad = bad[near]
+            near = touched
+            bad = bad[[any(v in near for v in T[t]) for t in bad.tolist()]]
         if not len(bad):
             break
         touched = set()
-        for t in bad[np.argsort(worst[bad])]:
+        for t in bad[np.argsort(worst[bad])].tolist():
             if not alive[t]:
                 continue
-            a = _tri_angles(pts[tri[t]][None])[0]
-            if a.min() >= min_angle:
+            r = T[t]
+            a = _angles(P[r[0]], P[r[1]], P[r[2]])
+            lo = min(a)
+            if lo >= min_angle:
                 continue
-            ring = tri[t].tolist()
-            if (
-                try_flip(t, int(np.argmax(a)))
-                or try_snap(t, int(np.argmax(a)))
-                or try_collapse(t, int(np.argmin(a)))
-            ):
+            kmax, kmin = a.index(max(a)), a.index(lo)
+            ring = list(r)
+            if try_flip(t, kmax) or try_snap(t, kmax) or try_collapse(t, kmin):
                 for v in ring:
                     for f in inc.get(v, ()):
-                        touched.update(tri[f].tolist())
+                        touched.update(T[f])
         if not touched:
             break
-    tri = tri[alive]
+    tri = np.array(T, dtype=np.int64).reshape(-1, 3)[np.array(alive, dtype=bool)]
     used, idx = np.unique(tri, return_inverse=True)
-    corners = None if cn is None else cn[alive].reshape(-1, cn.shape[2])
+    corners = None
+    if cn is not None:
+        keep = [f for f, al in zip(cn, alive, strict=True) if al]
+        corners = np.array(keep, dtype=np.float64).reshape(-1, n_ch)
     nrm = None if corners is None or not n_dim else corners[:, :3].astype(np.float32)
     st = sti = None
     if corners is not None and corners.shape[1] > n_dim:
