@@ -345,7 +345,8 @@ def remove_slivers(
     """
     pts = np.array(mesh.points, dtype=np.float64)
     P: list[list[float]] = pts.tolist()  # the points as floats (kept equal to pts)
-    T: list[list[int]] = mesh.triangles.astype(np.int64).reshape(-1, 3).tolist()
+    tri0 = mesh.triangles.astype(np.int64).reshape(-1, 3)
+    T: list[list[int]] = tri0.tolist()
     # per-corner attributes carried through every edit: the normals (3) and st (2)
     parts = []
     corner_n = corner_normals(mesh)
@@ -355,29 +356,40 @@ def remove_slivers(
         parts.append(np.asarray(mesh.st, dtype=np.float64)[mesh.st_indices].reshape(-1, 3, 2))
     cn0 = np.concatenate(parts, axis=2) if parts else None
     n_ch = 0 if cn0 is None else cn0.shape[2]
-    cn: list[np.ndarray] | None = None if cn0 is None else list(cn0)  # (3, n_ch) per face
+    cn: dict[int, np.ndarray] = {}  # the (3, n_ch) corners of each edited or new face
     n_dim = 3 if corner_n is not None else 0
     alive = [True] * len(T)
 
-    inc: dict[int, set[int]] = {}  # vertex → the live triangles using it
-    for f, row in enumerate(T):
-        for v in row:
-            inc.setdefault(v, set()).add(f)
-    empty: set[int] = set()
+    def corners_of(f: int) -> np.ndarray:
+        got = cn.get(f)
+        return cn0[f] if got is None else got  # type: ignore[index]
+
+    # vertex → the live triangles using it, made on first use from the input's incidence
+    # (every edit goes through faces_of for each vertex it touches, so it stays exact)
+    flat = tri0.reshape(-1)
+    first_use = np.concatenate([[0], np.cumsum(np.bincount(flat, minlength=len(pts)))]).tolist()
+    by_vertex = (np.argsort(flat, kind="stable") // 3).tolist()
+    inc: dict[int, set[int]] = {}
+
+    def faces_of(v: int) -> set[int]:
+        got = inc.get(v)
+        if got is None:
+            got = inc[v] = set(by_vertex[first_use[v] : first_use[v + 1]])
+        return got
 
     def edge_faces(a: int, b: int) -> set[int]:
-        return inc.get(a, empty) & inc.get(b, empty)
+        return faces_of(a) & faces_of(b)
 
     def set_tri(f: int, new: list[int]) -> None:
         if f < len(T):
             for v in T[f]:
-                inc[v].discard(f)
+                faces_of(v).discard(f)
         for v in new:
-            inc.setdefault(v, set()).add(f)
+            faces_of(v).add(f)
 
     def kill(f: int) -> None:
         for v in T[f]:
-            inc[v].discard(f)
+            faces_of(v).discard(f)
         alive[f] = False
 
     def min_angle_of(
@@ -416,8 +428,8 @@ def remove_slivers(
         before = min_angle_of([row, ro])
         if min(min(_angles(pc, pa, pd)), min(_angles(pd, pb, pc))) <= before:
             return False
-        if cn is not None:
-            ct, co = cn[t], cn[o]
+        if cn0 is not None:
+            ct, co = corners_of(t), corners_of(o)
             ic, ia, id_, ib = row.index(c), row.index(a), ro.index(d), ro.index(b)
             cn[t] = np.array([ct[ic], ct[ia], co[id_]])
             cn[o] = np.array([co[id_], co[ib], ct[ic]])
@@ -440,7 +452,7 @@ def remove_slivers(
         foot = pts[a] + u * ab
         if np.linalg.norm(foot - pts[c]) > tol or edge_faces(c, d):
             return False
-        around = [T[f] for f in sorted(inc[c]) if f != t]
+        around = [T[f] for f in sorted(faces_of(c)) if f != t]
         fl = foot.tolist()
         moved = {v: P[v] for r in around for v in r}
         moved[c] = fl
@@ -457,8 +469,8 @@ def remove_slivers(
             return False
         pts[c] = foot
         P[c] = fl
-        if cn is not None:
-            ro, co = T[o], cn[o]
+        if cn0 is not None:
+            ro, co = T[o], corners_of(o)
             ia, ib, id_ = ro.index(a), ro.index(b), ro.index(d)
             n_a, n_b, n_d = co[ia], co[ib], co[id_]
             nf = (1 - u) * n_a + u * n_b
@@ -467,7 +479,7 @@ def remove_slivers(
             new_o = np.array([n_b, nf, n_d])
             cn[o] = new_o
             # the new half takes the corners of o at a's and d's old places (as written)
-            cn.append(np.array([nf, new_o[ia], new_o[id_]]))
+            cn[len(T)] = np.array([nf, new_o[ia], new_o[id_]])
         set_tri(o, halves[0])
         T[o] = halves[0]
         set_tri(len(T), halves[1])
@@ -485,13 +497,13 @@ def remove_slivers(
         shared = edge_faces(a, b)
         if len(shared) != 2:
             return False
-        ring_a = {v for f in inc[a] for v in T[f]} - {a}
-        ring_b = {v for f in inc[b] for v in T[f]} - {b}
+        ring_a = {v for f in faces_of(a) for v in T[f]} - {a}
+        ring_b = {v for f in faces_of(b) for v in T[f]} - {b}
         opp = {v for f in shared for v in T[f] if v != a and v != b}
         if ring_a & ring_b != opp:
             return False  # the link condition: a pinch or a fold would follow
         for keep, drop in ((a, b), (b, a)):
-            moved = [f for f in sorted(inc[drop]) if f not in shared]
+            moved = [f for f in sorted(faces_of(drop)) if f not in shared]
             new = [[keep if v == drop else v for v in T[f]] for f in moved]
             old = [T[f] for f in moved]
             if any(
@@ -510,8 +522,9 @@ def remove_slivers(
         return False
 
     touched: set[int] | None = None  # vertices near a change in the last pass (None: all)
+    tri = tri0
     for _ in range(max_passes):
-        worst = _tri_angles(pts[np.array(T, dtype=np.int64).reshape(-1, 3)]).min(axis=1)
+        worst = _tri_angles(pts[tri]).min(axis=1)
         bad = np.flatnonzero(np.array(alive, dtype=bool) & (worst < min_angle))
         if touched is not None:  # a sliver nothing changed around failed before: skip it
             near = touched
@@ -531,16 +544,20 @@ def remove_slivers(
             ring = list(r)
             if try_flip(t, kmax) or try_snap(t, kmax) or try_collapse(t, kmin):
                 for v in ring:
-                    for f in inc.get(v, ()):
+                    for f in faces_of(v):
                         touched.update(T[f])
         if not touched:
             break
+        tri = np.array(T, dtype=np.int64).reshape(-1, 3)
     tri = np.array(T, dtype=np.int64).reshape(-1, 3)[np.array(alive, dtype=bool)]
     used, idx = np.unique(tri, return_inverse=True)
     corners = None
-    if cn is not None:
-        keep = [f for f, al in zip(cn, alive, strict=True) if al]
-        corners = np.array(keep, dtype=np.float64).reshape(-1, n_ch)
+    if cn0 is not None:
+        full = np.empty((len(T), 3, n_ch))
+        full[: len(cn0)] = cn0
+        for f, rows in cn.items():
+            full[f] = rows
+        corners = full[np.array(alive, dtype=bool)].reshape(-1, n_ch)
     nrm = None if corners is None or not n_dim else corners[:, :3].astype(np.float32)
     st = sti = None
     if corners is not None and corners.shape[1] > n_dim:
