@@ -108,7 +108,8 @@ def main() -> None:
     for _ in range(args.repeat):
         for mode in ("old", "new"):
             r = build(tmp / mode, mode)
-            best[mode] = tuple(min(x, y) for x, y in zip(best.get(mode, r), r, strict=True))  # type: ignore[assignment]
+            prev = best.get(mode, r)
+            best[mode] = (min(prev[0], r[0]), min(prev[1], r[1]), min(prev[2], r[2]))
     print(f"best of {args.repeat} warm temple builds (s):")
     print(f"{'':>6} {'asset hints':>12} {'temple hints':>13} {'all hints':>10} {'build':>8}")
     for mode in ("old", "new"):

@@ -129,8 +129,9 @@ def toggled_extents_hints(
     paths = list(items)
     if any(s not in vsets for tags in items.values() for s in tags):
         return None  # a tag on a set not enumerated: its selection is not known here
-    if any(Sdf.Path(a).HasPrefix(Sdf.Path(b)) for a in paths for b in paths if a != b):
-        return None
+    known = {Sdf.Path(p) for p in paths}
+    if any(a in known for p in known for a in p.GetAncestorsRange() if a != p):
+        return None  # an item inside another
     session = stage.GetSessionLayer()
     purposes = UsdGeom.Imageable.GetOrderedPurposeTokens()
 
