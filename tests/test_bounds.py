@@ -8,7 +8,12 @@ import numpy as np
 import pytest
 from pxr import Sdf, Usd, UsdGeom
 
-from ionic_usd.usd.bounds import author_extents_hints, relevant_sets, variant_extents_hints
+from ionic_usd.usd.bounds import (
+    author_extents_hints,
+    relevant_sets,
+    toggled_extents_hints,
+    variant_extents_hints,
+)
 
 PURPOSES = [
     UsdGeom.Tokens.default_,
@@ -220,3 +225,58 @@ def test_relevant_sets_and_nesting():
             for n, v in zip("abc", sel, strict=True):
                 prim.GetVariantSet(n).SetVariantSelection(v)
         np.testing.assert_allclose(np.array(UsdGeom.ModelAPI(prim).GetExtentsHint()), want["/R"])
+
+
+def _toggle_stage(moved: bool) -> tuple[Usd.Stage, dict[str, dict[str, str]]]:
+    """/R with variant sets a (x, y) and b (p, q, r) deactivating the meshes whose tag differs;
+    render and proxy scopes, a mesh tagged by no set; ``moved``: one mesh translated."""
+    stage = Usd.Stage.CreateInMemory()
+    root = UsdGeom.Xform.Define(stage, "/R").GetPrim()
+    stage.SetDefaultPrim(root)
+    tags = {
+        "/R/Geom/ax": {"a": "x"},
+        "/R/Geom/ay": {"a": "y"},
+        "/R/Geom/ax_bq": {"a": "x", "b": "q"},
+        "/R/Geom/br": {"b": "r"},
+        "/R/Proxy/bp": {"b": "p"},
+    }
+    rng = np.random.default_rng(3)
+    for scope, purpose in (("Geom", "render"), ("Proxy", "proxy")):
+        UsdGeom.Imageable(UsdGeom.Scope.Define(stage, f"/R/{scope}")).CreatePurposeAttr(purpose)
+    for path in [*tags, "/R/Geom/always"]:
+        m = UsdGeom.Mesh.Define(stage, path)
+        pts = rng.normal(size=(8, 3)) * rng.uniform(0.5, 3) + rng.normal(size=3) * 4
+        m.CreatePointsAttr(pts.astype(np.float32).tolist())
+        m.CreateExtentAttr(UsdGeom.Boundable.ComputeExtentFromPlugins(m, Usd.TimeCode.Default()))
+    if moved:
+        UsdGeom.Xformable(stage.GetPrimAtPath("/R/Geom/br")).AddTranslateOp().Set((1, 2, 3))
+    vsets = root.GetVariantSets()
+    for n, vs in (("a", "xy"), ("b", "pqr")):
+        vset = vsets.AddVariantSet(n)
+        for v in vs:
+            vset.AddVariant(v)
+            vset.SetVariantSelection(v)
+            with vset.GetVariantEditContext():
+                for path, t in tags.items():
+                    if n in t and t[n] != v:
+                        stage.OverridePrim(path).SetActive(False)
+        vset.SetVariantSelection(vs[0])
+    return stage, tags
+
+
+def test_toggled_hints_equal_the_composed_ones():
+    """The union of the switched meshes' bounds gives, to the bit, the hints of composing
+    every combination; a transform below the root makes it decline."""
+    stage, tags = _toggle_stage(moved=False)
+    sets = {"a": "xy", "b": "pqr"}
+    want = variant_extents_hints(stage, "/R", ["/R"], sets)
+    got = toggled_extents_hints(stage, "/R", tags, sets)
+    assert got is not None and set(got) == set(want)
+    assert len({w["/R"].tobytes() for w in want.values()}) == 6  # every combination differs
+    for combo, w in want.items():
+        assert got[combo]["/R"].shape == w["/R"].shape
+        assert np.array_equal(got[combo]["/R"], w["/R"]), combo
+    assert not stage.GetSessionLayer().rootPrims  # session left clear
+    moved, tags = _toggle_stage(moved=True)
+    assert toggled_extents_hints(moved, "/R", tags, sets) is None
+    assert toggled_extents_hints(stage, "/R", tags, {"a": "xy"}) is None  # b not enumerated

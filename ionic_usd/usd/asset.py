@@ -29,7 +29,11 @@ from pxr import Sdf, Usd
 
 from ionic_usd.errors import ParameterError
 from ionic_usd.geometry.mesh import Mesh
-from ionic_usd.usd.bounds import author_extents_hints, variant_extents_hints
+from ionic_usd.usd.bounds import (
+    author_extents_hints,
+    toggled_extents_hints,
+    variant_extents_hints,
+)
 from ionic_usd.usd.materials import (
     MaterialTextures,
     author_preview_material,
@@ -162,6 +166,18 @@ def _tagged(spec: AssetSpec) -> tuple[AssetMesh | AssetInstancer, ...]:
     return (*spec.meshes, *spec.instancers)
 
 
+def _toggled(spec: AssetSpec) -> dict[str, Mapping[str, str]]:
+    """What the variants switch (:func:`_interface_layer`): each mesh and instancer under Geom
+    with its tags, each proxy mesh with its tags but ``lod``."""
+    out: dict[str, Mapping[str, str]] = {
+        f"/{spec.name}/Geom/{m.part}/{m.name}": m.tags for m in _tagged(spec)
+    }
+    if spec.proxy_lod is not None:
+        for m in _proxy_meshes(spec):
+            out[f"/{spec.name}/Proxy/{m.name}"] = {s: v for s, v in m.tags.items() if s != "lod"}
+    return out
+
+
 def _proxy_meshes(spec: AssetSpec) -> list[AssetMesh]:
     return [m for m in spec.meshes if m.tags.get("lod") == spec.proxy_lod]
 
@@ -265,7 +281,9 @@ def write_asset_layers(spec: AssetSpec, folder: Path) -> dict[str, Path]:
         if any(vs in m.tags for m in spec.meshes)
     }
     stage = Usd.Stage.Open(str(written["interface"]))
-    hints = variant_extents_hints(stage, f"/{spec.name}", [f"/{spec.name}"], tagging)
+    hints = toggled_extents_hints(stage, f"/{spec.name}", _toggled(spec), tagging)
+    if hints is None:
+        hints = variant_extents_hints(stage, f"/{spec.name}", [f"/{spec.name}"], tagging)
     del stage
     author_extents_hints(interface, f"/{spec.name}", hints, list(tagging))
     save_layer(interface, written["interface"], force=True)

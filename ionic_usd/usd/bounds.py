@@ -17,19 +17,33 @@ import itertools
 from collections.abc import Mapping, Sequence
 
 import numpy as np
-from pxr import Sdf, Usd, UsdGeom, Vt
+from pxr import Gf, Sdf, Usd, UsdGeom, Vt
 
-__all__ = ["bound_changing_sets", "variant_extents_hints", "author_extents_hints", "relevant_sets"]
+__all__ = [
+    "bound_changing_sets",
+    "variant_extents_hints",
+    "toggled_extents_hints",
+    "author_extents_hints",
+    "relevant_sets",
+]
 
 Combo = tuple[str, ...]
 
 
 def variant_extents_hints(
-    stage: Usd.Stage, root: str, prims: Sequence[str], vsets: Mapping[str, Sequence[str]]
+    stage: Usd.Stage,
+    root: str,
+    prims: Sequence[str],
+    vsets: Mapping[str, Sequence[str]],
+    *,
+    memo: dict[tuple[tuple[str, str], ...], dict[str, np.ndarray]] | None = None,
 ) -> dict[Combo, dict[str, np.ndarray]]:
     """Hints of ``prims`` for every combination of ``vsets`` selected on ``root``.
 
-    Selections are made in the stage's session layer, which is cleared afterwards.
+    Selections are made in the stage's session layer, which is cleared afterwards. ``memo``
+    (shared by calls on the same stage, root and prims) keeps the hints of each composition
+    — keyed by the selections that differ from the authored ones — so that a combination
+    already composed by an earlier call is not composed again.
 
     Returns
     -------
@@ -39,10 +53,17 @@ def variant_extents_hints(
     session = stage.GetSessionLayer()
     names = list(vsets)
     out: dict[Combo, dict[str, np.ndarray]] = {}
+    prim = stage.GetPrimAtPath(root)
+    authored = {n: prim.GetVariantSet(n).GetVariantSelection() for n in names}
     with Usd.EditContext(stage, session):
-        prim = stage.GetPrimAtPath(root)
         try:
             for combo in itertools.product(*(vsets[n] for n in names)):
+                key = tuple(
+                    sorted((n, v) for n, v in zip(names, combo, strict=True) if v != authored[n])
+                )
+                if memo is not None and key in memo:
+                    out[combo] = memo[key]
+                    continue
                 with Sdf.ChangeBlock():
                     for n, v in zip(names, combo, strict=True):
                         prim.GetVariantSet(n).SetVariantSelection(v)
@@ -56,8 +77,106 @@ def variant_extents_hints(
                     ).reshape(-1, 3)
                     for p in prims
                 }
+                if memo is not None:
+                    memo[key] = out[combo]
         finally:
             session.Clear()
+    return out
+
+
+def _identity_below(stage: Usd.Stage, root: str) -> bool:
+    """Whether every prim below ``root`` (down to the instancers, whose bound is their extent)
+    has an identity local transform: then ``BBoxCache`` combines the children's bounds as a
+    plain union of ranges, which :func:`toggled_extents_hints` reproduces."""
+    ident = Gf.Matrix4d(1.0)
+    it = iter(Usd.PrimRange(stage.GetPrimAtPath(root)))
+    next(it)  # the root's own transform is outside its untransformed bound
+    for p in it:
+        if p.IsInstance() or p.IsA(UsdGeom.PointInstancer):
+            it.PruneChildren()
+        if p.IsInstance():
+            return False
+        x = UsdGeom.Xformable(p)
+        if x and (x.GetResetXformStack() or x.GetLocalTransformation() != ident):
+            return False
+    return True
+
+
+def _hint(ranges: Sequence[Gf.Range3d]) -> np.ndarray:
+    """``UsdGeom.ModelAPI.ComputeExtentsHint``'s array from one range per ordered purpose:
+    (2·p, 3), trailing empty purposes dropped (one empty range if all are)."""
+    last = max((i for i, r in enumerate(ranges) if not r.IsEmpty()), default=0)
+    flat = Vt.Vec3fArray(
+        [Gf.Vec3f(v) for r in ranges[: last + 1] for v in (r.GetMin(), r.GetMax())]
+    )
+    return np.array(flat, dtype=np.float64).reshape(-1, 3)
+
+
+def toggled_extents_hints(
+    stage: Usd.Stage,
+    root: str,
+    items: Mapping[str, Mapping[str, str]],
+    vsets: Mapping[str, Sequence[str]],
+) -> dict[Combo, dict[str, np.ndarray]] | None:
+    """The hints of :func:`variant_extents_hints` on ``root`` alone, for a model whose variants
+    only switch ``items`` on and off: prim path → tags (set → the variant it is active in; it
+    is active where every tag matches). Each item's bound is computed once and the bound of a
+    combination is the union of its active items' bounds and the rest's (two compositions
+    instead of one per combination). None where that union is not what ``BBoxCache`` computes
+    (a transform below ``root``, nested items, a tag on a set not in ``vsets``): use
+    :func:`variant_extents_hints` then.
+    """
+    paths = list(items)
+    if any(s not in vsets for tags in items.values() for s in tags):
+        return None  # a tag on a set not enumerated: its selection is not known here
+    known = {Sdf.Path(p) for p in paths}
+    if any(a in known for p in known for a in p.GetAncestorsRange() if a != p):
+        return None  # an item inside another
+    session = stage.GetSessionLayer()
+    purposes = UsdGeom.Imageable.GetOrderedPurposeTokens()
+
+    def bounds(prim_paths: Sequence[str]) -> list[list[Gf.Range3d]]:
+        # one cache per purpose, shared by the prims of one composition
+        caches = [UsdGeom.BBoxCache(Usd.TimeCode.Default(), [p]) for p in purposes]
+        out = []
+        for path in prim_paths:
+            prim = stage.GetPrimAtPath(path)
+            out.append(
+                [
+                    c.ComputeUntransformedBound(prim).ComputeAlignedRange()
+                    if prim
+                    else Gf.Range3d()
+                    for c in caches
+                ]
+            )
+        return out
+
+    def set_active(active: bool) -> None:
+        with Sdf.ChangeBlock():
+            for path in paths:
+                spec = Sdf.CreatePrimInLayer(session, path)
+                spec.specifier = Sdf.SpecifierOver
+                spec.active = active
+
+    try:
+        set_active(True)
+        if not _identity_below(stage, root):
+            return None
+        item_bounds = bounds(paths)
+        set_active(False)
+        (rest,) = bounds([root])
+    finally:
+        session.Clear()
+    names = list(vsets)
+    out: dict[Combo, dict[str, np.ndarray]] = {}
+    for combo in itertools.product(*(vsets[n] for n in names)):
+        sel = dict(zip(names, combo, strict=True))
+        ranges = [Gf.Range3d(r.GetMin(), r.GetMax()) for r in rest]
+        for path, b in zip(paths, item_bounds, strict=True):
+            if all(sel.get(s, v) == v for s, v in items[path].items()):
+                for r, rb in zip(ranges, b, strict=True):
+                    r.UnionWith(rb)
+        out[combo] = {root: _hint(ranges)}
     return out
 
 
@@ -151,6 +270,7 @@ def bound_changing_sets(
     *,
     base: str | None = None,
     tol: float = 1e-6,
+    memo: dict[tuple[tuple[str, str], ...], dict[str, np.ndarray]] | None = None,
 ) -> dict[str, Sequence[str]]:
     """The sets of ``vsets`` whose selection changes some hint when switched alone — under
     each variant of ``base`` (e.g. ``lod``: a level of detail can hide a change), the other sets
@@ -159,7 +279,9 @@ def bound_changing_sets(
     A set that moves no bound on its own is dropped before the product of the rest is taken
     (a few short passes instead of one pass over every combination); the temple's tests
     compose combinations of every set and compare the authored hints with
-    ``UsdGeom.BBoxCache`` to show that nothing that matters was dropped.
+    ``UsdGeom.BBoxCache`` to show that nothing that matters was dropped. ``memo``: as in
+    :func:`variant_extents_hints` (the passes share their ``base`` × authored combinations,
+    and a later product of the kept sets shares those of one set switched alone).
     """
     keep: dict[str, Sequence[str]] = {}
     if base is not None:
@@ -168,7 +290,7 @@ def bound_changing_sets(
         if name == base:
             continue
         sets = {base: vsets[base], name: variants} if base is not None else {name: variants}
-        hints = variant_extents_hints(stage, root, prims, sets)
+        hints = variant_extents_hints(stage, root, prims, sets, memo=memo)
         groups: dict[str, list[dict[str, np.ndarray]]] = {}
         for combo, h in hints.items():
             groups.setdefault(combo[0] if base is not None else "", []).append(h)

@@ -461,8 +461,9 @@ def compose_temple(
             "/Temple/Colonnade",
         ]
         log.info("extentsHint per variant combination")
-        vsets = bound_changing_sets(gen, "/Temple", parts, candidates, base="lod")
-        hints = variant_extents_hints(gen, "/Temple", parts, vsets)
+        memo: dict[Any, Any] = {}  # the passes and the product share combinations
+        vsets = bound_changing_sets(gen, "/Temple", parts, candidates, base="lod", memo=memo)
+        hints = variant_extents_hints(gen, "/Temple", parts, vsets, memo=memo)
         gen_layer = gen.GetRootLayer()
         author_extents_hints(gen_layer, "/Temple", hints, list(vsets))
         gen_layer.Save()
