@@ -24,6 +24,7 @@ from ionic_usd.usd.column_asset import (
     FLUTE_VARIANTS,
     FORM_VARIANTS,
     SCROLL_VARIANTS,
+    VOLUTE_VARIANTS,
     ColumnAssetOptions,
 )
 
@@ -102,7 +103,8 @@ def test_asset_meshes_are_solids_subset(form):
 @pytest.mark.parametrize("lod", ["high", "medium", "low"])
 def test_every_asset_mesh_is_a_solid(lod):
     meshes = column_asset_meshes(ColumnAssetOptions(lods=(lod,)))
-    n = len(BASE_VARIANTS) + len(FLUTE_VARIANTS) + len(SCROLL_VARIANTS) * len(CAPITAL_VARIANTS)
+    capitals = len(SCROLL_VARIANTS) * len(CAPITAL_VARIANTS) * len(VOLUTE_VARIANTS)
+    n = len(BASE_VARIANTS) + len(FLUTE_VARIANTS) + capitals
     assert len(meshes) == n * len(FORM_VARIANTS)
     for m in meshes:
         _check(m, m.name)
