@@ -308,3 +308,23 @@ def test_every_temple_cuboid_is_a_solid():
         r = solid_report(m)
         assert r.solid, (c.name, r)
         assert manifold_status(m)[0] == "NoError", c.name
+
+
+def test_normals_with_winding_repairs_only_the_corners_against_the_winding():
+    from ionic_usd.geometry.boolean import normals_with_winding
+    from ionic_usd.geometry.check import normals_against_winding
+    from ionic_usd.geometry.mesh import Mesh, face_normals
+
+    pts = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+    tri = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    fn, _ = face_normals(pts, tri)
+    corners = np.repeat(fn, 3, axis=0).astype(np.float32)
+    corners[4] = -corners[4]  # one corner of face 1 against its winding
+    mesh = Mesh(pts, np.full(4, 3, np.int32), tri.reshape(-1), corners, "faceVarying")
+    assert normals_against_winding(mesh) == 1
+    fixed = normals_with_winding(mesh)
+    assert normals_against_winding(fixed) == 0
+    np.testing.assert_allclose(fixed.normals[4], fn[1], atol=1e-6)
+    keep = np.ones(12, bool)
+    keep[4] = False
+    np.testing.assert_array_equal(fixed.normals[keep], corners[keep])

@@ -53,7 +53,7 @@ def _old_tet_height(a, b, c, d) -> float:
     return v / max(max(areas), 1e-300)
 
 
-def old_remove_slivers(
+def _old_remove_slivers_loop(
     mesh: Mesh, tol: float, *, min_angle: float = 1.0, max_passes: int = 8
 ) -> Mesh:
     """Remove sliver triangles of a closed triangle mesh without moving its surface by more
@@ -285,6 +285,13 @@ def old_remove_slivers(
 
 
 # -- the comparison ---------------------------------------------------------------------------
+
+
+def old_remove_slivers(mesh, tol, **kw):
+    """The loop version, followed by the normal repair both versions now end with."""
+    return boolean.normals_with_winding(_old_remove_slivers_loop(mesh, tol, **kw))
+
+
 def _arrays(m: Mesh) -> list[np.ndarray | None]:
     return [m.points, m.face_vertex_counts, m.face_vertex_indices, m.normals, m.st, m.st_indices]
 

@@ -21,6 +21,7 @@ __all__ = [
     "union",
     "difference",
     "remove_slivers",
+    "normals_with_winding",
     "SLIVER_ANGLE_DEG",
     "SLIVER_TOL",
 ]
@@ -569,7 +570,7 @@ def remove_slivers(
         rank[order] = np.arange(len(order))
         st = corners[first[order], n_dim:].astype(np.float32)
         sti = rank[inv.reshape(-1)].astype(np.int32)
-    return Mesh(
+    out = Mesh(
         pts[used],
         np.full(len(tri), 3, np.int32),
         idx.reshape(-1),
@@ -579,3 +580,21 @@ def remove_slivers(
         sti,
         name=mesh.name,
     )
+    return normals_with_winding(out)
+
+
+def normals_with_winding(mesh: Mesh) -> Mesh:
+    """``mesh`` with every faceVarying corner normal that points against its face's winding
+    (dot < 0: a flip or snap of the sliver clean-up across a crease) replaced by the face
+    normal, so authored normals agree with the winding on every face. Triangles only."""
+    if mesh.normals is None or mesh.normals_interpolation != "faceVarying" or not mesh.n_faces:
+        return mesh
+    corner = corner_normals(mesh)
+    assert corner is not None
+    fn, _ = face_normals(mesh.points, mesh.triangles)
+    cn3 = np.array(corner, dtype=np.float32).reshape(-1, 3, 3)
+    against = np.einsum("ikj,ij->ik", cn3, fn) < 0
+    if not against.any():
+        return mesh
+    cn3[against] = np.broadcast_to(fn[:, None, :], cn3.shape)[against]
+    return mesh.with_(normals=cn3.reshape(-1, 3), normals_indices=None)
