@@ -27,9 +27,9 @@ if TYPE_CHECKING:  # imported lazily at run time: `import ionic_usd` stays light
     from ionic_usd.column.column import Column as _BuiltColumn
     from ionic_usd.column.column import ColumnParams
     from ionic_usd.geometry.mesh import Mesh
+    from ionic_usd.pipeline.temple import TempleReport
     from ionic_usd.temple.layout import TempleLayout
     from ionic_usd.temple.mouldings import MouldingParams
-    from ionic_usd.usd.temple import TempleReport
 
 __all__ = ["Column", "Temple", "portunus_column", "column"]
 
@@ -175,11 +175,20 @@ class Temple:
     ) -> TempleReport:
         """Compose the temple folder (``Temple.usda`` + layers + the column asset).
 
-        ``options`` go to :func:`ionic_usd.usd.temple.compose_temple` (``texture_size``,
-        ``seed``, ``detail``). Returns its :class:`~ionic_usd.usd.temple.TempleReport`.
+        ``options`` go to :func:`ionic_usd.pipeline.temple.compose_temple` (``texture_size``,
+        ``seed``, ``detail``, ``rebuild``). A folder that already holds this build's intact
+        output is left as it is (``report.current``). Returns its
+        :class:`~ionic_usd.pipeline.temple.TempleReport`.
         """
-        from ionic_usd.usd.temple import compose_temple
+        from ionic_usd.pipeline.temple import compose_temple
 
         return compose_temple(
             folder, self.layout, self.column, force=force, mouldings=self.mouldings, **options
         )
+
+    def current(self, folder: str | os.PathLike, **options: Any) -> TempleReport | None:
+        """The report of ``folder`` if it already holds this temple's build (same description,
+        options, code and libraries; every generated file intact), else None. Loads no USD."""
+        from ionic_usd.pipeline.temple import current_temple
+
+        return current_temple(folder, self.layout, self.column, mouldings=self.mouldings, **options)

@@ -156,8 +156,9 @@ def cmd_column(args: argparse.Namespace) -> int:
 
 def cmd_asset(args: argparse.Namespace) -> int:
     from ionic_usd.io import check_output_folder
+    from ionic_usd.pipeline.asset import build_column_asset
     from ionic_usd.resources import check_estimate, estimate_asset
-    from ionic_usd.usd.column_asset import ColumnAssetOptions, build_column_asset
+    from ionic_usd.usd.column_asset import ColumnAssetOptions
 
     check_output_folder(args.output, force=args.force)
     params = _column_params(args)
@@ -212,19 +213,17 @@ def cmd_temple(args: argparse.Namespace) -> int:
             )
         temple = layouts[args.layout]()
     layout = temple.layout
-    n_cuboids = sum(len(c) for c in layout.cuboids.values())
-    check_estimate(
-        estimate_temple(temple.column_params, args.texture_size, n_cuboids), args.max_memory
-    )
-    rep = temple.save(
-        args.output,
-        force=args.force,
-        texture_size=args.texture_size,
-        seed=args.seed,
-        detail=args.detail,
-    )
+    options = {"texture_size": args.texture_size, "seed": args.seed, "detail": args.detail}
+    rep = None if args.rebuild else temple.current(args.output, **options)
+    if rep is None:  # something to build: estimate its memory first
+        n_cuboids = sum(len(c) for c in layout.cuboids.values())
+        check_estimate(
+            estimate_temple(temple.column_params, args.texture_size, n_cuboids), args.max_memory
+        )
+        rep = temple.save(args.output, force=args.force, rebuild=args.rebuild, **options)
+    done = "up to date" if rep.current else "wrote"
     print(
-        f"wrote {rep.root} ({layout.name}): {rep.files} files, {rep.prims} prims, "
+        f"{done} {rep.root} ({layout.name}): {rep.files} files, {rep.prims} prims, "
         f"{rep.instances} column instances of {rep.prototypes} prototypes, "
         f"{rep.triangles:,} triangles, {len(rep.hypotheses)} hypotheses, {rep.seconds:.2f} s"
     )
@@ -377,6 +376,13 @@ def _add_temple(sub: Any, full: bool) -> None:
         help="the default selection of the temple's variant set `detail`: plain "
         "(cuboids), moulded (swept mouldings) or carved (mouldings, dentils, roof "
         "tiles, frieze relief hypothesis) [default: carved]",
+    )
+    p.add_argument(
+        "--rebuild",
+        action="store_true",
+        help="regenerate every file even when the folder already holds this build's intact "
+        "output (by default such a folder is verified — SHA-256 of every generated file — "
+        "and left as it is)",
     )
     add_memory_flag(p)
 

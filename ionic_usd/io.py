@@ -33,6 +33,7 @@ import secrets
 import shutil
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
+from typing import Any
 
 from ionic_usd.errors import OutputExistsError, ParameterError
 
@@ -44,6 +45,8 @@ __all__ = [
     "check_output_folder",
     "clean_stale_temporaries",
     "generated_files",
+    "manifest_record",
+    "up_to_date",
     "recover_folder",
     "replace_folder",
     "sha256_file",
@@ -323,11 +326,49 @@ def _roll_forward(stage: Path, dest: Path) -> None:
             if p.parent != dest:  # a folder it emptied goes too (rmdir refuses a full one)
                 with contextlib.suppress(OSError):
                     p.parent.rmdir()
-    atomic_write_bytes(
-        dest / MANIFEST_NAME, json.dumps({"files": journal["files"]}, indent=1).encode()
-    )
+    manifest = journal.get("manifest", {"files": journal["files"]})
+    atomic_write_bytes(dest / MANIFEST_NAME, json.dumps(manifest, indent=1).encode())
     _fsync_dir(dest)
     shutil.rmtree(stage, ignore_errors=True)
+
+
+def up_to_date(dest: str | os.PathLike, key: str) -> dict | None:
+    """The record of the build that made ``dest`` if it was a build of ``key`` and every file
+    it generated is there with the bytes it wrote (SHA-256 against its manifest); else None.
+
+    An interrupted update is finished (or discarded) first. The user's files (those the build
+    did not generate, ``overrides.usda``) do not enter: they are theirs to edit.
+    """
+    dest = Path(dest)
+    if not dest.is_dir():
+        return None
+    recover_folder(dest)
+    try:
+        manifest = json.loads((dest / MANIFEST_NAME).read_text("utf-8"))
+        if manifest.get("key") != key:
+            return None
+        sums = manifest["sha256"]
+        if set(sums) != set(manifest["files"]) or not all(map(_safe_rel, sums)):
+            return None
+        for rel, digest in sums.items():
+            p = dest / rel
+            if p.is_symlink() or not p.is_file() or sha256_file(p) != digest:
+                return None
+        record = manifest.get("record", {})
+        return record if isinstance(record, dict) else None
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
+        return None
+
+
+def manifest_record(dest: str | os.PathLike) -> tuple[str | None, dict, dict[str, str]]:
+    """The key, record and SHA-256 per generated file of ``dest``'s last build (None, {}, {}
+    when it kept none): what a build may reuse from it after checking the files itself."""
+    try:
+        m = json.loads((Path(dest) / MANIFEST_NAME).read_text("utf-8"))
+        sums = {r: h for r, h in m.get("sha256", {}).items() if _safe_rel(r)}
+        return m.get("key"), dict(m.get("record", {})), sums
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
+        return None, {}, {}
 
 
 def recover_folder(dest: str | os.PathLike) -> None:
@@ -380,6 +421,8 @@ def replace_folder(
     force: bool = False,
     keep_existing: Iterable[str] = (),
     root_files: Iterable[str] = (),
+    key: str | None = None,
+    record: Callable[[Any], dict] | None = None,
 ):
     """Build a generated folder in a staging sibling and move it into ``dest`` kill-safely.
 
@@ -390,6 +433,11 @@ def replace_folder(
     keep_existing : relative paths created only when absent (the user's layer): an existing
         file or symlink there is never read, replaced or deleted
     root_files : relative paths moved last (the layers a user opens)
+    key : the build's content key (:func:`ionic_usd.pipeline.keys.build_key`), kept in the
+        manifest with every generated file's SHA-256, so that :func:`up_to_date` can tell a
+        later build of the same key that this folder is its output, intact
+    record : ``record(result)``: a JSON-able summary of the build kept beside the key (what
+        :func:`up_to_date` returns)
 
     Files in ``dest`` that the previous build did not generate are never touched; files the
     previous build generated and this one does not are deleted.
@@ -408,26 +456,29 @@ def replace_folder(
     try:
         result = build(stage)
         files = _list_files(stage)
+        keep = [k for k in keep_existing if k in files]
+        new = sorted(set(files) - set(keep))
+        manifest: dict[str, Any] = {"files": new}
+        if key is not None:
+            manifest["key"] = key
+            manifest["sha256"] = {rel: sha256_file(stage / rel) for rel in new}
+            manifest["record"] = record(result) if record is not None else {}
         for rel in files:
             _fsync_file(stage / rel)
-        keep = [k for k in keep_existing if k in files]
         if not dest.exists():
             # a new folder appears whole with one rename
-            atomic_write_bytes(
-                stage / MANIFEST_NAME,
-                json.dumps({"files": sorted(set(files) - set(keep))}, indent=1).encode(),
-            )
+            atomic_write_bytes(stage / MANIFEST_NAME, json.dumps(manifest, indent=1).encode())
             _fsync_dir(stage)
             os.replace(stage, dest)
             _fsync_dir(parent)
             return result
-        new = sorted(set(files) - set(keep))
         old = generated_files(dest)
         journal = {
             "move": _move_order(files, root_files),
             "keep_existing": keep,
             "obsolete": sorted(set(old) - set(new) - set(keep)),
             "files": new,
+            "manifest": manifest,
         }
         atomic_write_bytes(stage / _JOURNAL, json.dumps(journal, indent=1).encode())
         _fsync_dir(stage)

@@ -21,7 +21,8 @@ def rng() -> np.random.Generator:
 @pytest.fixture(scope="session")
 def column_asset(tmp_path_factory):
     """The default column asset (small textures), built once per test session."""
-    from ionic_usd.usd.column_asset import ColumnAssetOptions, build_column_asset
+    from ionic_usd.pipeline.asset import build_column_asset
+    from ionic_usd.usd.column_asset import ColumnAssetOptions
 
     folder = tmp_path_factory.mktemp("asset") / "IonicColumn"
     report = build_column_asset(folder, ColumnAssetOptions(texture_size=64))
@@ -31,8 +32,8 @@ def column_asset(tmp_path_factory):
 @pytest.fixture(scope="session")
 def portunus_temple(tmp_path_factory):
     """The default Temple of Portunus scene (small textures), built once per test session."""
+    from ionic_usd.pipeline.temple import compose_temple
     from ionic_usd.temple.layout import portunus_layout
-    from ionic_usd.usd.temple import compose_temple
 
     folder = tmp_path_factory.mktemp("temple") / "PortunusTemple"
     return compose_temple(folder, portunus_layout(), texture_size=64)
@@ -48,9 +49,9 @@ def carved_temple(portunus_temple):
 def tiny_temple(tmp_path_factory):
     """The Portunus temple with a one-LOD column asset (low, one base, one scroll) and 16 px
     textures: every kind of composition the full temple has, in a few seconds."""
+    from ionic_usd.pipeline.temple import compose_temple
     from ionic_usd.temple.layout import portunus_layout
     from ionic_usd.usd.column_asset import ColumnAssetOptions
-    from ionic_usd.usd.temple import compose_temple
 
     folder = tmp_path_factory.mktemp("tiny") / "TinyTemple"
     opts = ColumnAssetOptions(

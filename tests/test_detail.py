@@ -158,9 +158,9 @@ def test_column_high_lod_carries_the_carved_capital(carved_temple):
 
 def test_selected_variant_is_a_choice(tmp_path):
     from ionic_usd.errors import ParameterError
+    from ionic_usd.pipeline.temple import compose_temple
     from ionic_usd.usd.detail import author_detail_variants
     from ionic_usd.usd.stage import new_layer
-    from ionic_usd.usd.temple import compose_temple
 
     root = new_layer("Temple", kind="assembly")
     geom = detail_geometry(portunus_layout())

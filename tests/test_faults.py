@@ -113,8 +113,8 @@ def test_full_disk_preview_not_reported_written(tmp_path, capsys):
 @pytest.mark.skipif(_can_mount() is not None, reason=str(_can_mount()))
 def test_full_cache_disk_never_poisons_textures(tmp_path, monkeypatch):
     from ionic_usd.io import MANIFEST_NAME
+    from ionic_usd.pipeline.asset import copy_stone_textures
     from ionic_usd.texture.stone import verify_image
-    from ionic_usd.usd.column_asset import copy_stone_textures
 
     with tmpfs(tmp_path / "cache", "64k") as cache:
         monkeypatch.setenv("IONIC_USD_CACHE", str(cache))
@@ -153,8 +153,8 @@ def test_read_only_folder_refused_before_work(tmp_path, capsys):
 
 
 def test_corrupt_texture_cache_is_recomputed(tmp_path, monkeypatch):
+    from ionic_usd.pipeline.asset import copy_stone_textures
     from ionic_usd.texture.stone import write_stone_textures
-    from ionic_usd.usd.column_asset import copy_stone_textures
 
     monkeypatch.setenv("IONIC_USD_CACHE", str(tmp_path / "cache"))
     fresh = write_stone_textures(tmp_path / "fresh", "marble", 32, 5)
@@ -187,7 +187,11 @@ def _temple_ok(x: Path) -> None:
 def _kill_rebuilds(tmp_path: Path, kills: int, *, final_run: bool) -> None:
     x = tmp_path / "X"
     env = {**os.environ, "PYTHONPATH": str(REPO)}
-    cmd = [sys.executable, "-m", "ionic_usd.cli", "temple", "-o", str(x), "--texture-size", "16"]
+    # --rebuild: every run regenerates (an unchanged folder would be verified and left alone)
+    cmd = [
+        sys.executable, "-m", "ionic_usd.cli", "temple", "-o", str(x), "--texture-size", "16",
+        "--rebuild",
+    ]  # fmt: skip
     t0 = time.perf_counter()
     assert main(cmd[3:]) == 0  # the first build in-process (no interpreter start-up)
     full = time.perf_counter() - t0 + 4.0  # + a new interpreter's imports

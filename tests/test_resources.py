@@ -40,7 +40,8 @@ def test_custom_sampling_estimate_bounds_the_build():
 
 
 def test_asset_estimate_bounds_the_asset_meshes():
-    from ionic_usd.usd.column_asset import ColumnAssetOptions, column_asset_meshes
+    from ionic_usd.pipeline.asset import column_asset_meshes
+    from ionic_usd.usd.column_asset import ColumnAssetOptions
 
     kw = {"lods": ("low",), "bases": ("G1", "G2"), "scrolls": ("S1", "S2")}
     opts = ColumnAssetOptions(flutes=("f24", "f20"), **kw)

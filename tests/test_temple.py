@@ -10,9 +10,9 @@ from pxr import Gf, Sdf, Usd, UsdGeom
 
 from ionic_usd.cli import main
 from ionic_usd.errors import OutputExistsError
+from ionic_usd.pipeline.temple import compose_temple
 from ionic_usd.temple.layout import portunus_layout
 from ionic_usd.usd import validate_stage
-from ionic_usd.usd.temple import compose_temple
 
 
 def stage_of(report) -> Usd.Stage:
@@ -210,7 +210,7 @@ def test_user_overrides_survive_regeneration(tmp_path):
     before = (folder / "overrides.usda").read_bytes()
     with pytest.raises(OutputExistsError):
         compose_temple(folder, layout, texture_size=16)
-    compose_temple(folder, layout, texture_size=16, force=True)
+    compose_temple(folder, layout, texture_size=16, force=True, rebuild=True)
     assert (folder / "overrides.usda").read_bytes() == before
     stage = Usd.Stage.Open(str(folder / "Temple.usda"))
     prim = stage.GetPrimAtPath("/Temple/Colonnade/Free/front_1")

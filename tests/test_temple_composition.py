@@ -13,10 +13,11 @@ from pxr import Gf, Sdf, Usd, UsdGeom, UsdShade
 from ionic_usd.cli import main
 from ionic_usd.errors import ParameterError
 from ionic_usd.params import load_toml
+from ionic_usd.pipeline.temple import compose_temple
 from ionic_usd.temple.layout import ROOF_BED, layout_from_mapping, portunus_layout
 from ionic_usd.usd import validate_stage
 from ionic_usd.usd.column_asset import UV_SPAN
-from ionic_usd.usd.temple import compose_temple, hypothesis_layers, temple_triangles
+from ionic_usd.usd.temple import hypothesis_layers, temple_triangles
 
 EVERYTHING = Usd.TraverseInstanceProxies(Usd.PrimAllPrimsPredicate)
 
@@ -200,7 +201,7 @@ def test_overrides_are_strongest_and_survive_a_rebuild(tmp_path):
         assert validate_stage(stage) == []
 
     check()
-    compose_temple(folder, layout, texture_size=16, force=True)
+    compose_temple(folder, layout, texture_size=16, force=True, rebuild=True)
     assert (folder / "overrides.usda").read_bytes() == before
     check()
 
@@ -499,9 +500,12 @@ def test_temple_lod_passes_to_every_column(portunus_temple):
     assert temple_triangles(stage) == inst + own + copies
 
 
-def test_a_rebuild_is_not_blocked_by_the_users_edits(tmp_path):
+@pytest.mark.parametrize("rebuild", [True, False])
+def test_a_rebuild_is_not_blocked_by_the_users_edits(tmp_path, rebuild):
     """The user's layer may de-instance a column or reference a file of their own that is not
-    there yet: the build checks what it generates, and keeps the user's layer as it is."""
+    there yet: the build checks what it generates, and keeps the user's layer as it is; the
+    report counts the scene as it composes with the user's layer, regenerated or found
+    current."""
     folder = tmp_path / "T"
     compose_temple(folder, portunus_layout(), texture_size=16)
     user = Sdf.Layer.FindOrOpen(str(folder / "overrides.usda"))
@@ -513,6 +517,7 @@ def test_a_rebuild_is_not_blocked_by_the_users_edits(tmp_path):
     extra.referenceList.Prepend(Sdf.Reference("./statue.usda"))
     user.Save()
     before = (folder / "overrides.usda").read_bytes()
-    rep = compose_temple(folder, portunus_layout(), texture_size=16, force=True)
+    rep = compose_temple(folder, portunus_layout(), texture_size=16, force=True, rebuild=rebuild)
+    assert rep.current is not rebuild
     assert (folder / "overrides.usda").read_bytes() == before
     assert rep.instances == 17  # front_1 is the user's own, de-instanced, column

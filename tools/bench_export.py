@@ -58,8 +58,8 @@ def main() -> None:
     temple = a.temple
     if temple is None:
         os.environ.setdefault("IONIC_USD_CACHE", str(work / "cache"))
+        from ionic_usd.pipeline.temple import compose_temple
         from ionic_usd.temple.layout import portunus_layout
-        from ionic_usd.usd.temple import compose_temple
 
         temple = compose_temple(work / "PortunusTemple", portunus_layout()).root
     cases = [

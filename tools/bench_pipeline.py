@@ -24,9 +24,10 @@ from pathlib import Path
 def main() -> None:
     os.environ["IONIC_USD_CACHE"] = tempfile.mkdtemp(prefix="ionic_bench_cache_")
     from ionic_usd.column.column import LODS, build_column, portunus_column_params
+    from ionic_usd.pipeline.asset import build_column_asset
+    from ionic_usd.pipeline.temple import compose_temple
     from ionic_usd.temple.layout import portunus_layout
-    from ionic_usd.usd.column_asset import ColumnAssetOptions, build_column_asset
-    from ionic_usd.usd.temple import compose_temple
+    from ionic_usd.usd.column_asset import ColumnAssetOptions
 
     print("whole column (base + shaft + capital body + scrolls), best of 5:")
     print(f"{'lod':>8} {'triangles':>10} {'ms':>8} {'Mtri/s':>8}")

@@ -19,11 +19,12 @@ import numpy as np
 from ionic_usd.column.capital import capital_mesh
 from ionic_usd.column.column import portunus_column_params
 from ionic_usd.geometry.mesh import Mesh, merge, transform
+from ionic_usd.pipeline.asset import column_asset_meshes
 from ionic_usd.preview import render_preview
 from ionic_usd.temple.cuboid import Cuboid, cuboid_mesh
 from ionic_usd.temple.layout import Layer, portunus_layout
 from ionic_usd.usd import write_meshes
-from ionic_usd.usd.column_asset import ColumnAssetOptions, column_asset_meshes
+from ionic_usd.usd.column_asset import ColumnAssetOptions
 
 DOCS = Path(__file__).resolve().parent.parent / "docs"
 

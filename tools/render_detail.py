@@ -25,6 +25,7 @@ from ionic_usd.column.column import build_column, portunus_column_params
 from ionic_usd.column.ornament import Instances
 from ionic_usd.geometry.clip import clip_mesh
 from ionic_usd.geometry.mesh import Mesh, transform
+from ionic_usd.pipeline.temple import compose_temple
 from ionic_usd.preview import render_preview
 from ionic_usd.temple.cuboid import cuboid_mesh
 from ionic_usd.temple.layout import portunus_layout
@@ -34,7 +35,6 @@ from ionic_usd.usd.detail import column_ornament, detail_geometry
 from ionic_usd.usd.instancer import author_point_instancer
 from ionic_usd.usd.mesh import author_mesh
 from ionic_usd.usd.stage import new_layer, save_layer
-from ionic_usd.usd.temple import compose_temple
 
 DOCS = Path(__file__).resolve().parent.parent / "docs"
 

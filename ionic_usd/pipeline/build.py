@@ -65,7 +65,7 @@ def build_temple_files(spec: TempleSpec) -> tuple[dict[str, bytes], str, str, fl
     """
     from ionic_usd import __version__
     from ionic_usd.column.column import column_params_from_mapping, portunus_column_params
-    from ionic_usd.usd.temple import compose_temple
+    from ionic_usd.pipeline.temple import compose_temple
 
     t0 = time.perf_counter()
     data = spec.tables()

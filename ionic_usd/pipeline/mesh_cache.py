@@ -8,29 +8,27 @@ arrays (no pickle) plus a JSON index, written and read through
 :func:`ionic_usd.io.verified_cache` (SHA-256 manifest, atomic rename: a truncated or edited
 entry is discarded and produced again).
 
-The key hashes ``repr(opts)`` (frozen dataclasses of numbers, strings and tuples: stable across
-runs), the UV cache's folder (the capital's charts come from it), the package version and the
-bytes of every module of the package, so any change to the generators — released or not —
+The key (:func:`ionic_usd.pipeline.keys.build_key`) hashes ``repr(opts)``, the UV cache's
+folder (the capital's charts come from it), the package version, the bytes of every module of
+the package and the libraries' versions, so any change to the generators — released or not —
 misses the cache instead of returning stale geometry.
 """
 
 from __future__ import annotations
 
-import hashlib
 import json
 import logging
 from collections.abc import Callable
-from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ionic_usd import __version__
 from ionic_usd.geometry.mesh import Mesh
+from ionic_usd.pipeline.keys import build_key
 from ionic_usd.usd.asset import AssetMesh
 
-__all__ = ["cached_meshes", "source_digest", "mesh_cache_folder"]
+__all__ = ["cached_meshes", "mesh_cache_folder"]
 
 log = logging.getLogger(__name__)
 
@@ -47,17 +45,6 @@ _INDEX = "meshes.json"
 _ARRAYS = "meshes.npz"
 
 
-@lru_cache(maxsize=1)
-def source_digest() -> str:
-    """SHA-256 of every ``.py`` file of the installed package (names and bytes, sorted)."""
-    root = Path(__file__).resolve().parents[1]
-    h = hashlib.sha256()
-    for f in sorted(root.rglob("*.py")):
-        h.update(str(f.relative_to(root)).encode())
-        h.update(f.read_bytes())
-    return h.hexdigest()
-
-
 def mesh_cache_folder() -> Path:
     """``meshes/`` beside the UV cache (``$IONIC_USD_CACHE/meshes`` or ``~/.cache/...``)."""
     from ionic_usd.texture.uv import default_cache_folder
@@ -66,11 +53,7 @@ def mesh_cache_folder() -> Path:
 
 
 def _key(tag: str, opts: object, extra: str) -> str:
-    h = hashlib.sha256()
-    for part in (tag, repr(opts), extra, __version__, source_digest()):
-        h.update(part.encode())
-        h.update(b"\0")
-    return h.hexdigest()[:32]
+    return build_key(tag, opts, extra)
 
 
 def _write(folder: Path, meshes: list[AssetMesh]) -> None:

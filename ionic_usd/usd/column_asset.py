@@ -2,8 +2,7 @@
 
 This module authors prims from kernel values; the pipeline that makes those values
 (generate → clip → UV → texture) is :mod:`ionic_usd.pipeline.asset`, whose
-:func:`~ionic_usd.pipeline.asset.build_column_asset` is the entry point (also reachable here,
-for existing callers).
+:func:`~ionic_usd.pipeline.asset.build_column_asset` is the entry point.
 
 Variant sets on ``/IonicColumn`` (defaults first):
 
@@ -59,7 +58,6 @@ import os
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 from ionic_usd import __version__
 from ionic_usd.column.column import (
@@ -291,17 +289,3 @@ def author_column_asset(
 def _flatten(tables: dict[str, dict]) -> dict[str, object]:
     """TOML-like tables as USD customData (a dictionary of dictionaries of scalars)."""
     return {name: {k: v for k, v in t.items() if v is not None} for name, t in tables.items()}
-
-
-#: names that moved to the pipeline (:mod:`ionic_usd.pipeline.asset`), still importable from
-#: here for existing callers; imported on first use so that authoring does not load the
-#: pipeline.
-_MOVED = ("AssetReport", "build_column_asset", "column_asset_meshes", "copy_stone_textures")
-
-
-def __getattr__(name: str) -> Any:
-    if name in _MOVED:
-        from ionic_usd.pipeline import asset
-
-        return getattr(asset, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -1,6 +1,7 @@
 """The temple composer: an assembly of layers that instances the column asset.
 
-Folder written by :func:`compose_temple` (all asset paths relative)::
+Folder written by :func:`ionic_usd.pipeline.temple.compose_temple` (layers authored here by
+:class:`TemplePlan`; all asset paths relative)::
 
     Temple.usda          the root: stage metadata and two sublayers, nothing else —
                            ./overrides.usda (yours, strongest) over ./generated.usda
@@ -47,8 +48,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import os
-import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -57,10 +57,10 @@ from pxr import Sdf, Usd
 
 from ionic_usd import __version__
 from ionic_usd.column.column import LODS, ColumnParams, portunus_column_params
-from ionic_usd.errors import OutputExistsError, ParameterError, UsdAuthoringError
+from ionic_usd.errors import ParameterError, UsdAuthoringError
 from ionic_usd.temple.layout import Layer, TempleLayout
 from ionic_usd.temple.mouldings import MouldingParams, portunus_mouldings
-from ionic_usd.usd.asset import class_path, replace_folder
+from ionic_usd.usd.asset import class_path
 from ionic_usd.usd.bounds import (
     author_extents_hints,
     bound_changing_sets,
@@ -72,8 +72,6 @@ from ionic_usd.usd.column_asset import (
     FLUTE_VARIANTS,
     UV_SPAN,
     ColumnAssetOptions,
-    build_column_asset,
-    copy_stone_textures,
 )
 from ionic_usd.usd.combinations import realise_combinations, select_variants
 from ionic_usd.usd.detail import (
@@ -111,8 +109,9 @@ from ionic_usd.usd.stage import new_layer, save_layer
 log = logging.getLogger(__name__)
 
 __all__ = [
-    "TempleReport",
-    "compose_temple",
+    "TemplePlan",
+    "plan_temple",
+    "temple_counts",
     "hypothesis_layers",
     "temple_triangles",
     "ROOT_LAYER",
@@ -143,20 +142,6 @@ BASELINE_FINISH = "stucco"
 CUBOID_UV_SCALE = 1.0 / UV_SPAN
 # temple keys the composer cannot realise: the column asset is built once per temple
 _COLUMN_SHAPE_KEYS = ("columns.lower_diameter", "columns.upper_diameter_ratio")
-
-
-@dataclass(frozen=True)
-class TempleReport:
-    root: Path
-    files: int
-    prims: int
-    instances: int
-    prototypes: int
-    triangles: int
-    hypotheses: tuple[str, ...]
-    seconds: float
-    triangles_per_lod: dict[str, int] = dataclasses.field(default_factory=dict)
-    combination_layers: tuple[str, ...] = ()
 
 
 def _finish_materials() -> dict[str, str]:
@@ -352,40 +337,94 @@ def _generated_layer(
     return lay
 
 
-def compose_temple(
-    folder: str | os.PathLike,
+@dataclass
+class TemplePlan:
+    """Everything the temple's layers need, validated (:func:`plan_temple`): :meth:`write`
+    authors them into a folder that already holds the column asset."""
+
+    layout: TempleLayout
+    opts: ColumnAssetOptions
+    detail: str
+    hyp_layers: dict[str, Sdf.Layer | None]
+    geometry: DetailGeometry
+    base_meshes: dict
+    lods: tuple[str, ...]
+    detail_of: Callable[[TempleLayout], DetailGeometry]
+
+    def write(self, tmp: Path) -> dict[str, Any]:
+        """Author every temple layer into ``tmp`` (beside ``tmp/IonicColumn``), check every
+        hypothesis combination, author the extentsHints; returns the triangles per LOD and the
+        combination layers written."""
+        layout, geom = self.layout, self.geometry
+        baseline_material = FINISHES[BASELINE_FINISH][0]
+        log.info("writing the part, colonnade, detail and hypothesis layers")
+        save_layer(_materials_layer(), tmp / MATERIALS_LAYER)
+        save_layer(detail_layer(geom), tmp / DETAIL_LAYER)
+        for layer, meshes in self.base_meshes.items():
+            save_layer(_part_layer(layer, meshes, baseline_material), tmp / PART_LAYERS[layer])
+        save_layer(_colonnade_layer(layout), tmp / COLONNADE_LAYER)
+        for hid, lay in self.hyp_layers.items():
+            if lay is not None:
+                save_layer(lay, tmp / "layers" / f"{hid}.usda")
+        gen_layer = _generated_layer(layout, self.hyp_layers, self.lods)
+        spec = gen_layer.GetPrimAtPath("/Temple")
+        author_detail_variants(spec, geom, self.detail)
+        frieze = write_frieze_hypotheses(tmp, spec, layout, geom)
+        save_layer(gen_layer, tmp / GENERATED_LAYER)
+        save_layer(_root_layer(layout.name), tmp / ROOT_LAYER)
+        # created only where absent: an existing overrides.usda (or symlink) is never touched
+        save_layer(_user_overrides_layer(), tmp / OVERRIDES_LAYER)
+        # checks and hints on the generated layer alone: the user's opinions are theirs
+        gen = Usd.Stage.Open(str(tmp / GENERATED_LAYER))
+        realised = [
+            h for h in layout.hypotheses if self.hyp_layers[h.id] is not None or h in frieze
+        ]
+        log.info("checking the combinations of %d hypotheses x detail", len(realised))
+        combos = realise_combinations(
+            gen, tmp, layout, realised, uv_scale=CUBOID_UV_SCALE, detail_of=self.detail_of
+        )
+        lod_triangles = {lod: _triangles_with(gen, {"lod": lod}) for lod in self.lods}
+        temple_sets = gen.GetPrimAtPath("/Temple").GetVariantSets()
+        candidates = {
+            "lod": self.lods,
+            **{
+                n: tuple(temple_sets.GetVariantSet(n).GetVariantNames())
+                for n in temple_sets.GetNames()
+                if n.startswith("hyp_") or n == DETAIL_SET
+            },
+        }
+        parts = [
+            "/Temple",
+            *(f"/Temple/{PART_PRIMS[la]}" for la in layout.cuboids),
+            "/Temple/Colonnade",
+        ]
+        log.info("extentsHint per variant combination")
+        memo: dict[Any, Any] = {}  # the passes and the product share combinations
+        vsets = bound_changing_sets(gen, "/Temple", parts, candidates, base="lod", memo=memo)
+        hints = variant_extents_hints(gen, "/Temple", parts, vsets, memo=memo)
+        gen_layer = gen.GetRootLayer()
+        author_extents_hints(gen_layer, "/Temple", hints, list(vsets))
+        gen_layer.Save()
+        del gen
+        _check_resolves(tmp / ROOT_LAYER, tmp / GENERATED_LAYER)
+        return {"triangles_per_lod": lod_triangles, "combination_layers": list(combos)}
+
+
+def plan_temple(
     layout: TempleLayout,
     column: ColumnParams | None = None,
     *,
-    force: bool = False,
     texture_size: int = 1024,
     seed: int = 7,
     asset_options: ColumnAssetOptions | None = None,
     detail: str | None = None,
     mouldings: MouldingParams | None = None,
-) -> TempleReport:
-    """Write the temple folder (see the module docstring) atomically.
+) -> TemplePlan:
+    """The temple's column asset options and layers, validated before anything is written.
 
-    Parameters
-    ----------
-    folder : output folder; an existing one needs ``force`` and is replaced atomically, keeping
-        its ``overrides.usda`` byte for byte
-    layout : the temple (e.g. :func:`ionic_usd.temple.portunus_layout`)
-    column : column parameters (default: Portunus proportions at the layout's column height and
-        lower diameter)
-    detail : the default selection of the ``detail`` variant set (plain, moulded, carved;
-        None: :data:`~ionic_usd.usd.detail.DEFAULT_DETAIL`)
-    mouldings : the moulding sections (default: those of ``portunus.toml``)
-
-    Hypothesis changes the generator cannot realise raise :class:`ParameterError` before
-    anything is written.
+    Parameters are :func:`ionic_usd.pipeline.temple.compose_temple`'s. Hypothesis changes the
+    generator cannot realise raise :class:`ParameterError`.
     """
-    t0 = time.perf_counter()
-    dest = Path(folder)
-    if dest.exists() and not force:
-        raise OutputExistsError(
-            f"{dest} exists; pass --force to rebuild it (your {OVERRIDES_LAYER} is kept)"
-        )
     p = layout.params
     column = column or portunus_column_params(
         height=p.columns_height, lower_diameter=p.columns_lower_diameter
@@ -407,81 +446,15 @@ def compose_temple(
             detail_cache[key] = detail_geometry(want, mp)
         return detail_cache[key]
 
-    geom = detail_of(layout)
-    base_meshes = cuboid_meshes(layout, CUBOID_UV_SCALE)
-    baseline_material = FINISHES[BASELINE_FINISH][0]
-    lods = tuple(lod for lod in LODS if lod in opts.lods)
-    stats: dict[str, Any] = {}
-
-    def build(tmp: Path) -> None:
-        log.info("building the column asset")
-        stats["asset"] = build_column_asset(tmp / ASSET_NAME, opts)
-        log.info("writing the part, colonnade, detail and hypothesis layers")
-        # tiles repeat their map every metre (stone: every TILE_METRES = 2 m): half the size
-        # keeps the texel density
-        copy_stone_textures(
-            tmp / "Textures", TERRACOTTA[1], max(16, opts.texture_size // 2), opts.seed
-        )
-        save_layer(_materials_layer(), tmp / MATERIALS_LAYER)
-        save_layer(detail_layer(geom), tmp / DETAIL_LAYER)
-        for layer, meshes in base_meshes.items():
-            save_layer(_part_layer(layer, meshes, baseline_material), tmp / PART_LAYERS[layer])
-        save_layer(_colonnade_layer(layout), tmp / COLONNADE_LAYER)
-        for hid, lay in hyp_layers.items():
-            if lay is not None:
-                save_layer(lay, tmp / "layers" / f"{hid}.usda")
-        gen_layer = _generated_layer(layout, hyp_layers, lods)
-        spec = gen_layer.GetPrimAtPath("/Temple")
-        author_detail_variants(spec, geom, detail)
-        frieze = write_frieze_hypotheses(tmp, spec, layout, geom)
-        save_layer(gen_layer, tmp / GENERATED_LAYER)
-        save_layer(_root_layer(layout.name), tmp / ROOT_LAYER)
-        # created only where absent: an existing overrides.usda (or symlink) is never touched
-        save_layer(_user_overrides_layer(), tmp / OVERRIDES_LAYER)
-        # checks and hints on the generated layer alone: the user's opinions are theirs
-        gen = Usd.Stage.Open(str(tmp / GENERATED_LAYER))
-        realised = [h for h in layout.hypotheses if hyp_layers[h.id] is not None or h in frieze]
-        log.info("checking the combinations of %d hypotheses x detail", len(realised))
-        stats["combos"] = realise_combinations(
-            gen, tmp, layout, realised, uv_scale=CUBOID_UV_SCALE, detail_of=detail_of
-        )
-        stats["lod_triangles"] = {lod: _triangles_with(gen, {"lod": lod}) for lod in lods}
-        temple_sets = gen.GetPrimAtPath("/Temple").GetVariantSets()
-        candidates = {
-            "lod": lods,
-            **{
-                n: tuple(temple_sets.GetVariantSet(n).GetVariantNames())
-                for n in temple_sets.GetNames()
-                if n.startswith("hyp_") or n == DETAIL_SET
-            },
-        }
-        parts = [
-            "/Temple",
-            *(f"/Temple/{PART_PRIMS[la]}" for la in layout.cuboids),
-            "/Temple/Colonnade",
-        ]
-        log.info("extentsHint per variant combination")
-        memo: dict[Any, Any] = {}  # the passes and the product share combinations
-        vsets = bound_changing_sets(gen, "/Temple", parts, candidates, base="lod", memo=memo)
-        hints = variant_extents_hints(gen, "/Temple", parts, vsets, memo=memo)
-        gen_layer = gen.GetRootLayer()
-        author_extents_hints(gen_layer, "/Temple", hints, list(vsets))
-        gen_layer.Save()
-        del gen
-        _check_resolves(tmp / ROOT_LAYER, tmp / GENERATED_LAYER)
-
-    replace_folder(
-        build, dest, force=force, keep_existing=(OVERRIDES_LAYER,), root_files=(ROOT_LAYER,)
-    )
-    root_path = dest / ROOT_LAYER
-    stage = Usd.Stage.Open(str(root_path))
-    if stage is None:
-        raise UsdAuthoringError(f"cannot open the temple written at {root_path}")
-    rep = _report(stage, dest, layout, time.perf_counter() - t0)
-    return dataclasses.replace(
-        rep,
-        triangles_per_lod=dict(stats["lod_triangles"]),
-        combination_layers=tuple(stats["combos"]),
+    return TemplePlan(
+        layout=layout,
+        opts=opts,
+        detail=detail,
+        hyp_layers=hyp_layers,
+        geometry=detail_of(layout),
+        base_meshes=cuboid_meshes(layout, CUBOID_UV_SCALE),
+        lods=tuple(lod for lod in LODS if lod in opts.lods),
+        detail_of=detail_of,
     )
 
 
@@ -523,17 +496,15 @@ def _triangles_with(stage: Usd.Stage, selections: dict[str, str]) -> int:
         stage.GetSessionLayer().Clear()
 
 
-def _report(stage: Usd.Stage, dest: Path, layout: TempleLayout, seconds: float) -> TempleReport:
-    prims = sum(1 for _ in stage.Traverse())
-    instances = sum(1 for p in stage.Traverse() if p.IsInstance())
-    files = sum(1 for f in dest.rglob("*") if f.is_file())
-    return TempleReport(
-        dest / ROOT_LAYER,
-        files,
-        prims,
-        instances,
-        len(stage.GetPrototypes()),
-        temple_triangles(stage),
-        tuple(h.id for h in layout.hypotheses),
-        seconds,
-    )
+def temple_counts(root: str | os.PathLike) -> dict[str, int]:
+    """Prims, native instances, prototypes and drawn triangles of the temple whose root layer
+    is ``root``, as composed (defaults selected)."""
+    stage = Usd.Stage.Open(str(root))
+    if stage is None:
+        raise UsdAuthoringError(f"cannot open the temple written at {root}")
+    return {
+        "prims": sum(1 for _ in stage.Traverse()),
+        "instances": sum(1 for p in stage.Traverse() if p.IsInstance()),
+        "prototypes": len(stage.GetPrototypes()),
+        "triangles": temple_triangles(stage),
+    }
