@@ -1,7 +1,7 @@
 """Prototype build specifications: what a temple build depends on, and its content hash.
 
 A :class:`TempleSpec` carries everything that decides the bytes of a temple folder written by
-:func:`ionic_usd.usd.temple.compose_temple`: the description (TOML text), the column
+:func:`ionic_usd.pipeline.temple.compose_temple`: the description (TOML text), the column
 overrides, texture size and seed, and the package version. Its :attr:`key` (SHA-256 of a
 canonical JSON of those) names the folder in the prototype cache and in the city, so two lots
 that choose the same temple share one build, and a rebuild builds only what changed.

@@ -1,7 +1,7 @@
 """Architectural detail as levels of detail: the ``detail`` variant set on ``/Temple``.
 
 Files of a temple folder that hold the detail (written by :func:`write_detail`, called from
-:func:`ionic_usd.usd.temple.compose_temple`)::
+:func:`ionic_usd.pipeline.temple.compose_temple`)::
 
     detail.usdc          the swept mouldings and the ornament PointInstancers, as ``def`` prims
                          under the part prims they belong to (a crate file: ~8k points):

@@ -15,7 +15,7 @@ Where two or more hypotheses still interact (both reshape one mesh, or both move
 composer writes a *combination* layer (``layers/<a>+<b>.usda``) with the combined values and
 references it from a nested variant set ``hyp_<b>`` inside ``hyp_<a>``'s ``alternative``, which
 Pcp selects by name with the prim's own ``hyp_<b>`` selection; see
-:func:`ionic_usd.usd.temple.compose_temple`, which checks every combination against
+:func:`ionic_usd.pipeline.temple.compose_temple`, which checks every combination against
 :func:`ionic_usd.temple.layout.build_layout` and writes only the combination layers needed.
 
 Paradata (London Charter principles 4 and 6) is keyed by hypothesis id, so a prim that several
