@@ -534,3 +534,33 @@ def test_generated_meshes_are_cached_by_content(tmp_path, monkeypatch):
         cache=UVCache(tmp_path / "cache" / "uv"),
     )
     assert len(calls) == 3 and len(list(mesh_cache_folder().iterdir())) == 2
+
+
+def test_generation_in_parallel_processes_gives_the_serial_meshes(tmp_path):
+    """The asset's units of work run in a process pool: the meshes (geometry, charts, tags,
+    order) must not depend on how many processes ran them."""
+    from ionic_usd.texture.uv import UVCache
+
+    opts = ColumnAssetOptions(
+        lods=("low", "medium"), bases=("G1",), scrolls=("S1",), flutes=("f24",), texture_size=16
+    )
+    serial = column_asset_meshes(opts, UVCache(tmp_path / "a"), workers=1)
+    cache = UVCache(tmp_path / "b")
+    parallel = column_asset_meshes(opts, cache, workers=2)
+    assert cache.misses == sum(m.part == "CapitalBody" and m.tags["form"] == "full" for m in serial)
+    assert [(m.part, m.name, m.tags) for m in parallel] == [
+        (m.part, m.name, m.tags) for m in serial
+    ]
+    for a, b in zip(serial, parallel, strict=True):
+        for f in (
+            "points",
+            "face_vertex_indices",
+            "normals",
+            "normals_indices",
+            "st",
+            "st_indices",
+        ):
+            x, y = getattr(a.mesh, f), getattr(b.mesh, f)
+            assert (x is None) == (y is None), (a.name, f)
+            if x is not None:
+                np.testing.assert_array_equal(x, y, err_msg=f"{a.name}.{f}")

@@ -220,3 +220,20 @@ def test_indexed_normals_are_validated_and_extent_is_cached():
         a.with_(normals_interpolation="vertex")
     assert_allclose(a.extent, [a.points.min(axis=0), a.points.max(axis=0)])
     assert a.extent is a.extent and not a.extent.flags.writeable
+
+
+@pytest.mark.parametrize("dtype", [np.int64, np.float64, np.float32])
+def test_unique_rows_is_numpys_unique_along_rows(dtype):
+    from ionic_usd.geometry.mesh import unique_rows
+
+    rng = np.random.default_rng(3)
+    a = rng.integers(-3, 4, size=(5000, 3)).astype(dtype)
+    if dtype != np.int64:
+        a[::7, 1] = -0.0  # equal to 0.0, as numpy counts it
+    want = np.unique(a, axis=0, return_index=True, return_inverse=True, return_counts=True)
+    got = unique_rows(a, return_index=True, return_inverse=True, return_counts=True)
+    for w, g in zip(want, got, strict=True):
+        np.testing.assert_array_equal(g, w.reshape(g.shape))
+    np.testing.assert_array_equal(unique_rows(a), want[0])
+    empty = np.zeros((0, 2), dtype=dtype)
+    assert unique_rows(empty).shape == (0, 2)

@@ -38,7 +38,7 @@ import numpy as np
 from ionic_usd import __version__
 from ionic_usd.errors import GeometryError, IonicError, ParameterError
 from ionic_usd.export.common import atomic_write, require
-from ionic_usd.geometry.mesh import triangulate_fan
+from ionic_usd.geometry.mesh import triangulate_fan, unique_rows
 from ionic_usd.usd.reader import MaterialData, Scene, SceneMesh, TextureRef
 
 __all__ = ["GltfReport", "write_gltf", "trs_decompose", "texture_transform", "split_common"]
@@ -103,7 +103,7 @@ def _streams(m: SceneMesh):
     if m.st is not None:
         cols.append(m.st)
     key = np.concatenate(cols, axis=1)
-    _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    _, first, inverse = unique_rows(key, return_index=True, return_inverse=True)
     inverse = inverse.reshape(-1)
     tris = inverse[tri_c]
     good = (tris[:, 0] != tris[:, 1]) & (tris[:, 1] != tris[:, 2]) & (tris[:, 0] != tris[:, 2])

@@ -24,7 +24,7 @@ import numpy as np
 
 from ionic_usd.errors import GeometryError, ParameterError
 from ionic_usd.export.common import atomic_write, require
-from ionic_usd.geometry.mesh import triangulate_fan
+from ionic_usd.geometry.mesh import triangulate_fan, unique_rows
 from ionic_usd.usd.reader import Scene
 
 __all__ = [
@@ -159,7 +159,7 @@ def check_solid(vertices: np.ndarray, triangles: np.ndarray) -> tuple[bool, int,
 def _report(s: Solid) -> SolidReport:
     v32 = s.vertices.astype(np.float32)
     # the check runs on the written float32 numbers, welded by position as a slicer does
-    uniq, inv = np.unique(v32, axis=0, return_inverse=True)
+    uniq, inv = unique_rows(v32, return_inverse=True)
     tris = inv.reshape(-1)[s.triangles]
     closed, pinched, vol = check_solid(uniq, tris)
     ext = (uniq.max(axis=0) - uniq.min(axis=0)) * 1e-3

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ionic_usd.geometry.mesh import Mesh, face_normals
+from ionic_usd.geometry.mesh import Mesh, face_normals, unique_rows
 
 __all__ = ["MeshReport", "inspect_mesh", "signed_volume", "boundary_edges"]
 
@@ -67,7 +67,7 @@ def signed_volume(mesh: Mesh) -> float:
 def boundary_edges(mesh: Mesh) -> np.ndarray:
     """(b, 2) int: undirected edges used by exactly one triangle."""
     e = np.sort(_edges(mesh.triangles), axis=1)
-    u, c = np.unique(e, axis=0, return_counts=True)
+    u, c = unique_rows(e, return_counts=True)
     return u[c == 1]
 
 
@@ -82,14 +82,14 @@ def inspect_mesh(mesh: Mesh, *, area_eps: float | None = None) -> MeshReport:
     """
     tri = mesh.triangles
     directed = _edges(tri)
-    _, dcount = np.unique(directed, axis=0, return_counts=True)
+    _, dcount = unique_rows(directed, return_counts=True)
     und = np.sort(directed, axis=1)
-    _, ucount = np.unique(und, axis=0, return_counts=True)
+    _, ucount = unique_rows(und, return_counts=True)
     _, areas = face_normals(mesh.points, tri)
     diag = float(np.linalg.norm(np.ptp(mesh.points, axis=0))) if mesh.n_points else 0.0
     eps = area_eps if area_eps is not None else 1e-12 * diag * diag
     st = np.sort(tri, axis=1)
-    _, fcount = np.unique(st, axis=0, return_counts=True)
+    _, fcount = unique_rows(st, return_counts=True)
     used = np.zeros(mesh.n_points, dtype=bool)
     used[tri.reshape(-1)] = True
     return MeshReport(

@@ -14,7 +14,14 @@ import math
 import numpy as np
 
 from ionic_usd.errors import GeometryError
-from ionic_usd.geometry.mesh import Mesh, box_st, corner_normals, face_normals, triangulate_fan
+from ionic_usd.geometry.mesh import (
+    Mesh,
+    box_st,
+    corner_normals,
+    face_normals,
+    triangulate_fan,
+    unique_rows,
+)
 
 __all__ = [
     "split_shells",
@@ -112,7 +119,7 @@ def _to_manifold(mesh: Mesh, keep_faces: bool = False, st: np.ndarray | None = N
     key = np.concatenate([corner_pt[:, None], q], axis=1)
     if st is not None:
         key = np.concatenate([key, np.round(st * 1e6).astype(np.int64)], axis=1)
-    uk, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    uk, first, inv = unique_rows(key, return_index=True, return_inverse=True)
     inv = inv.reshape(-1)
     pv = uk[:, 0]
     props = np.concatenate(
@@ -240,7 +247,7 @@ def _from_manifold(res, name: str, simplify: bool = True) -> Mesh:
         # share it, so a chart stays connected across creases
         q = np.round(props[:, 6:8] * 1e6).astype(np.int64)
         key = np.concatenate([pt_index[:, None], q], axis=1)
-        _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
+        _, first, inv = unique_rows(key, return_index=True, return_inverse=True)
         st = props[first, 6:8].astype(np.float32)
         sti = inv.reshape(-1)[tri.reshape(-1)]
     out_mesh = Mesh(
@@ -564,7 +571,7 @@ def remove_slivers(
     if corners is not None and corners.shape[1] > n_dim:
         # re-index st per corner (equal values shared, first occurrence first)
         q = np.round(corners[:, n_dim:] * 1e7).astype(np.int64)
-        _, first, inv = np.unique(q, axis=0, return_index=True, return_inverse=True)
+        _, first, inv = unique_rows(q, return_index=True, return_inverse=True)
         order = np.argsort(first)
         rank = np.empty_like(order)
         rank[order] = np.arange(len(order))

@@ -14,7 +14,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from ionic_usd.geometry.analysis import signed_volume
-from ionic_usd.geometry.mesh import Mesh, corner_normals, face_normals, triangulate_fan, weld
+from ionic_usd.geometry.mesh import (
+    Mesh,
+    corner_normals,
+    face_normals,
+    triangulate_fan,
+    unique_rows,
+    weld,
+)
 
 __all__ = [
     "SolidReport",
@@ -169,7 +176,7 @@ def _candidate_pairs(p: np.ndarray, cell: float) -> np.ndarray:
     if not out:
         return np.zeros((0, 2), dtype=np.int64)
     pairs = np.concatenate(out)
-    return np.unique(pairs, axis=0)
+    return unique_rows(pairs)
 
 
 def _segments_cross(

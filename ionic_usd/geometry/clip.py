@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from ionic_usd.errors import GeometryError
-from ionic_usd.geometry.mesh import Mesh, box_st, corner_normals, triangulate_fan
+from ionic_usd.geometry.mesh import Mesh, box_st, corner_normals, triangulate_fan, unique_rows
 from ionic_usd.geometry.polygon import polygon_triangles
 
 __all__ = ["clip_mesh"]
@@ -198,7 +198,7 @@ def clip_mesh(
             key = np.concatenate(
                 [faces_all.reshape(-1, 1), np.round(out_nrm[:, 3:] * 1e6).astype(np.int64)], axis=1
             )
-            _, first, sti = np.unique(key, axis=0, return_index=True, return_inverse=True)
+            _, first, sti = unique_rows(key, return_index=True, return_inverse=True)
             st, sti = out_nrm[first, 3:], sti.reshape(-1)
             out_nrm = out_nrm[:, :3] if mesh.normals is not None else None
     if out_nrm is not None:

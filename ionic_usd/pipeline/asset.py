@@ -138,23 +138,55 @@ def _outside_walls(points: np.ndarray, form: str) -> np.ndarray:
 
 
 # -- generate -----------------------------------------------------------------------------
-def column_asset_meshes(
-    opts: ColumnAssetOptions, uv_cache: UVCache | None = None
-) -> list[AssetMesh]:
-    """Every mesh of the asset with its variant tags (geometry only; with ``uv_cache`` the
-    capital is charted by xatlas before the form cuts, which carry the charts).
+@dataclass(frozen=True)
+class _Unit:
+    """One independent piece of the asset's generation: the bases and shafts of a LOD, or one
+    capital variant of a LOD (with its chart and its form cuts)."""
 
-    Returns
-    -------
-    one :class:`~ionic_usd.usd.asset.AssetMesh` per (part variant, lod, form), named
-    ``<Part>_<variant>_<lod>[_<form>]``; capitals are tagged with ``scroll``, ``capital`` and
-    (when the asset has more than one model) ``volute``.
-    """
-    out: list[AssetMesh] = []
+    lod: str
+    kind: str  # "base_shaft" | "capital"
+    volute: str = ""
+    scroll: str = ""
+    capital: str = ""
+
+
+def _units(opts: ColumnAssetOptions) -> list[_Unit]:
+    out = []
     for lod in opts.lods:
-        p = opts.params.with_lod(lod)
-        base_h = p.base_params().height
-        groups: list[tuple[str, str, Mesh, dict[str, str]]] = []
+        out.append(_Unit(lod, "base_shaft"))
+        for vm in opts.volutes:
+            for s in opts.scrolls:
+                for c in opts.capitals:
+                    out.append(_Unit(lod, "capital", vm, s, c))
+    return out
+
+
+def _with_forms(
+    opts: ColumnAssetOptions, lod: str, groups: list[tuple[str, str, Mesh, dict[str, str]]]
+) -> list[AssetMesh]:
+    out = []
+    for part, name, mesh, tags in groups:
+        for form in opts.forms:
+            m = form_cut(mesh, form, part)
+            if part == "CapitalBody":
+                m = _weld_exact(m)
+            suffix = "" if form == "full" else f"_{form}"
+            t = {"lod": lod, **tags}
+            if len(opts.forms) > 1:
+                t["form"] = form
+            out.append(AssetMesh(part, f"{name}_{lod}{suffix}", m.with_(name=name), t))
+    return out
+
+
+def _unit_meshes(
+    opts: ColumnAssetOptions, unit: _Unit, uv_cache: UVCache | None, workers: int | None = None
+) -> tuple[list[AssetMesh], tuple[int, int]]:
+    """The unit's meshes (every form) and the UV cache's (misses, hits) it added: xatlas runs
+    and charts read from the cache."""
+    p = opts.params.with_lod(unit.lod)
+    base_h = p.base_params().height
+    groups: list[tuple[str, str, Mesh, dict[str, str]]] = []
+    if unit.kind == "base_shaft":
         for b in opts.bases:
             groups.append(("Base", f"Base_{b}", build_base_part(p, b), {"base": b}))
         for fname in opts.flutes:
@@ -162,37 +194,90 @@ def column_asset_meshes(
             groups.append(
                 ("Shaft", f"Shaft_{fname}", build_shaft_part(fp, base_h), {"flutes": fname})
             )
-        y_cap = base_h + p.shaft.length
-        for vm in opts.volutes:
-            vp = volute_variant_params(p, vm)
-            for s in opts.scrolls:
-                for c in opts.capitals:
-                    body = build_capital_part(vp, y_cap, scroll=s, angle=c == "angle")
-                    tag = {"scroll": s, "capital": c}
-                    name = f"Capital_{s}_{c}"
-                    if len(opts.volutes) > 1:
-                        tag["volute"] = vm
-                        name = f"{name}_{vm}"
-                    groups.append(("CapitalBody", name, body, tag))
-        if uv_cache is not None:  # base and shaft have analytic st; chart the capital once
-            from ionic_usd.texture.uv import metric_charts
+        return _with_forms(opts, unit.lod, groups), (0, 0)
+    vp = volute_variant_params(p, unit.volute)
+    body = build_capital_part(
+        vp, base_h + p.shaft.length, scroll=unit.scroll, angle=unit.capital == "angle"
+    )
+    tag = {"scroll": unit.scroll, "capital": unit.capital}
+    name = f"Capital_{unit.scroll}_{unit.capital}"
+    if len(opts.volutes) > 1:
+        tag["volute"] = unit.volute
+        name = f"{name}_{unit.volute}"
+    counts = (0, 0)
+    if uv_cache is not None:  # base and shaft have analytic st; chart the capital once
+        from ionic_usd.texture.uv import metric_charts
 
-            caps = [i for i, g in enumerate(groups) if g[0] == "CapitalBody"]
-            charted = metric_charts(
-                [groups[i][2] for i in caps], ASSET_TEXELS_PER_METRE[lod], cache=uv_cache
-            )
-            for i, m in zip(caps, charted, strict=True):
-                groups[i] = (groups[i][0], groups[i][1], m, groups[i][3])
-        for part, name, mesh, tags in groups:
-            for form in opts.forms:
-                m = form_cut(mesh, form, part)
-                if part == "CapitalBody":
-                    m = _weld_exact(m)
-                suffix = "" if form == "full" else f"_{form}"
-                t = {"lod": lod, **tags}
-                if len(opts.forms) > 1:
-                    t["form"] = form
-                out.append(AssetMesh(part, f"{name}_{lod}{suffix}", m.with_(name=name), t))
+        m0, h0 = uv_cache.misses, uv_cache.hits
+        (body,) = metric_charts(
+            [body], ASSET_TEXELS_PER_METRE[unit.lod], cache=uv_cache, workers=workers
+        )
+        counts = (uv_cache.misses - m0, uv_cache.hits - h0)
+    return _with_forms(opts, unit.lod, [("CapitalBody", name, body, tag)]), counts
+
+
+# the worker's copy of (opts, uv_cache), set by the pool's initializer (fork: no pickling)
+_WORKER_STATE: dict[str, Any] = {}
+
+
+def _worker_init(opts: ColumnAssetOptions, uv_cache: UVCache | None) -> None:
+    _WORKER_STATE["args"] = (opts, uv_cache)
+
+
+def _worker_unit(unit: _Unit) -> tuple[list[AssetMesh], tuple[int, int]]:
+    opts, uv_cache = _WORKER_STATE["args"]
+    return _unit_meshes(opts, unit, uv_cache, workers=1)
+
+
+def _cost(unit: _Unit) -> tuple[int, int]:
+    """Scheduling order: capitals before bases, high LOD first (the longest units first)."""
+    rank = {"high": 0, "medium": 1, "low": 2}.get(unit.lod, 3)
+    return (unit.kind != "capital", rank)
+
+
+def column_asset_meshes(
+    opts: ColumnAssetOptions, uv_cache: UVCache | None = None, *, workers: int | None = None
+) -> list[AssetMesh]:
+    """Every mesh of the asset with its variant tags (geometry only; with ``uv_cache`` the
+    capital is charted by xatlas before the form cuts, which carry the charts).
+
+    The units of work (the bases and shafts of a LOD; each capital variant of a LOD, with its
+    chart and cuts) are independent: they run in ``workers`` processes (default: one per
+    core; in-process on one core or inside a daemonic process such as a Dask worker), and the
+    result does not depend on how many.
+
+    Returns
+    -------
+    one :class:`~ionic_usd.usd.asset.AssetMesh` per (part variant, lod, form), named
+    ``<Part>_<variant>_<lod>[_<form>]``; capitals are tagged with ``scroll``, ``capital`` and
+    (when the asset has more than one model) ``volute``.
+    """
+    import multiprocessing as mp
+
+    units = _units(opts)
+    n = min(workers or os.cpu_count() or 1, len(units))
+    results: dict[_Unit, tuple[list[AssetMesh], tuple[int, int]]] = {}
+    if n <= 1 or mp.current_process().daemon or "fork" not in mp.get_all_start_methods():
+        for u in units:
+            results[u] = _unit_meshes(opts, u, uv_cache)
+    else:
+        from concurrent.futures import ProcessPoolExecutor
+
+        order = sorted(units, key=_cost)
+        ctx = mp.get_context("fork")
+        with ProcessPoolExecutor(
+            max_workers=n, mp_context=ctx, initializer=_worker_init, initargs=(opts, uv_cache)
+        ) as ex:
+            for u, r in zip(order, ex.map(_worker_unit, order, chunksize=1), strict=True):
+                results[u] = r
+        if uv_cache is not None:  # the workers' cache use, counted where the report reads it
+            uv_cache.misses += sum(r[1][0] for r in results.values())
+            uv_cache.hits += sum(r[1][1] for r in results.values())
+    out: list[AssetMesh] = []
+    for lod in opts.lods:  # the order of the serial loop: bases, shafts, then capitals
+        for u in units:
+            if u.lod == lod:
+                out.extend(results[u][0])
     return out
 
 

@@ -400,6 +400,7 @@ def metric_charts(
     padding: int = DEFAULT_PADDING,
     resolution_cap: int = DEFAULT_RESOLUTION_CAP,
     cache: UVCache | None = None,
+    workers: int | None = None,
 ) -> list[Mesh]:
     """The meshes with xatlas charts attached as metric ``st`` (metres of surface).
 
@@ -408,7 +409,8 @@ def metric_charts(
     :func:`ionic_usd.geometry.boolean.difference`), so xatlas runs once for the uncut mesh
     instead of once per form, and :func:`unwrap` then packs the cut pieces' charts as analytic
     ones. Meshes that already have ``st`` are returned as they are; the others are unwrapped
-    in parallel (:func:`prefetch`, through ``cache``) at ``texels_per_metre``.
+    in parallel (:func:`prefetch` over ``workers`` processes, through ``cache``) at
+    ``texels_per_metre``.
     """
     meshes = list(meshes)
     todo = [m for m in meshes if m.st is None]
@@ -417,6 +419,7 @@ def metric_charts(
         padding=padding,
         resolution_cap=resolution_cap,
         cache=cache,
+        workers=workers,
     )
     out = []
     for m in meshes:
