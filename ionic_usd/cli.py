@@ -19,6 +19,7 @@ from ionic_usd.cli_flags import (
     add_dataclass_flags,
     add_memory_flag,
     add_output_flags,
+    add_rebuild_flag,
     add_stone_flags,
     collect_flags,
 )
@@ -185,10 +186,11 @@ def cmd_asset(args: argparse.Namespace) -> int:
         make_tx=args.tx,
         user_textures=user,
     )
-    rep = build_column_asset(args.output, opts, force=args.force)
+    rep = build_column_asset(args.output, opts, force=args.force, rebuild=args.rebuild)
     lods = ", ".join(f"{k} {v:,}" for k, v in rep.triangles_per_lod.items())
+    done = "up to date" if rep.current else "wrote"
     print(
-        f"wrote {rep.path}: {rep.meshes} meshes, triangles per LOD: {lods}; "
+        f"{done} {rep.path}: {rep.meshes} meshes, triangles per LOD: {lods}; "
         f"{rep.uv_unwraps} UV unwraps, {rep.bytes_on_disk / 1e6:.1f} MB, {rep.seconds:.2f} s"
     )
     return 0
@@ -377,13 +379,7 @@ def _add_temple(sub: Any, full: bool) -> None:
         "(cuboids), moulded (swept mouldings) or carved (mouldings, dentils, roof "
         "tiles, frieze relief hypothesis) [default: carved]",
     )
-    p.add_argument(
-        "--rebuild",
-        action="store_true",
-        help="regenerate every file even when the folder already holds this build's intact "
-        "output (by default such a folder is verified — SHA-256 of every generated file — "
-        "and left as it is)",
-    )
+    add_rebuild_flag(p)
     add_memory_flag(p)
 
 
@@ -419,6 +415,7 @@ def _add_asset(sub: Any, full: bool) -> None:
         help="use your own travertine map (png/jpg) for ROLE basecolor, roughness "
         "or normal; give all three",
     )
+    add_rebuild_flag(p)
     add_memory_flag(p)
 
 

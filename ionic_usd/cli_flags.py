@@ -132,6 +132,17 @@ def add_memory_flag(p: argparse.ArgumentParser) -> None:
     )
 
 
+def add_rebuild_flag(p: argparse.ArgumentParser) -> None:
+    """``--rebuild``: regenerate a folder that already holds this build's intact output."""
+    p.add_argument(
+        "--rebuild",
+        action="store_true",
+        help="regenerate every file even when the folder already holds this build's intact "
+        "output (by default such a folder is verified — SHA-256 of every generated file — "
+        "and left as it is)",
+    )
+
+
 def add_variant_flag(p: argparse.ArgumentParser, help: str) -> None:
     """``--variant SET=VALUE`` (repeatable); read with
     :func:`ionic_usd.usd.reader.parse_variant_args`."""

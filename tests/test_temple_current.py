@@ -199,3 +199,18 @@ def test_a_current_folder_is_verified_without_loading_usd_or_the_generators(
         [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120
     )
     assert out.stdout.strip() == "[]", out.stdout
+
+
+def test_the_asset_command_verifies_an_unchanged_folder_too(tmp_path, capsys):
+    out = tmp_path / "A"
+    argv = ["asset", "-o", str(out), "--texture-size", "16"]
+    assert main(argv) == 0 and capsys.readouterr().out.startswith("wrote ")
+    before = _files(out)
+    assert main([*argv, "--force"]) == 0
+    assert capsys.readouterr().out.startswith("up to date ")
+    assert _files(out) == before
+    (out / "Payload" / "Materials.usda").write_text("#usda 1.0\n")  # damaged: rebuilt
+    assert main([*argv, "--force"]) == 0 and capsys.readouterr().out.startswith("wrote ")
+    assert _digests(out) == {k: v[0] for k, v in before.items()}
+    assert main([*argv, "--force", "--rebuild"]) == 0
+    assert capsys.readouterr().out.startswith("wrote ")

@@ -19,6 +19,7 @@ The variant vocabulary (sets, variants, texel densities, ``UV_SPAN``) is the ass
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import math
 import os
 import shutil
@@ -37,10 +38,13 @@ from ionic_usd.column.column import (
 )
 from ionic_usd.errors import GeometryError, OutputExistsError
 from ionic_usd.geometry.mesh import Mesh
+from ionic_usd.io import up_to_date
+from ionic_usd.pipeline.keys import build_key
 from ionic_usd.pipeline.mesh_cache import cached_meshes
 from ionic_usd.texture.uv import UVCache, attach_uvs, unwrap_parts
 from ionic_usd.usd.asset import AssetInstancer, AssetMesh
 from ionic_usd.usd.column_asset import (
+    ASSET_NAME,
     ASSET_TEXELS_PER_METRE,
     BASE_CHART_BOUNDARY,
     ENGAGED_INSET,
@@ -54,6 +58,7 @@ from ionic_usd.usd.column_asset import (
 
 __all__ = [
     "AssetReport",
+    "asset_key",
     "build_column_asset",
     "column_asset_meshes",
     "column_asset_ornament",
@@ -73,6 +78,7 @@ class AssetReport:
     uv_unwraps: int
     seconds: float
     bytes_on_disk: int
+    current: bool = False  # the folder already held this build's intact output: none written
 
 
 # -- clip ---------------------------------------------------------------------------------
@@ -449,6 +455,7 @@ def build_column_asset(
     *,
     force: bool = False,
     cache: UVCache | None = None,
+    rebuild: bool = False,
 ) -> AssetReport:
     """Write the column asset ``<folder>/IonicColumn.usda`` (+ Payload/) atomically.
 
@@ -459,6 +466,9 @@ def build_column_asset(
     force : replace an existing folder (atomically)
     cache : UV cache (default: the process-wide one); a rebuild of unchanged geometry runs
         no xatlas work
+    rebuild : regenerate even when ``folder`` already holds this build's intact output
+        (:func:`asset_key` and every file's SHA-256 in its manifest), which is otherwise left
+        as it is
 
     User textures (``opts.user_textures``) are validated before anything is written.
     """
@@ -473,6 +483,21 @@ def build_column_asset(
     if opts.user_textures:
         for src in opts.user_textures.values():
             validate_user_texture(src)
+    key = asset_key(opts)
+    record = None if rebuild else up_to_date(dest, key)
+    if record is not None:
+        try:
+            return AssetReport(
+                dest / f"{ASSET_NAME}.usda",
+                int(record["meshes"]),
+                {str(k): int(v) for k, v in record["triangles_per_lod"].items()},
+                0,
+                time.perf_counter() - t0,
+                sum(f.stat().st_size for f in dest.rglob("*") if f.is_file()),
+                current=True,
+            )
+        except (KeyError, TypeError, ValueError, AttributeError):
+            pass  # a record of another shape: build
     cache = cache if cache is not None else default_cache()
     misses0 = cache.misses
     # the generated meshes (unions, cuts, the capital's charts) are a pure function of the
@@ -485,6 +510,7 @@ def build_column_asset(
     )
     meshes, _ = _with_uvs(generated, cache)
     unwraps = cache.misses - misses0
+    triangles = _default_triangles(meshes, opts)
     path = author_column_asset(
         dest,
         opts,
@@ -492,8 +518,20 @@ def build_column_asset(
         column_asset_ornament(opts),
         populate=_textures_writer(opts),
         force=force,
+        key=key,
+        record={"meshes": len(meshes), "triangles_per_lod": triangles},
     )
     size = sum(f.stat().st_size for f in dest.rglob("*") if f.is_file())
-    return AssetReport(
-        path, len(meshes), _default_triangles(meshes, opts), unwraps, time.perf_counter() - t0, size
-    )
+    return AssetReport(path, len(meshes), triangles, unwraps, time.perf_counter() - t0, size)
+
+
+def asset_key(opts: ColumnAssetOptions) -> str:
+    """The content key of an asset build: its options, the bytes of the user's textures, the
+    code and the libraries (:func:`ionic_usd.pipeline.keys.build_key`)."""
+    users = []
+    for p in (opts.user_textures or {}).values():
+        try:
+            users.append(hashlib.sha256(Path(p).read_bytes()).hexdigest())
+        except OSError:
+            users.append(f"unreadable:{p}")
+    return build_key("column_asset", opts, users)

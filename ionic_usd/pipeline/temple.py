@@ -235,20 +235,20 @@ def compose_temple(
         current = _current(dest, key, t0)
         if current is not None:
             return current
-    from ionic_usd.pipeline.asset import build_column_asset, copy_stone_textures
+    from ionic_usd.pipeline.asset import asset_key, build_column_asset, copy_stone_textures
     from ionic_usd.usd.detail import TERRACOTTA
     from ionic_usd.usd.temple import plan_temple, temple_counts
 
     plan = plan_temple(layout, column, **options)
-    asset_key = build_key("column_asset", plan.opts, _file_digests(plan.opts.user_textures))
+    akey = asset_key(plan.opts)
 
     def build(tmp: Path) -> dict[str, Any]:
-        reused = not rebuild and dest.is_dir() and _reuse_asset(dest, tmp, asset_key)
+        reused = not rebuild and dest.is_dir() and _reuse_asset(dest, tmp, akey)
         if reused:
             log.info("the column asset is unchanged: its verified files are reused")
         else:
             log.info("building the column asset")
-            build_column_asset(tmp / ASSET_NAME, plan.opts)
+            build_column_asset(tmp / ASSET_NAME, plan.opts, rebuild=True)
         # tiles repeat their map every metre (stone: every TILE_METRES = 2 m): half the size
         # keeps the texel density
         copy_stone_textures(
@@ -261,7 +261,7 @@ def compose_temple(
             "overrides_sha256": hashlib.sha256((tmp / OVERRIDES_LAYER).read_bytes()).hexdigest(),
             **stats,
             "hypotheses": [h.id for h in layout.hypotheses],
-            "asset_key": asset_key,
+            "asset_key": akey,
             "asset_reused": reused,
         }
 

@@ -297,6 +297,8 @@ def replace_folder(
     force: bool = False,
     keep_existing: tuple[str, ...] = (),
     root_files: tuple[str, ...] = (),
+    key: str | None = None,
+    record: Callable[[object], dict] | None = None,
 ):
     """Build a folder in a staging sibling and move it into place kill-safely.
 
@@ -308,7 +310,15 @@ def replace_folder(
     from ionic_usd.io import replace_folder as _replace
 
     dest = Path(dest)
-    result = _replace(build, dest, force=force, keep_existing=keep_existing, root_files=root_files)
+    result = _replace(
+        build,
+        dest,
+        force=force,
+        keep_existing=keep_existing,
+        root_files=root_files,
+        key=key,
+        record=record,
+    )
     # layers cached under the old content must be re-read
     for layer in Sdf.Layer.GetLoadedLayers():
         real = layer.realPath
@@ -323,8 +333,11 @@ def write_asset(
     *,
     populate: Callable[[Path], None] | None = None,
     force: bool = False,
+    key: str | None = None,
+    record: dict | None = None,
 ) -> Path:
-    """Write an asset folder atomically; ``populate(tmp_folder)`` adds textures first."""
+    """Write an asset folder atomically; ``populate(tmp_folder)`` adds textures first; ``key``
+    and ``record`` are kept in its manifest (:func:`ionic_usd.io.replace_folder`)."""
     dest = Path(folder)
 
     def build(tmp: Path):
@@ -333,5 +346,12 @@ def write_asset(
             populate(tmp)
         write_asset_layers(spec, tmp)
 
-    replace_folder(build, dest, force=force, root_files=(f"{spec.name}.usda",))
+    replace_folder(
+        build,
+        dest,
+        force=force,
+        root_files=(f"{spec.name}.usda",),
+        key=key,
+        record=None if key is None else (lambda _: dict(record or {})),
+    )
     return dest / f"{spec.name}.usda"
