@@ -237,3 +237,25 @@ def test_unique_rows_is_numpys_unique_along_rows(dtype):
     np.testing.assert_array_equal(unique_rows(a), want[0])
     empty = np.zeros((0, 2), dtype=dtype)
     assert unique_rows(empty).shape == (0, 2)
+
+
+def test_pchip_is_scipys_pchip_interpolator():
+    from scipy.interpolate import PchipInterpolator
+
+    from ionic_usd.geometry.curves import pchip
+
+    rng = np.random.default_rng(5)
+    cases = [
+        (np.array([0.0, 1.0]), np.array([2.0, 3.0])),
+        (np.array([0.0, 0.2, 0.5, 1.0]), np.array([1.0, 1.0, 0.6, 0.8])),  # flat, turn
+        (np.array([0.0, 0.1, 0.15, 0.6, 1.0]), np.array([0.9, 0.5, 0.55, 0.55, 1.0])),
+    ]
+    for _ in range(20):
+        x = np.sort(rng.uniform(0, 3, 7))
+        cases.append((x, rng.normal(size=7)))
+    cases.append((np.array([0.0, 1.0, 2.0]), np.array([0.0, 1.0, -5.0])))  # end clamp to 3 m0
+    for x, y in cases:
+        t = np.linspace(x[0], x[-1], 301)
+        want = PchipInterpolator(x, y)(t)
+        np.testing.assert_allclose(pchip(x, y, t), want, rtol=0, atol=1e-12 * (1 + np.abs(y).max()))
+        np.testing.assert_allclose(pchip(x, y, x), y, atol=1e-14 * (1 + np.abs(y).max()))

@@ -23,6 +23,7 @@ from ionic_usd.column.volute import (
     volute_total_radius,
 )
 from ionic_usd.errors import ParameterError
+from ionic_usd.geometry.curves import pchip
 from ionic_usd.geometry.mesh import Mesh, merge
 from ionic_usd.grammar.scroll import ScrollGrammar, resolve_scroll
 
@@ -266,8 +267,6 @@ def bolster_profile(p: CapitalParams, length: float, radius: float) -> np.ndarra
             runs.append([k])
         else:
             runs[-1].append(k)
-    from scipy.interpolate import PchipInterpolator
-
     grid = np.linspace(0.0, 1.0, p.bolster_rows + 1)
     nodes: list[tuple[float, float]] = []
     for run in runs:
@@ -278,7 +277,7 @@ def bolster_profile(p: CapitalParams, length: float, radius: float) -> np.ndarra
             continue
         inside = grid[(grid > ps[0]) & (grid < ps[-1])]
         t = np.union1d(ps, inside)
-        nodes.extend(zip(t.tolist(), PchipInterpolator(ps, rs)(t).tolist(), strict=True))
+        nodes.extend(zip(t.tolist(), pchip(ps, rs, t).tolist(), strict=True))
     prof = [(0.0, 0.0)]
     for pos, r in nodes:
         node = (max(r, 0.0) * radius, pos * length)
