@@ -65,7 +65,9 @@ def author_mesh(
     layer : the layer to author into
     path : prim path; missing ancestors are created as ``Xform``
     mesh : the geometry; normals and ``st`` are written when present (indexed normals as
-        the indexed primvar ``primvars:normals``, others as the ``normals`` attribute)
+        the indexed primvar ``primvars:normals``, others as the ``normals`` attribute; ``st``
+        as the indexed primvar ``primvars:st``, de-duplicated by :func:`indexed_st` unless
+        ``mesh.st_distinct`` says the producer indexed it already)
     """
     spec = define_prim(layer, path, "Mesh")
     pts = np.ascontiguousarray(mesh.points, dtype=np.float32)
@@ -103,7 +105,10 @@ def author_mesh(
                 Vt.IntArray.FromNumpy(np.ascontiguousarray(mesh.normals_indices, dtype=np.int32)),
             )
     if mesh.st is not None:
-        values, indices = indexed_st(mesh.st, mesh.st_indices)
+        if mesh.st_distinct:  # the generator's own indexing (Mesh.st_distinct): as it is
+            values, indices = mesh.st, mesh.st_indices
+        else:
+            values, indices = indexed_st(mesh.st, mesh.st_indices)
         _attr(
             spec,
             "primvars:st",
