@@ -108,8 +108,8 @@ def author_mesh(
             _attr(spec, "primvars:normals", _T.Normal3fArray, values, interpolation="faceVarying")
             _attr(spec, "primvars:normals:indices", _T.IntArray, _ints(mesh.normals_indices))
     if mesh.st is not None:
-        if mesh.st_distinct:  # the generator's own indexing (Mesh.st_distinct): as it is
-            st, st_indices = mesh.st, mesh.st_indices
+        if mesh.st_distinct and mesh.st_indices is not None:
+            st, st_indices = mesh.st, mesh.st_indices  # the generator's own indexing: as it is
         else:
             st, st_indices = indexed_st(mesh.st, mesh.st_indices)
         _attr(
