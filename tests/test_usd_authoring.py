@@ -82,3 +82,75 @@ def test_atomic_write_and_force(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.usda"]  # no temp leftovers
     with pytest.raises(ParameterError, match="usda"):
         save_layer(new_layer("C"), tmp_path / "c.obj")
+
+
+def _primvar_arrays(path, prim_path: str, name: str) -> tuple[np.ndarray, np.ndarray]:
+    stage = Usd.Stage.Open(str(path))
+    pv = UsdGeom.PrimvarsAPI(stage.GetPrimAtPath(prim_path)).GetPrimvar(name)
+    assert pv.IsIndexed() and pv.GetInterpolation() == UsdGeom.Tokens.faceVarying
+    return np.array(pv.Get()), np.array(pv.GetIndices())
+
+
+@pytest.mark.parametrize(
+    ("params", "kw"),
+    [
+        (ShaftParams(), {}),
+        (ShaftParams(flute_slices=5, entasis=0.01), {"cap_bottom": False, "cap_top": False}),
+        (ShaftParams(flute_slices=4, ring_bottom=0.0, ring_top=0.0), {"cap_top": False}),
+    ],
+)
+def test_authored_shaft_st_is_the_generators_indexing(tmp_path, params, kw):
+    from ionic_usd.texture.atlas import chart_labels
+
+    m = build_shaft(params, **kw)
+    assert m.st_distinct  # the generator indexed st itself: authoring skips the sort
+    fast = write_meshes(tmp_path / "fast.usdc", {"Shaft": m}, root="Shaft")
+    # the same mesh without the promise: de-duplicated at authoring, as before
+    slow = write_meshes(tmp_path / "slow.usdc", {"Shaft": m.with_(st_distinct=False)}, root="Shaft")
+    values, idx = _primvar_arrays(fast, "/Shaft/Geom/Shaft", "st")
+    # expanded, exactly the generator's per-corner st, and exactly the de-duplicated file's
+    corner_st = m.st[m.st_indices]
+    np.testing.assert_array_equal(values[idx], corner_st)
+    np.testing.assert_array_equal(values, m.st)  # written as the generator indexed it
+    v_slow, i_slow = _primvar_arrays(slow, "/Shaft/Geom/Shaft", "st")
+    np.testing.assert_array_equal(v_slow[i_slow], corner_st)
+    # every value is used, and within a chart no two values are equal
+    assert np.unique(idx).size == len(values)
+    chart = chart_labels(idx, len(values))
+    value_chart = np.empty(len(values))
+    value_chart[idx.reshape(-1, 3)] = chart[:, None]
+    keyed = np.column_stack([values, value_chart])
+    assert len(np.unique(keyed, axis=0)) == len(values)
+    # the charts of the two files are the same (the sort may merge values of two charts
+    # that coincide, e.g. a cap centre with the side's seam corner, never more)
+    assert len(v_slow) <= len(values) <= len(v_slow) + 2
+    # the normals are untouched by the choice
+    for path in (fast, slow):
+        nv, ni = _primvar_arrays(path, "/Shaft/Geom/Shaft", "normals")
+        np.testing.assert_array_equal(nv[ni], m.corner_normals())
+
+
+def test_st_distinct_promise_follows_the_values():
+    from ionic_usd.errors import GeometryError
+    from ionic_usd.geometry.mesh import Mesh, merge, transform
+    from ionic_usd.texture.atlas import analytic_atlas, attach_uvs
+
+    m = build_shaft(ShaftParams(flute_slices=3))
+    assert m.st_distinct
+    # new values or indices drop the promise unless it is given again
+    assert not m.with_(st=m.st * 2, st_indices=m.st_indices).st_distinct
+    assert not m.with_(st_indices=m.st_indices[::-1]).st_distinct
+    assert m.with_(st=m.st * 2, st_distinct=True).st_distinct
+    assert m.with_(points=m.points * 2).st_distinct
+    # a mirror permutes each face's corners: the same values, still all used
+    mirrored = transform(m, np.diag([-1.0, 1.0, 1.0, 1.0]))
+    assert mirrored.st_distinct and not np.array_equal(mirrored.st_indices, m.st_indices)
+    assert not merge([m, m]).st_distinct  # two parts' charts may coincide
+    with pytest.raises(GeometryError, match="st_distinct"):
+        Mesh(m.points, m.face_vertex_counts, m.face_vertex_indices, st_distinct=True)
+    # packing moves whole charts apart: the atlas keeps the promise, and after packing all
+    # values are distinct (the charts no longer overlap)
+    atlas = analytic_atlas(m, texels_per_metre=64)
+    packed = attach_uvs(m, atlas)
+    assert atlas.st_distinct and packed.st_distinct
+    assert len(np.unique(packed.st, axis=0)) == len(packed.st)

@@ -43,6 +43,8 @@ from ionic_usd.errors import BudgetError, ParameterError
 from ionic_usd.geometry.mesh import Mesh, smooth_normals
 from ionic_usd.geometry.stitch import auto_sequence, stitch
 
+from .shaft_surface import grid_normals, shaft_st
+
 __all__ = [
     "ShaftParams",
     "SHAFT_PARAMETER_DOCS",
@@ -320,8 +322,9 @@ def build_shaft(
     Mesh with indexed faceVarying normals (``normals_indices``): smooth inside each flute
     and over fillets and rings, crisp at every flute/fillet edge and at the caps; and analytic
     ``st`` in metres of surface (the unrolled side, seam on the fillet at +X, and two flat
-    caps; see :func:`_shaft_st`), which :func:`ionic_usd.texture.uv.unwrap` packs without
-    xatlas.
+    caps; see :func:`ionic_usd.column.shaft_surface.shaft_st`), indexed by the generator
+    itself (``st_distinct``: authoring writes it without de-duplicating), which
+    :func:`ionic_usd.texture.uv.unwrap` packs without xatlas.
     """
     p = p or ShaftParams()
     est = shaft_triangle_estimate(p, caps=int(cap_bottom) + int(cap_top))
@@ -365,7 +368,7 @@ def build_shaft(
 
     tris, groups = [], []
     grid_tri = np.zeros((0, 3), dtype=np.int64)
-    grid_normals = np.zeros((0, 3), dtype=np.float32)
+    grid_nrm = np.zeros((0, 3), dtype=np.float32)
     grid_nidx = np.zeros(0, dtype=np.int32)
     # fluted bands: regular quads, split along the rising diagonal; their normals come from
     # the grid directly (dense arrays, no scatter), the rest of the mesh uses smooth_normals
@@ -375,7 +378,7 @@ def build_shaft(
         a0, a1 = r0 + j, r0 + (j + 1) % n
         b0, b1 = a0 + n, a1 + n
         grid_tri = np.stack([a0, a1, b0, a1, b1, b0], axis=-1).reshape(-1, 3)
-        grid_normals, grid_nidx = _grid_normals(fl_pts.reshape(nrows, n, 3), col, h)
+        grid_nrm, grid_nidx = grid_normals(fl_pts.reshape(nrows, n, 3), col, h)
     u_ring = ring_ang / (2 * np.pi)
     u_bot, u_top = fl_ang[0] / (2 * np.pi), fl_ang[-1] / (2 * np.pi)
     first_fl = base_fl + np.arange(n)
@@ -425,11 +428,13 @@ def build_shaft(
     used, local = np.unique(rest, return_inverse=True)
     rest_mesh = Mesh(points[used], np.full(len(rest), 3, np.int32), local.reshape(-1))
     rest_mesh = smooth_normals(rest_mesh, np.concatenate(groups), indexed=True)
-    tri = np.concatenate([grid_tri, rest]).astype(np.int32)
-    st, st_idx = _shaft_st(p, points, tri, n_lateral, fl_ang[0], ring_ang, starts)
-    normals = np.concatenate([grid_normals, rest_mesh.normals])
+    tri = np.concatenate([grid_tri, rest.astype(np.int32)])
+    st, st_idx = shaft_st(
+        points, tri, n_lateral, len(grid_tri), e, h, _reference_perimeter(p), starts
+    )
+    normals = np.concatenate([grid_nrm, rest_mesh.normals])
     assert rest_mesh.normals is not None and rest_mesh.normals_indices is not None
-    nidx = np.concatenate([grid_nidx, rest_mesh.normals_indices + len(grid_normals)])
+    nidx = np.concatenate([grid_nidx, rest_mesh.normals_indices + len(grid_nrm)])
     # drop points no triangle uses (cap centres of an open shaft, collapsed ring rows)
     keep = np.ones(len(points), dtype=bool)
     keep[[c_bot, c_top]] = [cap_bottom, cap_top]
@@ -439,7 +444,15 @@ def build_shaft(
         keep[plain[2]] = False
     if not keep.all():
         remap = (np.cumsum(keep) - 1).astype(np.int32)
-        tri = remap[tri]
+        if keep[:c_bot].all():  # only cap centres (the last points): renumber the caps only
+            tri[n_lateral:] = remap[tri[n_lateral:]]
+        else:
+            tri = remap[tri]
+            # the side values of the dropped rows are unused: drop them too (st_distinct)
+            keep_st = np.ones(len(st), dtype=bool)
+            keep_st[:c_bot] = keep[:c_bot]
+            st_idx = (np.cumsum(keep_st, dtype=np.int32) - 1)[st_idx]
+            st = st[keep_st]
         points = points[keep]
     if y_offset:
         points = points + np.array([0.0, y_offset, 0.0])
@@ -453,156 +466,19 @@ def build_shaft(
         st_idx,
         name=name,
         normals_indices=nidx,
+        st_distinct=True,
     )
 
 
-def _shaft_st(
-    p: ShaftParams,
-    points: np.ndarray,
-    tri: np.ndarray,
-    n_lateral: int,
-    fl_ang: np.ndarray,
-    ring_ang: np.ndarray,
-    starts: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Analytic texture coordinates in metres: the unrolled side and two planar caps.
-
-    Side (triangles ``[:n_lateral]``): t = y (the taper's slope changes arc length by
-    < 0.01 %), s = arc length around the full-flute cross-section at the mean radius, the
-    same s for a column of vertices on every row, so flute edges run straight up the chart.
-    Plain-ring vertices (at other angles) take s from their angle through the same arc-length
-    function. The seam (s = 0 and s = perimeter) lies on a fillet at angle 0; triangles
-    across it use a second value of their low-s corners. Caps: (x, z) below and (x, −z) above,
-    exact and wound like their faces (so is the side: s grows with the angle about +Y).
-    Distortion: the side's s-scale is the reference row's, so a ring at radius r is stretched
-    by (reference arc length)/(2π r) and a flute end is compressed where its flute narrows.
-
-    Returns
-    -------
-    st : (w, 2) float32 metres
-    st_indices : (3 t,) int32
-    """
-    e, h = p.flutes, p.flute_slices
-    n = p.fluted_segments
-    k_per = n // e  # vertices per flute period in a fluted row
+def _reference_perimeter(p: ShaftParams) -> float:
+    """Length of the full-flute cross-section at the mean radius (the side chart's width)."""
     r_mid = 0.5 * (p.bottom_radius + p.top_radius)
     ref, _ = _fluted_rows(
         ShaftParams(**{**p.to_dict(), "entasis": 0.0, "bottom_radius": r_mid, "top_radius": r_mid}),
         np.array([0.5 * p.length]),
         np.ones(1),
     )
-    perimeter = float(
-        np.linalg.norm(np.diff(np.vstack([ref[0], ref[0, :1]]), axis=0), axis=1).sum()
-    )
-    n_pts = len(points)
-    # plain rings (other angles): s proportional to the angle
-    s = np.zeros(n_pts)
-    for k in (0, 3):
-        ring = points[starts[k] : starts[k + 1]]
-        theta = np.mod(np.arctan2(-ring[:, 2], ring[:, 0]), 2 * np.pi)
-        s[starts[k] : starts[k + 1]] = theta / (2 * np.pi) * perimeter
-    # rows with the flute columns (the fluted grid and the two plain rows at its angles):
-    # s = the flute centre's s + arc length along this row from the flute centre, so every
-    # flute centre runs straight up the chart and a narrowing flute end stays narrow
-    rows = np.concatenate(
-        [
-            np.arange(starts[1], starts[3]).reshape(2, n),
-            np.arange(starts[-1], n_pts - 2).reshape(-1, n),
-        ]
-    )
-    q = points[rows]  # (R, n, 3), all rows at once
-    seg = np.linalg.norm(np.roll(q, -1, axis=1) - q, axis=2)
-    cum = (np.cumsum(seg, axis=1) - seg).reshape(len(rows), e, k_per)
-    # the flute centre lies half-way (in arc length) between the flute's two corners
-    centre = cum[:, :, 0] + 0.5 * seg.reshape(len(rows), e, k_per)[:, :, :h].sum(axis=2)
-    # scaled so the row's perimeter maps to the reference one: the taper and a flute end's
-    # narrowing spread over the whole row instead of squeezing the fillets
-    local = (cum - centre[:, :, None]) * (perimeter / seg.sum(axis=1))[:, None, None]
-    s[rows] = ((np.arange(e) + 0.5)[None, :, None] * (perimeter / e) + local).reshape(len(rows), n)
-    s = np.mod(s, perimeter)
-    side = np.stack([s, points[:, 1]], axis=1)
-    # the seam: a side triangle spanning more than half the perimeter wraps around s = 0
-    lat = tri[:n_lateral]
-    s0, s1, s2 = s[lat[:, 0]], s[lat[:, 1]], s[lat[:, 2]]  # columns: fast reductions
-    span = np.maximum(np.maximum(s0, s1), s2) - np.minimum(np.minimum(s0, s1), s2)
-    wraps = np.flatnonzero(span > 0.5 * perimeter)
-    sub = lat[wraps]
-    low = s[sub] < 0.5 * perimeter
-    dup_v = np.unique(sub[low])
-    dup_of = np.zeros(n_pts, dtype=np.int64)
-    dup_of[dup_v] = n_pts + np.arange(len(dup_v))
-    st_idx = np.empty((len(tri), 3), dtype=np.int64)
-    st_idx[:n_lateral] = lat
-    st_idx[wraps] = np.where(low, dup_of[sub], sub)
-    values = [side, side[dup_v] + [perimeter, 0.0]]
-    base = n_pts + len(dup_v)
-    caps = tri[n_lateral:]
-    for k, sign in ((0, 1.0), (3, -1.0)):  # caps: bottom ring row 0, top ring row 3
-        sel = np.all(np.abs(points[caps, 1] - points[starts[k], 1]) < 1e-12, axis=1)
-        if not sel.any():
-            continue
-        v = np.unique(caps[sel])
-        values.append(np.stack([points[v, 0], sign * points[v, 2]], axis=1))
-        st_idx[n_lateral + np.flatnonzero(sel)] = base + np.searchsorted(v, caps[sel])
-        base += len(v)
-    return np.concatenate(values).astype(np.float32), st_idx.reshape(-1).astype(np.int32)
-
-
-def _grid_normals(pts: np.ndarray, col: np.ndarray, h: int) -> tuple[np.ndarray, np.ndarray]:
-    """Indexed corner normals of the fluted grid's triangles, crisp at the flute corners.
-
-    ``pts`` (R, N, 3) rows of the fluted grid; quads (r, j) are split into (a0, a1, b0) and
-    (a1, b1, b0). A vertex's normal on each side of a crease column is the mean of the unit
-    normals of the quads on that side (a regular grid: equal weights are the angle weights).
-    Every vertex has one value (its right side: the quads of column j); a vertex on a crease
-    column (a flute edge) has a second one for its left side.
-
-    Returns
-    -------
-    values : (R (N + c), 3) float32, row by row: each vertex's right-side value, followed on
-        the c crease columns by its left-side value
-    indices : (2 (R-1) N · 3,) int32, one per triangle corner
-    """
-    pts = pts.astype(np.float32)  # normals need no more precision; halves the memory traffic
-    R, N = pts.shape[:2]
-    a0 = pts[:-1]
-    b0 = pts[1:]
-    q = np.cross(np.roll(b0, -1, axis=1) - a0, b0 - np.roll(a0, -1, axis=1))  # quad normals
-    q /= np.maximum(np.linalg.norm(q, axis=2, keepdims=True), 1e-30)
-    zero = np.zeros_like(q[:1])
-    v = np.concatenate([zero, q]) + np.concatenate([q, zero])  # quads above+below a vertex
-    v_left = np.roll(v, 1, axis=1)  # the quads to the left of vertex j are column j - 1
-    is_crease = (col == 0) | (col == h)
-    creases = np.flatnonzero(is_crease)
-    right = v + np.where(is_crease[None, :, None], 0.0, v_left)
-    # values row by row, each crease vertex's left value right after its right one: corner
-    # indices then follow the grid as closely as the vertex indices do, which the crate
-    # writer's integer compression turns into a smaller file in less time (measured at 1.25 M
-    # triangles: 31 → 17 ms to save the indices, 0.42 → 0.19 MB, against the left values
-    # stored after all right ones)
-    width = N + len(creases)
-    slot = np.arange(N) + np.cumsum(is_crease) - is_crease  # column of the right value
-    values = np.empty((R, width, 3), dtype=np.float32)
-    values[:, slot] = right
-    values[:, slot[creases] + 1] = v_left[:, creases]
-    values = values.reshape(-1, 3)
-    values /= np.maximum(np.linalg.norm(values, axis=1, keepdims=True), 1e-30)
-    rows = np.arange(R, dtype=np.int64)[:, None]
-    right_idx = rows * width + slot
-    left_idx = right_idx + is_crease
-    left_next = np.roll(left_idx, -1, axis=1)  # left side of vertex j + 1
-    corners = np.stack(
-        [
-            right_idx[:-1],
-            left_next[:-1],
-            right_idx[1:],
-            left_next[:-1],
-            left_next[1:],
-            right_idx[1:],
-        ],
-        axis=2,
-    )
-    return values.astype(np.float32), corners.reshape(-1).astype(np.int32)
+    return float(np.linalg.norm(np.diff(np.vstack([ref[0], ref[0, :1]]), axis=0), axis=1).sum())
 
 
 def shaft_silhouette(p: ShaftParams, samples: int = 200) -> np.ndarray:

@@ -4,7 +4,8 @@ Fields map 1:1 to ``UsdGeom.Mesh``: ``points`` → ``points``, ``face_vertex_cou
 ``faceVertexCounts``, ``face_vertex_indices`` → ``faceVertexIndices``, ``normals`` → ``normals``
 (with ``normals_interpolation``) or, with ``normals_indices``, the indexed primvar
 ``primvars:normals`` (the ``normals`` attribute cannot be indexed; a renderer reads the primvar
-first), ``st`` / ``st_indices`` → the indexed primvar ``primvars:st``.
+first), ``st`` / ``st_indices`` → the indexed primvar ``primvars:st`` (written as it is when
+``st_distinct``, else de-duplicated at authoring).
 Winding is counter-clockwise seen from outside (USD's default ``orientation = rightHanded``).
 """
 
@@ -65,6 +66,16 @@ class Mesh:
         Indexed faceVarying normals: corner c has normal ``normals[normals_indices[c]]``
         (:meth:`corner_normals` expands them). A crisp-edged solid needs about one value per
         point instead of one per corner: a third of the data to author and store.
+    st_distinct : bool
+        The producer's promise that ``st`` is already indexed: every value is used by a corner
+        and no two values of one chart (triangles joined through shared values) are equal, as
+        a generator emits one value per seam-split chart vertex. Authoring then writes
+        ``st`` / ``st_indices`` as they are instead of de-duplicating them (a sort of every
+        value). Values of different charts may coincide (metric charts overlap until packed);
+        they stay apart, which keeps the charts apart for a reader. A broken promise costs
+        only a larger file: the expanded ``st[st_indices]`` is authored exactly either way.
+        Replacing ``st`` or ``st_indices`` with :meth:`with_` drops the promise unless it is
+        given again.
     """
 
     points: np.ndarray
@@ -76,6 +87,7 @@ class Mesh:
     st_indices: np.ndarray | None = None
     name: str = "mesh"
     normals_indices: np.ndarray | None = None
+    st_distinct: bool = False
     # derived data (the fan triangulation): not an init field, so dataclasses.replace() and
     # with_() always start a fresh cache and can never carry stale triangles over
     _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
@@ -123,6 +135,9 @@ class Mesh:
             object.__setattr__(self, "normals", _frozen(nrm))
         if (self.st is None) != (self.st_indices is None):
             raise GeometryError(f"mesh {self.name!r}: st and st_indices go together")
+        if self.st_distinct and self.st is None:
+            raise GeometryError(f"mesh {self.name!r}: st_distinct without st")
+        object.__setattr__(self, "st_distinct", bool(self.st_distinct))
         if self.st is not None:
             st = np.asarray(self.st, dtype=np.float32).reshape(-1, 2)
             sti = np.asarray(self.st_indices, dtype=np.int32).reshape(-1)
@@ -172,7 +187,12 @@ class Mesh:
         return corner_normals(self)
 
     def with_(self, **changes) -> Mesh:
-        """A copy with some fields replaced (the cache is not carried over)."""
+        """A copy with some fields replaced (the cache is not carried over).
+
+        New ``st`` or ``st_indices`` drop the ``st_distinct`` promise unless it is given again.
+        """
+        if "st" in changes or "st_indices" in changes:
+            changes.setdefault("st_distinct", False)
         return replace(self, **changes)
 
 
@@ -449,7 +469,12 @@ def transform(mesh: Mesh, matrix: np.ndarray) -> Mesh:
         elif normals is not None and mesh.normals_interpolation == "faceVarying":
             normals = normals[perm]
     return mesh.with_(
-        points=pts, face_vertex_indices=idx, normals=normals, st_indices=sti, normals_indices=nidx
+        points=pts,
+        face_vertex_indices=idx,
+        normals=normals,
+        st_indices=sti,
+        normals_indices=nidx,
+        st_distinct=mesh.st_distinct,  # a face's corners permuted: the same values, all used
     )
 
 

@@ -74,6 +74,7 @@ def _write(folder: Path, meshes: list[AssetMesh]) -> None:
                 "tags": dict(am.tags),
                 "mesh_name": m.name,
                 "interpolation": m.normals_interpolation,
+                "st_distinct": m.st_distinct,  # authoring writes such st without sorting
                 "fields": present,
             }
         )
@@ -87,7 +88,12 @@ def _read(folder: Path) -> list[AssetMesh]:
     with np.load(folder / _ARRAYS, allow_pickle=False) as z:
         for i, e in enumerate(index):
             kw = {f: z[f"{i}.{f}"] for f in e["fields"]}
-            mesh = Mesh(normals_interpolation=e["interpolation"], name=e["mesh_name"], **kw)
+            mesh = Mesh(
+                normals_interpolation=e["interpolation"],
+                name=e["mesh_name"],
+                st_distinct=bool(e.get("st_distinct", False)),
+                **kw,
+            )
             out.append(AssetMesh(e["part"], e["name"], mesh, e["tags"]))
     return out
 

@@ -77,6 +77,10 @@ class UVAtlas:
     seconds : float
         Wall time of the xatlas run(s) that produced the atlas; a diagnostic, not stored in
         the cache (0 for an atlas read from disk).
+    st_distinct : bool
+        Packed from a mesh whose ``st`` its generator indexed
+        (:attr:`ionic_usd.geometry.mesh.Mesh.st_distinct`): each chart was moved and scaled as a
+        whole, so the values stay one per chart vertex and :func:`attach_uvs` passes it on.
     """
 
     st_px: np.ndarray
@@ -87,6 +91,7 @@ class UVAtlas:
     utilisation: float
     texels_per_metre: float
     seconds: float = field(default=0.0, compare=False)
+    st_distinct: bool = False
 
     def __post_init__(self) -> None:
         st = np.asarray(self.st_px, dtype=np.float32).reshape(-1, 2)
@@ -121,6 +126,7 @@ class UVAtlas:
         object.__setattr__(self, "st_indices", frozen_array(sti))
         object.__setattr__(self, "utilisation", float(self.utilisation))
         object.__setattr__(self, "texels_per_metre", float(self.texels_per_metre))
+        object.__setattr__(self, "st_distinct", bool(self.st_distinct))
 
     @property
     def size(self) -> int:
@@ -182,14 +188,16 @@ def common_atlas_size(atlases: Iterable[UVAtlas]) -> int:
 def attach_uvs(mesh: Mesh, atlas: UVAtlas, atlas_size: int | None = None) -> Mesh:
     """``mesh`` with ``st = atlas.st_px / atlas_size`` and ``st_indices`` attached.
 
-    Points, faces and normals are untouched.
+    Points, faces and normals are untouched; ``st_distinct`` comes from the atlas.
     """
     if atlas.st_indices.size != mesh.face_vertex_indices.size:
         raise GeometryError(
             f"attach_uvs: atlas has {atlas.st_indices.size} corners, mesh {mesh.name!r} has "
             f"{mesh.face_vertex_indices.size}"
         )
-    return mesh.with_(st=atlas.st(atlas_size), st_indices=atlas.st_indices)
+    return mesh.with_(
+        st=atlas.st(atlas_size), st_indices=atlas.st_indices, st_distinct=atlas.st_distinct
+    )
 
 
 def chart_labels(st_indices: np.ndarray, n_values: int) -> np.ndarray:
@@ -280,6 +288,7 @@ def analytic_atlas(
         chart_count=n_charts,
         utilisation=min(1.0, area * tpm * tpm / (width * height)),
         texels_per_metre=tpm,
+        st_distinct=mesh.st_distinct,
     )
 
 

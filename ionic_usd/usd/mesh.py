@@ -48,7 +48,26 @@ def _attr(
 
 def mesh_extent(mesh: Mesh) -> Vt.Vec3fArray:
     """The mesh's bounds as a USD ``extent`` value."""
-    return Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(mesh.extent, dtype=np.float32))
+    return _floats(Vt.Vec3fArray, mesh.extent)
+
+
+# Vt.*Array.FromNumpy converts element by element through the buffer protocol, walking an
+# n-dimensional index: a flat float32 view of an (n, 3) array converts in about half the time
+# (measured at 0.63 M points: 9.1 -> 5.2 ms), the same values (FromNumpy groups the flat
+# items by the element's width)
+def _floats(cls, a: np.ndarray):
+    return cls.FromNumpy(np.ascontiguousarray(a, dtype=np.float32).reshape(-1))
+
+
+def _ints(a: np.ndarray) -> Vt.IntArray:
+    return Vt.IntArray.FromNumpy(np.ascontiguousarray(a, dtype=np.int32).reshape(-1))
+
+
+def _counts(counts: np.ndarray) -> Vt.IntArray:
+    """``faceVertexCounts``; all equal (a triangle mesh) as a filled array, not a conversion."""
+    if counts.size and counts.min() == counts.max():
+        return Vt.IntArray(int(counts.size), int(counts[0]))
+    return _ints(counts)
 
 
 def author_mesh(
@@ -65,28 +84,19 @@ def author_mesh(
     layer : the layer to author into
     path : prim path; missing ancestors are created as ``Xform``
     mesh : the geometry; normals and ``st`` are written when present (indexed normals as
-        the indexed primvar ``primvars:normals``, others as the ``normals`` attribute)
+        the indexed primvar ``primvars:normals``, others as the ``normals`` attribute; ``st``
+        as the indexed primvar ``primvars:st``, de-duplicated by :func:`indexed_st` unless
+        ``mesh.st_distinct`` says the producer indexed it already)
     """
     spec = define_prim(layer, path, "Mesh")
-    pts = np.ascontiguousarray(mesh.points, dtype=np.float32)
-    _attr(spec, "points", _T.Point3fArray, Vt.Vec3fArray.FromNumpy(pts))
-    _attr(
-        spec,
-        "faceVertexCounts",
-        _T.IntArray,
-        Vt.IntArray.FromNumpy(np.ascontiguousarray(mesh.face_vertex_counts, dtype=np.int32)),
-    )
-    _attr(
-        spec,
-        "faceVertexIndices",
-        _T.IntArray,
-        Vt.IntArray.FromNumpy(np.ascontiguousarray(mesh.face_vertex_indices, dtype=np.int32)),
-    )
+    _attr(spec, "points", _T.Point3fArray, _floats(Vt.Vec3fArray, mesh.points))
+    _attr(spec, "faceVertexCounts", _T.IntArray, _counts(mesh.face_vertex_counts))
+    _attr(spec, "faceVertexIndices", _T.IntArray, _ints(mesh.face_vertex_indices))
     _attr(spec, "extent", _T.Float3Array, mesh_extent(mesh))
     _attr(spec, "subdivisionScheme", _T.Token, "none", uniform=True)
     _attr(spec, "doubleSided", _T.Bool, bool(double_sided), uniform=True)
     if mesh.normals is not None:
-        values = Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(mesh.normals, dtype=np.float32))
+        values = _floats(Vt.Vec3fArray, mesh.normals)
         if mesh.normals_indices is None:
             _attr(
                 spec, "normals", _T.Normal3fArray, values, interpolation=mesh.normals_interpolation
@@ -96,22 +106,20 @@ def author_mesh(
             # 'primvars:normals' are both specified, the latter has precedence" (Hydra, Blender
             # and usdview read the primvar first), so exactly one of the two is authored
             _attr(spec, "primvars:normals", _T.Normal3fArray, values, interpolation="faceVarying")
-            _attr(
-                spec,
-                "primvars:normals:indices",
-                _T.IntArray,
-                Vt.IntArray.FromNumpy(np.ascontiguousarray(mesh.normals_indices, dtype=np.int32)),
-            )
+            _attr(spec, "primvars:normals:indices", _T.IntArray, _ints(mesh.normals_indices))
     if mesh.st is not None:
-        values, indices = indexed_st(mesh.st, mesh.st_indices)
+        if mesh.st_distinct and mesh.st_indices is not None:
+            st, st_indices = mesh.st, mesh.st_indices  # the generator's own indexing: as it is
+        else:
+            st, st_indices = indexed_st(mesh.st, mesh.st_indices)
         _attr(
             spec,
             "primvars:st",
             _T.TexCoord2fArray,
-            Vt.Vec2fArray.FromNumpy(values),
+            _floats(Vt.Vec2fArray, st),
             interpolation="faceVarying",
         )
-        _attr(spec, "primvars:st:indices", _T.IntArray, Vt.IntArray.FromNumpy(indices))
+        _attr(spec, "primvars:st:indices", _T.IntArray, _ints(st_indices))
     return spec
 
 
