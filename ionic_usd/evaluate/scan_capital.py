@@ -181,7 +181,7 @@ def fit_scanned_capital(
         sol = least_squares(
             lambda x: dist(surf, x[0], x[1], sel),
             np.array([s0, ty1]),
-            bounds=([0.85, -lim], [1.15, lim]),
+            bounds=([0.85, ty1 - lim], [1.15, ty1 + lim]),
             loss="soft_l1",
             f_scale=f_scale,
             x_scale=[0.05, 0.02 * size],
