@@ -119,3 +119,27 @@ def test_cli_bad_grammar_points_at_token(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "module 1" in err and "^" in err
     assert not (tmp_path / "x.usda").exists()
+
+
+@pytest.mark.parametrize("diameter", [0.6, 1.2])
+def test_portunus_capital_scales_with_the_lower_diameter(diameter):
+    """The capital of a column ``k`` times the Portunus diameter is the Portunus capital
+    ``k`` times as large: every vertex of its meshes, and its height."""
+    from ionic_usd.column.capital import build_capital, capital_height
+
+    k = diameter / 0.95
+    ref, p = portunus_column_params(), portunus_column_params(lower_diameter=diameter)
+    assert p.capital.volute.capital_spiral_radius == pytest.approx(k * 0.95 / 4)
+    assert p.capital.volute.a == ref.capital.volute.a  # spiral units kept
+    assert p.capital.spiral_samples == ref.capital.spiral_samples
+    assert capital_height(p.capital) == pytest.approx(k * capital_height(ref.capital), rel=1e-12)
+    big = build_capital(p.capital, top_radius=p.shaft.top_radius).as_dict()
+    small = build_capital(ref.capital, top_radius=ref.shaft.top_radius).as_dict()
+    assert big.keys() == small.keys()
+    for name, mesh in big.items():
+        np.testing.assert_allclose(mesh.points, k * small[name].points, atol=1e-9, err_msg=name)
+    # the column keeps its total height: the shaft gives what the capital takes
+    built = build_column(p)
+    top = max(m.points[:, 1].max() for m in built.parts().values())
+    assert top == pytest.approx(8.22, abs=1e-6)
+    assert portunus_column_params(lower_diameter=0.95) == ref

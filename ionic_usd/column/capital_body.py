@@ -29,6 +29,7 @@ from ionic_usd.grammar.scroll import ScrollGrammar, resolve_scroll
 
 __all__ = [
     "CapitalParams",
+    "CAPITAL_LENGTHS",
     "CapitalParts",
     "CapitalLayout",
     "CAPITAL_PARAMETER_DOCS",
@@ -71,6 +72,23 @@ CAPITAL_PARAMETER_DOCS: dict[str, tuple[str, str, str]] = {
     "ring_segments": ("", "count", "segments around the echinus, bolsters and eyes (LOD)"),
     "bolster_rows": ("", "count", "rows along a bolster between front and rear (LOD)"),
 }
+
+
+#: The fields in metres (:meth:`CapitalParams.scaled`).
+CAPITAL_LENGTHS = (
+    "capital_length",
+    "capital_width",
+    "spiral_margin",
+    "scroll_position_y",
+    "capital_position_y",
+    "abacus_length",
+    "abacus_width",
+    "abacus_height",
+    "echinus_height",
+    "echinus_projection",
+    "relief_depth",
+    "slab_depth",
+)
 
 
 @dataclass(frozen=True)
@@ -170,6 +188,14 @@ class CapitalParams:
 
     def with_(self, **changes) -> CapitalParams:
         return replace(self, **changes)
+
+    def scaled(self, factor: float) -> CapitalParams:
+        """The same capital ``factor`` times as large (a column of ``factor`` times the lower
+        diameter): every length scaled, the volute with it; sampling counts kept."""
+        if isinstance(factor, bool) or not (isinstance(factor, int | float) and factor > 0):
+            raise ParameterError("factor", factor, "a number > 0", context="capital")
+        lengths = {n: getattr(self, n) * factor for n in CAPITAL_LENGTHS}
+        return replace(self, volute=self.volute.scaled(factor), **lengths)
 
 
 @dataclass(frozen=True)

@@ -304,9 +304,10 @@ def portunus_column_params(
     columns of 20–30 ft diminish by 1/7 — 8.22 m ≈ 28 Roman ft); Attic base half a diameter
     high (Vitruvius III.5.1–3); 24 flutes with fillets ¼ of a flute and semicircular flutes
     (Vitruvius III.5.14; ``flutes=20`` is the reconstruction hypothesis); capital proportions
-    after Vitruvius III.5.5–8 (see :mod:`ionic_usd.column.capital`).
+    after Vitruvius III.5.5–8 (see :mod:`ionic_usd.column.capital`), scaled with the lower
+    diameter (the capital of a 1.2 m column is 1.2 / 0.95 times the Portunus one).
     """
-    cap = CapitalParams()
+    cap = CapitalParams().scaled(lower_diameter / PORTUNUS_LOWER_DIAMETER)
     shaft = portunus_shaft_params(
         height=height, lower_diameter=lower_diameter, flutes=flutes, capital=cap
     )

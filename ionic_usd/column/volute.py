@@ -49,6 +49,7 @@ from ionic_usd.errors import GeometryError, ParameterError
 
 __all__ = [
     "VOLUTE_MODELS",
+    "VOLUTE_LENGTHS",
     "VoluteParams",
     "VOLUTE_PARAMETER_DOCS",
     "vitruvian_coefficients",
@@ -97,6 +98,16 @@ VOLUTE_PARAMETER_DOCS: dict[str, tuple[str, str, str]] = {
         "centred_arcs: innermost / outermost square side (steps linear in between)",
     ),
 }
+
+#: The fields in metres (:meth:`VoluteParams.scaled`); the others are angles, counts, ratios or
+#: spiral units (× R).
+VOLUTE_LENGTHS = (
+    "capital_circle_radius",
+    "capital_spiral_radius",
+    "offset_x",
+    "offset_y",
+    "arc_square",
+)
 
 #: The volute curve constructions (``VoluteParams.volute_model``).
 VOLUTE_MODELS = ("log_spiral", "centred_arcs")
@@ -241,6 +252,13 @@ class VoluteParams:
 
     def with_(self, **changes) -> VoluteParams:
         return replace(self, **changes)
+
+    def scaled(self, factor: float) -> VoluteParams:
+        """The same volute ``factor`` times as large: every length in metres (R, the eye,
+        the offsets, the arc square) scaled; angles and spiral units kept."""
+        if isinstance(factor, bool) or not (isinstance(factor, int | float) and factor > 0):
+            raise ParameterError("factor", factor, "a number > 0", context="volute")
+        return replace(self, **{n: getattr(self, n) * factor for n in VOLUTE_LENGTHS})
 
     # -- validation ---------------------------------------------------------------------
     def _check_shape(self) -> None:

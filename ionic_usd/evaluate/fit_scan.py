@@ -10,11 +10,12 @@
    — points against the model, so missing sectors cost nothing; the outer radius of every bin
    gives the taper (robust line), hence the lower diameter at the shaft's bottom;
 3. the base: once the turn about the axis is fixed, its meridian at the plinth's face normals
-   (:func:`.scan_parts.base_meridian`) is fitted with :func:`.fit_base.fit_base`; the column
+   (:func:`.scan_parts.base_meridian`, its top at the joint found from the flutes' start,
+   :func:`.scan_parts.base_top`) is fitted with :func:`.fit_base.fit_base`; the column
    takes the fitted base unless the base has a square plinth (a lathe grammar cannot rebuild
    its corners; ``fit_base_grammar`` takes it anyway);
-4. the capital is detected (asymmetric wide bins) and rebuilt from the Vitruvian proportions
-   at the fitted diameter (a scanned volute is not fitted yet);
+4. the capital: the generator's capital fitted to its points — placement, volute size, eye
+   height and spacing, for both volute models (:mod:`.scan_capital`);
 5. deviations: every scan point's distance to the fitted surfaces — exact to the fitted
    shaft section (scaled by the taper at the point's height), and to the base and capital
    by the nearest of dense surface samples (about 1 mm apart).
@@ -33,9 +34,16 @@ import numpy as np
 from ionic_usd.column.column import ColumnParams, build_column, portunus_column_params
 from ionic_usd.errors import GeometryError
 from ionic_usd.evaluate.fit_core import FitResult
-from ionic_usd.evaluate.polyline import PolylineIndex, closest_on_polyline
+from ionic_usd.evaluate.polyline import closest_on_polyline
 from ionic_usd.evaluate.scan_axis import ColumnFrame, estimate_axis, find_parts
-from ionic_usd.evaluate.scan_parts import base_meridian, has_square_plinth, to_column
+from ionic_usd.evaluate.scan_capital import CapitalFit
+from ionic_usd.evaluate.scan_deviation import (
+    heat_colours,
+    other_parts_tree,
+    scan_deviation,
+    shaft_deviation,
+)
+from ionic_usd.evaluate.scan_parts import base_meridian, base_top, has_square_plinth, to_column
 
 __all__ = ["ScanFit", "ScanSummary", "fit_column_scan", "heat_colours", "scan_deviation"]
 
@@ -316,6 +324,8 @@ def fit_column_scan(
     r_bottom = (ra + rb * s0) * scale
     diameter = 2.0 * r_bottom
     col = portunus_column_params(lower_diameter=diameter, flutes=e)
+    if "base" in frame.parts:
+        frame = _joint(frame, loc, col, r_bottom, sec, notes)
     sh = col.shaft
     top_ratio = sh.top_radius / sh.bottom_radius
     has_base, has_cap = "base" in frame.parts, "capital" in frame.parts
@@ -361,7 +371,7 @@ def fit_column_scan(
     h_col0 = _column_zero(frame, col, s0)
     # the flutes fix the turn about the axis up to a flute period; the plinth and the
     # volutes (180° symmetric) choose among the periods: the one nearest the scan wins
-    tree = _other_parts_tree(col)
+    tree = other_parts_tree(col)
     probe = sub[rng.choice(len(sub), min(len(sub), 5000), replace=False)]
     turns: list[tuple[float, np.ndarray, int]] = []
     for j in range(e // 2 if (has_base or has_cap) else 1):
@@ -375,14 +385,13 @@ def fit_column_scan(
     if has_base:  # the turn about the axis is known now: the plinth's faces face ±x, ±z
         col, base_fit = _fit_scanned_base(to_column(sub, m), col, frame, notes, fit_base_grammar)
         if base_fit is not None:
-            tree = _other_parts_tree(col)
+            tree = other_parts_tree(col)
+    cap_fit = None
     if has_cap:
-        notes.append(
-            "capital found; rebuilt from Vitruvius' proportions at the diameter "
-            "(scanned volutes are not fitted yet)"
-        )
+        col, m, cap_fit = _fit_capital(sub, col, m, has_base, notes)
+        tree = other_parts_tree(col)
     dev = scan_deviation(pts, col, m, tree=tree)
-    fits = _part_report(frame.local(pts)[:, 2], dev, frame, sec, base_fit, col)
+    fits = _part_report(frame.local(pts)[:, 2], dev, frame, sec, base_fit, col, cap_fit)
     return ScanFit(
         col,
         frame,
@@ -398,6 +407,75 @@ def fit_column_scan(
         notes,
         fits,
     )
+
+
+def _fit_capital(
+    sub: np.ndarray, col: ColumnParams, m: np.ndarray, has_base: bool, notes: list[str]
+) -> tuple[ColumnParams, np.ndarray, CapitalFit]:
+    """The capital fitted to its points (:func:`.scan_capital.fit_scanned_capital`), the
+    column taking it: its height shift lengthens the shaft (a whole column) or moves the
+    column along the axis (no base to hold it)."""
+    from ionic_usd.evaluate.scan_capital import fit_scanned_capital
+
+    built = build_column(col)
+    y_top = built.base_height + built.shaft_length
+    low = float(built.capital_body.points[:, 1].min())
+    d = 2.0 * col.shaft.bottom_radius
+    q = to_column(sub, m)
+    q = q[q[:, 1] > low - 0.05 * d]
+    other = shaft_deviation(q, col)
+    keep = (q[:, 1] > y_top) | (other > 0.003 * d)  # not on the shaft's top
+    fit = fit_scanned_capital(q[keep], col.capital, col.shaft.top_radius, y_top, other[keep])
+    if has_base:
+        col = dataclasses.replace(
+            col, shaft=dataclasses.replace(col.shaft, height=col.shaft.height + fit.ty)
+        )
+    else:
+        m = m.copy()
+        m[3, :3] += fit.ty * m[1, :3]
+    col = dataclasses.replace(col, capital=fit.capital)
+    notes.append(
+        f"capital fitted to {fit.points} points ({fit.seconds:.1f} s): volute model "
+        f"{fit.model}, R = {fit.values['capital_spiral_radius']:.4f} m, height shift "
+        f"{fit.ty * 1000:+.3g} mm; rms {fit.rms_start * 1000:.2f} mm (Vitruvian, rebuilt) → "
+        f"{fit.rms * 1000:.2f} mm"
+    )
+    return col, m, fit
+
+
+def _joint(
+    frame: ColumnFrame,
+    loc: np.ndarray,
+    col: ColumnParams,
+    r_bottom: float,
+    sec: dict[str, float],
+    notes: list[str],
+) -> ColumnFrame:
+    """The base's top moved to the base/shaft joint found from the flutes' start
+    (:func:`.scan_parts.base_top`); the frame unchanged when the flutes' start is not seen."""
+    from ionic_usd.column.shaft import build_shaft
+
+    b0, b1 = frame.parts["base"]
+    sp = dataclasses.replace(
+        col.shaft,
+        bottom_radius=r_bottom,
+        top_radius=r_bottom * col.shaft.top_radius / col.shaft.bottom_radius,
+        flute_angle=sec["flute_angle"],
+        flute_depth=sec["flute_depth"],
+    )
+    found = base_top(np.hypot(loc[:, 0], loc[:, 1]), loc[:, 2], b1, 2 * r_bottom, build_shaft(sp))
+    if found is None or not b0 < found[0] < b1 + 1.2 * r_bottom:
+        notes.append("base top: the flutes' start not seen; the parts' bins kept")
+        return frame
+    top = found[0]
+    notes.append(
+        f"base top at the joint {top - b0:.4f} m up: the flutes start {found[1] * 1000:.3g} mm "
+        f"above it on the fitted shaft (the parts' bins gave {b1 - b0:.4f} m)"
+    )
+    parts = dict(frame.parts, base=(b0, top))
+    if "shaft" in parts:
+        parts["shaft"] = (max(top, parts["shaft"][0]), parts["shaft"][1])
+    return dataclasses.replace(frame, parts=parts)
 
 
 def _fit_scanned_base(
@@ -442,6 +520,7 @@ def _part_report(
     sec: dict[str, float],
     base_fit: FitResult | None,
     col: ColumnParams,
+    cap_fit: CapitalFit | None = None,
 ) -> dict[str, dict[str, Any]]:
     """Per part found: what was fitted or only rebuilt, and the deviations of its points."""
     out: dict[str, dict[str, Any]] = {}
@@ -473,6 +552,17 @@ def _part_report(
                     "discrete_frechet_pct": base_fit.after.discrete_frechet_pct,
                 },
             )
+        elif part == "capital" and cap_fit is not None:
+            rep.update(
+                status="fitted",
+                model=f"generator capital, volute {cap_fit.model}",
+                fitted=["scale", "height", "volute_scale", "eye_height", "eye_spacing"],
+                values=cap_fit.values,
+                models=cap_fit.models,
+                bounds_hit=cap_fit.bounds_hit,
+                rebuilt_rms=cap_fit.rms_start,
+                seconds=cap_fit.seconds,
+            )
         else:
             rep.update(status="rebuilt", model="Vitruvian proportions at the diameter")
         out[part] = rep
@@ -503,89 +593,3 @@ def _column_zero(frame: ColumnFrame, col: ColumnParams, shaft_start: float) -> f
         )
         return frame.parts["capital"][0] - low
     return shaft_start - bh
-
-
-def _other_parts_tree(col: ColumnParams):
-    """kd-tree of dense samples (about 1 mm apart) of every part but the shaft."""
-    from scipy.spatial import cKDTree
-
-    from ionic_usd.evaluate.scan_io import sample_surface
-
-    meshes = build_column(col).parts()
-    allp, allt, off = [], [], 0
-    for n, mesh in meshes.items():
-        if n.lower() == "shaft":
-            continue
-        allp.append(mesh.points)
-        allt.append(mesh.triangles + off)
-        off += len(mesh.points)
-    P, T = np.concatenate(allp), np.concatenate(allt)
-    pp = P[T]
-    area = 0.5 * np.linalg.norm(np.cross(pp[:, 1] - pp[:, 0], pp[:, 2] - pp[:, 0]), axis=1).sum()
-    count = int(min(1_500_000, max(50_000, area / 1e-6)))
-    samples, _ = sample_surface(P, T, count, seed=1)
-    return cKDTree(samples)
-
-
-def scan_deviation(
-    points: np.ndarray, col: ColumnParams, matrix: np.ndarray, *, tree=None
-) -> np.ndarray:
-    """Distance (m) of every scan point from the fitted column's surface.
-
-    Parameters
-    ----------
-    points : (n, 3) float, scan frame
-    col : ColumnParams
-    matrix : (4, 4) column → scan (row vectors)
-
-    Returns
-    -------
-    (n,) float, finite
-    """
-
-    from ionic_usd.column.shaft import shaft_radius_at
-    from ionic_usd.evaluate.fit_shaft import fluted_section
-
-    inv = np.linalg.inv(matrix)
-    q = np.column_stack([points, np.ones(len(points))]) @ inv
-    x, y, z = q[:, 0], q[:, 1], q[:, 2]
-    bp = col.base_params()
-    sp = col.shaft_params()
-    y_shaft0, y_cap = bp.height, bp.height + sp.length
-    dev = np.full(len(points), np.inf)
-    r = np.hypot(x, z)
-    # shaft: the fitted section scaled to the radius at the point's height
-    in_shaft = (y >= y_shaft0) & (y <= y_cap)
-    if in_shaft.any():
-        sec = fluted_section(1.0, sp.flutes, sp.flute_angle, sp.flute_depth, slices=64)
-        k = shaft_radius_at(sp, np.clip(y[in_shaft] - y_shaft0, 0, sp.length))
-        xy = np.column_stack([x[in_shaft], -z[in_shaft]]) / k[:, None]
-        dev[in_shaft] = PolylineIndex(sec).distances(xy) * k
-        # the plain rings at both ends are circles, not fluted
-        ring = (y[in_shaft] - y_shaft0 < sp.ring_bottom) | (y_cap - y[in_shaft] < sp.ring_top)
-        idx = np.flatnonzero(in_shaft)[ring]
-        dev[idx] = np.abs(r[idx] - k[ring])
-    # the capital's volutes hang below the shaft's top: the upper half of the shaft band is
-    # also measured against the other parts, and the nearer surface counts
-    rest = ~in_shaft | (y > y_shaft0 + 0.5 * sp.length)
-    if rest.any():
-        tree = tree if tree is not None else _other_parts_tree(col)
-        # a bounded search: points of the shaft band far from the capital stop early
-        q_rest = np.column_stack([x, y, z])[rest]
-        bound = 0.1 * (bp.height + 1e-3)
-        d, _ = tree.query(q_rest, distance_upper_bound=bound)
-        far = ~np.isfinite(d) & ~np.isfinite(dev[rest])
-        if far.any():  # off the shaft and far from everything: the full search
-            d[far] = tree.query(q_rest[far])[0]
-        dev[rest] = np.minimum(dev[rest], d)
-    return dev
-
-
-def heat_colours(dev: np.ndarray, vmax: float) -> np.ndarray:
-    """(n, 3) colours: blue (0) → green → yellow → red (≥ vmax)."""
-    t = np.clip(dev / max(vmax, 1e-12), 0.0, 1.0)
-    stops = np.array([[0.1, 0.2, 0.9], [0.1, 0.8, 0.3], [0.95, 0.9, 0.1], [0.9, 0.1, 0.1]])
-    x = t * 3
-    i = np.minimum(x.astype(int), 2)
-    f = (x - i)[:, None]
-    return stops[i] * (1 - f) + stops[i + 1] * f

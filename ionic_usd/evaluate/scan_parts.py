@@ -12,13 +12,22 @@ coordinates (y up the axis, x and z the plinth's and the capital's face normals)
   radius (a round moulding), whichever spreads less across the half-angle.
 
 It is None when the scan does not cover enough of the base.
+
+* **base top** — the base's last fillet and the shaft's plain ring are one cylinder, so the
+  joint cannot be seen in the outer radius. The flutes' start can: per thin height bin, the
+  mean depth of the points below the bin's outer radius (a fraction of it) is ~0 on the
+  ring and the mouldings' bins near the shaft, and the flutes' level above; the start is
+  where it first reaches half that level, walking down from the flutes
+  (:func:`flute_onset`). The same measure on the fitted shaft's own mesh gives the start's
+  height above the shaft's bottom (the ring and the spoon ends' half depth), so the
+  joint is the scan's start less that (:func:`base_top`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["base_meridian", "has_square_plinth", "to_column"]
+__all__ = ["base_meridian", "base_top", "flute_onset", "has_square_plinth", "to_column"]
 
 
 def to_column(points: np.ndarray, matrix: np.ndarray) -> np.ndarray:
@@ -95,3 +104,83 @@ def has_square_plinth(col_pts: np.ndarray, y0: float, y1: float) -> bool:
     if len(face) < 8 or len(diag) < 8:
         return False
     return bool(np.percentile(diag, 95) > 1.2 * np.percentile(face, 95))
+
+
+def flute_onset(r: np.ndarray, h: np.ndarray, h0: float, h1: float) -> float | None:
+    """Height where the flutes start (module docstring), between ``h0`` and ``h1``.
+
+    Parameters
+    ----------
+    r, h : (n,) float, distance from the axis and height along it
+    h0, h1 : the search range: the base's mouldings at the bottom, flutes at the top
+
+    Returns
+    -------
+    float, or None when the range holds too few points or no fluted level
+    """
+    sel = (h >= h0) & (h <= h1)
+    r, h = r[sel], h[sel]
+    if len(r) < 200:
+        return None
+    width = max((h1 - h0) * 30.0 / len(r), (h1 - h0) / 400.0)  # ~30 points a bin
+    edges = np.arange(h0, h1 + 0.5 * width, width)
+    idx = np.clip(np.digitize(h, edges) - 1, 0, len(edges) - 2)
+    nb = len(edges) - 1
+    depth = np.full(nb, np.nan)
+    for k in range(nb):
+        rk = r[idx == k]
+        if len(rk) >= 8:
+            depth[k] = float(np.mean(1.0 - rk / np.percentile(rk, 95)))
+    ok = np.flatnonzero(np.isfinite(depth))
+    if len(ok) < 12:
+        return None
+    d = np.interp(np.arange(nb), ok, depth[ok])
+    d = np.array([np.median(d[max(0, k - 1) : k + 2]) for k in range(nb)])  # 3-bin median
+    level = float(np.median(d[int(0.75 * nb) :]))  # the top quarter: flutes
+    if not level > 4.0 * float(np.median(np.abs(np.diff(d)))) + 1e-4:
+        return None
+    half = 0.5 * level
+    k = int(0.75 * nb)
+    while k > 0 and d[k - 1] >= half:
+        k -= 1
+    if k == 0:
+        return None
+    # d[k - 1] < half <= d[k]: linear between the bins' centres
+    f = (half - d[k - 1]) / max(d[k] - d[k - 1], 1e-12)
+    return float(edges[k - 1] + (0.5 + f) * width)
+
+
+def base_top(
+    r: np.ndarray, h: np.ndarray, guess: float, diameter: float, shaft_mesh
+) -> tuple[float, float] | None:
+    """The base/shaft joint's height (module docstring) and the flutes' start above it.
+
+    Parameters
+    ----------
+    r, h : (n,) float, the scan's distance from the axis and height along it
+    guess : the base's top from the parts' bins (short: the joint is often unassigned)
+    diameter : the fitted lower diameter (m)
+    shaft_mesh : the fitted shaft's Mesh, y = 0 at its bottom
+
+    Returns
+    -------
+    (joint height, onset above the joint), or None
+    """
+    from ionic_usd.evaluate.scan_io import sample_surface
+
+    h0, h1 = guess - 0.1 * diameter, guess + 0.8 * diameter
+    onset = flute_onset(r, h, h0, h1)
+    if onset is None:
+        return None
+    # the same measure on the model: its own onset above the shaft's bottom
+    tri = np.asarray(shaft_mesh.triangles)
+    pts = np.asarray(shaft_mesh.points)
+    low = pts[tri][:, :, 1].max(axis=1) < 0.7 * diameter
+    s, _ = sample_surface(pts, tri[low], 60_000, seed=3)
+    below = np.linspace(-0.1 * diameter, 0.0, 2000)  # the base below the joint: no flutes
+    rm = np.concatenate([np.hypot(s[:, 0], s[:, 2]), np.full(2000, float(pts[:, 0].max()))])
+    hm = np.concatenate([s[:, 1], below])
+    model = flute_onset(rm, hm, -0.1 * diameter, 0.6 * diameter)
+    if model is None:
+        return None
+    return onset - model, model
