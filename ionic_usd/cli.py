@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 from collections.abc import Callable, Collection, Sequence
 from pathlib import Path
 from typing import Any
@@ -21,260 +20,18 @@ from ionic_usd.cli_flags import (
     add_output_flags,
     add_rebuild_flag,
     add_stone_flags,
-    collect_flags,
 )
-from ionic_usd.errors import IonicError, ParameterError
+from ionic_usd.errors import IonicError
+from ionic_usd.make_commands import (
+    PARTS,
+    cmd_asset,
+    cmd_column,
+    cmd_preview,
+    cmd_shaft,
+    cmd_temple,
+)
 
 __all__ = ["main", "build_parser"]
-
-
-# -- commands ----------------------------------------------------------------------------------
-def _shaft_params(args: argparse.Namespace):
-    from ionic_usd.column.shaft import ShaftParams
-    from ionic_usd.params import dataclass_from_mapping, load_toml
-
-    base = ShaftParams()
-    if args.config:
-        data = load_toml(args.config)
-        section = data.get("shaft", data)
-        if not isinstance(section, dict):
-            raise ParameterError("shaft", section, "a TOML table", context=str(args.config))
-        base = dataclass_from_mapping(ShaftParams, section, context=f"{args.config} [shaft]")
-    flags = collect_flags(args, ShaftParams)
-    return dataclass_from_mapping(ShaftParams, flags, context="command line", base=base)
-
-
-def cmd_shaft(args: argparse.Namespace) -> int:
-    from ionic_usd.column.shaft import (
-        SHAFT_PARAMETER_DOCS,
-        build_shaft,
-        shaft_triangle_estimate,
-    )
-    from ionic_usd.params import to_toml
-
-    params = _shaft_params(args)
-    if args.print_config:
-        sys.stdout.write(
-            to_toml(
-                {"shaft": params.to_dict()},
-                {"shaft": SHAFT_PARAMETER_DOCS},
-                header="ionic_usd shaft parameters (edit and pass with --config)",
-            )
-        )
-        return 0
-    from ionic_usd.usd import check_output_path, write_meshes
-
-    out = check_output_path(args.output, force=args.force)
-    _check_memory("the shaft", shaft_triangle_estimate(params), args)
-    t0 = time.perf_counter()
-    from ionic_usd.geometry.guard import guarded
-
-    mesh = guarded(
-        lambda: build_shaft(params, max_triangles=args.max_triangles), "shaft", "parameters"
-    )
-    t1 = time.perf_counter()
-    write_meshes(out, {"Shaft": mesh}, root="Shaft", force=args.force)
-    t2 = time.perf_counter()
-    print(
-        f"wrote {out}: {mesh.n_triangles:,} triangles, {mesh.n_points:,} points "
-        f"(generate {1e3 * (t1 - t0):.1f} ms, write {1e3 * (t2 - t1):.1f} ms)"
-    )
-    return 0
-
-
-def _column_params(args: argparse.Namespace):
-    from ionic_usd.column.column import column_params_from_mapping, portunus_column_params
-    from ionic_usd.params import load_toml
-
-    params = portunus_column_params()
-    if args.config:
-        params = column_params_from_mapping(load_toml(args.config), context=str(args.config))
-    flags = {k: getattr(args, k) for k in ("lod", "base", "scroll") if getattr(args, k, None)}
-    if flags:
-        params = column_params_from_mapping({"column": flags}, context="command line", base=params)
-    return params
-
-
-_PARTS = {
-    "all": ("Base", "Shaft", "CapitalBody"),
-    "base": ("Base",),
-    "shaft": ("Shaft",),
-    "capital": ("CapitalBody",),
-    "base+shaft": ("Base", "Shaft"),
-}
-
-
-def cmd_column(args: argparse.Namespace) -> int:
-    from ionic_usd.column.column import COLUMN_DOCS, build_column, column_params_to_tables
-    from ionic_usd.column.shaft import SHAFT_PARAMETER_DOCS
-    from ionic_usd.params import to_toml
-
-    params = _column_params(args)
-    if args.print_config:
-        from ionic_usd.column.capital import CAPITAL_PARAMETER_DOCS
-        from ionic_usd.column.volute import VOLUTE_PARAMETER_DOCS
-
-        docs = {
-            "column": COLUMN_DOCS,
-            "shaft": SHAFT_PARAMETER_DOCS,
-            "capital": CAPITAL_PARAMETER_DOCS,
-            "volute": VOLUTE_PARAMETER_DOCS,
-        }
-        sys.stdout.write(
-            to_toml(
-                column_params_to_tables(params),
-                docs,
-                header="ionic_usd column parameters (edit and pass with "
-                "--config); lengths in metres, angles in degrees",
-            )
-        )
-        return 0
-    from ionic_usd.usd import check_output_path, write_meshes
-
-    out = check_output_path(args.output, force=args.force)
-    from ionic_usd.resources import check_estimate, estimate_column
-
-    check_estimate(estimate_column(params), args.max_memory)
-    t0 = time.perf_counter()
-    col = build_column(params)
-    t1 = time.perf_counter()
-    meshes = {k: v for k, v in col.parts().items() if k in _PARTS[args.part]}
-    write_meshes(
-        out,
-        meshes,
-        root="Column",
-        force=args.force,
-        comment=f"ionic_usd column ({params.lod}, base {params.base})",
-    )
-    t2 = time.perf_counter()
-    tris = sum(m.n_triangles for m in meshes.values())
-    print(
-        f"wrote {out}: {', '.join(meshes)}; {tris:,} triangles, height {col.height:.3f} m "
-        f"(generate {1e3 * (t1 - t0):.1f} ms, write {1e3 * (t2 - t1):.1f} ms)"
-    )
-    return 0
-
-
-def cmd_asset(args: argparse.Namespace) -> int:
-    from ionic_usd.io import check_output_folder
-    from ionic_usd.pipeline.asset import build_column_asset
-    from ionic_usd.resources import check_estimate, estimate_asset
-    from ionic_usd.usd.column_asset import ColumnAssetOptions
-
-    check_output_folder(args.output, force=args.force)
-    params = _column_params(args)
-    user: dict[str, str] | None = None
-    if args.texture:
-        user = {}
-        roles = ("basecolor", "roughness", "normal")
-        for item in args.texture:
-            role, sep, path = item.partition("=")
-            if not sep or role not in roles or not path:
-                raise ParameterError(
-                    "--texture", item, "ROLE=FILE with ROLE basecolor, roughness or normal"
-                )
-            if role in user:  # the last one silently winning would hide a typo
-                raise ParameterError(
-                    "--texture", item, f"each role once ({role} is also {user[role]!r})"
-                )
-            user[role] = path
-    check_estimate(estimate_asset(params, args.texture_size), args.max_memory)
-    opts = ColumnAssetOptions(
-        params=params,
-        texture_size=args.texture_size,
-        seed=args.seed,
-        make_tx=args.tx,
-        user_textures=user,
-    )
-    rep = build_column_asset(args.output, opts, force=args.force, rebuild=args.rebuild)
-    lods = ", ".join(f"{k} {v:,}" for k, v in rep.triangles_per_lod.items())
-    done = "up to date" if rep.current else "wrote"
-    print(
-        f"{done} {rep.path}: {rep.meshes} meshes, triangles per LOD: {lods}; "
-        f"{rep.uv_unwraps} UV unwraps, {rep.bytes_on_disk / 1e6:.1f} MB, {rep.seconds:.2f} s"
-    )
-    return 0
-
-
-def cmd_temple(args: argparse.Namespace) -> int:
-    from ionic_usd.api import Temple
-    from ionic_usd.io import check_output_folder
-    from ionic_usd.resources import check_estimate, estimate_temple
-
-    check_output_folder(args.output, force=args.force)
-    if args.config:
-        temple = Temple.from_toml(args.config)
-    else:
-        layouts = {"portunus": Temple.portunus}
-        if args.layout not in layouts:
-            raise ParameterError(
-                "--layout",
-                args.layout,
-                f"one of the built-in layouts: {', '.join(layouts)} "
-                "(or describe a temple in a TOML file: --config)",
-            )
-        temple = layouts[args.layout]()
-    layout = temple.layout
-    options = {"texture_size": args.texture_size, "seed": args.seed, "detail": args.detail}
-    rep = None if args.rebuild else temple.current(args.output, **options)
-    if rep is None:  # something to build: estimate its memory first
-        n_cuboids = sum(len(c) for c in layout.cuboids.values())
-        check_estimate(
-            estimate_temple(temple.column_params, args.texture_size, n_cuboids), args.max_memory
-        )
-        rep = temple.save(args.output, force=args.force, rebuild=args.rebuild, **options)
-    done = "up to date" if rep.current else "wrote"
-    print(
-        f"{done} {rep.root} ({layout.name}): {rep.files} files, {rep.prims} prims, "
-        f"{rep.instances} column instances of {rep.prototypes} prototypes, "
-        f"{rep.triangles:,} triangles, {len(rep.hypotheses)} hypotheses, {rep.seconds:.2f} s"
-    )
-    print(
-        f"  open {rep.root} in usdview, Blender, Houdini or Omniverse; put your own edits in "
-        f"{Path(args.output) / 'overrides.usda'} (kept on rebuilds)"
-    )
-    return 0
-
-
-def cmd_preview(args: argparse.Namespace) -> int:
-    from ionic_usd.preview import render_preview
-
-    try:
-        red, green, blue = (float(x) for x in args.background.split(","))
-    except ValueError:
-        raise ParameterError("--background", args.background, "three numbers R,G,B") from None
-    background = (red, green, blue)
-    s = render_preview(
-        args.scene,
-        args.output,
-        width=args.width,
-        height=args.height,
-        camera=args.camera,
-        lod=args.lod,
-        background=background,
-        samples=args.samples,
-        ground=not args.no_ground,
-        force=args.force,
-    )
-    print(
-        f"wrote {args.output}: {s.triangles:,} triangles, {s.meshes} meshes, "
-        f"{s.instances} instances ({s.seconds:.2f} s)"
-    )
-    return 0
-
-
-def _check_memory(what: str, triangles: int, args: argparse.Namespace) -> None:
-    from ionic_usd.resources import (
-        BASELINE_BYTES,
-        BYTES_PER_TRIANGLE,
-        Estimate,
-        check_estimate,
-    )
-
-    check_estimate(
-        Estimate(what, triangles, 0, BASELINE_BYTES + BYTES_PER_TRIANGLE * triangles),
-        args.max_memory,
-    )
 
 
 # -- parser --------------------------------------------------------------------------------------
@@ -335,7 +92,7 @@ def _add_column(sub: Any, full: bool) -> None:
         return
     add_output_flags(p, "output USD file", default="column.usda")
     add_config_flags(p, "TOML file (see --print-config)", print_config=True)
-    p.add_argument("--part", choices=list(_PARTS), default="all", help="which parts to write")
+    p.add_argument("--part", choices=list(PARTS), default="all", help="which parts to write")
     p.add_argument("--lod", help="level of detail: high, medium, low or custom")
     p.add_argument(
         "--base",
