@@ -57,6 +57,18 @@ class GrammarError(IonicError, ValueError):
         self.grammar = grammar
         super().__init__(self._render())
 
+    def with_grammar(self, grammar: str) -> GrammarError:
+        """The same error (message, source, caret) under another grammar label, e.g. one that
+        names the parameter the grammar came from."""
+        return GrammarError(
+            self.message,
+            self.source,
+            self.offset,
+            length=self.length,
+            module=self.module,
+            grammar=grammar,
+        )
+
     def get_context(self) -> str:
         """The source line with a caret (``^~~``) under the offending token."""
         line = self.source.replace("\n", " ")

@@ -354,6 +354,7 @@ def test_parsed_grammar_objects_are_accepted_and_located():
         {"shaft_radius": float("nan")},
         {"segments": 2},
         {"segments": 7.5},
+        {"segments": float("inf")},  # was an OverflowError before the shared check
         {"profile_slices": 0},
         {"plinth_modules": 9},
         {"plinth_modules": -1},

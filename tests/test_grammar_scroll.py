@@ -85,8 +85,8 @@ def test_equal_positions_and_range_ends_are_allowed():
     [
         ("R0.7 P0.05, X1 P0.2", "X1", 2, "unknown token"),
         ("R0.7 P0.05, R0.7 P0.2 Q", "Q", 2, "unknown token"),
-        ("R0.7 P0.05, R P0.2", "R", 2, "missing value"),
-        ("R0.7 P", "P", 1, "missing value"),
+        ("R0.7 P0.05, R P0.2", "R", 2, "missing radius"),
+        ("R0.7 P", "P", 1, "missing position"),
         ("R0.7 P0.05, Rabc P0.2", "abc", 2, "not a number"),
         ("R0.7 P0.05, R0.7 P0.2.1", "0.2.1", 2, "not a number"),
         ("R0.7 P0.05, R2.5 P0.2", "2.5", 2, "outside [0, 2]"),

@@ -125,8 +125,12 @@ def test_toml_table_matches_defaults_and_is_validated():
     assert portunus_mouldings() == MouldingParams()
     with pytest.raises(ParameterError, match="mouldings.fascia"):
         mouldings_from_tables({"mouldings": {"fascia": "R0 H1"}})
-    with pytest.raises(GrammarError):
+    with pytest.raises(GrammarError) as info:
         mouldings_from_tables({"mouldings": {"cornice": "R0 H0 Rx H1"}})
+    # relabelled twice (the moulding, then the table's context), caret still under the token
+    assert info.value.grammar == "temple: mouldings.cornice (base v2)"
+    assert (info.value.source, info.value.offset, info.value.module) == ("R0 H0 Rx H1", 7, 1)
+    assert str(info.value).startswith("temple: mouldings.cornice (base v2) error in module 1")
     with pytest.raises(ParameterError, match="podium_back"):
         MouldingParams(podium_back=-1.0)
 

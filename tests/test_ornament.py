@@ -14,6 +14,7 @@ from ionic_usd.column.ornament import (
     frames_to_quaternions,
     quaternion_matrices,
 )
+from ionic_usd.errors import ParameterError
 from ionic_usd.temple.layout import portunus_layout
 from ionic_usd.temple.mouldings import cornice_levels
 from ionic_usd.temple.ornament import (
@@ -104,6 +105,21 @@ def test_dentils_follow_vitruvius(layout):
     proto = d.prototypes[0]
     assert_allclose(proto.extent[1, 2], lv["dentil_front"] - lv["dentil_face"])
     assert_allclose(proto.extent[1, 1] - proto.extent[0, 1], h)
+
+
+@pytest.mark.parametrize(
+    "kw, name",
+    [
+        ({"thickness": 0.0}, "thickness"),
+        ({"flange": float("nan")}, "flange"),
+        ({"antefix_height": True}, "antefix_height"),
+        ({"overlap": 0.62}, "overlap"),
+    ],
+)
+def test_tile_parameters_are_checked(kw, name):
+    with pytest.raises(ParameterError) as info:
+        TileParams(**kw)
+    assert info.value.name == name and str(info.value).startswith("tiles: ")
 
 
 def test_roof_tiles_cover_both_slabs(layout):

@@ -46,13 +46,13 @@ shells keep both simple and edge-closed; coplanar touching faces are harmless fo
 from __future__ import annotations
 
 import functools
-import math
 import tomllib
 from dataclasses import dataclass, field, fields
 from importlib import resources
 
 import numpy as np
 
+from ionic_usd.checks import check_fields
 from ionic_usd.column.charts import revolved_st
 from ionic_usd.errors import GeometryError, GrammarError, ParameterError
 from ionic_usd.geometry.curves import bezier, revolve
@@ -116,20 +116,13 @@ class BaseParams:
 
     def __post_init__(self) -> None:
         ctx = "base"
-        for name in ("shaft_radius", "scale"):
-            v = getattr(self, name)
-            if (
-                isinstance(v, bool)
-                or not isinstance(v, int | float)
-                or not math.isfinite(v)
-                or v <= 0
-            ):
-                raise ParameterError(name, v, "a finite number > 0", context=ctx)
-        for name, lo in (("segments", 3), ("profile_slices", 1), ("plinth_modules", 0)):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int | float) or v != int(v) or v < lo:
-                raise ParameterError(name, v, f"an integer >= {lo}", context=ctx)
-            object.__setattr__(self, name, int(v))
+        check_fields(
+            self,
+            context=ctx,
+            skip=("grammar", "version"),
+            integers={"segments": 3, "profile_slices": 1, "plinth_modules": 0},
+            positive=("shaft_radius", "scale"),
+        )
         if self.version not in (None, 1, 2):
             raise ParameterError("version", self.version, "1, 2 or None (detect)", context=ctx)
         g = self.grammar

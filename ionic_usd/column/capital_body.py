@@ -9,11 +9,11 @@ container :class:`CapitalParts`, the echinus and the bolster (pulvinus) profile.
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from ionic_usd.checks import check_fields
 from ionic_usd.column.portunus import PORTUNUS_LOWER_DIAMETER
 from ionic_usd.column.solids import box_mesh, lathe, rigid
 from ionic_usd.column.volute import (
@@ -125,36 +125,23 @@ class CapitalParams:
                 "scroll", self.scroll, "a grammar string or preset name", context=ctx
             )
         object.__setattr__(self, "_scroll", resolve_scroll(self.scroll))
-        for f in fields(self):
-            if f.name in ("volute", "scroll", "_scroll"):
-                continue
-            v = getattr(self, f.name)
-            if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
-                raise ParameterError(f.name, v, "a finite number", context=ctx)
-        for name in ("spiral_samples", "ring_segments", "bolster_rows"):
-            v = getattr(self, name)
-            if int(v) != v:
-                raise ParameterError(name, v, "an integer", context=ctx)
-            object.__setattr__(self, name, int(v))
-        positive = (
-            "capital_length",
-            "capital_width",
-            "abacus_length",
-            "abacus_width",
-            "abacus_height",
-            "echinus_height",
-            "relief_depth",
-            "slab_depth",
+        check_fields(
+            self,
+            context=ctx,
+            skip=("volute", "scroll"),
+            integers={"spiral_samples": 8, "ring_segments": 3, "bolster_rows": 1},
+            positive=(
+                "capital_length",
+                "capital_width",
+                "abacus_length",
+                "abacus_width",
+                "abacus_height",
+                "echinus_height",
+                "relief_depth",
+                "slab_depth",
+            ),
+            non_negative=("spiral_margin", "echinus_projection"),
         )
-        for name in positive:
-            if getattr(self, name) <= 0:
-                raise ParameterError(name, getattr(self, name), "a length > 0", context=ctx)
-        for name in ("spiral_margin", "echinus_projection"):
-            if getattr(self, name) < 0:
-                raise ParameterError(name, getattr(self, name), "a length >= 0", context=ctx)
-        for name, lo in (("spiral_samples", 8), ("ring_segments", 3), ("bolster_rows", 1)):
-            if getattr(self, name) < lo:
-                raise ParameterError(name, getattr(self, name), f"an integer >= {lo}", context=ctx)
         depth = 2 * (self.relief_depth + self.slab_depth)
         if self.capital_width <= depth:
             raise ParameterError(

@@ -352,10 +352,30 @@ def reel_prototype(
 
 
 # -- the capital -------------------------------------------------------------------------------
-def _ring_frames(n: int, phase: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-    """Angles and outward unit radials (n, 3) of n points round the Y axis."""
+def _ring_instances(
+    proto: Mesh,
+    n: int,
+    phase: float,
+    radius: float,
+    y: float,
+    tilt: np.ndarray | tuple[float, float] = (0.0, 1.0),
+) -> Instances:
+    """``n`` copies of ``proto`` evenly round the Y axis at ``radius`` and height ``y``, the
+    first at angle ``phase``: local +X along the ring, local +Y ``tilt[0]`` × the outward radial
+    + ``tilt[1]`` × world +Y (``tilt`` a unit vector in the meridian plane)."""
     a = phase + 2 * np.pi * np.arange(n) / n
-    return a, np.stack([np.sin(a), np.zeros(n), np.cos(a)], 1)
+    radial = np.stack([np.sin(a), np.zeros(n), np.cos(a)], 1)
+    y_dir = tilt[0] * radial + tilt[1] * np.array([0.0, 1.0, 0.0])
+    x_dir = np.stack([np.cos(a), np.zeros(n), -np.sin(a)], 1)
+    pos = np.stack([radius * np.sin(a), np.full(n, y), radius * np.cos(a)], 1)
+    return Instances(
+        proto.name,
+        (proto,),
+        np.zeros(n, np.int32),
+        pos,
+        frames_to_quaternions(x_dir, y_dir),
+        np.ones((n, 3)),
+    )
 
 
 def capital_ornament(
@@ -398,24 +418,11 @@ def capital_ornament(
     egg_h = 0.9 * h
     egg = egg_prototype(egg_h, 0.62 * spacing, 0.8 * min(w, 0.62 * spacing))
     dart = dart_prototype(0.75 * egg_h, 0.22 * spacing, 0.35 * min(w, 0.62 * spacing))
-    out_parts = []
-    for k, (proto, phase) in enumerate(((egg, 0.0), (dart, math.pi / eggs))):
-        a, radial = _ring_frames(eggs, phase)
-        # local +Y along the ovolo's tangent (up and out), +Z along its outward normal
-        y_dir = tang[0] * radial + tang[1] * np.array([0.0, 1.0, 0.0])
-        x_dir = np.stack([np.cos(a), np.zeros(eggs), -np.sin(a)], 1)  # along the ring
-        pos = np.stack([r0 * np.sin(a), np.full(eggs, y0), r0 * np.cos(a)], 1)
-        out_parts.append(
-            Instances(
-                proto.name,
-                (proto,),
-                np.zeros(eggs, np.int32),
-                pos,
-                frames_to_quaternions(x_dir, y_dir),
-                np.ones((eggs, 3)),
-            )
-        )
-        del k
+    # eggs and darts with their axis along the ovolo's tangent (up and out)
+    out_parts = [
+        _ring_instances(proto, eggs, phase, r0, y0, tilt=tang)
+        for proto, phase in ((egg, 0.0), (dart, math.pi / eggs))
+    ]
     egg_dart = Instances.concat("EggAndDart", out_parts)
     # bead-and-reel round the astragal (the shaft's plain top ring)
     d = 0.8 * ring_top
@@ -423,19 +430,8 @@ def capital_ornament(
     pairs = max(4, int(2 * math.pi * c // (lb + lr + 0.2 * d)))
     bead, reel = bead_prototype(lb, d), reel_prototype(lr, 0.85 * d)
     yb = y_capital - 0.5 * ring_top
-    parts = []
-    for proto, phase in ((bead, 0.0), (reel, math.pi / pairs)):
-        a, radial = _ring_frames(pairs, phase)
-        x_dir = np.stack([np.cos(a), np.zeros(pairs), -np.sin(a)], 1)
-        pos = np.stack([c * np.sin(a), np.full(pairs, yb), c * np.cos(a)], 1)
-        parts.append(
-            Instances(
-                proto.name,
-                (proto,),
-                np.zeros(pairs, np.int32),
-                pos,
-                frames_to_quaternions(x_dir, np.tile([0.0, 1.0, 0.0], (pairs, 1))),
-                np.ones((pairs, 3)),
-            )
-        )
+    parts = [
+        _ring_instances(proto, pairs, phase, c, yb)
+        for proto, phase in ((bead, 0.0), (reel, math.pi / pairs))
+    ]
     return egg_dart, Instances.concat("BeadAndReel", parts)

@@ -15,6 +15,7 @@ from numba import njit
 from scipy.spatial import cKDTree
 
 from ionic_usd.errors import GeometryError, ParameterError
+from ionic_usd.geometry.curves import resample_polyline
 
 __all__ = [
     "PolylineIndex",
@@ -111,16 +112,8 @@ def resample(
     assert count is not None
     if int(count) != count or count < 2:
         raise ParameterError("count", count, "an integer >= 2")
-    count = max(int(count), 2)
-    targets = np.linspace(0.0, total, count)
-    # Drop zero-length segments so the arc-length abscissa is strictly increasing.
-    keep = np.concatenate(([True], seg > 0.0))
-    s, c = s[keep], c[keep]
-    out = np.empty((count, c.shape[1]))
-    for k in range(c.shape[1]):
-        out[:, k] = np.interp(targets, s, c[:, k])
-    out[0], out[-1] = c[0], c[-1]
-    return out
+    # the interpolation itself is the geometry kernel's one resampler
+    return resample_polyline(c, count=int(count))
 
 
 def densify_curve(curve: np.ndarray, fraction: float) -> np.ndarray:

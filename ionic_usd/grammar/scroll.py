@@ -15,14 +15,13 @@ Presets S1 and S2 (the paper's examples) ship in ``ionic_usd/data/scroll_presets
 
 from __future__ import annotations
 
-import math
 import tomllib
 from dataclasses import dataclass, field
 from functools import lru_cache
 from importlib import resources
 
 from ionic_usd.errors import GrammarError, ParameterError
-from ionic_usd.grammar.lexer import NUMBER_RE, Token, split_top_level, tokenize
+from ionic_usd.grammar.lexer import Token, split_top_level, token_number, tokenize
 
 __all__ = [
     "ScrollRing",
@@ -84,39 +83,6 @@ def format_scroll(g: ScrollGrammar | list[ScrollRing] | tuple[ScrollRing, ...]) 
     """The canonical string of a scroll grammar (parses back to equal rings)."""
     rings = g.rings if isinstance(g, ScrollGrammar) else tuple(g)
     return ", ".join(f"R{_fmt(r.radius)} P{_fmt(r.position)}" for r in rings)
-
-
-def _value(t: Token, source: str, mod: int) -> float:
-    """The finite number after an R or P (pointed errors for a missing or bad one)."""
-    if not t.text:
-        raise GrammarError(
-            f"missing value after {t.letter}",
-            source,
-            t.offset,
-            length=1,
-            module=mod,
-            grammar=GRAMMAR,
-        )
-    if NUMBER_RE.fullmatch(t.text) is None:
-        raise GrammarError(
-            f"{t.text!r} is not a number",
-            source,
-            t.text_offset,
-            length=len(t.text),
-            module=mod,
-            grammar=GRAMMAR,
-        )
-    val = float(t.text)
-    if not math.isfinite(val):  # e.g. 1e999
-        raise GrammarError(
-            f"{t.text!r} is not a finite number",
-            source,
-            t.text_offset,
-            length=len(t.text),
-            module=mod,
-            grammar=GRAMMAR,
-        )
-    return val
 
 
 def parse_scroll(source: str) -> ScrollGrammar:
@@ -182,12 +148,12 @@ def parse_scroll(source: str) -> ScrollGrammar:
                     module=mod,
                     grammar=GRAMMAR,
                 )
-            val = _value(t, source, mod)
+            what = "radius" if sym == "R" else "position"
+            val = token_number(t, source, grammar=GRAMMAR, module=mod, what=what)
             lo, hi = RADIUS_RANGE if sym == "R" else POSITION_RANGE
             if not lo <= val <= hi:
-                what = "radius r" if sym == "R" else "position p"
                 raise GrammarError(
-                    f"{what} = {_fmt(val)} is outside [{_fmt(lo)}, {_fmt(hi)}]",
+                    f"{what} {sym.lower()} = {_fmt(val)} is outside [{_fmt(lo)}, {_fmt(hi)}]",
                     source,
                     t.text_offset,
                     length=len(t.text),

@@ -39,6 +39,7 @@ from ionic_usd.city.layout import (
 )
 from ionic_usd.city.plan import CityPlan, grid_plan, read_geojson
 from ionic_usd.errors import BudgetError, OutputExistsError, ParameterError
+from ionic_usd.io import atomic_write_bytes
 from ionic_usd.pipeline.build import PrototypeCache, build_prototypes
 from ionic_usd.pipeline.spec import TempleSpec, temple_spec
 
@@ -499,12 +500,6 @@ def _far_column_cards(
 
 
 def write_summary(summary: dict, path: str | os.PathLike) -> None:
-    """Write the summary as JSON atomically."""
-    p = Path(path)
-    tmp = p.with_name(f".{p.name}.{os.getpid()}.tmp")
-    try:
-        tmp.write_text(json.dumps(summary, indent=2, sort_keys=True) + "\n", encoding="utf-8")
-        os.replace(tmp, p)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
+    """Write the summary as JSON atomically (:func:`ionic_usd.io.atomic_write_bytes`)."""
+    text = json.dumps(summary, indent=2, sort_keys=True) + "\n"
+    atomic_write_bytes(path, text.encode("utf-8"))

@@ -151,14 +151,7 @@ def moulding_section(
     except ParameterError as exc:
         raise ParameterError(name, exc.value, exc.valid) from None
     except GrammarError as exc:  # name the moulding: "mouldings.cornice (base v2) error …"
-        raise GrammarError(
-            exc.message,
-            exc.source,
-            exc.offset,
-            length=exc.length,
-            module=exc.module,
-            grammar=f"{name} ({exc.grammar})",
-        ) from None
+        raise exc.with_grammar(f"{name} ({exc.grammar})") from None
     out = base_profile(p).copy()
     out[:, 0] -= d * max(1.0, scale)
     return out
@@ -216,14 +209,7 @@ def mouldings_from_tables(data: Mapping[str, Any], *, context: str = "temple") -
     except ParameterError as exc:
         raise ParameterError(exc.name, exc.value, exc.valid, context=context) from None
     except GrammarError as exc:
-        raise GrammarError(
-            exc.message,
-            exc.source,
-            exc.offset,
-            length=exc.length,
-            module=exc.module,
-            grammar=f"{context}: {exc.grammar}",
-        ) from None
+        raise exc.with_grammar(f"{context}: {exc.grammar}") from None
 
 
 def portunus_mouldings() -> MouldingParams:
@@ -320,27 +306,23 @@ def moulding_meshes(
         m = sweep(sec, path, axis=axis, closed=closed, uv_scale=uv_scale, name=name)
         out.append(MouldedMember(name, m, replaces))
 
-    member(
-        "architrave",
-        mp.architrave,
-        a,
-        _rect(lv["xe"], lv["ze"], lv["y_architrave"]),
-        closed=True,
-        chamfer=False,
-        back=back,
-        replaces="architrave",
-    )
-    member(
-        "cornice",
-        mp.cornice,
-        c,
-        _rect(lv["xe"], lv["ze"], lv["y_cornice"]),
-        closed=True,
-        chamfer=False,
-        back=back,
-        replaces="cornice",
-        top=c,
-    )
+    # architrave and cornice: closed rings round the entablature, replacing the plain cuboids
+    for name, grammar, scale, top in (
+        ("architrave", mp.architrave, a, None),
+        ("cornice", mp.cornice, c, c),
+    ):
+        ring = _rect(lv["xe"], lv["ze"], lv[f"y_{name}"])
+        member(
+            name,
+            grammar,
+            scale,
+            ring,
+            closed=True,
+            chamfer=False,
+            back=back,
+            replaces=name,
+            top=top,
+        )
     y_sima = lv["y_cornice"] + float(moulding_section(mp.cornice, c)[-1, 1])
     zc = lv["ze"] + lv["projection"]
     for name, sgn in (("sima_left", -1.0), ("sima_right", 1.0)):

@@ -24,10 +24,11 @@ Rules and sources
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
+from ionic_usd.checks import check_fields
 from ionic_usd.column.ornament import (
     Instances,
     box_prototype,
@@ -67,11 +68,9 @@ class TileParams:
     antefix_height: float = 0.30
 
     def __post_init__(self) -> None:
-        for k, v in vars(self).items():
-            if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
-                raise ParameterError(f"tiles.{k}", v, "a length > 0 (m)")
+        check_fields(self, context="tiles", positive=[f.name for f in fields(self)])
         if self.overlap >= self.tegula_length:
-            raise ParameterError("tiles.overlap", self.overlap, "< the tegula length")
+            raise ParameterError("overlap", self.overlap, "< the tegula length", context="tiles")
 
 
 def _side_frames(x: float, z: float):

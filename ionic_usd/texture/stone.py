@@ -28,7 +28,9 @@ from __future__ import annotations
 
 import math
 import os
+import tomllib
 from dataclasses import dataclass, field
+from importlib import resources
 from pathlib import Path
 
 import numpy as np
@@ -147,67 +149,16 @@ class StoneStyle:
             )
 
 
-# The presets, one row each in StoneStyle's field order: name, base colour, vein colour, vein
-# strength, pore density, roughness range, normal strength, banding, mottling, pore colour.
-_PRESETS = (
-    # Temple of Portunus: travertine (columns, facing) and tufa: warm cream, horizontal
-    # layers with small elongated voids lying along them
-    (
-        "travertine",
-        (0.84, 0.76, 0.62),
-        (0.72, 0.62, 0.47),
-        0.15,
-        0.045,
-        (0.55, 0.9),
-        0.004,
-        0.8,
-        0.35,
-        (0.5, 0.42, 0.3),
-    ),
-    (
-        "marble",
-        (0.91, 0.90, 0.88),
-        (0.45, 0.46, 0.48),
-        0.75,
-        0.0,
-        (0.12, 0.3),
-        0.0008,
-        0.0,
-        0.2,
-        (0.6, 0.6, 0.6),
-    ),
-    # reconstruction hypothesis: the travertine/tufa was coated with white painted stucco
-    (
-        "stucco_painted",
-        (0.90, 0.88, 0.83),
-        (0.80, 0.77, 0.70),
-        0.0,
-        0.01,
-        (0.6, 0.85),
-        0.0015,
-        0.0,
-        0.25,
-        (0.7, 0.67, 0.6),
-    ),
-    # roof tiles (tegulae, imbrices, antefixes): fired red-orange clay, matt, fine mottling
-    # and sparse pores (ionic_usd.temple.ornament)
-    (
-        "terracotta",
-        (0.70, 0.38, 0.24),
-        (0.58, 0.30, 0.19),
-        0.1,
-        0.015,
-        (0.65, 0.9),
-        0.002,
-        0.0,
-        0.45,
-        (0.45, 0.24, 0.16),
-    ),
+def _load_presets() -> dict[str, StoneStyle]:
+    """The preset styles of ``ionic_usd/data/stone_presets.toml``, one table each."""
+    text = resources.files("ionic_usd").joinpath("data", "stone_presets.toml").read_text("utf-8")
+    return {name: StoneStyle(name, **row) for name, row in tomllib.loads(text).items()}
+
+
+STONE_STYLES: dict[str, StoneStyle] = _load_presets()
+TRAVERTINE, MARBLE, STUCCO_PAINTED, TERRACOTTA = (
+    STONE_STYLES[n] for n in ("travertine", "marble", "stucco_painted", "terracotta")
 )
-TRAVERTINE, MARBLE, STUCCO_PAINTED, TERRACOTTA = (StoneStyle(*row) for row in _PRESETS)
-STONE_STYLES: dict[str, StoneStyle] = {
-    s.name: s for s in (TRAVERTINE, MARBLE, STUCCO_PAINTED, TERRACOTTA)
-}
 
 
 def get_stone_style(style: StoneStyle | str) -> StoneStyle:

@@ -46,7 +46,7 @@ from ionic_usd.temple.layout import (
     build_layout,
 )
 from ionic_usd.usd.materials import bind_material_spec
-from ionic_usd.usd.mesh import author_mesh
+from ionic_usd.usd.mesh import author_attribute, author_mesh
 from ionic_usd.usd.stage import new_layer
 
 __all__ = [
@@ -212,20 +212,14 @@ def add_paradata(spec: Sdf.PrimSpec, hyps: Sequence[Hypothesis]) -> None:
 
 def column_xform(spec: Sdf.PrimSpec, pos: Sequence[float], rot_y_deg: float, scale: float) -> None:
     """Translate, rotateXYZ and scale ops in XformCommonAPI's order (no pivot)."""
-
-    def put(name: str, type_name, value) -> None:
-        attr = spec.attributes.get(name) or Sdf.AttributeSpec(spec, name, type_name)
-        attr.default = value
-
     from pxr import Gf  # noqa: PLC0415 - local: keeps the module's import list short
 
-    put("xformOp:translate", _T.Double3, Gf.Vec3d(*map(float, pos)))
-    put("xformOp:rotateXYZ", _T.Float3, Gf.Vec3f(0.0, float(rot_y_deg), 0.0))
-    put("xformOp:scale", _T.Float3, Gf.Vec3f(float(scale), float(scale), float(scale)))
-    order = spec.attributes.get("xformOpOrder") or Sdf.AttributeSpec(
-        spec, "xformOpOrder", _T.TokenArray, Sdf.VariabilityUniform
-    )
-    order.default = Vt.TokenArray(["xformOp:translate", "xformOp:rotateXYZ", "xformOp:scale"])
+    k = float(scale)
+    author_attribute(spec, "xformOp:translate", _T.Double3, Gf.Vec3d(*map(float, pos)))
+    author_attribute(spec, "xformOp:rotateXYZ", _T.Float3, Gf.Vec3f(0.0, float(rot_y_deg), 0.0))
+    author_attribute(spec, "xformOp:scale", _T.Float3, Gf.Vec3f(k, k, k))
+    ops = Vt.TokenArray(["xformOp:translate", "xformOp:rotateXYZ", "xformOp:scale"])
+    author_attribute(spec, "xformOpOrder", _T.TokenArray, ops, uniform=True)
 
 
 def _over(layer: Sdf.Layer, path: str) -> Sdf.PrimSpec:
@@ -239,14 +233,9 @@ def _over(layer: Sdf.Layer, path: str) -> Sdf.PrimSpec:
 def _translate(spec: Sdf.PrimSpec, offset: np.ndarray) -> None:
     from pxr import Gf  # noqa: PLC0415
 
-    attr = spec.attributes.get("xformOp:translate") or Sdf.AttributeSpec(
-        spec, "xformOp:translate", _T.Double3
-    )
-    attr.default = Gf.Vec3d(*map(float, offset))
-    order = spec.attributes.get("xformOpOrder") or Sdf.AttributeSpec(
-        spec, "xformOpOrder", _T.TokenArray, Sdf.VariabilityUniform
-    )
-    order.default = Vt.TokenArray(["xformOp:translate"])
+    author_attribute(spec, "xformOp:translate", _T.Double3, Gf.Vec3d(*map(float, offset)))
+    ops = Vt.TokenArray(["xformOp:translate"])
+    author_attribute(spec, "xformOpOrder", _T.TokenArray, ops, uniform=True)
 
 
 def _offset(old: Mesh, new: Mesh) -> np.ndarray | None:

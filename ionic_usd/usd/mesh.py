@@ -12,7 +12,14 @@ from pxr import Sdf, Vt
 from ionic_usd.geometry.mesh import Mesh
 from ionic_usd.usd.stage import ensure_typed_ancestors
 
-__all__ = ["author_mesh", "define_prim", "indexed_st", "mesh_extent", "write_meshes"]
+__all__ = [
+    "author_attribute",
+    "author_mesh",
+    "define_prim",
+    "indexed_st",
+    "mesh_extent",
+    "write_meshes",
+]
 
 _T = Sdf.ValueTypeNames
 
@@ -27,7 +34,7 @@ def define_prim(layer: Sdf.Layer, path: str | Sdf.Path, type_name: str = "Xform"
     return spec
 
 
-def _attr(
+def author_attribute(
     spec: Sdf.PrimSpec,
     name: str,
     type_name,
@@ -36,6 +43,11 @@ def _attr(
     uniform: bool = False,
     interpolation: str | None = None,
 ) -> Sdf.AttributeSpec:
+    """Set an attribute's default value, creating the attribute spec when it is missing.
+
+    ``uniform`` makes a new attribute uniform (an existing one keeps its variability);
+    ``interpolation``, when given, sets the primvar interpolation metadata.
+    """
     attr = spec.attributes.get(name)
     if attr is None:
         variability = Sdf.VariabilityUniform if uniform else Sdf.VariabilityVarying
@@ -89,37 +101,37 @@ def author_mesh(
         ``mesh.st_distinct`` says the producer indexed it already)
     """
     spec = define_prim(layer, path, "Mesh")
-    _attr(spec, "points", _T.Point3fArray, _floats(Vt.Vec3fArray, mesh.points))
-    _attr(spec, "faceVertexCounts", _T.IntArray, _counts(mesh.face_vertex_counts))
-    _attr(spec, "faceVertexIndices", _T.IntArray, _ints(mesh.face_vertex_indices))
-    _attr(spec, "extent", _T.Float3Array, mesh_extent(mesh))
-    _attr(spec, "subdivisionScheme", _T.Token, "none", uniform=True)
-    _attr(spec, "doubleSided", _T.Bool, bool(double_sided), uniform=True)
+    author_attribute(spec, "points", _T.Point3fArray, _floats(Vt.Vec3fArray, mesh.points))
+    author_attribute(spec, "faceVertexCounts", _T.IntArray, _counts(mesh.face_vertex_counts))
+    author_attribute(spec, "faceVertexIndices", _T.IntArray, _ints(mesh.face_vertex_indices))
+    author_attribute(spec, "extent", _T.Float3Array, mesh_extent(mesh))
+    author_attribute(spec, "subdivisionScheme", _T.Token, "none", uniform=True)
+    author_attribute(spec, "doubleSided", _T.Bool, bool(double_sided), uniform=True)
     if mesh.normals is not None:
         values = _floats(Vt.Vec3fArray, mesh.normals)
         if mesh.normals_indices is None:
-            _attr(
+            author_attribute(
                 spec, "normals", _T.Normal3fArray, values, interpolation=mesh.normals_interpolation
             )
         else:
             # only a primvar can be indexed; UsdGeomPointBased: "if 'normals' and
             # 'primvars:normals' are both specified, the latter has precedence" (Hydra, Blender
             # and usdview read the primvar first), so exactly one of the two is authored
-            _attr(spec, "primvars:normals", _T.Normal3fArray, values, interpolation="faceVarying")
-            _attr(spec, "primvars:normals:indices", _T.IntArray, _ints(mesh.normals_indices))
+            author_attribute(spec, "primvars:normals", _T.Normal3fArray, values, interpolation="faceVarying")
+            author_attribute(spec, "primvars:normals:indices", _T.IntArray, _ints(mesh.normals_indices))
     if mesh.st is not None:
         if mesh.st_distinct and mesh.st_indices is not None:
             st, st_indices = mesh.st, mesh.st_indices  # the generator's own indexing: as it is
         else:
             st, st_indices = indexed_st(mesh.st, mesh.st_indices)
-        _attr(
+        author_attribute(
             spec,
             "primvars:st",
             _T.TexCoord2fArray,
             _floats(Vt.Vec2fArray, st),
             interpolation="faceVarying",
         )
-        _attr(spec, "primvars:st:indices", _T.IntArray, _ints(st_indices))
+        author_attribute(spec, "primvars:st:indices", _T.IntArray, _ints(st_indices))
     return spec
 
 

@@ -9,7 +9,7 @@ import numpy as np
 from pxr import Gf, Sdf, Vt
 
 from ionic_usd.geometry.mesh import Mesh
-from ionic_usd.usd.mesh import _attr, author_mesh, define_prim
+from ionic_usd.usd.mesh import author_attribute, author_mesh, define_prim
 from ionic_usd.usd.stage import check_output_path, new_layer, save_layer
 
 __all__ = ["write_scan_points", "write_fitted_column"]
@@ -41,25 +41,25 @@ def write_scan_points(
     layer = new_layer("Scan", kind="component", comment="ionic_usd scan with deviations")
     with Sdf.ChangeBlock():
         spec = define_prim(layer, "/Scan/Points", "Points")
-        _attr(spec, "points", _T.Point3fArray, Vt.Vec3fArray.FromNumpy(pts))
+        author_attribute(spec, "points", _T.Point3fArray, Vt.Vec3fArray.FromNumpy(pts))
         lo, hi = pts.min(axis=0), pts.max(axis=0)
-        _attr(
+        author_attribute(
             spec,
             "extent",
             _T.Float3Array,
             Vt.Vec3fArray([Gf.Vec3f(*map(float, lo)), Gf.Vec3f(*map(float, hi))]),
         )
-        _attr(
+        author_attribute(
             spec, "widths", _T.FloatArray, Vt.FloatArray([float(width)]), interpolation="constant"
         )
-        _attr(
+        author_attribute(
             spec,
             "primvars:deviation",
             _T.FloatArray,
             Vt.FloatArray.FromNumpy(np.ascontiguousarray(deviation, dtype=np.float32)),
             interpolation="vertex",
         )
-        _attr(
+        author_attribute(
             spec,
             "primvars:displayColor",
             _T.Color3fArray,
@@ -89,8 +89,8 @@ def write_fitted_column(
     with Sdf.ChangeBlock():
         root = layer.GetPrimAtPath("/Column")
         m = Gf.Matrix4d(*[float(v) for v in np.asarray(matrix, dtype=np.float64).ravel()])
-        _attr(root, "xformOp:transform", _T.Matrix4d, m)
-        _attr(
+        author_attribute(root, "xformOp:transform", _T.Matrix4d, m)
+        author_attribute(
             root, "xformOpOrder", _T.TokenArray, Vt.TokenArray(["xformOp:transform"]), uniform=True
         )
         define_prim(layer, "/Column/Geom", "Xform")
