@@ -117,8 +117,12 @@ def author_mesh(
             # only a primvar can be indexed; UsdGeomPointBased: "if 'normals' and
             # 'primvars:normals' are both specified, the latter has precedence" (Hydra, Blender
             # and usdview read the primvar first), so exactly one of the two is authored
-            author_attribute(spec, "primvars:normals", _T.Normal3fArray, values, interpolation="faceVarying")
-            author_attribute(spec, "primvars:normals:indices", _T.IntArray, _ints(mesh.normals_indices))
+            author_attribute(
+                spec, "primvars:normals", _T.Normal3fArray, values, interpolation="faceVarying"
+            )
+            author_attribute(
+                spec, "primvars:normals:indices", _T.IntArray, _ints(mesh.normals_indices)
+            )
     if mesh.st is not None:
         if mesh.st_distinct and mesh.st_indices is not None:
             st, st_indices = mesh.st, mesh.st_indices  # the generator's own indexing: as it is
