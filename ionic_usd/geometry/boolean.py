@@ -12,7 +12,14 @@ from __future__ import annotations
 import numpy as np
 
 from ionic_usd.errors import GeometryError
-from ionic_usd.geometry.mesh import Mesh, box_st, corner_normals, face_normals, triangulate_fan
+from ionic_usd.geometry.mesh import (
+    Mesh,
+    box_st,
+    chart_labels,
+    corner_normals,
+    face_normals,
+    triangulate_fan,
+)
 from ionic_usd.geometry.slivers import (
     SLIVER_ANGLE_DEG,
     SLIVER_TOL,
@@ -96,9 +103,14 @@ def _corner_normals(mesh: Mesh) -> np.ndarray | None:
     return corner_normals(mesh)
 
 
-def _to_manifold(mesh: Mesh, keep_faces: bool = False, st: np.ndarray | None = None):
+def _to_manifold(
+    mesh: Mesh,
+    keep_faces: bool = False,
+    st: np.ndarray | None = None,
+    chart: np.ndarray | None = None,
+):
     """A manifold3d.Manifold with the corner normals as properties 3..5 (and ``st``, per
-    corner (3 t, 2), as properties 6..7).
+    corner (3 t, 2), as properties 6..7, with its chart number per corner (3 t,) as 8).
 
     ``keep_faces``: one face id per triangle, so coplanar neighbours keep their edges (a flat
     top keeps the ring a shaft welds to); otherwise manifold3d merges coplanar triangles into
@@ -114,14 +126,16 @@ def _to_manifold(mesh: Mesh, keep_faces: bool = False, st: np.ndarray | None = N
     corner_pt = tri.reshape(-1)
     q = np.round(cn.astype(np.float64) * 1e6).astype(np.int64)
     key = np.concatenate([corner_pt[:, None], q], axis=1)
-    if st is not None:
+    extra = []
+    if st is not None and chart is not None:
+        extra = [st, np.asarray(chart, dtype=np.float64).reshape(-1, 1)]
+        key = np.concatenate([key, np.round(extra[1]).astype(np.int64)], axis=1)
         key = np.concatenate([key, np.round(st * 1e6).astype(np.int64)], axis=1)
     uk, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
     inv = inv.reshape(-1)
     pv = uk[:, 0]
     props = np.concatenate(
-        [mesh.points[pv], cn[first].astype(np.float64)] + ([] if st is None else [st[first]]),
-        axis=1,
+        [mesh.points[pv], cn[first].astype(np.float64)] + [e[first] for e in extra], axis=1
     )
     # property vertices at one point are merged for topology
     order = np.argsort(pv, kind="stable")
@@ -180,15 +194,22 @@ def difference(
     """
     import manifold3d
 
-    if mesh.st is not None:
+    if mesh.st is not None and mesh.st_indices is not None:
         # carry the mesh's own (analytic) st through the cut; the cap faces a cutter leaves
-        # get planar st (box-mapped, wound like the caps, which face against the cutter)
-        ops = [_to_manifold(mesh, keep_faces=True, st=mesh.st[mesh.st_indices].astype(np.float64))]
+        # get planar st (box-mapped, wound like the caps, which face against the cutter).
+        # Every corner carries its chart too (the mesh's charts 0.., each cutter plane's
+        # below 0), so charts whose values meet at a point are not joined by the cut
+        chart = np.repeat(chart_labels(mesh.st_indices, len(mesh.st)), 3)
+        cst = mesh.st[mesh.st_indices].astype(np.float64)
+        ops = [_to_manifold(mesh, keep_faces=True, st=cst, chart=chart)]
         cut = []
-        for m in map(_as_triangles, cutters):
+        for k, m in enumerate(map(_as_triangles, cutters)):
             fn, _ = face_normals(m.points, m.triangles)
             cst = box_st(m.points[m.triangles.reshape(-1)], -np.repeat(fn, 3, axis=0))
-            cut.append(_to_manifold(m, keep_faces=True, st=cst))
+            axis = np.argmax(np.abs(fn), axis=1)
+            plane = 2 * axis + (fn[np.arange(len(fn)), axis] > 0)  # one chart per box plane
+            ids = -1.0 - 6 * k - np.repeat(plane, 3)
+            cut.append(_to_manifold(m, keep_faces=True, st=cst, chart=ids))
         res = manifold3d.Manifold.batch_boolean([*ops, *cut], manifold3d.OpType.Subtract)
         if res.is_empty():
             raise GeometryError(f"difference: nothing of mesh {mesh.name!r} is left")
@@ -239,11 +260,11 @@ def _from_manifold(res, name: str, simplify: bool = True) -> Mesh:
     against = np.einsum("ij,ij->i", nrm, fn3) < 0
     nrm[against] = -nrm[against]
     st = sti = None
-    if props.shape[1] >= 8:
-        # one st value per (point, st) pair: property vertices split by a normal crease only
-        # share it, so a chart stays connected across creases
+    if props.shape[1] >= 9:
+        # one st value per (point, chart, st): property vertices split by a normal crease
+        # only share it, so a chart stays connected across creases (and only within itself)
         q = np.round(props[:, 6:8] * 1e6).astype(np.int64)
-        key = np.concatenate([pt_index[:, None], q], axis=1)
+        key = np.concatenate([pt_index[:, None], np.round(props[:, 8:9]).astype(np.int64), q], 1)
         _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
         st = props[first, 6:8].astype(np.float32)
         sti = inv.reshape(-1)[tri.reshape(-1)]

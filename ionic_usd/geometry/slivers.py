@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from ionic_usd.geometry.mesh import Mesh, corner_normals, face_normals
+from ionic_usd.geometry.mesh import Mesh, chart_labels, corner_normals, face_normals
 
 __all__ = ["SLIVER_ANGLE_DEG", "SLIVER_TOL", "normals_with_winding", "remove_slivers"]
 
@@ -107,13 +107,16 @@ def remove_slivers(
     P: list[list[float]] = pts.tolist()  # the points as floats (kept equal to pts)
     tri0 = mesh.triangles.astype(np.int64).reshape(-1, 3)
     T: list[list[int]] = tri0.tolist()
-    # per-corner attributes carried through every edit: the normals (3) and st (2)
+    # per-corner attributes carried through every edit: the normals (3), st (2) and the
+    # st chart (1: an edit never joins two charts, whose values may meet at a point)
     parts = []
     corner_n = corner_normals(mesh)
     if corner_n is not None:
         parts.append(np.asarray(corner_n, dtype=np.float64).reshape(-1, 3, 3))
     if mesh.st is not None and mesh.st_indices is not None:
         parts.append(np.asarray(mesh.st, dtype=np.float64)[mesh.st_indices].reshape(-1, 3, 2))
+        chart = chart_labels(mesh.st_indices, len(mesh.st)).astype(np.float64)
+        parts.append(np.repeat(chart, 3).reshape(-1, 3, 1))
     cn0 = np.concatenate(parts, axis=2) if parts else None
     n_ch = 0 if cn0 is None else cn0.shape[2]
     cn: dict[int, np.ndarray] = {}  # the (3, n_ch) corners of each edited or new face
@@ -191,6 +194,11 @@ def remove_slivers(
         if cn0 is not None:
             ct, co = corners_of(t), corners_of(o)
             ic, ia, id_, ib = row.index(c), row.index(a), ro.index(d), ro.index(b)
+            if n_ch > n_dim and not (
+                np.array_equal(ct[ia, n_dim:], co[ro.index(a), n_dim:])
+                and np.array_equal(ct[row.index(b), n_dim:], co[ib, n_dim:])
+            ):
+                return False  # ab is an st seam: the new triangles would span two charts
             cn[t] = np.array([ct[ic], ct[ia], co[id_]])
             cn[o] = np.array([co[id_], co[ib], ct[ic]])
         set_tri(t, [c, a, d])
@@ -321,13 +329,15 @@ def remove_slivers(
     nrm = None if corners is None or not n_dim else corners[:, :3].astype(np.float32)
     st = sti = None
     if corners is not None and corners.shape[1] > n_dim:
-        # re-index st per corner (equal values shared, first occurrence first)
+        # re-index st per corner (equal values of one point and chart shared, first
+        # occurrence first)
         q = np.round(corners[:, n_dim:] * 1e7).astype(np.int64)
+        q = np.concatenate([idx.reshape(-1, 1), q], axis=1)
         _, first, inv = np.unique(q, axis=0, return_index=True, return_inverse=True)
         order = np.argsort(first)
         rank = np.empty_like(order)
         rank[order] = np.arange(len(order))
-        st = corners[first[order], n_dim:].astype(np.float32)
+        st = corners[first[order], n_dim : n_dim + 2].astype(np.float32)
         sti = rank[inv.reshape(-1)].astype(np.int32)
     out = Mesh(
         pts[used],
