@@ -534,3 +534,20 @@ def test_generated_meshes_are_cached_by_content(tmp_path, monkeypatch):
         cache=UVCache(tmp_path / "cache" / "uv"),
     )
     assert len(calls) == 3 and len(list(mesh_cache_folder().iterdir())) == 2
+
+
+@pytest.mark.parametrize("form", ["engaged", "corner"])
+def test_form_cuts_keep_the_charts_of_a_base_apart(form):
+    # the plinth's top and the torus's underside are box-mapped with mirrored frames whose
+    # values meet on the axis plane z = 0; the cuts re-indexed st by value and joined them
+    # into one chart, repacked overlapping (28 texels engaged, 280 corner, of 2048^2)
+    from test_uv import overlap_texels
+
+    from ionic_usd.column.column import build_base_part
+    from ionic_usd.pipeline.asset import form_cut
+    from ionic_usd.texture.uv import unwrap
+
+    p = ColumnAssetOptions().params.with_lod("low")
+    full = build_base_part(p, "attic_bezier_plinth")
+    a = unwrap(form_cut(full, form, "Base"), texels_per_metre=32.0, cache=False)
+    assert overlap_texels(a.st_px, a.st_indices) == 0
