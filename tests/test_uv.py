@@ -512,7 +512,7 @@ def test_split_overlapping_charts_separates_a_fold():
 
 def test_metric_charts_of_a_low_capital_do_not_overlap(cache):
     # xatlas folds one chart of this capital onto itself (3 triangle pairs); repacked, the
-    # fold covered 27 sub-texels of a 4x raster twice before its charts were split
+    # fold covered 26 sub-texels of a 4x raster twice before its charts were split
     from ionic_usd.column.column import build_capital_part
     from ionic_usd.texture.uv import metric_charts
     from ionic_usd.usd.column_asset import ASSET_TEXELS_PER_METRE, ColumnAssetOptions
