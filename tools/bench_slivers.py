@@ -28,7 +28,8 @@ from ionic_usd.geometry.mesh import Mesh, chart_labels, corner_normals
 
 
 # -- the old implementation (before the fast paths), verbatim apart from the names and the
-# st chart rules (chart channel, no flip on an st seam, st keyed by point) both now follow
+# st chart rules (chart channel, no flip on an st seam, st keyed by point) and the snap's
+# corner copies both now follow
 def _old_tri_angles(p: np.ndarray) -> np.ndarray:
     """(t, 3, 3) corner points → (t, 3) corner angles in degrees."""
     a = np.roll(p, -1, axis=1) - p
@@ -192,7 +193,8 @@ def _old_remove_slivers_loop(
             return False
         pts[c] = foot
         if cn is not None:
-            n_a, n_b, n_d = (cn[o][int(np.flatnonzero(tri[o] == v)[0])] for v in (a, b, d))
+            # copies: cn[o] is overwritten below (as the current version)
+            n_a, n_b, n_d = (cn[o][int(np.flatnonzero(tri[o] == v)[0])].copy() for v in (a, b, d))
             nf = (1 - u) * n_a + u * n_b
             if n_dim:
                 nf[:n_dim] /= max(float(np.linalg.norm(nf[:n_dim])), 1e-12)

@@ -244,10 +244,11 @@ def remove_slivers(
             nf = (1 - u) * n_a + u * n_b
             if n_dim:
                 nf[:n_dim] /= max(float(np.linalg.norm(nf[:n_dim])), 1e-12)
-            new_o = np.array([n_b, nf, n_d])
-            cn[o] = new_o
-            # the new half takes the corners of o at a's and d's old places (as written)
-            cn[len(T)] = np.array([nf, new_o[ia], new_o[id_]])
+            cn[o] = np.array([n_b, nf, n_d])  # halves[0] = b, c, d
+            # halves[1] = c, a, d takes o's old corners at a and d (the loop version read
+            # them back after overwriting o's, giving this half o's new corners: wrong st
+            # and normals, an st fold on the cut capitals)
+            cn[len(T)] = np.array([nf, n_a, n_d])
         set_tri(o, halves[0])
         T[o] = halves[0]
         set_tri(len(T), halves[1])
