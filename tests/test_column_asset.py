@@ -170,17 +170,16 @@ def test_every_mesh_closed_with_uvs_in_unit_square(column_asset):
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(
-    strict=True,
-    reason="known defect (issue 12): since the analytic charts and the atlas repacking, the cut "
-    "bases (engaged 26-28, corner 220-280 texels of 2048^2) and the low capitals (6) overlap",
-)
 def test_charts_do_not_overlap_in_any_mesh(column_asset):
+    from scipy.ndimage import maximum_filter, minimum_filter
     from test_uv import rasterise, uv_charts
+
+    from ionic_usd.texture.uv import DEFAULT_PADDING
+    from ionic_usd.usd.column_asset import ASSET_TEXELS_PER_METRE, UV_SPAN
 
     layer = Sdf.Layer.FindOrOpen(str(column_asset.path.parent / "Payload/Geometry.usdc"))
     stage = Usd.Stage.Open(layer)
-    res = 2048  # raster of the normalised [0,1] square
+    checked = 0
     for prim in stage.Traverse():
         if (
             not prim.IsA(UsdGeom.Mesh)
@@ -190,8 +189,21 @@ def test_charts_do_not_overlap_in_any_mesh(column_asset):
             continue
         m = mesh_value(prim)
         charts = uv_charts(m.st_indices, len(m.st))
-        cover, _ = rasterise(m.st * res, m.st_indices, res, res, charts)
+        cover, _ = rasterise(m.st * 2048, m.st_indices, 2048, 2048, charts)
         assert cover.max() == 1, prim.GetPath()
+        # finer: no overlap either, and no two charts within the padding the atlas keeps
+        # around every chart (DEFAULT_PADDING texels of this LOD's S = density × UV_SPAN)
+        res = 4096
+        cover, label = rasterise(m.st * res, m.st_indices, res, res, charts)
+        assert cover.max() == 1, prim.GetPath()
+        lod = next(k for k in ASSET_TEXELS_PER_METRE if f"_{k}" in prim.GetName())
+        r = DEFAULT_PADDING * res // int(ASSET_TEXELS_PER_METRE[lod] * UV_SPAN)
+        occupied = label >= 0
+        hi = maximum_filter(label, size=2 * r - 1)
+        lo = minimum_filter(np.where(occupied, label, label.max() + 1), size=2 * r - 1)
+        assert not np.any(occupied & ((hi != label) | (lo != label))), prim.GetPath()
+        checked += 1
+    assert checked > 0
 
 
 def test_switching_variants_changes_exactly_their_part(column_asset):
@@ -564,3 +576,20 @@ def test_generation_in_parallel_processes_gives_the_serial_meshes(tmp_path):
             assert (x is None) == (y is None), (a.name, f)
             if x is not None:
                 np.testing.assert_array_equal(x, y, err_msg=f"{a.name}.{f}")
+
+
+@pytest.mark.parametrize("form", ["engaged", "corner"])
+def test_form_cuts_keep_the_charts_of_a_base_apart(form):
+    # the plinth's top and the torus's underside are box-mapped with mirrored frames whose
+    # values meet on the axis plane z = 0; the cuts re-indexed st by value and joined them
+    # into one chart, repacked overlapping (106 sub-texels engaged, 1106 corner, of a 4x raster)
+    from test_uv import overlap_texels
+
+    from ionic_usd.column.column import build_base_part
+    from ionic_usd.pipeline.asset import form_cut
+    from ionic_usd.texture.uv import unwrap
+
+    p = ColumnAssetOptions().params.with_lod("low")
+    full = build_base_part(p, "attic_bezier_plinth")
+    a = unwrap(form_cut(full, form, "Base"), texels_per_metre=32.0, cache=False)
+    assert overlap_texels(a.st_px, a.st_indices) == 0

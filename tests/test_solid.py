@@ -292,6 +292,24 @@ def test_remove_slivers_mends_a_cap_without_moving_the_surface():
     assert off.max() <= 1e-6
 
 
+@pytest.mark.parametrize("offset", [(1e-7, -1e-7, 0.0), (-1e-7, 1e-7, 0.0)])
+def test_remove_slivers_carries_st_with_every_corner(offset):
+    # box-mapped st is a function of a corner's point and face: every edit (the snap that
+    # splits the neighbour here) must keep it so; the split's second half once took the
+    # neighbour's overwritten corners (a folded st triangle on the cut capitals)
+    from ionic_usd.geometry.boolean import remove_slivers
+    from ionic_usd.geometry.mesh import box_st, face_normals
+
+    m = _cube_with_cap(offset)
+    fn = np.repeat(face_normals(m.points, m.triangles)[0], 3, axis=0)
+    m = m.with_(st=box_st(m.points[m.triangles.reshape(-1)], fn), st_indices=np.arange(len(fn)))
+    out = remove_slivers(m, 1e-6)
+    assert solid_report(out).min_angle > 10.0
+    got = out.st[out.st_indices]
+    fn = np.repeat(face_normals(out.points, out.triangles)[0], 3, axis=0)
+    np.testing.assert_allclose(got, box_st(out.points[out.triangles.reshape(-1)], fn), atol=1e-6)
+
+
 def test_remove_slivers_keeps_a_real_feature_beyond_its_tolerance():
     from ionic_usd.geometry.boolean import remove_slivers
 

@@ -473,3 +473,53 @@ def test_metric_charts_let_cuts_reuse_one_unwrap(cache):
     assert cache.misses == 1  # the cut's charts are packed, not unwrapped again
     areas = uv_areas(a.st_px, a.st_indices)
     assert np.all(areas[np.abs(areas) > 1e-9] > 0)
+
+
+# -- charts that overlap themselves ----------------------------------------------------------
+
+
+def overlap_texels(st_px: np.ndarray, st_indices: np.ndarray, scale: int = 4) -> int:
+    """Sub-texels (a ``scale``× finer raster of the atlas) covered by two triangles."""
+    st_px = np.asarray(st_px, dtype=np.float64) * scale
+    w, h = (int(np.ceil(v)) + 1 for v in st_px.max(axis=0))
+    charts = uv_charts(st_indices, len(st_px))
+    cover, _ = rasterise(st_px, st_indices, w, h, charts)
+    return int((cover > 1).sum())
+
+
+def test_split_overlapping_charts_separates_a_fold():
+    from ionic_usd.texture.charts import overlapping_triangles, split_overlapping_charts
+
+    # chart 0: a square (triangles 0, 1) and triangle 2 folded back over it across edge DC,
+    # every triangle counter-clockwise; chart 1 elsewhere touches nothing
+    st = np.array(
+        [[0, 0], [1, 0], [0, 1], [1, 1], [0.2, 0.2], [3, 0], [4, 0], [3, 1]], dtype=np.float64
+    )
+    sti = np.array([0, 1, 2, 1, 3, 2, 3, 2, 4, 5, 6, 7])
+    assert np.all(uv_areas(st, sti) > 0)
+    assert {tuple(p) for p in overlapping_triangles(st, sti, 1e-9).tolist()} == {(0, 2), (1, 2)}
+    st2, sti2, n = split_overlapping_charts(st, sti, 1e-9)
+    assert n == 1
+    assert len(overlapping_triangles(st2, sti2, 1e-9)) == 0
+    labels = uv_charts(sti2, len(st2))
+    assert labels[0] == labels[1] != labels[2] and len(set(labels.tolist())) == 3
+    assert_array_equal(st2[sti2], st[sti])  # every corner keeps its value
+    # touching neighbours (shared edges and vertices) are not overlaps
+    ok = np.array([0, 1, 2, 1, 3, 2, 5, 6, 7])
+    assert len(overlapping_triangles(st, ok, 1e-9)) == 0
+    assert split_overlapping_charts(st, ok, 1e-9)[2] == 0
+
+
+def test_metric_charts_of_a_low_capital_do_not_overlap(cache):
+    # xatlas folds one chart of this capital onto itself (3 triangle pairs); repacked, the
+    # fold covered 26 sub-texels of a 4x raster twice before its charts were split
+    from ionic_usd.column.column import build_capital_part
+    from ionic_usd.texture.uv import metric_charts
+    from ionic_usd.usd.column_asset import ASSET_TEXELS_PER_METRE, ColumnAssetOptions
+
+    p = ColumnAssetOptions().params.with_lod("low")
+    body = build_capital_part(p, 0.0, scroll="S1")
+    tpm = ASSET_TEXELS_PER_METRE["low"]
+    (charted,) = metric_charts([body], tpm, cache=cache)
+    a = unwrap(charted, texels_per_metre=tpm, cache=cache)
+    assert overlap_texels(a.st_px, a.st_indices) == 0

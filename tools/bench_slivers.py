@@ -24,10 +24,12 @@ from collections import defaultdict
 import numpy as np
 
 from ionic_usd.geometry import boolean
-from ionic_usd.geometry.mesh import Mesh, corner_normals
+from ionic_usd.geometry.mesh import Mesh, chart_labels, corner_normals
 
 
-# -- the old implementation (before the fast paths), verbatim apart from the names ----------
+# -- the old implementation (before the fast paths), verbatim apart from the names and the
+# st chart rules (chart channel, no flip on an st seam, st keyed by point) and the snap's
+# corner copies both now follow
 def _old_tri_angles(p: np.ndarray) -> np.ndarray:
     """(t, 3, 3) corner points → (t, 3) corner angles in degrees."""
     a = np.roll(p, -1, axis=1) - p
@@ -87,6 +89,8 @@ def _old_remove_slivers_loop(
         parts.append(np.asarray(corner_n, dtype=np.float64).reshape(-1, 3, 3))
     if mesh.st is not None and mesh.st_indices is not None:
         parts.append(np.asarray(mesh.st, dtype=np.float64)[mesh.st_indices].reshape(-1, 3, 2))
+        chart = chart_labels(mesh.st_indices, len(mesh.st)).astype(np.float64)
+        parts.append(np.repeat(chart, 3).reshape(-1, 3, 1))  # as the current version
     cn: np.ndarray | None = np.concatenate(parts, axis=2) if parts else None
     n_dim = 3 if corner_n is not None else 0
     alive = np.ones(len(tri), dtype=bool)
@@ -140,6 +144,11 @@ def _old_remove_slivers_loop(
             def corner(f: int, v: int) -> np.ndarray:
                 return cnl[f][int(np.flatnonzero(tri[f] == v)[0])]
 
+            if cn.shape[2] > n_dim and not all(
+                np.array_equal(corner(t, v)[n_dim:], corner(o, v)[n_dim:]) for v in (a, b)
+            ):
+                return False  # an st seam (as the current version)
+
             n_new = np.array(
                 [
                     [corner(t, c), corner(t, a), corner(o, d)],
@@ -184,7 +193,8 @@ def _old_remove_slivers_loop(
             return False
         pts[c] = foot
         if cn is not None:
-            n_a, n_b, n_d = (cn[o][int(np.flatnonzero(tri[o] == v)[0])] for v in (a, b, d))
+            # copies: cn[o] is overwritten below (as the current version)
+            n_a, n_b, n_d = (cn[o][int(np.flatnonzero(tri[o] == v)[0])].copy() for v in (a, b, d))
             nf = (1 - u) * n_a + u * n_b
             if n_dim:
                 nf[:n_dim] /= max(float(np.linalg.norm(nf[:n_dim])), 1e-12)
@@ -264,13 +274,14 @@ def _old_remove_slivers_loop(
     nrm = None if corners is None or not n_dim else corners[:, :3].astype(np.float32)
     st = sti = None
     if corners is not None and corners.shape[1] > n_dim:
-        # re-index st per corner (equal values shared, first occurrence first)
+        # re-index st per corner (point, chart and value as the current version)
         q = np.round(corners[:, n_dim:] * 1e7).astype(np.int64)
+        q = np.concatenate([idx.reshape(-1, 1), q], axis=1)
         _, first, inv = np.unique(q, axis=0, return_index=True, return_inverse=True)
         order = np.argsort(first)
         rank = np.empty_like(order)
         rank[order] = np.arange(len(order))
-        st = corners[first[order], n_dim:].astype(np.float32)
+        st = corners[first[order], n_dim : n_dim + 2].astype(np.float32)
         sti = rank[inv.reshape(-1)].astype(np.int32)
     return Mesh(
         pts[used],

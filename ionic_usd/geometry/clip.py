@@ -133,10 +133,15 @@ def clip_mesh(
     cn0 = corner_normals(mesh)  # None iff the mesh has no normals
     if cn0 is not None:
         fv = cn0.astype(np.float64)
+    sid = None
     if mesh.st is not None and mesh.st_indices is not None:
         # st rides along with the normals (3 more columns, interpolated the same way)
         cst = mesh.st[mesh.st_indices].astype(np.float64)
         fv = np.concatenate([fv if fv is not None else np.zeros((len(cst), 3)), cst], axis=1)
+        # which st value each corner is: (input st index, -1) for a kept corner, the pair of
+        # its edge's end indices for a cut corner; never the value itself, so two charts
+        # whose values meet at a shared point (mirrored planar maps on an axis) stay apart
+        sid = np.asarray(mesh.st_indices, dtype=np.int64)[corner]
 
     # -- split the crossing triangles: one new vertex per crossing undirected edge ----------
     st_ = tri[split]
@@ -163,7 +168,15 @@ def clip_mesh(
 
     all_pts = np.concatenate([pts, new_pts])
     kept_tri = np.concatenate([tri[whole], poly_tri.astype(np.int64)])
-    kept_nrm = None
+    kept_nrm = kept_sid = None
+    if sid is not None:
+        cs, ns = sid[split], np.roll(sid[split], -1, axis=1)
+        cand_id = np.empty((len(st_), 6, 2), dtype=np.int64)
+        cand_id[:, 0::2, 0], cand_id[:, 0::2, 1] = cs, -1
+        cand_id[:, 1::2, 0], cand_id[:, 1::2, 1] = np.minimum(cs, ns), np.maximum(cs, ns)
+        poly_i = triangulate_fan(counts, np.arange(int(counts.sum())))
+        whole_id = np.stack([sid[whole], np.full(sid[whole].shape, -1)], axis=-1)
+        kept_sid = np.concatenate([whole_id.reshape(-1, 2), cand_id[mask][poly_i].reshape(-1, 2)])
     if fv is not None:
         cc = corner[split]
         cn = fv[cc]  # (m, 3 corners, 3)
@@ -177,11 +190,14 @@ def clip_mesh(
 
     faces = [kept_tri]
     normals = [kept_nrm] if kept_nrm is not None else None
+    ids = [kept_sid] if kept_sid is not None else None
     if cap:
         on_plane = np.concatenate([s == 0, np.ones(len(new_pts), dtype=bool)])
-        cap_tri = _cap(all_pts, kept_tri, on_plane, n, mesh.name)
+        cap_tri, outline = _cap(all_pts, kept_tri, on_plane, n, mesh.name)
         if len(cap_tri):
             faces.append(cap_tri)
+            if ids is not None:  # every outline's cap is a chart of its own: ids below -1
+                ids.append(np.stack([np.repeat(-2 - outline, 3), np.full(3 * len(outline), -1)], 1))
             if normals is not None:
                 cap_v = np.broadcast_to(-n, (3 * len(cap_tri), 3))
                 if fv is not None and fv.shape[1] == 5:  # planar st on the cap, box-mapped
@@ -194,10 +210,8 @@ def clip_mesh(
     out_nrm = st = sti = None
     if normals is not None and fv is not None:  # (normals exist only when fv does)
         out_nrm = np.concatenate([np.reshape(x, (-1, fv.shape[1])) for x in normals])
-        if out_nrm.shape[1] == 5:
-            key = np.concatenate(
-                [faces_all.reshape(-1, 1), np.round(out_nrm[:, 3:] * 1e6).astype(np.int64)], axis=1
-            )
+        if out_nrm.shape[1] == 5 and ids is not None:
+            key = np.concatenate([faces_all.reshape(-1, 1), np.concatenate(ids)], axis=1)
             _, first, sti = unique_rows(key, return_index=True, return_inverse=True)
             st, sti = out_nrm[first, 3:], sti.reshape(-1)
             out_nrm = out_nrm[:, :3] if mesh.normals is not None else None
@@ -313,13 +327,14 @@ def _plane_loops(
 
 def _cap(
     points: np.ndarray, tri: np.ndarray, on_plane: np.ndarray, normal: np.ndarray, mesh_name: str
-) -> np.ndarray:
-    """(c, 3) int64 cap triangles over the cut outline, wound to face ``−normal``."""
+) -> tuple[np.ndarray, np.ndarray]:
+    """(c, 3) int64 cap triangles over the cut outline, wound to face ``−normal``, and the
+    (c,) int64 number of the outer outline each one fills."""
     import shapely  # optional at import time: the kernel is numpy-only until a cut is made
 
     loops = _plane_loops(points, tri, on_plane, normal, mesh_name=mesh_name)
     if not loops:
-        return np.empty((0, 3), dtype=np.int64)
+        return np.empty((0, 3), dtype=np.int64), np.empty(0, dtype=np.int64)
     u, w = _plane_frame(normal)
     rings = [np.stack([points[lp] @ u, points[lp] @ w], axis=1) for lp in loops]
     areas = np.array([_signed_area(r) for r in rings])
@@ -339,7 +354,7 @@ def _cap(
                 "(is the mesh consistently wound?)"
             )
         owned[min(inside, key=lambda k: outer_polys[k].area)].append(h)
-    caps = []
+    caps, which = [], []
     for k, i in enumerate(outer):
         lp = np.concatenate([loops[i]] + [loops[h] for h in owned[k]])
         ct = lp[
@@ -357,4 +372,7 @@ def _cap(
         flip = np.cross(q[:, 1] - q[:, 0], q[:, 2] - q[:, 0]) @ normal > 0
         ct[flip] = ct[flip][:, ::-1]
         caps.append(ct)
-    return np.concatenate(caps) if caps else np.empty((0, 3), dtype=np.int64)
+        which.append(np.full(len(ct), k, dtype=np.int64))
+    if not caps:
+        return np.empty((0, 3), dtype=np.int64), np.empty(0, dtype=np.int64)
+    return np.concatenate(caps), np.concatenate(which)

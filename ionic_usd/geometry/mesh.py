@@ -29,6 +29,7 @@ __all__ = [
     "corner_normals",
     "frozen_array",
     "box_st",
+    "chart_labels",
 ]
 
 Interpolation = Literal["vertex", "faceVarying"]
@@ -565,3 +566,27 @@ def unique_rows(
         starts = np.flatnonzero(new)
         out.append(np.diff(np.append(starts, len(srt))))
     return out[0] if len(out) == 1 else tuple(out)
+
+
+def chart_labels(st_indices: np.ndarray, n_values: int) -> np.ndarray:
+    """Chart of every triangle: connected components of triangles sharing ``st`` values.
+
+    Parameters
+    ----------
+    st_indices : (3 t,) int, one per triangle corner
+    n_values : number of ``st`` values
+
+    Returns
+    -------
+    (t,) int64 chart label, 0 .. charts - 1
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    tri = np.asarray(st_indices, dtype=np.int64).reshape(-1, 3)
+    rows = np.concatenate([tri[:, 0], tri[:, 1]])
+    cols = np.concatenate([tri[:, 1], tri[:, 2]])
+    graph = coo_matrix((np.ones(len(rows), np.int8), (rows, cols)), shape=(n_values, n_values))
+    _, label = connected_components(graph, directed=False)
+    # values no triangle uses are components of their own: number only the used ones
+    return np.unique(label[tri[:, 0]], return_inverse=True)[1].reshape(-1).astype(np.int64)

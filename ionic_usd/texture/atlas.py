@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ionic_usd.errors import GeometryError, ParameterError
-from ionic_usd.geometry.mesh import Mesh, frozen_array
+from ionic_usd.geometry.mesh import Mesh, chart_labels, frozen_array
 
 __all__ = [
     "DEFAULT_PADDING",
@@ -198,30 +198,6 @@ def attach_uvs(mesh: Mesh, atlas: UVAtlas, atlas_size: int | None = None) -> Mes
     return mesh.with_(
         st=atlas.st(atlas_size), st_indices=atlas.st_indices, st_distinct=atlas.st_distinct
     )
-
-
-def chart_labels(st_indices: np.ndarray, n_values: int) -> np.ndarray:
-    """Chart of every triangle: connected components of triangles sharing ``st`` values.
-
-    Parameters
-    ----------
-    st_indices : (3 t,) int, one per triangle corner
-    n_values : number of ``st`` values
-
-    Returns
-    -------
-    (t,) int64 chart label, 0 .. charts - 1
-    """
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
-    tri = np.asarray(st_indices, dtype=np.int64).reshape(-1, 3)
-    rows = np.concatenate([tri[:, 0], tri[:, 1]])
-    cols = np.concatenate([tri[:, 1], tri[:, 2]])
-    graph = coo_matrix((np.ones(len(rows), np.int8), (rows, cols)), shape=(n_values, n_values))
-    _, label = connected_components(graph, directed=False)
-    # values no triangle uses are components of their own: number only the used ones
-    return np.unique(label[tri[:, 0]], return_inverse=True)[1].reshape(-1).astype(np.int64)
 
 
 def analytic_atlas(

@@ -49,6 +49,7 @@ from ionic_usd.texture.atlas import (
     check_uv_options,
     common_atlas_size,
 )
+from ionic_usd.texture.charts import split_overlapping_charts
 from ionic_usd.texture.uv_cache import (
     XATLAS_CHART_OPTIONS,
     XATLAS_PACK_OPTIONS,
@@ -410,7 +411,8 @@ def metric_charts(
     instead of once per form, and :func:`unwrap` then packs the cut pieces' charts as analytic
     ones. Meshes that already have ``st`` are returned as they are; the others are unwrapped
     in parallel (:func:`prefetch` over ``workers`` processes, through ``cache``) at
-    ``texels_per_metre``.
+    ``texels_per_metre``. A chart xatlas folded onto itself is split into pieces that do not
+    overlap (:func:`~ionic_usd.texture.charts.split_overlapping_charts`).
     """
     meshes = list(meshes)
     todo = [m for m in meshes if m.st is None]
@@ -434,5 +436,9 @@ def metric_charts(
             cache=cache,
             analytic=False,
         )
-        out.append(m.with_(st=a.st_px / np.float32(a.texels_per_metre), st_indices=a.st_indices))
+        # xatlas can fold a chart onto itself near its boundary; once repacked the fold
+        # covers whole texels twice, so such charts are split here (overlaps thinner than a
+        # thousandth of a texel, i.e. touching neighbours, do not count)
+        st, sti, _ = split_overlapping_charts(a.st_px, a.st_indices, 1e-3)
+        out.append(m.with_(st=st / np.float32(a.texels_per_metre), st_indices=sti))
     return out
