@@ -312,3 +312,28 @@ def test_fit_a_capital_scanned_alone():
     assert s["deviation"]["rms"] < 0.004 and np.all(np.isfinite(fit.deviation))
     assert s["parts"]["capital"]["status"] == "fitted"
     assert any("capital alone" in n for n in s["notes"])
+
+
+def test_a_cut_drum_top_is_not_a_capital():
+    """A base with a short drum at D = 0.6 (the first axis 4° off): the drum's cut top flares
+    in the bins but reaches neither a capital's width nor its height — only the base and the
+    shaft are found (before: a capital at the cut, or "cannot orient the column")."""
+    from ionic_usd.evaluate.scan_axis import estimate_axis, find_parts
+
+    p = portunus_column_params(lower_diameter=0.6)
+    bh = p.base_params().height
+    pts, rot, t = synthetic_scan(
+        build_column(p).parts(),
+        n=20_000,
+        noise=5e-4,
+        holes=4,
+        missing_sector=(40.0, 100.0),
+        hidden=((0.0, 99.0), (bh, 9.0)),
+        seed=2,
+        y_range=(0.0, bh + 0.8),
+        hole_radius=0.05,
+    )
+    a, c, _ = estimate_axis(pts)
+    frame = find_parts(pts, a, c)
+    assert sorted(frame.parts) == ["base", "shaft"]
+    assert frame.direction @ rot[:, 1] > 0
