@@ -177,7 +177,7 @@ def fit_column_scan(
                         raise
                     notes.append("too few points for a shaft section: no shaft")
                     return _capital_alone(pts, sub, seed, notes, t0)
-                if stage == 0 and not is_fluted(slab1, sec1):
+                if stage == 0 and frac == 0.25 and not is_fluted(slab1, sec1):
                     notes.append(
                         f"no fluted section fits the narrow band ({e} flutes tried at "
                         f"{h:.3f} m): no shaft"
