@@ -290,3 +290,50 @@ def test_capital_fitted_to_its_points_beats_the_rebuilt_one():
     assert fit.rms < 0.3 * fit.rms_start
     assert set(fit.models) == {"log_spiral", "centred_arcs"}
     assert fit.models["centred_arcs"]["cost"] >= fit.models["log_spiral"]["cost"]
+
+
+def test_fit_a_capital_scanned_alone():
+    """A capital alone (random pose, noise, holes, a 60° missing sector): no fluted shaft is
+    found, so the capital sets the axis and the size — measured axis 0.01–0.03°, D within
+    0.01 %, deviation rms 1.1–2.0 mm at D = 0.6–1.2 (the shaft's path gave 88° and 58 mm)."""
+    from ionic_usd.evaluate.fit_scan import fit_column_scan
+
+    p = portunus_column_params(lower_diameter=0.8)
+    caps = {k: m for k, m in build_column(p).parts().items() if k.startswith("Capital")}
+    pts, rot, t = synthetic_scan(
+        caps, n=6000, noise=5e-4, holes=3, missing_sector=(40.0, 100.0), seed=5, hole_radius=0.04
+    )
+    fit = fit_column_scan(pts)
+    s = fit.summary()
+    assert s["parts_found"] == ["capital"]
+    assert math.degrees(math.acos(min(1.0, abs(fit.frame.direction @ rot[:, 1])))) < 2.0
+    assert fit.frame.direction @ rot[:, 1] > 0  # the abacus up
+    assert s["diameter"] == pytest.approx(0.8, rel=0.02)
+    assert s["deviation"]["rms"] < 0.004 and np.all(np.isfinite(fit.deviation))
+    assert s["parts"]["capital"]["status"] == "fitted"
+    assert any("capital alone" in n for n in s["notes"])
+
+
+def test_a_cut_drum_top_is_not_a_capital():
+    """A base with a short drum at D = 0.6 (the first axis 4° off): the drum's cut top flares
+    in the bins but reaches neither a capital's width nor its height — only the base and the
+    shaft are found (before: a capital at the cut, or "cannot orient the column")."""
+    from ionic_usd.evaluate.scan_axis import estimate_axis, find_parts
+
+    p = portunus_column_params(lower_diameter=0.6)
+    bh = p.base_params().height
+    pts, rot, t = synthetic_scan(
+        build_column(p).parts(),
+        n=20_000,
+        noise=5e-4,
+        holes=4,
+        missing_sector=(40.0, 100.0),
+        hidden=((0.0, 99.0), (bh, 9.0)),
+        seed=2,
+        y_range=(0.0, bh + 0.8),
+        hole_radius=0.05,
+    )
+    a, c, _ = estimate_axis(pts)
+    frame = find_parts(pts, a, c)
+    assert sorted(frame.parts) == ["base", "shaft"]
+    assert frame.direction @ rot[:, 1] > 0

@@ -34,7 +34,7 @@ import numpy as np
 from ionic_usd.column.column import ColumnParams, build_column, portunus_column_params
 from ionic_usd.errors import GeometryError
 from ionic_usd.evaluate.fit_core import FitResult
-from ionic_usd.evaluate.polyline import closest_on_polyline
+from ionic_usd.evaluate.scan_alone import is_fluted
 from ionic_usd.evaluate.scan_axis import ColumnFrame, estimate_axis, find_parts
 from ionic_usd.evaluate.scan_capital import CapitalFit
 from ionic_usd.evaluate.scan_deviation import (
@@ -44,6 +44,7 @@ from ionic_usd.evaluate.scan_deviation import (
     shaft_deviation,
 )
 from ionic_usd.evaluate.scan_parts import base_meridian, base_top, has_square_plinth, to_column
+from ionic_usd.evaluate.scan_section import outer_profile, section_at, taper
 
 __all__ = ["ScanFit", "ScanSummary", "fit_column_scan", "heat_colours", "scan_deviation"]
 
@@ -122,132 +123,6 @@ class ScanFit:
         }
 
 
-def _flutes_from_points(xy: np.ndarray) -> tuple[int, float]:
-    """Flute count and a flute centre's angle (deg) from the outer radius round the centre."""
-    ang = np.arctan2(xy[:, 1], xy[:, 0])
-    rad = np.hypot(xy[:, 0], xy[:, 1])
-    nb = 720
-    idx = ((ang + np.pi) / (2 * np.pi) * nb).astype(int) % nb
-    prof = np.full(nb, np.nan)
-    np.fmax.at(prof, idx, rad)
-    ok = np.isfinite(prof)
-    prof = np.interp(np.arange(nb), np.flatnonzero(ok), prof[ok], period=nb)
-    spec = np.fft.rfft(prof - prof.mean())
-    k = int(np.argmax(np.abs(spec[6:65]))) + 6
-    phase = float(np.angle(spec[k]))
-    # prof ≈ A cos(kθ' + phase) with θ' = θ + π: lowest (a flute centre) at kθ' + phase = π
-    centre = (np.pi - phase) / k - np.pi
-    return k, math.degrees(centre)
-
-
-def _fit_section_e(
-    xy: np.ndarray, r0: float, e: int, centre_deg: float
-) -> tuple[int, float, np.ndarray, np.ndarray, np.ndarray]:
-    """Fluted section with ``e`` flutes through scattered points (points → model, robust)."""
-    from scipy.optimize import least_squares
-
-    from ionic_usd.evaluate.fit_shaft import fluted_section
-
-    period = 360.0 / e
-    rot0 = (centre_deg - 0.5 * period) % period  # fluted_section centres flutes at (k+½)p
-    pts = np.ascontiguousarray(xy)
-    lo = np.array([0.8 * r0, 0.2 * period, 0.05, rot0 - 0.5 * period, -0.1 * r0, -0.1 * r0])
-    hi = np.array([1.2 * r0, 0.98 * period, 1.6, rot0 + 0.5 * period, 0.1 * r0, 0.1 * r0])
-
-    def res(x: np.ndarray) -> np.ndarray:
-        poly = fluted_section(x[0], e, x[1], x[2], x[3], x[4:6], slices=12)
-        return closest_on_polyline(pts, np.ascontiguousarray(poly))[0]
-
-    sols = [
-        least_squares(
-            res,
-            np.array([r0, f0 * period, 1.0, rot0, 0.0, 0.0]),
-            bounds=(lo, hi),
-            loss="soft_l1",
-            f_scale=0.002 * r0,
-            x_scale=hi - lo,
-            max_nfev=300,
-        )
-        for f0 in (0.6, 0.8)
-    ]
-    best = min(sols, key=lambda sol: sol.cost)  # the first of equal costs, as before
-    x = best.x
-    return e, best.cost, x, lo, hi
-
-
-def _fit_section(
-    xy: np.ndarray, r0: float, flutes: int | None = None
-) -> tuple[int, dict[str, float]]:
-    """Fluted section through scattered points: the harmonic's flute count and its two
-    neighbours are each fitted (a missing sector blurs the spectrum); the lowest cost wins."""
-    e0, centre_deg = _flutes_from_points(xy)
-    counts = (e0 - 1, e0, e0 + 1) if flutes is None else (flutes,)
-    fits = [_fit_section_e(xy, r0, e, centre_deg) for e in counts if e >= 4]
-    e, _, x, lo, hi = min(fits, key=lambda f: f[1])
-    names = ("radius", "flute_angle", "flute_depth", "rotation_deg", "centre_u", "centre_v")
-    vals = dict(zip(names, (float(v) for v in x), strict=True))
-    vals["flutes"] = float(e)
-    span = hi - lo
-    vals["bounds_hit"] = [
-        n for n, u in zip(names, (x - lo) / span, strict=True) if u < 1e-3 or u > 1 - 1e-3
-    ]  # type: ignore[assignment]
-    return e, vals
-
-
-def _taper(loc: np.ndarray, s0: float, s1: float) -> tuple[float, float]:
-    """Outer radius along the shaft band (ends trimmed) as a robust line r = a + b h."""
-    prof = _outer_profile(
-        loc, s0 + 0.05 * (s1 - s0), s1 - 0.05 * (s1 - s0), max((s1 - s0) / 40, 0.004)
-    )
-    if len(prof) < 3:
-        raise GeometryError("too few points along the shaft to measure its taper")
-    return _robust_line(prof[:, 1], prof[:, 0])
-
-
-def _section_at(
-    loc: np.ndarray, h: float, s0: float, s1: float, ra: float, rb: float, flutes: int | None
-) -> tuple[int, dict[str, float], np.ndarray, float]:
-    """Fit the section through a slab at height ``h``, thick enough for ~1500 points, each
-    point scaled radially to the slab's middle by the taper."""
-    in_band = int(np.count_nonzero((loc[:, 2] >= s0) & (loc[:, 2] <= s1)))
-    half = min(max(0.004, 0.5 * (s1 - s0) * 1500.0 / max(in_band, 1)), 0.15 * (s1 - s0))
-    sel = np.abs(loc[:, 2] - h) < half
-    if np.count_nonzero(sel) < 200:
-        raise GeometryError(
-            f"too few points ({np.count_nonzero(sel)}) at the shaft section {h:.3f} m up the axis"
-        )
-    sl = loc[sel]
-    k = (ra + rb * h) / (ra + rb * sl[:, 2])
-    slab = (sl[:, :2] * k[:, None])[:4000]
-    e, sec = _fit_section(slab, ra + rb * h, flutes)
-    return e, sec, slab, half
-
-
-def _robust_line(h: np.ndarray, r: np.ndarray) -> tuple[float, float]:
-    """r ≈ a + b h, Huber-weighted (outer radius per bin; noisy bins and holes)."""
-    w = np.ones_like(r)
-    a, b = float(np.median(r)), 0.0
-    for _ in range(8):
-        A = np.column_stack([np.ones_like(h), h]) * w[:, None]
-        (a, b), *_ = np.linalg.lstsq(A, r * w, rcond=None)
-        res = np.abs(r - a - b * h)
-        s = 1.4826 * np.median(res) + 1e-9
-        w = np.minimum(1.0, 2.0 * s / np.maximum(res, 1e-12))
-    return float(a), float(b)
-
-
-def _outer_profile(loc: np.ndarray, h0: float, h1: float, width: float) -> np.ndarray:
-    """(r, h) polyline: the 95th percentile radius of thin bins between h0 and h1."""
-    r = np.hypot(loc[:, 0], loc[:, 1])
-    edges = np.arange(h0, h1 + 0.5 * width, width)
-    out = []
-    for a, b in zip(edges[:-1], edges[1:], strict=True):
-        sel = (loc[:, 2] >= a) & (loc[:, 2] < b)
-        if np.count_nonzero(sel) >= 8:
-            out.append((float(np.percentile(r[sel], 95)), 0.5 * (a + b)))
-    return np.asarray(out)
-
-
 def fit_column_scan(
     points: np.ndarray,
     *,
@@ -281,10 +156,8 @@ def fit_column_scan(
     frame = find_parts(sub, a, c)
     notes = [f"axis: normal lines meet it within {resid * 1000:.3g} mm (median)"]
     if "shaft" not in frame.parts:
-        raise GeometryError(
-            "no shaft in the scan: a narrow band of at least three bins along "
-            "the axis is needed to set the diameter"
-        )
+        notes.append("no narrow band along the axis: no shaft")
+        return _capital_alone(pts, sub, seed, notes, t0)
     # two sections, a quarter and three quarters up the shaft band: their centres set the
     # axis far better than the normals (a 1 mm error over 4 m is 0.015°); then the final
     # section a third of the way up in the corrected frame
@@ -292,12 +165,24 @@ def fit_column_scan(
     for stage in range(3):  # refine twice: a tilted first axis blurs the first slabs
         loc = frame.local(sub)
         s0, s1 = frame.parts["shaft"]
-        ra, rb = _taper(loc, s0, s1)
+        ra, rb = taper(loc, s0, s1)
         if stage < 2:
             cs = []
             for frac in (0.25, 0.75):
                 h = s0 + frac * (s1 - s0)
-                e, sec1, _, _ = _section_at(loc, h, s0, s1, ra, rb, e)
+                try:
+                    e, sec1, slab1, _ = section_at(loc, h, s0, s1, ra, rb, e)
+                except GeometryError:
+                    if stage:
+                        raise
+                    notes.append("too few points for a shaft section: no shaft")
+                    return _capital_alone(pts, sub, seed, notes, t0)
+                if stage == 0 and frac == 0.25 and not is_fluted(slab1, sec1):
+                    notes.append(
+                        f"no fluted section fits the narrow band ({e} flutes tried at "
+                        f"{h:.3f} m): no shaft"
+                    )
+                    return _capital_alone(pts, sub, seed, notes, t0)
                 cs.append(
                     frame.origin
                     + sec1["centre_u"] * frame.u
@@ -310,7 +195,7 @@ def fit_column_scan(
                 raise GeometryError("the shaft band was lost after refining the axis")
     hs = s0 + (s1 - s0) / 3.0
     # the flute count is chosen again in the refined frame (a tilted slab blurs flutes)
-    e, sec, slab, half = _section_at(loc, hs, s0, s1, ra, rb, None)
+    e, sec, slab, half = section_at(loc, hs, s0, s1, ra, rb, None)
     notes.append(
         f"axis through the centres of sections {s0 + 0.25 * (s1 - s0):.3f} and "
         f"{s0 + 0.75 * (s1 - s0):.3f} m up; section from {len(slab)} points within "
@@ -364,7 +249,7 @@ def fit_column_scan(
     bprof = None
     if has_base:
         b0, b1 = frame.parts["base"]
-        bprof = _outer_profile(loc, b0, b1, max((b1 - b0) / 80, 0.002))
+        bprof = outer_profile(loc, b0, b1, max((b1 - b0) / 80, 0.002))
     else:
         notes.append("no base in the scan: the column's base is the Vitruvian one")
     # column coordinates → scan: y along the axis, x at the flutes' angle 0
@@ -407,6 +292,76 @@ def fit_column_scan(
         notes,
         fits,
     )
+
+
+def _capital_alone(
+    pts: np.ndarray, sub: np.ndarray, seed: int, notes: list[str], t0: float
+) -> ScanFit:
+    """A capital scanned alone: its pose and size from the capital itself
+    (:func:`.scan_alone.capital_pose`), then its proportions (:func:`_fit_capital`); the
+    column is the Vitruvian one at the capital's diameter."""
+    from ionic_usd.evaluate.scan_alone import capital_pose
+
+    pose = capital_pose(sub, seed=seed)
+    if not pose.rms < 0.02 * pose.scale:
+        raise GeometryError(
+            f"neither a fluted shaft nor a capital fits the scan (the best capital pose "
+            f"leaves {pose.rms * 1000:.3g} mm rms at D = {pose.scale:.3f} m)"
+        )
+    notes.append(
+        f"capital alone: its pose and size from the capital ({pose.candidates} frames from "
+        f"the points' principal directions, the best placed at {pose.rms * 1000:.3g} mm rms)"
+    )
+    col = portunus_column_params(lower_diameter=pose.scale)
+    up = pose.rotation[:, 1]
+    y_top = _shaft_top(col)
+    m = np.eye(4)
+    m[:3, :3] = pose.rotation.T
+    m[3, :3] = pose.origin - y_top * up
+    col, m, cap_fit = _fit_capital(sub, col, m, False, notes)
+    top = m[3, :3] + y_top * up  # the shaft's top centre in the scan
+    diameter = float(cap_fit.capital.capital_width)  # the capital's width is the diameter
+    col = dataclasses.replace(
+        portunus_column_params(lower_diameter=diameter, flutes=col.shaft.flutes),
+        capital=cap_fit.capital,
+    )
+    m[3, :3] = top - _shaft_top(col) * up
+    notes.append(
+        f"diameter {diameter:.4f} m from the capital's fitted size; shaft, flutes "
+        f"({col.shaft.flutes}) and base not seen: the Vitruvian ones"
+    )
+    h = (pts - top) @ up
+    frame = ColumnFrame(
+        up,
+        top + h.min() * up,
+        m[0, :3],
+        np.cross(up, m[0, :3]),
+        {"capital": (0.0, float(np.ptp(h)))},
+        col.shaft.top_radius,
+    )
+    dev = scan_deviation(pts, col, m, tree=other_parts_tree(col))
+    fits = _part_report(frame.local(pts)[:, 2], dev, frame, {}, None, col, cap_fit)
+    return ScanFit(
+        col,
+        frame,
+        m,
+        diameter,
+        col.shaft.flutes,
+        {},
+        None,
+        dev,
+        time.perf_counter() - t0,
+        np.empty((0, 2)),
+        None,
+        notes,
+        fits,
+    )
+
+
+def _shaft_top(col: ColumnParams) -> float:
+    """Column y of the shaft's top (the capital's origin)."""
+    built = build_column(col)
+    return built.base_height + built.shaft_length
 
 
 def _fit_capital(

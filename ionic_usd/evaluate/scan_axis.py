@@ -202,13 +202,22 @@ def find_parts(points: np.ndarray, direction: np.ndarray, point: np.ndarray) -> 
         lo_end = _end_run(wide, ok, from_start=True)
         hi_end = _end_run(wide, ok, from_start=False)
         parts: dict[str, tuple[float, float]] = {}
-        kinds = {}
+        kinds: dict[str, tuple[str, tuple[float, float], float]] = {}
         for name, run in (("low", lo_end), ("high", hi_end)):
             if run is None:
                 continue
             i, j = run
             asy = np.nanmedian(asym[i : j + 1]) if np.isfinite(asym[i : j + 1]).any() else 1.0
-            kinds[name] = ("capital" if asy > 1.25 else "base", (edges[i], edges[j + 1]))
+            grow = float(np.nanmax(r95[i : j + 1])) / r_shaft
+            tall = float(edges[j + 1] - edges[i]) / r_shaft
+            # a capital's volutes reach ≥ 1.4 shaft radii over ≥ 0.7 of one (the echinus
+            # to the abacus); a cut drum's top seen from a tilted first axis flares less
+            if asy > 1.25 and grow > 1.3 and tall > 0.6:
+                kinds[name] = ("capital", (edges[i], edges[j + 1]), grow)
+            elif grow > 1.2:  # a plinth: ≥ 1.27 shaft radii (a square's corners more)
+                kinds[name] = ("base", (edges[i], edges[j + 1]), grow)
+        if kinds.get("low", ("",))[0] == kinds.get("high", ("",))[0] == "base":
+            del kinds[min(kinds, key=lambda k: kinds[k][2])]  # one base: the wider end
         # a base belongs at the bottom, a capital at the top: flip once if they disagree
         flip = (kinds.get("high", ("",))[0] == "base" and kinds.get("low", ("",))[0] != "base") or (
             kinds.get("low", ("",))[0] == "capital" and kinds.get("high", ("",))[0] != "capital"
@@ -216,7 +225,7 @@ def find_parts(points: np.ndarray, direction: np.ndarray, point: np.ndarray) -> 
         if flip:
             a = -a
             continue
-        for kind, span in kinds.values():
+        for kind, span, _ in kinds.values():
             parts[kind] = (float(span[0]), float(span[1]))
         nidx = np.flatnonzero(narrow)
         if len(nidx) >= 3:

@@ -42,22 +42,26 @@ def plot_scan_fit(fit: ScanFit, path: Path) -> Path:
     ax1.set_title(f"deviation of {len(d):,} scan points (max {d.max():.3g} mm)")
     ax1.legend(fontsize=8)
     s = fit.section
-    sec = fluted_section(
-        s["radius"],
-        fit.flutes,
-        s["flute_angle"],
-        s["flute_depth"],
-        s["rotation_deg"],
-        (s["centre_u"], s["centre_v"]),
-        slices=32,
-    )
-    ax2.plot(fit.slab[:, 0], fit.slab[:, 1], ".", ms=1.5, color="#d4a500", label="scan slab")
-    ax2.plot(sec[:, 0], sec[:, 1], "-", lw=0.8, color="#d62728", label="fitted section")
-    ax2.set_aspect("equal")
-    ax2.set_xlabel("u (m)")
-    ax2.set_ylabel("v (m)")
-    ax2.set_title(f"shaft section: {fit.flutes} flutes, D = {fit.diameter:.4f} m")
-    ax2.legend(fontsize=8, loc="upper right")
+    if "radius" in s:
+        sec = fluted_section(
+            s["radius"],
+            fit.flutes,
+            s["flute_angle"],
+            s["flute_depth"],
+            s["rotation_deg"],
+            (s["centre_u"], s["centre_v"]),
+            slices=32,
+        )
+        ax2.plot(fit.slab[:, 0], fit.slab[:, 1], ".", ms=1.5, color="#d4a500", label="scan slab")
+        ax2.plot(sec[:, 0], sec[:, 1], "-", lw=0.8, color="#d62728", label="fitted section")
+        ax2.set_aspect("equal")
+        ax2.set_xlabel("u (m)")
+        ax2.set_ylabel("v (m)")
+        ax2.set_title(f"shaft section: {fit.flutes} flutes, D = {fit.diameter:.4f} m")
+        ax2.legend(fontsize=8, loc="upper right")
+    else:
+        ax2.set_axis_off()
+        ax2.text(0.5, 0.5, "no shaft in the scan", ha="center", va="center")
     if fit.profile is not None and len(fit.profile):
         h0 = fit.frame.parts["base"][0]
         prof = base_section(fit.column)
