@@ -145,7 +145,7 @@ def add_rebuild_flag(p: argparse.ArgumentParser) -> None:
 
 def add_variant_flag(p: argparse.ArgumentParser, help: str) -> None:
     """``--variant SET=VALUE`` (repeatable); read with
-    :func:`ionic_usd.usd.reader.parse_variant_args`."""
+    :func:`ionic_usd.usd.variants.parse_variant_args`."""
     p.add_argument("--variant", action="append", metavar="SET=VALUE", help=help)
 
 

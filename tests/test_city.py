@@ -249,7 +249,7 @@ def test_cli_city_json_and_errors(grid_city, tmp_path, capsys):
 
 @pytest.mark.parametrize("n, scaled", [(500, False), (500, True), (20_000, False)])
 def test_instance_bounds_match_brute_force(n, scaled):
-    from ionic_usd.usd.city import _instance_bounds
+    from ionic_usd.usd.city_prototypes import instance_bounds
 
     rng = np.random.default_rng(n + scaled)
     lo = np.array([[-1.0, 0.0, -2.0], [-3.0, 0.5, -1.0]])
@@ -257,7 +257,7 @@ def test_instance_bounds_match_brute_force(n, scaled):
     idx = rng.integers(0, 2, n)
     xz, yaw = rng.random((n, 2)) * 500, rng.random(n) * 360
     s = rng.random(n) + 0.5 if scaled else None
-    got = _instance_bounds(lo, hi, idx, xz, yaw, s)
+    got = instance_bounds(lo, hi, idx, xz, yaw, s)
     a = np.radians(yaw)
     S = np.ones(n) if s is None else s
     pts = []

@@ -237,6 +237,22 @@ def test_package_data_globs_match_the_data_files():
         assert any(fnmatch(f, g) for f in data), f"package-data glob {g!r} matches no file"
 
 
+MAX_MODULE_LINES = 600
+
+
+def test_no_module_is_over_600_lines():
+    """Every module stays readable: at most 600 lines (DESIGN.md convention 8)."""
+    modules = sorted((ROOT / "ionic_usd").rglob("*.py"))
+    assert len(modules) > 50  # the glob found the package
+    lines = {
+        p.relative_to(ROOT).as_posix(): len(p.read_text(encoding="utf-8").splitlines())
+        for p in modules
+    }
+    over = {name: n for name, n in lines.items() if n > MAX_MODULE_LINES}
+    listed = ", ".join(f"{name} ({n} lines)" for name, n in sorted(over.items()))
+    assert not over, f"modules over {MAX_MODULE_LINES} lines, split them: {listed}"
+
+
 def test_readme_quick_start_is_what_ci_runs():
     sys.path.insert(0, str(ROOT / "tools"))
     try:

@@ -124,7 +124,7 @@ def _generated(
     from ionic_usd.evaluate import sections
 
     if args.usd is not None:
-        from ionic_usd.usd.reader import parse_variant_args
+        from ionic_usd.usd.variants import parse_variant_args
 
         curve = sections.section_from_usd(
             args.usd, part, variants=parse_variant_args(args.variant), y=section_y

@@ -32,7 +32,7 @@ def parse_scale(text: str) -> float:
 def cmd_export(args: argparse.Namespace) -> int:
     from ionic_usd.export import export_scene
     from ionic_usd.export.common import check_export_path
-    from ionic_usd.usd.reader import parse_variant_args
+    from ionic_usd.usd.variants import parse_variant_args
 
     variants = parse_variant_args(args.variant)
     scale = parse_scale(args.scale)

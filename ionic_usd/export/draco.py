@@ -36,7 +36,7 @@ def draco_primitive(
 
     Parameters
     ----------
-    b : the glTF builder (``ionic_usd.export.gltf._Builder``)
+    b : the glTF builder (:class:`ionic_usd.export.gltf_buffers.GltfBuilder`)
     pos, nrm : (v, 3) float32; uv : (v, 2) float32 or None; tan : (v, 4) float32 or None
     tris : (t, 3) uint32
     """

@@ -402,7 +402,11 @@ def _far_cards(
     if not cards.any():
         return None, {}, note
     from ionic_usd.preview import PreviewUnavailableError, bake_cards
-    from ionic_usd.usd.city import temple_card_bound, temple_selection, temple_variant_sets
+    from ionic_usd.usd.city_prototypes import (
+        temple_card_bound,
+        temple_selection,
+        temple_variant_sets,
+    )
     from ionic_usd.usd.draw_mode import CARD_FACES
 
     dirs: dict[tuple, str] = {}
@@ -471,7 +475,8 @@ def _far_column_cards(
     if not cards.any():
         return None, None
     from ionic_usd.preview import PreviewUnavailableError, bake_cards
-    from ionic_usd.usd.city import COLUMN_CARD_SELECTION, model_card_bound
+    from ionic_usd.usd.city import COLUMN_CARD_SELECTION
+    from ionic_usd.usd.city_prototypes import model_card_bound
     from ionic_usd.usd.draw_mode import CARD_FACES
 
     sel = {**COLUMN_CARD_SELECTION, "finish": _COLUMN_FINISH}

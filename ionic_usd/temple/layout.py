@@ -79,10 +79,14 @@ from ionic_usd.temple.description import (
     Hypothesis,
     Layer,
     TempleParams,
+    enum_value,
+)
+
+# the TOML readers, re-exported for callers of the layout
+from ionic_usd.temple.tables import (
     check_temple_tables,
     cuboids_from_tables,
     cuboids_to_toml,
-    enum_value,
     hypotheses_from_tables,
     load_cuboids_toml,
     params_from_tables,

@@ -24,7 +24,7 @@ Files written into the city folder by :func:`compose_city` (the temple folders u
 Every model's parent is a model (assembly › group › component/assembly). Instance arrays are
 built with ``Vt.*Array.FromNumpy`` — no per-instance Python object — and nothing re-opens the
 city to check it: prototype counts, bounds and drawn triangles come from the arrays and from
-the prototypes' own (small) stages.
+the prototypes' own (small) stages (:mod:`ionic_usd.usd.city_prototypes`).
 """
 
 from __future__ import annotations
@@ -36,12 +36,18 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from pxr import Gf, Sdf, Tf, Usd, UsdGeom, Vt
+from pxr import Gf, Sdf, Usd, Vt
 
 from ionic_usd.city.layout import DEFAULT_INSTANCER_THRESHOLD, LOD_NAMES, yaw_quaternions
 from ionic_usd.errors import OutputExistsError, ParameterError, UsdAuthoringError
-from ionic_usd.usd.draw_mode import CARD_FACES, author_cards, card_bbox_cache, card_bound
-from ionic_usd.usd.instancer import drawn_triangles
+from ionic_usd.usd.city_prototypes import (
+    instance_bounds,
+    prim_identifier,
+    prototype_stats,
+    temple_selection,
+    temple_variant_sets,
+)
+from ionic_usd.usd.draw_mode import CARD_FACES, author_cards
 from ionic_usd.usd.stage import new_layer, save_layer
 
 __all__ = [
@@ -54,8 +60,6 @@ __all__ = [
     "DEFAULT_INSTANCER_THRESHOLD",
     "temple_variant_sets",
     "temple_selection",
-    "temple_card_bound",
-    "model_card_bound",
     "CARD_TRIANGLES",
     "COLUMN_CARD_SELECTION",
 ]
@@ -132,78 +136,6 @@ class CityReport:
     seconds: dict[str, float] = field(default_factory=dict)
 
 
-def temple_variant_sets(temple_root: Path) -> dict[str, tuple[str, ...]]:
-    """Variant set → its variants, on the default prim of a temple (composed, payloads unloaded:
-    the root layer only sublayers the user's and the generated layer)."""
-    stage = Usd.Stage.Open(str(temple_root), Usd.Stage.LoadNone)
-    if stage is None:
-        raise UsdAuthoringError(f"cannot open {temple_root}")
-    prim = stage.GetDefaultPrim()
-    if not prim:
-        raise UsdAuthoringError(f"{temple_root} has no default prim")
-    vsets = prim.GetVariantSets()
-    return {name: tuple(vsets.GetVariantSet(name).GetVariantNames()) for name in vsets.GetNames()}
-
-
-def temple_selection(
-    vsets: Mapping[str, Sequence[str]], selections: Mapping[str, str], lod: str | None = None
-) -> dict[str, str]:
-    """The variant selections of one temple: hypothesis id → ``hyp_<id>`` where the build has
-    that set (others are ignored), plus ``lod`` where the build has a lod set."""
-    sel = {f"hyp_{_ident(h)}": v for h, v in selections.items() if f"hyp_{_ident(h)}" in vsets}
-    if lod is not None and "lod" in vsets:
-        sel["lod"] = lod
-    return sel
-
-
-def model_card_bound(
-    root_layer: Path, selections: Mapping[str, str]
-) -> tuple[np.ndarray, np.ndarray]:
-    """The card box of the default prim of ``root_layer`` with ``selections`` (its own frame,
-    metres): the box a viewer draws its cards on (:func:`ionic_usd.usd.draw_mode.card_bound`)."""
-    stage = Usd.Stage.Open(str(root_layer))
-    if stage is None:
-        raise UsdAuthoringError(f"cannot open {root_layer}")
-    prim = stage.GetDefaultPrim()
-    with Usd.EditContext(stage, stage.GetSessionLayer()):
-        for name, value in selections.items():
-            prim.GetVariantSet(name).SetVariantSelection(value)
-    bound = card_bound(prim, card_bbox_cache())
-    if bound is None:
-        raise UsdAuthoringError(f"{root_layer}: the model has no bound to put cards on")
-    return bound
-
-
-def temple_card_bound(
-    temple_root: Path, selections: Mapping[str, str]
-) -> tuple[np.ndarray, np.ndarray]:
-    """The card box of a temple with ``selections`` (:func:`model_card_bound`)."""
-    return model_card_bound(temple_root, selections)
-
-
-def _stats(
-    stage: Usd.Stage, root: str, selections: Mapping[str, str]
-) -> tuple[np.ndarray, np.ndarray, int]:
-    """Bounds (lo (3,), hi (3,)) and drawn triangles of ``root`` with ``selections`` made in
-    the stage's session layer (default + render purposes, visible prims only); earlier
-    selections there are cleared first, so "as authored" means the file's own."""
-    stage.GetSessionLayer().Clear()
-    prim = stage.GetPrimAtPath(root)
-    with Usd.EditContext(stage, stage.GetSessionLayer()):
-        for name, value in selections.items():
-            prim.GetVariantSet(name).SetVariantSelection(value)
-    cache = UsdGeom.BBoxCache(
-        Usd.TimeCode.Default(), [UsdGeom.Tokens.default_, UsdGeom.Tokens.render]
-    )
-    rng = cache.ComputeWorldBound(prim).ComputeAlignedRange()
-    tris = drawn_triangles(prim)
-    return np.array(rng.GetMin()), np.array(rng.GetMax()), tris
-
-
-def _ident(name: str) -> str:
-    return Tf.MakeValidIdentifier(str(name))
-
-
 def _set_xform(spec: Sdf.PrimSpec, x: float, z: float, yaw: float, scale: float) -> None:
     Sdf.AttributeSpec(spec, "xformOp:translate", _T.Double3).default = Gf.Vec3d(x, 0.0, z)
     Sdf.AttributeSpec(spec, "xformOp:rotateXYZ", _T.Float3).default = Gf.Vec3f(0.0, yaw, 0.0)
@@ -266,62 +198,6 @@ def _instancer(
 def _cards(spec: Sdf.PrimSpec, folder: str) -> None:
     """Card draw mode on a temple model: a box of the six baked views in ``folder``."""
     author_cards(spec, {f: f"./{folder}/{f}.png" for f in CARD_FACES}, geometry="box")
-
-
-def _instance_bounds(
-    lo: np.ndarray,
-    hi: np.ndarray,
-    index: np.ndarray,
-    xz: np.ndarray,
-    yaw: np.ndarray,
-    scale: np.ndarray | None,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Axis-aligned bounds of every placed prototype box (boxes (p, 3) lo/hi), exact for
-    rotations about Y: the rotated box's half-widths are |cos|·hx + |sin|·hz and the like."""
-    if len(index) == 0:
-        return np.zeros(3), np.zeros(3)
-    # only instances near the extremes of the positions can bound the whole: with r the
-    # largest horizontal reach of any placed box from its pivot, an instance more than 2r
-    # inside the positions' extremes cannot hold an extreme (its box starts beyond one that
-    # does); so the exact computation runs on a thin rim (1M columns: a few thousand)
-    smax = 1.0 if scale is None else float(np.max(scale))
-    reach = (
-        np.hypot(
-            np.maximum(np.abs(lo[:, 0]), np.abs(hi[:, 0])),
-            np.maximum(np.abs(lo[:, 2]), np.abs(hi[:, 2])),
-        ).max()
-        * smax
-    )
-    x, z = xz[:, 0], xz[:, 1]
-    rim = (
-        (x <= x.min() + 2 * reach)
-        | (x >= x.max() - 2 * reach)
-        | (z <= z.min() + 2 * reach)
-        | (z >= z.max() - 2 * reach)
-    )
-    # heights do not depend on position: every instance counts (scale = 1 or per instance)
-    if scale is None:
-        used = np.bincount(index, minlength=len(lo)) > 0
-        y_lo, y_hi = lo[used, 1].min(), hi[used, 1].max()
-    else:
-        sc = np.asarray(scale, dtype=float)
-        y_lo = min((lo[index, 1] * sc).min(), (hi[index, 1] * sc).min())
-        y_hi = max((lo[index, 1] * sc).max(), (hi[index, 1] * sc).max())
-    index, xz, yaw = index[rim], xz[rim], np.asarray(yaw)[rim]
-    scale = None if scale is None else np.asarray(scale)[rim]
-    s = np.ones(len(index)) if scale is None else np.asarray(scale, dtype=float)
-    c = (lo + hi) / 2
-    h = (hi - lo) / 2
-    ci, hi_ = c[index] * s[:, None], h[index] * s[:, None]
-    a = np.radians(np.asarray(yaw, dtype=float))
-    cs, sn = np.cos(a), np.sin(a)
-    cx = ci[:, 0] * cs + ci[:, 2] * sn + xz[:, 0]
-    cz = -ci[:, 0] * sn + ci[:, 2] * cs + xz[:, 1]
-    hx = np.abs(cs) * hi_[:, 0] + np.abs(sn) * hi_[:, 2]
-    hz = np.abs(sn) * hi_[:, 0] + np.abs(cs) * hi_[:, 2]
-    out_lo = np.array([(cx - hx).min(), y_lo, (cz - hz).min()])
-    out_hi = np.array([(cx + hx).max(), y_hi, (cz + hz).max()])
-    return out_lo, out_hi
 
 
 def compose_city(
@@ -390,15 +266,15 @@ def compose_city(
     for k, (b, sel, card) in enumerate(protos):
         stage = stages.get(b) or Usd.Stage.Open(str(folder / temples.folders[b] / "Temple.usda"))
         stages[b] = stage
-        lo, hi, ttri["as authored"][k] = _stats(stage, "/Temple", dict(sel))
+        lo, hi, ttri["as authored"][k] = prototype_stats(stage, "/Temple", dict(sel))
         if card:  # a box of cards stands in for the temple
             ttri["as authored"][k] = CARD_TRIANGLES
         tlo[k], thi[k] = lo, hi
         for lod in LOD_NAMES:
             if "lod" in vsets[b]:
-                ttri[lod][k] = _stats(stage, "/Temple", {**dict(sel), "lod": lod})[2]
+                ttri[lod][k] = prototype_stats(stage, "/Temple", {**dict(sel), "lod": lod})[2]
             else:  # before the temple has a lod set its columns draw as authored
-                ttri[lod][k] = _stats(stage, "/Temple", dict(sel))[2]
+                ttri[lod][k] = prototype_stats(stage, "/Temple", dict(sel))[2]
     # the street columns' prototypes: the column asset at each LOD used by a near column,
     # then (index len(col_lods)) the card prototype for the far ones
     ccard = (
@@ -432,18 +308,20 @@ def compose_city(
             raise UsdAuthoringError(f"cannot open the column asset {folder / columns.asset}")
         root = str(cstage.GetDefaultPrim().GetPath())
         for k, li in enumerate(box_lods):
-            clo[k], chi[k], _ = _stats(
+            clo[k], chi[k], _ = prototype_stats(
                 cstage, root, {"lod": LOD_NAMES[li], "form": "full", "finish": finish}
             )
         for lod in LOD_NAMES:
-            col_tri[lod] = _stats(cstage, root, {"lod": lod, "form": "full", "finish": finish})[2]
+            col_tri[lod] = prototype_stats(
+                cstage, root, {"lod": lod, "form": "full", "finish": finish}
+            )[2]
     secs["prototype stats"] = time.perf_counter() - t1
 
     # -- author ----------------------------------------------------------------------------------
     t2 = time.perf_counter()
     as_instancer = len(temples) > instancer_threshold
-    t_ext = _instance_bounds(tlo, thi, proto_of, temples.xz, temples.yaw, temples.scale)
-    c_ext = _instance_bounds(clo, chi, cidx, columns.xz, columns.yaw, None)
+    t_ext = instance_bounds(tlo, thi, proto_of, temples.xz, temples.yaw, temples.scale)
+    c_ext = instance_bounds(clo, chi, cidx, columns.xz, columns.yaw, None)
     body = new_layer("City", kind="assembly")
     with Sdf.ChangeBlock():
         _group(body, "/City/Temples")
@@ -466,7 +344,7 @@ def compose_city(
         else:
             used: set[str] = set()
             for i in range(len(temples)):
-                name = _ident(f"Temple_{temples.names[i]}")
+                name = prim_identifier(f"Temple_{temples.names[i]}")
                 while name in used:
                     name += "_"
                 used.add(name)

@@ -1,7 +1,7 @@
 """usdz packages for AR (ARKit profile) made with usd-core's own ``UsdUtils`` packaging.
 
 The scene is opened, the requested variant selections are made in the session layer (see
-:func:`ionic_usd.usd.reader.select_variants`), and the composed stage is flattened — variant
+:func:`ionic_usd.usd.variants.select_variants`), and the composed stage is flattened — variant
 sets resolved away, references and payloads merged, native instancing kept as flattened
 prototypes — into one crate layer in a temporary folder beside the textures' real paths.
 ``UsdUtils.CreateNewARKitUsdzPackage`` then copies that layer and every texture it uses into a
@@ -22,8 +22,8 @@ from pathlib import Path
 from pxr import Ar, Sdf, UsdUtils
 
 from ionic_usd.errors import UsdAuthoringError
-from ionic_usd.usd.reader import open_stage, select_variants
 from ionic_usd.usd.stage import validate_stage
+from ionic_usd.usd.variants import open_stage, select_variants
 
 __all__ = ["UsdzReport", "write_usdz"]
 

@@ -14,24 +14,34 @@ the default prim's on :attr:`Scene.paradata`, a mesh's own and its ancestors' in
 prototype on :attr:`SceneMesh.paradata`, and an instance's chain outside the prototype on
 :attr:`Placement.paradata`.
 
-``pxr`` stays in this module: callers get numpy arrays, strings and dicts.
+Opening a stage and selecting variants are :mod:`ionic_usd.usd.variants`; one mesh prim's
+arrays, its paradata and the content keys are :mod:`ionic_usd.usd.prim_values`. ``pxr`` stays
+under :mod:`ionic_usd.usd`: callers get numpy arrays, strings and dicts.
 """
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 from pxr import Sdf, Usd, UsdGeom, UsdShade
 
-from ionic_usd.errors import GeometryError, ParameterError, UsdAuthoringError
+from ionic_usd.errors import GeometryError
 from ionic_usd.usd.draw_mode import CardFace, card_colour, card_faces
+from ionic_usd.usd.prim_values import (
+    as_array,
+    content_key,
+    display_colour,
+    merge_paradata,
+    prim_paradata,
+    read_mesh_arrays,
+    to_json_value,
+)
 from ionic_usd.usd.surface import MaterialData, TextureRef, read_material
+from ionic_usd.usd.variants import open_stage, parse_variant_args, select_variants
 
 __all__ = [
     "TextureRef",
@@ -127,153 +137,6 @@ class Scene:
         return sum(self.meshes[p.mesh].n_triangles for p in self.placements)
 
 
-# -- JSON paradata -----------------------------------------------------------------------------
-def to_json_value(v: object) -> object:
-    """A USD value (dictionary, Vt array, Gf vector, asset path…) as plain JSON data."""
-    if isinstance(v, Mapping):
-        return {str(k): to_json_value(x) for k, x in v.items()}
-    if isinstance(v, (bool, int, str)) or v is None:
-        return v
-    if isinstance(v, float):
-        return v if np.isfinite(v) else None
-    if isinstance(v, Sdf.AssetPath):
-        return v.path
-    if isinstance(v, Sdf.Path):
-        return str(v)
-    if isinstance(v, (list, tuple)) or hasattr(v, "__len__") and not isinstance(v, bytes):
-        try:
-            return [to_json_value(x) for x in v]  # type: ignore[attr-defined]
-        except TypeError:
-            pass
-    if isinstance(v, (np.integer, np.floating)):
-        return to_json_value(v.item())
-    return str(v)
-
-
-def _prim_paradata(prim: Usd.Prim) -> dict:
-    out: dict = {}
-    cd = prim.GetAllAuthoredMetadata().get("customData")  # not the schemas' userDocBrief
-    if cd:
-        out.update(to_json_value(dict(cd)))  # type: ignore[call-overload]
-    props = {}
-    for attr in prim.GetAuthoredAttributes():
-        name = attr.GetName()
-        if name.startswith("userProperties:"):
-            props[name.split(":", 1)[1]] = to_json_value(attr.Get())
-    if props:
-        out["userProperties"] = props
-    return out
-
-
-def _merge(outer: dict, inner: dict) -> dict:
-    out = dict(outer)
-    for k, v in inner.items():
-        out[k] = _merge(out[k], v) if isinstance(v, dict) and isinstance(out.get(k), dict) else v
-    return out
-
-
-# -- stage and variants ------------------------------------------------------------------------
-def open_stage(path: str | os.PathLike) -> Usd.Stage:
-    """Open a USD file with every payload loaded; errors name the file."""
-    p = Path(path)
-    if not p.is_file():
-        raise ParameterError("scene", str(p), "an existing USD file (.usd, .usda, .usdc, .usdz)")
-    try:
-        stage = Usd.Stage.Open(str(p), Usd.Stage.LoadAll)
-    except Exception as exc:  # pxr raises Tf.ErrorException carrying the parser's message
-        msg = " ".join(str(exc).split())[:300]
-        raise UsdAuthoringError(f"{p}: cannot open as a USD stage: {msg}") from None
-    if stage is None:
-        raise UsdAuthoringError(f"{p}: cannot open as a USD stage")
-    return stage
-
-
-def parse_variant_args(items: Sequence[str] | None) -> dict[str, str]:
-    """``["lod=low", "finish=stucco"]`` → ``{"lod": "low", "finish": "stucco"}``."""
-    out: dict[str, str] = {}
-    for item in items or ():
-        name, sep, value = item.partition("=")
-        if not sep or not name.strip() or not value.strip():
-            raise ParameterError("--variant", item, "SET=VALUE, e.g. lod=low")
-        out[name.strip()] = value.strip()
-    return out
-
-
-def _outermost_instance(prim: Usd.Prim) -> Usd.Prim:
-    """The instance prim (not a proxy) that makes ``prim`` an instance proxy."""
-    p = prim
-    while p and (p.IsInstanceProxy() or not p.IsInstance()):
-        p = p.GetParent()
-    return p
-
-
-def select_variants(
-    stage: Usd.Stage, selections: Mapping[str, str], *, require_sets: bool = True
-) -> dict[str, str]:
-    """Select ``set=value`` on every prim that has the set, in the session layer.
-
-    Prims reached only through instancing (instance proxies) cannot carry a selection, so the
-    instance above them is made non-instanceable in the session layer first (its nested
-    instances stay instanced). Repeats until stable, because a selection can compose in prims
-    with variant sets of their own. Raises ParameterError for a set no prim has, or a value a
-    prim's set does not offer (listing the valid ones); with ``require_sets=False`` a set no
-    prim has is ignored. Returns the selections made.
-    """
-    found: set[str] = set()
-    session = stage.GetSessionLayer()
-    with Usd.EditContext(stage, session):
-        for _ in range(64):
-            deinstance: dict[str, Usd.Prim] = {}
-            select: list[tuple[Usd.Prim, str, str]] = []
-            for prim in Usd.PrimRange(stage.GetPseudoRoot(), Usd.TraverseInstanceProxies()):
-                if not prim.HasVariantSets():
-                    continue
-                vsets = prim.GetVariantSets()
-                names = vsets.GetNames()
-                for vset_name, value in selections.items():
-                    if vset_name not in names:
-                        continue
-                    found.add(vset_name)
-                    vset = vsets.GetVariantSet(vset_name)
-                    valid = vset.GetVariantNames()
-                    if value not in valid:
-                        raise ParameterError(
-                            f"--variant {vset_name}",
-                            value,
-                            f"one of {', '.join(valid)}",
-                            context=str(prim.GetPath()),
-                        )
-                    if vset.GetVariantSelection() == value:
-                        continue
-                    if prim.IsInstanceProxy():
-                        inst = _outermost_instance(prim)
-                        deinstance[str(inst.GetPath())] = inst
-                    else:
-                        select.append((prim, vset_name, value))
-            if not deinstance and not select:
-                break
-            with Sdf.ChangeBlock():
-                for inst in deinstance.values():
-                    inst.SetInstanceable(False)
-                for prim, vset_name, value in select:
-                    prim.GetVariantSets().GetVariantSet(vset_name).SetVariantSelection(value)
-        else:  # pragma: no cover - would need a pathological stage
-            raise UsdAuthoringError("variant selections did not settle after 64 passes")
-    missing = [s for s in selections if s not in found]
-    if missing and require_sets:
-        sets: set[str] = set()
-        for prim in Usd.PrimRange(stage.GetPseudoRoot(), Usd.TraverseInstanceProxies()):
-            if prim.HasVariantSets():
-                sets.update(prim.GetVariantSets().GetNames())
-        valid = ", ".join(sorted(sets)) or "none: the scene has no variant sets"
-        raise ParameterError(
-            "--variant",
-            missing[0],
-            f"a variant set of the scene ({valid}); the scene has no {missing[0]!r} variant set",
-        )
-    return {k: v for k, v in selections.items() if k in found}
-
-
 def _root_matrix(stage: Usd.Stage) -> np.ndarray:
     """Row-vector matrix taking stage coordinates to Y-up metres."""
     s = float(UsdGeom.GetStageMetersPerUnit(stage)) or 1.0
@@ -283,107 +146,6 @@ def _root_matrix(stage: Usd.Stage) -> np.ndarray:
         # (x, y, z) -> (x, z, -y): +Z becomes +Y, handedness kept
         m[:3, :3] = s * np.array([[1.0, 0, 0], [0, 0, -1.0], [0, 1.0, 0]])
     return m
-
-
-# -- meshes ------------------------------------------------------------------------------------
-def _np(value, dtype) -> np.ndarray:
-    return np.asarray(value if value is not None else [], dtype=dtype)
-
-
-def _corner_values(
-    pv: UsdGeom.Primvar, n_points: int, counts: np.ndarray, idx: np.ndarray, width: int, what: str
-) -> np.ndarray | None:
-    """A primvar (indexed or not) expanded to one value per face corner: (k, width)."""
-    if not pv or not pv.HasValue():
-        return None
-    vals = _np(pv.ComputeFlattened(), np.float64).reshape(-1, width)
-    interp = pv.GetInterpolation()
-    if interp == UsdGeom.Tokens.faceVarying and len(vals) == len(idx):
-        return vals
-    if interp in (UsdGeom.Tokens.vertex, UsdGeom.Tokens.varying) and len(vals) == n_points:
-        return vals[idx]
-    if interp == UsdGeom.Tokens.uniform and len(vals) == len(counts):
-        return np.repeat(vals, counts, axis=0)
-    if interp == UsdGeom.Tokens.constant and len(vals) >= 1:
-        return np.repeat(vals[:1], len(idx), axis=0)
-    raise GeometryError(
-        f"{pv.GetAttr().GetPath()}: {len(vals)} {what} values do not fit interpolation {interp}"
-    )
-
-
-def _read_mesh(prim: Usd.Prim, t: Usd.TimeCode):
-    mesh = UsdGeom.Mesh(prim)
-    pts = _np(mesh.GetPointsAttr().Get(t), np.float64).reshape(-1, 3)
-    counts = _np(mesh.GetFaceVertexCountsAttr().Get(t), np.int64)
-    idx = _np(mesh.GetFaceVertexIndicesAttr().Get(t), np.int64)
-    if len(pts) == 0 or len(counts) == 0:
-        return None
-    if counts.sum() != len(idx) or (len(idx) and (idx.min() < 0 or idx.max() >= len(pts))):
-        raise GeometryError(
-            f"{prim.GetPath()}: faceVertexCounts/faceVertexIndices do not match {len(pts)} points"
-        )
-    if not np.all(np.isfinite(pts)):
-        raise GeometryError(f"{prim.GetPath()}: points contain non-finite values")
-    keep = counts >= 3  # points and lines carry no area
-    if not keep.all():
-        corner_keep = np.repeat(keep, counts)
-        counts, idx = counts[keep], idx[corner_keep]
-    else:
-        corner_keep = None
-    if len(counts) == 0:
-        return None
-    pvapi = UsdGeom.PrimvarsAPI(prim)
-    nrm, interp = None, "vertex"
-    pv = pvapi.GetPrimvar("normals")
-    if pv and pv.HasValue():
-        nrm = _corner_values(pv, len(pts), counts, idx, 3, "normal")
-        interp = "faceVarying"
-    elif mesh.GetNormalsAttr().HasValue():
-        raw = _np(mesh.GetNormalsAttr().Get(t), np.float64).reshape(-1, 3)
-        ni = mesh.GetNormalsInterpolation()
-        if ni in (UsdGeom.Tokens.vertex, UsdGeom.Tokens.varying) and len(raw) == len(pts):
-            nrm = raw
-        elif ni == UsdGeom.Tokens.faceVarying and corner_keep is not None:
-            nrm, interp = raw[corner_keep], "faceVarying"
-        elif ni == UsdGeom.Tokens.faceVarying and len(raw) == len(idx):
-            nrm, interp = raw, "faceVarying"
-        elif ni == UsdGeom.Tokens.uniform and len(raw) == len(keep):
-            nrm, interp = np.repeat(raw[keep], counts, axis=0), "faceVarying"
-        elif ni == UsdGeom.Tokens.constant and len(raw):
-            nrm, interp = np.repeat(raw[:1], len(idx), axis=0), "faceVarying"
-        else:
-            raise GeometryError(
-                f"{prim.GetPath()}: {len(raw)} normals do not fit interpolation {ni}"
-            )
-    st = None
-    pv = pvapi.GetPrimvar("st")
-    if pv and pv.HasValue() and corner_keep is None:
-        st = _corner_values(pv, len(pts), counts, idx, 2, "st")
-    for name, arr in (("normals", nrm), ("st", st)):
-        if arr is not None and not np.all(np.isfinite(arr)):
-            raise GeometryError(f"{prim.GetPath()}: {name} contain non-finite values")
-    if mesh.GetOrientationAttr().Get() == UsdGeom.Tokens.leftHanded:
-        # reverse each face's corners so the winding is counter-clockwise
-        starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
-        order = np.concatenate(
-            [s + np.arange(c)[::-1] for s, c in zip(starts, counts, strict=True)]
-        )
-        idx = idx[order]
-        if st is not None:
-            st = st[order]
-        if nrm is not None and interp == "faceVarying":
-            nrm = nrm[order]
-    double = bool(mesh.GetDoubleSidedAttr().Get())
-    return pts, counts, idx, nrm, interp, st, double
-
-
-def _content_key(arrays: Sequence[np.ndarray | None], extra: str) -> str:
-    h = hashlib.blake2b(digest_size=12)
-    for a in arrays:
-        h.update(b"-" if a is None else np.ascontiguousarray(a).tobytes())
-        h.update(b"|")
-    h.update(extra.encode())
-    return h.hexdigest()
 
 
 # -- walking -----------------------------------------------------------------------------------
@@ -433,8 +195,8 @@ class _Reader:
                     it.PruneChildren()
                     continue
             purposes[path] = purpose
-            own = _prim_paradata(prim) if prim != self.stage.GetDefaultPrim() else {}
-            para[path] = _merge(para.get(parent, {}), own) if own else para.get(parent, {})
+            own = prim_paradata(prim) if prim != self.stage.GetDefaultPrim() else {}
+            para[path] = merge_paradata(para.get(parent, {}), own) if own else para.get(parent, {})
             if prim.IsA(UsdShade.Material):
                 it.PruneChildren()
                 continue
@@ -460,7 +222,7 @@ class _Reader:
                             k,
                             rel @ m,
                             str(path) + (ip[n:] if via else ""),
-                            _merge(para[path], pd),
+                            merge_paradata(para[path], pd),
                             True,
                         )
                     )
@@ -497,7 +259,7 @@ class _Reader:
             mat = MaterialData(f"card{face.name}", str(prim.GetPath()), colour, tex)
             self.scene.materials.setdefault(mat.key, mat)
             counts, idx = np.array([4], np.int64), np.arange(4, dtype=np.int64)
-            key = _content_key([face.points, counts, idx, face.st], f"card|{mat.key}")
+            key = content_key([face.points, counts, idx, face.st], f"card|{mat.key}")
             self.scene.meshes.setdefault(
                 key,
                 SceneMesh(
@@ -530,20 +292,14 @@ class _Reader:
         return self._materials[mpath]
 
     def _mesh(self, prim: Usd.Prim, paradata: dict) -> str | None:
-        read = _read_mesh(prim, self.t)
+        read = read_mesh_arrays(prim, self.t)
         if read is None:
             return None
         pts, counts, idx, nrm, interp, st, double = read
         material = self._material(prim)
-        colour: tuple[float, float, float] | None = None
-        pv = UsdGeom.Mesh(prim).GetDisplayColorPrimvar()
-        if pv and pv.HasValue():
-            vals = _np(pv.ComputeFlattened(), np.float64).reshape(-1, 3)
-            if len(vals):
-                r, g, b = (float(x) for x in vals.mean(axis=0))
-                colour = (r, g, b)
+        colour = display_colour(prim)
         meta = json.dumps(paradata, sort_keys=True, default=str)
-        key = _content_key(
+        key = content_key(
             [pts, counts, idx, nrm, st], f"{interp}|{material}|{double}|{meta}|{colour}"
         )
         if key not in self.scene.meshes:
@@ -574,7 +330,7 @@ class _Reader:
 
     def _point_instancer(self, pi: UsdGeom.PointInstancer, world: np.ndarray, chain: dict):
         targets = pi.GetPrototypesRel().GetForwardedTargets()
-        ids = _np(pi.GetProtoIndicesAttr().Get(self.t), np.int64)
+        ids = as_array(pi.GetProtoIndicesAttr().Get(self.t), np.int64)
         if len(ids) == 0 or not targets:
             return []
         # the prototype root's own transform is part of each instance (IncludeProtoXform)
@@ -604,7 +360,13 @@ class _Reader:
                 tail = ip[n:] if via else ""
                 for i in sel:
                     out.append(
-                        (k, rel @ full[i] @ world, f"{base}[{i}]{tail}", _merge(chain, pd), True)
+                        (
+                            k,
+                            rel @ full[i] @ world,
+                            f"{base}[{i}]{tail}",
+                            merge_paradata(chain, pd),
+                            True,
+                        )
                     )
         return out
 
@@ -643,7 +405,7 @@ def read_scene(
     scene = Scene(source=str(path), variants=sel)
     root = stage.GetDefaultPrim()
     if root:
-        scene.paradata = _prim_paradata(root)
+        scene.paradata = prim_paradata(root)
         vs = root.GetVariantSets()
         scene.paradata["variantSelections"] = {n: vs.GetVariantSelection(n) for n in vs.GetNames()}
     conv = _root_matrix(stage)
