@@ -27,7 +27,6 @@ __all__ = [
     "FieldSpec",
     "IDENTIFIER",
     "UNIT_LIMITS",
-    "check_column_tables",
     "check_identifier",
     "check_table",
     "check_value",
@@ -372,31 +371,3 @@ def dataclass_schema(cls) -> dict[str, FieldSpec]:
             spec = FieldSpec("any")
         out[f.name] = spec
     return out
-
-
-_COLUMN_TABLE = {
-    "lod": FieldSpec("str", max_len=16),
-    "base": FieldSpec("str", max_len=4096),
-    "base_height": FieldSpec("float", 0.0, UNIT_LIMITS["m"], "m"),
-    "scroll": FieldSpec("str", max_len=4096),
-}
-
-
-def check_column_tables(data: Mapping[str, Any], *, context: str) -> None:
-    """Check ``[column]``, ``[shaft]``, ``[capital]``, ``[volute]`` (types and ranges)."""
-    from ionic_usd.column.capital import CapitalParams
-    from ionic_usd.column.shaft import ShaftParams
-    from ionic_usd.column.volute import VoluteParams
-
-    for table, schema in (
-        ("column", _COLUMN_TABLE),
-        ("shaft", dataclass_schema(ShaftParams)),
-        ("capital", dataclass_schema(CapitalParams)),
-        ("volute", dataclass_schema(VoluteParams)),
-    ):
-        if table in data:
-            check_table(
-                check_value(table, data[table], FieldSpec("table"), context=context),
-                {k: v for k, v in schema.items() if k != "volute"},
-                context=f"{context} [{table}]",
-            )

@@ -18,8 +18,9 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import TypedDict
+from typing import Any, TypedDict
 
 import numpy as np
 
@@ -31,8 +32,17 @@ from ionic_usd.errors import ParameterError
 from ionic_usd.geometry.boolean import union
 from ionic_usd.geometry.guard import guarded
 from ionic_usd.geometry.mesh import Mesh
+from ionic_usd.params import (
+    UNIT_LIMITS,
+    FieldSpec,
+    check_table,
+    check_value,
+    dataclass_from_mapping,
+    dataclass_schema,
+)
 
 __all__ = [
+    "check_column_tables",
     "Lod",
     "LODS",
     "ColumnParams",
@@ -359,6 +369,33 @@ COLUMN_DOCS: dict[str, tuple[str, str, str]] = {
 }
 
 
+_COLUMN_TABLE = {
+    "lod": FieldSpec("str", max_len=16),
+    "base": FieldSpec("str", max_len=4096),
+    "base_height": FieldSpec("float", 0.0, UNIT_LIMITS["m"], "m"),
+    "scroll": FieldSpec("str", max_len=4096),
+}
+
+
+def check_column_tables(data: Mapping[str, Any], *, context: str) -> None:
+    """Check ``[column]``, ``[shaft]``, ``[capital]``, ``[volute]`` (types and ranges) against
+    the parameter classes' schemas (:func:`ionic_usd.params.dataclass_schema`)."""
+    from ionic_usd.column.volute import VoluteParams
+
+    for table, schema in (
+        ("column", _COLUMN_TABLE),
+        ("shaft", dataclass_schema(ShaftParams)),
+        ("capital", dataclass_schema(CapitalParams)),
+        ("volute", dataclass_schema(VoluteParams)),
+    ):
+        if table in data:
+            check_table(
+                check_value(table, data[table], FieldSpec("table"), context=context),
+                {k: v for k, v in schema.items() if k != "volute"},
+                context=f"{context} [{table}]",
+            )
+
+
 def column_params_from_mapping(
     data: dict, *, context: str = "column config", base: ColumnParams | None = None
 ) -> ColumnParams:
@@ -368,7 +405,6 @@ def column_params_from_mapping(
     are errors naming them.
     """
     from ionic_usd.column.volute import VoluteParams
-    from ionic_usd.params import check_column_tables, dataclass_from_mapping
 
     cur = base or portunus_column_params()
     unknown = sorted(set(data) - {"column", "shaft", "capital", "volute"})

@@ -13,12 +13,12 @@ import os
 from collections.abc import Iterable, Mapping
 from typing import Any
 
+from ionic_usd.column.column import check_column_tables
 from ionic_usd.errors import ParameterError
 from ionic_usd.grammar.cuboid import Cuboid, Incline
 from ionic_usd.params import (
     UNIT_LIMITS,
     FieldSpec,
-    check_column_tables,
     check_identifier,
     check_table,
     check_value,
