@@ -348,12 +348,8 @@ def up_to_date(dest: str | os.PathLike, key: str) -> dict | None:
         if manifest.get("key") != key:
             return None
         sums = manifest["sha256"]
-        if set(sums) != set(manifest["files"]) or not all(map(_safe_rel, sums)):
+        if set(sums) != set(manifest["files"]) or not _files_intact(dest, sums):
             return None
-        for rel, digest in sums.items():
-            p = dest / rel
-            if p.is_symlink() or not p.is_file() or sha256_file(p) != digest:
-                return None
         record = manifest.get("record", {})
         return record if isinstance(record, dict) else None
     except (OSError, ValueError, KeyError, TypeError, AttributeError):
@@ -530,6 +526,16 @@ def verified_cache(
     return entry
 
 
+def _files_intact(root: Path, sums: dict[str, str]) -> bool:
+    """Whether every file of ``sums`` (relative path → SHA-256) is a regular file below
+    ``root`` with those bytes (a symlink is not the file a build wrote)."""
+    for rel, digest in sums.items():
+        p = root / rel
+        if not _safe_rel(rel) or p.is_symlink() or not p.is_file() or sha256_file(p) != digest:
+            return False
+    return True
+
+
 def _cache_ok(entry: Path) -> bool:
     try:
         sums = json.loads((entry / MANIFEST_NAME).read_text("utf-8"))["sha256"]
@@ -538,6 +544,6 @@ def _cache_ok(entry: Path) -> bool:
         on_disk = set(_list_files(entry))
         if on_disk != set(sums):
             return False
-        return all(sha256_file(entry / rel) == h for rel, h in sums.items())
+        return _files_intact(entry, sums)
     except (OSError, ValueError, KeyError, TypeError, AttributeError):
         return False

@@ -19,7 +19,6 @@ The variant vocabulary (sets, variants, texel densities, ``UV_SPAN``) is the ass
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 import math
 import os
 import shutil
@@ -39,7 +38,7 @@ from ionic_usd.column.column import (
 from ionic_usd.errors import GeometryError, OutputExistsError
 from ionic_usd.geometry.mesh import Mesh
 from ionic_usd.io import up_to_date
-from ionic_usd.pipeline.keys import build_key
+from ionic_usd.pipeline.keys import build_key, file_digests
 from ionic_usd.pipeline.mesh_cache import cached_meshes
 from ionic_usd.texture.uv import UVCache, attach_uvs, unwrap_parts
 from ionic_usd.usd.asset import AssetInstancer, AssetMesh
@@ -551,10 +550,4 @@ def build_column_asset(
 def asset_key(opts: ColumnAssetOptions) -> str:
     """The content key of an asset build: its options, the bytes of the user's textures, the
     code and the libraries (:func:`ionic_usd.pipeline.keys.build_key`)."""
-    users = []
-    for p in (opts.user_textures or {}).values():
-        try:
-            users.append(hashlib.sha256(Path(p).read_bytes()).hexdigest())
-        except OSError:
-            users.append(f"unreadable:{p}")
-    return build_key("column_asset", opts, users)
+    return build_key("column_asset", opts, file_digests(opts.user_textures))

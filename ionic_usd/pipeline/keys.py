@@ -21,7 +21,7 @@ from pathlib import Path
 
 from ionic_usd import __version__
 
-__all__ = ["build_key", "library_versions", "source_digest"]
+__all__ = ["build_key", "file_digests", "library_versions", "source_digest"]
 
 #: the distributions whose code makes the geometry, the charts, the maps and the files
 LIBRARIES = (
@@ -60,6 +60,18 @@ def library_versions() -> str:
         except metadata.PackageNotFoundError:
             out.append(f"{name}==absent")
     return ";".join(out)
+
+
+def file_digests(paths: object) -> list[str]:
+    """SHA-256 of each file a mapping names (e.g. the user's textures, whose bytes make the
+    maps), in its order; ``unreadable:<path>`` for a file that cannot be read."""
+    out = []
+    for p in dict(paths or {}).values():  # type: ignore[call-overload]
+        try:
+            out.append(hashlib.sha256(Path(p).read_bytes()).hexdigest())
+        except OSError:
+            out.append(f"unreadable:{p}")
+    return out
 
 
 def build_key(tag: str, *inputs: object) -> str:

@@ -33,7 +33,7 @@ from typing import TYPE_CHECKING, Any
 
 from ionic_usd.errors import OutputExistsError
 from ionic_usd.io import manifest_record, replace_folder, up_to_date
-from ionic_usd.pipeline.keys import build_key
+from ionic_usd.pipeline.keys import build_key, file_digests
 
 if TYPE_CHECKING:
     from ionic_usd.column.column import ColumnParams
@@ -75,17 +75,6 @@ class TempleReport:
     asset_reused: bool = False
 
 
-def _file_digests(paths: object) -> list[str]:
-    """SHA-256 of the user's texture files an asset names (their bytes make the maps)."""
-    out = []
-    for p in dict(paths or {}).values():  # type: ignore[call-overload]
-        try:
-            out.append(hashlib.sha256(Path(p).read_bytes()).hexdigest())
-        except OSError:
-            out.append(f"unreadable:{p}")
-    return out
-
-
 def temple_key(
     layout: TempleLayout,
     column: ColumnParams | None = None,
@@ -97,7 +86,7 @@ def temple_key(
     mouldings: MouldingParams | None = None,
 ) -> str:
     """The content key of a temple build (see the module docstring)."""
-    users = _file_digests(getattr(asset_options, "user_textures", None))
+    users = file_digests(getattr(asset_options, "user_textures", None))
     return build_key(
         "temple", layout, column, texture_size, seed, asset_options, detail, mouldings, users
     )
