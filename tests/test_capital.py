@@ -16,6 +16,7 @@ from ionic_usd.column.capital import (
     capital_layout,
     capital_mesh,
 )
+from ionic_usd.column.capital_body import seat_depth
 from ionic_usd.column.volute import VoluteParams, volute_extent
 from ionic_usd.errors import GrammarError, ParameterError
 from ionic_usd.geometry.analysis import inspect_mesh
@@ -126,8 +127,11 @@ def test_vitruvian_layout(parts):
     assert lay.abacus_y == pytest.approx(5 * PART)
     assert capital_height(p) == pytest.approx(6.5 * PART)
     assert lay.eye_x == pytest.approx(p.abacus_length / 2 - 1.5 * PART, abs=1e-4)
-    # the volutes' top is the abacus bottom
-    assert vol.extent[1, 1] == pytest.approx(lay.abacus_y)
+    # the volutes' top is the abacus bottom: the spiral band reaches it, only the margin's far
+    # end (inside the abacus) rises a seat above it
+    assert vol.extent[1, 1] == pytest.approx(lay.abacus_y + seat_depth(p))
+    above = vol.points[vol.points[:, 1] > lay.abacus_y + 1e-9]
+    assert len(above) and np.all(above[:, 0] < lay.eye_x - lay.margin + 1e-9)
 
 
 def test_left_right_front_rear_are_mirrors(parts):
@@ -164,9 +168,18 @@ def test_bolster_rings_follow_the_grammar(scroll):
     br = parts.bolsters[0]
     assert inspect_mesh(br).watertight
     pts = br.points
-    # axis along Z through the eye; front (p = 0) at the back of the front volute disc
-    assert pts[:, 2].max() == pytest.approx(lay.back_z)
-    assert pts[:, 2].min() == pytest.approx(-lay.back_z)
+    # axis along Z through the eye; front (p = 0) at the back of the front volute disc, each
+    # end carried a seat on into its disc (a cylinder of the end ring's radius)
+    seat = seat_depth(p)
+    assert pts[:, 2].max() == pytest.approx(lay.back_z + seat)
+    assert pts[:, 2].min() == pytest.approx(-lay.back_z - seat)
+    for end in (1.0, -1.0):
+        tip = np.abs(pts[:, 2] - end * (lay.back_z + seat)) < 1e-12
+        ring = np.abs(pts[:, 2] - end * lay.back_z) < 1e-12
+        r_tip = np.hypot(pts[tip, 0] - lay.eye_x, pts[tip, 1] - lay.eye_y).max()
+        r_ring = np.hypot(pts[ring, 0] - lay.eye_x, pts[ring, 1] - lay.eye_y).max()
+        assert r_tip == pytest.approx(r_ring, abs=1e-12)
+    pts = pts[np.abs(pts[:, 2]) <= lay.back_z + 1e-12]
     dist = np.hypot(pts[:, 0] - lay.eye_x, pts[:, 1] - lay.eye_y)
     pos = (lay.back_z - pts[:, 2]) / (2 * lay.back_z)
     for ring in p.scroll_grammar.rings:
@@ -224,7 +237,8 @@ def test_spiral_margin_is_cut_at_the_centre():
     far = build_capital(CapitalParams(spiral_margin=5.0), top_radius=C).volutes[0]
     lay = capital_layout(CapitalParams())
     assert near.extent[0, 0] > 0.2
-    assert far.extent[0, 0] == pytest.approx(0.0, abs=1e-9)  # meets its mirror image at x = 0
+    # meets its mirror image at x = 0, and overlaps it by a seat (no touching end faces)
+    assert far.extent[0, 0] == pytest.approx(-seat_depth(CapitalParams()), abs=1e-9)
     top = near.points[:, 1] > lay.abacus_y - 1e-3
     assert near.points[top, 0].min() == pytest.approx(lay.eye_x - 0.05, abs=1e-9)
 

@@ -9,11 +9,17 @@ import math
 
 import numpy as np
 import pytest
+from numpy.testing import assert_allclose
 
 from ionic_usd.column.base import build_base
 from ionic_usd.column.column import portunus_column_params
 from ionic_usd.column.shaft import build_shaft
-from ionic_usd.geometry.check import manifold_status, solid_report
+from ionic_usd.geometry.check import (
+    enclosed_faces,
+    manifold_status,
+    solid_report,
+    winding_numbers,
+)
 from ionic_usd.geometry.mesh import Mesh, merge, smooth_normals, weld
 from ionic_usd.pipeline.asset import column_asset_meshes, form_cut
 from ionic_usd.temple.layout import ColumnKind, Layer, portunus_layout
@@ -60,6 +66,26 @@ def test_checks_see_each_defect():
         face_vertex_indices=c.face_vertex_indices.reshape(-1, 3)[:, ::-1].reshape(-1), normals=None
     )
     assert solid_report(inside_out).volume < 0
+
+
+def test_winding_numbers_count_the_shells_around_a_point():
+    two = merge([cube(), cube((0.5, 0.0, 0.0))])  # overlapping in x ∈ [0.5, 1]
+    q = np.array([[0.25, 0.5, 0.5], [0.75, 0.5, 0.5], [1.25, 0.5, 0.5], [2.0, 0.5, 0.5]])
+    assert_allclose(winding_numbers(two, q), [1.0, 2.0, 1.0, 0.0], atol=1e-9)
+    # one point at a time (budget 1) gives the same numbers
+    assert_allclose(winding_numbers(two, q, budget=1), winding_numbers(two, q), atol=1e-12)
+
+
+def test_enclosed_faces_are_the_sheets_of_a_slit():
+    assert len(enclosed_faces(cube())) == 0
+    # two cubes side by side, merged without a union: the faces at x = 1 are a slit
+    pair = merge([cube(), cube((1.0, 0.0, 0.0))])
+    found = enclosed_faces(pair)
+    assert len(found) == 4
+    assert_allclose(pair.points[pair.triangles[found]][..., 0], 1.0)
+    # a cube inside another: all 12 of the inner one's faces are enclosed
+    nested = merge([cube(size=3.0), cube((1.0, 1.0, 1.0))])
+    assert sorted(enclosed_faces(nested)) == list(range(12, 24))
 
 
 # -- the asset's meshes -------------------------------------------------------------------------
@@ -111,6 +137,29 @@ def test_every_asset_mesh_is_a_solid(lod):
     assert len(meshes) == n * len(FORM_VARIANTS)
     for m in meshes:
         _check(m, m.name)
+
+
+def _enclosed_capital_faces(lod: str) -> dict[str, int]:
+    opts = ColumnAssetOptions(
+        lods=(lod,), bases=BASE_VARIANTS[:1], flutes=tuple(FLUTE_VARIANTS)[:1], forms=("full",)
+    )
+    caps = [m for m in column_asset_meshes(opts) if m.part == "CapitalBody"]
+    assert len(caps) == len(SCROLL_VARIANTS) * len(CAPITAL_VARIANTS) * len(VOLUTE_VARIANTS)
+    return {m.name: len(enclosed_faces(m.mesh)) for m in caps}
+
+
+def test_no_capital_has_a_face_inside_it():
+    """Every capital variant (scroll × capital × volute model) at low LOD: no face with the
+    solid on both sides (the touching parts used to leave 104 here, 317 at high LOD)."""
+    found = _enclosed_capital_faces("low")
+    assert not any(found.values()), found
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("lod", ["medium", "high"])
+def test_no_capital_has_a_face_inside_it_at(lod):
+    found = _enclosed_capital_faces(lod)
+    assert not any(found.values()), found
 
 
 # -- base + shaft weld --------------------------------------------------------------------------

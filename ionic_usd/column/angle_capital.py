@@ -40,6 +40,7 @@ from ionic_usd.column.capital_body import (
     canalis_bottom,
     capital_layout,
     echinus_mesh,
+    seat_depth,
 )
 from ionic_usd.column.solids import MIRROR_X, SWAP_XZ, box_mesh, rigid, rot_y
 from ionic_usd.column.volute import volute_curve
@@ -83,7 +84,7 @@ def build_angle_capital(p: CapitalParams, lay: CapitalLayout, top_radius: float)
     from ionic_usd.geometry.boolean import union
     from ionic_usd.geometry.clip import clip_mesh
 
-    r, slab = p.relief_depth, p.slab_depth
+    r, slab, seat = p.relief_depth, p.slab_depth, seat_depth(p)
     top_dx = float(volute_curve(p.volute, 2)[-1, 0]) - p.volute.offset_x
 
     def volute(margin: float) -> Mesh:
@@ -94,6 +95,7 @@ def build_angle_capital(p: CapitalParams, lay: CapitalLayout, top_radius: float)
             relief_depth=r,
             slab_depth=slab,
             margin=margin,
+            seat=seat,
         )
 
     # the +Z face's own volute (front-left), its margin running along the canalis' top to
@@ -114,7 +116,7 @@ def build_angle_capital(p: CapitalParams, lay: CapitalLayout, top_radius: float)
     slab_front = lay.face_z - r
     lo = canalis_bottom(p, lay)
     front = box_mesh(
-        (-lay.eye_x, lo, lay.back_z), (slab_front, lay.abacus_y, slab_front), "canalis_front"
+        (-lay.eye_x, lo, lay.back_z), (slab_front, lay.abacus_y + seat, slab_front), "canalis_front"
     )
     side_canalis = rigid(front, SWAP_XZ, name="canalis_side")
     # the core: between the canales' backs (into them by half a slab), the bolster axes (1 cm
@@ -135,6 +137,7 @@ def build_angle_capital(p: CapitalParams, lay: CapitalLayout, top_radius: float)
         length,
         lay.total_radius,
         extend=reach_out + 2 * MITRE_OVERLAP + 0.01,
+        lead=seat,
         name="bolster_left",
     )
     bol = rigid(bol, np.eye(3), (-lay.eye_x, lay.eye_y, lay.back_z))

@@ -23,13 +23,21 @@ The paper's five general parameters, as read here (its Figure 5 is not in the te
   edge of the right one; it places the eyes: ``eye_x = length/2 − (volute's +X extent)``;
 * ``capital_width`` — Z extent of the volute group, front band face to rear band face;
 * ``spiral_margin`` — length of the straight band continuing each volute's top end towards the
-  axis (the canalis' upper edge); cut at the centre plane so the two margins meet, never cross;
+  axis (the canalis' upper edge); cut at the centre plane, where the two margins meet (they
+  overlap by a :func:`~ionic_usd.column.capital_body.seat_depth`, see below);
 * ``scroll_position_y`` — height of the eye centres above the capital's bottom;
 * ``capital_position_y`` — height of the capital's bottom above the shaft top.
 
 Vertical layout: echinus ``[0, echinus_height]``; the abacus rests on the volutes' top (the band's
 top end), ``y_abacus = max(scroll_position_y + volute top extent, echinus_height)``; everything is
 lifted by ``capital_position_y``. :func:`capital_height` is the abacus' top.
+
+Parts that rest on one another are sunk into each other by a *seat*
+(:func:`~ionic_usd.column.capital_body.seat_depth`, 0.75 mm for Portunus): the band and eye into
+the disc and canalis, the bolster ends into the discs, the canales' tops and the margins' far
+ends up into the abacus, the meeting margins across the centre plane. Faces that only touch are
+coincident planes for the union, which manifold3d may keep as a zero-thickness slit inside the
+solid.
 
 Defaults (Vitruvius III.5.5–7 for the Temple of Portunus, D = 0.95 m, part = D/18): abacus
 (D + D/18) square and 1½ parts thick; volutes 8 parts high with the eye ½ part above the shaft
@@ -56,6 +64,7 @@ from ionic_usd.column.capital_body import (
     capital_height,
     capital_layout,
     echinus_mesh,
+    seat_depth,
 )
 from ionic_usd.column.solids import MIRROR_X, MIRROR_Z, box_mesh, rigid
 from ionic_usd.column.volute_solid import build_volute
@@ -107,13 +116,20 @@ def build_capital(
     lay = capital_layout(p)
     if angle:
         return build_angle_capital(p, lay, float(top_radius)).lifted(p.capital_position_y)
+    seat = seat_depth(p)
+    margin = lay.margin
+    if lay.margin_gap < seat:
+        # margins that would meet (or all but meet) on the centre plane cross it by a seat:
+        # two band ends touching there would be coincident faces for the union
+        margin += lay.margin_gap + seat
     vol = build_volute(
         p.volute,
         samples=p.spiral_samples,
         eye_segments=p.ring_segments,
         relief_depth=p.relief_depth,
         slab_depth=p.slab_depth,
-        margin=lay.margin,
+        margin=margin,
+        seat=seat,
     )
     fr = rigid(vol, np.eye(3), (lay.eye_x, lay.eye_y, lay.face_z), "volute_front_right")
     fl = rigid(fr, MIRROR_X, name="volute_front_left")
@@ -122,12 +138,12 @@ def build_capital(
     slab_front = lay.face_z - p.relief_depth
     front = box_mesh(
         (-lay.eye_x, canalis_bottom(p, lay), lay.back_z),
-        (lay.eye_x, lay.abacus_y, slab_front),
+        (lay.eye_x, lay.abacus_y + seat, slab_front),
         "canalis_front",
     )
     rear = rigid(front, MIRROR_Z, name="canalis_rear")
     br = rigid(
-        bolster_mesh(p, 2 * lay.back_z, lay.total_radius),
+        bolster_mesh(p, 2 * lay.back_z, lay.total_radius, extend=seat, lead=seat),
         np.eye(3),
         (lay.eye_x, lay.eye_y, lay.back_z),
         "bolster_right",

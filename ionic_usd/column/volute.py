@@ -440,12 +440,14 @@ def volute_total_radius(p: VoluteParams, samples: int = 2048) -> float:
 
 
 def volute_band_outline(
-    p: VoluteParams, samples: int = 192, margin: float = 0.0
+    p: VoluteParams, samples: int = 192, margin: float = 0.0, rise: float = 0.0
 ) -> tuple[np.ndarray, np.ndarray]:
     """Outer and inner rows of the band, optionally continued straight past the last sample.
 
     The continuation (the canalis margin) leaves the end point along the curve's last
-    direction — with the defaults horizontally towards −X — for ``margin`` metres.
+    direction — with the defaults horizontally towards −X — for ``margin`` metres; its outer
+    (upper) edge rises by ``rise`` on the way, up into the abacus it runs under (so the two
+    do not meet as coincident faces; the lower edge, the one seen, stays straight).
 
     Returns
     -------
@@ -457,6 +459,6 @@ def volute_band_outline(
         # margin keeps the canalis parallel to the abacus
         direction = np.sign(outer[-1, 0] - outer[-2, 0]) or -1.0
         step = np.array([direction * margin, 0.0])
-        outer = np.vstack([outer, outer[-1] + step])
+        outer = np.vstack([outer, outer[-1] + step + [0.0, rise]])
         inner = np.vstack([inner, inner[-1] + step])
     return outer, inner

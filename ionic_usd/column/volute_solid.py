@@ -141,15 +141,17 @@ def build_volute_band(
     *,
     samples: int = 192,
     margin: float = 0.0,
+    rise: float = 0.0,
     z0: float,
     z1: float,
     name: str = "volute_band",
 ) -> Mesh:
-    """The raised spiral band (the listel) as a closed prism between ``z0`` and ``z1``.
+    """The raised spiral band (the listel) as a closed prism between ``z0`` and ``z1``; the
+    margin's upper edge rises by ``rise`` (:func:`~ionic_usd.column.volute.volute_band_outline`).
 
     Coordinates: the eye centre at the origin, the volute's face plane ⊥ Z.
     """
-    outer, inner = volute_band_outline(p, samples, margin)
+    outer, inner = volute_band_outline(p, samples, margin, rise)
     n = len(outer)
     tris = stitch(np.arange(n), np.arange(n, 2 * n), is_closed=False)
     loop = np.concatenate([np.arange(n), np.arange(2 * n - 1, n - 1, -1)])
@@ -223,14 +225,17 @@ def build_volute(
     relief_depth: float = 0.015,
     slab_depth: float = 0.03,
     margin: float = 0.0,
+    seat: float = 0.0,
     name: str = "volute",
 ) -> Mesh:
     """One volute (three closed shells: backing disc, raised band, eye boss), merged.
 
-    Frame: the eye centre at the origin, the face towards +Z; the band and the eye span
-    ``z ∈ [−relief_depth, 0]``, the backing ``[−relief_depth − slab_depth, −relief_depth]``;
-    the recess between the band's turns is the backing's front face (the channel floor).
-    Mirror with :func:`ionic_usd.geometry.mesh.transform` for the other volutes.
+    Frame: the eye centre at the origin, the face towards +Z; the band and the eye span ``z ∈
+    [−relief_depth − seat, 0]`` (``seat`` sinks them into the backing, and raises the margin's
+    far end as much, so a union meets an overlap, not touching faces), the backing
+    ``[−relief_depth − slab_depth, −relief_depth]``; the recess between the band's turns is the
+    backing's front face (the channel floor). Mirror with
+    :func:`ionic_usd.geometry.mesh.transform` for the other volutes.
     """
     p = p or VoluteParams()
     for nm, v in (("relief_depth", relief_depth), ("slab_depth", slab_depth)):
@@ -238,7 +243,11 @@ def build_volute(
             raise ParameterError(nm, v, "a length > 0", context="volute")
     if margin < 0 or not math.isfinite(margin):
         raise ParameterError("margin", margin, "a length >= 0", context="volute")
-    band = build_volute_band(p, samples=samples, margin=margin, z0=-relief_depth, z1=0.0)
+    if not (math.isfinite(seat) and 0 <= seat < slab_depth):
+        raise ParameterError("seat", seat, "a length in [0, slab_depth)", context="volute")
+    band = build_volute_band(
+        p, samples=samples, margin=margin, rise=seat, z0=-relief_depth - seat, z1=0.0
+    )
     back = build_volute_backing(p, samples=samples, z0=-relief_depth - slab_depth, z1=-relief_depth)
-    eye = build_volute_eye(p, segments=eye_segments, z0=-relief_depth, z1=0.0)
+    eye = build_volute_eye(p, segments=eye_segments, z0=-relief_depth - seat, z1=0.0)
     return merge([back, band, eye], name=name)

@@ -196,8 +196,8 @@ def volute_variant_params(params: ColumnParams, model: str) -> ColumnParams:
     gap, top_end_x = _margin_gap(out)
     if own_gap > 0.0 and gap < own_gap:
         # the straight margins stop as far short of the centre plane as the column's own
-        # model's do (1.4 mm for Portunus), the canalis bridging them: margins meeting on
-        # the plane leave coincident vertices in the capital's union
+        # model's do (0.026 mm for Portunus; the capital then carries both a seat across it,
+        # see capital_body.seat_depth)
         margin = max(top_end_x - own_gap, 0.0)
         out = dataclasses.replace(out, capital=out.capital.with_(spiral_margin=margin))
     return out
@@ -207,12 +207,9 @@ def _margin_gap(params: ColumnParams) -> tuple[float, float]:
     """How far short of the centre plane x = 0 a volute's straight margin stops, and the x of
     the band's top end where the margin starts (m)."""
     from ionic_usd.column.capital import capital_layout
-    from ionic_usd.column.volute import volute_curve
 
-    cp = params.capital_params()
-    lay = capital_layout(cp)
-    top_end_x = lay.eye_x + float(volute_curve(cp.volute, 2)[-1, 0]) - cp.volute.offset_x
-    return top_end_x - lay.margin, top_end_x
+    lay = capital_layout(params.capital_params())
+    return lay.margin_gap, lay.margin + lay.margin_gap
 
 
 def _materials(opts: ColumnAssetOptions) -> dict[str, MaterialTextures]:
