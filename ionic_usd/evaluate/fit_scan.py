@@ -162,27 +162,26 @@ def fit_column_scan(
     # axis far better than the normals (a 1 mm error over 4 m is 0.015°); then the final
     # section a third of the way up in the corrected frame
     e = None
+    fracs = (0.25, 0.75)
     for stage in range(3):  # refine twice: a tilted first axis blurs the first slabs
         loc = frame.local(sub)
         s0, s1 = frame.parts["shaft"]
         ra, rb = taper(loc, s0, s1)
+        if stage == 0:
+            try:
+                found = _lowest_fluted(loc, s0, s1, ra, rb)
+            except GeometryError:
+                notes.append("too few points for a shaft section: no shaft")
+                return _capital_alone(pts, sub, seed, notes, t0)
+            if isinstance(found, str):
+                notes.append(f"no fluted section fits the narrow band ({found}): no shaft")
+                return _capital_alone(pts, sub, seed, notes, t0)
+            fracs = (found, 0.75 if found < 0.5 else 0.9)
         if stage < 2:
             cs = []
-            for frac in (0.25, 0.75):
+            for frac in fracs:
                 h = s0 + frac * (s1 - s0)
-                try:
-                    e, sec1, slab1, _ = section_at(loc, h, s0, s1, ra, rb, e)
-                except GeometryError:
-                    if stage:
-                        raise
-                    notes.append("too few points for a shaft section: no shaft")
-                    return _capital_alone(pts, sub, seed, notes, t0)
-                if stage == 0 and frac == 0.25 and not is_fluted(slab1, sec1):
-                    notes.append(
-                        f"no fluted section fits the narrow band ({e} flutes tried at "
-                        f"{h:.3f} m): no shaft"
-                    )
-                    return _capital_alone(pts, sub, seed, notes, t0)
+                e, sec1, slab1, _ = section_at(loc, h, s0, s1, ra, rb, e)
                 cs.append(
                     frame.origin
                     + sec1["centre_u"] * frame.u
@@ -292,6 +291,23 @@ def fit_column_scan(
         notes,
         fits,
     )
+
+
+#: where the first fluted section is sought, as fractions of the narrow band: its lower part
+#: can still be the base's top (a short fragment's band starts at the upper torus)
+FIRST_SECTIONS = (0.25, 0.4, 0.55)
+
+
+def _lowest_fluted(loc: np.ndarray, s0: float, s1: float, ra: float, rb: float) -> float | str:
+    """The lowest of :data:`FIRST_SECTIONS` whose section is fluted, or what was tried."""
+    tried = []
+    for frac in FIRST_SECTIONS:
+        h = s0 + frac * (s1 - s0)
+        e, sec, slab, _ = section_at(loc, h, s0, s1, ra, rb, None)
+        if is_fluted(slab, sec):
+            return frac
+        tried.append(f"{e} flutes at {h:.3f} m")
+    return ", ".join(tried) + " tried"
 
 
 def _capital_alone(

@@ -54,7 +54,7 @@ def _basis(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _refine(
-    a0: np.ndarray, p: np.ndarray, n: np.ndarray, size: float
+    a0: np.ndarray, p: np.ndarray, n: np.ndarray, size: float, *, direction_fixed: bool = False
 ) -> tuple[np.ndarray, np.ndarray, float]:
     from scipy.optimize import least_squares
 
@@ -72,6 +72,8 @@ def _refine(
     origin = pk.mean(0)
 
     def unpack(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        if direction_fixed:  # only the axis point moves
+            return a0, origin + x[0] * u + x[1] * v
         a = a0 + x[0] * u + x[1] * v
         a /= np.linalg.norm(a)
         return a, origin + x[2] * u + x[3] * v
@@ -80,9 +82,8 @@ def _refine(
         a, c = unpack(x)
         return _line_residuals(a, c, pk, nk)
 
-    sol = least_squares(
-        res, np.array([0.0, 0.0, c2[0], c2[1]]), loss="soft_l1", f_scale=0.01 * size, max_nfev=200
-    )
+    x0 = np.array([c2[0], c2[1]] if direction_fixed else [0.0, 0.0, c2[0], c2[1]])
+    sol = least_squares(res, x0, loss="soft_l1", f_scale=0.01 * size, max_nfev=200)
     a, c = unpack(sol.x)
     return a, c, float(np.median(res(sol.x)))
 
@@ -126,7 +127,40 @@ def estimate_axis(
         if best is None or r < best[2]:
             best = (a, c, r)
     assert best is not None
-    return best
+    a = _prism_direction(best[0], n)
+    if a is best[0]:
+        return best
+    a, c, r = _refine(a, p, n, size, direction_fixed=True)
+    return a, c, r
+
+
+#: normals within this |n·a| of the plane ⊥ the axis are the surface's vertical parts
+VERTICAL = 0.15
+
+
+def _prism_direction(a: np.ndarray, n: np.ndarray, rounds: int = 8) -> np.ndarray:
+    """The direction ⊥ the normals of the surface's vertical parts, started from ``a``.
+
+    Wherever a surface of revolution's profile is vertical (the shaft, a torus' equator) and
+    everywhere on a fluted shaft, the normal is ⊥ the axis; a flute's normal line, though,
+    passes the axis by up to the shaft radius × the flute's half angle, so the normal lines'
+    least-squares axis above is tilted by the flutes (1–4° on a 1.6 m drum). Iterated: the
+    least eigenvector of Σ n nᵀ over the normals within :data:`VERTICAL` of ⊥ ``a``. Returns
+    ``a`` itself when too few normals are vertical (no such part).
+    """
+    cur = a
+    for _ in range(rounds):
+        vert = np.abs(n @ cur) < VERTICAL
+        if vert.sum() < 50:
+            return a
+        nv = n[vert]
+        new = np.linalg.eigh(nv.T @ nv)[1][:, 0]
+        new = new if new @ cur >= 0 else -new
+        done = np.linalg.norm(new - cur) < 1e-7
+        cur = new
+        if done:
+            break
+    return cur
 
 
 @dataclass(frozen=True)
