@@ -183,3 +183,23 @@ def test_cli_bad_moulding_section_names_file_and_key(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "t.toml" in err and "mouldings.cornice" in err and "Traceback" not in err
     assert not out.exists()
+
+
+def test_readme_detail_table_matches_the_default_temple(stage):
+    """The README's triangle table, row by row, from the default build's own stage."""
+    import re
+    from pathlib import Path
+
+    from ionic_usd.usd.temple import triangles_with
+
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text("utf-8")
+    rows = re.findall(
+        r"^\| (plain|moulded|carved)(?: \(default\))? \| .* \| ([\d,]+) \| ([\d,]+) \|$",
+        readme,
+        flags=re.M,
+    )
+    assert [r[0] for r in rows] == ["plain", "moulded", "carved"]
+    for detail, high, low in rows:
+        for lod, want in (("high", high), ("low", low)):
+            got = triangles_with(stage, {"detail": detail, "lod": lod})
+            assert got == int(want.replace(",", "")), (detail, lod)

@@ -114,6 +114,7 @@ __all__ = [
     "temple_counts",
     "hypothesis_layers",
     "temple_triangles",
+    "triangles_with",
     "ROOT_LAYER",
     "GENERATED_LAYER",
     "OVERRIDES_LAYER",
@@ -383,7 +384,7 @@ class TemplePlan:
         combos = realise_combinations(
             gen, tmp, layout, realised, uv_scale=CUBOID_UV_SCALE, detail_of=self.detail_of
         )
-        lod_triangles = {lod: _triangles_with(gen, {"lod": lod}) for lod in self.lods}
+        lod_triangles = {lod: triangles_with(gen, {"lod": lod}) for lod in self.lods}
         temple_sets = gen.GetPrimAtPath("/Temple").GetVariantSets()
         candidates = {
             "lod": self.lods,
@@ -488,7 +489,9 @@ def temple_triangles(stage: Usd.Stage) -> int:
     return drawn_triangles(stage.GetPseudoRoot())
 
 
-def _triangles_with(stage: Usd.Stage, selections: dict[str, str]) -> int:
+def triangles_with(stage: Usd.Stage, selections: dict[str, str]) -> int:
+    """:func:`temple_triangles` with ``selections`` (variant set → variant) made on the
+    default prim in the session layer, which is cleared again afterwards."""
     try:
         select_variants(stage, selections)
         return temple_triangles(stage)
