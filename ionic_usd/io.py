@@ -48,6 +48,7 @@ __all__ = [
     "manifest_record",
     "up_to_date",
     "recover_folder",
+    "removed_if_failed",
     "replace_folder",
     "sha256_file",
     "verified_cache",
@@ -102,6 +103,28 @@ def _tmp_sibling(path: Path, tag: str = _TMP_TAG) -> Path:
     # keep the extension: USD and OpenImageIO choose the format by it
     stem = path.name[:100]
     return path.with_name(f".{stem}.{tag}-{os.getpid()}-{secrets.token_hex(4)}{path.suffix}")
+
+
+@contextlib.contextmanager
+def removed_if_failed(*folders: str | os.PathLike) -> Iterator[None]:
+    """Folders the block is about to create, taken away again if it raises.
+
+    Of ``folders``, those that do not exist yet are noted; on an exception every empty folder
+    inside them, and then each of them, is removed (``rmdir``, deepest first: a folder holding
+    any file stays, so nothing but this block's empty folders can go). A refusal half-way (a
+    full disk) then leaves the output as it was.
+    """
+    new = [Path(f) for f in folders if not os.path.lexists(f)]
+    try:
+        yield
+    except BaseException:
+        for top in sorted(new, key=lambda p: len(p.parts), reverse=True):
+            if not top.is_dir() or top.is_symlink():
+                continue
+            for d, _, _ in sorted(os.walk(top), key=lambda w: len(w[0]), reverse=True):
+                with contextlib.suppress(OSError):
+                    os.rmdir(d)
+        raise
 
 
 def sha256_file(path: str | os.PathLike) -> str:

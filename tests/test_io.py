@@ -268,3 +268,31 @@ def test_verified_cache_failure_leaves_nothing(tmp_path):
 
 if __name__ == "__main__":  # pragma: no cover
     sys.exit(pytest.main([__file__, "-q"]))
+
+
+def test_removed_if_failed_takes_away_only_the_empty_folders_it_made(tmp_path):
+    from ionic_usd.io import removed_if_failed
+
+    out = tmp_path / "city"
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "keep.txt").write_text("the user's")
+    with pytest.raises(OSError, match="No space"):
+        with removed_if_failed(out, out / "Temples", mine):
+            (out / "Temples" / "A" / "B").mkdir(parents=True)
+            (out / "Temples" / "C").mkdir()
+            raise OSError(28, "No space left on device")
+    assert not out.exists()  # every folder it made was empty: all gone
+    assert (mine / "keep.txt").read_text() == "the user's"  # existed before: untouched
+    # a file written inside keeps its folder (and the folders above it)
+    with pytest.raises(RuntimeError):
+        with removed_if_failed(out, out / "Temples"):
+            (out / "Temples" / "D").mkdir(parents=True)
+            (out / "Temples" / "E").mkdir()
+            (out / "Temples" / "D" / "f.usda").write_text("#usda 1.0\n")
+            raise RuntimeError("late failure")
+    assert sorted(p.name for p in (out / "Temples").iterdir()) == ["D"]
+    # success: nothing is removed
+    with removed_if_failed(tmp_path / "ok"):
+        (tmp_path / "ok").mkdir()
+    assert (tmp_path / "ok").is_dir()

@@ -145,7 +145,17 @@ def estimate_memory(temples: int, columns: int, builds: int, threshold: int) -> 
 def build_city(
     out: str | os.PathLike, opts: CityOptions, *, progress: Callable[[str], None] | None = None
 ) -> dict:
-    """Build the city into ``out`` (see the module docstring); returns the summary (JSON)."""
+    """Build the city into ``out`` (see the module docstring); returns the summary (JSON).
+
+    A build that fails takes away the folders it created (empty ones only: the files it wrote
+    are each atomic, so a refusal on a full disk leaves the folder as it found it)."""
+    from ionic_usd.io import removed_if_failed
+
+    with removed_if_failed(out, Path(out) / "Temples"):
+        return _build_city(Path(out), opts, progress)
+
+
+def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | None) -> dict:
     from ionic_usd.usd.city import (
         DEFAULT_INSTANCER_THRESHOLD,
         INSTANCES_LAYER,
