@@ -90,11 +90,10 @@ def test_enclosed_faces_are_the_sheets_of_a_slit():
 
 # -- the asset's meshes -------------------------------------------------------------------------
 #: the smallest triangle angle of a capital after the sliver clean-up (degrees; it was 0.0003°
-#: on the united capitals, 0.0000° with zero-area faces on the engaged angle capitals)
-# on the united capitals, 0.0000° with zero-area faces on the engaged angle capitals).
-# Lowered from 0.02 to 0.01: since the parts are seated into one another, the medium normal
-# capitals have a 0.014° needle in the abacus' underside along the band face, at the 1 mm
-# gap between the two margins' ends (open: make the margins cross there)
+#: on the united capitals, 0.0000° with zero-area faces on the engaged angle capitals).
+#: Lowered from 0.02 to 0.01: since the parts are seated into one another, the medium normal
+#: capitals have a 0.014° needle in the abacus' underside along the band face, at the 1 mm
+#: gap between the two margins' ends (open: make the margins cross there)
 CAPITAL_MIN_ANGLE = 0.01
 
 
