@@ -176,7 +176,8 @@ def fit_column_scan(
             if isinstance(found, str):
                 notes.append(f"no fluted section fits the narrow band ({found}): no shaft")
                 return _capital_alone(pts, sub, seed, notes, t0)
-            fracs = (found, 0.75 if found < 0.5 else 0.9)
+            first, e = found  # the count its search chose: the loop fits that count only
+            fracs = (first, 0.75 if first < 0.5 else 0.9)
         if stage < 2:
             cs = []
             for frac in fracs:
@@ -298,14 +299,17 @@ def fit_column_scan(
 FIRST_SECTIONS = (0.25, 0.4, 0.55)
 
 
-def _lowest_fluted(loc: np.ndarray, s0: float, s1: float, ra: float, rb: float) -> float | str:
-    """The lowest of :data:`FIRST_SECTIONS` whose section is fluted, or what was tried."""
+def _lowest_fluted(
+    loc: np.ndarray, s0: float, s1: float, ra: float, rb: float
+) -> tuple[float, int] | str:
+    """The lowest of :data:`FIRST_SECTIONS` whose section is fluted and its flute count, or
+    what was tried."""
     tried = []
     for frac in FIRST_SECTIONS:
         h = s0 + frac * (s1 - s0)
         e, sec, slab, _ = section_at(loc, h, s0, s1, ra, rb, None)
         if is_fluted(slab, sec):
-            return frac
+            return frac, e
         tried.append(f"{e} flutes at {h:.3f} m")
     return ", ".join(tried) + " tried"
 

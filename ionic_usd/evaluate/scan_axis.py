@@ -127,32 +127,29 @@ def estimate_axis(
         if best is None or r < best[2]:
             best = (a, c, r)
     assert best is not None
-    a = _prism_direction(best[0], n)
-    if a is best[0]:
-        return best
-    a, c, r = _refine(a, p, n, size, direction_fixed=True)
-    return a, c, r
+    prism = _prism_direction(best[0], n)
+    return best if prism is None else _refine(prism, p, n, size, direction_fixed=True)
 
 
 #: normals within this |n·a| of the plane ⊥ the axis are the surface's vertical parts
 VERTICAL = 0.15
 
 
-def _prism_direction(a: np.ndarray, n: np.ndarray, rounds: int = 8) -> np.ndarray:
+def _prism_direction(a: np.ndarray, n: np.ndarray, rounds: int = 8) -> np.ndarray | None:
     """The direction ⊥ the normals of the surface's vertical parts, started from ``a``.
 
     Wherever a surface of revolution's profile is vertical (the shaft, a torus' equator) and
     everywhere on a fluted shaft, the normal is ⊥ the axis; a flute's normal line, though,
     passes the axis by up to the shaft radius × the flute's half angle, so the normal lines'
     least-squares axis above is tilted by the flutes (1–4° on a 1.6 m drum). Iterated: the
-    least eigenvector of Σ n nᵀ over the normals within :data:`VERTICAL` of ⊥ ``a``. Returns
-    ``a`` itself when too few normals are vertical (no such part).
+    least eigenvector of Σ n nᵀ over the normals within :data:`VERTICAL` of ⊥ ``a``. None
+    when too few normals are vertical (no such part).
     """
     cur = a
     for _ in range(rounds):
         vert = np.abs(n @ cur) < VERTICAL
         if vert.sum() < 50:
-            return a
+            return None
         nv = n[vert]
         new = np.linalg.eigh(nv.T @ nv)[1][:, 0]
         new = new if new @ cur >= 0 else -new

@@ -348,13 +348,9 @@ def enclosed_faces(mesh: Mesh, *, eps: float | None = None) -> np.ndarray:
     and crossing tests pass such faces (the sheets are manifold and only touch), yet a
     renderer shows them through cuts, slicers fill them and the area is wrong.
     """
-    tri = mesh.triangles
-    t = mesh.points[tri].astype(np.float64)
-    n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
-    ln = np.linalg.norm(n, axis=1)
-    ok = ln > 0
-    n = n / np.where(ok, ln, 1.0)[:, None]
+    pts = mesh.points.astype(np.float64)
+    n, area = face_normals(pts, mesh.triangles)
     if eps is None:
-        eps = 1e-6 * float(np.linalg.norm(np.ptp(mesh.points, axis=0)))
-    w = winding_numbers(mesh, t.mean(axis=1) + eps * n)
-    return np.flatnonzero(ok & (w > 0.5))
+        eps = 1e-6 * float(np.linalg.norm(np.ptp(pts, axis=0)))
+    w = winding_numbers(mesh, pts[mesh.triangles].mean(axis=1) + eps * n)
+    return np.flatnonzero((area > 0) & (w > 0.5))
