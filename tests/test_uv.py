@@ -510,6 +510,39 @@ def test_split_overlapping_charts_separates_a_fold():
     assert split_overlapping_charts(st, ok, 1e-9)[2] == 0
 
 
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_overlapping_triangles_match_geos_on_every_pair(seed):
+    # a soup of random triangles, some snapped to a coarse grid so that many touch exactly
+    # along edges and at vertices: the broad phase (R-tree) and the separating-axis test
+    # together must report exactly the pairs GEOS's intersection gives an area, checked pair
+    # by pair over all n (n - 1) / 2 pairs
+    import shapely
+
+    from ionic_usd.texture.charts import overlapping_triangles
+
+    rng = np.random.default_rng(seed)
+    n = 120
+    st = rng.random((3 * n, 2)) * 4.0
+    st[: 3 * n // 2] = np.round(st[: 3 * n // 2] * 2) / 2
+    tri = st.reshape(-1, 3, 2)
+    cross = (tri[:, 1, 0] - tri[:, 0, 0]) * (tri[:, 2, 1] - tri[:, 0, 1]) - (
+        tri[:, 1, 1] - tri[:, 0, 1]
+    ) * (tri[:, 2, 0] - tri[:, 0, 0])
+    tri = tri[np.abs(cross) > 1e-3]  # no degenerate triangles (GEOS and SAT disagree on those)
+    st = tri.reshape(-1, 2)
+    sti = np.arange(len(st))
+    polys = shapely.polygons(np.concatenate([tri, tri[:, :1]], axis=1))
+    want = {
+        (i, j)
+        for i in range(len(tri))
+        for j in range(i + 1, len(tri))
+        if shapely.intersection(polys[i], polys[j]).area > 1e-9
+    }
+    got = {tuple(p) for p in overlapping_triangles(st, sti, 1e-9, same_chart=False).tolist()}
+    assert len(want) > 20
+    assert got == want
+
 def test_metric_charts_of_a_low_capital_do_not_overlap(cache):
     # xatlas folds one chart of this capital onto itself (3 triangle pairs); repacked, the
     # fold covered 26 sub-texels of a 4x raster twice before its charts were split

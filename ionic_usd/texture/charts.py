@@ -19,31 +19,25 @@ __all__ = ["overlapping_triangles", "split_overlapping_charts"]
 
 
 def _candidate_pairs(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    """(k, 2) int64 pairs i < j of boxes (t, 2) that share a cell of a uniform grid."""
-    ext = np.max(hi - lo, axis=1)
-    h = float(np.median(ext)) if len(ext) else 1.0
-    if not h > 0:
-        h = float(ext.max()) if len(ext) and ext.max() > 0 else 1.0
-    c0 = np.floor((lo - lo.min(axis=0)) / h).astype(np.int64)
-    c1 = np.floor((hi - lo.min(axis=0)) / h).astype(np.int64)
-    nx, ny = c1[:, 0] - c0[:, 0] + 1, c1[:, 1] - c0[:, 1] + 1
-    cells = nx * ny
-    tri = np.repeat(np.arange(len(lo)), cells)
-    k = np.arange(int(cells.sum())) - np.repeat(np.cumsum(cells) - cells, cells)
-    cx = c0[tri, 0] + k % nx[tri]
-    cy = c0[tri, 1] + k // nx[tri]
-    key = cx * (int(c1[:, 1].max()) + 1) + cy
-    order = np.lexsort((tri, key))
-    key, tri = key[order], tri[order]
-    pairs = []
-    for d in range(1, len(key)):
-        same = key[d:] == key[:-d]
-        if not same.any():
-            break
-        pairs.append(np.stack([tri[:-d][same], tri[d:][same]], axis=1))
-    if not pairs:
+    """(k, 2) int64 pairs i < j of boxes (t, 2) that intersect (closed boxes), by a query of
+    GEOS's STR packed R-tree (shapely), in sorted order."""
+    import shapely
+
+    if not len(lo):
         return np.empty((0, 2), dtype=np.int64)
-    return unique_rows(np.sort(np.concatenate(pairs), axis=1))
+    boxes = shapely.box(lo[:, 0], lo[:, 1], hi[:, 0], hi[:, 1])
+    i, j = shapely.STRtree(boxes).query(boxes, predicate="intersects")
+    keep = i < j
+    return unique_rows(np.stack([i[keep], j[keep]], axis=1).astype(np.int64))
+
+
+def _lo3(t: np.ndarray) -> np.ndarray:
+    """(m, 3, 2) triangles → (m, 2) lower box corners (elementwise, not a reduction)."""
+    return np.minimum(np.minimum(t[:, 0], t[:, 1]), t[:, 2])
+
+
+def _hi3(t: np.ndarray) -> np.ndarray:
+    return np.maximum(np.maximum(t[:, 0], t[:, 1]), t[:, 2])
 
 
 def overlapping_triangles(
@@ -70,7 +64,7 @@ def overlapping_triangles(
         return np.empty((0, 2), dtype=np.int64)
     e1, e2 = t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]
     area = 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
-    pairs = _candidate_pairs(t.min(axis=1), t.max(axis=1))
+    pairs = _candidate_pairs(_lo3(t), _hi3(t))
     if same_chart and len(pairs):
         chart = chart_labels(st_indices, len(st))
         pairs = pairs[chart[pairs[:, 0]] == chart[pairs[:, 1]]]
@@ -79,17 +73,32 @@ def overlapping_triangles(
     out = []
     for chunk in np.array_split(pairs, max(1, len(pairs) // 200_000 + 1)):
         a, b = t[chunk[:, 0]], t[chunk[:, 1]]
-        lo_a, hi_a, lo_b, hi_b = a.min(axis=1), a.max(axis=1), b.min(axis=1), b.max(axis=1)
+        lo_a, hi_a, lo_b, hi_b = _lo3(a), _hi3(a), _lo3(b), _hi3(b)
         boxes = np.all((hi_a > lo_b + eps) & (hi_b > lo_a + eps), axis=1)
         a, b, chunk = a[boxes], b[boxes], chunk[boxes]
-        edges = np.concatenate([np.roll(a, -1, axis=1) - a, np.roll(b, -1, axis=1) - b], axis=1)
-        axes = np.stack([-edges[..., 1], edges[..., 0]], axis=-1)  # (m, 6, 2)
-        length = np.linalg.norm(axes, axis=-1)
-        axes = axes / np.where(length > 0, length, 1.0)[..., None]
-        pa = np.einsum("mkd,mcd->mkc", axes, a)  # (m, 6 axes, 3 corners)
-        pb = np.einsum("mkd,mcd->mkc", axes, b)
-        apart = (pa.max(axis=2) <= pb.min(axis=2) + eps) | (pb.max(axis=2) <= pa.min(axis=2) + eps)
-        out.append(chunk[~np.any(apart & (length > 0), axis=1)])
+        overlap = np.ones(len(chunk), dtype=bool)
+        # the six edge normals (three of each triangle); projections as plain arithmetic on
+        # the (m, 3) coordinate columns (einsum and reductions over a length-3 axis cost
+        # several times more at these sizes)
+        for tri in (a, b):
+            for k in range(3):
+                nx = tri[:, k, 1] - tri[:, (k + 1) % 3, 1]
+                ny = tri[:, (k + 1) % 3, 0] - tri[:, k, 0]
+                length = np.hypot(nx, ny)
+                ok = length > 0
+                nx, ny = nx / np.where(ok, length, 1.0), ny / np.where(ok, length, 1.0)
+                pa = [nx * a[:, c, 0] + ny * a[:, c, 1] for c in range(3)]
+                pb = [nx * b[:, c, 0] + ny * b[:, c, 1] for c in range(3)]
+                ma, mb = (
+                    np.maximum(np.maximum(*pa[:2]), pa[2]),
+                    np.maximum(np.maximum(*pb[:2]), pb[2]),
+                )
+                na, nb = (
+                    np.minimum(np.minimum(*pa[:2]), pa[2]),
+                    np.minimum(np.minimum(*pb[:2]), pb[2]),
+                )
+                overlap &= ~(ok & ((ma <= nb + eps) | (mb <= na + eps)))
+        out.append(chunk[overlap])
     return np.concatenate(out) if out else np.empty((0, 2), dtype=np.int64)
 
 
