@@ -214,7 +214,9 @@ def difference(
         res = manifold3d.Manifold.batch_boolean([*ops, *cut], manifold3d.OpType.Subtract)
         if res.is_empty():
             raise GeometryError(f"difference: nothing of mesh {mesh.name!r} is left")
-        return _from_manifold(res, mesh.name if name is None else name, simplify=simplify)
+        return _from_manifold(
+            res, mesh.name if name is None else name, simplify=simplify, before=mesh.points
+        )
     ops = [_to_manifold(s, keep_faces=True) for s in split_shells(mesh)]
     base = manifold3d.Manifold.batch_boolean(ops, manifold3d.OpType.Add)
     cut = [_to_manifold(s, keep_faces=True) for m in cutters for s in split_shells(m)]
@@ -223,17 +225,31 @@ def difference(
         raise GeometryError(f"difference: nothing of mesh {mesh.name!r} is left")
     # no simplification by default: a cut must not depend on the mesh's size, so two parts
     # cut by the same plane keep the same vertices where they meet (base and shaft)
-    return _from_manifold(res, mesh.name if name is None else name, simplify=simplify)
+    return _from_manifold(
+        res, mesh.name if name is None else name, simplify=simplify, before=mesh.points
+    )
 
 
-def _from_manifold(res, name: str, simplify: bool = True) -> Mesh:
+def _new_points(points: np.ndarray, before: np.ndarray) -> np.ndarray:
+    """(n,) bool: the ``points`` (n, 3) that are not, bit for bit, among ``before``."""
+
+    def rows(a: np.ndarray) -> np.ndarray:
+        a = np.ascontiguousarray(a, dtype=np.float64) + 0.0  # + 0.0: -0.0 becomes 0.0
+        return a.view(np.dtype((np.void, a.dtype.itemsize * 3))).reshape(-1)
+
+    return ~np.isin(rows(points), rows(before))
+
+
+def _from_manifold(res, name: str, simplify: bool = True, before: np.ndarray | None = None) -> Mesh:
     """A Mesh from a manifold3d result whose properties 3..5 are corner normals.
 
     ``simplify``: edges shorter than 1e-7 × the bounding box diagonal (slivers where faces
     met almost coplanar) are collapsed first (``Manifold.simplify``), then the remaining
     sliver triangles are flipped or collapsed away within :data:`SLIVER_TOL` × the diagonal
     (:func:`remove_slivers`; manifold3d's simplify keeps needles whose edges run along a
-    crease of the authored normals).
+    crease of the authored normals). ``before``: the points of the operand a difference
+    cut (its surface already clean): only the slivers round the points the cut made are
+    mended.
     """
     diag = 0.0
     if simplify:
@@ -279,4 +295,7 @@ def _from_manifold(res, name: str, simplify: bool = True) -> Mesh:
         sti,
         name=name,
     )
-    return remove_slivers(out_mesh, SLIVER_TOL * diag) if simplify else out_mesh
+    if not simplify:
+        return out_mesh
+    changed = None if before is None else _new_points(points, before)
+    return remove_slivers(out_mesh, SLIVER_TOL * diag, changed=changed)

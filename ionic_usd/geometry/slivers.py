@@ -82,7 +82,12 @@ def _tet_height(a: list[float], b: list[float], c: list[float], d: list[float]) 
 
 
 def remove_slivers(
-    mesh: Mesh, tol: float, *, min_angle: float = SLIVER_ANGLE_DEG, max_passes: int = 8
+    mesh: Mesh,
+    tol: float,
+    *,
+    min_angle: float = SLIVER_ANGLE_DEG,
+    max_passes: int = 8,
+    changed: np.ndarray | None = None,
 ) -> Mesh:
     """Remove sliver triangles of a closed triangle mesh without moving its surface by more
     than ``tol``.
@@ -104,6 +109,11 @@ def remove_slivers(
     mesh : closed, consistently wound triangle mesh with faceVarying normals (or none)
     tol : largest allowed movement of the surface (m)
     min_angle : degrees
+    changed : (n,) bool over the points, or None (all). Only the slivers with a vertex on a
+        triangle round a changed point are worked on (then, as always, those round the
+        edits): the rest of the mesh is as an earlier clean-up with at least this ``tol``
+        left it, whose slivers failed then and would fail again (a cut of a cleaned union
+        re-mends only along the cut)
 
     Returns
     -------
@@ -297,6 +307,9 @@ def remove_slivers(
         return False
 
     touched: set[int] | None = None  # vertices near a change in the last pass (None: all)
+    if changed is not None:
+        near_new = np.any(np.asarray(changed, dtype=bool)[tri0], axis=1)
+        touched = set(np.unique(tri0[near_new]).tolist())
     tri = tri0
     for _ in range(max_passes):
         worst = _tri_angles(pts[tri]).min(axis=1)
