@@ -548,17 +548,33 @@ def test_generated_meshes_are_cached_by_content(tmp_path, monkeypatch):
     assert len(calls) == 3 and len(list(mesh_cache_folder().iterdir())) == 2
 
 
-def test_generation_in_parallel_processes_gives_the_serial_meshes(tmp_path):
+def test_generation_in_parallel_processes_gives_the_serial_meshes(tmp_path, monkeypatch):
     """The asset's units of work run in a process pool: the meshes (geometry, charts, tags,
-    order) must not depend on how many processes ran them."""
+    order) must not depend on how many processes ran them. The stone maps made in the same
+    pool (side jobs) are in the cache afterwards: copying them generates nothing."""
+    import ionic_usd.texture.stone as stone
+    from ionic_usd.pipeline.asset import _texture_jobs, copy_stone_textures
     from ionic_usd.texture.uv import UVCache
 
+    monkeypatch.setenv("IONIC_USD_CACHE", str(tmp_path / "cache"))
     opts = ColumnAssetOptions(
         lods=("low", "medium"), bases=("G1",), scrolls=("S1",), flutes=("f24",), texture_size=16
     )
     serial = column_asset_meshes(opts, UVCache(tmp_path / "a"), workers=1)
     cache = UVCache(tmp_path / "b")
-    parallel = column_asset_meshes(opts, cache, workers=2)
+    jobs = _texture_jobs(opts)
+    assert sorted(args[0] for _, args in jobs) == ["stucco_painted", "travertine"]
+    parallel = column_asset_meshes(opts, cache, workers=2, side_jobs=jobs)
+
+    def no_generation(*_a, **_k):
+        raise AssertionError("the maps should have been in the cache")
+
+    monkeypatch.setattr(stone, "write_stone_textures", no_generation)
+    for _, (style, size, seed, _tx) in jobs:
+        got = copy_stone_textures(tmp_path / "tex", style, size, seed)
+        assert [p.name for p in got] == [
+            f"{style}_{r}.png" for r in ("basecolor", "roughness", "normal")
+        ]
     assert cache.misses == sum(m.part == "CapitalBody" and m.tags["form"] == "full" for m in serial)
     assert [(m.part, m.name, m.tags) for m in parallel] == [
         (m.part, m.name, m.tags) for m in serial

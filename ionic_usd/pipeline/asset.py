@@ -23,6 +23,7 @@ import math
 import os
 import shutil
 import time
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -263,7 +264,11 @@ def _cost(unit: _Unit) -> tuple[int, int]:
 
 
 def column_asset_meshes(
-    opts: ColumnAssetOptions, uv_cache: UVCache | None = None, *, workers: int | None = None
+    opts: ColumnAssetOptions,
+    uv_cache: UVCache | None = None,
+    *,
+    workers: int | None = None,
+    side_jobs: Sequence[tuple[Callable[..., object], tuple]] = (),
 ) -> list[AssetMesh]:
     """Every mesh of the asset with its variant tags (geometry only; with ``uv_cache`` the
     capital is charted by xatlas before the form cuts, which carry the charts).
@@ -271,7 +276,10 @@ def column_asset_meshes(
     The units of work (the bases and shafts of a LOD; each capital variant of a LOD, with its
     chart and cuts) are independent: they run in ``workers`` processes (default: one per
     core; in-process on one core or inside a daemonic process such as a Dask worker), and the
-    result does not depend on how many.
+    result does not depend on how many. ``side_jobs`` (picklable ``(function, args)``, their
+    results dropped: cache warm-ups such as :func:`warm_stone_textures`) run in the same pool
+    after the high LOD's units, so they overlap the geometry instead of following it; without
+    a pool they are not run.
 
     Returns
     -------
@@ -293,11 +301,17 @@ def column_asset_meshes(
         _preload()
         order = sorted(units, key=_cost)
         ctx = mp.get_context("fork")
+        first = sum(u.kind == "capital" and u.lod == order[0].lod for u in order)  # longest
         with ProcessPoolExecutor(
             max_workers=n, mp_context=ctx, initializer=_worker_init, initargs=(opts, uv_cache)
         ) as ex:
-            for u, r in zip(order, ex.map(_worker_unit, order, chunksize=1), strict=True):
-                results[u] = r
+            futures = {u: ex.submit(_worker_unit, u) for u in order[:first]}
+            side = [ex.submit(fn, *args) for fn, args in side_jobs]
+            futures.update({u: ex.submit(_worker_unit, u) for u in order[first:]})
+            for u, f in futures.items():
+                results[u] = f.result()
+            for job in side:
+                job.result()
         if uv_cache is not None:  # the workers' cache use, counted where the report reads it
             uv_cache.misses += sum(r[1][0] for r in results.values())
             uv_cache.hits += sum(r[1][1] for r in results.values())
@@ -401,21 +415,15 @@ def copy_stone_textures(
     Generated maps are deterministic, so they are kept in the cache folder (beside the UV
     cache) and copied: a rebuild writes no PNG.
     """
-    from ionic_usd.io import verified_cache
     from ionic_usd.texture.stone import TextureError, write_stone_textures
-    from ionic_usd.texture.uv import default_cache_folder
 
-    key = f"{style}-{size}-{seed}-{__version__}{'-tx' if make_tx else ''}"
-    store = default_cache_folder().parent / "textures" / key
     names = [
         f"{style}_{r}.{e}"
         for r in ("basecolor", "roughness", "normal")
         for e in (("png", "tx") if make_tx else ("png",))
     ]
-    try:  # verified on read (SHA-256 manifest), written atomically, rebuilt when bad
-        store = verified_cache(
-            store, lambda tmp: write_stone_textures(tmp, style, size, seed, make_tx=make_tx)
-        )
+    try:
+        store = _stone_store(style, size, seed, make_tx)
     except (OSError, TextureError):  # an unwritable or full cache: write into the asset
         write_stone_textures(folder, style, size, seed, make_tx=make_tx)
         return [folder / n for n in names]
@@ -425,6 +433,38 @@ def copy_stone_textures(
         shutil.copyfile(store / n, folder / n)
         out.append(folder / n)
     return out
+
+
+def _stone_store(style: str, size: int, seed: int, make_tx: bool) -> Path:
+    """The cache folder holding a stone style's maps, generated there on first use (verified
+    on read by its SHA-256 manifest, written atomically, rebuilt when bad)."""
+    from ionic_usd.io import verified_cache
+    from ionic_usd.texture.stone import write_stone_textures
+    from ionic_usd.texture.uv import default_cache_folder
+
+    key = f"{style}-{size}-{seed}-{__version__}{'-tx' if make_tx else ''}"
+    return verified_cache(
+        default_cache_folder().parent / "textures" / key,
+        lambda tmp: write_stone_textures(tmp, style, size, seed, make_tx=make_tx),
+    )
+
+
+def warm_stone_textures(style: str, size: int, seed: int, make_tx: bool = False) -> None:
+    """Generate a stone style's maps into the cache (what :func:`copy_stone_textures` then
+    copies), quietly doing nothing when the cache cannot be written: the copy reports it."""
+    from ionic_usd.texture.stone import TextureError
+
+    try:
+        _stone_store(style, size, seed, make_tx)
+    except (OSError, TextureError):
+        pass
+
+
+def _texture_jobs(opts: ColumnAssetOptions) -> list[tuple[Callable[..., object], tuple]]:
+    """The asset's generated maps as :func:`column_asset_meshes` side jobs."""
+    styles = [s for _, s in FINISHES.values() if not (opts.user_textures and s == "travertine")]
+    args = (opts.texture_size, opts.seed, opts.make_tx)
+    return [(warm_stone_textures, (s, *args)) for s in dict.fromkeys(styles)]
 
 
 def _textures_writer(opts: ColumnAssetOptions):
@@ -527,7 +567,7 @@ def build_column_asset(
     generated, _ = cached_meshes(
         "column_asset",
         opts,
-        lambda: column_asset_meshes(opts, uv_cache=cache),
+        lambda: column_asset_meshes(opts, uv_cache=cache, side_jobs=_texture_jobs(opts)),
         extra=str(cache.folder),
     )
     meshes, _ = _with_uvs(generated, cache)
