@@ -20,6 +20,7 @@ import numpy as np
 from pxr import Gf, Sdf, Usd, UsdGeom, Vt
 
 __all__ = [
+    "bbox_cache",
     "bound_changing_sets",
     "variant_extents_hints",
     "toggled_extents_hints",
@@ -67,9 +68,7 @@ def variant_extents_hints(
                 with Sdf.ChangeBlock():
                     for n, v in zip(names, combo, strict=True):
                         prim.GetVariantSet(n).SetVariantSelection(v)
-                cache = UsdGeom.BBoxCache(
-                    Usd.TimeCode.Default(), UsdGeom.Imageable.GetOrderedPurposeTokens()
-                )
+                cache = bbox_cache(stage, UsdGeom.Imageable.GetOrderedPurposeTokens())
                 out[combo] = {
                     p: np.array(
                         UsdGeom.ModelAPI(stage.GetPrimAtPath(p)).ComputeExtentsHint(cache),
@@ -82,6 +81,15 @@ def variant_extents_hints(
         finally:
             session.Clear()
     return out
+
+
+def bbox_cache(stage: Usd.Stage, purposes) -> UsdGeom.BBoxCache:
+    """A ``BBoxCache`` for ``stage``: on a stage opened without its payloads
+    (``Usd.Stage.LoadNone``) the unloaded models are bounded by their ``extentsHint`` (an
+    asset's own hints, per variant combination: the temple's checks need no column geometry),
+    on a loaded one every bound comes from the geometry."""
+    unloaded = bool(stage.FindLoadable()) and not stage.GetLoadSet()
+    return UsdGeom.BBoxCache(Usd.TimeCode.Default(), purposes, useExtentsHint=unloaded)
 
 
 def _identity_below(stage: Usd.Stage, root: str) -> bool:
@@ -137,7 +145,7 @@ def toggled_extents_hints(
 
     def bounds(prim_paths: Sequence[str]) -> list[list[Gf.Range3d]]:
         # one cache per purpose, shared by the prims of one composition
-        caches = [UsdGeom.BBoxCache(Usd.TimeCode.Default(), [p]) for p in purposes]
+        caches = [bbox_cache(stage, [p]) for p in purposes]
         out = []
         for path in prim_paths:
             prim = stage.GetPrimAtPath(path)
