@@ -55,6 +55,11 @@ def bars_enabled() -> bool:
     return _state["verbosity"] >= 0 and bool(getattr(stream, "isatty", lambda: False)())
 
 
+def _plural(noun: str) -> str:
+    """English plural of a unit's name: mesh → meshes, material → materials."""
+    return noun + ("es" if noun.endswith(("s", "sh", "ch", "x")) else "s")
+
+
 @contextmanager
 def progress(total: int | None, desc: str, *, unit: str = "step") -> Iterator[Any]:
     """A progress bar on stderr over ``total`` steps; call ``.update(n)`` on what it yields.
@@ -68,7 +73,9 @@ def progress(total: int | None, desc: str, *, unit: str = "step") -> Iterator[An
     unit : str
         Name of one step, e.g. ``"mesh"``.
     """
-    logging.getLogger("ionic_usd").info("%s (%s %ss)", desc, "?" if total is None else total, unit)
+    logging.getLogger("ionic_usd").info(
+        "%s (%s %s)", desc, "?" if total is None else total, unit if total == 1 else _plural(unit)
+    )
     from tqdm import tqdm
 
     bar = tqdm(

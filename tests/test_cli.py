@@ -120,3 +120,21 @@ def test_verbosity_flags_before_or_after_the_command(tmp_path, caplog, where):
             == 0
         )
     assert out.exists()
+
+
+def test_progress_messages_name_their_units_in_english(caplog):
+    # -v prints "unwrapping UVs (xatlas) (1 mesh)", never "1 meshs" or "2 meshs"
+    import logging
+
+    from ionic_usd.progress import progress
+
+    with caplog.at_level(logging.INFO, logger="ionic_usd"):
+        for n, unit in ((1, "mesh"), (2, "mesh"), (3, "material"), (1, "material")):
+            with progress(n, "step", unit=unit):
+                pass
+    assert [r.getMessage() for r in caplog.records] == [
+        "step (1 mesh)",
+        "step (2 meshes)",
+        "step (3 materials)",
+        "step (1 material)",
+    ]
