@@ -510,7 +510,6 @@ def test_split_overlapping_charts_separates_a_fold():
     assert split_overlapping_charts(st, ok, 1e-9)[2] == 0
 
 
-
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_overlapping_triangles_match_geos_on_every_pair(seed):
     # a soup of random triangles, some snapped to a coarse grid so that many touch exactly
@@ -542,6 +541,7 @@ def test_overlapping_triangles_match_geos_on_every_pair(seed):
     got = {tuple(p) for p in overlapping_triangles(st, sti, 1e-9, same_chart=False).tolist()}
     assert len(want) > 20
     assert got == want
+
 
 def test_metric_charts_of_a_low_capital_do_not_overlap(cache):
     # xatlas folds one chart of this capital onto itself (3 triangle pairs); repacked, the
