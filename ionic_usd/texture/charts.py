@@ -31,13 +31,13 @@ def _candidate_pairs(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     return unique_rows(np.stack([i[keep], j[keep]], axis=1).astype(np.int64))
 
 
-def _lo3(t: np.ndarray) -> np.ndarray:
-    """(m, 3, 2) triangles → (m, 2) lower box corners (elementwise, not a reduction)."""
-    return np.minimum(np.minimum(t[:, 0], t[:, 1]), t[:, 2])
+def _min3(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """Elementwise minimum of three arrays (cheaper than a reduction over a length-3 axis)."""
+    return np.minimum(np.minimum(a, b), c)
 
 
-def _hi3(t: np.ndarray) -> np.ndarray:
-    return np.maximum(np.maximum(t[:, 0], t[:, 1]), t[:, 2])
+def _max3(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    return np.maximum(np.maximum(a, b), c)
 
 
 def overlapping_triangles(
@@ -64,7 +64,7 @@ def overlapping_triangles(
         return np.empty((0, 2), dtype=np.int64)
     e1, e2 = t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]
     area = 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
-    pairs = _candidate_pairs(_lo3(t), _hi3(t))
+    pairs = _candidate_pairs(_min3(*t.transpose(1, 0, 2)), _max3(*t.transpose(1, 0, 2)))
     if same_chart and len(pairs):
         chart = chart_labels(st_indices, len(st))
         pairs = pairs[chart[pairs[:, 0]] == chart[pairs[:, 1]]]
@@ -73,7 +73,8 @@ def overlapping_triangles(
     out = []
     for chunk in np.array_split(pairs, max(1, len(pairs) // 200_000 + 1)):
         a, b = t[chunk[:, 0]], t[chunk[:, 1]]
-        lo_a, hi_a, lo_b, hi_b = _lo3(a), _hi3(a), _lo3(b), _hi3(b)
+        ca, cb = a.transpose(1, 0, 2), b.transpose(1, 0, 2)  # corners first
+        lo_a, hi_a, lo_b, hi_b = _min3(*ca), _max3(*ca), _min3(*cb), _max3(*cb)
         boxes = np.all((hi_a > lo_b + eps) & (hi_b > lo_a + eps), axis=1)
         a, b, chunk = a[boxes], b[boxes], chunk[boxes]
         overlap = np.ones(len(chunk), dtype=bool)
@@ -89,14 +90,7 @@ def overlapping_triangles(
                 nx, ny = nx / np.where(ok, length, 1.0), ny / np.where(ok, length, 1.0)
                 pa = [nx * a[:, c, 0] + ny * a[:, c, 1] for c in range(3)]
                 pb = [nx * b[:, c, 0] + ny * b[:, c, 1] for c in range(3)]
-                ma, mb = (
-                    np.maximum(np.maximum(*pa[:2]), pa[2]),
-                    np.maximum(np.maximum(*pb[:2]), pb[2]),
-                )
-                na, nb = (
-                    np.minimum(np.minimum(*pa[:2]), pa[2]),
-                    np.minimum(np.minimum(*pb[:2]), pb[2]),
-                )
+                ma, na, mb, nb = _max3(*pa), _min3(*pa), _max3(*pb), _min3(*pb)
                 overlap &= ~(ok & ((ma <= nb + eps) | (mb <= na + eps)))
         out.append(chunk[overlap])
     return np.concatenate(out) if out else np.empty((0, 2), dtype=np.int64)

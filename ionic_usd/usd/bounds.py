@@ -88,7 +88,7 @@ def bbox_cache(stage: Usd.Stage, purposes) -> UsdGeom.BBoxCache:
     (``Usd.Stage.LoadNone``) the unloaded models are bounded by their ``extentsHint`` (an
     asset's own hints, per variant combination: the temple's checks need no column geometry),
     on a loaded one every bound comes from the geometry."""
-    unloaded = bool(stage.FindLoadable()) and not stage.GetLoadSet()
+    unloaded = not stage.GetLoadRules().IsLoaded(Sdf.Path.absoluteRootPath)  # O(1), no traversal
     return UsdGeom.BBoxCache(Usd.TimeCode.Default(), purposes, useExtentsHint=unloaded)
 
 
