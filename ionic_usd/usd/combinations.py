@@ -112,13 +112,15 @@ def mismatches(
     detail: DetailGeometry | None = None,
     garlands: bool = False,
     atol: float = 1e-6,
+    memo: dict | None = None,
 ) -> dict[str, Fix]:
     """Prims whose composed values differ from ``expected`` shown in the ``detail`` variant
     ``variant`` (``detail``: its detail geometry): path → the expected value, or None (the prim
-    should not be there)."""
+    should not be there). ``memo``: :func:`~ionic_usd.usd.hypotheses.cuboid_meshes`'s, shared
+    by the calls of one check."""
     cache = UsdGeom.XformCache()
     want: dict[str, Mesh | Instances] = {}
-    for layer, ms in cuboid_meshes(expected, uv_scale).items():
+    for layer, ms in cuboid_meshes(expected, uv_scale, memo).items():
         for name, m in ms.items():
             if variant != "plain" and layer is Layer.ENTABLATURE and name in REPLACED_CUBOIDS:
                 continue
@@ -263,6 +265,7 @@ def realise_combinations(
     has_detail = gen.GetPrimAtPath("/Temple").GetVariantSets().HasVariantSet(DETAIL_SET)
     variants = DETAIL_VARIANTS if has_detail and detail_of is not None else ("plain",)
     height = layout.params.columns_height
+    memo: dict = {}  # the cuboid meshes: the subsets' layouts share most cuboids
 
     def check(
         sel: dict[str, str], want: TempleLayout, geom: DetailGeometry | None, garlands: bool
@@ -272,7 +275,14 @@ def realise_combinations(
         for v in variants:  # the cuboids are checked in plain, the detail where it shows
             select_variants(gen, sel | ({DETAIL_SET: v} if has_detail else {}))
             found = mismatches(
-                gen, want, height, uv_scale=uv_scale, variant=v, detail=geom, garlands=garlands
+                gen,
+                want,
+                height,
+                uv_scale=uv_scale,
+                variant=v,
+                detail=geom,
+                garlands=garlands,
+                memo=memo,
             )
             off |= {p for p in found if (q := gen.GetPrimAtPath(p)) and not q.IsActive()}
             bad.update(found)

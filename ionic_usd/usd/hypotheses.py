@@ -35,7 +35,7 @@ from pxr import Sdf, Tf, Vt
 
 from ionic_usd.errors import ParameterError
 from ionic_usd.geometry.mesh import Mesh
-from ionic_usd.temple.cuboid import cuboid_mesh
+from ionic_usd.temple.cuboid import Cuboid, cuboid_mesh
 from ionic_usd.temple.layout import (
     COMPOSER_NAMESPACES,
     ColumnKind,
@@ -108,10 +108,24 @@ def temple_keys(h: Hypothesis) -> list[str]:
     return [k for k in h.changes if k.split(".")[0] not in COMPOSER_NAMESPACES]
 
 
-def cuboid_meshes(layout: TempleLayout, uv_scale: float) -> dict[Layer, dict[str, Mesh]]:
-    """Meshes of every cuboid, by layer and prim name (``st`` at ``uv_scale`` per metre)."""
+def cuboid_meshes(
+    layout: TempleLayout, uv_scale: float, memo: dict[tuple[Cuboid, float], Mesh] | None = None
+) -> dict[Layer, dict[str, Mesh]]:
+    """Meshes of every cuboid, by layer and prim name (``st`` at ``uv_scale`` per metre).
+
+    ``memo``: meshes already made, by (cuboid, uv_scale), read and filled (the layouts of a
+    hypothesis combination share most of their cuboids). Its meshes are shared, not copied.
+    """
+    memo = {} if memo is None else memo
+
+    def mesh_of(c: Cuboid) -> Mesh:
+        got = memo.get((c, uv_scale))
+        if got is None:
+            got = memo[(c, uv_scale)] = cuboid_mesh(c, uv_scale=uv_scale)
+        return got
+
     return {
-        layer: {Tf.MakeValidIdentifier(c.name): cuboid_mesh(c, uv_scale=uv_scale) for c in cs}
+        layer: {Tf.MakeValidIdentifier(c.name): mesh_of(c) for c in cs}
         for layer, cs in layout.cuboids.items()
     }
 
