@@ -231,13 +231,15 @@ def remove_slivers(
         if od is None:
             return False
         o, d = od
-        ab = pts[b] - pts[a]
-        u = float(np.clip(np.dot(pts[c] - pts[a], ab) / max(float(ab @ ab), 1e-300), 0.0, 1.0))
-        foot = pts[a] + u * ab
-        if np.linalg.norm(foot - pts[c]) > tol or edge_faces(c, d):
+        pa, pb, pc = P[a], P[b], P[c]
+        ab = (pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2])
+        ac = (pc[0] - pa[0], pc[1] - pa[1], pc[2] - pa[2])
+        u = min(max(_dot(ac, ab) / max(_dot(ab, ab), 1e-300), 0.0), 1.0)
+        fl = [pa[0] + u * ab[0], pa[1] + u * ab[1], pa[2] + u * ab[2]]  # the foot on ab
+        off = (fl[0] - pc[0], fl[1] - pc[1], fl[2] - pc[2])
+        if math.sqrt(_dot(off, off)) > tol or edge_faces(c, d):
             return False
         around = [T[f] for f in sorted(faces_of(c)) if f != t]
-        fl = foot.tolist()
         moved = {v: P[v] for r in around for v in r}
         moved[c] = fl
         for r in around:
@@ -251,7 +253,7 @@ def remove_slivers(
         after = min(min_angle_of(around, moved), min_angle_of(halves, moved))
         if after <= before:
             return False
-        pts[c] = foot
+        pts[c] = fl
         P[c] = fl
         if cn0 is not None:
             ro, co = T[o], corners_of(o)
@@ -277,7 +279,9 @@ def remove_slivers(
         """Collapse the edge opposite corner k of triangle t (one end onto the other)."""
         row = T[t]
         a, b = row[(k + 1) % 3], row[(k + 2) % 3]
-        if np.linalg.norm(pts[a] - pts[b]) > tol:
+        pa, pb = P[a], P[b]
+        ab = (pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2])
+        if math.sqrt(_dot(ab, ab)) > tol:
             return False
         shared = edge_faces(a, b)
         if len(shared) != 2:
@@ -310,17 +314,22 @@ def remove_slivers(
     if changed is not None:
         near_new = np.any(np.asarray(changed, dtype=bool)[tri0], axis=1)
         touched = set(np.unique(tri0[near_new]).tolist())
-    tri = tri0
     for _ in range(max_passes):
+        # the live triangles a pass looks at: all at first, then (a sliver nothing changed
+        # around failed before) those with a vertex near the last pass's edits
+        if touched is None:
+            cand = np.arange(len(T))
+            tri = tri0
+        else:
+            cand = np.array(sorted({f for v in touched for f in faces_of(v)}), dtype=np.int64)
+            tri = np.array([T[f] for f in cand.tolist()], dtype=np.int64).reshape(-1, 3)
         worst = _tri_angles(pts[tri]).min(axis=1)
-        bad = np.flatnonzero(np.array(alive, dtype=bool) & (worst < min_angle))
-        if touched is not None:  # a sliver nothing changed around failed before: skip it
-            near = touched
-            bad = bad[[any(v in near for v in T[t]) for t in bad.tolist()]]
+        low = worst < min_angle
+        bad, worst = cand[low], worst[low]
         if not len(bad):
             break
         touched = set()
-        for t in bad[np.argsort(worst[bad])].tolist():
+        for t in bad[np.argsort(worst)].tolist():
             if not alive[t]:
                 continue
             r = T[t]
@@ -336,7 +345,6 @@ def remove_slivers(
                         touched.update(T[f])
         if not touched:
             break
-        tri = np.array(T, dtype=np.int64).reshape(-1, 3)
     tri = np.array(T, dtype=np.int64).reshape(-1, 3)[np.array(alive, dtype=bool)]
     used, idx = np.unique(tri, return_inverse=True)
     corners = None
