@@ -452,3 +452,31 @@ def test_wall_cuts_carry_the_analytic_st():
         cap_st = st[on_cap].reshape(-1, 2)
         cap_xy = cut.points[cut.triangles[on_cap].reshape(-1)][:, :2]
         assert_allclose(np.abs(cap_st), np.abs(cap_xy), atol=1e-6)
+
+
+@pytest.mark.parametrize("with_st", [True, False])
+def test_differences_share_the_operand_and_match_one_difference_each(with_st):
+    """``differences`` hands the mesh to manifold3d once for several cutter sets: each result
+    is the same mesh as its own ``difference`` (points, triangles, st), and a set that
+    removes everything still raises."""
+    from ionic_usd.errors import GeometryError
+    from ionic_usd.geometry.boolean import difference, differences
+    from ionic_usd.temple.cuboid import Cuboid, cuboid_mesh
+
+    m = build_base(load_base_preset("G2", segments=48))
+    if not with_st:
+        m = m.with_(st=None, st_indices=None)
+    half = cuboid_mesh(Cuboid((-2.0, -1.0, -2.0), (2.0, 2.0, -0.05), name="wall"))
+    quad = cuboid_mesh(Cuboid((-2.0, -1.0, -2.0), (-0.05, 2.0, -0.05), name="wall"))
+    got = differences(m, [[half], [quad]], simplify=True)
+    for cut, block in zip(got, (half, quad), strict=True):
+        one = difference(m, [block], simplify=True)
+        assert np.array_equal(cut.points, one.points)
+        assert np.array_equal(cut.face_vertex_indices, one.face_vertex_indices)
+        if with_st:
+            assert np.array_equal(cut.st, one.st) and np.array_equal(cut.st_indices, one.st_indices)
+        assert inspect_mesh(cut).watertight
+    assert len(got[0].points) != len(got[1].points)  # two different cuts, not one twice
+    everything = cuboid_mesh(Cuboid((-5.0, -5.0, -5.0), (5.0, 5.0, 5.0), name="all"))
+    with pytest.raises(GeometryError, match="nothing"):
+        differences(m, [[half], [everything]])

@@ -127,7 +127,7 @@ class BaseParams:
             raise ParameterError("version", self.version, "1, 2 or None (detect)", context=ctx)
         g = self.grammar
         if isinstance(g, str):
-            g = parse_base_grammar(g, self.version)
+            g = _parse_grammar(g, self.version)
         elif isinstance(g, TorusBase | BezierBase):
             if self.version is not None and g.version != self.version:
                 raise ParameterError(
@@ -520,6 +520,11 @@ def _with_plinth(
     )
 
 
+# the parsed grammars are frozen values: a text parsed once serves every BaseParams of it
+# (the column asset makes ~70, one per part variant × LOD)
+_parse_grammar = functools.lru_cache(maxsize=256)(parse_base_grammar)
+
+
 # -- presets --------------------------------------------------------------------------------
 _PRESET_KEYS = {"description", "version", "grammar", "plinth_modules"}
 
@@ -529,8 +534,14 @@ def _preset_text() -> str:
     return resources.files("ionic_usd").joinpath("data/base_presets.toml").read_text("utf-8")
 
 
+@functools.cache
+def _parsed_presets() -> dict[str, dict]:
+    return tomllib.loads(_preset_text())
+
+
 def _presets() -> dict[str, dict]:
-    return tomllib.loads(_preset_text())  # a fresh dict each call: callers may not mutate ours
+    # fresh dicts each call (their values are numbers and strings): callers may not mutate ours
+    return {name: dict(entry) for name, entry in _parsed_presets().items()}
 
 
 def base_preset_names() -> tuple[str, ...]:

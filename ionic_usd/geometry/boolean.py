@@ -32,6 +32,7 @@ __all__ = [
     "split_shells",
     "union",
     "difference",
+    "differences",
     "remove_slivers",
     "normals_with_winding",
     "SLIVER_ANGLE_DEG",
@@ -193,8 +194,22 @@ def difference(
     The triangulation of faces the cutters do not touch is kept as it was (so a ring another
     part welds to survives).
     """
+    (out,) = differences(mesh, [cutters], name, simplify=simplify)
+    return out
+
+
+def differences(
+    mesh: Mesh,
+    cutter_sets: list[list[Mesh]],
+    name: str | None = None,
+    *,
+    simplify: bool = False,
+) -> list[Mesh]:
+    """:func:`difference` of ``mesh`` and each set of cutters in turn: ``mesh`` is handed to
+    manifold3d once for all of them (the forms of a capital are cuts of one solid)."""
     import manifold3d
 
+    name = mesh.name if name is None else name
     if mesh.st is not None and mesh.st_indices is not None:
         # carry the mesh's own (analytic) st through the cut; the cap faces a cutter leaves
         # get planar st (box-mapped, wound like the caps, which face against the cutter).
@@ -202,32 +217,30 @@ def difference(
         # below 0), so charts whose values meet at a point are not joined by the cut
         chart = np.repeat(chart_labels(mesh.st_indices, len(mesh.st)), 3)
         cst = mesh.st[mesh.st_indices].astype(np.float64)
-        ops = [_to_manifold(mesh, keep_faces=True, st=cst, chart=chart)]
-        cut = []
-        for k, m in enumerate(map(_as_triangles, cutters)):
-            fn, _ = face_normals(m.points, m.triangles)
-            cst = box_st(m.points[m.triangles.reshape(-1)], -np.repeat(fn, 3, axis=0))
-            axis = np.argmax(np.abs(fn), axis=1)
-            plane = 2 * axis + (fn[np.arange(len(fn)), axis] > 0)  # one chart per box plane
-            ids = -1.0 - 6 * k - np.repeat(plane, 3)
-            cut.append(_to_manifold(m, keep_faces=True, st=cst, chart=ids))
-        res = manifold3d.Manifold.batch_boolean([*ops, *cut], manifold3d.OpType.Subtract)
+        base = _to_manifold(mesh, keep_faces=True, st=cst, chart=chart)
+    else:
+        ops = [_to_manifold(s, keep_faces=True) for s in split_shells(mesh)]
+        base = manifold3d.Manifold.batch_boolean(ops, manifold3d.OpType.Add)
+    out = []
+    for cutters in cutter_sets:
+        if mesh.st is not None and mesh.st_indices is not None:
+            cut = []
+            for k, m in enumerate(map(_as_triangles, cutters)):
+                fn, _ = face_normals(m.points, m.triangles)
+                cst = box_st(m.points[m.triangles.reshape(-1)], -np.repeat(fn, 3, axis=0))
+                axis = np.argmax(np.abs(fn), axis=1)
+                plane = 2 * axis + (fn[np.arange(len(fn)), axis] > 0)  # one chart per plane
+                ids = -1.0 - 6 * k - np.repeat(plane, 3)
+                cut.append(_to_manifold(m, keep_faces=True, st=cst, chart=ids))
+        else:
+            cut = [_to_manifold(s, keep_faces=True) for m in cutters for s in split_shells(m)]
+        res = manifold3d.Manifold.batch_boolean([base, *cut], manifold3d.OpType.Subtract)
         if res.is_empty():
             raise GeometryError(f"difference: nothing of mesh {mesh.name!r} is left")
-        return _from_manifold(
-            res, mesh.name if name is None else name, simplify=simplify, before=mesh.points
-        )
-    ops = [_to_manifold(s, keep_faces=True) for s in split_shells(mesh)]
-    base = manifold3d.Manifold.batch_boolean(ops, manifold3d.OpType.Add)
-    cut = [_to_manifold(s, keep_faces=True) for m in cutters for s in split_shells(m)]
-    res = manifold3d.Manifold.batch_boolean([base, *cut], manifold3d.OpType.Subtract)
-    if res.is_empty():
-        raise GeometryError(f"difference: nothing of mesh {mesh.name!r} is left")
-    # no simplification by default: a cut must not depend on the mesh's size, so two parts
-    # cut by the same plane keep the same vertices where they meet (base and shaft)
-    return _from_manifold(
-        res, mesh.name if name is None else name, simplify=simplify, before=mesh.points
-    )
+        # no simplification by default: a cut must not depend on the mesh's size, so two
+        # parts cut by the same plane keep the same vertices where they meet (base and shaft)
+        out.append(_from_manifold(res, name, simplify=simplify, before=mesh.points))
+    return out
 
 
 def _new_points(points: np.ndarray, before: np.ndarray) -> np.ndarray:
