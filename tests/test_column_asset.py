@@ -6,6 +6,7 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import json
+import os
 
 import numpy as np
 import pytest
@@ -592,6 +593,36 @@ def test_generation_in_parallel_processes_gives_the_serial_meshes(tmp_path, monk
             assert (x is None) == (y is None), (a.name, f)
             if x is not None:
                 np.testing.assert_array_equal(x, y, err_msg=f"{a.name}.{f}")
+
+
+@pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="side jobs need the process pool")
+def test_build_side_jobs_warm_the_cache_in_the_pool(tmp_path, monkeypatch):
+    """``build_column_asset(side_jobs=)`` (the temple's terracotta maps) runs them in the
+    geometry's pool: afterwards the maps are in the cache and copying them generates none."""
+    import ionic_usd.texture.stone as stone
+    from ionic_usd.pipeline.asset import copy_stone_textures, warm_stone_textures
+    from ionic_usd.texture.uv import UVCache
+
+    monkeypatch.setenv("IONIC_USD_CACHE", str(tmp_path / "cache"))
+    opts = ColumnAssetOptions(
+        lods=("low",), bases=("G1",), scrolls=("S1",), flutes=("f24",), texture_size=16
+    )
+    tiles = ("terracotta", 16, 3)
+    build_column_asset(
+        tmp_path / "a" / "IonicColumn",
+        opts,
+        cache=UVCache(tmp_path / "uv"),
+        side_jobs=[(warm_stone_textures, tiles)],
+    )
+
+    def no_generation(*_a, **_k):
+        raise AssertionError("the maps should have been in the cache")
+
+    monkeypatch.setattr(stone, "write_stone_textures", no_generation)
+    got = copy_stone_textures(tmp_path / "tex", *tiles)
+    assert [p.name for p in got] == [
+        f"terracotta_{r}.png" for r in ("basecolor", "roughness", "normal")
+    ]
 
 
 @pytest.mark.parametrize("form", ["engaged", "corner"])

@@ -537,6 +537,7 @@ def build_column_asset(
     force: bool = False,
     cache: UVCache | None = None,
     rebuild: bool = False,
+    side_jobs: Sequence[tuple[Callable[..., object], tuple]] = (),
 ) -> AssetReport:
     """Write the column asset ``<folder>/IonicColumn.usda`` (+ Payload/) atomically.
 
@@ -550,6 +551,8 @@ def build_column_asset(
     rebuild : regenerate even when ``folder`` already holds this build's intact output
         (:func:`asset_key` and every file's SHA-256 in its manifest), which is otherwise left
         as it is
+    side_jobs : more cache warm-ups for the geometry's process pool, after the asset's own
+        maps (see :func:`column_asset_meshes`; the temple's terracotta maps)
 
     User textures (``opts.user_textures``) are validated before anything is written.
     """
@@ -586,7 +589,9 @@ def build_column_asset(
     generated, _ = cached_meshes(
         "column_asset",
         opts,
-        lambda: column_asset_meshes(opts, uv_cache=cache, side_jobs=_texture_jobs(opts)),
+        lambda: column_asset_meshes(
+            opts, uv_cache=cache, side_jobs=[*_texture_jobs(opts), *side_jobs]
+        ),
         extra=str(cache.folder),
     )
     meshes, _ = _with_uvs(generated, cache)

@@ -224,7 +224,12 @@ def compose_temple(
         current = _current(dest, key, t0)
         if current is not None:
             return current
-    from ionic_usd.pipeline.asset import asset_key, build_column_asset, copy_stone_textures
+    from ionic_usd.pipeline.asset import (
+        asset_key,
+        build_column_asset,
+        copy_stone_textures,
+        warm_stone_textures,
+    )
     from ionic_usd.usd.detail import TERRACOTTA
     from ionic_usd.usd.temple import plan_temple, temple_counts
 
@@ -233,16 +238,18 @@ def compose_temple(
 
     def build(tmp: Path) -> dict[str, Any]:
         reused = not rebuild and dest.is_dir() and _reuse_asset(dest, tmp, akey)
+        # tiles repeat their map every metre (stone: every TILE_METRES = 2 m): half the size
+        # keeps the texel density
+        tiles = (TERRACOTTA[1], max(16, plan.opts.texture_size // 2), plan.opts.seed)
         if reused:
             log.info("the column asset is unchanged: its verified files are reused")
         else:
             log.info("building the column asset")
-            build_column_asset(tmp / ASSET_NAME, plan.opts, rebuild=True)
-        # tiles repeat their map every metre (stone: every TILE_METRES = 2 m): half the size
-        # keeps the texel density
-        copy_stone_textures(
-            tmp / "Textures", TERRACOTTA[1], max(16, plan.opts.texture_size // 2), plan.opts.seed
-        )
+            # the tiles' maps are made in the asset's process pool, beside its geometry
+            build_column_asset(
+                tmp / ASSET_NAME, plan.opts, rebuild=True, side_jobs=[(warm_stone_textures, tiles)]
+            )
+        copy_stone_textures(tmp / "Textures", *tiles)
         stats = plan.write(tmp)
         # counted on the staged folder: the scene as generated, with the empty user's layer
         return {
