@@ -176,14 +176,34 @@ def toggled_extents_hints(
     finally:
         session.Clear()
     names = list(vsets)
+    combos = list(itertools.product(*(vsets[n] for n in names)))
+    # active[c, i]: item i is on in combination c (every tag matches)
+    active = np.ones((len(combos), len(paths)), dtype=bool)
+    for k, n in enumerate(names):
+        chosen = np.array([c[k] for c in combos], dtype=object)
+        for i, path in enumerate(paths):
+            want = items[path].get(n)
+            if want is not None:
+                active[:, i] &= chosen == want
+
+    # min and max corners per purpose (items × purposes × 3); an empty range is (+inf, -inf),
+    # the union then takes min/max of the very doubles Gf.Range3d.UnionWith compares
+    def corners(bs: list[list[Gf.Range3d]]) -> tuple[np.ndarray, np.ndarray]:
+        lo = np.array([[r.GetMin() if not r.IsEmpty() else (np.inf,) * 3 for r in b] for b in bs])
+        hi = np.array([[r.GetMax() if not r.IsEmpty() else (-np.inf,) * 3 for r in b] for b in bs])
+        return lo.reshape(len(bs), len(purposes), 3), hi.reshape(len(bs), len(purposes), 3)
+
+    item_lo, item_hi = corners(item_bounds)
+    rest_lo, rest_hi = corners([rest])
     out: dict[Combo, dict[str, np.ndarray]] = {}
-    for combo in itertools.product(*(vsets[n] for n in names)):
-        sel = dict(zip(names, combo, strict=True))
-        ranges = [Gf.Range3d(r.GetMin(), r.GetMax()) for r in rest]
-        for path, b in zip(paths, item_bounds, strict=True):
-            if all(sel.get(s, v) == v for s, v in items[path].items()):
-                for r, rb in zip(ranges, b, strict=True):
-                    r.UnionWith(rb)
+    for c, combo in enumerate(combos):
+        on = active[c]
+        lo = np.minimum(rest_lo[0], item_lo[on].min(axis=0)) if on.any() else rest_lo[0]
+        hi = np.maximum(rest_hi[0], item_hi[on].max(axis=0)) if on.any() else rest_hi[0]
+        ranges = [
+            Gf.Range3d() if np.any(a > b) else Gf.Range3d(Gf.Vec3d(*a), Gf.Vec3d(*b))
+            for a, b in zip(lo.tolist(), hi.tolist(), strict=True)
+        ]
         out[combo] = {root: _hint(ranges)}
     return out
 
