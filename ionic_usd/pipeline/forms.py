@@ -14,7 +14,6 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ionic_usd.errors import GeometryError
 from ionic_usd.geometry.mesh import Mesh
 from ionic_usd.usd.column_asset import ENGAGED_INSET
 
@@ -48,18 +47,11 @@ def _engage(mesh: Mesh, part: str = "") -> Mesh:
     along the same vertices, so they still weld); for the capital, the boolean difference
     (its sliver clean-up keeps the cut free of needle triangles).
     """
-    import shapely
-
     from ionic_usd.geometry.clip import clip_mesh
 
     if part == "CapitalBody":
         return _wall_cut(mesh, None, simplify=True)
-    try:
-        return clip_mesh(mesh, (0.0, 0.0, -ENGAGED_INSET), (0.0, 0.0, 1.0), name=mesh.name)
-    except (GeometryError, shapely.errors.GEOSException):
-        if part != "CapitalBody":
-            raise
-        return _wall_cut(mesh, None, simplify=True)
+    return clip_mesh(mesh, (0.0, 0.0, -ENGAGED_INSET), (0.0, 0.0, 1.0), name=mesh.name)
 
 
 def _corner(mesh: Mesh, part: str = "") -> Mesh:
