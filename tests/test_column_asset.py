@@ -278,39 +278,27 @@ def test_textures_readable_with_declared_size(column_asset):
         inp.close()
 
 
-def test_rebuild_does_no_unwrapping(tmp_path, monkeypatch):
+def test_no_part_is_unwrapped_by_xatlas(tmp_path, monkeypatch):
+    # every part carries its generator's charts (the capital's through its union and form
+    # cuts): a cold build runs no xatlas at all, and packs the charts at the LOD's density
+    from ionic_usd.texture import uv
     from ionic_usd.texture.uv import UVCache
 
     monkeypatch.setenv("IONIC_USD_CACHE", str(tmp_path / "cache"))  # its own mesh cache
 
+    def no_xatlas(*_a, **_k):
+        raise AssertionError("xatlas ran")
+
+    monkeypatch.setattr(uv, "_run_xatlas", no_xatlas)
     cache = UVCache(tmp_path / "uv")
     opts = ColumnAssetOptions(
         lods=("low",), bases=("G1",), scrolls=("S1",), flutes=("f24",), texture_size=16
     )
+    meshes = column_asset_meshes(opts, cache, workers=1)
+    assert all(m.mesh.st is not None for m in meshes)
+    assert sum(m.part == "CapitalBody" for m in meshes) == 2 * 2 * 3  # capitals × volutes × forms
     cold = build_column_asset(tmp_path / "a" / "IonicColumn", opts, cache=cache)
-    # the base and shaft carry analytic charts (no xatlas), and the cut forms carry the charts
-    # of the mesh they were cut from: xatlas runs once per uncut capital
-    meshes = column_asset_meshes(opts)
-    assert sum(m.mesh.st is not None for m in meshes) == 6  # base and shaft, every form
-    uncut_capitals = sum(m.part == "CapitalBody" and m.tags["form"] == "full" for m in meshes)
-    # (normal, angle) capitals x (log_spiral, centred_arcs) volutes
-    assert cold.uv_unwraps == uncut_capitals == cache.misses == 4
-    misses = cache.misses
-    warm = build_column_asset(tmp_path / "a" / "IonicColumn", opts, cache=cache, force=True)
-    assert warm.uv_unwraps == 0 and cache.misses == misses
-    # a fresh process (new in-memory layer) reads the files: still no unwrapping
-    again = UVCache(tmp_path / "uv")
-    build_column_asset(tmp_path / "b" / "IonicColumn", opts, cache=again)
-    assert again.misses == 0  # (the generated meshes, charts included, came from their cache)
-    # without the mesh cache the capitals are charted again: from the UV files, no xatlas
-    import shutil
-
-    from ionic_usd.pipeline.mesh_cache import mesh_cache_folder
-
-    shutil.rmtree(mesh_cache_folder())
-    fresh = UVCache(tmp_path / "uv")
-    build_column_asset(tmp_path / "c" / "IonicColumn", opts, cache=fresh)
-    assert fresh.misses == 0 and fresh.hits > 0
+    assert cold.uv_unwraps == cache.misses == 0
 
 
 def test_force_replaces_atomically(tmp_path):
@@ -576,7 +564,7 @@ def test_generation_in_parallel_processes_gives_the_serial_meshes(tmp_path, monk
         assert [p.name for p in got] == [
             f"{style}_{r}.png" for r in ("basecolor", "roughness", "normal")
         ]
-    assert cache.misses == sum(m.part == "CapitalBody" and m.tags["form"] == "full" for m in serial)
+    assert cache.misses == 0  # every part brings its own charts: no xatlas run in the pool
     assert [(m.part, m.name, m.tags) for m in parallel] == [
         (m.part, m.name, m.tags) for m in serial
     ]

@@ -462,7 +462,9 @@ def build_base(
     if len(groups) != mesh.n_triangles:  # revolve emits bands in profile order
         raise GeometryError("build_base: revolve's band layout changed")
     mesh = smooth_normals(mesh, groups - groups.min(), indexed=True)
-    st, st_idx = revolved_st(nodes, rows, mesh.points, mesh.triangles, per_band)
+    st, st_idx = revolved_st(
+        nodes, rows, mesh.points, mesh.triangles, np.repeat(np.arange(len(per_band)), per_band)
+    )
     mesh = mesh.with_(st=st, st_indices=st_idx)
     if p.plinth_modules:
         mesh = _with_plinth(mesh, rows[0], half, ptop, cap_bottom, name)

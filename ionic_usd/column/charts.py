@@ -85,17 +85,18 @@ def revolved_st(
     rows: list[np.ndarray],
     points: np.ndarray,
     triangles: np.ndarray,
-    per_band: np.ndarray,
+    band_of_tri: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Metric ``st`` of a mesh from :func:`ionic_usd.geometry.curves.revolve`.
+    """Metric ``st`` of a revolved mesh (:func:`ionic_usd.geometry.curves.revolve`,
+    :func:`ionic_usd.column.solids.lathe`).
 
     Parameters
     ----------
     nodes : (b + 1, 2) float, the revolved (r, y) profile
     rows : the b + 1 vertex rows ``revolve`` returned
     points : (n, 3) float
-    triangles : (t, 3) int, bands in profile order
-    per_band : (b,) int, triangles of each band
+    triangles : (t, 3) int
+    band_of_tri : (t,) int, the profile band (0 .. b − 1) of each triangle
 
     Returns
     -------
@@ -105,7 +106,6 @@ def revolved_st(
     chart, kinds = _charts(nodes)
     arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(nodes, axis=0), axis=1))])
     theta = np.mod(np.arctan2(-points[:, 2], points[:, 0]), 2 * np.pi)
-    band_of_tri = np.repeat(np.arange(len(per_band)), per_band)
     values: list[np.ndarray] = []
     corner = np.empty_like(triangles, dtype=np.int64)
     base = 0

@@ -1,6 +1,13 @@
 """Small solids the capital is assembled from: an axis-aligned box, a lathe (a profile revolved
 about +Y with analytic normals) and orthogonal placements (rotations, mirrors) that keep the
 winding outward. Frame: metres, Y up.
+
+Each solid carries its own metric texture charts (``st`` in metres of surface, see
+:mod:`ionic_usd.column.charts`): the box one exact planar chart per face, the lathe the
+revolved charts of :func:`~ionic_usd.column.charts.revolved_st`. A placement carries them
+along (a mirror flips ``s``, so every chart still winds counter-clockwise like its faces seen
+from outside), and the capital's union keeps them (:func:`ionic_usd.geometry.boolean.union`):
+the capital needs no xatlas unwrap.
 """
 
 from __future__ import annotations
@@ -9,13 +16,15 @@ import math
 
 import numpy as np
 
-from ionic_usd.geometry.mesh import Mesh, smooth_normals
+from ionic_usd.column.charts import revolved_st
+from ionic_usd.geometry.mesh import Mesh, box_st, smooth_normals
 
 __all__ = ["box_mesh", "lathe", "rigid", "rot_y", "MIRROR_X", "MIRROR_Z", "SWAP_XZ"]
 
 
 def box_mesh(lo, hi, name: str) -> Mesh:
-    """Axis-aligned box, outward-wound, crisp faceVarying normals."""
+    """Axis-aligned box, outward-wound, crisp faceVarying normals, one exact planar ``st``
+    chart per face (:func:`~ionic_usd.geometry.mesh.box_st`)."""
     (x0, y0, z0), (x1, y1, z1) = lo, hi
     pts = np.array(
         [
@@ -35,7 +44,12 @@ def box_mesh(lo, hi, name: str) -> Mesh:
     tri = np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
     groups = np.tile(np.arange(6), 2)
     m = Mesh(pts, np.full(12, 3, np.int32), tri.reshape(-1), name=name)
-    return smooth_normals(m, groups)
+    # four st values per face, in its quad's corner order
+    face_n = np.array([[0, 0, -1], [0, 0, 1], [0, -1, 0], [0, 1, 0], [-1, 0, 0], [1, 0, 0]])
+    st = box_st(pts[quads.reshape(-1)], np.repeat(face_n, 4, axis=0))
+    local = np.concatenate([np.tile([0, 1, 2], (6, 1)), np.tile([0, 2, 3], (6, 1))])
+    sti = (4 * groups[:, None] + local).reshape(-1)
+    return smooth_normals(m, groups).with_(st=st.astype(np.float32), st_indices=sti)
 
 
 def lathe(profile: np.ndarray, segments: int, name: str, crease_deg: float = 40.0) -> Mesh:
@@ -44,7 +58,8 @@ def lathe(profile: np.ndarray, segments: int, name: str, crease_deg: float = 40.
     Same vertex rings and triangle orientation as :func:`ionic_usd.geometry.curves.revolve`
     (nodes on the axis become single vertices), but the whole grid is built at once and the
     normals come from the profile: smooth across profile nodes turning less than
-    ``crease_deg``, crisp at sharper ones.
+    ``crease_deg``, crisp at sharper ones. The ``st`` charts are
+    :func:`~ionic_usd.column.charts.revolved_st`'s (flat bands planar, steep ones unrolled).
     """
     prof = np.asarray(profile, dtype=np.float64)
     s = int(segments)
@@ -83,7 +98,7 @@ def lathe(profile: np.ndarray, segments: int, name: str, crease_deg: float = 40.
 
     live = (seg_len > 0) & ~(on_axis[:-1] & on_axis[1:])
     grid = np.flatnonzero(live & ~on_axis[:-1] & ~on_axis[1:])
-    tris, corner_n = [], []
+    tris, corner_n, band = [], [], []
     if grid.size:  # ring-to-ring bands, all at once
         a0, b0 = first[grid][:, None], first[grid + 1][:, None]
         na, nb = n_start[grid], n_end[grid]
@@ -92,6 +107,7 @@ def lathe(profile: np.ndarray, segments: int, name: str, crease_deg: float = 40.
         na_j, na_j1 = nvec(na, cos, sin), nvec(na, cos[j1], sin[j1])
         nb_j, nb_j1 = nvec(nb, cos, sin), nvec(nb, cos[j1], sin[j1])
         tris += [t1.reshape(-1, 3), t2.reshape(-1, 3)]
+        band += [np.repeat(grid, s)] * 2
         corner_n += [
             np.stack([na_j, nb_j1, nb_j], axis=-2).reshape(-1, 3, 3),
             np.stack([na_j, na_j1, nb_j1], axis=-2).reshape(-1, 3, 3),
@@ -99,6 +115,7 @@ def lathe(profile: np.ndarray, segments: int, name: str, crease_deg: float = 40.
     for k in np.flatnonzero(live & (on_axis[:-1] | on_axis[1:])):  # cap fans and cone tips
         a0, b0 = first[k], first[k + 1]
         na, nb = n_start[k], n_end[k]
+        band.append(np.full(s, k))
         if on_axis[k]:
             tris.append(np.stack([np.full(s, a0), b0 + j1, b0 + j], axis=1))
             corner_n.append(
@@ -115,8 +132,17 @@ def lathe(profile: np.ndarray, segments: int, name: str, crease_deg: float = 40.
             )
     tri = np.concatenate(tris)
     normals = np.concatenate(corner_n).reshape(-1, 3)
+    rows = [first[k] + np.arange(sizes[k]) for k in range(len(prof))]
+    st, sti = revolved_st(prof, rows, points, tri, np.concatenate(band))
     return Mesh(
-        points, np.full(len(tri), 3, np.int32), tri.reshape(-1), normals, "faceVarying", name=name
+        points,
+        np.full(len(tri), 3, np.int32),
+        tri.reshape(-1),
+        normals,
+        "faceVarying",
+        st,
+        sti,
+        name=name,
     )
 
 
@@ -125,22 +151,28 @@ def rigid(mesh: Mesh, lin: np.ndarray, t=(0.0, 0.0, 0.0), name: str | None = Non
 
     Orthogonal maps carry unit normals to unit normals, so this skips the inverse transpose
     and renormalisation of :func:`~ionic_usd.geometry.mesh.transform` (the capital's largest
-    cost at high LOD); a mirror reverses each triangle's winding (corners 1 and 2 swap).
+    cost at high LOD); a mirror reverses each triangle's winding (corners 1 and 2 swap) and
+    flips ``s`` of the mesh's metric charts, so they wind counter-clockwise as before.
     """
     lin = np.asarray(lin, dtype=np.float64)
     pts = mesh.points @ lin.T + np.asarray(t, dtype=np.float64)
     normals = None if mesh.normals is None else (mesh.normals @ lin.T.astype(np.float32))
-    idx = mesh.face_vertex_indices
+    idx, st, sti = mesh.face_vertex_indices, mesh.st, mesh.st_indices
     if np.linalg.det(lin) < 0:
         idx = idx.reshape(-1, 3)[:, [0, 2, 1]].reshape(-1)
         if normals is not None and mesh.normals_interpolation == "faceVarying":
             normals = normals.reshape(-1, 3, 3)[:, [0, 2, 1]].reshape(-1, 3)
+        if st is not None and sti is not None:
+            st = st * np.array([-1.0, 1.0], dtype=st.dtype)
+            sti = sti.reshape(-1, 3)[:, [0, 2, 1]].reshape(-1)
     return Mesh(
         pts,
         mesh.face_vertex_counts,
         idx,
         normals,
         mesh.normals_interpolation,
+        st,
+        sti,
         name=name or mesh.name,
     )
 

@@ -74,7 +74,10 @@ def prism(
 
     Returns
     -------
-    Closed triangle Mesh with faceVarying normals: flat caps, walls smooth between creases.
+    Closed triangle Mesh with faceVarying normals (flat caps, walls smooth between creases)
+    and three exact metric ``st`` charts: the front cap (x, y), the back cap (−x, y) and the
+    walls unrolled (arc length along the loop, z), each winding counter-clockwise like its
+    faces seen from outside.
     """
     pts = np.asarray(points2d, dtype=np.float64)
     tri = np.asarray(triangles, dtype=np.int64)
@@ -121,12 +124,33 @@ def prism(
     points = np.concatenate(
         [np.column_stack([pts, np.full(n, z0)]), np.column_stack([pts, np.full(n, z1)])]
     )
+    # st: the front cap's n values, the back cap's n, then the walls' 2 (b + 1): loop vertex k
+    # at s = arc length to it (the last edge ends at the whole length: the strip's seam)
+    b = len(loop)
+    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(d, axis=1))])
+    w0 = 2 * n
+    k = np.arange(b)
+    st = np.concatenate(
+        [
+            pts,
+            pts * [-1.0, 1.0],
+            np.column_stack([arc, np.full(b + 1, z1)]),
+            np.column_stack([arc, np.full(b + 1, z0)]),
+        ]
+    )
+    top, bot = w0 + k, w0 + b + 1 + k  # the edge's first vertex; + 1 is its second
+    wall_st = np.concatenate(
+        [np.stack([top + 1, top, bot], axis=1), np.stack([top + 1, bot, bot + 1], axis=1)]
+    )
+    sti = np.concatenate([tri, tri[:, ::-1] + n, wall_st])
     return Mesh(
         points,
         np.full(len(faces), 3, np.int32),
         faces.reshape(-1),
         normals.reshape(-1, 3),
         "faceVarying",
+        st.astype(np.float32),
+        sti.reshape(-1),
         name=name,
     )
 

@@ -4,7 +4,9 @@ Parts that are modelled as separate solids but overlap (the capital's volutes, c
 bolsters and abacus) are joined into one closed, non-self-intersecting shell by manifold3d, a
 robust boolean library (exact symbolic perturbation; imported here only). The authored corner
 normals travel through the boolean as vertex properties, so smooth surfaces stay smooth and the
-new intersection curves are crisp.
+new intersection curves are crisp; so do the parts' metric ``st`` charts (with the chart of
+every corner, and the charts as manifold3d's face ids, so no re-triangulation mixes two of them):
+the united capital keeps its parts' analytic parametrisation, and needs no xatlas unwrap.
 """
 
 from __future__ import annotations
@@ -62,7 +64,8 @@ def _as_triangles(mesh: Mesh) -> Mesh:
 
 
 def split_shells(mesh: Mesh) -> list[Mesh]:
-    """The connected components of a mesh (triangles sharing vertex indices)."""
+    """The connected components of a mesh (triangles sharing vertex indices), each with its
+    share of the mesh's ``st`` (if any)."""
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
@@ -81,6 +84,10 @@ def split_shells(mesh: Mesh) -> list[Mesh]:
         sel = np.flatnonzero(face_lab == c)
         used, local = np.unique(tri[sel], return_inverse=True)
         nrm = None if fv is None else fv.reshape(-1, 3, 3)[sel].reshape(-1, 3)
+        st = sti = None
+        if mesh.st is not None and mesh.st_indices is not None:
+            st_used, sti = np.unique(mesh.st_indices.reshape(-1, 3)[sel], return_inverse=True)
+            st = mesh.st[st_used]
         out.append(
             Mesh(
                 mesh.points[used],
@@ -88,6 +95,8 @@ def split_shells(mesh: Mesh) -> list[Mesh]:
                 local.reshape(-1),
                 nrm,
                 "faceVarying",
+                st,
+                None if sti is None else sti.reshape(-1),
                 name=mesh.name,
             )
         )
@@ -110,6 +119,7 @@ def _to_manifold(
     keep_faces: bool = False,
     st: np.ndarray | None = None,
     chart: np.ndarray | None = None,
+    faces: np.ndarray | None = None,
 ):
     """A manifold3d.Manifold with the corner normals as properties 3..5 (and ``st``, per
     corner (3 t, 2), as properties 6..7, with its chart number per corner (3 t,) as 8).
@@ -149,7 +159,9 @@ def _to_manifold(
         tri_verts=np.ascontiguousarray(inv.reshape(-1, 3), dtype=np.uint64),
         merge_from_vert=np.ascontiguousarray(dup, dtype=np.uint64),
         merge_to_vert=np.ascontiguousarray(rep[~head], dtype=np.uint64),
-        face_id=np.arange(len(tri), dtype=np.uint64) if keep_faces else None,
+        face_id=np.arange(len(tri), dtype=np.uint64)
+        if keep_faces
+        else (None if faces is None else np.ascontiguousarray(faces, dtype=np.uint64)),
     )
     man = manifold3d.Manifold(mm)
     if man.status() != manifold3d.Error.NoError:
@@ -170,7 +182,9 @@ def union(meshes: list[Mesh], name: str = "mesh") -> Mesh:
     Returns
     -------
     Mesh : the union's surface, faceVarying normals carried from the inputs (interpolated at
-        new vertices), no texture coordinates.
+        new vertices); when every input has ``st`` (metric charts) so has the union, each
+        input chart's visible part a chart of its own (the values carried through the boolean
+        like the normals, so a cut through a chart keeps its parametrisation exactly).
 
     Raises
     ------
@@ -178,11 +192,75 @@ def union(meshes: list[Mesh], name: str = "mesh") -> Mesh:
     """
     import manifold3d
 
-    ops = [_to_manifold(s) for m in meshes for s in split_shells(m)]
+    shells = [s for m in meshes for s in split_shells(m)]
+    if all(s.st is not None and s.st_indices is not None for s in shells):
+        ops = [
+            _to_manifold(s, st=st, chart=np.repeat(chart, 3), faces=chart)
+            for s, (st, chart) in zip(shells, _union_charts(shells), strict=True)
+        ]
+    else:
+        ops = [_to_manifold(s) for s in shells]
     if not ops:
         raise GeometryError("union needs at least one mesh")
     res = manifold3d.Manifold.batch_boolean(ops, manifold3d.OpType.Add)
     return _from_manifold(res, name)
+
+
+def _union_charts(shells: list[Mesh]) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Per shell: (st per corner (3 t, 2), chart per triangle (t,)) for the union.
+
+    Every chart of every shell gets a number of its own, except the flat faces (a triangle
+    whose corner normals are its face normal: caps, box faces): they are charted by their
+    plane, st = :func:`_plane_st` of the position, one chart per plane across all shells.
+    The charts are manifold3d's face ids, so the union never re-triangulates across two
+    charts (which would mix their st), while coplanar flat faces of different parts (the two
+    margins meeting on the centre plane, a cap seated in a slab) are one face it may merge.
+    """
+    planes: dict[tuple[int, ...], int] = {}
+    out = []
+    offset = 0
+    for s in shells:
+        assert s.st is not None and s.st_indices is not None
+        tri = s.triangles
+        chart = chart_labels(s.st_indices, len(s.st)) + offset
+        offset = int(chart.max()) + 1
+        cst = s.st[s.st_indices].astype(np.float64)
+        fn, _ = face_normals(s.points, tri)
+        cn = _corner_normals(s)
+        if cn is not None:
+            cn3 = cn.reshape(-1, 3, 3).astype(np.float64)
+            flat = np.all(np.einsum("tkj,tj->tk", cn3, fn) > 1.0 - 1e-9, axis=1)
+            if flat.any():
+                nq = np.round(fn[flat] * 1e6).astype(np.int64)
+                d = np.round(np.einsum("ij,ij->i", fn[flat], s.points[tri[flat, 0]]) * 1e8)
+                keys = np.concatenate([nq, d.astype(np.int64)[:, None]], axis=1)
+                uk, inv = np.unique(keys, axis=0, return_inverse=True)
+                ids = np.array([planes.setdefault(tuple(k), len(planes)) for k in uk.tolist()])
+                chart[flat] = -1 - ids[inv.reshape(-1)]  # negative: renumbered below
+                nrm = uk[:, :3] / 1e6
+                nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
+                corner_n = np.repeat(nrm[inv.reshape(-1)], 3, axis=0)
+                pts = s.points[tri[flat].reshape(-1)]
+                cst.reshape(-1, 3, 2)[flat] = _plane_st(pts, corner_n).reshape(-1, 3, 2)
+        out.append((cst, chart))
+    # plane charts after the shells' own
+    return [(st, np.where(c < 0, offset - 1 - c, c)) for st, c in out]
+
+
+def _plane_st(points: np.ndarray, normals: np.ndarray) -> np.ndarray:
+    """(k, 2) st (m) of points on planes with unit ``normals`` (k, 3): a function of the
+    position and the plane only (coplanar faces agree), isometric, s × t = n (counter-
+    clockwise seen from outside); t up the plane on steep planes, s along +X on flat ones
+    (the frames of :func:`~ionic_usd.geometry.mesh.box_st` on axis planes)."""
+    n = np.asarray(normals, dtype=np.float64)
+    steep = np.abs(n[:, 1]) < 0.9
+    ref = np.where(steep[:, None], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0])
+    a = ref - np.einsum("ij,ij->i", ref, n)[:, None] * n
+    a /= np.linalg.norm(a, axis=1, keepdims=True)
+    s_axis = np.where(steep[:, None], np.cross(a, n), a)
+    t_axis = np.where(steep[:, None], a, np.cross(n, a))
+    p = np.asarray(points, dtype=np.float64)
+    return np.stack([np.einsum("ij,ij->i", p, s_axis), np.einsum("ij,ij->i", p, t_axis)], axis=1)
 
 
 def difference(

@@ -97,8 +97,11 @@ def remove_slivers(
     lies near that edge), if the flip moves the surface by at most ``tol`` (the tetrahedron of
     the four vertices is that flat), raises the pair's smallest angle and turns no triangle
     over; an **edge collapse** of its shortest edge (a needle) if that edge is shorter than
-    ``tol``, the two end points share exactly two neighbours (the link condition: the shell
-    stays a closed 2-manifold) and no triangle round it turns over or becomes a new sliver.
+    ``tol`` or one of its ends lies inside a flat face (its triangles coplanar, with one
+    normal, st and chart there: removing it does not move the surface, and the moved corners
+    take the kept end's values), the two end points share exactly two neighbours (the link
+    condition: the shell stays a closed 2-manifold) and no triangle round it turns over or
+    becomes a new sliver.
     Slivers neither can mend within ``tol`` are left (they are real, thin features).
 
     The edits run on Python lists (points, triangles, per-corner attributes) with plain float
@@ -281,7 +284,8 @@ def remove_slivers(
         a, b = row[(k + 1) % 3], row[(k + 2) % 3]
         pa, pb = P[a], P[b]
         ab = (pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2])
-        if math.sqrt(_dot(ab, ab)) > tol:
+        short = math.sqrt(_dot(ab, ab)) <= tol
+        if not short and not (flat_fan(a) or flat_fan(b)):
             return False
         shared = edge_faces(a, b)
         if len(shared) != 2:
@@ -292,7 +296,11 @@ def remove_slivers(
         if ring_a & ring_b != opp:
             return False  # the link condition: a pinch or a fold would follow
         for keep, drop in ((a, b), (b, a)):
+            if not short and not flat_fan(drop):
+                continue
             moved = [f for f in sorted(faces_of(drop)) if f not in shared]
+            if not moved:
+                continue  # drop is on the two shared triangles only (a flap): leave it
             new = [[keep if v == drop else v for v in T[f]] for f in moved]
             old = [T[f] for f in moved]
             if any(
@@ -302,6 +310,16 @@ def remove_slivers(
                 continue
             if min_angle_of(new) < min(min_angle, min_angle_of(old)):
                 continue
+            if not short and cn0 is not None:
+                # a long edge is collapsed only inside a flat fan of one chart (the surface
+                # does not move): the moved corners take keep's own values (st is a function
+                # of the position on the chart, so drop's would stretch it)
+                f0 = min(shared)
+                at_keep = corners_of(f0)[T[f0].index(keep)]
+                for f in moved:
+                    c = corners_of(f).copy()
+                    c[T[f].index(drop)] = at_keep
+                    cn[f] = c
             for f, nr in zip(moved, new, strict=True):
                 set_tri(f, nr)
                 T[f] = nr
@@ -309,6 +327,33 @@ def remove_slivers(
                 kill(f)
             return True
         return False
+
+    def flat_fan(v: int) -> bool:
+        """Every triangle round ``v`` lies in one plane with one set of corner values at
+        ``v`` (same normal, st and chart: no crease or seam through it): ``v`` is inside a
+        flat face, and removing it leaves the surface where it is."""
+        fs = sorted(faces_of(v))
+        vec = [_cross(*(P[i] for i in T[f])) for f in fs]
+        big = max(range(len(fs)), key=lambda i: _dot(vec[i], vec[i]))
+        n0 = _normal(*(P[i] for i in T[fs[big]]))
+        p0 = P[v]
+        for f, w in zip(fs, vec, strict=True):
+            if _dot(w, n0) < 0:
+                return False  # a fold
+            for i in T[f]:
+                q = P[i]
+                if abs(_dot(n0, (q[0] - p0[0], q[1] - p0[1], q[2] - p0[2]))) > 1e-12:
+                    return False  # off the plane by more than rounding (1e-12 m)
+        if cn0 is None:
+            return True
+        ref = corners_of(fs[0])[T[fs[0]].index(v)]
+        for f in fs[1:]:
+            c = corners_of(f)[T[f].index(v)]
+            if n_dim and not np.allclose(c[:n_dim], ref[:n_dim], rtol=0.0, atol=1e-6):
+                return False
+            if n_ch > n_dim and not np.array_equal(c[n_dim:], ref[n_dim:]):
+                return False
+        return True
 
     touched: set[int] | None = None  # vertices near a change in the last pass (None: all)
     if changed is not None:

@@ -6,8 +6,10 @@
    count, capitals per scroll × capital × volute model;
 2. **clip** each part to its ``form`` (engaged: the wall plane; corner: a quadrant), a plane
    clip or a manifold3d difference (:mod:`ionic_usd.pipeline.forms`);
-3. **UV**: xatlas charts per part and LOD at one texel density per LOD
-   (:mod:`ionic_usd.texture.uv`);
+3. **UV**: every part's own metric charts (analytic: the base and shaft unrolled, the
+   capital's parts charted by their generators and kept through the union), packed per part
+   and LOD at one texel density per LOD (:mod:`ionic_usd.texture.uv`; xatlas only for a part
+   without charts);
 4. **texture**: the tileable stone maps, made once per (style, size, seed) and kept in the
    cache folder (:mod:`ionic_usd.texture.stone`);
 5. **author** the layers from those values (:func:`ionic_usd.usd.column_asset.author_column_asset`).
@@ -149,7 +151,9 @@ def _unit_meshes(
         tag["volute"] = unit.volute
         name = f"{name}_{unit.volute}"
     counts = (0, 0)
-    if uv_cache is not None:  # base and shaft have analytic st; chart the capital once
+    if uv_cache is not None and body.st is None:
+        # every part carries analytic st, the capital's through its union (parts without
+        # it, e.g. from a user's generator, are charted by xatlas once, before the cuts)
         from ionic_usd.texture.uv import metric_charts
 
         m0, h0 = uv_cache.misses, uv_cache.hits
@@ -208,8 +212,9 @@ def column_asset_meshes(
     workers: int | None = None,
     side_jobs: Sequence[tuple[Callable[..., object], tuple]] = (),
 ) -> list[AssetMesh]:
-    """Every mesh of the asset with its variant tags (geometry only; with ``uv_cache`` the
-    capital is charted by xatlas before the form cuts, which carry the charts).
+    """Every mesh of the asset with its variant tags and metric charts (geometry only; every
+    part is charted by its generator, the form cuts carry the charts; with ``uv_cache`` a
+    capital without charts would be unwrapped by xatlas before its cuts).
 
     The units of work (the bases and shafts of a LOD; each capital variant of a LOD, with its
     chart and cuts) are independent: they run in ``workers`` processes (default: one per
@@ -312,7 +317,8 @@ def column_asset_ornament(opts: ColumnAssetOptions) -> tuple[AssetInstancer, ...
 
 # -- UV -----------------------------------------------------------------------------------
 def _with_uvs(meshes: list[AssetMesh], cache: UVCache | None) -> tuple[list[AssetMesh], int]:
-    """The meshes with ``st`` (xatlas, one atlas per LOD) and the number of unwraps run."""
+    """The meshes with ``st`` packed (one atlas per part, one density per LOD) and the number
+    of xatlas unwraps run (0 when every part has its own charts)."""
     from ionic_usd.texture.uv import prefetch
 
     misses0 = cache.misses if cache is not None else 0
@@ -465,8 +471,8 @@ def build_column_asset(
     folder : the asset folder (its name is usually ``IonicColumn``)
     opts : variants and textures to build (default: everything, Portunus column)
     force : replace an existing folder (atomically)
-    cache : UV cache (default: the process-wide one); a rebuild of unchanged geometry runs
-        no xatlas work
+    cache : UV cache (default: the process-wide one) for parts without their own charts (none
+        of the column's: every part is charted analytically, so no xatlas runs)
     rebuild : regenerate even when ``folder`` already holds this build's intact output
         (:func:`asset_key` and every file's SHA-256 in its manifest), which is otherwise left
         as it is

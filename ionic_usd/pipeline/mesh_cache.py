@@ -9,9 +9,9 @@ arrays (no pickle) plus a JSON index, written and read through
 entry is discarded and produced again).
 
 The key (:func:`ionic_usd.pipeline.keys.build_key`) hashes ``repr(opts)``, the UV cache's
-folder (the capital's charts come from it), the package version, the bytes of every module of
-the package and the libraries' versions, so any change to the generators — released or not —
-misses the cache instead of returning stale geometry.
+folder (a part without its own charts is unwrapped through it), the package version, the bytes
+of every module of the package and the libraries' versions, so any change to the generators —
+released or not — misses the cache instead of returning stale geometry.
 """
 
 from __future__ import annotations
