@@ -285,7 +285,8 @@ def remove_slivers(
         pa, pb = P[a], P[b]
         ab = (pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2])
         short = math.sqrt(_dot(ab, ab)) <= tol
-        if not short and not (flat_fan(a) or flat_fan(b)):
+        flat = {} if short else {a: flat_fan(a), b: flat_fan(b)}
+        if not short and not (flat[a] or flat[b]):
             return False
         shared = edge_faces(a, b)
         if len(shared) != 2:
@@ -296,7 +297,7 @@ def remove_slivers(
         if ring_a & ring_b != opp:
             return False  # the link condition: a pinch or a fold would follow
         for keep, drop in ((a, b), (b, a)):
-            if not short and not flat_fan(drop):
+            if not short and not flat[drop]:
                 continue
             moved = [f for f in sorted(faces_of(drop)) if f not in shared]
             if not moved:
@@ -333,6 +334,11 @@ def remove_slivers(
         ``v`` (same normal, st and chart: no crease or seam through it): ``v`` is inside a
         flat face, and removing it leaves the surface where it is."""
         fs = sorted(faces_of(v))
+        if cn0 is not None:  # the cheap test first: one property vertex at v
+            ref = corners_of(fs[0])[T[fs[0]].index(v)].tolist()
+            for f in fs[1:]:
+                if corners_of(f)[T[f].index(v)].tolist() != ref:
+                    return False
         vec = [_cross(*(P[i] for i in T[f])) for f in fs]
         big = max(range(len(fs)), key=lambda i: _dot(vec[i], vec[i]))
         n0 = _normal(*(P[i] for i in T[fs[big]]))
@@ -344,15 +350,6 @@ def remove_slivers(
                 q = P[i]
                 if abs(_dot(n0, (q[0] - p0[0], q[1] - p0[1], q[2] - p0[2]))) > 1e-12:
                     return False  # off the plane by more than rounding (1e-12 m)
-        if cn0 is None:
-            return True
-        ref = corners_of(fs[0])[T[fs[0]].index(v)]
-        for f in fs[1:]:
-            c = corners_of(f)[T[f].index(v)]
-            if n_dim and not np.allclose(c[:n_dim], ref[:n_dim], rtol=0.0, atol=1e-6):
-                return False
-            if n_ch > n_dim and not np.array_equal(c[n_dim:], ref[n_dim:]):
-                return False
         return True
 
     touched: set[int] | None = None  # vertices near a change in the last pass (None: all)
