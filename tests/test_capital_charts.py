@@ -92,13 +92,9 @@ def test_coplanar_faces_of_different_parts_share_one_plane_chart():
     corners = m.st_indices.reshape(-1, 3)[on_face].reshape(-1)
     pts = m.points[m.triangles[on_face].reshape(-1)]
     st = m.st[corners].astype(np.float64)
-    # st = (x, y) on the whole front face plane, to within the sliver clean-up's tolerance
-    # (a collapsed short edge leaves the kept point its old st: 0.13 mm here, 0.02 texel at
-    # the high LOD's 128 px/m)
-    from ionic_usd.geometry.slivers import SLIVER_TOL
-
-    diag = float(np.linalg.norm(np.ptp(m.points, axis=0)))
-    assert np.abs(st - pts[:, :2]).max() <= SLIVER_TOL * diag
+    # st = (x, y) on the whole front face plane, to float32 rounding: the sliver clean-up's
+    # collapses give the moved corners the kept point's st (before: off by up to 0.13 mm)
+    assert np.abs(st - pts[:, :2]).max() < 1e-6
 
 
 def test_a_vertex_inside_a_flat_face_is_collapsed_even_far_from_its_neighbour():
@@ -126,4 +122,29 @@ def test_a_vertex_inside_a_flat_face_is_collapsed_even_far_from_its_neighbour():
     c = out.st_indices.reshape(-1, 3)[flat].reshape(-1)
     np.testing.assert_allclose(
         out.st[c], out.points[out.triangles[flat].reshape(-1), :2], atol=1e-7
+    )
+
+
+def test_a_short_collapse_gives_the_moved_corners_the_kept_points_st():
+    # a point 0.1 mm from a corner of a flat square (tol 1 mm): its edge to the corner is
+    # collapsed; the corners moved onto the kept point take its st, not the dropped one's
+    pts = np.array(
+        [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0], [1e-4, 1e-4, 0.0]]
+    )
+    pts = np.vstack([pts, [[0.5, 0.5, -1.0]]])
+    tri = np.array(
+        [[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]] + [[1, 0, 5], [2, 1, 5], [3, 2, 5], [0, 3, 5]]
+    )
+    m = Mesh(
+        pts,
+        np.full(len(tri), 3, np.int32),
+        tri.reshape(-1),
+        st=pts[:, :2].copy(),
+        st_indices=tri.reshape(-1),
+    )
+    out = remove_slivers(m, 1e-3)
+    assert out.n_points == 5
+    # st is the position's own everywhere (the sides too: st = (x, y) on the whole mesh)
+    np.testing.assert_allclose(
+        out.st[out.st_indices], out.points[out.triangles.reshape(-1), :2], atol=1e-6
     )

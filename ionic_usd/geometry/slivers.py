@@ -311,15 +311,24 @@ def remove_slivers(
                 continue
             if min_angle_of(new) < min(min_angle, min_angle_of(old)):
                 continue
-            if not short and cn0 is not None:
-                # a long edge is collapsed only inside a flat fan of one chart (the surface
-                # does not move): the moved corners take keep's own values (st is a function
-                # of the position on the chart, so drop's would stretch it)
-                f0 = min(shared)
-                at_keep = corners_of(f0)[T[f0].index(keep)]
+            if cn0 is not None:
+                # the moved corners take keep's own values where keep has them in the same
+                # chart (st is a function of the position on a chart: drop's values would
+                # stretch the triangles round keep, by up to tol on a short edge); inside a
+                # flat fan of one chart (a long edge: the surface does not move) every value
+                at = {}
+                for f0 in sorted(shared):
+                    row0 = corners_of(f0)[T[f0].index(keep)]
+                    at.setdefault(float(row0[-1]) if n_ch > n_dim else 0.0, row0)
                 for f in moved:
                     c = corners_of(f).copy()
-                    c[T[f].index(drop)] = at_keep
+                    k = T[f].index(drop)
+                    if not short:
+                        c[k] = next(iter(at.values()))
+                    elif n_ch > n_dim and float(c[k, -1]) in at:
+                        c[k, n_dim:] = at[float(c[k, -1])][n_dim:]
+                    else:
+                        continue
                     cn[f] = c
             for f, nr in zip(moved, new, strict=True):
                 set_tri(f, nr)
