@@ -13,33 +13,28 @@ from ionic_usd.column.solids import MIRROR_X, box_mesh, lathe, rigid
 from ionic_usd.column.volute_solid import prism
 from ionic_usd.geometry.mesh import Mesh, chart_labels, face_normals
 from ionic_usd.geometry.slivers import remove_slivers
+from ionic_usd.texture.atlas import st_distortion
 from ionic_usd.usd.column_asset import ColumnAssetOptions
 
 
 def _distortion(m: Mesh) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Per triangle: the singular-value ratio of the 3D → st map (1: conformal), the signed
-    st area and the 3D area (triangles with a 3D area under 1e-12 m² left out)."""
-    p = m.points[m.triangles]
-    s = m.st[m.st_indices.reshape(-1, 3)].astype(np.float64)
-    e1, e2 = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
-    n = np.cross(e1, e2)
-    a3 = np.linalg.norm(n, axis=1) / 2
-    keep = a3 > 1e-12
-    e1, e2, n, s, a3 = e1[keep], e2[keep], n[keep], s[keep], a3[keep]
-    x = e1 / np.linalg.norm(e1, axis=1)[:, None]
-    y = np.cross(n / np.linalg.norm(n, axis=1)[:, None], x)
-    # 2x2 local frames: columns are the edges in (x, y) and in st
-    X = np.stack(
-        [
-            np.stack([(e1 * x).sum(1), (e1 * y).sum(1)], 1),
-            np.stack([(e2 * x).sum(1), (e2 * y).sum(1)], 1),
-        ],
-        2,
+    return st_distortion(m)
+
+
+def test_st_distortion_by_hand():
+    # a right triangle in the plane x = 1 (normal +X), st = (2 z, y): stretched 2× along one
+    # axis (anisotropy 2, st area twice the surface's); st = (−z, y) winds against it
+    pts = np.array([[1.0, 0.0, 0.0], [1.0, 0.0, -1.0], [1.0, 1.0, 0.0]])
+    tri = Mesh(
+        pts, np.array([3], np.int32), np.arange(3), st=np.zeros((3, 2)), st_indices=np.arange(3)
     )
-    U = np.stack([s[:, 1] - s[:, 0], s[:, 2] - s[:, 0]], 2)
-    sv = np.linalg.svd(U @ np.linalg.inv(X), compute_uv=False)
-    a2 = np.linalg.det(U) / 2
-    return sv[:, 0] / sv[:, 1], a2, a3
+    stretched = tri.with_(st=np.stack([-2 * pts[:, 2], pts[:, 1]], 1), st_indices=np.arange(3))
+    ratio, st_area, area = st_distortion(stretched)
+    assert area == pytest.approx([0.5]) and ratio == pytest.approx([2.0])
+    assert st_area == pytest.approx([1.0])
+    folded = tri.with_(st=np.stack([pts[:, 2], pts[:, 1]], 1), st_indices=np.arange(3))
+    ratio, st_area, _ = st_distortion(folded)
+    assert ratio == pytest.approx([1.0]) and st_area == pytest.approx([-0.5])
 
 
 def test_primitives_carry_isometric_charts_wound_like_their_faces():

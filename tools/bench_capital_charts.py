@@ -30,6 +30,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from ionic_usd.column.capital import build_capital  # noqa: E402
 from ionic_usd.geometry.boolean import union  # noqa: E402
 from ionic_usd.geometry.mesh import Mesh  # noqa: E402
+from ionic_usd.texture.atlas import st_distortion  # noqa: E402
 from ionic_usd.texture.uv import UVCache, metric_charts  # noqa: E402
 from ionic_usd.usd.column_asset import (  # noqa: E402
     ASSET_TEXELS_PER_METRE,
@@ -40,33 +41,13 @@ from ionic_usd.usd.column_asset import (  # noqa: E402
 
 def quality(m: Mesh) -> tuple[float, float, float, int]:
     """(p99 anisotropy, max anisotropy, st area / surface area, st triangles with area ≤ 0)
-    over the triangles with a surface area of at least 1e-12 m²."""
-    assert m.st is not None and m.st_indices is not None
-    p = m.points[m.triangles]
-    s = m.st[m.st_indices.reshape(-1, 3)].astype(np.float64)
-    e1, e2 = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
-    n = np.cross(e1, e2)
-    a3 = np.linalg.norm(n, axis=1) / 2
-    k = a3 > 1e-12
-    e1, e2, n, s, a3 = e1[k], e2[k], n[k], s[k], a3[k]
-    x = e1 / np.linalg.norm(e1, axis=1)[:, None]
-    y = np.cross(n / np.linalg.norm(n, axis=1)[:, None], x)
-    frame = np.stack(
-        [
-            np.stack([(e1 * x).sum(1), (e1 * y).sum(1)], 1),
-            np.stack([(e2 * x).sum(1), (e2 * y).sum(1)], 1),
-        ],
-        2,
-    )
-    uv = np.stack([s[:, 1] - s[:, 0], s[:, 2] - s[:, 0]], 2)
-    sv = np.linalg.svd(uv @ np.linalg.inv(frame), compute_uv=False)
-    ratio = sv[:, 0] / np.maximum(sv[:, 1], 1e-300)
-    a2 = np.linalg.det(uv) / 2
+    (:func:`ionic_usd.texture.atlas.st_distortion`)."""
+    ratio, st_area, area = st_distortion(m)  # inf: a triangle collapsed to a line in st
     return (
-        float(np.percentile(ratio, 99)),
+        float(np.percentile(ratio[np.isfinite(ratio)], 99)),
         float(ratio.max()),
-        float(a2.sum() / a3.sum()),
-        int((a2 <= 0).sum()),
+        float(st_area.sum() / area.sum()),
+        int((st_area <= 0).sum()),
     )
 
 

@@ -316,7 +316,7 @@ def remove_slivers(
                 # chart (st is a function of the position on a chart: drop's values would
                 # stretch the triangles round keep, by up to tol on a short edge); inside a
                 # flat fan of one chart (a long edge: the surface does not move) every value
-                at = {}
+                at: dict[float, np.ndarray] = {}
                 for f0 in sorted(shared):
                     row0 = corners_of(f0)[T[f0].index(keep)]
                     at.setdefault(float(row0[-1]) if n_ch > n_dim else 0.0, row0)

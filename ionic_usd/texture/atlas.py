@@ -23,6 +23,7 @@ arc length around), one chart per connected piece, seams split. :func:`analytic_
 such metric charts into a :class:`UVAtlas` without xatlas: the charts (connected components of
 the ``st`` indices) are scaled to ``texels_per_metre`` and shelf-packed with ``padding`` texels
 between them, so they follow the same density and normalisation rules as xatlas atlases.
+:func:`st_distortion` measures a parametrisation on the surface (anisotropy, area, winding).
 """
 
 from __future__ import annotations
@@ -48,6 +49,7 @@ __all__ = [
     "check_uv_options",
     "common_atlas_size",
     "next_pow2",
+    "st_distortion",
 ]
 
 #: Texel densities per level of detail (px per metre of surface). 256 px/m puts about
@@ -286,3 +288,44 @@ def _shelf_pack(size: np.ndarray) -> tuple[np.ndarray, int, int]:
         shelf = max(shelf, h)
         width = max(width, x)
     return offset, max(1, int(math.ceil(width))), max(1, int(math.ceil(y + shelf)))
+
+
+def st_distortion(mesh: Mesh, min_area: float = 1e-12) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """How a triangle mesh's ``st`` maps its surface, triangle by triangle.
+
+    Parameters
+    ----------
+    mesh : triangles with ``st``
+    min_area : triangles with a smaller surface area (m²) are left out (their map is noise)
+
+    Returns
+    -------
+    anisotropy : (k,) the ratio of the map's singular values (1: conformal; a square drawn on
+        the surface stays a square in st), ``inf`` where st collapses the triangle to a line
+    st_area : (k,) signed st area: negative where the chart winds against the face (folded)
+    area : (k,) surface area of the same triangles
+    """
+    if mesh.st is None or mesh.st_indices is None:
+        raise GeometryError(f"st_distortion: mesh {mesh.name!r} has no st")
+    p = mesh.points[mesh.triangles]
+    s = mesh.st[mesh.st_indices.reshape(-1, 3)].astype(np.float64)
+    e1, e2 = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
+    n = np.cross(e1, e2)
+    area = np.linalg.norm(n, axis=1) / 2
+    keep = area >= min_area
+    e1, e2, n, s, area = e1[keep], e2[keep], n[keep], s[keep], area[keep]
+    # each triangle in an orthonormal frame of its plane (x along its first edge)
+    x = e1 / np.linalg.norm(e1, axis=1)[:, None]
+    y = np.cross(n / np.linalg.norm(n, axis=1)[:, None], x)
+    frame = np.stack(
+        [
+            np.stack([(e1 * x).sum(1), (e1 * y).sum(1)], 1),
+            np.stack([(e2 * x).sum(1), (e2 * y).sum(1)], 1),
+        ],
+        2,
+    )
+    uv = np.stack([s[:, 1] - s[:, 0], s[:, 2] - s[:, 0]], 2)
+    sv = np.linalg.svd(uv @ np.linalg.inv(frame), compute_uv=False)
+    with np.errstate(divide="ignore"):
+        anisotropy = sv[:, 0] / sv[:, 1]
+    return anisotropy, np.linalg.det(uv) / 2, area
