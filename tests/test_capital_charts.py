@@ -17,10 +17,6 @@ from ionic_usd.texture.atlas import st_distortion
 from ionic_usd.usd.column_asset import ColumnAssetOptions
 
 
-def _distortion(m: Mesh) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    return st_distortion(m)
-
-
 def test_st_distortion_by_hand():
     # a right triangle in the plane x = 1 (normal +X), st = (2 z, y): stretched 2× along one
     # axis (anisotropy 2, st area twice the surface's); st = (−z, y) winds against it
@@ -43,7 +39,7 @@ def test_primitives_carry_isometric_charts_wound_like_their_faces():
     sq = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
     pri = prism(sq, np.array([[0, 1, 2], [0, 2, 3]]), -0.5, 0.25)
     for m, worst in ((box, 1.0 + 1e-9), (pri, 1.0 + 1e-9), (lat, 1.25)):
-        ratio, a2, a3 = _distortion(m)
+        ratio, a2, a3 = st_distortion(m)
         assert np.all(a2 > 0), m.name  # counter-clockwise in st like the face seen from outside
         assert ratio.max() <= worst, m.name
         assert a2.sum() == pytest.approx(a3.sum(), rel=0.1 if m is lat else 1e-9), m.name
@@ -54,7 +50,7 @@ def test_primitives_carry_isometric_charts_wound_like_their_faces():
     ws = pri.st[pri.st_indices.reshape(-1, 3)[wall]].reshape(-1, 2)
     assert np.ptp(ws, axis=0) == pytest.approx([4.0, 0.75])
     # a mirror keeps the winding of st (s flips with the faces)
-    ratio, a2, _ = _distortion(rigid(pri, MIRROR_X))
+    ratio, a2, _ = st_distortion(rigid(pri, MIRROR_X))
     assert np.all(a2 > 0) and ratio.max() <= 1.0 + 1e-9
 
 
@@ -65,7 +61,7 @@ def test_capital_union_keeps_near_isometric_charts(angle):
     assert all(m.st is not None for m in parts.as_dict().values())
     m = build_capital_part(p, 0.0, scroll="S1", angle=angle)
     assert m.st is not None and np.all(np.isfinite(m.st))
-    ratio, a2, a3 = _distortion(m)
+    ratio, a2, a3 = st_distortion(m)
     # xatlas gave this capital p99 anisotropy 4.8 and 16 folded triangles; the charts of the
     # parts are exact but for the lathes' s-scale (≤ 1.14) and the angle capital's mitre cap
     # (box-mapped on a 45° plane: √2)

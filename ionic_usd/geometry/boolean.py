@@ -127,6 +127,8 @@ def _to_manifold(
     ``keep_faces``: one face id per triangle, so coplanar neighbours keep their edges (a flat
     top keeps the ring a shaft welds to); otherwise manifold3d merges coplanar triangles into
     faces and re-triangulates those it cuts (which also resolves touching coplanar parts).
+    ``faces``: (t,) face ids to use instead (the union's charts: edges between two ids are
+    kept, triangles of one id may be merged).
     """
     import manifold3d
 
@@ -154,14 +156,14 @@ def _to_manifold(
     head = np.r_[True, pv[order][1:] != pv[order][:-1]]
     rep = order[np.maximum.accumulate(np.where(head, np.arange(len(order)), 0))]
     dup = order[~head]
+    if keep_faces:
+        faces = np.arange(len(tri))
     mm = manifold3d.Mesh64(
         vert_properties=np.ascontiguousarray(props, dtype=np.float64),
         tri_verts=np.ascontiguousarray(inv.reshape(-1, 3), dtype=np.uint64),
         merge_from_vert=np.ascontiguousarray(dup, dtype=np.uint64),
         merge_to_vert=np.ascontiguousarray(rep[~head], dtype=np.uint64),
-        face_id=np.arange(len(tri), dtype=np.uint64)
-        if keep_faces
-        else (None if faces is None else np.ascontiguousarray(faces, dtype=np.uint64)),
+        face_id=None if faces is None else np.ascontiguousarray(faces, dtype=np.uint64),
     )
     man = manifold3d.Manifold(mm)
     if man.status() != manifold3d.Error.NoError:
@@ -234,7 +236,7 @@ def _union_charts(shells: list[Mesh]) -> list[tuple[np.ndarray, np.ndarray]]:
                 nq = np.round(fn[flat] * 1e6).astype(np.int64)
                 d = np.round(np.einsum("ij,ij->i", fn[flat], s.points[tri[flat, 0]]) * 1e8)
                 keys = np.concatenate([nq, d.astype(np.int64)[:, None]], axis=1)
-                uk, inv = np.unique(keys, axis=0, return_inverse=True)
+                uk, inv = unique_rows(keys, return_inverse=True)
                 ids = np.array([planes.setdefault(tuple(k), len(planes)) for k in uk.tolist()])
                 chart[flat] = -1 - ids[inv.reshape(-1)]  # negative: renumbered below
                 nrm = uk[:, :3] / 1e6

@@ -311,7 +311,7 @@ def remove_slivers(
                 continue
             if min_angle_of(new) < min(min_angle, min_angle_of(old)):
                 continue
-            if cn0 is not None:
+            if cn0 is not None and (n_ch > n_dim or not short):
                 # the moved corners take keep's own values where keep has them in the same
                 # chart (st is a function of the position on a chart: drop's values would
                 # stretch the triangles round keep, by up to tol on a short edge); inside a
@@ -319,13 +319,13 @@ def remove_slivers(
                 at: dict[float, np.ndarray] = {}
                 for f0 in sorted(shared):
                     row0 = corners_of(f0)[T[f0].index(keep)]
-                    at.setdefault(float(row0[-1]) if n_ch > n_dim else 0.0, row0)
+                    at.setdefault(float(row0[-1]), row0)
                 for f in moved:
                     c = corners_of(f).copy()
                     k = T[f].index(drop)
                     if not short:
                         c[k] = next(iter(at.values()))
-                    elif n_ch > n_dim and float(c[k, -1]) in at:
+                    elif float(c[k, -1]) in at:
                         c[k, n_dim:] = at[float(c[k, -1])][n_dim:]
                     else:
                         continue
