@@ -118,6 +118,59 @@ def test_point_to_polyline_matches_brute_force(seed, d):
     )
 
 
+def _closest_case(rng: np.random.Generator, kind: int) -> tuple[np.ndarray, np.ndarray]:
+    """A 2-D polyline large enough for the grid kernel and points near, far and on it."""
+    m, n = int(rng.integers(40, 1500)), int(rng.integers(700, 2000))
+    if kind == 0:  # a random walk (crossings, long and short segments)
+        poly = random_walk(rng, m)
+    elif kind == 1:  # a circle far from the origin (georeferenced metres)
+        th = np.linspace(0.0, 2.0 * np.pi, m)
+        poly = np.stack([np.cos(th), np.sin(th)], axis=1) * 10.0 + 5e5
+    elif kind == 2:  # a flat line: a grid one cell high
+        poly = np.stack([np.linspace(0.0, 100.0, m), np.zeros(m)], axis=1)
+    else:  # nodes on a lattice, each three times (zero-length segments, many exact ties)
+        poly = np.repeat(np.round(rng.normal(size=(m // 3 + 1, 2)) * 3.0) / 3.0, 3, axis=0)
+    size = float(np.ptp(poly, axis=0).max()) + 1.0
+    scale = (0.0, 0.01, 0.5, 3.0, 1e3, 1e12)[int(rng.integers(6))]
+    pts = poly.mean(axis=0) + rng.normal(size=(n, 2)) * size * scale
+    if kind == 3:
+        pts = np.round(pts * 3.0) / 3.0
+    pts = np.concatenate([pts, poly[:50], 0.5 * (poly[:-1] + poly[1:])[:50]])
+    return np.ascontiguousarray(pts), np.ascontiguousarray(poly)
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_closest_on_polyline_grid_is_the_brute_force(seed):
+    """The grid kernel gives every value of trying every segment, bit for bit (distance,
+    segment, parameter; of equally close segments the first), on curves that stress it:
+    crossings, far-off coordinates, a flat grid, repeated nodes with exact ties, points from
+    on the curve to 1e12 away."""
+    from ionic_usd.evaluate.polyline import _closest_brute, closest_on_polyline
+
+    rng = np.random.default_rng(seed)
+    pts, poly = _closest_case(rng, seed % 4)
+    got = closest_on_polyline(pts, poly)
+    want = _closest_brute(pts, poly)
+    for g, w in zip(got, want, strict=True):
+        np.testing.assert_array_equal(g, w)
+    # and the brute force itself against the numpy one
+    assert_allclose(got[0], brute_point_to_polyline(pts, poly), rtol=1e-12, atol=1e-12)
+
+
+def test_closest_on_polyline_small_and_degenerate():
+    """One node, two nodes, non-finite values: the every-segment path, numpy's values."""
+    from ionic_usd.evaluate.polyline import closest_on_polyline
+
+    pts = np.array([[1.0, 1.0], [3.0, 4.0]])
+    d, s, t = closest_on_polyline(pts, np.array([[0.0, 0.0]]))
+    assert_allclose(d, [math.sqrt(2.0), 5.0])
+    d, s, t = closest_on_polyline(pts, np.array([[0.0, 0.0], [4.0, 0.0]]))
+    assert_allclose(d, [1.0, 4.0])
+    assert_allclose(t, [0.25, 0.75])
+    d, _, _ = closest_on_polyline(np.array([[np.nan, 0.0]]), np.array([[0.0, 0.0], [1.0, 0.0]]))
+    assert not np.isfinite(d[0])
+
+
 def test_point_to_polyline_uneven_segments():
     # One very long segment among tiny ones: the index must still find its interior.
     poly = np.array([[0.0, 0.0], [0.01, 0.0], [0.02, 0.0], [100.0, 0.0], [100.01, 0.0]])

@@ -142,8 +142,8 @@ class Objective:
         self.calls = 0
 
     def both(self, gen: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        # brute force in numba: for fit-sized curves (hundreds of nodes) it beats the kd-tree
-        # index, whose exactness loop re-queries many nodes of a badly placed candidate
+        # the compiled grid kernel: for fit-sized curves (hundreds of nodes) it beats the
+        # kd-tree index, whose exactness loop re-queries many nodes of a badly placed candidate
         gen = np.ascontiguousarray(gen, dtype=np.float64)
         return closest_on_polyline(gen, self.ref)[0], closest_on_polyline(self.ref, gen)[0]
 

@@ -2,8 +2,8 @@
 
 The kernels every curve measure and fit shares (:mod:`ionic_usd.evaluate.metrics`,
 :mod:`ionic_usd.evaluate.frechet`, the fits). Curves are ``(n, d)`` float arrays with ``d`` = 2
-or 3; distances are exact (points on edges count), kd-tree accelerated (scipy) and compiled
-(numba).
+or 3; distances are exact (points on edges count), kd-tree accelerated (scipy) for the
+measures and grid accelerated for the fits' closest points, compiled (numba).
 """
 
 from __future__ import annotations
@@ -228,33 +228,163 @@ class PolylineIndex:
         return out
 
 
+@njit(cache=True, inline="always")
+def _segment_d2(px, py, poly, j, m):  # pragma: no cover - compiled
+    """(squared distance, parameter t) from (px, py) to segment j of ``poly`` (m nodes; a
+    single node when m == 1): the one formula both kernels use, so their values agree bit
+    for bit."""
+    ox, oy = poly[j, 0], poly[j, 1]
+    vx, vy = 0.0, 0.0
+    if m > 1:
+        vx, vy = poly[j + 1, 0] - ox, poly[j + 1, 1] - oy
+    l2 = vx * vx + vy * vy
+    t = ((px - ox) * vx + (py - oy) * vy) / l2 if l2 > 0.0 else 0.0
+    t = min(max(t, 0.0), 1.0)
+    dx, dy = px - ox - t * vx, py - oy - t * vy
+    return dx * dx + dy * dy, t
+
+
 @njit(cache=True)
-def closest_on_polyline(points, poly):  # pragma: no cover - compiled
-    """Exact closest point of a 2-D polyline ``poly`` (m, 2) for each of ``points`` (n, 2),
-    every segment tried (fit-sized curves): distances (n,), segment indices (n,) int and
-    parameters t (n,) on those segments."""
+def _closest_brute(points, poly):  # pragma: no cover - compiled
+    """:func:`closest_on_polyline` by trying every segment for every point (the reference the
+    grid kernel is tested against, and its path for small or degenerate inputs)."""
     n, m = points.shape[0], poly.shape[0]
     dist = np.empty(n)
     seg = np.zeros(n, dtype=np.int64)
     par = np.zeros(n)
     for i in range(n):
-        px, py = points[i, 0], points[i, 1]
         best = np.inf
         for j in range(max(m - 1, 1)):
-            ox, oy = poly[j, 0], poly[j, 1]
-            vx, vy = 0.0, 0.0
-            if m > 1:
-                vx, vy = poly[j + 1, 0] - ox, poly[j + 1, 1] - oy
-            l2 = vx * vx + vy * vy
-            t = ((px - ox) * vx + (py - oy) * vy) / l2 if l2 > 0.0 else 0.0
-            t = min(max(t, 0.0), 1.0)
-            dx, dy = px - ox - t * vx, py - oy - t * vy
-            d2 = dx * dx + dy * dy
+            d2, t = _segment_d2(points[i, 0], points[i, 1], poly, j, m)
             if d2 < best:
                 best = d2
                 seg[i] = j
                 par[i] = t
         dist[i] = math.sqrt(best)
+    return dist, seg, par
+
+
+@njit(cache=True)
+def _segment_grid(poly, cs, nx, ny, x0, y0):  # pragma: no cover - compiled
+    """Segments binned by their bounding boxes into an nx × ny grid of cells of side cs
+    (CSR: the segments of cell c are items[start[c]:start[c + 1]])."""
+    ns = poly.shape[0] - 1
+    lo = np.empty((ns, 2), dtype=np.int64)
+    hi = np.empty((ns, 2), dtype=np.int64)
+    count = np.zeros(nx * ny + 1, dtype=np.int64)
+    for j in range(ns):
+        for e in range(2):
+            o, nn = (x0, nx) if e == 0 else (y0, ny)
+            a = (min(poly[j, e], poly[j + 1, e]) - o) / cs
+            b = (max(poly[j, e], poly[j + 1, e]) - o) / cs
+            lo[j, e] = min(max(int(math.floor(a)), 0), nn - 1)
+            hi[j, e] = min(max(int(math.floor(b)), 0), nn - 1)
+        for cj in range(lo[j, 1], hi[j, 1] + 1):
+            for ci in range(lo[j, 0], hi[j, 0] + 1):
+                count[cj * nx + ci + 1] += 1
+    start = np.cumsum(count)
+    fill = start[:-1].copy()
+    items = np.empty(start[-1], dtype=np.int64)
+    for j in range(ns):
+        for cj in range(lo[j, 1], hi[j, 1] + 1):
+            for ci in range(lo[j, 0], hi[j, 0] + 1):
+                items[fill[cj * nx + ci]] = j
+                fill[cj * nx + ci] += 1
+    return start, items
+
+
+@njit(cache=True)
+def closest_on_polyline(points, poly):  # pragma: no cover - compiled
+    """Exact closest point of a 2-D polyline ``poly`` (m, 2) for each of ``points`` (n, 2):
+    distances (n,), segment indices (n,) int and parameters t (n,) on those segments — the
+    values of trying every segment (of equally close segments, the first), found through a
+    grid of cells about four segments long.
+
+    Each point searches the rings of cells round its own, nearest first, and stops once the
+    closest segment found is nearer than any cell not yet searched (the distance to the
+    searched block's edge, less a rounding margin): exact, and for points near the curve a
+    few dozen segments instead of all m. Small, degenerate or non-finite inputs, grids that
+    would list long segments in too many cells, and points very far out use every segment.
+    """
+    n, m = points.shape[0], poly.shape[0]
+    ns = m - 1
+    finite = True
+    for i in range(n):
+        finite = finite and math.isfinite(points[i, 0]) and math.isfinite(points[i, 1])
+    x0, y0, x1, y1, total = np.inf, np.inf, -np.inf, -np.inf, 0.0
+    for j in range(m):
+        finite = finite and math.isfinite(poly[j, 0]) and math.isfinite(poly[j, 1])
+        x0, x1 = min(x0, poly[j, 0]), max(x1, poly[j, 0])
+        y0, y1 = min(y0, poly[j, 1]), max(y1, poly[j, 1])
+        if j:
+            total += math.hypot(poly[j, 0] - poly[j - 1, 0], poly[j, 1] - poly[j - 1, 1])
+    if not finite or ns < 32 or n * ns < 20_000 or total <= 0.0:
+        return _closest_brute(points, poly)
+    cs = max(4.0 * total / ns, 1e-9 * max(x1 - x0, y1 - y0))
+    cells = (math.floor((x1 - x0) / cs) + 1) * (math.floor((y1 - y0) / cs) + 1)
+    if cells > 4 * ns:  # a sparse curve in a large box: coarser cells
+        cs *= math.sqrt(cells / (4.0 * ns))
+    nx = int(math.floor((x1 - x0) / cs)) + 1
+    ny = int(math.floor((y1 - y0) / cs)) + 1
+    # listings per segment: its bounding box's cells (long diagonal segments list many)
+    listed = 0.0
+    for j in range(ns):
+        listed += (math.floor(abs(poly[j + 1, 0] - poly[j, 0]) / cs) + 2) * (
+            math.floor(abs(poly[j + 1, 1] - poly[j, 1]) / cs) + 2
+        )
+    if listed > 64.0 * ns:
+        return _closest_brute(points, poly)
+    start, items = _segment_grid(poly, cs, nx, ny, x0, y0)
+    stamp = np.full(ns, -1, dtype=np.int64)
+    dist = np.empty(n)
+    seg = np.zeros(n, dtype=np.int64)
+    par = np.zeros(n)
+    reach = 1e6 + nx + ny  # points farther out (in cells) try every segment
+    # the rounding of a distance is a few ulps of the coordinates: far less than this margin
+    scale = max(abs(x0), abs(x1), abs(y0), abs(y1))
+    for i in range(n):
+        px, py = points[i, 0], points[i, 1]
+        fx, fy = (px - x0) / cs, (py - y0) / cs
+        if abs(fx) > reach or abs(fy) > reach:
+            best, bj, bt = np.inf, 0, 0.0
+            for j in range(ns):
+                d2, t = _segment_d2(px, py, poly, j, m)
+                if d2 < best:
+                    best, bj, bt = d2, j, t
+            dist[i], seg[i], par[i] = math.sqrt(best), bj, bt
+            continue
+        ci, cj = int(math.floor(fx)), int(math.floor(fy))
+        k = max(0, ci - (nx - 1), -ci, cj - (ny - 1), -cj)  # the first ring on the grid
+        best, bj, bt = np.inf, ns, 0.0
+        while True:
+            for gj in range(max(cj - k, 0), min(cj + k, ny - 1) + 1):
+                edge_row = gj == cj - k or gj == cj + k
+                gi = max(ci - k, 0)
+                last = min(ci + k, nx - 1)
+                while gi <= last:
+                    if edge_row or gi == ci - k or gi == ci + k:
+                        c = gj * nx + gi
+                        for q in range(start[c], start[c + 1]):
+                            j = items[q]
+                            if stamp[j] == i:
+                                continue
+                            stamp[j] = i
+                            d2, t = _segment_d2(px, py, poly, j, m)
+                            if d2 < best or (d2 == best and j < bj):
+                                best, bj, bt = d2, j, t
+                    if edge_row or gi >= ci + k:
+                        gi += 1
+                    else:
+                        gi = max(gi + 1, ci + k)  # inner rows: the ring's two ends only
+            if ci - k <= 0 and ci + k >= nx - 1 and cj - k <= 0 and cj + k >= ny - 1:
+                break  # every cell searched
+            # any segment not yet tried lies outside the block of rings 0..k round the point
+            lb = min(fx - (ci - k), ci + k + 1 - fx, fy - (cj - k), cj + k + 1 - fy) * cs
+            lb -= 1e-9 * cs + 1e-13 * (scale + abs(px) + abs(py))
+            if lb > 0.0 and best < lb * lb:
+                break
+            k += 1
+        dist[i], seg[i], par[i] = math.sqrt(best), bj, bt
     return dist, seg, par
 
 
