@@ -34,7 +34,10 @@ def other_parts_tree(col: ColumnParams):
     area = 0.5 * np.linalg.norm(np.cross(pp[:, 1] - pp[:, 0], pp[:, 2] - pp[:, 0]), axis=1).sum()
     count = int(min(1_500_000, max(50_000, area / 1e-6)))
     samples, _ = sample_surface(P, T, count, seed=1)
-    return cKDTree(samples)
+    # sliding-midpoint splits and no node boxes: built in half the time (1.5 M samples:
+    # 0.99 → 0.52 s), queries ~20 % slower; the tree answers exact nearest distances only,
+    # which do not depend on its shape
+    return cKDTree(samples, balanced_tree=False, compact_nodes=False)
 
 
 def shaft_deviation(col_pts: np.ndarray, col: ColumnParams) -> np.ndarray:
