@@ -346,12 +346,8 @@ def closest_on_polyline(points, poly):  # pragma: no cover - compiled
         px, py = points[i, 0], points[i, 1]
         fx, fy = (px - x0) / cs, (py - y0) / cs
         if abs(fx) > reach or abs(fy) > reach:
-            best, bj, bt = np.inf, 0, 0.0
-            for j in range(ns):
-                d2, t = _segment_d2(px, py, poly, j, m)
-                if d2 < best:
-                    best, bj, bt = d2, j, t
-            dist[i], seg[i], par[i] = math.sqrt(best), bj, bt
+            d, s, t = _closest_brute(points[i : i + 1], poly)
+            dist[i], seg[i], par[i] = d[0], s[0], t[0]
             continue
         ci, cj = int(math.floor(fx)), int(math.floor(fy))
         k = max(0, ci - (nx - 1), -ci, cj - (ny - 1), -cj)  # the first ring on the grid
