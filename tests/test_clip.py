@@ -370,3 +370,114 @@ print('ok')
 """
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert out.returncode == 0 and out.stdout.strip() == "ok", out.stderr[-2000:]
+
+
+# -- the corner notch (geometry.notch) ---------------------------------------------------------
+def _boolean_notch_volume(m: Mesh, x0: float, z0: float) -> float:
+    """Reference: manifold3d's volume of ``m`` minus the quadrant block x < x0, z < z0."""
+    from ionic_usd.geometry.boolean import difference
+    from ionic_usd.geometry.check import solid_report
+
+    big = 10.0
+    block = cube_tris((-big, -big, -big), 1.0)
+    block = block.with_(
+        points=np.array([[x, y, z] for x in (-big, x0) for y in (-big, big) for z in (-big, z0)])
+    )
+    return solid_report(difference(m, [block]), intersections=False).volume
+
+
+def _notch_checks(m: Mesh) -> None:
+    from ionic_usd.geometry.check import solid_report
+
+    check_closed(m)
+    r = solid_report(m)
+    assert r.shells == 1 and r.self_intersections == 0, r
+
+
+@pytest.mark.parametrize("make", [cube_tris, cube_quads])
+def test_notch_of_a_cube_keeps_the_rest_and_caps_both_walls(make):
+    from ionic_usd.geometry.check import solid_report
+    from ionic_usd.geometry.notch import cut_quadrant
+
+    m = make()
+    out = cut_quadrant(smooth_normals(m) if make is cube_tris else m, 0.4, 0.7)
+    _notch_checks(out)
+    assert solid_report(out).volume == pytest.approx(1.0 - 0.4 * 0.7, abs=1e-12)
+    # the two caps: z = 0.7 over x < 0.4 (facing -z), x = 0.4 under z = 0.7 (facing -x)
+    assert cap_area(out, (0, 0, 0.7), (0, 0, 1)) == pytest.approx(0.4, abs=1e-12)
+    assert cap_area(out, (0.4, 0, 0), (1, 0, 0)) == pytest.approx(0.7, abs=1e-12)
+    # the caps' authored normals are their face normals
+    q = out.points[out.triangles]
+    cap = np.all(q[:, :, 2] == 0.7, axis=1) | np.all(q[:, :, 0] == 0.4, axis=1)
+    assert cap.sum() >= 4
+    if make is cube_tris:
+        fn, _ = face_normals(out.points, out.triangles)
+        cn = out.corner_normals().reshape(-1, 3, 3)
+        assert np.all(np.einsum("tkj,tj->tk", cn[cap], fn[cap]) > 1 - 1e-9)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_notch_of_a_sphere_is_the_boolean_difference(seed):
+    """A faceted sphere at a random place, cut by random walls: the notch's volume is
+    manifold3d's difference's, the result one closed shell without self-intersections."""
+    from ionic_usd.geometry.check import solid_report
+    from ionic_usd.geometry.notch import cut_quadrant
+
+    rng = np.random.default_rng(seed)
+    s = sphere(1.0, rows=12 + seed, segments=20 + 3 * seed)
+    s = s.with_(points=s.points + rng.uniform(-0.3, 0.3, 3))
+    x0, z0 = rng.uniform(-0.5, 0.5, 2)
+    out = cut_quadrant(s, x0, z0)
+    _notch_checks(out)
+    assert solid_report(out).volume == pytest.approx(_boolean_notch_volume(s, x0, z0), rel=1e-9)
+    assert np.all(np.isfinite(out.points))
+
+
+def test_notch_carries_st_by_chart_and_charts_the_caps():
+    """An analytic-st base cut at the corner: every split triangle keeps its input's st map
+    (its stretch), the caps are isometric (stretch 1), no chart is joined to another."""
+    from ionic_usd.column.base import build_base
+    from ionic_usd.column.column import portunus_column_params
+    from ionic_usd.geometry.mesh import chart_labels
+    from ionic_usd.geometry.notch import cut_quadrant
+    from ionic_usd.texture.atlas import st_distortion
+
+    b = build_base(portunus_column_params(lod="low").base_params())
+    assert b.st is not None
+    out = cut_quadrant(b, -0.05, -0.05)
+    _notch_checks(out)
+    smax_in = st_distortion(b)[0].max()
+    s_out = st_distortion(out)[0]
+    assert s_out.max() <= smax_in * (1 + 1e-6)
+    caps = np.abs(out.points[out.triangles][:, :, [0, 2]] + 0.05).max(axis=1).min(axis=1) < 1e-12
+    assert caps.any()
+    assert_allclose(s_out[caps], 1.0, atol=1e-3)  # st is float32: thin triangles round
+    n_in = chart_labels(b.st_indices, len(b.st)).max() + 1
+    n_out = chart_labels(out.st_indices, len(out.st)).max() + 1
+    assert n_out >= n_in  # cuts may split charts and add cap charts, never join two
+
+
+def test_notch_outside_the_quadrant_and_of_everything():
+    from ionic_usd.geometry.notch import cut_quadrant
+
+    m = cube_tris((0.0, 0.0, 0.0))
+    assert cut_quadrant(m, 0.0, 0.5) is m  # x >= 0 everywhere: nothing in the quadrant
+    with pytest.raises(GeometryError, match="nothing"):
+        cut_quadrant(m, 2.0, 2.0)
+
+
+def test_corner_form_falls_back_to_the_boolean_on_the_corner_line():
+    """A box whose top face lies in the wall plane z = -0.05: the notch's outline would run
+    along the corner line (refused), and the corner form is cut by the boolean instead."""
+    from ionic_usd.geometry.check import solid_report
+    from ionic_usd.geometry.notch import cut_quadrant
+    from ionic_usd.pipeline.forms import form_cut
+
+    box = cube_tris().with_(
+        points=np.array([[x, y, z] for x in (-1.0, 1.0) for y in (0.0, 1.0) for z in (-1.0, -0.05)])
+    )
+    with pytest.raises(GeometryError, match="corner line"):
+        cut_quadrant(box, -0.05, -0.05)
+    out = form_cut(box, "corner", "Shaft")
+    _notch_checks(out)
+    assert solid_report(out).volume == pytest.approx(1.05 * 0.95, abs=1e-9)

@@ -35,6 +35,7 @@ __all__ = [
     "union",
     "difference",
     "differences",
+    "new_points",
     "remove_slivers",
     "normals_with_winding",
     "SLIVER_ANGLE_DEG",
@@ -323,7 +324,7 @@ def differences(
     return out
 
 
-def _new_points(points: np.ndarray, before: np.ndarray) -> np.ndarray:
+def new_points(points: np.ndarray, before: np.ndarray) -> np.ndarray:
     """(n,) bool: the ``points`` (n, 3) that are not, bit for bit, among ``before``."""
 
     def rows(a: np.ndarray) -> np.ndarray:
@@ -390,5 +391,5 @@ def _from_manifold(res, name: str, simplify: bool = True, before: np.ndarray | N
     )
     if not simplify:
         return out_mesh
-    changed = None if before is None else _new_points(points, before)
+    changed = None if before is None else new_points(points, before)
     return remove_slivers(out_mesh, SLIVER_TOL * diag, changed=changed)

@@ -5,7 +5,7 @@
 1. **generate** every part per variant (:mod:`ionic_usd.column`): bases, shafts per flute
    count, capitals per scroll × capital × volute model;
 2. **clip** each part to its ``form`` (engaged: the wall plane; corner: a quadrant), a plane
-   clip or a manifold3d difference (:mod:`ionic_usd.pipeline.forms`);
+   clip or a notch between two wall planes, capped (:mod:`ionic_usd.pipeline.forms`);
 3. **UV**: every part's own metric charts (analytic: the base and shaft unrolled, the
    capital's parts charted by their generators and kept through the union), packed per part
    and LOD at one texel density per LOD (:mod:`ionic_usd.texture.uv`; xatlas only for a part

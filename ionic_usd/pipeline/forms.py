@@ -3,9 +3,9 @@
 ``full`` is the free-standing column; ``engaged`` the half column in front of a wall (the part
 behind the plane z = −ENGAGED_INSET removed and capped); ``corner`` the three-quarter column
 at a corner (the quadrant x, z < −ENGAGED_INSET removed). Bases and shafts are plane clips
-whose cut faces meet along the same vertices (they still weld); the capital is cut by a
-robust boolean difference (manifold3d) with its sliver clean-up, its forms sharing one
-operand. Used by :mod:`ionic_usd.pipeline.asset`.
+whose cut faces meet along the same vertices (they still weld); so is the capital, with its
+sliver clean-up along the cut. The corner's two walls are one notch cut
+(:mod:`ionic_usd.geometry.notch`). Used by :mod:`ionic_usd.pipeline.asset`.
 """
 
 from __future__ import annotations
@@ -14,10 +14,19 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from ionic_usd.geometry.boolean import new_points
 from ionic_usd.geometry.mesh import Mesh
+from ionic_usd.geometry.slivers import SLIVER_TOL, remove_slivers
 from ionic_usd.usd.column_asset import ENGAGED_INSET
 
 __all__ = ["form_cut", "form_cuts", "outside_walls"]
+
+
+def _diagonal(mesh: Mesh) -> float:
+    lo, hi = mesh.extent
+    return float(
+        np.linalg.norm(np.asarray(hi, dtype=np.float64) - np.asarray(lo, dtype=np.float64))
+    )
 
 
 def _wall_block(mesh: Mesh, x_max: float | None) -> Mesh:
@@ -40,24 +49,48 @@ def _wall_cut(mesh: Mesh, x_max: float | None, simplify: bool = False) -> Mesh:
     return difference(mesh, [_wall_block(mesh, x_max)], name=mesh.name, simplify=simplify)
 
 
+def _mended(cut: Mesh, mesh: Mesh, tol: float) -> Mesh:
+    """The sliver clean-up of a capital's cut, round the points the cut made only (the rest
+    is the united capital's surface, mended already)."""
+    return remove_slivers(cut, tol, changed=new_points(cut.points, mesh.points))
+
+
 def _engage(mesh: Mesh, part: str = "") -> Mesh:
     """The half column: the part behind the wall plane z = −ENGAGED_INSET removed.
 
     A plane clip capped by a constrained Delaunay triangulation (base and shaft cut faces meet
-    along the same vertices, so they still weld); for the capital, the boolean difference
-    (its sliver clean-up keeps the cut free of needle triangles).
+    along the same vertices, so they still weld). The capital's clip first moves the points
+    within the sliver tolerance of the plane onto it (no needle between a point and the cut
+    next to it), then its sliver clean-up mends the triangles round the points the cut made.
     """
     from ionic_usd.geometry.clip import clip_mesh
 
-    if part == "CapitalBody":
-        return _wall_cut(mesh, None, simplify=True)
-    return clip_mesh(mesh, (0.0, 0.0, -ENGAGED_INSET), (0.0, 0.0, 1.0), name=mesh.name)
+    plane, normal = (0.0, 0.0, -ENGAGED_INSET), (0.0, 0.0, 1.0)
+    if part != "CapitalBody":
+        return clip_mesh(mesh, plane, normal, name=mesh.name)
+    tol = SLIVER_TOL * _diagonal(mesh)
+    return _mended(clip_mesh(mesh, plane, normal, eps=tol, name=mesh.name), mesh, tol)
 
 
 def _corner(mesh: Mesh, part: str = "") -> Mesh:
     """The three-quarter column: the quadrant x, z < −ENGAGED_INSET (inside the walls of a
-    corner whose outer faces hold the axis) removed."""
-    return _wall_cut(mesh, -ENGAGED_INSET, simplify=part == "CapitalBody")
+    corner whose outer faces hold the axis) removed.
+
+    Two plane splits capped in both wall planes (:func:`~ionic_usd.geometry.notch.cut_quadrant`),
+    with the capital's snap and sliver clean-up as in :func:`_engage`; a mesh whose cut
+    outline runs along the corner line itself (which those caps cannot follow) is cut by the
+    robust boolean difference instead.
+    """
+    from ionic_usd.errors import GeometryError
+    from ionic_usd.geometry.notch import cut_quadrant
+
+    capital = part == "CapitalBody"
+    tol = SLIVER_TOL * _diagonal(mesh) if capital else None
+    try:
+        cut = cut_quadrant(mesh, -ENGAGED_INSET, -ENGAGED_INSET, eps=tol)
+    except GeometryError:
+        return _wall_cut(mesh, -ENGAGED_INSET, simplify=capital)
+    return cut if tol is None else _mended(cut, mesh, tol)
 
 
 def form_cut(mesh: Mesh, form: str, part: str = "") -> Mesh:
@@ -70,17 +103,8 @@ def form_cut(mesh: Mesh, form: str, part: str = "") -> Mesh:
 
 
 def form_cuts(mesh: Mesh, forms: Sequence[str], part: str = "") -> list[Mesh]:
-    """:func:`form_cut` of ``mesh`` for each of ``forms``; the capital's cuts share one
-    boolean operand (the same meshes as one :func:`form_cut` each)."""
-    if part != "CapitalBody":
-        return [form_cut(mesh, f, part) for f in forms]
-    from ionic_usd.geometry.boolean import differences
-
-    x_max = {"engaged": None, "corner": -ENGAGED_INSET}
-    cut = [f for f in forms if f != "full"]
-    done = differences(mesh, [[_wall_block(mesh, x_max[f])] for f in cut], mesh.name, simplify=True)
-    by_form = dict(zip(cut, done, strict=True))
-    return [mesh if f == "full" else by_form[f] for f in forms]
+    """:func:`form_cut` of ``mesh`` for each of ``forms``."""
+    return [form_cut(mesh, f, part) for f in forms]
 
 
 def outside_walls(points: np.ndarray, form: str) -> np.ndarray:
