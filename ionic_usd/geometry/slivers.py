@@ -81,6 +81,36 @@ def _tet_height(a: list[float], b: list[float], c: list[float], d: list[float]) 
     return v / max(max(areas), 1e-300)
 
 
+class _Rows(dict):
+    """Rows of a numpy array as Python lists, made on first read (an edit touches a few
+    hundred of a mesh's rows: converting them all costs more than the edits); rows set or
+    appended are kept here. ``len`` is the number of rows, appended ones included."""
+
+    def __init__(self, src: np.ndarray) -> None:
+        super().__init__()
+        self.src = src
+        self.n = len(src)
+
+    def __missing__(self, k: int) -> list:
+        row = self[k] = self.src[k].tolist()
+        return row
+
+    def __len__(self) -> int:
+        return self.n
+
+    def append(self, row: list) -> None:
+        self[self.n] = row
+        self.n += 1
+
+    def array(self) -> np.ndarray:
+        """All rows (appended included) as one array."""
+        out = np.empty((self.n, *self.src.shape[1:]), dtype=self.src.dtype)
+        out[: len(self.src)] = self.src
+        for k, row in self.items():
+            out[k] = row
+        return out
+
+
 def remove_slivers(
     mesh: Mesh,
     tol: float,
@@ -123,9 +153,9 @@ def remove_slivers(
     Mesh with the same name; unused points removed.
     """
     pts = np.array(mesh.points, dtype=np.float64)
-    P: list[list[float]] = pts.tolist()  # the points as floats (kept equal to pts)
+    P = _Rows(pts)  # the points as floats (kept equal to pts)
     tri0 = mesh.triangles.astype(np.int64).reshape(-1, 3)
-    T: list[list[int]] = tri0.tolist()
+    T = _Rows(tri0)
     # per-corner attributes carried through every edit: the normals (3), st (2) and the
     # st chart (1: an edit never joins two charts, whose values may meet at a point)
     parts = []
@@ -396,7 +426,7 @@ def remove_slivers(
                         touched.update(T[f])
         if not touched:
             break
-    tri = np.array(T, dtype=np.int64).reshape(-1, 3)[np.array(alive, dtype=bool)]
+    tri = T.array()[np.array(alive, dtype=bool)]
     used, idx = np.unique(tri, return_inverse=True)
     corners = None
     if cn0 is not None:
