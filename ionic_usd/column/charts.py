@@ -20,6 +20,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ionic_usd.geometry import libm
+
 __all__ = ["revolved_st", "split_seam", "FLAT_SLOPE_DEG", "SIDE_RADIUS_SPREAD"]
 
 FLAT_SLOPE_DEG = 35.0
@@ -105,7 +107,7 @@ def revolved_st(
     """
     chart, kinds = _charts(nodes)
     arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(nodes, axis=0), axis=1))])
-    theta = np.mod(np.arctan2(-points[:, 2], points[:, 0]), 2 * np.pi)
+    theta = np.mod(libm.arctan2(-points[:, 2], points[:, 0]), 2 * np.pi)
     values: list[np.ndarray] = []
     corner = np.empty_like(triangles, dtype=np.int64)
     base = 0

@@ -40,6 +40,7 @@ import numpy as np
 
 from ionic_usd.checks import check_fields
 from ionic_usd.errors import BudgetError, ParameterError
+from ionic_usd.geometry import libm
 from ionic_usd.geometry.mesh import Mesh, smooth_normals
 from ionic_usd.geometry.stitch import auto_sequence, stitch
 
@@ -275,7 +276,7 @@ def _fluted_rows(p: ShaftParams, ys: np.ndarray, ks: np.ndarray) -> tuple[np.nda
     x_t = -rho * np.cos(phi)
     # fillet: corner2 and interior vertices on the circle up to the next flute
     fil_delta = alpha + (period - 2 * alpha) * (np.arange(nf) / nf)  # (R,nf)
-    delta = np.concatenate([np.arctan2(x_t, x_r), fil_delta], axis=1)  # (R,K) local angle
+    delta = np.concatenate([libm.arctan2(x_t, x_r), fil_delta], axis=1)  # (R,K) local angle
     rc = np.concatenate([x_r, r * np.cos(fil_delta)], axis=1)  # rad·cos(delta)
     rs = np.concatenate([x_t, r * np.sin(fil_delta)], axis=1)  # rad·sin(delta)
     centre = (np.arange(e) + 0.5) * period

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ionic_usd.geometry import libm
+
 __all__ = ["shaft_st", "grid_normals"]
 
 
@@ -68,7 +70,7 @@ def shaft_st(
     # plain rings (other angles): s proportional to the angle
     for k in (0, 3):
         ring = points[starts[k] : starts[k + 1]]
-        theta = np.mod(np.arctan2(-ring[:, 2], ring[:, 0]), 2 * np.pi)
+        theta = np.mod(libm.arctan2(-ring[:, 2], ring[:, 0]), 2 * np.pi)
         s[starts[k] : starts[k + 1]] = theta / (2 * np.pi) * perimeter
     # rows with the flute columns (the two plain rows at the flute angles and the fluted
     # grid): s = the flute centre's s + arc length along this row from the flute centre, so

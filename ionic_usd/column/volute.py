@@ -46,6 +46,7 @@ from ionic_usd.column.volute_band import (
     worst_crossing,
 )
 from ionic_usd.errors import GeometryError, ParameterError
+from ionic_usd.geometry import libm
 
 __all__ = [
     "VOLUTE_MODELS",
@@ -363,7 +364,7 @@ def volute_theta(p: VoluteParams, samples: int) -> np.ndarray:
 def volute_radius(p: VoluteParams, theta: np.ndarray | float) -> np.ndarray:
     """Spiral radius ``r(θ) = a / (b·e^{cθ}) − d`` in spiral units (paper formula 3)."""
     th = np.asarray(theta, dtype=np.float64)
-    return p.a / (p.b * np.exp(p.c * th)) - p.d
+    return p.a / (p.b * libm.exp(p.c * th)) - p.d
 
 
 def volute_thickness(p: VoluteParams, theta: np.ndarray | float) -> np.ndarray:

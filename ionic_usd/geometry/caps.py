@@ -8,6 +8,8 @@ surface it closes share exactly the same boundary vertices. Used by the plane cl
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ionic_usd.errors import GeometryError
@@ -57,9 +59,10 @@ def chain_loops(
                 )
             if len(cands) > 1:
                 back = xy[int(src[e])] - xy[v]
-                ab = np.arctan2(back[1], back[0])
+                ab = math.atan2(back[1], back[0])
                 ang = [
-                    (ab - np.arctan2(*(xy[int(dst[k])] - xy[v])[::-1])) % (2 * np.pi) for k in cands
+                    (ab - math.atan2(*(xy[int(dst[k])] - xy[v])[::-1])) % (2 * math.pi)
+                    for k in cands
                 ]
                 nxt = cands[int(np.argmin(ang))]
             else:
