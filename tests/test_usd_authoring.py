@@ -31,7 +31,10 @@ def test_shaft_roundtrip_and_validates(tmp_path, ext):
     assert not geom.GetNormalsAttr().HasAuthoredValue()
     pv = UsdGeom.PrimvarsAPI(prim).GetPrimvar("normals")
     assert pv.IsIndexed() and pv.GetInterpolation() == UsdGeom.Tokens.faceVarying
-    assert len(pv.Get()) == len(mesh.normals) < mesh.face_vertex_indices.size / 2
+    values, indices = np.array(pv.Get()), np.array(pv.GetIndices())
+    assert len(values) <= len(mesh.normals) < mesh.face_vertex_indices.size / 2
+    # each value once and every value used (NVIDIA's IndexedPrimvar and UnusedPrimvar rules)
+    assert len(np.unique(values, axis=0)) == len(values) == np.unique(indices).size
     flat = np.array(pv.ComputeFlattened())
     assert flat.shape == (mesh.face_vertex_indices.size, 3)
     assert_allclose(flat, mesh.corner_normals(), atol=1e-6)

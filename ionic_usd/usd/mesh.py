@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 from pxr import Sdf, Vt
 
+from ionic_usd.geometry.indexing import distinct_values
 from ionic_usd.geometry.mesh import Mesh
 from ionic_usd.usd.stage import ensure_typed_ancestors
 
@@ -95,10 +96,12 @@ def author_mesh(
     ----------
     layer : the layer to author into
     path : prim path; missing ancestors are created as ``Xform``
-    mesh : the geometry; normals and ``st`` are written when present (indexed normals as
-        the indexed primvar ``primvars:normals``, others as the ``normals`` attribute; ``st``
-        as the indexed primvar ``primvars:st``, de-duplicated by :func:`indexed_st` unless
-        ``mesh.st_distinct`` says the producer indexed it already)
+    mesh : the geometry; normals and ``st`` are written when present (per-vertex normals as
+        the ``normals`` attribute, faceVarying ones as the indexed primvar
+        ``primvars:normals``, its values made distinct and all used by
+        :func:`~ionic_usd.geometry.indexing.distinct_values`; ``st`` as the indexed primvar
+        ``primvars:st``, de-duplicated the same way unless ``mesh.st_distinct`` says the
+        producer indexed it already)
     """
     spec = define_prim(layer, path, "Mesh")
     author_attribute(spec, "points", _T.Point3fArray, _floats(Vt.Vec3fArray, mesh.points))
@@ -108,21 +111,29 @@ def author_mesh(
     author_attribute(spec, "subdivisionScheme", _T.Token, "none", uniform=True)
     author_attribute(spec, "doubleSided", _T.Bool, bool(double_sided), uniform=True)
     if mesh.normals is not None:
-        values = _floats(Vt.Vec3fArray, mesh.normals)
-        if mesh.normals_indices is None:
+        if mesh.normals_interpolation == "vertex":
             author_attribute(
-                spec, "normals", _T.Normal3fArray, values, interpolation=mesh.normals_interpolation
+                spec,
+                "normals",
+                _T.Normal3fArray,
+                _floats(Vt.Vec3fArray, mesh.normals),
+                interpolation="vertex",
             )
         else:
-            # only a primvar can be indexed; UsdGeomPointBased: "if 'normals' and
-            # 'primvars:normals' are both specified, the latter has precedence" (Hydra, Blender
-            # and usdview read the primvar first), so exactly one of the two is authored
+            # faceVarying normals as an indexed primvar, each distinct value once and every
+            # value used (NVIDIA's IndexedPrimvar and UnusedPrimvar rules). Only a primvar can
+            # be indexed; UsdGeomPointBased: "if 'normals' and 'primvars:normals' are both
+            # specified, the latter has precedence" (Hydra, Blender and usdview read the
+            # primvar first), so exactly one of the two is authored
+            values, indices = distinct_values(mesh.normals, mesh.normals_indices)
             author_attribute(
-                spec, "primvars:normals", _T.Normal3fArray, values, interpolation="faceVarying"
+                spec,
+                "primvars:normals",
+                _T.Normal3fArray,
+                _floats(Vt.Vec3fArray, values),
+                interpolation="faceVarying",
             )
-            author_attribute(
-                spec, "primvars:normals:indices", _T.IntArray, _ints(mesh.normals_indices)
-            )
+            author_attribute(spec, "primvars:normals:indices", _T.IntArray, _ints(indices))
     if mesh.st is not None:
         if mesh.st_distinct and mesh.st_indices is not None:
             st, st_indices = mesh.st, mesh.st_indices  # the generator's own indexing: as it is
@@ -140,7 +151,8 @@ def author_mesh(
 
 
 def indexed_st(st: np.ndarray, indices: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
-    """``st`` as an indexed primvar: each distinct (float32) value once, corners index it.
+    """``st`` as an indexed primvar: each distinct (float32) value once, every value used, in
+    the order of first use (:func:`~ionic_usd.geometry.indexing.distinct_values`).
 
     Parameters
     ----------
@@ -152,20 +164,7 @@ def indexed_st(st: np.ndarray, indices: np.ndarray | None) -> tuple[np.ndarray, 
     values : (w, 2) float32, ``w ≤ u``, distinct rows
     corner_indices : (k,) int32 with ``values[corner_indices] == st[indices]``
     """
-    st32 = np.ascontiguousarray(st, dtype=np.float32).reshape(-1, 2)
-    idx = np.arange(len(st32)) if indices is None else np.asarray(indices).reshape(-1)
-    # the rows in lexicographic (s, t) order, as np.unique(axis=0) gives them, by one lexsort
-    # of the two columns (several times faster than unique(axis=0)'s structured sort)
-    order = np.lexsort((st32[:, 1], st32[:, 0]))
-    srt = st32[order]
-    new = np.ones(len(srt), dtype=bool)
-    new[1:] = np.any(srt[1:] != srt[:-1], axis=1)
-    inverse = np.empty(len(srt), dtype=np.int64)
-    inverse[order] = np.cumsum(new) - 1
-    return (
-        np.ascontiguousarray(srt[new], dtype=np.float32),
-        np.ascontiguousarray(inverse[idx], dtype=np.int32),
-    )
+    return distinct_values(np.asarray(st).reshape(-1, 2), indices)
 
 
 def write_meshes(
