@@ -1,6 +1,6 @@
 """The generated geometry is the same on every CPU: ionic_usd.geometry.libm against the C
-library, and the column and the asset's meshes built with numpy's SIMD loops and OpenBLAS's
-kernels switched to other code paths, array for array."""
+library and plain products, and the column and the asset's meshes built with numpy's SIMD
+loops and OpenBLAS's kernels switched to other code paths, array for array."""
 
 from __future__ import annotations
 
@@ -52,8 +52,9 @@ def test_arctan2_is_the_c_librarys_value_by_value_and_broadcasts():
 
 
 # Every array but the normals (their angle weights stay on numpy's loops; see libm): the
-# Portunus column at every LOD and every mesh of a low-LOD asset (both volute models, both
-# scrolls, normal and angle capitals, the engaged and corner cuts).
+# Portunus column at every LOD and every mesh of the default asset (3 LODs, every base and
+# flute count, both volute models, both scrolls, normal and angle capitals, the engaged and
+# corner cuts): 564 arrays.
 _HASHES = """
 import hashlib, json, sys
 import numpy as np
@@ -70,7 +71,7 @@ def put(name, mesh):
 for lod in ("high", "medium", "low"):
     for part, mesh in build_column(portunus_column_params(lod=lod)).parts().items():
         put(f"column_{lod}/{part}", mesh)
-for am in column_asset_meshes(ColumnAssetOptions(lods=("low",)), workers=1):
+for am in column_asset_meshes(ColumnAssetOptions(), workers=1):
     put(am.name, am.mesh)
 json.dump(out, sys.stdout)
 """
@@ -78,16 +79,19 @@ json.dump(out, sys.stdout)
 
 def _other_code_paths() -> dict[str, str]:
     """Environment that sends numpy and OpenBLAS down other code paths on this CPU: every
-    SIMD extension numpy dispatches to and this CPU has switched off, and OpenBLAS's Haswell
-    kernels (AVX2) where it would pick newer ones."""
+    SIMD extension numpy dispatches to and this CPU has switched off (its transcendental
+    loops and its sort, whose ties come out in another order), and on x86-64 OpenBLAS's
+    Nehalem kernels (SSE only, no fused multiply-add; numpy's own baseline needs no more)."""
+    import platform
+
     from numpy._core._multiarray_umath import __cpu_dispatch__, __cpu_features__
 
     env: dict[str, str] = {}
     found = [f for f in __cpu_dispatch__ if __cpu_features__.get(f)]
     if found:
         env["NPY_DISABLE_CPU_FEATURES"] = " ".join(found)
-    if __cpu_features__.get("AVX512F") and __cpu_features__.get("AVX2"):
-        env["OPENBLAS_CORETYPE"] = "Haswell"
+    if platform.machine().lower() in ("x86_64", "amd64") and __cpu_features__.get("AVX2"):
+        env["OPENBLAS_CORETYPE"] = "Nehalem"
     return env
 
 
@@ -106,6 +110,21 @@ def test_the_geometry_is_the_same_on_other_cpu_code_paths(tmp_path):
         pytest.skip("this CPU has no SIMD extension numpy dispatches to: one code path only")
     here = _hashes({}, tmp_path)
     there = _hashes(other, tmp_path)
-    assert len(here) > 150 and here.keys() == there.keys()
+    assert len(here) > 500 and here.keys() == there.keys()
     differ = sorted(k for k in here if here[k] != there[k])
     assert not differ, f"{len(differ)} arrays differ with {other}: {differ[:8]}"
+
+
+def test_linear_and_dot_are_numpys_products_summed_in_order():
+    rng = np.random.default_rng(5)
+    p = rng.normal(size=(1000, 3))
+    m = rng.normal(size=(3, 3))
+    got = libm.linear(p, m)
+    want = p[:, :1] * m[:, 0] + p[:, 1:2] * m[:, 1] + p[:, 2:3] * m[:, 2]  # the stated order
+    assert _same_bits(got, want)
+    assert np.allclose(got, p @ m.T, rtol=0, atol=1e-14)
+    assert _same_bits(libm.dot(p, m[0]), want[:, 0])
+    # dtypes follow numpy's product: float32 with float32, float64 otherwise
+    assert libm.linear(p.astype(np.float32), m.astype(np.float32)).dtype == np.float32
+    assert libm.linear(p.astype(np.float32), m).dtype == np.float64
+    assert libm.linear(p[:, :2], m[:2, :2]).shape == (1000, 2)

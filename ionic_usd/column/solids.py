@@ -17,6 +17,7 @@ import math
 import numpy as np
 
 from ionic_usd.column.charts import revolved_st
+from ionic_usd.geometry import libm
 from ionic_usd.geometry.mesh import Mesh, box_st, smooth_normals
 
 __all__ = ["box_mesh", "lathe", "rigid", "rot_y", "MIRROR_X", "MIRROR_Z", "SWAP_XZ"]
@@ -155,8 +156,8 @@ def rigid(mesh: Mesh, lin: np.ndarray, t=(0.0, 0.0, 0.0), name: str | None = Non
     flips ``s`` of the mesh's metric charts, so they wind counter-clockwise as before.
     """
     lin = np.asarray(lin, dtype=np.float64)
-    pts = mesh.points @ lin.T + np.asarray(t, dtype=np.float64)
-    normals = None if mesh.normals is None else (mesh.normals @ lin.T.astype(np.float32))
+    pts = libm.linear(mesh.points, lin) + np.asarray(t, dtype=np.float64)
+    normals = None if mesh.normals is None else libm.linear(mesh.normals, lin.astype(np.float32))
     idx, st, sti = mesh.face_vertex_indices, mesh.st, mesh.st_indices
     if np.linalg.det(lin) < 0:
         idx = idx.reshape(-1, 3)[:, [0, 2, 1]].reshape(-1)

@@ -13,6 +13,7 @@ import math
 import numpy as np
 
 from ionic_usd.errors import GeometryError
+from ionic_usd.geometry import libm
 from ionic_usd.geometry.polygon import polygon_triangles
 
 __all__ = ["cap_loops", "cap_outline", "chain_loops", "plane_frame", "plane_loops"]
@@ -118,7 +119,7 @@ def plane_loops(
     src, dst = directed[border, 1], directed[border, 0]
     u, w = plane_frame(np.asarray(normal, dtype=np.float64))
     verts = np.unique(np.concatenate([src, dst]))
-    p2 = np.stack([points[verts] @ u, points[verts] @ w], axis=1)
+    p2 = np.stack([libm.dot(points[verts], u), libm.dot(points[verts], w)], axis=1)
     xy = dict(zip(verts.tolist(), p2, strict=True))
     return chain_loops(src, dst, xy, mesh_name)
 
@@ -145,7 +146,7 @@ def cap_loops(
     if not loops:
         return np.empty((0, 3), dtype=np.int64), np.empty(0, dtype=np.int64)
     u, w = plane_frame(normal)
-    rings = [np.stack([points[lp] @ u, points[lp] @ w], axis=1) for lp in loops]
+    rings = [np.stack([libm.dot(points[lp], u), libm.dot(points[lp], w)], axis=1) for lp in loops]
     areas = np.array([_signed_area(r) for r in rings])
     keep = [i for i in range(len(loops)) if len(loops[i]) >= 3 and areas[i] != 0.0]
     outer = [i for i in keep if areas[i] > 0]
@@ -178,7 +179,7 @@ def cap_loops(
         ct = ct[(ct[:, 0] != ct[:, 1]) & (ct[:, 1] != ct[:, 2]) & (ct[:, 0] != ct[:, 2])]
         # wind every cap triangle counter-clockwise in (u, w), i.e. facing −normal
         q = points[ct]
-        flip = np.cross(q[:, 1] - q[:, 0], q[:, 2] - q[:, 0]) @ normal > 0
+        flip = libm.dot(np.cross(q[:, 1] - q[:, 0], q[:, 2] - q[:, 0]), normal) > 0
         ct[flip] = ct[flip][:, ::-1]
         caps.append(ct)
         which.append(np.full(len(ct), k, dtype=np.int64))

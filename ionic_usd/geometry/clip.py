@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from ionic_usd.errors import GeometryError
+from ionic_usd.geometry import libm
 from ionic_usd.geometry.caps import cap_outline
 from ionic_usd.geometry.mesh import Mesh, box_st, corner_normals, triangulate_fan, unique_rows
 
@@ -89,7 +90,7 @@ def clip_mesh(
     pts = mesh.points
     if eps is None:
         eps = _REL_EPS * max(float(np.linalg.norm(np.ptp(pts, axis=0))), 1e-300)
-    raw = (pts - p0) @ n
+    raw = libm.dot(pts - p0, n)
     near = np.abs(raw) <= eps
     d = np.where(near, 0.0, raw)
     s = np.sign(d).astype(np.int8)
@@ -101,7 +102,7 @@ def clip_mesh(
     if flat.any():
         # a face in the plane bounds kept solid iff it faces away from the kept side
         fp = pts[tri[flat]]
-        fn = np.cross(fp[:, 1] - fp[:, 0], fp[:, 2] - fp[:, 0]) @ n
+        fn = libm.dot(np.cross(fp[:, 1] - fp[:, 0], fp[:, 2] - fp[:, 0]), n)
         keep_flat = np.zeros(len(tri), dtype=bool)
         keep_flat[flat] = fn < 0
     else:
@@ -146,7 +147,7 @@ def clip_mesh(
     # interpolate from the lower index so both triangles of an edge compute the same point
     t = d[elo] / (d[elo] - d[ehi])
     new_pts = pts[elo] + t[:, None] * (pts[ehi] - pts[elo])
-    new_pts -= ((new_pts - p0) @ n)[:, None] * n
+    new_pts -= libm.dot(new_pts - p0, n)[:, None] * n
     edge_vertex = np.full(a.shape, -1, dtype=np.int64)
     edge_vertex[cross] = len(pts) + inv.reshape(-1)
     # candidate polygon per triangle: v0, x01, v1, x12, v2, x20 (Sutherland–Hodgman order)

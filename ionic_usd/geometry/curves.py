@@ -83,9 +83,18 @@ def bernstein(n: int, t: np.ndarray) -> np.ndarray:
     (len(t), n + 1) float
     """
     t = np.asarray(t, dtype=np.float64)[:, None]
-    i = np.arange(n + 1)[None, :]
     coef = np.array([comb(n, k) for k in range(n + 1)], dtype=np.float64)[None, :]
-    return coef * t**i * (1.0 - t) ** (n - i)
+    # t^i and (1 - t)^(n - i) by repeated products, not numpy's power (whose AVX-512 loop
+    # differs from the others in the last bits: see ionic_usd.geometry.libm)
+    return coef * _powers(t, n) * _powers(1.0 - t, n)[:, ::-1]
+
+
+def _powers(x: np.ndarray, n: int) -> np.ndarray:
+    """(s, n + 1): x^0 .. x^n for a column x (s, 1), each the product of the one before."""
+    out = np.empty((len(x), n + 1))
+    out[:, :1] = 1.0
+    out[:, 1:] = x
+    return np.multiply.accumulate(out, axis=1)
 
 
 def bezier(control: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -101,7 +110,11 @@ def bezier(control: np.ndarray, t: np.ndarray) -> np.ndarray:
     (s, d) float
     """
     p = np.asarray(control, dtype=np.float64)
-    return bernstein(len(p) - 1, t) @ p
+    b = bernstein(len(p) - 1, t)
+    out = b[:, :1] * p[0]  # Σ_i B_i(t) P_i in the order of i (no BLAS: see geometry.libm)
+    for i in range(1, len(p)):
+        out += b[:, i : i + 1] * p[i]
+    return out
 
 
 def pchip(x: np.ndarray, y: np.ndarray, t: np.ndarray) -> np.ndarray:

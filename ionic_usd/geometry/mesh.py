@@ -17,6 +17,7 @@ from typing import Any, Literal
 import numpy as np
 
 from ionic_usd.errors import GeometryError
+from ionic_usd.geometry import libm
 
 __all__ = [
     "Mesh",
@@ -450,14 +451,14 @@ def transform(mesh: Mesh, matrix: np.ndarray) -> Mesh:
     if m.shape != (4, 4):
         raise GeometryError(f"transform expects a 4x4 matrix, got shape {m.shape}")
     lin, t = m[:3, :3], m[:3, 3]
-    pts = mesh.points @ lin.T + t
+    pts = libm.linear(mesh.points, lin) + t
     det = np.linalg.det(lin)
     if abs(det) < 1e-15:
         raise GeometryError("transform matrix is singular")
     normals = mesh.normals
     if normals is not None:
         nm = np.linalg.inv(lin).T
-        normals = _normalise(normals.astype(np.float64) @ nm.T).astype(np.float32)
+        normals = _normalise(libm.linear(normals.astype(np.float64), nm)).astype(np.float32)
     counts, idx, sti = mesh.face_vertex_counts, mesh.face_vertex_indices, mesh.st_indices
     nidx = mesh.normals_indices
     if det < 0:

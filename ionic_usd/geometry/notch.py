@@ -19,6 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from ionic_usd.errors import GeometryError
+from ionic_usd.geometry import libm
 from ionic_usd.geometry.caps import cap_loops, chain_loops, plane_frame
 from ionic_usd.geometry.mesh import Mesh, box_st, corner_normals, triangulate_fan, unique_rows
 
@@ -308,7 +309,13 @@ def _caps(
         t = np.concatenate([t, np.array(extra_t, dtype=np.int64)])
         u, w = plane_frame(normal)
         verts = np.unique(np.concatenate([s, t]))
-        xy = dict(zip(verts.tolist(), np.stack([P[verts] @ u, P[verts] @ w], axis=1), strict=True))
+        xy = dict(
+            zip(
+                verts.tolist(),
+                np.stack([libm.dot(P[verts], u), libm.dot(P[verts], w)], axis=1),
+                strict=True,
+            )
+        )
         loops = chain_loops(s, t, xy, mesh_name)
         ct, which = cap_loops(P, loops, normal, mesh_name)
         out_tri.append(ct)

@@ -410,7 +410,7 @@ def remove_slivers(
         if not len(bad):
             break
         touched = set()
-        for t in bad[np.argsort(worst)].tolist():
+        for t in bad[np.argsort(worst, kind="stable")].tolist():
             if not alive[t]:
                 continue
             r = T[t]
@@ -443,7 +443,7 @@ def remove_slivers(
         q = np.round(corners[:, n_dim:] * 1e7).astype(np.int64)
         q = np.concatenate([idx.reshape(-1, 1), q], axis=1)
         _, first, inv = unique_rows(q, return_index=True, return_inverse=True)
-        order = np.argsort(first)
+        order = np.argsort(first, kind="stable")
         rank = np.empty_like(order)
         rank[order] = np.arange(len(order))
         st = corners[first[order], n_dim : n_dim + 2].astype(np.float32)

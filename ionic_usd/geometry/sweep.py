@@ -25,6 +25,7 @@ import math
 import numpy as np
 
 from ionic_usd.errors import GeometryError
+from ionic_usd.geometry import libm
 from ionic_usd.geometry.mesh import Mesh
 
 __all__ = ["sweep", "side_normals", "mitre_vectors", "polygon_area"]
@@ -108,7 +109,7 @@ def _check(profile, path, axis, closed) -> tuple[np.ndarray, np.ndarray, np.ndar
     scale = max(1.0, float(np.abs(pts).max()))
     if np.any(np.linalg.norm(seg, axis=1) <= 1e-12 * scale):
         raise GeometryError("sweep: the path has coincident consecutive points")
-    if np.abs((pts - pts[0]) @ ax).max() > 1e-9 * scale:
+    if np.abs(libm.dot(pts - pts[0], ax)).max() > 1e-9 * scale:
         raise GeometryError("sweep: the path must lie in a plane perpendicular to axis")
     if abs(polygon_area(prof)) <= 1e-15:
         raise GeometryError("sweep: the section encloses no area")
@@ -137,7 +138,7 @@ def _check_offsets(
                 f"sweep: the section reaches u = {u:g}, past where a mitre "
                 "overtakes its neighbour (it would cut through itself)"
             )
-        flat = np.stack([off @ e1, off @ e2], axis=1)
+        flat = np.stack([libm.dot(off, e1), libm.dot(off, e2)], axis=1)
         line = shapely.LinearRing(flat) if closed else shapely.LineString(flat)
         if not line.is_simple:
             raise GeometryError(f"sweep: at u = {u:g} the offset path crosses itself")
@@ -199,7 +200,7 @@ def sweep(
         # orient the loop so that the side normal points out of the enclosed area
         e1 = _unit(pts[1] - pts[0])
         e2 = np.cross(ax, e1)
-        loop2 = np.stack([(pts - pts[0]) @ e1, (pts - pts[0]) @ e2], axis=1)
+        loop2 = np.stack([libm.dot(pts - pts[0], e1), libm.dot(pts - pts[0], e2)], axis=1)
         if polygon_area(loop2) < 0:
             pts = pts[::-1].copy()
     k, m = len(prof), len(pts)
