@@ -17,7 +17,6 @@ __all__ = [
     "author_attribute",
     "author_mesh",
     "define_prim",
-    "indexed_st",
     "mesh_extent",
     "write_meshes",
 ]
@@ -126,45 +125,24 @@ def author_mesh(
             # specified, the latter has precedence" (Hydra, Blender and usdview read the
             # primvar first), so exactly one of the two is authored
             values, indices = distinct_values(mesh.normals, mesh.normals_indices)
-            author_attribute(
-                spec,
-                "primvars:normals",
-                _T.Normal3fArray,
-                _floats(Vt.Vec3fArray, values),
-                interpolation="faceVarying",
-            )
-            author_attribute(spec, "primvars:normals:indices", _T.IntArray, _ints(indices))
+            _indexed_primvar(spec, "normals", _T.Normal3fArray, Vt.Vec3fArray, values, indices)
     if mesh.st is not None:
         if mesh.st_distinct and mesh.st_indices is not None:
             st, st_indices = mesh.st, mesh.st_indices  # the generator's own indexing: as it is
         else:
-            st, st_indices = indexed_st(mesh.st, mesh.st_indices)
-        author_attribute(
-            spec,
-            "primvars:st",
-            _T.TexCoord2fArray,
-            _floats(Vt.Vec2fArray, st),
-            interpolation="faceVarying",
-        )
-        author_attribute(spec, "primvars:st:indices", _T.IntArray, _ints(st_indices))
+            st, st_indices = distinct_values(mesh.st, mesh.st_indices)
+        _indexed_primvar(spec, "st", _T.TexCoord2fArray, Vt.Vec2fArray, st, st_indices)
     return spec
 
 
-def indexed_st(st: np.ndarray, indices: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
-    """``st`` as an indexed primvar: each distinct (float32) value once, every value used, in
-    the order of first use (:func:`~ionic_usd.geometry.indexing.distinct_values`).
-
-    Parameters
-    ----------
-    st : (u, 2) float
-    indices : (k,) int or None (None: one value per corner, ``k = u``)
-
-    Returns
-    -------
-    values : (w, 2) float32, ``w ≤ u``, distinct rows
-    corner_indices : (k,) int32 with ``values[corner_indices] == st[indices]``
-    """
-    return distinct_values(np.asarray(st).reshape(-1, 2), indices)
+def _indexed_primvar(
+    spec: Sdf.PrimSpec, name: str, type_name, vt_cls, values: np.ndarray, indices: np.ndarray
+) -> None:
+    """A faceVarying indexed primvar ``primvars:<name>`` with its ``:indices``."""
+    author_attribute(
+        spec, f"primvars:{name}", type_name, _floats(vt_cls, values), interpolation="faceVarying"
+    )
+    author_attribute(spec, f"primvars:{name}:indices", _T.IntArray, _ints(indices))
 
 
 def write_meshes(
