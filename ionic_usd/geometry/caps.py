@@ -119,7 +119,7 @@ def plane_loops(
     src, dst = directed[border, 1], directed[border, 0]
     u, w = plane_frame(np.asarray(normal, dtype=np.float64))
     verts = np.unique(np.concatenate([src, dst]))
-    p2 = np.stack([libm.dot(points[verts], u), libm.dot(points[verts], w)], axis=1)
+    p2 = libm.linear(points[verts], np.stack([u, w]))
     xy = dict(zip(verts.tolist(), p2, strict=True))
     return chain_loops(src, dst, xy, mesh_name)
 
@@ -146,7 +146,7 @@ def cap_loops(
     if not loops:
         return np.empty((0, 3), dtype=np.int64), np.empty(0, dtype=np.int64)
     u, w = plane_frame(normal)
-    rings = [np.stack([libm.dot(points[lp], u), libm.dot(points[lp], w)], axis=1) for lp in loops]
+    rings = [libm.linear(points[lp], np.stack([u, w])) for lp in loops]
     areas = np.array([_signed_area(r) for r in rings])
     keep = [i for i in range(len(loops)) if len(loops[i]) >= 3 and areas[i] != 0.0]
     outer = [i for i in keep if areas[i] > 0]

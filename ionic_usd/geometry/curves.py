@@ -7,6 +7,7 @@ from math import comb
 import numpy as np
 
 from ionic_usd.errors import GeometryError, ParameterError
+from ionic_usd.geometry import libm
 from ionic_usd.geometry.mesh import Mesh
 from ionic_usd.geometry.stitch import stitch
 
@@ -110,11 +111,7 @@ def bezier(control: np.ndarray, t: np.ndarray) -> np.ndarray:
     (s, d) float
     """
     p = np.asarray(control, dtype=np.float64)
-    b = bernstein(len(p) - 1, t)
-    out = b[:, :1] * p[0]  # Σ_i B_i(t) P_i in the order of i (no BLAS: see geometry.libm)
-    for i in range(1, len(p)):
-        out += b[:, i : i + 1] * p[i]
-    return out
+    return libm.linear(bernstein(len(p) - 1, t), p.T)  # Σ_i B_i(t) P_i, in the order of i
 
 
 def pchip(x: np.ndarray, y: np.ndarray, t: np.ndarray) -> np.ndarray:

@@ -68,9 +68,9 @@ def arctan2(y: np.ndarray | float, x: np.ndarray | float) -> np.ndarray:
 
 
 def linear(points: np.ndarray, lin: np.ndarray) -> np.ndarray:
-    """``points @ lin.T`` for (n, k) points and a (m, k) matrix, k ≤ 4, the same bits on every
-    CPU: ``Σ_j points[:, j] · lin[:, j]``, summed in the order of j (float64 unless both are
-    float32, as numpy's product)."""
+    """``points @ lin.T`` for (n, k) points and a (m, k) matrix (k small: 3-vectors, a
+    Bézier's control points), the same bits on every CPU: ``Σ_j points[:, j] · lin[:, j]``,
+    summed in the order of j (float64 unless both are float32, as numpy's product)."""
     p = np.asarray(points)
     a = np.asarray(lin)
     dtype = np.result_type(p, a)
@@ -86,5 +86,5 @@ def linear(points: np.ndarray, lin: np.ndarray) -> np.ndarray:
 
 
 def dot(points: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """``points @ v`` for (n, k) points and a k-vector, k ≤ 4, the same bits on every CPU."""
+    """``points @ v`` for (n, k) points and a k-vector, the same bits on every CPU."""
     return linear(points, np.asarray(v)[None, :])[:, 0]

@@ -312,7 +312,7 @@ def _caps(
         xy = dict(
             zip(
                 verts.tolist(),
-                np.stack([libm.dot(P[verts], u), libm.dot(P[verts], w)], axis=1),
+                libm.linear(P[verts], np.stack([u, w])),
                 strict=True,
             )
         )

@@ -138,7 +138,7 @@ def _check_offsets(
                 f"sweep: the section reaches u = {u:g}, past where a mitre "
                 "overtakes its neighbour (it would cut through itself)"
             )
-        flat = np.stack([libm.dot(off, e1), libm.dot(off, e2)], axis=1)
+        flat = libm.linear(off, np.stack([e1, e2]))
         line = shapely.LinearRing(flat) if closed else shapely.LineString(flat)
         if not line.is_simple:
             raise GeometryError(f"sweep: at u = {u:g} the offset path crosses itself")
@@ -200,7 +200,7 @@ def sweep(
         # orient the loop so that the side normal points out of the enclosed area
         e1 = _unit(pts[1] - pts[0])
         e2 = np.cross(ax, e1)
-        loop2 = np.stack([libm.dot(pts - pts[0], e1), libm.dot(pts - pts[0], e2)], axis=1)
+        loop2 = libm.linear(pts - pts[0], np.stack([e1, e2]))
         if polygon_area(loop2) < 0:
             pts = pts[::-1].copy()
     k, m = len(prof), len(pts)
