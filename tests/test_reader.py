@@ -161,6 +161,28 @@ def test_city_placements_name_nested_instances_and_instancer_entries(tiny_city):
         assert_allclose(m, want, atol=1e-9)
 
 
+@pytest.mark.parametrize("which", ["temple", "city"])
+def test_mesh_sources_are_paths_of_the_scene_not_of_usd_prototypes(tiny_temple, tiny_city, which):
+    """A mesh's ``source`` (glTF's ``extras.usdPath``, the solid export's messages) names a
+    prim of the scene: inside native instances the first instance's proxy, never USD's
+    ``/__Prototype_N``, whose numbering changes from one opening of the stage to the next
+    (the same temple exported twice gave two GLBs)."""
+    path = tiny_temple.root if which == "temple" else tiny_city
+    scene = read_scene(path)
+    stage = Usd.Stage.Open(str(path))
+    sources = [m.source for m in scene.meshes.values()]
+    assert not [s for s in sources if "__Prototype" in s]
+    for s in sources:
+        prim = stage.GetPrimAtPath(s)
+        assert prim and prim.IsA(UsdGeom.Mesh), s
+    # nested: the city's temples are instances holding column instances and instancers
+    proxies = [s for s in sources if stage.GetPrimAtPath(s).IsInstanceProxy()]
+    assert proxies
+    # and the scene read again names every mesh the same way
+    again = read_scene(path)
+    assert sorted(sources) == sorted(m.source for m in again.meshes.values())
+
+
 def test_non_finite_transform_is_refused(tmp_path):
     path = _quad_stage(tmp_path / "q.usda", "vertex")
     stage = Usd.Stage.Open(str(path))

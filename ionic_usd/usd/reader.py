@@ -67,7 +67,10 @@ class SceneMesh:
     Parameters
     ----------
     key : content key (unique in the scene)
-    name : prim name of its first occurrence; ``source`` that prim's path
+    name : prim name of its first occurrence; ``source`` that prim's path, as the scene names
+        it: inside a native instance, the instance proxy's path under the first instance in
+        traversal order (USD's ``/__Prototype_N`` names are not stable from one opening of a
+        stage to the next)
     points : (n, 3) float64, in the mesh's own space
     face_vertex_counts : (f,) int64
     face_vertex_indices : (k,) int64, counter-clockwise seen from outside
@@ -169,11 +172,13 @@ class _Reader:
         self._materials: dict[str, str | None] = {}
 
     def walk(
-        self, root: Usd.Prim, relative: bool, chain: dict
+        self, root: Usd.Prim, relative: bool, chain: dict, alias: tuple[str, str] | None = None
     ) -> list[tuple[str, np.ndarray, str, dict, bool]]:
         """``(mesh key, matrix, path, paradata, instanced)`` per drawable under ``root``;
         matrices are relative to ``root`` when ``relative``, else local-to-world; ``path`` is
-        the placing instance's path (an instance proxy path when nested) or the mesh's."""
+        the placing instance's path (an instance proxy path when nested) or the mesh's.
+        ``alias``: (a prototype's path, the path of the instance it is walked for): the
+        meshes' ``source`` paths are named under the instance."""
         out: list[tuple[str, np.ndarray, str, dict, bool]] = []
         purposes: dict[Sdf.Path, str] = {}
         para: dict[Sdf.Path, dict] = {root.GetPath().GetParentPath(): chain}
@@ -216,7 +221,7 @@ class _Reader:
                 it.PruneChildren()
                 proto = prim.GetPrototype()
                 n = len(str(proto.GetPath()))
-                for k, rel, ip, pd, via in self._prototype(proto):
+                for k, rel, ip, pd, via in self._prototype(proto, _aliased(path, alias)):
                     out.append(
                         (
                             k,
@@ -228,9 +233,10 @@ class _Reader:
                     )
             elif prim.IsA(UsdGeom.PointInstancer):
                 it.PruneChildren()
-                out.extend(self._point_instancer(UsdGeom.PointInstancer(prim), m, para[path]))
+                pi = UsdGeom.PointInstancer(prim)
+                out.extend(self._point_instancer(pi, m, para[path], alias))
             else:
-                mkey = self._mesh(prim, para[path] if relative else {})
+                mkey = self._mesh(prim, para[path] if relative else {}, _aliased(path, alias))
                 if mkey is not None:
                     out.append((mkey, m, str(path), {} if relative else para[path], False))
         return out
@@ -291,7 +297,7 @@ class _Reader:
             self._materials[mpath] = data.key if data is not None else None
         return self._materials[mpath]
 
-    def _mesh(self, prim: Usd.Prim, paradata: dict) -> str | None:
+    def _mesh(self, prim: Usd.Prim, paradata: dict, source: str) -> str | None:
         read = read_mesh_arrays(prim, self.t)
         if read is None:
             return None
@@ -306,7 +312,7 @@ class _Reader:
             self.scene.meshes[key] = SceneMesh(
                 key=key,
                 name=prim.GetName(),
-                source=str(prim.GetPath()),
+                source=source,
                 points=pts,
                 face_vertex_counts=counts,
                 face_vertex_indices=idx,
@@ -320,15 +326,26 @@ class _Reader:
             )
         return key
 
-    def _prototype(self, root: Usd.Prim) -> list[tuple[str, np.ndarray, str, dict, bool]]:
+    def _prototype(
+        self, root: Usd.Prim, instance: str | None = None
+    ) -> list[tuple[str, np.ndarray, str, dict, bool]]:
+        """The drawables of a prototype, walked once; ``instance``: the path of the (first)
+        native instance it is walked for, under which its meshes are named."""
         key = str(root.GetPath())
         if key not in self._protos:
-            self._protos[key] = self.walk(root, relative=True, chain={})  # type: ignore[assignment]
+            alias = (key, instance) if instance is not None else None
+            self._protos[key] = self.walk(root, relative=True, chain={}, alias=alias)  # type: ignore[assignment]
             if self._protos[key]:
                 self.scene.prototypes.add(key)
         return self._protos[key]  # type: ignore[return-value]
 
-    def _point_instancer(self, pi: UsdGeom.PointInstancer, world: np.ndarray, chain: dict):
+    def _point_instancer(
+        self,
+        pi: UsdGeom.PointInstancer,
+        world: np.ndarray,
+        chain: dict,
+        alias: tuple[str, str] | None = None,
+    ):
         targets = pi.GetPrototypesRel().GetForwardedTargets()
         ids = as_array(pi.GetProtoIndicesAttr().Get(self.t), np.int64)
         if len(ids) == 0 or not targets:
@@ -356,7 +373,8 @@ class _Reader:
                 continue
             # the prototype's transform is in ``mats``: walk it relative to itself
             n = len(str(proto.GetPath()))
-            for k, rel, ip, pd, via in self._prototype(proto):
+            named = _aliased(target, alias) if alias is not None else None
+            for k, rel, ip, pd, via in self._prototype(proto, named):
                 tail = ip[n:] if via else ""
                 for i in sel:
                     out.append(
@@ -369,6 +387,15 @@ class _Reader:
                         )
                     )
         return out
+
+
+def _aliased(path: Sdf.Path, alias: tuple[str, str] | None) -> str:
+    """``path`` as the scene names it: under ``alias = (prototype, instance)`` the prototype's
+    prefix is replaced by the instance's path."""
+    s = str(path)
+    if alias is None or not s.startswith(alias[0]):
+        return s
+    return alias[1] + s[len(alias[0]) :]
 
 
 def read_scene(
