@@ -256,6 +256,88 @@ def test_usdz_is_flat_valid_and_self_contained(tiny_temple, tmp_path):
             assert "t.usdz[" in f.Get().resolvedPath  # textures resolve inside the package
 
 
+def _renamed_prototypes(layer: Sdf.Layer, mapping: dict[str, str]) -> None:
+    """Root prims renamed (copied: targets inside follow) and internal references re-aimed."""
+    for src, dst in mapping.items():
+        assert Sdf.CopySpec(layer, Sdf.Path(src), layer, Sdf.Path(dst))
+    paths: list[Sdf.Path] = []
+    layer.Traverse(Sdf.Path.absoluteRootPath, lambda p: paths.append(p) if p.IsPrimPath() else None)
+    for path in paths:
+        spec = layer.GetPrimAtPath(path)
+        if spec is None or not spec.hasReferences:
+            continue
+        refs = spec.referenceList
+        for kind in ("explicitItems", "prependedItems", "appendedItems"):
+            setattr(
+                refs,
+                kind,
+                [
+                    Sdf.Reference(
+                        r.assetPath, Sdf.Path(mapping.get(str(r.primPath), str(r.primPath)))
+                    )
+                    for r in getattr(refs, kind)
+                ],
+            )
+    for src in mapping:
+        del layer.rootPrims[Sdf.Path(src).name]
+
+
+def test_stable_prototypes_do_not_depend_on_usds_numbering(tiny_temple):
+    """Flatten numbers the prototypes as USD happened to (it changes from one opening to the
+    next); renumbered by their first instance, any numbering gives the same layer."""
+    from ionic_usd.usd.package import stable_prototypes
+
+    flat = Usd.Stage.Open(str(tiny_temple.root)).Flatten()
+    names = [f"/{p.name}" for p in flat.rootPrims if p.name.startswith("Flattened_Prototype_")]
+    assert len(names) == 3  # the free, engaged and corner columns
+    other = Sdf.Layer.CreateAnonymous(".usda")
+    other.TransferContent(flat)
+    # another numbering: the names rotated, through temporary ones
+    _renamed_prototypes(other, {n: f"/Tmp{i}" for i, n in enumerate(names)})
+    _renamed_prototypes(other, {f"/Tmp{i}": names[(i + 1) % 3] for i in range(3)})
+    assert other.ExportToString() != flat.ExportToString()
+    stable_prototypes(flat)
+    stable_prototypes(other)
+    assert other.ExportToString() == flat.ExportToString()
+    assert validate_stage(Usd.Stage.Open(other)) == []  # every instance finds its prototype
+
+
+def test_exports_are_the_same_bytes_run_after_run(tiny_temple, tmp_path):
+    """glb, usdz and 3mf of one scene: the same bytes in two processes (other time zones),
+    every zip entry stamped with the zip epoch."""
+    import os
+    import subprocess
+    import sys
+
+    outs = {}
+    for run, tz in enumerate(("UTC", "Asia/Tokyo")):
+        for ext in ("glb", "usdz", "3mf"):
+            out = tmp_path / f"run{run}" / f"t.{ext}"
+            out.parent.mkdir(exist_ok=True)
+            r = subprocess.run(
+                [
+                    sys.executable,
+                    "-m",
+                    "ionic_usd",
+                    "export",
+                    str(tiny_temple.root),
+                    "-o",
+                    str(out),
+                    "-q",
+                ],
+                env={**os.environ, "TZ": tz},
+                capture_output=True,
+                text=True,
+            )
+            assert r.returncode == 0, r.stderr
+            outs.setdefault(ext, []).append(out.read_bytes())
+    for ext, (a, b) in outs.items():
+        assert a == b, ext
+    for ext in ("usdz", "3mf"):
+        with zipfile.ZipFile(tmp_path / "run1" / f"t.{ext}") as z:
+            assert {i.date_time for i in z.infolist()} == {(1980, 1, 1, 0, 0, 0)}, ext
+
+
 def _cubes_stage(path, boxes):
     stage = Usd.Stage.CreateNew(str(path))
     UsdGeom.SetStageUpAxis(stage, "Y")

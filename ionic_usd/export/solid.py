@@ -252,9 +252,15 @@ def write_3mf(path: Path, solids: list[Solid], *, title: str = "") -> None:
 
     def write(tmp: Path) -> None:
         with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as z:
-            z.writestr("[Content_Types].xml", _CONTENT_TYPES)
-            z.writestr("_rels/.rels", _RELS)
-            z.writestr("3D/3dmodel.model", model)
+            for name, text in (
+                ("[Content_Types].xml", _CONTENT_TYPES),
+                ("_rels/.rels", _RELS),
+                ("3D/3dmodel.model", model),
+            ):
+                # a fixed time stamp (the zip epoch): the same solids give the same bytes
+                info = zipfile.ZipInfo(name, date_time=(1980, 1, 1, 0, 0, 0))
+                info.compress_type = zipfile.ZIP_DEFLATED
+                z.writestr(info, text)
 
     atomic_write(path, write)
 

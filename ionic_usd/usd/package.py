@@ -1,12 +1,20 @@
-"""usdz packages for AR (ARKit profile) made with usd-core's own ``UsdUtils`` packaging.
+"""usdz packages for AR (ARKit profile), written with usd-core's own ``Sdf.ZipFileWriter``.
 
 The scene is opened, the requested variant selections are made in the session layer (see
 :func:`ionic_usd.usd.variants.select_variants`), and the composed stage is flattened — variant
 sets resolved away, references and payloads merged, native instancing kept as flattened
-prototypes — into one crate layer in a temporary folder beside the textures' real paths.
-``UsdUtils.CreateNewARKitUsdzPackage`` then copies that layer and every texture it uses into a
-zip-aligned ``.usdz``. The package is checked with ``pxr.UsdValidation`` before it replaces
-the output.
+prototypes — into one crate layer in a temporary folder, with every texture it uses copied
+beside it (``textures/``). The package holds that layer first, then the textures by name
+(uncompressed, 64-byte aligned, as usdz requires); it is checked with ``pxr.UsdValidation``
+before it replaces the output.
+
+The same scene gives the same package, byte for byte: ``Stage.Flatten`` names the prototypes
+``/Flattened_Prototype_<n>`` in the order USD happened to number them, which changes from one
+opening of the stage to the next (one thread or many), so :func:`stable_prototypes`
+renumbers them by the path of their first instance; the zip stamps each file with its
+modification time, which is set to the zip epoch first (1980-01-01 00:00 local time, as the
+zip stores it); and ``UsdUtils.CreateNewARKitUsdzPackage``, which listed the textures in an
+order that changed from run to run, is not used.
 """
 
 from __future__ import annotations
@@ -19,13 +27,15 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
-from pxr import Ar, Sdf, UsdUtils
+from pxr import Ar, Sdf
 
 from ionic_usd.errors import UsdAuthoringError
 from ionic_usd.usd.stage import validate_stage
 from ionic_usd.usd.variants import open_stage, select_variants
 
-__all__ = ["UsdzReport", "write_usdz"]
+__all__ = ["UsdzReport", "stable_prototypes", "write_usdz"]
+
+_FLAT = "Flattened_Prototype_"
 
 
 @dataclass(frozen=True)
@@ -76,6 +86,105 @@ def _gather_textures(layer: Sdf.Layer, folder: Path) -> int:
     return len(by_hash)
 
 
+def _internal_refs(layer: Sdf.Layer) -> dict[str, list[str]]:
+    """Prototype root path → paths of the prim specs that reference it internally."""
+    users: dict[str, list[str]] = {}
+
+    def visit(path: Sdf.Path) -> None:
+        if not path.IsPrimPath():
+            return
+        spec = layer.GetPrimAtPath(path)
+        if spec is None or not spec.hasReferences:
+            return
+        for ref in spec.referenceList.GetAddedOrExplicitItems():
+            if not ref.assetPath and ref.primPath.name.startswith(_FLAT):
+                users.setdefault(str(ref.primPath), []).append(str(path))
+
+    layer.Traverse(Sdf.Path.absoluteRootPath, visit)
+    return users
+
+
+def _rename_references(layer: Sdf.Layer, mapping: dict[str, str]) -> None:
+    """Internal references to ``mapping``'s keys point at its values instead."""
+
+    def fix(ref: Sdf.Reference) -> Sdf.Reference:
+        new = mapping.get(str(ref.primPath)) if not ref.assetPath else None
+        if new is None:
+            return ref
+        return Sdf.Reference(ref.assetPath, Sdf.Path(new), ref.layerOffset, ref.customData)
+
+    def visit(path: Sdf.Path) -> None:
+        if not path.IsPrimPath():
+            return
+        spec = layer.GetPrimAtPath(path)
+        if spec is None or not spec.hasReferences:
+            return
+        refs = spec.referenceList
+        for kind in ("explicitItems", "prependedItems", "appendedItems"):
+            items = list(getattr(refs, kind))
+            fixed = [fix(r) for r in items]
+            if fixed != items:
+                setattr(refs, kind, fixed)
+
+    layer.Traverse(Sdf.Path.absoluteRootPath, visit)
+
+
+def stable_prototypes(layer: Sdf.Layer) -> int:
+    """Renumber a flattened layer's ``/Flattened_Prototype_<n>`` by their first instance.
+
+    A prototype's key is the smallest path among the prims that reference it, a path inside
+    another prototype taken under that prototype's own key (nested instancing), so the order
+    depends on the scene alone. Each prototype is copied under its new name with
+    ``Sdf.CopySpec`` (which moves the targets and connections inside it along) and the
+    references to it are rewritten. Returns how many prototypes were renumbered.
+    """
+    protos = [str(p.path) for p in layer.rootPrims if p.name.startswith(_FLAT)]
+    if not protos:
+        return 0
+    users = _internal_refs(layer)
+    keys: dict[str, str] = {}
+
+    def key(proto: str, depth: int = 0) -> str:
+        if proto not in keys:
+            stable = []
+            for u in users.get(proto, []):
+                owner = next((p for p in protos if u.startswith(p + "/")), None)
+                if owner is None or depth > len(protos):
+                    stable.append(u)
+                else:
+                    stable.append(key(owner, depth + 1) + u[len(owner) :])
+            keys[proto] = min(stable, default="\uffff" + proto)
+        return keys[proto]
+
+    order = sorted(protos, key=key)
+    final = {old: f"/{_FLAT}{i + 1}" for i, old in enumerate(order)}
+    moved = sum(old != new for old, new in final.items())
+    # every prototype is copied, moved or not, so the layer's order of root prims (copies
+    # come last) does not depend on USD's numbering either. Two steps, through temporary names: a new name may be another prototype's old one
+    temp = {old: f"/_ionic_usd_prototype_{i}" for i, old in enumerate(order)}
+    for step in (temp, {temp[old]: new for old, new in final.items()}):
+        for src, dst in step.items():
+            if not Sdf.CopySpec(layer, Sdf.Path(src), layer, Sdf.Path(dst)):
+                raise UsdAuthoringError(f"could not copy the flattened prototype {src}")
+        _rename_references(layer, step)
+        for src in step:
+            del layer.rootPrims[Sdf.Path(src).name]
+    return moved
+
+
+def _zip_package(root: Path, textures: list[Path], pkg: Path) -> None:
+    """The usdz archive (``Sdf.ZipFileWriter``: uncompressed, 64-byte aligned): the root
+    layer first, as the format requires, then the textures by name."""
+    writer = Sdf.ZipFileWriter.CreateNew(str(pkg))
+    if not writer.AddFile(str(root), root.name):
+        raise UsdAuthoringError(f"{pkg}: could not add {root.name} to the package")
+    for tex in textures:
+        if not writer.AddFile(str(tex), f"textures/{tex.name}"):
+            raise UsdAuthoringError(f"{pkg}: could not add textures/{tex.name} to the package")
+    if not writer.Save():
+        raise UsdAuthoringError(f"{pkg}: could not write the usdz package")
+
+
 def write_usdz(
     scene: str | os.PathLike,
     output: str | os.PathLike,
@@ -97,6 +206,7 @@ def write_usdz(
     if sel:
         select_variants(stage, sel)
     flat = stage.Flatten()
+    stable_prototypes(flat)
     # what Flatten keeps of variant sets: none should be left (the ARKit profile forbids them)
     left = 0
 
@@ -112,9 +222,12 @@ def write_usdz(
         root = Path(tmp) / f"{out.stem or 'scene'}.usdc"
         if not flat.Export(str(root)):
             raise UsdAuthoringError(f"{scene}: could not write the flattened stage")
+        # the zip records local modification times: the epoch in local time, for every file
+        epoch = time.mktime((1980, 1, 1, 0, 0, 0, 0, 1, -1))
+        for f in Path(tmp).rglob("*"):
+            os.utime(f, (epoch, epoch))
         pkg = Path(tmp) / "package.usdz"
-        if not UsdUtils.CreateNewARKitUsdzPackage(Sdf.AssetPath(str(root)), str(pkg)):
-            raise UsdAuthoringError(f"{scene}: UsdUtils could not package it as usdz")
+        _zip_package(root, sorted((Path(tmp) / "textures").glob("*")), pkg)
         errors = validate_stage(str(pkg))
         if errors:
             raise UsdAuthoringError(
