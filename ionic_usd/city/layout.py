@@ -19,6 +19,7 @@ import numpy as np
 
 from ionic_usd.city.plan import Lot, Porticus
 from ionic_usd.errors import IonicError, ParameterError
+from ionic_usd.geometry import libm
 
 __all__ = [
     "Footprint",
@@ -276,7 +277,8 @@ def porticus_columns(p: Porticus, spacing: float) -> tuple[np.ndarray, np.ndarra
         normal = np.stack([tan[:, 1], -tan[:, 0]], axis=1) * (sign if sign else 1.0)
         xs.append(np.stack([pts[:, 0], -pts[:, 1]], axis=1))
         # front (+Z local) → plan direction `normal`: yaw = 180° − azimuth(normal)
-        yaws.append((180.0 - np.degrees(np.arctan2(normal[:, 0], normal[:, 1]))) % 360.0)
+        # libm.arctan2: the same yaws (and so the same instance file) on every CPU
+        yaws.append((180.0 - np.degrees(libm.arctan2(normal[:, 0], normal[:, 1]))) % 360.0)
     if not xs:
         return np.zeros((0, 2)), np.zeros(0)
     return np.concatenate(xs), np.concatenate(yaws)

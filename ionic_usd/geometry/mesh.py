@@ -323,7 +323,7 @@ def smooth_normals(mesh: Mesh, groups: np.ndarray | None = None, *, indexed: boo
         -np.einsum("ij,ij->i", e1, e0),
         -np.einsum("ij,ij->i", e2, e1),
     )
-    angle = [np.arctan2(twice_area, d) for d in dots]
+    angle = [libm.arctan2(twice_area, d) for d in dots]
     corner_vertex = tri.reshape(-1)
     npts = len(pts)
 

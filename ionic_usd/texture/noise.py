@@ -17,6 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ionic_usd.geometry import libm
+
 __all__ = [
     "KMAX",
     "CELL",
@@ -62,19 +64,36 @@ class NoiseSpec:
         u = (kx * math.cos(a) + ky * math.sin(a)) * self.stretch[0]
         v = (ky * math.cos(a) - kx * math.sin(a)) * self.stretch[1]
         f = np.maximum(np.sqrt(u * u + v * v), 1e-6)
-        amp = f ** (-self.beta) * np.exp(-((f / self.f_hi) ** 2))
-        amp *= 1.0 - np.exp(-((f / self.f_lo) ** 2))
-        return amp.astype(np.float32, copy=False)
+        # f**−β and the cuts by ionic_usd.geometry.libm (the same bits on every CPU), in
+        # float32 a block at a time
+
+        def amp(b: np.ndarray) -> np.ndarray:
+            out = libm.power(b, -self.beta)
+            out *= libm.exp(-np.square(b / np.float32(self.f_hi)))
+            out *= 1.0 - libm.exp(-np.square(b / np.float32(self.f_lo)))
+            return out
+
+        return libm.by_blocks(amp, f)
+
+
+@functools.lru_cache(maxsize=16)
+def _amplitude_grid(spec: NoiseSpec) -> np.ndarray:
+    """The amplitude for ky in [−K, K] (rows), kx in [0, K] (columns), K = ``spec.k_need``:
+    every frequency a tile draws below KMAX, so a field slices it (read-only, shared)."""
+    k = spec.k_need
+    grid = spec.amplitude(
+        np.arange(0, k + 1, dtype=np.float32)[None, :],
+        np.arange(-k, k + 1, dtype=np.float32)[:, None],
+    )
+    grid.flags.writeable = False
+    return grid
 
 
 @functools.lru_cache(maxsize=64)
 def noise_sigma(spec: NoiseSpec) -> float:
     """Standard deviation of the unnormalised field in the infinite-resolution limit (x n^2)."""
     k = spec.k_need
-    amp = spec.amplitude(
-        np.arange(0, k + 1, dtype=np.float32)[None, :],
-        np.arange(-k, k + 1, dtype=np.float32)[:, None],
-    )
+    amp = _amplitude_grid(spec).copy()
     amp[k, 0] = 0.0
     # Columns kx > 0 of the half plane stand for two full-plane bins (Hermitian pairs);
     # E|c|^2 = 2 for a complex coefficient with unit-variance parts.
@@ -118,10 +137,8 @@ class Spectrum:
         k = min(spec.k_need, KMAX, n // 2)
         scale = np.float32(n * n / noise_sigma(spec))
         block = self._draw_low(spec.stream, k)
-        block *= spec.amplitude(
-            np.arange(0, k + 1, dtype=np.float32)[None, :],
-            np.arange(-k, k + 1, dtype=np.float32)[:, None],
-        )
+        big = spec.k_need
+        block *= _amplitude_grid(spec)[big - k : big + k + 1, : k + 1]  # the same values
         block *= scale
         if n // 2 <= k:
             coef = block[self.iy + k, : n // 2 + 1]

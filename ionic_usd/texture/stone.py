@@ -36,6 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from ionic_usd.errors import ParameterError
+from ionic_usd.geometry import libm
 from ionic_usd.texture.colour import encode_srgb_inplace, linear_to_srgb, srgb_to_linear
 from ionic_usd.texture.files import (
     MAX_USER_TEXTURE_SIZE,
@@ -249,6 +250,11 @@ def _check_seed(seed: object) -> int:
     return int(seed)
 
 
+def _gauss(u: np.ndarray) -> np.ndarray:
+    """exp(−u²) of float32 ``u`` by :func:`ionic_usd.geometry.libm.exp`, block by block."""
+    return libm.by_blocks(lambda b: libm.exp(-np.square(b)), u.astype(np.float32, copy=False))
+
+
 def generate_stone_maps(style: StoneStyle | str, size: int = 1024, seed: int = 0) -> StoneMaps:
     """Generate tileable base colour, roughness, normal and height maps.
 
@@ -300,10 +306,11 @@ def generate_stone_maps(style: StoneStyle | str, size: int = 1024, seed: int = 0
         fade_a = smoothstep(-0.8, 0.6, cloud)
         fade_b = smoothstep(0.2, 1.4, -cloud + 0.5 * grain)
         width = np.float32(0.06) * (1.0 + 0.6 * cloud)
-        primary = np.exp(-((vein_a / np.maximum(width, 0.015)) ** 2))
-        halo = 0.25 * np.exp(-((vein_a / 0.3) ** 2))
+        # Gaussians through libm.exp (float64, then float32): the same texels on every CPU
+        primary = _gauss(vein_a / np.maximum(width, 0.015))
+        halo = 0.25 * _gauss(vein_a / np.float32(0.3))
         veins = np.maximum(primary, halo) * fade_a
-        veins = np.maximum(veins, 0.45 * np.exp(-((vein_b / 0.035) ** 2)) * fade_b)
+        veins = np.maximum(veins, 0.45 * _gauss(vein_b / np.float32(0.035)) * fade_b)
         veins *= np.float32(st.vein_strength)
 
     pores = zeros

@@ -160,7 +160,8 @@ def stable_prototypes(layer: Sdf.Layer) -> int:
     final = {old: f"/{_FLAT}{i + 1}" for i, old in enumerate(order)}
     moved = sum(old != new for old, new in final.items())
     # every prototype is copied, moved or not, so the layer's order of root prims (copies
-    # come last) does not depend on USD's numbering either. Two steps, through temporary names: a new name may be another prototype's old one
+    # come last) does not depend on USD's numbering either; in two steps, through temporary
+    # names, as a new name may be another prototype's old one
     temp = {old: f"/_ionic_usd_prototype_{i}" for i, old in enumerate(order)}
     for step in (temp, {temp[old]: new for old, new in final.items()}):
         for src, dst in step.items():
