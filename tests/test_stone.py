@@ -13,6 +13,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 from ionic_usd.errors import IonicError, ParameterError
+from ionic_usd.texture.colour import encode_srgb_inplace
 from ionic_usd.texture.stone import (
     STONE_STYLES,
     TRAVERTINE,
@@ -176,6 +177,30 @@ def test_srgb_round_trip_and_anchors():
     x = np.linspace(0, 1, 101, dtype=np.float32)
     assert_allclose(linear_to_srgb(srgb_to_linear(x)), x, atol=2e-6)
     assert_allclose(srgb_to_linear(np.float32([0.5]))[0], 0.21404, atol=1e-4)
+
+
+def test_srgb_encoding_follows_the_standard_to_float32_resolution():
+    """The table encoder against IEC 61966-2-1 evaluated value by value with math.pow: every
+    float32 cell of the table sampled, the linear segment exact, the range clipped."""
+    rng = np.random.default_rng(11)
+    x = np.concatenate(
+        [rng.uniform(0.0, 1.0, 20000), 10.0 ** rng.uniform(-9.0, 0.0, 20000), [0.0, 1.0]]
+    ).astype(np.float32)
+    knee = 0.0031308
+    x = x[np.abs(x.astype(np.float64) - knee) > 1e-9]  # the two segments differ by 7e-7 there
+    want = np.array(
+        [12.92 * v if v <= knee else 1.055 * math.pow(v, 1 / 2.4) - 0.055 for v in x.tolist()]
+    )
+    got = linear_to_srgb(x).astype(np.float64)
+    assert np.max(np.abs(got - want) / np.maximum(want, 1e-30)) < 2e-7
+    low = x <= knee
+    assert np.array_equal(got[low], (x[low] * np.float32(12.92)).astype(np.float64))
+    assert linear_to_srgb(np.float32([-1.0, 2.0])).tolist() == [0.0, 1.0]
+    assert np.isnan(linear_to_srgb(np.float32([np.nan]))[0])
+    # in place, any shape, the same values
+    m = x[: 20000 // 3 * 3].reshape(-1, 3).copy()
+    encode_srgb_inplace(m)
+    assert np.array_equal(m.reshape(-1), linear_to_srgb(x[: len(m) * 3]))
 
 
 # ----------------------------------------------------------------------------- validation
