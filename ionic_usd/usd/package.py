@@ -86,21 +86,27 @@ def _gather_textures(layer: Sdf.Layer, folder: Path) -> int:
     return len(by_hash)
 
 
+def _referencing_specs(layer: Sdf.Layer) -> list[tuple[Sdf.Path, Sdf.PrimSpec]]:
+    """Every prim spec of ``layer`` that has references, with its path (traversal order)."""
+    found: list[tuple[Sdf.Path, Sdf.PrimSpec]] = []
+
+    def visit(path: Sdf.Path) -> None:
+        if path.IsPrimPath():
+            spec = layer.GetPrimAtPath(path)
+            if spec is not None and spec.hasReferences:
+                found.append((path, spec))
+
+    layer.Traverse(Sdf.Path.absoluteRootPath, visit)
+    return found
+
+
 def _internal_refs(layer: Sdf.Layer) -> dict[str, list[str]]:
     """Prototype root path → paths of the prim specs that reference it internally."""
     users: dict[str, list[str]] = {}
-
-    def visit(path: Sdf.Path) -> None:
-        if not path.IsPrimPath():
-            return
-        spec = layer.GetPrimAtPath(path)
-        if spec is None or not spec.hasReferences:
-            return
+    for path, spec in _referencing_specs(layer):
         for ref in spec.referenceList.GetAddedOrExplicitItems():
             if not ref.assetPath and ref.primPath.name.startswith(_FLAT):
                 users.setdefault(str(ref.primPath), []).append(str(path))
-
-    layer.Traverse(Sdf.Path.absoluteRootPath, visit)
     return users
 
 
@@ -113,20 +119,13 @@ def _rename_references(layer: Sdf.Layer, mapping: dict[str, str]) -> None:
             return ref
         return Sdf.Reference(ref.assetPath, Sdf.Path(new), ref.layerOffset, ref.customData)
 
-    def visit(path: Sdf.Path) -> None:
-        if not path.IsPrimPath():
-            return
-        spec = layer.GetPrimAtPath(path)
-        if spec is None or not spec.hasReferences:
-            return
+    for _, spec in _referencing_specs(layer):
         refs = spec.referenceList
         for kind in ("explicitItems", "prependedItems", "appendedItems"):
             items = list(getattr(refs, kind))
             fixed = [fix(r) for r in items]
             if fixed != items:
                 setattr(refs, kind, fixed)
-
-    layer.Traverse(Sdf.Path.absoluteRootPath, visit)
 
 
 def stable_prototypes(layer: Sdf.Layer) -> int:
