@@ -181,17 +181,14 @@ def exp(x: np.ndarray | float) -> np.ndarray:
     top, bottom = (_EXPF_MAX, _EXPF_MIN) if single else (_EXP_MAX, _EXP_MIN)
     with np.errstate(all="ignore"):
         lo, hi = (float(x.min()), float(x.max())) if x.size else (0.0, 0.0)
-        # within (bottom + 37, top − 1) 2**n is a normal number: one ldexp
-        wide = not (bottom + 37.0 < lo and hi < top - 1.0)  # also NaN: the clipped path
-        e, n = _exp_kernel(np.clip(x, bottom, top) if wide else x)
-        if not wide:
-            return _result(np.ldexp(e, n.astype(np.int32)), shape)
-        nn = np.nan_to_num(n).astype(np.int32)
-        # two steps of ldexp: 2**n alone overflows at the top and underflows at the bottom
-        half = nn // 2
-        out = np.ldexp(np.ldexp(e, half), nn - half)
-        out[x > top] = np.inf
-        out[x < bottom] = 0.0
+        inside = bottom <= lo and hi <= top  # False with a NaN too
+        e, n = _exp_kernel(x if inside else np.clip(x, bottom, top))
+        # ldexp scales exactly and rounds once, so e · 2**n needs no 2**n (which would
+        # overflow at the top and underflow at the bottom); a NaN's n casts to anything
+        out = np.ldexp(e, n.astype(np.int32))
+        if not inside:
+            out[x > top] = np.inf
+            out[x < bottom] = 0.0
     return _result(out, shape)
 
 

@@ -64,12 +64,14 @@ class NoiseSpec:
         u = (kx * math.cos(a) + ky * math.sin(a)) * self.stretch[0]
         v = (ky * math.cos(a) - kx * math.sin(a)) * self.stretch[1]
         f = np.maximum(np.sqrt(u * u + v * v), 1e-6)
-        # f**−β and the cuts by ionic_usd.geometry.libm (the same bits on every CPU), in
-        # float32 a block at a time
+        # f**−β · exp(−(f/f_hi)²) as one exp, times the low cut, by ionic_usd.geometry.libm
+        # (the same bits on every CPU), in float32 a block at a time
 
         def amp(b: np.ndarray) -> np.ndarray:
-            out = libm.power(b, -self.beta)
-            out *= libm.exp(-np.square(b / np.float32(self.f_hi)))
+            e = libm.log(b)
+            e *= np.float32(-self.beta)
+            e -= np.square(b / np.float32(self.f_hi))
+            out = libm.exp(e)
             out *= 1.0 - libm.exp(-np.square(b / np.float32(self.f_lo)))
             return out
 
@@ -79,12 +81,16 @@ class NoiseSpec:
 @functools.lru_cache(maxsize=16)
 def _amplitude_grid(spec: NoiseSpec) -> np.ndarray:
     """The amplitude for ky in [−K, K] (rows), kx in [0, K] (columns), K = ``spec.k_need``:
-    every frequency a tile draws below KMAX, so a field slices it (read-only, shared)."""
+    every frequency a tile draws below KMAX, so a field slices it (read-only, shared). An
+    unrotated spectrum is even in ky (u = kx·sx, v = ky·sy exactly): its rows ky ≥ 0 are
+    computed and mirrored, the same values at half the cost."""
     k = spec.k_need
-    grid = spec.amplitude(
-        np.arange(0, k + 1, dtype=np.float32)[None, :],
-        np.arange(-k, k + 1, dtype=np.float32)[:, None],
-    )
+    kx = np.arange(0, k + 1, dtype=np.float32)[None, :]
+    if spec.angle_deg == 0.0:
+        top = spec.amplitude(kx, np.arange(0, k + 1, dtype=np.float32)[:, None])
+        grid = np.concatenate([top[:0:-1], top])
+    else:
+        grid = spec.amplitude(kx, np.arange(-k, k + 1, dtype=np.float32)[:, None])
     grid.flags.writeable = False
     return grid
 
