@@ -282,19 +282,24 @@ def _renamed_prototypes(layer: Sdf.Layer, mapping: dict[str, str]) -> None:
         del layer.rootPrims[Sdf.Path(src).name]
 
 
-def test_stable_prototypes_do_not_depend_on_usds_numbering(tiny_temple):
+@pytest.mark.parametrize("which", ["temple", "city"])
+def test_stable_prototypes_do_not_depend_on_usds_numbering(tiny_temple, tiny_city, which):
     """Flatten numbers the prototypes as USD happened to (it changes from one opening to the
-    next); renumbered by their first instance, any numbering gives the same layer."""
+    next); renumbered by their first instance, any numbering gives the same layer (the
+    city's temples are prototypes holding the columns' prototypes: nested)."""
     from ionic_usd.usd.package import stable_prototypes
 
-    flat = Usd.Stage.Open(str(tiny_temple.root)).Flatten()
+    scene = tiny_temple.root if which == "temple" else tiny_city
+    flat = Usd.Stage.Open(str(scene)).Flatten()
     names = [f"/{p.name}" for p in flat.rootPrims if p.name.startswith("Flattened_Prototype_")]
-    assert len(names) == 3  # the free, engaged and corner columns
+    # the temple: the free, engaged and corner columns; the city: its temples' too
+    assert len(names) == 3 if which == "temple" else len(names) > 3
     other = Sdf.Layer.CreateAnonymous(".usda")
     other.TransferContent(flat)
     # another numbering: the names rotated, through temporary ones
-    _renamed_prototypes(other, {n: f"/Tmp{i}" for i, n in enumerate(names)})
-    _renamed_prototypes(other, {f"/Tmp{i}": names[(i + 1) % 3] for i in range(3)})
+    n = len(names)
+    _renamed_prototypes(other, {p: f"/Tmp{i}" for i, p in enumerate(names)})
+    _renamed_prototypes(other, {f"/Tmp{i}": names[(i + 1) % n] for i in range(n)})
     assert other.ExportToString() != flat.ExportToString()
     stable_prototypes(flat)
     stable_prototypes(other)
@@ -302,40 +307,35 @@ def test_stable_prototypes_do_not_depend_on_usds_numbering(tiny_temple):
     assert validate_stage(Usd.Stage.Open(other)) == []  # every instance finds its prototype
 
 
-def test_exports_are_the_same_bytes_run_after_run(tiny_temple, tmp_path):
-    """glb, usdz and 3mf of one scene: the same bytes in two processes (other time zones),
-    every zip entry stamped with the zip epoch."""
+def test_exports_are_the_same_bytes_run_after_run(tiny_temple, tiny_city, tmp_path):
+    """glb, usdz and 3mf of one scene, the glb of a city (its materials inside nested
+    instances) and the usdz of a copy of the scene in another folder: the same bytes in two
+    processes (other time zones), every zip entry stamped with the zip epoch."""
     import os
+    import shutil
     import subprocess
     import sys
 
-    outs = {}
+    moved = tmp_path / "elsewhere" / tiny_temple.root.parent.name
+    shutil.copytree(tiny_temple.root.parent, moved, symlinks=True)
+    jobs = [(f"t.{ext}", tiny_temple.root) for ext in ("glb", "usdz", "3mf")]
+    jobs += [("city.glb", tiny_city), ("moved/t.usdz", moved / tiny_temple.root.name)]
+    outs: dict[str, list[bytes]] = {}
     for run, tz in enumerate(("UTC", "Asia/Tokyo")):
-        for ext in ("glb", "usdz", "3mf"):
-            out = tmp_path / f"run{run}" / f"t.{ext}"
-            out.parent.mkdir(exist_ok=True)
-            r = subprocess.run(
-                [
-                    sys.executable,
-                    "-m",
-                    "ionic_usd",
-                    "export",
-                    str(tiny_temple.root),
-                    "-o",
-                    str(out),
-                    "-q",
-                ],
-                env={**os.environ, "TZ": tz},
-                capture_output=True,
-                text=True,
-            )
+        for name, scene in jobs:
+            out = tmp_path / f"run{run}" / name
+            out.parent.mkdir(parents=True, exist_ok=True)
+            cmd = [sys.executable, "-m", "ionic_usd", "export", str(scene), "-o", str(out), "-q"]
+            r = subprocess.run(cmd, env={**os.environ, "TZ": tz}, capture_output=True, text=True)
             assert r.returncode == 0, r.stderr
-            outs.setdefault(ext, []).append(out.read_bytes())
-    for ext, (a, b) in outs.items():
-        assert a == b, ext
-    for ext in ("usdz", "3mf"):
-        with zipfile.ZipFile(tmp_path / "run1" / f"t.{ext}") as z:
-            assert {i.date_time for i in z.infolist()} == {(1980, 1, 1, 0, 0, 0)}, ext
+            outs.setdefault(name, []).append(out.read_bytes())
+    for name, (a, b) in outs.items():
+        assert a == b, name
+    # where the scene lies on disk is not in the package
+    assert outs["moved/t.usdz"][0] == outs["t.usdz"][0]
+    for name in ("t.usdz", "t.3mf"):
+        with zipfile.ZipFile(tmp_path / "run1" / name) as z:
+            assert {i.date_time for i in z.infolist()} == {(1980, 1, 1, 0, 0, 0)}, name
 
 
 def _cubes_stage(path, boxes):

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
-from pxr import Gf, Sdf, Usd, UsdGeom, Vt
+from pxr import Gf, Sdf, Usd, UsdGeom, UsdShade, Vt
 
 from ionic_usd.errors import ParameterError
 from ionic_usd.usd.reader import parse_variant_args, read_scene
@@ -163,10 +163,10 @@ def test_city_placements_name_nested_instances_and_instancer_entries(tiny_city):
 
 @pytest.mark.parametrize("which", ["temple", "city"])
 def test_mesh_sources_are_paths_of_the_scene_not_of_usd_prototypes(tiny_temple, tiny_city, which):
-    """A mesh's ``source`` (glTF's ``extras.usdPath``, the solid export's messages) names a
-    prim of the scene: inside native instances the first instance's proxy, never USD's
-    ``/__Prototype_N``, whose numbering changes from one opening of the stage to the next
-    (the same temple exported twice gave two GLBs)."""
+    """A mesh's ``source`` and a material's ``path`` (glTF's ``extras.usdPath``, the solid
+    export's messages) name prims of the scene: inside native instances the first instance's
+    proxy, never USD's ``/__Prototype_N``, whose numbering changes from one opening of the
+    stage to the next (the same temple exported twice gave two GLBs)."""
     path = tiny_temple.root if which == "temple" else tiny_city
     scene = read_scene(path)
     stage = Usd.Stage.Open(str(path))
@@ -178,6 +178,11 @@ def test_mesh_sources_are_paths_of_the_scene_not_of_usd_prototypes(tiny_temple, 
     # nested: the city's temples are instances holding column instances and instancers
     proxies = [s for s in sources if stage.GetPrimAtPath(s).IsInstanceProxy()]
     assert proxies
+    # materials too (the city's are inside its temple instances)
+    materials = [m.path for m in scene.materials.values()]
+    assert materials and not [p for p in materials if "__Prototype" in p]
+    for p in materials:
+        assert stage.GetPrimAtPath(p).IsA(UsdShade.Material), p
     # and the scene read again names every mesh the same way
     again = read_scene(path)
     assert sorted(sources) == sorted(m.source for m in again.meshes.values())

@@ -269,10 +269,15 @@ def arctan2(y: np.ndarray | float, x: np.ndarray | float) -> np.ndarray:
         r *= z
         r += z
         # each turn adds the part of its multiple of π/4 that fl(π/4) leaves out (_MOREBITS
-        # is π/2 − fl(π/2)) before the rounded constant
+        # is π/2 − fl(π/2)) before the rounded constant, and each octant takes one turn (two
+        # in a row would round twice): steep on the left is π/2 + a, not π − (π/2 − a)
         a = np.where(mid, (r + 0.5 * _MOREBITS) + math.pi / 4, r)
-        a = np.where(steep, (_MOREBITS - a) + math.pi / 2, a)
-        a = np.where(np.signbit(x), (2.0 * _MOREBITS - a) + math.pi, a)
+        left = np.signbit(x)
+        a = np.where(
+            steep,
+            np.where(left, (a + _MOREBITS) + math.pi / 2, (_MOREBITS - a) + math.pi / 2),
+            np.where(left, (2.0 * _MOREBITS - a) + math.pi, a),
+        )
         out = np.copysign(a, y)
     return _result(out, shape)
 

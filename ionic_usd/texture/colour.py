@@ -3,7 +3,7 @@
 Both are computed so that a map encodes to the same bytes on every CPU (numpy's ``power`` is a
 SIMD approximation on some processors and not on others):
 
-* decoding with :func:`ionic_usd.geometry.libm.power` (float32, relative error below 5e-7);
+* decoding with :func:`ionic_usd.geometry.libm.power` (float32, relative error below 1e-6);
 * encoding, which runs on every texel of a base colour map, by a table of the encoded value at
   every 2**13-th float32 above 2**-9 (the exponent and the top 10 mantissa bits of the
   argument: 9.2 k entries, made once with float64 ``libm.power``) interpolated linearly in the
@@ -59,9 +59,9 @@ def _encode(c: np.ndarray) -> np.ndarray:
     values, steps = _table()
     bits = c.view(np.int32)
     cell = (bits >> _LOW_BITS) - (int(_FIRST.view(np.int32)) >> _LOW_BITS)
-    low = c <= np.float32(_KNEE)  # on the linear segment
-    nan = cell >= len(values)  # only NaN lies above 1 after the clip
-    cell[low | nan] = 0  # low: cells below 2**-9 too
+    low = c <= np.float32(_KNEE)  # on the linear segment (cells below 2**-9 too)
+    nan = np.isnan(c)  # either sign: its bits index no cell
+    cell[low | nan] = 0
     frac = (bits & ((1 << _LOW_BITS) - 1)).astype(np.float32)
     frac *= np.float32(1.0 / (1 << _LOW_BITS))
     out = steps[cell]
@@ -80,7 +80,10 @@ def linear_to_srgb(c: np.ndarray) -> np.ndarray:
 
 def encode_srgb_inplace(c: np.ndarray) -> None:
     """:func:`linear_to_srgb` of a float32 array in place, block by block (no temporary of
-    the full shape)."""
+    the full shape); a float64 array is encoded through float32 values, in place too."""
+    if c.dtype != np.float32:
+        c[...] = linear_to_srgb(c)
+        return
     flat = c.reshape(-1)  # a view of a contiguous map (else a copy, written back below)
     libm.by_blocks(_encode, flat, c.dtype, out=flat)
     if not np.shares_memory(flat, c):

@@ -13,8 +13,9 @@ The same scene gives the same package, byte for byte: ``Stage.Flatten`` names th
 opening of the stage to the next (one thread or many), so :func:`stable_prototypes`
 renumbers them by the path of their first instance; the zip stamps each file with its
 modification time, which is set to the zip epoch first (1980-01-01 00:00 local time, as the
-zip stores it); and ``UsdUtils.CreateNewARKitUsdzPackage``, which listed the textures in an
-order that changed from run to run, is not used.
+zip stores it); the layer's documentation and the models' ``assetInfo`` identifiers are
+made relative to the scene's folder; and ``UsdUtils.CreateNewARKitUsdzPackage``, which
+listed the textures in an order that changed from run to run, is not used.
 """
 
 from __future__ import annotations
@@ -172,6 +173,35 @@ def stable_prototypes(layer: Sdf.Layer) -> int:
     return moved
 
 
+def _relative_paths(layer: Sdf.Layer, scene: Path) -> None:
+    """Flatten anchors the models' ``assetInfo`` identifiers to absolute paths and documents
+    the root layer's: both relative to the scene's folder instead (the file's name for one
+    outside it), so the package neither depends on nor tells where the scene lay on disk."""
+    folder = scene.resolve().parent
+    layer.documentation = f"Flattened by ionic_usd from {scene.name}"
+
+    def relative(path: str) -> str:
+        p = Path(path)
+        if not p.is_absolute():
+            return path
+        try:
+            return "./" + p.resolve().relative_to(folder).as_posix()
+        except ValueError:
+            return "./" + p.name
+
+    def visit(path: Sdf.Path) -> None:
+        if not path.IsPrimPath():
+            return
+        spec = layer.GetPrimAtPath(path)
+        info = dict(spec.assetInfo) if spec is not None and spec.assetInfo else {}
+        ident = info.get("identifier")
+        if isinstance(ident, Sdf.AssetPath) and Path(ident.path).is_absolute():
+            info["identifier"] = Sdf.AssetPath(relative(ident.path))
+            spec.SetInfo("assetInfo", info)
+
+    layer.Traverse(Sdf.Path.absoluteRootPath, visit)
+
+
 def _zip_package(root: Path, textures: list[Path], pkg: Path) -> None:
     """The usdz archive (``Sdf.ZipFileWriter``: uncompressed, 64-byte aligned): the root
     layer first, as the format requires, then the textures by name."""
@@ -206,6 +236,7 @@ def write_usdz(
     if sel:
         select_variants(stage, sel)
     flat = stage.Flatten()
+    _relative_paths(flat, Path(scene))
     stable_prototypes(flat)
     # what Flatten keeps of variant sets: none should be left (the ARKit profile forbids them)
     left = 0

@@ -21,6 +21,7 @@ under :mod:`ionic_usd.usd`: callers get numpy arrays, strings and dicts.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 from collections.abc import Mapping
@@ -209,7 +210,7 @@ class _Reader:
             if cards is not None:  # a model drawn as its card box stands in for its subtree
                 it.PruneChildren()
                 m = self._matrix(prim, root, relative)
-                for key in self._cards(prim, cards):
+                for key in self._cards(prim, cards, _aliased(path, alias)):
                     out.append((key, m, str(path), {} if relative else para[path], False))
                 continue
             if not (
@@ -236,7 +237,9 @@ class _Reader:
                 pi = UsdGeom.PointInstancer(prim)
                 out.extend(self._point_instancer(pi, m, para[path], alias))
             else:
-                mkey = self._mesh(prim, para[path] if relative else {}, _aliased(path, alias))
+                mkey = self._mesh(
+                    prim, para[path] if relative else {}, _aliased(path, alias), alias
+                )
                 if mkey is not None:
                     out.append((mkey, m, str(path), {} if relative else para[path], False))
         return out
@@ -246,7 +249,7 @@ class _Reader:
             return np.array(self.xfc.ComputeRelativeTransform(prim, root)[0]).reshape(4, 4)
         return np.array(self.xfc.GetLocalToWorldTransform(prim)).reshape(4, 4)
 
-    def _cards(self, prim: Usd.Prim, faces: list[CardFace]) -> list[str]:
+    def _cards(self, prim: Usd.Prim, faces: list[CardFace], source: str) -> list[str]:
         """One quad mesh per card face, textured by the face's image (keys of the meshes)."""
         keys = []
         colour = card_colour(prim)
@@ -262,7 +265,7 @@ class _Reader:
                 if face.texture
                 else None
             )
-            mat = MaterialData(f"card{face.name}", str(prim.GetPath()), colour, tex)
+            mat = MaterialData(f"card{face.name}", source, colour, tex)
             self.scene.materials.setdefault(mat.key, mat)
             counts, idx = np.array([4], np.int64), np.arange(4, dtype=np.int64)
             key = content_key([face.points, counts, idx, face.st], f"card|{mat.key}")
@@ -271,7 +274,7 @@ class _Reader:
                 SceneMesh(
                     key,
                     f"card{face.name}",
-                    str(prim.GetPath()),
+                    source,
                     face.points,
                     counts,
                     idx,
@@ -285,7 +288,9 @@ class _Reader:
             keys.append(key)
         return keys
 
-    def _material(self, prim: Usd.Prim) -> str | None:
+    def _material(self, prim: Usd.Prim, alias: tuple[str, str] | None) -> str | None:
+        """The key of the material bound to ``prim``; a material inside a prototype is named
+        under the instance, as the meshes are."""
         mat, _ = UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial()
         if not mat:
             return None
@@ -293,16 +298,19 @@ class _Reader:
         if mpath not in self._materials:
             data = read_material(mat)
             if data is not None:
+                data = dataclasses.replace(data, path=_aliased(mat.GetPath(), alias))
                 self.scene.materials.setdefault(data.key, data)
             self._materials[mpath] = data.key if data is not None else None
         return self._materials[mpath]
 
-    def _mesh(self, prim: Usd.Prim, paradata: dict, source: str) -> str | None:
+    def _mesh(
+        self, prim: Usd.Prim, paradata: dict, source: str, alias: tuple[str, str] | None
+    ) -> str | None:
         read = read_mesh_arrays(prim, self.t)
         if read is None:
             return None
         pts, counts, idx, nrm, interp, st, double = read
-        material = self._material(prim)
+        material = self._material(prim, alias)
         colour = display_colour(prim)
         meta = json.dumps(paradata, sort_keys=True, default=str)
         key = content_key(
