@@ -243,8 +243,9 @@ def arctan2(y: np.ndarray | float, x: np.ndarray | float) -> np.ndarray:
     same bits on every CPU (numpy's ``arctan2`` otherwise, signed zeros and infinities
     included).
 
-    With a = |y|, b = |x|: atan(min/max) on [0, 1] (above 0.66 as π/4 + atan((t − 1)/(t + 1))),
-    then π/2 − that where a > b and π − that where x < 0 (or −0), signed as y.
+    With a = |y|, b = |x|: r = atan(min/max) on [0, 1] (above 0.66 as π/4 + atan((t − 1)/
+    (t + 1))), then one turn per octant, π/2 − r (a > b, x ≥ 0), π/2 + r (a > b, x < 0 or
+    −0), π − r (a ≤ b, x < 0 or −0), signed as y.
     """
     y, x = np.broadcast_arrays(np.asarray(y, dtype=_F), np.asarray(x, dtype=_F))
     shape = y.shape

@@ -34,16 +34,10 @@ def srgb_to_linear(c: np.ndarray) -> np.ndarray:
     return np.where(c <= 0.04045, c / np.float32(12.92), high).astype(np.float32)
 
 
-def _encode_exact(c: np.ndarray) -> np.ndarray:
-    """The formula in float64: 12.92 c below the knee, 1.055 c**(1/2.4) − 0.055 above."""
-    c = np.asarray(c, dtype=np.float64)
-    return np.where(c <= _KNEE, 12.92 * c, 1.055 * libm.power(c, 1.0 / 2.4) - 0.055)
-
-
 @functools.cache
 def _table() -> tuple[np.ndarray, np.ndarray]:
     """(value at each knot, difference to the next): float32, knots at the float32 values
-    whose low 13 bits are zero, from 2**-9 up to 1 and one past it."""  # 9.2 k entries
+    whose low 13 bits are zero, from 2**-9 up to 1 and one past it (9.2 k entries)."""
     first = int(_FIRST.view(np.int32)) >> _LOW_BITS
     last = int(np.float32(1.0).view(np.int32)) >> _LOW_BITS
     knots = (np.arange(first, last + 2, dtype=np.int32) << _LOW_BITS).view(np.float32)

@@ -306,7 +306,7 @@ def generate_stone_maps(style: StoneStyle | str, size: int = 1024, seed: int = 0
         fade_a = smoothstep(-0.8, 0.6, cloud)
         fade_b = smoothstep(0.2, 1.4, -cloud + 0.5 * grain)
         width = np.float32(0.06) * (1.0 + 0.6 * cloud)
-        # Gaussians through libm.exp (float64, then float32): the same texels on every CPU
+        # Gaussians through libm.exp (float32): the same texels on every CPU
         primary = _gauss(vein_a / np.maximum(width, 0.015))
         halo = 0.25 * _gauss(vein_a / np.float32(0.3))
         veins = np.maximum(primary, halo) * fade_a

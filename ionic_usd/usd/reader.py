@@ -210,7 +210,7 @@ class _Reader:
             if cards is not None:  # a model drawn as its card box stands in for its subtree
                 it.PruneChildren()
                 m = self._matrix(prim, root, relative)
-                for key in self._cards(prim, cards, _aliased(path, alias)):
+                for key in self._cards(prim, cards, alias):
                     out.append((key, m, str(path), {} if relative else para[path], False))
                 continue
             if not (
@@ -237,9 +237,7 @@ class _Reader:
                 pi = UsdGeom.PointInstancer(prim)
                 out.extend(self._point_instancer(pi, m, para[path], alias))
             else:
-                mkey = self._mesh(
-                    prim, para[path] if relative else {}, _aliased(path, alias), alias
-                )
+                mkey = self._mesh(prim, para[path] if relative else {}, alias)
                 if mkey is not None:
                     out.append((mkey, m, str(path), {} if relative else para[path], False))
         return out
@@ -249,8 +247,11 @@ class _Reader:
             return np.array(self.xfc.ComputeRelativeTransform(prim, root)[0]).reshape(4, 4)
         return np.array(self.xfc.GetLocalToWorldTransform(prim)).reshape(4, 4)
 
-    def _cards(self, prim: Usd.Prim, faces: list[CardFace], source: str) -> list[str]:
+    def _cards(
+        self, prim: Usd.Prim, faces: list[CardFace], alias: tuple[str, str] | None
+    ) -> list[str]:
         """One quad mesh per card face, textured by the face's image (keys of the meshes)."""
+        source = _aliased(prim.GetPath(), alias)
         keys = []
         colour = card_colour(prim)
         for face in faces:
@@ -303,9 +304,7 @@ class _Reader:
             self._materials[mpath] = data.key if data is not None else None
         return self._materials[mpath]
 
-    def _mesh(
-        self, prim: Usd.Prim, paradata: dict, source: str, alias: tuple[str, str] | None
-    ) -> str | None:
+    def _mesh(self, prim: Usd.Prim, paradata: dict, alias: tuple[str, str] | None) -> str | None:
         read = read_mesh_arrays(prim, self.t)
         if read is None:
             return None
@@ -320,7 +319,7 @@ class _Reader:
             self.scene.meshes[key] = SceneMesh(
                 key=key,
                 name=prim.GetName(),
-                source=source,
+                source=_aliased(prim.GetPath(), alias),
                 points=pts,
                 face_vertex_counts=counts,
                 face_vertex_indices=idx,
@@ -401,8 +400,8 @@ def _aliased(path: Sdf.Path, alias: tuple[str, str] | None) -> str:
     """``path`` as the scene names it: under ``alias = (prototype, instance)`` the prototype's
     prefix is replaced by the instance's path."""
     s = str(path)
-    if alias is None or not s.startswith(alias[0]):
-        return s
+    if alias is None or not (s == alias[0] or s.startswith(alias[0] + "/")):
+        return s  # not under it (a prefix of the name alone, /__Prototype_1 of _10, is not)
     return alias[1] + s[len(alias[0]) :]
 
 
