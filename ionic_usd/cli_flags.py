@@ -24,10 +24,14 @@ __all__ = [
     "add_memory_flag",
     "add_output_flags",
     "add_report_flags",
+    "add_seed_flag",
     "add_stone_flags",
     "add_variant_flag",
     "collect_flags",
+    "memory_gb",
     "parse_bool",
+    "seed",
+    "texture_size",
 ]
 
 
@@ -105,30 +109,107 @@ def add_config_flags(p: argparse.ArgumentParser, help: str, *, print_config: boo
         )
 
 
-def add_stone_flags(p: argparse.ArgumentParser) -> None:
+#: the one schema of the flags several commands share: (low, high) of each
+TEXTURE_SIZES = (16, 8192)
+SEED_RANGE = (0, 2**63 - 1)
+MEMORY_GB_RANGE = (0.1, float(1 << 20))
+
+
+def texture_size(text: str) -> int:
+    """``--texture-size``: a power of two in [16, 8192] (argparse type: refused at parsing)."""
+    lo, hi = TEXTURE_SIZES
+    try:
+        v = int(text)
+    except ValueError:
+        v = -1
+    if not lo <= v <= hi or v & (v - 1):
+        raise argparse.ArgumentTypeError(f"expected a power of two in [{lo}, {hi}], got {text!r}")
+    return v
+
+
+def seed(text: str) -> int:
+    """``--seed``: an integer in [0, 2**63 - 1]."""
+    lo, hi = SEED_RANGE
+    try:
+        v = int(text)
+    except ValueError:
+        v = -1
+    if not lo <= v <= hi:
+        raise argparse.ArgumentTypeError(f"expected an integer in [{lo}, 2**63 - 1], got {text!r}")
+    return v
+
+
+def memory_gb(text: str) -> float:
+    """``--max-memory``: a number of GB in [0.1, 1048576]."""
+    import math
+
+    lo, hi = MEMORY_GB_RANGE
+    try:
+        v = float(text)
+    except ValueError:
+        v = math.nan
+    if not (math.isfinite(v) and lo <= v <= hi):
+        raise argparse.ArgumentTypeError(
+            f"expected a number of GB in [{lo:g}, {hi:.0f}], got {text!r}"
+        )
+    return v
+
+
+def add_stone_flags(p: argparse.ArgumentParser, *, seed_default: int = 7) -> None:
     """``--texture-size`` and ``--seed`` of the procedural stone textures."""
     p.add_argument(
         "--texture-size",
-        type=int,
+        type=texture_size,
         default=1024,
         help="texture resolution in pixels: a power of two, 16-4096 within the "
         "default memory limit; 8192 needs about 10 GB (--max-memory 10) "
         "[default 1024]",
     )
-    p.add_argument("--seed", type=int, default=7, help="seed of the procedural stone [default 7]")
+    add_seed_flag(p, "seed of the procedural stone", default=seed_default)
 
 
-def add_memory_flag(p: argparse.ArgumentParser) -> None:
-    """``--max-memory GB``: refuse work whose estimated peak exceeds it."""
+def add_seed_flag(p: argparse.ArgumentParser, help: str, *, default: int) -> None:
+    """``--seed N`` (an integer in [0, 2**63 - 1])."""
+    p.add_argument("--seed", type=seed, default=default, help=f"{help} [default {default}]")
+
+
+class _DeprecatedAlias(argparse.Action):
+    """An old flag name kept working: stores like the new one and says it is deprecated."""
+
+    def __call__(self, parser: Any, namespace: Any, values: Any, option_string: Any = None):
+        import sys
+
+        print(
+            f"ionic-usd: warning: {option_string} is deprecated; use --max-memory",
+            file=sys.stderr,
+        )
+        setattr(namespace, self.dest, values)
+
+
+def add_memory_flag(
+    p: argparse.ArgumentParser, *, what: str = "work", old_name: str | None = None
+) -> None:
+    """``--max-memory GB``: refuse work whose estimated peak exceeds it. Every command that
+    allocates has it, with one range and one default; ``old_name`` (``--memory-limit`` on
+    ``city``) is still accepted, with a warning."""
     from ionic_usd.resources import DEFAULT_MAX_MEMORY_GB
 
     p.add_argument(
         "--max-memory",
-        type=float,
+        type=memory_gb,
         metavar="GB",
         default=None,
-        help="refuse work whose estimated peak memory exceeds this "
+        help=f"refuse {what} whose estimated peak memory exceeds this "
         f"[default {DEFAULT_MAX_MEMORY_GB:g} GB]",
+    )
+    if old_name is None:
+        return
+    p.add_argument(
+        old_name,
+        type=memory_gb,
+        dest="max_memory",
+        action=_DeprecatedAlias,
+        help=argparse.SUPPRESS,
     )
 
 

@@ -157,6 +157,9 @@ def _check_target(p: Path, what: str) -> Path:
         raise ParameterError(
             what, str(p), "a path ending in a file or folder name (not '.', '..' or '/')"
         )
+    if any(ord(c) < 32 or ord(c) == 127 for c in str(p)):
+        # USD asset paths cannot hold control characters: such a file does not reopen
+        raise ParameterError(what, str(p), "a path without control characters (newline, tab…)")
     parent = p.parent
     anc = _existing_ancestor(parent)
     if not anc.is_dir():

@@ -31,7 +31,19 @@ def _shaft_params(args: argparse.Namespace):
             raise ParameterError("shaft", section, "a TOML table", context=str(args.config))
         base = dataclass_from_mapping(ShaftParams, section, context=f"{args.config} [shaft]")
     flags = collect_flags(args, ShaftParams)
-    return dataclass_from_mapping(ShaftParams, flags, context="command line", base=base)
+    params = dataclass_from_mapping(ShaftParams, flags, context="command line", base=base)
+    given = flags.get("flute_slices_per_fillet_slice", base.flute_slices_per_fillet_slice)
+    top = params.fillet_ratio_saturation()
+    if given != ShaftParams.flute_slices_per_fillet_slice and given > top:
+        # a value that changes nothing is refused (issue 31), not silently accepted
+        raise ParameterError(
+            "--flute-slices-per-fillet-slice",
+            given,
+            f"at most {top}: from $i = {top} on the fillet is one slice (fillet "
+            f"{params.fillet_angle:g} deg, flute {params.flute_angle:g} deg in "
+            f"{params.flute_slices} slices), so a larger $i changes nothing",
+        )
+    return params
 
 
 def cmd_shaft(args: argparse.Namespace) -> int:
@@ -79,7 +91,10 @@ def _column_params(args: argparse.Namespace):
     params = portunus_column_params()
     if args.config:
         params = column_params_from_mapping(load_toml(args.config), context=str(args.config))
-    flags = {k: getattr(args, k) for k in ("lod", "base", "scroll") if getattr(args, k, None)}
+    # an empty value is given (and refused by the parameters), not "not given"
+    flags = {
+        k: getattr(args, k) for k in ("lod", "base", "scroll") if getattr(args, k, None) is not None
+    }
     if flags:
         params = column_params_from_mapping({"column": flags}, context="command line", base=params)
     return params
@@ -234,6 +249,9 @@ def cmd_preview(args: argparse.Namespace) -> int:
     except ValueError:
         raise ParameterError("--background", args.background, "three numbers R,G,B") from None
     background = (red, green, blue)
+    from ionic_usd.resources import check_estimate, estimate_render
+
+    check_estimate(estimate_render(args.width, args.height, args.samples), args.max_memory)
     s = render_preview(
         args.scene,
         args.output,

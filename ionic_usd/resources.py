@@ -35,8 +35,11 @@ __all__ = [
     "column_triangle_estimate",
     "estimate_asset",
     "estimate_city",
+    "estimate_inputs",
+    "estimate_render",
     "estimate_column",
     "estimate_temple",
+    "input_bytes",
     "max_memory_bytes",
 ]
 
@@ -216,3 +219,58 @@ def estimate_city(rows: int, cols: int, street_columns: int) -> Estimate:
         0,
         BASELINE_BYTES + b,
     )
+
+
+#: a framebuffer pixel: the resolved RGBA, its read-back and the PNG rows (measured 19 B/px:
+#: 2048² without MSAA, llvmpipe); each MSAA sample adds a colour and a depth value
+_BYTES_PER_PIXEL = 20
+_BYTES_PER_SAMPLE = 8
+#: decoded bytes per byte of input file (a crate file holds a triangle in ~18 B, numpy and
+#: Vt hold it in ~300 B; a text point cloud holds a point in ~30 B, the fit's arrays, copies
+#: and KD-tree about 16x that)
+INPUT_EXPANSION = 16
+
+
+def estimate_render(width: int, height: int, samples: int) -> Estimate:
+    """A preview: its framebuffers (the scene's own meshes were bounded when written)."""
+    px = width * height
+    per_px = _BYTES_PER_PIXEL + _BYTES_PER_SAMPLE * max(samples, 1)
+    return Estimate(
+        f"a {width}x{height} picture with {samples} samples", 0, 0, BASELINE_BYTES + px * per_px
+    )
+
+
+def input_bytes(*paths: object) -> int:
+    """Bytes on disk of the given files; a USD file counts with every USD layer of its
+    folder tree (the layers it may reference: a temple's or a city's parts)."""
+    from pathlib import Path
+
+    total = 0
+    for p in paths:
+        if p is None:
+            continue
+        path = Path(str(p))
+        if not path.is_file():
+            continue
+        total += path.stat().st_size
+        if path.suffix.lower() in (".usd", ".usda", ".usdc"):
+            total += _usd_layers_beside(path)
+    return total
+
+
+def _usd_layers_beside(path: object, cap: int = 20_000) -> int:
+    """Bytes of the other USD layers under ``path``'s folder (the first ``cap`` entries)."""
+    import itertools
+    from pathlib import Path
+
+    p = Path(str(path))
+    total = 0
+    for q in itertools.islice(p.parent.rglob("*"), cap):
+        if q != p and q.suffix.lower() in (".usd", ".usda", ".usdc") and q.is_file():
+            total += q.stat().st_size
+    return total
+
+
+def estimate_inputs(what: str, *paths: object) -> Estimate:
+    """A command whose allocation follows what it reads (export, fit, evaluate)."""
+    return Estimate(what, 0, 0, BASELINE_BYTES + INPUT_EXPANSION * input_bytes(*paths))

@@ -24,7 +24,9 @@ joined to the plain ring — which has a different vertex count — by ring stit
 
 Level of detail: ``flute_slices`` ($h) slices across a flute and rows in each arc;
 ``flute_slices_per_fillet_slice`` ($i): the fillet is cut into ``round(w / (i·f/h))`` slices
-(w = fillet angle), at least one; the plain rings use the fillet's angular step.
+(w = fillet angle), at least one; the plain rings use the fillet's angular step. Above the $i
+that gives one fillet slice (:meth:`ShaftParams.fillet_ratio_saturation`) $i changes nothing,
+so the ``shaft`` command refuses a larger one given by the user.
 
 The shaft is a closed solid (bottom and top caps) unless ``cap_bottom`` / ``cap_top`` is off: then
 it is open exactly at its bottom / top ring (``ring_segments`` vertices, vertex 0 at +X,
@@ -192,6 +194,15 @@ class ShaftParams:
     def fillet_slices(self) -> int:
         step = self.flute_slices_per_fillet_slice * self.flute_angle / self.flute_slices
         return max(1, round(self.fillet_angle / step))
+
+    def fillet_ratio_saturation(self) -> int:
+        """The smallest $i giving the fillet a single slice: every larger $i builds the same
+        shaft (``round(w·h / (i·f))`` is below one half; the fillet is at least one slice)."""
+        # round() of Python rounds half to even: search rather than solve
+        i = 1
+        while max(1, round(self.fillet_angle * self.flute_slices / (i * self.flute_angle))) > 1:
+            i += 1
+        return i
 
     @property
     def ring_segments(self) -> int:

@@ -18,8 +18,10 @@ from typing import TYPE_CHECKING, Any
 from ionic_usd.cli_flags import (
     add_command,
     add_config_flags,
+    add_memory_flag,
     add_output_flags,
     add_report_flags,
+    add_seed_flag,
     add_variant_flag,
 )
 from ionic_usd.errors import ParameterError
@@ -89,6 +91,13 @@ def _read(path: Path, args: argparse.Namespace) -> np.ndarray:
                 f"a spacing giving at most {MAX_RESAMPLED_NODES:,} nodes (about {nodes:,.0f} here)",
             )
     return ref
+
+
+def _check_memory(what: str, *files: Any, limit: float | None = None) -> None:
+    """Refuse (``--max-memory``) work whose inputs would need more memory than allowed."""
+    from ionic_usd.resources import check_estimate, estimate_inputs
+
+    check_estimate(estimate_inputs(what, *files), limit)
 
 
 def _reference(args: argparse.Namespace) -> np.ndarray:
@@ -194,6 +203,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     if args.spacing is not None and not (math.isfinite(args.spacing) and args.spacing > 0):
         raise ParameterError("--spacing", args.spacing, "a finite length > 0 (m)")
     refs = _references(args)
+    _check_memory("the comparison", args.usd, *(f for _, f in refs), limit=args.max_memory)
     if args.plot is not None and len(refs) > 1:
         raise ParameterError("--plot", str(args.plot), "one --reference (one part) per plot")
     rows, aligns, curves, meta = {}, {}, {}, {}
@@ -286,6 +296,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
     """Fit a part to a reference; print before/after tables; write (or print) TOML."""
     from ionic_usd.evaluate.report import format_table, plot_overlay
 
+    _check_memory("the fit", args.scan, args.reference, limit=args.max_memory)
     if args.part == "column":
         from ionic_usd.evaluate.scan_report import cmd_fit_column
 
@@ -456,6 +467,7 @@ def add_evaluate_parser(subparsers: Any, *, arguments: bool = True) -> None:
         plot="write an overlay plot (PNG)",
     )
     p.add_argument("--force", action="store_true", help="overwrite existing --json/--plot files")
+    add_memory_flag(p, what="a comparison")
 
 
 def add_fit_parser(subparsers: Any, *, arguments: bool = True) -> None:
@@ -494,7 +506,8 @@ def add_fit_parser(subparsers: Any, *, arguments: bool = True) -> None:
         type=Path,
         force_help="overwrite existing output files",
     )
-    p.add_argument("--seed", type=int, default=0, help="seed of the global stage [default 0]")
+    add_seed_flag(p, "seed of the global stage", default=0)
+    add_memory_flag(p, what="a fit")
     add_config_flags(p, "column TOML to start from (default: the Portunus column)")
     p.add_argument("--modules", help="base: control points per module, e.g. 2,4,4,2")
     p.add_argument(

@@ -7,7 +7,7 @@ import math
 from pathlib import Path
 from typing import Any
 
-from ionic_usd.cli_flags import add_command, add_output_flags, add_variant_flag
+from ionic_usd.cli_flags import add_command, add_memory_flag, add_output_flags, add_variant_flag
 from ionic_usd.errors import ParameterError
 
 __all__ = ["add_parser", "cmd_export", "parse_scale"]
@@ -54,6 +54,9 @@ def cmd_export(args: argparse.Namespace) -> int:
         raise ParameterError("scene", str(args.scene), "an existing USD file")
     if Path(args.output).resolve() == Path(args.scene).resolve():
         raise ParameterError("--output", args.output, "a file other than the scene read")
+    from ionic_usd.resources import check_estimate, estimate_inputs
+
+    check_estimate(estimate_inputs(f"exporting {args.scene}", args.scene), args.max_memory)
     res = export_scene(
         args.scene,
         args.output,
@@ -143,3 +146,4 @@ def add_parser(sub: Any, parser_class: Any = None, *, arguments: bool = True) ->
         default="1",
         help="STL/3MF: model scale, a number or ratio (1:20 = 0.05) [default 1]",
     )
+    add_memory_flag(p, what="an export")

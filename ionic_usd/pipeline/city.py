@@ -87,7 +87,7 @@ class CityOptions:
     instancer_threshold: int | None = None
     scheduler: str | None = None
     workers: int | None = None
-    memory_limit_gb: float = 8.0
+    memory_limit_gb: float = 4.0  # ionic_usd.resources.DEFAULT_MAX_MEMORY_GB
     force: bool = False
     prototype_cache: str | None = None  # default: $IONIC_USD_CACHE/prototypes
 
@@ -116,7 +116,7 @@ class CityOptions:
         if self.focus is not None and not np.isfinite(self.focus).all():
             raise ParameterError("--focus", self.focus, "finite X,Y (plan metres)")
         if not (np.isfinite(self.memory_limit_gb) and self.memory_limit_gb > 0):
-            raise ParameterError("--memory-limit", self.memory_limit_gb, "GB > 0")
+            raise ParameterError("--max-memory", self.memory_limit_gb, "GB > 0")
         ts = self.texture_size
         if isinstance(ts, bool) or not isinstance(ts, int) or not 16 <= ts <= 8192 or ts & (ts - 1):
             raise ParameterError("--texture-size", ts, "a power of two in [16, 8192]")
@@ -295,7 +295,7 @@ def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | 
     if est > opts.memory_limit_gb * 1e9:
         raise BudgetError(
             f"this city needs about {est / 1e9:.1f} GB ({len(plan.lots):,} "
-            f"temples, {len(cxz):,} columns), above --memory-limit "
+            f"temples, {len(cxz):,} columns), above --max-memory "
             f"{opts.memory_limit_gb:g} GB; raise the limit to build it anyway"
         )
     if not plan.lots and not len(cxz):

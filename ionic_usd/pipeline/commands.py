@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ionic_usd.cli_flags import add_command
+from ionic_usd.cli_flags import add_command, add_memory_flag, add_seed_flag, texture_size
 from ionic_usd.errors import ParameterError
 
 __all__ = ["add_city_parser", "cmd_city"]
@@ -36,7 +36,6 @@ def cmd_city(args: argparse.Namespace) -> int:
     for flag, v, lo, hi in (
         ("--rows", args.rows, 1, 10_000),
         ("--cols", args.cols, 1, 10_000),
-        ("--seed", args.seed, 0, 2**63 - 1),
     ):
         if not lo <= v <= hi:
             raise ParameterError(flag, v, f"an integer in [{lo}, {hi:,}]")
@@ -46,6 +45,9 @@ def cmd_city(args: argparse.Namespace) -> int:
     ):
         if not (math.isfinite(length) and low <= length <= high):
             raise ParameterError(flag, length, f"a length in [{low:g}, {high:g}] m")
+    from ionic_usd.resources import DEFAULT_MAX_MEMORY_GB
+
+    limit_gb = DEFAULT_MAX_MEMORY_GB if args.max_memory is None else args.max_memory
     if args.plan is None:
         # a grid's size is known before any layout work: refuse a city that cannot fit in
         # memory at once (the layout of a million lots alone takes minutes)
@@ -64,11 +66,11 @@ def cmd_city(args: argparse.Namespace) -> int:
             else args.instancer_threshold
         )
         est = estimate_memory(temples, street, 1, threshold)
-        if est > args.memory_limit * 1e9:
+        if est > limit_gb * 1e9:
             raise BudgetError(
                 f"this city needs about {est / 1e9:.1f} GB ({temples:,} temples, "
-                f"about {street:,} columns), above --memory-limit "
-                f"{args.memory_limit:g} GB; raise the limit to build it anyway"
+                f"about {street:,} columns), above --max-memory "
+                f"{limit_gb:g} GB; raise the limit to build it anyway"
             )
     opts = CityOptions(
         plan=str(args.plan) if args.plan else None,
@@ -90,7 +92,7 @@ def cmd_city(args: argparse.Namespace) -> int:
         instancer_threshold=args.instancer_threshold,
         scheduler=args.scheduler,
         workers=args.workers,
-        memory_limit_gb=args.memory_limit,
+        memory_limit_gb=limit_gb,
         force=args.force,
     )
     import logging
@@ -163,7 +165,7 @@ def add_city_parser(sub, parser_class, *, arguments: bool = True) -> None:
         help="draw each lot's column lower diameter from K levels within ±5%% of "
         "the description's (each level is a temple build) [default 1]",
     )
-    p.add_argument("--seed", type=int, default=0, help="seed of the per-lot choices [default 0]")
+    add_seed_flag(p, "seed of the per-lot choices", default=0)
     p.add_argument(
         "--focus",
         type=_pair("--focus"),
@@ -202,7 +204,10 @@ def add_city_parser(sub, parser_class, *, arguments: bool = True) -> None:
         help="uniform scales a temple may take to fit its lot [default 0.6,1.4]",
     )
     p.add_argument(
-        "--texture-size", type=int, default=1024, help="texture resolution (px) [default 1024]"
+        "--texture-size",
+        type=texture_size,
+        default=1024,
+        help="texture resolution (px), a power of two in [16, 8192] [default 1024]",
     )
     p.add_argument(
         "--instancer-threshold",
@@ -219,13 +224,7 @@ def add_city_parser(sub, parser_class, *, arguments: bool = True) -> None:
         "process writes) [default: a local cluster on this machine's cores]",
     )
     p.add_argument("--workers", type=int, help="local cluster size [default: cores]")
-    p.add_argument(
-        "--memory-limit",
-        type=float,
-        default=8.0,
-        metavar="GB",
-        help="refuse a city estimated to need more memory [default 8]",
-    )
+    add_memory_flag(p, what="a city", old_name="--memory-limit")
     p.add_argument(
         "--json",
         type=Path,

@@ -207,6 +207,9 @@ def compose_temple(
     anything is written.
     """
     t0 = time.perf_counter()
+    from ionic_usd.usd.column_asset import check_stone_options
+
+    check_stone_options(texture_size, seed)
     dest = Path(folder)
     if dest.exists() and not force:
         raise OutputExistsError(

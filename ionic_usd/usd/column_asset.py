@@ -111,6 +111,20 @@ BASE_CHART_BOUNDARY = 2.0  # m: see texture.uv.unwrap(max_chart_boundary=…)
 UV_SPAN = 32.0  # m of surface across st ∈ [0, 1]
 
 
+def check_stone_options(texture_size: object, seed: object) -> None:
+    """The stone flags' schema (that of ``--texture-size`` and ``--seed`` on every command)."""
+    from ionic_usd.cli_flags import SEED_RANGE, TEXTURE_SIZES
+
+    ts = (
+        texture_size if isinstance(texture_size, int) and not isinstance(texture_size, bool) else -1
+    )
+    if not TEXTURE_SIZES[0] <= ts <= TEXTURE_SIZES[1] or ts & (ts - 1):
+        raise ParameterError("--texture-size", texture_size, "a power of two in [16, 8192]")
+    sd = seed if isinstance(seed, int) and not isinstance(seed, bool) else -1
+    if not SEED_RANGE[0] <= sd <= SEED_RANGE[1]:
+        raise ParameterError("--seed", seed, "an integer in [0, 2**63 - 1]")
+
+
 @dataclass(frozen=True)
 class ColumnAssetOptions:
     """What to build: variants, texture resolution, extras."""
@@ -139,6 +153,7 @@ class ColumnAssetOptions:
                 if g not in valid:
                     raise ParameterError(name, g, f"one of {', '.join(valid)}")
 
+        check_stone_options(self.texture_size, self.seed)
         check("lod", self.lods, tuple(LODS))
         check("base", self.bases, BASE_VARIANTS)
         check("scroll", self.scrolls, SCROLL_VARIANTS)

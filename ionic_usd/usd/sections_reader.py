@@ -32,7 +32,8 @@ def part_triangles(
     prim_name : the part's prim name (a mesh counts when its placed path holds it, e.g.
         ``Base``)
     variants : variant selections to set on every prim that has the set (e.g.
-        ``{"lod": "high", "base": "G2"}``; a set the file does not have is ignored); default:
+        ``{"lod": "high", "base": "G2"}``; a set no prim has, or a value a set does not offer,
+        is refused, as export refuses it); default:
         the file's own selections
 
     Returns
@@ -43,7 +44,7 @@ def part_triangles(
     path = Path(path)
     if not path.is_file():
         raise ParameterError("usd", str(path), "an existing USD file")
-    scene = read_scene(path, variants=variants, require_sets=False)
+    scene = read_scene(path, variants=variants)
     all_pts, all_tris, offset = [], [], 0
     for p in scene.placements:
         if prim_name not in p.path.split("/"):

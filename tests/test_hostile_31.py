@@ -1,0 +1,131 @@
+"""Issue 31: the last bad inputs refused at the boundary — exit 2, one line naming the
+problem, nothing written (the folder listing unchanged)."""
+
+from __future__ import annotations
+
+import pytest
+
+from tests.test_hostile import _listing, assert_clean_refusal, run_cli
+
+SCENE = (
+    b'#usda 1.0\n(defaultPrim = "Base")\ndef Mesh "Base" {\n'
+    b"  int[] faceVertexCounts = [3, 3, 3, 3]\n"
+    b"  int[] faceVertexIndices = [0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3]\n"
+    b"  point3f[] points = [(0,0,0), (1,0,0), (0,1,0), (0,0,1)]\n}\n"
+)
+CSV = b"0,0\n0.1,0.05\n0.2,0.1\n"
+
+# (argv, files {name: bytes or None for a folder}, text the message must hold)
+CASES: list[tuple[list[str], dict[str, bytes | None], str]] = [
+    # one schema for --texture-size / --seed / --max-memory on every command that has them
+    *[
+        (["asset", "-o", "A", "--texture-size", v], {}, "--texture-size")
+        for v in ("0", "-1", "3", "15", "100", "x")
+    ],
+    *[
+        (["temple", "-o", "T", "--texture-size", v], {}, "--texture-size")
+        for v in ("0", "3", "100")
+    ],
+    (["city", "c", "--texture-size", "100"], {}, "--texture-size"),
+    (["asset", "-o", "A", "--seed", "-1"], {}, "--seed"),
+    (["temple", "-o", "T", "--seed", "-1"], {}, "--seed"),
+    (["city", "c", "--seed", "-1"], {}, "--seed"),
+    (["fit", "shaft", "--reference", "r.csv", "--seed", "-1"], {"r.csv": CSV}, "--seed"),
+    (["city", "c", "--memory-limit", "-1"], {}, "--memory-limit"),
+    (["city", "c", "--max-memory", "nan"], {}, "--max-memory"),
+    (["shaft", "--max-memory", "0"], {}, "--max-memory"),
+    # the commands that had no memory flag: an estimate and a refusal past the limit
+    (
+        [
+            "preview",
+            "s.usda",
+            "-o",
+            "p.png",
+            "--width",
+            "8192",
+            "--height",
+            "8192",
+            "--samples",
+            "16",
+        ],
+        {"s.usda": SCENE},
+        "8192x8192",
+    ),
+    (["export", "s.usda", "-o", "s.glb", "--max-memory", "0.1"], {"s.usda": SCENE}, "limit"),
+    (
+        ["evaluate", "--part", "base", "--reference", "r.csv", "--max-memory", "0.1"],
+        {"r.csv": CSV},
+        "limit",
+    ),
+    (["fit", "shaft", "--reference", "r.csv", "--max-memory", "0.1"], {"r.csv": CSV}, "limit"),
+    # names and values that used to pass
+    (["shaft", "-o", "a\nb.usda"], {}, "control characters"),
+    (["temple", "-o", "a\tb"], {}, "control characters"),
+    (["column", "--lod", "", "-o", "c.usda"], {}, "lod"),
+    (["column", "--base", "", "-o", "c.usda"], {}, "base"),
+    (["shaft", "--flute-slices-per-fillet-slice", "10000"], {}, "changes nothing"),
+    (
+        [
+            "evaluate",
+            "--usd",
+            "s.usda",
+            "--variant",
+            "lod=bogus",
+            "--part",
+            "base",
+            "--reference",
+            "r.csv",
+        ],
+        {"s.usda": SCENE, "r.csv": CSV},
+        "lod",
+    ),
+]
+
+
+@pytest.mark.parametrize("argv,files,needle", CASES, ids=[" ".join(c[0])[:60] for c in CASES])
+def test_refused_cleanly_and_nothing_written(tmp_path, capsys, argv, files, needle):
+    for name, data in files.items():
+        if data is None:
+            (tmp_path / name).mkdir()
+        else:
+            (tmp_path / name).write_bytes(data)
+    before = _listing(tmp_path)
+    code, _out, err = run_cli(argv, tmp_path, capsys)
+    assert_clean_refusal(code, err, needle)
+    assert _listing(tmp_path) == before
+
+
+def test_memory_limit_is_a_deprecated_alias(tmp_path, capsys):
+    """city's old --memory-limit still sets the one limit (and says it is deprecated)."""
+    from ionic_usd.cli import build_parser
+
+    args = build_parser(("city",)).parse_args(["city", "c", "--memory-limit", "2"])
+    assert args.max_memory == 2.0
+    assert "deprecated" in capsys.readouterr().err
+    args = build_parser(("city",)).parse_args(["city", "c"])
+    assert args.max_memory is None
+
+
+def test_fillet_ratio_saturation_is_where_it_stops_changing():
+    """Below the saturation $i the shaft differs from the next $i; from it on it is the same."""
+    import dataclasses
+
+    from ionic_usd.column.shaft import ShaftParams
+
+    for p in (ShaftParams(), ShaftParams(flute_slices=16), ShaftParams(flutes=20, flute_angle=9)):
+        top = p.fillet_ratio_saturation()
+        slices = [
+            dataclasses.replace(p, flute_slices_per_fillet_slice=i).fillet_slices
+            for i in range(1, top + 5)
+        ]
+        assert slices[top - 1] == 1 and set(slices[top - 1 :]) == {1}
+        assert top == 1 or slices[top - 2] > 1
+
+
+def test_api_refuses_texture_size_and_seed():
+    from ionic_usd.errors import ParameterError
+    from ionic_usd.usd.column_asset import ColumnAssetOptions
+
+    for kw in ({"texture_size": 100}, {"texture_size": 0}, {"seed": -1}, {"texture_size": True}):
+        with pytest.raises(ParameterError):
+            ColumnAssetOptions(**kw)
