@@ -221,6 +221,9 @@ def check_output_folder(
         raise ParameterError(what, str(p), "a folder path (this is an existing file)")
     if p.exists() and not force:
         raise OutputExistsError(f"{p} exists; pass --force to rebuild it")
+    if p.is_dir() and not os.access(p, os.W_OK | os.X_OK):
+        # an immutable or read-only folder: refused before the build, not after it
+        raise ParameterError(what, str(p), "a folder this process can write (permission denied)")
     return p
 
 
@@ -422,6 +425,9 @@ def recover_folder(dest: str | os.PathLike) -> None:
             elif pid is not None or _looks_generated(p):
                 shutil.rmtree(p, ignore_errors=True)
     clean_stale_temporaries(parent, dest.name)
+    from ionic_usd.outputs import remove_stale_lock
+
+    remove_stale_lock(dest)  # a killed build's lock file (the kernel released its lock)
 
 
 def _looks_generated(p: Path) -> bool:
@@ -508,7 +514,12 @@ def replace_folder(
         shutil.rmtree(stage, ignore_errors=True)
         raise
     # committed: from here on a kill is finished by the next run (recover_folder)
-    _roll_forward(stage, dest)
+    try:
+        _roll_forward(stage, dest)
+    except OSError:
+        if all(os.path.lexists(stage / r) for r in journal["move"]):
+            shutil.rmtree(stage, ignore_errors=True)  # nothing moved yet: nothing to finish
+        raise
     return result
 
 

@@ -191,7 +191,10 @@ def cmd_asset(args: argparse.Namespace) -> int:
         make_tx=args.tx,
         user_textures=user,
     )
-    rep = build_column_asset(args.output, opts, force=args.force, rebuild=args.rebuild)
+    from ionic_usd.outputs import folder_lock
+
+    with folder_lock(args.output):  # one writer at a time
+        rep = build_column_asset(args.output, opts, force=args.force, rebuild=args.rebuild)
     lods = ", ".join(f"{k} {v:,}" for k, v in rep.triangles_per_lod.items())
     done = "up to date" if rep.current else "wrote"
     print(
@@ -221,13 +224,17 @@ def cmd_temple(args: argparse.Namespace) -> int:
         temple = layouts[args.layout]()
     layout = temple.layout
     options = {"texture_size": args.texture_size, "seed": args.seed, "detail": args.detail}
-    rep = None if args.rebuild else temple.current(args.output, **options)
-    if rep is None:  # something to build: estimate its memory first
-        n_cuboids = sum(len(c) for c in layout.cuboids.values())
-        check_estimate(
-            estimate_temple(temple.column_params, args.texture_size, n_cuboids), args.max_memory
-        )
-        rep = temple.save(args.output, force=args.force, rebuild=args.rebuild, **options)
+    from ionic_usd.outputs import folder_lock
+
+    with folder_lock(args.output):  # one writer at a time
+        rep = None if args.rebuild else temple.current(args.output, **options)
+        if rep is None:  # something to build: estimate its memory first
+            n_cuboids = sum(len(c) for c in layout.cuboids.values())
+            check_estimate(
+                estimate_temple(temple.column_params, args.texture_size, n_cuboids),
+                args.max_memory,
+            )
+            rep = temple.save(args.output, force=args.force, rebuild=args.rebuild, **options)
     done = "up to date" if rep.current else "wrote"
     print(
         f"{done} {rep.root} ({layout.name}): {rep.files} files, {rep.prims} prims, "

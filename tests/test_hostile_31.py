@@ -15,6 +15,19 @@ SCENE = (
 )
 CSV = b"0,0\n0.1,0.05\n0.2,0.1\n"
 
+
+def _plan(*features: str) -> bytes:
+    return ('{"type": "FeatureCollection", "features": [' + ", ".join(features) + "]}").encode()
+
+
+def _lot(fid: str, x0: float, y0: float, x1: float, y1: float) -> str:
+    ring = f"[[{x0}, {y0}], [{x1}, {y0}], [{x1}, {y1}], [{x0}, {y1}], [{x0}, {y0}]]"
+    return (
+        f'{{"type": "Feature", "properties": {{"type": "temple", "id": "{fid}"}}, '
+        f'"geometry": {{"type": "Polygon", "coordinates": [{ring}]}}}}'
+    )
+
+
 # (argv, files {name: bytes or None for a folder}, text the message must hold)
 CASES: list[tuple[list[str], dict[str, bytes | None], str]] = [
     # one schema for --texture-size / --seed / --max-memory on every command that has them
@@ -58,6 +71,31 @@ CASES: list[tuple[list[str], dict[str, bytes | None], str]] = [
         "limit",
     ),
     (["fit", "shaft", "--reference", "r.csv", "--max-memory", "0.1"], {"r.csv": CSV}, "limit"),
+    # city: every output path and flag checked before any work
+    (["city", "c", "--json", "/nonexistent/dir/x.json"], {}, "--json"),
+    (["city", "c", "--json", "x.txt"], {}, "--json"),
+    (["city", "c", "--instancer-threshold", "-1"], {}, "--instancer-threshold"),
+    *[
+        (["city", "c", "--scheduler", a], {}, "--scheduler")
+        for a in (
+            "http://example.invalid:80",
+            "tcp://256.1.1.1:99999",
+            "tcp://256.1.1.1:99",
+            "tcp://",
+            "inproc://x",
+            "tcp://example.invalid:8786",
+        )
+    ],
+    (
+        ["city", "c", "--plan", "p.geojson"],
+        {"p.geojson": _plan(_lot("a", 0, 0, 1e300, 40))},
+        "1e+07",
+    ),
+    (
+        ["city", "c", "--plan", "p.geojson"],
+        {"p.geojson": _plan(_lot("a", 0, 0, 30, 40), _lot("b", 20, 10, 50, 50))},
+        "a and b",
+    ),
     # names and values that used to pass
     (["shaft", "-o", "a\nb.usda"], {}, "control characters"),
     (["temple", "-o", "a\tb"], {}, "control characters"),

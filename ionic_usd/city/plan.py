@@ -115,15 +115,28 @@ class CityPlan:
     base_dir: Path | None = None
 
 
-def _num(value: object, name: str, ctx: str, *, positive: bool = False) -> float:
+#: largest plan coordinate (m): a local frame near the site (a UTM northing is below 1e7);
+#: beyond it float32 USD positions lose whole metres and GEOS's arithmetic overflows
+MAX_COORDINATE = 1e7
+#: largest length of a feature's property (spacing, offset, column size), m
+MAX_LENGTH = 1e4
+
+
+def _num(
+    value: object, name: str, ctx: str, *, positive: bool = False, limit: float = MAX_LENGTH
+) -> float:
     if (
         not isinstance(value, (int, float))
         or isinstance(value, bool)
         or not math.isfinite(value)
         or (positive and value <= 0)
+        or abs(value) > limit
     ):
         raise ParameterError(
-            name, value, "a finite number" + (" > 0" if positive else ""), context=ctx
+            name,
+            value,
+            "a finite number" + (" > 0" if positive else "") + f" of magnitude <= {limit:g}",
+            context=ctx,
         )
     return float(value)
 
@@ -136,7 +149,10 @@ def _ring(coords: object, ctx: str, *, closed: bool) -> np.ndarray:
         if not isinstance(c, list) or len(c) < 2:
             raise ParameterError(f"coordinates[{i}]", c, "[x, y] in metres", context=ctx)
         pts.append(
-            [_num(c[0], f"coordinates[{i}][0]", ctx), _num(c[1], f"coordinates[{i}][1]", ctx)]
+            [
+                _num(c[0], f"coordinates[{i}][0]", ctx, limit=MAX_COORDINATE),
+                _num(c[1], f"coordinates[{i}][1]", ctx, limit=MAX_COORDINATE),
+            ]
         )
     a = np.asarray(pts, dtype=float)
     if closed and len(a) > 1 and np.array_equal(a[0], a[-1]):
@@ -171,7 +187,7 @@ def _lot(fid: str, geom: Mapping, props: Mapping, ctx: str) -> Lot:
     outline = _ring((geom.get("coordinates") or [None])[0], ctx, closed=True)
     orient = props.get("orientation")
     if orient is not None:
-        orient = _num(orient, "orientation", ctx) % 360.0
+        orient = _num(orient, "orientation", ctx, limit=1e6) % 360.0
     hyps = props.get("hypotheses", {})
     if not isinstance(hyps, dict) or any(v not in _HYP_CHOICES for v in hyps.values()):
         raise ParameterError(

@@ -60,6 +60,9 @@ _PER_BUILD = 40e6
 _CARD_LOD = "low"
 # what the card images depend on besides the temple and its selections: the baker's version
 _CARD_BAKE = f"cards-v2-{_CARD_LOD}"  # v2: Hydra's face axes (side faces Z-up)
+#: triangles a viewer draws interactively (usdview / Hydra Storm on a desktop GPU: a few
+#: hundred million per frame at a usable frame rate); a city drawing more is warned about
+VIEWER_TRIANGLES = 500_000_000
 # the street columns' finish variant
 _COLUMN_FINISH = "stucco"
 
@@ -120,10 +123,13 @@ class CityOptions:
         ts = self.texture_size
         if isinstance(ts, bool) or not isinstance(ts, int) or not 16 <= ts <= 8192 or ts & (ts - 1):
             raise ParameterError("--texture-size", ts, "a power of two in [16, 8192]")
-        if self.scheduler is not None and not (
-            isinstance(self.scheduler, str) and "://" in self.scheduler
-        ):
-            raise ParameterError("--scheduler", self.scheduler, "an address like tcp://HOST:PORT")
+        if self.scheduler is not None:
+            from ionic_usd.city.address import check_scheduler_address
+
+            check_scheduler_address(self.scheduler)
+        it = self.instancer_threshold
+        if it is not None and (isinstance(it, bool) or not isinstance(it, int) or it < 0):
+            raise ParameterError("--instancer-threshold", it, "an integer >= 0")
         if self.workers is not None and (not isinstance(self.workers, int) or self.workers < 1):
             raise ParameterError("--workers", self.workers, "an integer >= 1")
 
@@ -147,12 +153,25 @@ def build_city(
 ) -> dict:
     """Build the city into ``out`` (see the module docstring); returns the summary (JSON).
 
-    A build that fails takes away the folders it created (empty ones only: the files it wrote
-    are each atomic, so a refusal on a full disk leaves the folder as it found it)."""
+    A fresh city is built in a staging folder beside ``out`` and renamed to ``out`` when
+    complete, so a failed or killed build leaves no partial city; an existing city's files are
+    replaced one by one, atomically. A second build into the same folder meanwhile is refused
+    (:func:`ionic_usd.outputs.folder_lock`)."""
+    from ionic_usd.outputs import folder_lock, staged_new_folder
+
+    out = Path(out)
+    if opts.scheduler is not None:  # before any work, even when nothing needs building
+        from ionic_usd.city.address import resolve_scheduler_host
+
+        resolve_scheduler_host(opts.scheduler)
+    # one writer at a time; a fresh city is built in a staging sibling and renamed in whole
     from ionic_usd.io import removed_if_failed
 
-    with removed_if_failed(out, Path(out) / "Temples"):
-        return _build_city(Path(out), opts, progress)
+    with folder_lock(out), staged_new_folder(out) as where:
+        with removed_if_failed(where / "Temples"):
+            summary = _build_city(where, opts, progress)
+    summary["city"] = str(out / Path(summary["city"]).name)
+    return summary
 
 
 def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | None) -> dict:
@@ -184,6 +203,17 @@ def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | 
         if opts.plan
         else grid_plan(opts.rows, opts.cols, opts.block, spacing=opts.column_spacing)
     )
+    notes: list[str] = []
+    if opts.plan:
+        from ionic_usd.city.layout import check_lots_apart
+
+        check_lots_apart(plan.lots, plan.source)
+        for p in plan.porticoes:
+            if p.closed:  # resolved as documented, and said
+                notes.append(
+                    f"note: porticus {p.id} is a Polygon: its columns stand along its outline "
+                    "(a colonnaded square); give a LineString for a colonnade along a street"
+                )
     rng = np.random.default_rng(opts.seed)
 
     # -- 1. builds and per-lot choices -------------------------------------------------------
@@ -378,6 +408,14 @@ def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | 
             "timings": {k: round(v, 3) for k, v in timings.items()},
         }
     )
+    most = max(rep.triangles.values(), default=0)
+    if most > VIEWER_TRIANGLES:
+        notes.append(
+            f"warning: the city draws up to {most:,} triangles, past what an interactive "
+            f"viewer draws (about {VIEWER_TRIANGLES:,}): give --focus for LOD by distance "
+            "and cards, or build fewer lots"
+        )
+    summary["notes"] = notes
     return summary
 
 

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import argparse
+import math
+import sys
 from pathlib import Path
 
 from ionic_usd.cli_flags import add_command, add_memory_flag, add_seed_flag, texture_size
@@ -24,15 +26,45 @@ def _pair(flag: str):
     return parse
 
 
+def _check_grid_memory(args: argparse.Namespace, limit_gb: float) -> None:
+    """A grid's size is known before any layout work: refuse a city that cannot fit in memory
+    at once (the layout of a million lots alone takes minutes)."""
+    from ionic_usd.city.layout import DEFAULT_INSTANCER_THRESHOLD
+    from ionic_usd.errors import BudgetError
+    from ionic_usd.pipeline.city import estimate_memory
+
+    temples = args.rows * args.cols
+    street = 2 * (args.rows + 1) * (args.cols + 1) * int(args.block / args.column_spacing)
+    if args.columns is not None:
+        street = args.columns
+    threshold = (
+        DEFAULT_INSTANCER_THRESHOLD
+        if args.instancer_threshold is None
+        else args.instancer_threshold
+    )
+    est = estimate_memory(temples, street, 1, threshold)
+    if est > limit_gb * 1e9:
+        raise BudgetError(
+            f"this city needs about {est / 1e9:.1f} GB ({temples:,} temples, "
+            f"about {street:,} columns), above --max-memory "
+            f"{limit_gb:g} GB; raise the limit to build it anyway"
+        )
+
+
 def cmd_city(args: argparse.Namespace) -> int:
     from ionic_usd.pipeline.city import CityOptions, build_city, write_summary
 
-    if args.json is not None and args.json.suffix.lower() != ".json":
-        raise ParameterError("--json", str(args.json), "a path ending in .json")
-    if args.json is not None and args.json.exists() and not args.force:
-        raise ParameterError("--json", str(args.json), "a new file (or pass --force)")
-    import math
+    # every output path and flag is checked before any work (issue 31)
+    if args.json is not None:
+        from ionic_usd.io import check_output_file
 
+        check_output_file(args.json, force=args.force, what="--json", suffixes=(".json",))
+        parent = args.json.parent
+        if not parent.is_dir() and parent.resolve() != Path(args.folder).resolve():
+            raise ParameterError("--json", str(args.json), "a file in an existing folder")
+    from ionic_usd.io import check_output_folder
+
+    check_output_folder(args.folder, force=True, what="folder")
     for flag, v, lo, hi in (
         ("--rows", args.rows, 1, 10_000),
         ("--cols", args.cols, 1, 10_000),
@@ -48,30 +80,6 @@ def cmd_city(args: argparse.Namespace) -> int:
     from ionic_usd.resources import DEFAULT_MAX_MEMORY_GB
 
     limit_gb = DEFAULT_MAX_MEMORY_GB if args.max_memory is None else args.max_memory
-    if args.plan is None:
-        # a grid's size is known before any layout work: refuse a city that cannot fit in
-        # memory at once (the layout of a million lots alone takes minutes)
-        from ionic_usd.errors import BudgetError
-        from ionic_usd.pipeline.city import estimate_memory
-
-        temples = args.rows * args.cols
-        street = 2 * (args.rows + 1) * (args.cols + 1) * int(args.block / args.column_spacing)
-        if args.columns is not None:
-            street = args.columns
-        from ionic_usd.city.layout import DEFAULT_INSTANCER_THRESHOLD
-
-        threshold = (
-            DEFAULT_INSTANCER_THRESHOLD
-            if args.instancer_threshold is None
-            else args.instancer_threshold
-        )
-        est = estimate_memory(temples, street, 1, threshold)
-        if est > limit_gb * 1e9:
-            raise BudgetError(
-                f"this city needs about {est / 1e9:.1f} GB ({temples:,} temples, "
-                f"about {street:,} columns), above --max-memory "
-                f"{limit_gb:g} GB; raise the limit to build it anyway"
-            )
     opts = CityOptions(
         plan=str(args.plan) if args.plan else None,
         rows=args.rows,
@@ -95,10 +103,14 @@ def cmd_city(args: argparse.Namespace) -> int:
         memory_limit_gb=limit_gb,
         force=args.force,
     )
+    if args.plan is None:
+        _check_grid_memory(args, limit_gb)
     import logging
 
     log = logging.getLogger("ionic_usd.city")  # shown with -v; bars show the builds anyway
     s = build_city(args.folder, opts, progress=log.info)
+    for note in s.get("notes", []):
+        print(f"ionic-usd: {note}", file=sys.stderr)
     if args.json is not None:
         write_summary(s, args.json)
     tri = s["triangles"]

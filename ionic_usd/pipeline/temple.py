@@ -271,6 +271,8 @@ def compose_temple(
         keep_existing=(OVERRIDES_LAYER,),
         root_files=(ROOT_LAYER,),
         key=key,
-        record=lambda r: r,
+        # the manifest holds what the folder is, never how this run made it: a repaired
+        # folder's manifest is byte for byte a fresh build's
+        record=lambda r: {k: v for k, v in r.items() if k != "asset_reused"},
     )
     return _report(dest, record, t0)
