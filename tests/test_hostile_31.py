@@ -96,6 +96,12 @@ CASES: list[tuple[list[str], dict[str, bytes | None], str]] = [
         {"p.geojson": _plan(_lot("a", 0, 0, 30, 40), _lot("b", 20, 10, 50, 50))},
         "a and b",
     ),
+    # export --scale: the range a printer can make, nothing non-finite or degenerate written
+    *[
+        (["export", "s.usda", "-o", f"s{ext}", "--scale", v], {"s.usda": SCENE}, "--scale")
+        for ext in (".stl", ".3mf")
+        for v in ("1e300", "1e30", "1e-300", "1e-12", "inf", "0", "-1", "1:0")
+    ],
     # names and values that used to pass
     (["shaft", "-o", "a\nb.usda"], {}, "control characters"),
     (["temple", "-o", "a\tb"], {}, "control characters"),
@@ -167,3 +173,20 @@ def test_api_refuses_texture_size_and_seed():
     for kw in ({"texture_size": 100}, {"texture_size": 0}, {"seed": -1}, {"texture_size": True}):
         with pytest.raises(ParameterError):
             ColumnAssetOptions(**kw)
+
+
+@pytest.mark.parametrize("scale", ["1e-4", "1:5000"])
+def test_export_refuses_a_solid_below_a_millimetre(tmp_path, capsys, scale):
+    """The 1 cm tetrahedron (a layer without metersPerUnit is in cm) at 1:5,000 would print
+    2 µm long: refused, nothing written; at 1:1 it prints 10 mm long."""
+    pytest.importorskip("manifold3d")
+    (tmp_path / "s.usda").write_bytes(SCENE)
+    before = _listing(tmp_path)
+    code, _out, err = run_cli(
+        ["export", "s.usda", "-o", "s.stl", "--scale", scale], tmp_path, capsys
+    )
+    assert_clean_refusal(code, err, "mm")
+    assert _listing(tmp_path) == before
+    code, _out, err = run_cli(["export", "s.usda", "-o", "s.stl", "--scale", "1"], tmp_path, capsys)
+    assert code == 0, err  # 10 mm: printable
+    assert (tmp_path / "s.stl").stat().st_size > 84

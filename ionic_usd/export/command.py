@@ -26,6 +26,11 @@ def parse_scale(text: str) -> float:
         raise ParameterError("--scale", text, "a number > 0 or a ratio like 1:20") from None
     if not math.isfinite(value) or value <= 0:
         raise ParameterError("--scale", text, "a number > 0 or a ratio like 1:20")
+    lo, hi = 1e-4, 10.0  # ionic_usd.export.solid.SCALE_RANGE (not imported: numpy)
+    if not lo <= value <= hi:
+        raise ParameterError(
+            "--scale", text, "1:10000 (1e-4, a site model) to 10 (a detail study, 10:1)"
+        )
     return value
 
 

@@ -13,6 +13,7 @@ numbers written (float32): every edge shared by exactly two triangles with oppos
 
 from __future__ import annotations
 
+import math
 import os
 import time
 import zipfile
@@ -175,6 +176,31 @@ def _report(s: Solid) -> SolidReport:
     )
 
 
+#: the model scales ``--scale`` accepts: 1:10,000 (a site model) to 10:1 (a detail study)
+SCALE_RANGE = (1e-4, 10.0)
+#: the printed size of a solid's longest side (m): from 1 mm (a few nozzle or resin-voxel
+#: widths: below it a column is a speck) to 100 m (construction printers print whole
+#: buildings; a temple at 1:1 is 26 m)
+PRINT_SIZE = (1e-3, 100.0)
+
+
+def _check_printable(s: Solid, r: SolidReport, scale: float) -> None:
+    """Refuse, before anything is written, a solid no printer can make: non-finite written
+    numbers, a longest side outside :data:`PRINT_SIZE`, no volume."""
+    v32 = s.vertices.astype(np.float32)
+    longest = max(r.size)
+    lo, hi = PRINT_SIZE
+    if not (np.isfinite(v32).all() and math.isfinite(longest) and lo <= longest <= hi):
+        raise ParameterError(
+            "--scale",
+            f"{scale:g}",
+            f"a scale at which every solid's longest side is {lo * 1e3:g} mm to {hi:g} m "
+            f"({s.name} would be {longest * 1e3:.3g} mm)",
+        )
+    if not (math.isfinite(r.volume) and r.volume > 0):
+        raise GeometryError(f"{s.name}: no volume at scale {scale:g}; nothing written")
+
+
 def write_stl(path: Path, solids: list[Solid]) -> None:
     """Binary STL (all solids, mm)."""
     tris = [s.vertices[s.triangles] for s in solids]
@@ -277,6 +303,8 @@ def write_solids(scene: Scene, path: str | os.PathLike, *, scale: float = 1.0) -
     path = Path(path)
     solids = scene_solids(scene, scale=scale)
     reports = tuple(_report(s) for s in solids)
+    for s, r in zip(solids, reports, strict=True):
+        _check_printable(s, r, scale)
     if path.suffix.lower() == ".3mf":
         write_3mf(path, solids, title=Path(scene.source).stem)
     else:
