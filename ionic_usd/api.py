@@ -141,8 +141,11 @@ class Temple:
         from ionic_usd.params import load_toml
         from ionic_usd.temple.layout import layout_from_mapping
         from ionic_usd.temple.mouldings import mouldings_from_tables
+        from ionic_usd.temple.tables import resolve_extends
 
         data = load_toml(path)
+        if "extends" in data:  # what it inherits (the mouldings and column tables too)
+            data = resolve_extends(data, context=str(path))
         mouldings = mouldings_from_tables(data, context=str(path))
         tables = {k: data.pop(k) for k in ("column", "shaft", "capital", "volute") if k in data}
         temple = cls(layout_from_mapping(data, context=str(path)), None, mouldings)

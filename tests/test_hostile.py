@@ -78,7 +78,8 @@ CASES: list[tuple[list[str], dict[str, bytes | None], str]] = [
     (
         ["temple", "--config", "a.toml", "-o", "T"],
         {
-            "a.toml": b'[[hypothesis]]\nid = "h"\ndescription = ""\nsources = []\n'
+            "a.toml": b'extends = "portunus"\n'
+            b'[[hypothesis]]\nid = "h"\ndescription = ""\nsources = []\n'
             b'certainty = "low"\n'
             b'changes = { "column.flute_count" = "abc" }\n'
         },
@@ -87,7 +88,8 @@ CASES: list[tuple[list[str], dict[str, bytes | None], str]] = [
     (
         ["temple", "--config", "a.toml", "-o", "T"],
         {
-            "a.toml": b'[[hypothesis]]\nid = "../../ESCAPED"\ndescription = ""\nsources = []\n'
+            "a.toml": b'extends = "portunus"\n'
+            b'[[hypothesis]]\nid = "../../ESCAPED"\ndescription = ""\nsources = []\n'
             b'certainty = "low"\nchanges = { "roof.tympanum_ratio" = 8.0 }\n'
         },
         "id",
@@ -95,7 +97,8 @@ CASES: list[tuple[list[str], dict[str, bytes | None], str]] = [
     (
         ["temple", "--config", "a.toml", "-o", "T"],
         {
-            "a.toml": b'[[hypothesis]]\nid = "a/b"\ndescription = ""\nsources = []\n'
+            "a.toml": b'extends = "portunus"\n'
+            b'[[hypothesis]]\nid = "a/b"\ndescription = ""\nsources = []\n'
             b'certainty = "low"\nchanges = { "roof.tympanum_ratio" = 8.0 }\n'
         },
         "id",
@@ -103,7 +106,8 @@ CASES: list[tuple[list[str], dict[str, bytes | None], str]] = [
     (
         ["temple", "--config", "a.toml", "-o", "T"],
         {
-            "a.toml": b'[[hypothesis]]\nid = "a-b"\ndescription = ""\nsources = []\n'
+            "a.toml": b'extends = "portunus"\n'
+            b'[[hypothesis]]\nid = "a-b"\ndescription = ""\nsources = []\n'
             b'certainty = "low"\nchanges = { "roof.tympanum_ratio" = 8.0 }\n'
             b'[[hypothesis]]\nid = "a_b"\ndescription = ""\nsources = []\n'
             b'certainty = "low"\nchanges = { "roof.tympanum_ratio" = 7.0 }\n'
@@ -113,7 +117,8 @@ CASES: list[tuple[list[str], dict[str, bytes | None], str]] = [
     (
         ["temple", "--config", "a.toml", "-o", "T"],
         {
-            "a.toml": b'[[cuboid]]\nname = "a-b"\nmin = [0, 0, 0]\nmax = [1, 1, 1]\n'
+            "a.toml": b'extends = "portunus"\n'
+            b'[[cuboid]]\nname = "a-b"\nmin = [0, 0, 0]\nmax = [1, 1, 1]\n'
             b'layer = "cella"\n'
             b'[[cuboid]]\nname = "a_b"\nmin = [2, 0, 0]\nmax = [3, 1, 1]\nlayer = "cella"\n'
         },
@@ -122,7 +127,8 @@ CASES: list[tuple[list[str], dict[str, bytes | None], str]] = [
     (
         ["temple", "--config", "a.toml", "-o", "T"],
         {
-            "a.toml": b'[[cuboid]]\nname = "big"\nmin = [-1e300, 0, 0]\nmax = [1e300, 1, 1]\n'
+            "a.toml": b'extends = "portunus"\n'
+            b'[[cuboid]]\nname = "big"\nmin = [-1e300, 0, 0]\nmax = [1e300, 1, 1]\n'
             b'layer = "cella"\n'
         },
         "min",

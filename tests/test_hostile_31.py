@@ -3,6 +3,8 @@ problem, nothing written (the folder listing unchanged)."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from tests.test_hostile import _listing, assert_clean_refusal, run_cli
@@ -26,6 +28,22 @@ def _lot(fid: str, x0: float, y0: float, x1: float, y1: float) -> str:
         f'{{"type": "Feature", "properties": {{"type": "temple", "id": "{fid}"}}, '
         f'"geometry": {{"type": "Polygon", "coordinates": [{ring}]}}}}'
     )
+
+
+PORTUNUS = (Path(__file__).resolve().parents[1] / "ionic_usd/data/portunus.toml").read_text()
+
+
+def _without(table: str) -> bytes:
+    """portunus.toml without one table (its header and keys, up to the next header)."""
+    out, skip = [], False
+    for line in PORTUNUS.splitlines():
+        if line.startswith("["):
+            skip = line.strip() == f"[{table}]"
+        if not skip:
+            out.append(line)
+    text = "\n".join(out) + "\n"
+    assert f"[{table}]" not in text
+    return text.encode()
 
 
 # (argv, files {name: bytes or None for a folder}, text the message must hold)
@@ -102,6 +120,14 @@ CASES: list[tuple[list[str], dict[str, bytes | None], str]] = [
         for ext in (".stl", ".3mf")
         for v in ("1e300", "1e30", "1e-300", "1e-12", "inf", "0", "-1", "1:0")
     ],
+    # a temple description missing tables names them (unless it says what it extends)
+    *[
+        (["temple", "--config", "t.toml", "-o", "T"], {"t.toml": _without(t)}, f"[{t}]")
+        for t in ("columns", "podium", "roof", "temple")
+    ],
+    (["temple", "--config", "t.toml", "-o", "T"], {"t.toml": b'[temple]\nname = "x"\n'}, "[roof]"),
+    (["temple", "--config", "t.toml", "-o", "T"], {"t.toml": b'extends = "nope"\n'}, "extends"),
+    (["temple", "--config", "t.toml", "-o", "T"], {"t.toml": b"extends = 5\n"}, "extends"),
     # names and values that used to pass
     (["shaft", "-o", "a\nb.usda"], {}, "control characters"),
     (["temple", "-o", "a\tb"], {}, "control characters"),
@@ -190,3 +216,31 @@ def test_export_refuses_a_solid_below_a_millimetre(tmp_path, capsys, scale):
     code, _out, err = run_cli(["export", "s.usda", "-o", "s.stl", "--scale", "1"], tmp_path, capsys)
     assert code == 0, err  # 10 mm: printable
     assert (tmp_path / "s.stl").stat().st_size > 84
+
+
+def test_extends_takes_the_missing_tables_and_adds_hypotheses(tmp_path):
+    """extends = "portunus": the given keys win, every other value is Portunus's, and the
+    description's hypotheses come after Portunus's."""
+    from ionic_usd.api import Temple
+
+    cfg = tmp_path / "t.toml"
+    cfg.write_text(
+        'extends = "portunus"\n[temple]\nname = "Mine"\n[podium]\nheight = 1.75\n'
+        '[[hypothesis]]\nid = "mine"\ndescription = "d"\nsources = ["s"]\n'
+        'certainty = "low"\nchanges = { "roof.tympanum_ratio" = 8.0 }\n'
+    )
+    mine, ref = Temple.from_toml(cfg).layout, Temple.portunus().layout
+    assert mine.name == "Mine" and mine.params.podium_height == 1.75
+    assert ref.params.podium_height != 1.75
+    for f in (
+        "columns_lower_diameter",
+        "roof_tympanum_ratio",
+        "steps_count",
+        "cella_wall_thickness",
+    ):
+        assert getattr(mine.params, f) == getattr(ref.params, f), f
+    assert [h.id for h in mine.hypotheses] == [h.id for h in ref.hypotheses] + ["mine"]
+    # the full description needs no extends (the reference file itself)
+    full = tmp_path / "full.toml"
+    full.write_text(PORTUNUS)
+    assert Temple.from_toml(full).layout.params == ref.params

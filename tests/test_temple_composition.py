@@ -410,6 +410,7 @@ def test_cli_rejects_unknown_temple_key_and_bad_change(tmp_path, capsys):
     assert "[temple]" in err and "colour" in err and "Traceback" not in err
     assert len(err.strip().splitlines()) == 1
     cfg.write_text(
+        'extends = "portunus"\n'
         '[[hypothesis]]\nid = "h"\ndescription = "d"\nsources = ["s"]\n'
         'certainty = "low"\nchanges = { "column.flute_count" = 7 }\n'
     )

@@ -420,10 +420,15 @@ def layout_from_mapping(
 ) -> TempleLayout:
     """Build a layout from already-parsed TOML tables (see :func:`layout_from_toml`)."""
     ctx = context
+    from ionic_usd.temple.tables import resolve_extends
+
+    if isinstance(data, Mapping) and "extends" in data:
+        data = resolve_extends(data, context=ctx)
     check_temple_tables(data, context=ctx)  # types and ranges of every table, at the boundary
     params = params_from_tables(data, context=ctx)
     hyps = hypotheses_from_tables(data.get("hypothesis", []), ctx)
     extra = cuboids_from_tables(data.get("cuboid", []), context=ctx)
+    resolve_extends(data, context=ctx)  # missing tables: after what is there is checked
     return build_layout(params, hypotheses=hyps, apply=apply, extra_cuboids=extra)
 
 

@@ -44,6 +44,8 @@ __all__ = [
     "hypotheses_from_tables",
     "load_cuboids_toml",
     "params_from_tables",
+    "REQUIRED_TABLES",
+    "resolve_extends",
 ]
 
 
@@ -316,3 +318,75 @@ def check_temple_tables(data: Mapping[str, Any], *, context: str) -> None:
                 {key: change} if change else changes_schema,
                 context=f"{where} changes",
             )
+
+
+# ---------------------------------------------------------------------------------------------
+# what a description inherits: ``extends = "portunus"``
+
+#: the tables every temple description holds, itself or through ``extends``
+REQUIRED_TABLES = ("temple", *SECTIONS)
+_MAX_EXTENDS = 8  # a chain of descriptions deeper than this is a cycle or a mistake
+
+
+def _builtin_tables(name: object, context: str) -> dict[str, Any]:
+    from importlib import resources
+
+    names = sorted(
+        p.name[: -len(".toml")]
+        for p in resources.files("ionic_usd").joinpath("data").iterdir()
+        if p.name.endswith(".toml") and "[temple]" in p.read_text(encoding="utf-8")
+    )
+    if not isinstance(name, str) or name not in names:
+        raise ParameterError(
+            "extends", name, f"a built-in temple description ({', '.join(names)})", context=context
+        )
+    ref = resources.files("ionic_usd") / "data" / f"{name}.toml"
+    with resources.as_file(ref) as p:
+        return load_toml(p)
+
+
+def resolve_extends(data: Mapping[str, Any], *, context: str) -> dict[str, Any]:
+    """The description with what it inherits filled in, checked for missing tables.
+
+    ``extends = "NAME"`` (a built-in description, e.g. ``portunus``) takes NAME's tables: each
+    table the description gives is merged key by key over NAME's (``[temple]``, the dimension
+    sections, ``[mouldings]``, the column tables), and its ``[[cuboid]]`` and ``[[hypothesis]]``
+    entries are added to NAME's. Without ``extends`` every table of :data:`REQUIRED_TABLES`
+    must be there: a missing one is an error naming it (it used to take Portunus's values in
+    silence).
+    """
+    out = dict(data)
+    chain: list[str] = []
+    while "extends" in out:
+        name = out.pop("extends")
+        if name in chain or len(chain) >= _MAX_EXTENDS:
+            raise ParameterError(
+                "extends", name, f"a chain without cycles ({' -> '.join(chain)})", context=context
+            )
+        chain.append(str(name))
+        base = _builtin_tables(name, context)
+        merged: dict[str, Any] = dict(base)
+        for key, value in out.items():
+            old = base.get(key)
+            if (
+                key in ("cuboid", "hypothesis")
+                and isinstance(old, list)
+                and isinstance(value, list)
+            ):
+                merged[key] = [*old, *value]
+            elif isinstance(old, Mapping) and isinstance(value, Mapping):
+                merged[key] = {**old, **value}
+            else:
+                merged[key] = value
+        out = merged
+    missing = [t for t in REQUIRED_TABLES if t not in out]
+    if missing:
+        raise ParameterError(
+            "tables",
+            ", ".join(f"[{t}]" for t in missing),
+            "every table of a temple description ("
+            + ", ".join(f"[{t}]" for t in REQUIRED_TABLES)
+            + '), or extends = "portunus" to take the missing ones from a built-in description',
+            context=context,
+        )
+    return out
