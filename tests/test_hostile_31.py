@@ -128,6 +128,9 @@ CASES: list[tuple[list[str], dict[str, bytes | None], str]] = [
     (["temple", "--config", "t.toml", "-o", "T"], {"t.toml": b'[temple]\nname = "x"\n'}, "[roof]"),
     (["temple", "--config", "t.toml", "-o", "T"], {"t.toml": b'extends = "nope"\n'}, "extends"),
     (["temple", "--config", "t.toml", "-o", "T"], {"t.toml": b"extends = 5\n"}, "extends"),
+    # hypotheses: bounded work, refused before any (the limits of usd.combinations)
+    (["temple", "--config", "t.toml", "-o", "T"], {"t.toml": b"@1000"}, "at most 64"),
+    (["temple", "--config", "t.toml", "-o", "T"], {"t.toml": b"@6"}, "limit is 8"),
     # names and values that used to pass
     (["shaft", "-o", "a\nb.usda"], {}, "control characters"),
     (["temple", "-o", "a\tb"], {}, "control characters"),
@@ -152,12 +155,29 @@ CASES: list[tuple[list[str], dict[str, bytes | None], str]] = [
 ]
 
 
+def _hypotheses(n: int) -> bytes:
+    """extends portunus (3 hypotheses changing geometry) + n changing the roof."""
+    out = ['extends = "portunus"']
+    for i in range(n):
+        out += [
+            "[[hypothesis]]",
+            f'id = "h{i}"',
+            'description = "d"',
+            'sources = ["s"]',
+            'certainty = "low"',
+            f'changes = {{ "roof.tympanum_ratio" = {5 + 0.001 * i} }}',
+        ]
+    return ("\n".join(out) + "\n").encode()
+
+
 @pytest.mark.parametrize("argv,files,needle", CASES, ids=[" ".join(c[0])[:60] for c in CASES])
 def test_refused_cleanly_and_nothing_written(tmp_path, capsys, argv, files, needle):
     for name, data in files.items():
         if data is None:
             (tmp_path / name).mkdir()
         else:
+            if data.startswith(b"@"):  # portunus + n more hypotheses
+                data = _hypotheses(int(data[1:]))
             (tmp_path / name).write_bytes(data)
     before = _listing(tmp_path)
     code, _out, err = run_cli(argv, tmp_path, capsys)

@@ -117,7 +117,8 @@ def resample(
 
 
 def densify_curve(curve: np.ndarray, fraction: float) -> np.ndarray:
-    """Split every segment into ``round(1 / fraction)`` equal parts (GEOS' ``densify``).
+    """Split every segment into ``1 / fraction`` equal parts rounded as GEOS rounds (a half
+    up: ``floor(1 / fraction + 0.5)``), so node counts equal GEOS' ``densify`` at ties.
 
     Parameters
     ----------
@@ -133,7 +134,9 @@ def densify_curve(curve: np.ndarray, fraction: float) -> np.ndarray:
     c = as_curve(curve, "curve")
     if not (math.isfinite(fraction) and 0.0 < fraction <= 1.0):
         raise ParameterError("densify", fraction, "a fraction in (0, 1]")
-    k = max(1, int(round(1.0 / fraction)))
+    # GEOS' util::round (JTS: Math.round): a half rounds up, where
+    # Python's round() goes to even — 1 / 0.4 = 2.5 is 3 parts in GEOS, 2 in round()
+    k = max(1, int(math.floor(1.0 / fraction + 0.5)))
     if k == 1 or c.shape[0] < 2:
         return c
     t = np.arange(k) / k

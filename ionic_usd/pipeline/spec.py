@@ -73,7 +73,11 @@ class TempleSpec:
         data = self.tables()
         for k in ("column", "shaft", "capital", "volute"):
             data.pop(k, None)
-        return layout_from_mapping(data, context=f"temple {self.name}")
+        layout = layout_from_mapping(data, context=f"temple {self.name}")
+        from ionic_usd.usd.combinations import check_hypothesis_budget
+
+        check_hypothesis_budget(layout)  # refused here, before any build of the city
+        return layout
 
 
 def _toml_value(v: float) -> str:

@@ -49,7 +49,16 @@ from ionic_usd.usd.instancer import author_point_instancer
 from ionic_usd.usd.mesh import author_mesh
 from ionic_usd.usd.stage import new_layer, save_layer
 
-__all__ = ["Fix", "select_variants", "expected_column", "mismatches", "realise_combinations"]
+__all__ = [
+    "MAX_HYPOTHESES",
+    "MAX_SHAPE_HYPOTHESES",
+    "Fix",
+    "check_hypothesis_budget",
+    "select_variants",
+    "expected_column",
+    "mismatches",
+    "realise_combinations",
+]
 
 # what a prim should be: a mesh, ornament copies, a column's placement, or None (not there)
 Fix = Mesh | Instances | ColumnPlacement | None
@@ -325,3 +334,33 @@ def realise_combinations(
     if written:
         gen.GetRootLayer().Save()
     return written
+
+
+#: at most this many hypotheses in a temple: each is a variant set and a layer of its own
+MAX_HYPOTHESES = 64
+#: at most this many hypotheses that change geometry: only they can interact (a material, a
+#: flute count or a capital model is a variant of its own part and composes alone), and every
+#: subset of them is composed and checked in each detail variant — 2^8 = 256 subsets x 3
+MAX_SHAPE_HYPOTHESES = 8
+
+
+def check_hypothesis_budget(layout: TempleLayout) -> None:
+    """Refuse, before any work, a description whose combinations cannot be checked in bounded
+    time: more than :data:`MAX_HYPOTHESES` hypotheses, or more than
+    :data:`MAX_SHAPE_HYPOTHESES` that change geometry (2^n subsets to compose)."""
+    from ionic_usd.errors import BudgetError
+
+    hyps = layout.hypotheses
+    if len(hyps) > MAX_HYPOTHESES:
+        raise BudgetError(
+            f"{len(hyps):,} hypotheses: a temple holds at most {MAX_HYPOTHESES} (each is a "
+            "variant set and a layer); split the description"
+        )
+    shape = [h.id for h in hyps if temple_keys(h) or FRIEZE_KEY in h.changes]
+    if len(shape) > MAX_SHAPE_HYPOTHESES:
+        raise BudgetError(
+            f"{len(shape)} hypotheses change the temple's geometry ({', '.join(shape[:4])}, …): "
+            f"every one of their 2^{len(shape)} = {2 ** len(shape):,} combinations would be "
+            f"composed and checked; the limit is {MAX_SHAPE_HYPOTHESES} "
+            f"({2**MAX_SHAPE_HYPOTHESES} combinations)"
+        )

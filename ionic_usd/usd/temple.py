@@ -429,6 +429,9 @@ def plan_temple(
     Parameters are :func:`ionic_usd.pipeline.temple.compose_temple`'s. Hypothesis changes the
     generator cannot realise raise :class:`ParameterError`.
     """
+    from ionic_usd.usd.combinations import check_hypothesis_budget
+
+    check_hypothesis_budget(layout)  # bounded work: before anything else
     p = layout.params
     column = column or portunus_column_params(
         height=p.columns_height, lower_diameter=p.columns_lower_diameter
