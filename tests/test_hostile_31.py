@@ -264,3 +264,29 @@ def test_extends_takes_the_missing_tables_and_adds_hypotheses(tmp_path):
     full = tmp_path / "full.toml"
     full.write_text(PORTUNUS)
     assert Temple.from_toml(full).layout.params == ref.params
+
+
+def test_every_usd_layer_the_repository_ships_opens_alone_and_validates():
+    """layers/portunus/*.usda sublayer ../materials.usda: the repository ships it (stand-in
+    materials), so each layer opens alone with 0 validation errors; and it is up to date."""
+    from pxr import Sdf, Usd
+
+    from ionic_usd.usd.materials import stand_in_materials
+    from ionic_usd.usd.stage import validate_stage
+
+    repo = Path(__file__).resolve().parents[1]
+    shipped = sorted(
+        p
+        for p in repo.rglob("*.usd*")
+        if p.suffix in (".usd", ".usda", ".usdc") and not {"tests", ".git"} & set(p.parts)
+    )
+    assert len(shipped) >= 6
+    for p in shipped:
+        stage = Usd.Stage.Open(str(p))
+        assert stage is not None, p
+        for sub in Sdf.Layer.FindOrOpen(str(p)).subLayerPaths:  # every sublayer is there
+            assert (p.parent / sub).is_file(), (p, sub)
+        assert validate_stage(stage) == [], p
+    layers = [Sdf.Layer.FindOrOpen(str(p)) for p in sorted(repo.glob("layers/portunus/*.usda"))]
+    fresh = stand_in_materials(layers).ExportToString()
+    assert Sdf.Layer.FindOrOpen(str(repo / "layers/materials.usda")).ExportToString() == fresh

@@ -148,3 +148,57 @@ def stone_material(
         st_scale=st_scale,
         specular_tint=specular_tint,
     )
+
+
+#: linear diffuse colours of the stand-in materials (no texture: the maps are in a build folder)
+_STAND_IN_COLOURS = {
+    "Travertine": (0.80, 0.76, 0.66),
+    "Tufa": (0.55, 0.50, 0.40),
+    "Stucco": (0.90, 0.88, 0.83),
+    "Terracotta": (0.60, 0.28, 0.16),
+}
+
+
+def stand_in_materials(layers: list[Sdf.Layer]) -> Sdf.Layer:
+    """A material library for layers shipped outside a build folder: every material their
+    bindings target, as a plain ``UsdPreviewSurface`` of one colour under the same path (the
+    temple's ``materials.usda`` holds the textured ones), so each layer that sublayers it
+    opens alone and validates."""
+    targets: set[Sdf.Path] = set()
+
+    def visit(spec: Sdf.PrimSpec) -> None:
+        for rel in spec.relationships:
+            if rel.name.startswith("material:binding"):
+                targets.update(rel.targetPathList.GetAddedOrExplicitItems())
+        for child in spec.nameChildren:
+            visit(child)
+        for vset in spec.variantSets.values():
+            for variant in vset.variants.values():
+                visit(variant.primSpec)
+
+    for layer in layers:
+        for spec in layer.rootPrims:
+            visit(spec)
+    root = Sdf.Layer.CreateAnonymous(".usda")  # held by the caller (a stage's is not)
+    stage = Usd.Stage.Open(root)
+    root.comment = "stand-in materials (one colour each) for the layers shipped in layers/"
+    for path in sorted(targets):
+        for anc in path.GetParentPath().GetPrefixes():
+            if not stage.GetPrimAtPath(anc):
+                stage.DefinePrim(anc, "Xform" if anc.pathElementCount == 1 else "Scope")
+        mat = UsdShade.Material.Define(stage, path)
+        shader = UsdShade.Shader.Define(stage, path.AppendChild("PreviewSurface"))
+        shader.CreateIdAttr("UsdPreviewSurface")
+        colour = _STAND_IN_COLOURS.get(path.name, (0.7, 0.7, 0.7))
+        shader.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).Set(Gf.Vec3f(*colour))
+        shader.CreateInput("roughness", Sdf.ValueTypeNames.Float).Set(0.8)
+        mat.CreateSurfaceOutput().ConnectToSource(shader.ConnectableAPI(), "surface")
+    tops = [p for p in stage.GetPseudoRoot().GetChildren()]
+    if tops:
+        stage.SetDefaultPrim(tops[0])
+        Usd.ModelAPI(tops[0]).SetKind("assembly")
+    from pxr import UsdGeom
+
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.y)
+    UsdGeom.SetStageMetersPerUnit(stage, 1.0)
+    return root
