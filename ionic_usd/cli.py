@@ -314,7 +314,11 @@ def _library_error(exc: Exception) -> str | None:
         t.__name__ == "ArgumentError" and "Boost" in t.__module__
     ):
         lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
-        return "OpenUSD: " + (lines[-1] if lines else t.__name__)
+        text = "OpenUSD: " + (lines[-1] if lines else t.__name__)
+        for cause in ("No space left on device", "File too large", "Disk quota exceeded"):
+            if cause in str(exc):  # the cause first, not "crate file corrupt"
+                return f"{cause}: {text}"
+        return text
     return None
 
 
@@ -333,6 +337,15 @@ def main(argv: list[str] | None = None) -> int:
     """
     import os
 
+    from ionic_usd.usd_warnings import UsdWarnings
+
+    usd = UsdWarnings()
+
+    def fail(message: str, status: int = 2) -> int:
+        # OpenUSD's Warning: lines (printed ahead of the error) folded into the one line
+        head, sep, rest = message.partition("\n")  # a grammar error's source and caret stay
+        return _fail(usd.fold(head) + sep + rest, status)
+
     try:
         words = sys.argv[1:] if argv is None else argv
         name = _command_name(words)
@@ -341,32 +354,38 @@ def main(argv: list[str] | None = None) -> int:
         from ionic_usd.progress import configure
 
         configure(-1 if args.quiet else args.verbose)
-        return int(args.func(args) or 0)
+        usd.start()
+        status = int(args.func(args) or 0)
+        usd.stop()
+        return status
     except IonicError as exc:
         # one line; a grammar error adds its source line with a caret under the token
-        return _fail(str(exc))
+        return fail(str(exc))
     except RecursionError:
-        return _fail("input nested too deeply to read")
+        return fail("input nested too deeply to read")
     except MemoryError:
-        return _fail(
+        return fail(
             "out of memory; lower the level of detail or texture size, or run on a "
             "machine with more memory (see --max-memory)"
         )
     except OSError as exc:
-        return _fail(_os_message(exc))
+        return fail(_os_message(exc))
     except KeyboardInterrupt:
-        return _fail("interrupted", 130)
+        return fail("interrupted", 130)
     except Exception as exc:
         msg = _library_error(exc)
         if msg is not None:
-            return _fail(_one_line(msg))
+            return fail(_one_line(msg))
         if os.environ.get("IONIC_USD_DEBUG"):
+            usd.stop()
             raise
-        return _fail(
+        return fail(
             f"internal error, please report it: {type(exc).__name__}: "
             f"{_one_line(str(exc))[:300]} (IONIC_USD_DEBUG=1 shows the traceback)",
             70,
         )
+    finally:
+        usd.stop()  # (nothing left to print after fail(); restores stderr on SystemExit)
 
 
 if __name__ == "__main__":  # pragma: no cover

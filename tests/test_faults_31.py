@@ -216,3 +216,30 @@ def test_manifest_after_repair_equals_a_fresh_builds(fresh_tiny, tmp_path, damag
     assert files == sorted(p.relative_to(fresh) for p in fresh.rglob("*") if p.is_file())
     for rel in files:
         assert (copy / rel).read_bytes() == (fresh / rel).read_bytes(), rel
+
+
+def test_file_size_limit_named_first(tmp_path):
+    """Under `ulimit -f` the error names the cause (not OpenUSD's "Could not close")."""
+    import resource
+
+    def limit() -> None:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (100_000, resource.RLIM_INFINITY))
+
+    for out in ("s.usda", "s.usdc"):
+        r = _ionic(["shaft", "-o", out], tmp_path, preexec_fn=limit)
+        assert r.returncode == 2, r.stderr
+        assert len(r.stderr.splitlines()) == 1
+        assert r.stderr.startswith("ionic-usd: error: File too large"), r.stderr
+        assert os.listdir(tmp_path) == []
+
+
+def test_usd_warnings_folded_into_the_one_error_line(tmp_path):
+    """A sublayer that does not load: OpenUSD's Warning: line is folded into the error."""
+    (tmp_path / "w.usda").write_text("#usda 1.0\n(\n    subLayers = [@./missing.usda@]\n)\n")
+    r = _ionic(["preview", "w.usda", "-o", "w.png"], tmp_path)
+    assert r.returncode == 2, r.stderr
+    lines = r.stderr.splitlines()
+    assert len(lines) == 1, r.stderr
+    assert "OpenUSD warned: Could not load sublayer" in lines[0] and "missing.usda" in lines[0]
+    assert "Warning: in" not in r.stderr
+    assert sorted(os.listdir(tmp_path)) == ["w.usda"]

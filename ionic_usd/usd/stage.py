@@ -82,19 +82,28 @@ def save_layer(layer: Sdf.Layer, path: str | os.PathLike, *, force: bool = False
     p.parent.mkdir(parents=True, exist_ok=True)
 
     def readable(tmp: Path) -> None:  # a full disk can leave a truncated layer behind
-        if Sdf.Layer.OpenAsAnonymous(str(tmp)) is None:
-            raise UsdAuthoringError(
-                f"could not write {p} (the written layer does not read back; is the disk full?)"
-            )
+        try:
+            ok = Sdf.Layer.OpenAsAnonymous(str(tmp)) is not None
+        except Exception:  # pxr.Tf.ErrorException: "Sdf crate file corrupt, possibly truncated"
+            ok = False
+        if not ok:
+            cause = write_failure_cause(p, tmp) or "the written layer does not read back"
+            raise UsdAuthoringError(f"{cause}: could not write {p}")
 
     with atomic_path(p, verify=readable) as tmp:
         try:
             ok = layer.Export(str(tmp))
         except Exception as exc:  # pxr.Tf.ErrorException: OS errors surface as this
-            why = _first_line(exc).replace(str(tmp), p.name)
-            raise UsdAuthoringError(f"could not write {p}: {why}{_space_hint(p)}") from None
+            cause = write_failure_cause(p, tmp)
+            if cause is None:
+                why = _first_line(exc).replace(str(tmp), p.name)
+                raise UsdAuthoringError(f"could not write {p}: {why}") from None
+            raise UsdAuthoringError(f"{cause}: could not write {p}") from None
         if not ok:
-            raise UsdAuthoringError(f"could not write {p}{_space_hint(p)}")
+            cause = write_failure_cause(p, tmp)
+            raise UsdAuthoringError(
+                f"{cause or 'OpenUSD could not export the layer'}: could not write {p}"
+            )
     # a later Sdf.Layer.FindOrOpen of this path must see the new content, not a cached one
     cached = Sdf.Layer.Find(str(p))
     if cached is not None:
@@ -111,12 +120,29 @@ def _first_line(exc: BaseException) -> str:
     return text
 
 
-def _space_hint(p: Path) -> str:
+def write_failure_cause(p: Path, tmp: Path | None = None) -> str | None:
+    """Why writing ``p`` failed, when the OS can tell (OpenUSD's own text only says "Could not
+    close" or "crate file corrupt"): a full disk, or the process' file-size limit."""
+    import resource
+
+    soft, _hard = resource.getrlimit(resource.RLIMIT_FSIZE)
+    if soft != resource.RLIM_INFINITY:
+        try:
+            size = tmp.stat().st_size if tmp is not None else 0
+        except OSError:
+            size = 0
+        if size >= soft - (64 << 10):
+            return (
+                f"File too large (this process may write files of at most {soft:,} bytes: "
+                "ulimit -f)"
+            )
     try:
         st = os.statvfs(p.parent)
     except OSError:
-        return ""
-    return " (No space left on device)" if st.f_bavail * st.f_frsize < (1 << 20) else ""
+        return None
+    if st.f_bavail * st.f_frsize < (1 << 20):
+        return "No space left on device (free some space or write elsewhere)"
+    return None
 
 
 def save_stage(stage: Usd.Stage, path: str | os.PathLike, *, force: bool = False) -> Path:
