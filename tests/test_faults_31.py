@@ -194,6 +194,7 @@ def fresh_tiny(tmp_path_factory):
     return folder, kw
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("damaged", ["Temple.usda", "layers", "IonicColumn"])
 def test_manifest_after_repair_equals_a_fresh_builds(fresh_tiny, tmp_path, damaged):
     """Damage a generated file, repair with force: every file, the manifest included, holds a

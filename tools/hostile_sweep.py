@@ -154,7 +154,7 @@ def cases(quick: bool) -> list[tuple[list[str], dict[str, bytes | None]]]:
             out.append(
                 (
                     ["temple", "--config", "t.toml", "-o", "T"],
-                    {"t.toml": f"[{sec}]\n{key} = {v}\n".encode()},
+                    {"t.toml": f'extends = "portunus"\n[{sec}]\n{key} = {v}\n'.encode()},
                 )
             )
     for hid in ("../../ESCAPED", "a/b", "", " ", ".", "..", "x" * 100, "a b", "ü", "1abc"):
@@ -163,6 +163,7 @@ def cases(quick: bool) -> list[tuple[list[str], dict[str, bytes | None]]]:
                 ["temple", "--config", "t.toml", "-o", "T"],
                 {
                     "t.toml": (
+                        'extends = "portunus"\n'
                         f'[[hypothesis]]\nid = "{hid}"\ndescription = ""\nsources = []\n'
                         'certainty = "low"\nchanges = { "roof.tympanum_ratio" = 8.0 }\n'
                     ).encode()
@@ -181,7 +182,8 @@ def cases(quick: bool) -> list[tuple[list[str], dict[str, bytes | None]]]:
             (
                 ["temple", "--config", "t.toml", "-o", "T"],
                 {
-                    "t.toml": f'[[cuboid]]\nname = "c"\nmin = {lo}\nmax = {hi}\n'
+                    "t.toml": 'extends = "portunus"\n'
+                    f'[[cuboid]]\nname = "c"\nmin = {lo}\nmax = {hi}\n'
                     f'layer = "cella"\n'.encode()
                 },
             )
@@ -305,7 +307,80 @@ def cases(quick: bool) -> list[tuple[list[str], dict[str, bytes | None]]]:
         out.append((["column", "--config", "c.toml"], {"c.toml": data}))
     out.append((["column", "--config", "d.toml"], {"d.toml": None}))
     out.append((["column", "--config", "missing.toml"], {}))
+    out += cases_31()
     return out
+
+
+def cases_31() -> list[tuple[list[str], dict[str, bytes | None]]]:
+    """Issue 31: the flag schema on every command, city's checks before work, export scales,
+    temple descriptions' tables and hypotheses, names and values that used to pass (the case
+    list of tests/test_hostile_31.py), and more values of the same flags."""
+    from tests.test_hostile_31 import CASES, SCENE, _hypotheses
+
+    out: list[tuple[list[str], dict[str, bytes | None]]] = []
+    for argv, files, _needle in CASES:
+        files = {
+            k: (_hypotheses(int(v[1:])) if v is not None and v.startswith(b"@") else v)
+            for k, v in files.items()
+        }
+        out.append((list(argv), files))
+    sizes = ["0", "-1", "3", "15", "100", "1000", "16384", "1e3", "x", ""]
+    for cmd in (["asset", "-o", "A"], ["temple", "-o", "T"], ["city", "c"]):
+        for v in sizes:
+            out.append(([*cmd, "--texture-size", v], {}))
+        for v in ("-1", "2**63", "9223372036854775808", "1.5", "x"):
+            out.append(([*cmd, "--seed", v], {}))
+    mem = ["0", "-1", "nan", "inf", "0.01", "1e300", "x"]
+    for cmd in (
+        ["shaft"],
+        ["column"],
+        ["asset", "-o", "A"],
+        ["temple", "-o", "T"],
+        ["city", "c"],
+        ["preview", "s.usda", "-o", "p.png"],
+        ["export", "s.usda", "-o", "s.glb"],
+        ["evaluate", "--part", "base", "--reference", "r.csv"],
+        ["fit", "shaft", "--reference", "r.csv"],
+    ):
+        for v in mem:
+            out.append(([*cmd, "--max-memory", v], {"s.usda": SCENE, "r.csv": _CSV}))
+    for v in ("-1", "0"):
+        out.append((["city", "c", "--memory-limit", v], {}))
+    for name in ("a\nb.usda", "a\tb.usda", "a\x7fb.usda", "a\rb.usda"):
+        out.append((["shaft", "-o", name], {}))
+    for v in ("", " ", "HIGH"):
+        out.append((["column", "--lod", v, "-o", "c.usda"], {}))
+    for v in ("3", "8", "100", "10000"):
+        out.append((["shaft", "--flute-slices-per-fillet-slice", v], {}))
+    for a in ("tcp://1.2.3.4", "tcp://:80", "tls://[::1]", "ws://a_b:80", "tcp://x:-1", "x"):
+        out.append((["city", "c", "--scheduler", a], {}))
+    for v in ("-5", "x", "1.5"):
+        out.append((["city", "c", "--instancer-threshold", v], {}))
+    for j in ("d/x.json", "x.JSON.txt", "c"):
+        out.append((["city", "c", "--json", j], {"d": b"a file"}))
+    for v in ("1e-5", "100", "1:1e9", "nan", "1:-2"):
+        out.append((["export", "s.usda", "-o", "s.stl", "--scale", v], {"s.usda": SCENE}))
+    for v in ("lod=bogus", "base=G9", "x=y"):
+        out.append(
+            (
+                [
+                    "evaluate",
+                    "--usd",
+                    "s.usda",
+                    "--variant",
+                    v,
+                    "--part",
+                    "base",
+                    "--reference",
+                    "r.csv",
+                ],
+                {"s.usda": SCENE, "r.csv": _CSV},
+            )
+        )
+    return out
+
+
+_CSV = b"0,0\n0.1,0.05\n0.2,0.1\n"
 
 
 def fault_cases() -> list[tuple[list[str], dict[str, bytes | None]]]:
@@ -387,13 +462,20 @@ def main(argv: list[str] | None = None) -> int:
                 counts["fault cases"] += 1
                 if kind != "refused":
                     print(f"{kind.upper()} {cmd}: {detail}", flush=True)
+    by_command: dict[str, Counter[str]] = {}
     for i, (cmd, files) in enumerate(todo, 1):
         kind, detail = run_case(cmd, files)
         counts[kind] += 1
+        by_command.setdefault(cmd[0] if cmd else "-", Counter())[kind] += 1
         if kind != "refused":
             print(f"{kind.upper()} {cmd}: {detail}", flush=True)
         if i % 50 == 0:
             print(f"... {i}/{len(todo)} {dict(counts)}", file=sys.stderr, flush=True)
+    for name, c in sorted(by_command.items()):
+        print(
+            f"  {name}: {sum(c.values())} cases, refused cleanly {c['refused']}, accepted "
+            f"{c['accepted']}, anything else {c['other']}"
+        )
     total = len(todo) + counts["fault cases"]
     print(
         f"cases {total} ({counts['fault cases']} on read-only/full file systems): refused "
