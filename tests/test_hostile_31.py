@@ -290,3 +290,29 @@ def test_every_usd_layer_the_repository_ships_opens_alone_and_validates():
     layers = [Sdf.Layer.FindOrOpen(str(p)) for p in sorted(repo.glob("layers/portunus/*.usda"))]
     fresh = stand_in_materials(layers).ExportToString()
     assert Sdf.Layer.FindOrOpen(str(repo / "layers/materials.usda")).ExportToString() == fresh
+
+
+@pytest.mark.slow
+def test_city_says_what_it_resolved_and_warns_past_a_viewer(tmp_path, capsys, monkeypatch):
+    """A porticus Polygon stays a colonnaded square and the build says so; a city drawing more
+    triangles than a viewer can is built with a warning (the threshold lowered here, so a
+    small city crosses it)."""
+    import json
+
+    import ionic_usd.pipeline.city as city
+
+    ring = "[[0, 100], [30, 100], [30, 130], [0, 130], [0, 100]]"
+    porticus = (
+        '{"type": "Feature", "properties": {"type": "porticus", "id": "square"}, '
+        f'"geometry": {{"type": "Polygon", "coordinates": [{ring}]}}}}'
+    )
+    (tmp_path / "p.geojson").write_bytes(_plan(_lot("a", 0, 0, 30, 40), porticus))
+    monkeypatch.setattr(city, "VIEWER_TRIANGLES", 1000)
+    argv = ["city", "c", "--plan", "p.geojson", "--texture-size", "16", "--json", "s.json"]
+    code, _out, err = run_cli(argv, tmp_path, capsys)
+    assert code == 0, err
+    assert "porticus square is a Polygon" in err and "colonnaded square" in err
+    assert "warning: the city draws up to" in err
+    summary = json.loads((tmp_path / "s.json").read_text())
+    assert summary["columns"] > 0 and len(summary["notes"]) == 2
+    assert summary["city"] == str(Path("c") / "City.usda")
