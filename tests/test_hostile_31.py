@@ -102,6 +102,7 @@ CASES: list[tuple[list[str], dict[str, bytes | None], str]] = [
             "tcp://",
             "inproc://x",
             "tcp://example.invalid:8786",
+            "tcp://127.0.0.1:1",  # nothing listens on port 1
         )
     ],
     (

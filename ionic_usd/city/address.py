@@ -4,7 +4,8 @@ can reach over the network, ``SCHEME://HOST:PORT``.
 Accepted schemes are the network ones of ``distributed`` (``tcp``, ``tls``, ``ws``, ``wss``);
 ``inproc://`` names a scheduler inside this very process, which a city build never has, and
 ``http://`` is a dashboard, not a scheduler. The host must be a valid IPv4/IPv6 address or a
-host name that resolves; the port an integer in [1, 65535].
+host name that resolves; the port an integer in [1, 65535]; and something must accept a TCP
+connection there (checked before any work, even when every temple is already built).
 """
 
 from __future__ import annotations
@@ -59,7 +60,8 @@ def check_scheduler_address(address: object) -> tuple[str, str, int]:
 
 
 def resolve_scheduler_host(address: str, timeout: float = RESOLVE_TIMEOUT) -> None:
-    """Refuse an address whose host name does not resolve (within ``timeout`` seconds)."""
+    """Refuse an address whose host name does not resolve, or where nothing accepts a TCP
+    connection (each within ``timeout`` seconds)."""
     _scheme, host, port = check_scheduler_address(address)
     result: list[BaseException | None] = []
 
@@ -79,3 +81,11 @@ def resolve_scheduler_host(address: str, timeout: float = RESOLVE_TIMEOUT) -> No
         )
     if result[0] is not None:
         raise ParameterError("--scheduler", address, f"a host that resolves ({host}: {result[0]})")
+    try:  # something listens there (a scheduler's handshake is distributed's to check)
+        socket.create_connection((host, port), timeout=timeout).close()
+    except OSError as exc:
+        raise ParameterError(
+            "--scheduler",
+            address,
+            f"a scheduler that accepts connections ({host}:{port}: {exc.strerror or exc})",
+        ) from None
