@@ -322,8 +322,22 @@ def _library_error(exc: Exception) -> str | None:
     return None
 
 
+_STAGED = None
+
+
+def _user_paths(message: str) -> str:
+    """Staging and temporary names (``.T.ionic-build-<pid>-<hex>``) as the user's names."""
+    global _STAGED
+    if _STAGED is None:
+        import re
+
+        # the name, the tag, pid and hex, and the name's extension repeated (kept for USD)
+        _STAGED = re.compile(r"\.([^/\s]+?)\.ionic-(?:build|tmp)-\d+-[0-9a-f]{8}(?:\.\w+)?")
+    return _STAGED.sub(r"\1", message)
+
+
 def _fail(message: str, status: int = 2) -> int:
-    print(f"ionic-usd: error: {message}", file=sys.stderr)
+    print(f"ionic-usd: error: {_user_paths(message)}", file=sys.stderr)
     return status
 
 

@@ -244,3 +244,36 @@ def test_usd_warnings_folded_into_the_one_error_line(tmp_path):
     assert "OpenUSD warned: Could not load sublayer" in lines[0] and "missing.usda" in lines[0]
     assert "Warning: in" not in r.stderr
     assert sorted(os.listdir(tmp_path)) == ["w.usda"]
+
+
+def test_staging_names_shown_as_the_users():
+    from ionic_usd.cli import _user_paths
+
+    assert (
+        _user_paths("x: out/.T.ionic-build-15537-8ab514f7/.IonicColumn.ionic-build-1-a6ff2456/a")
+        == "x: out/T/IonicColumn/a"
+    )
+    assert _user_paths("at /d/.x.json.ionic-tmp-15159-5978de3c.json") == "at /d/x.json"
+
+
+def test_full_disk_named_first(tmp_path):
+    """On a full file system (a 1 MB tmpfs, filled; root only) the error starts with the
+    cause and names the user's path; nothing is left behind."""
+    if os.geteuid() != 0 or shutil.which("mount") is None:
+        pytest.skip("needs root to mount a tmpfs")
+    full = tmp_path / "full"
+    full.mkdir()
+    if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=1m", "tmpfs", str(full)]).returncode:
+        pytest.skip("cannot mount a tmpfs")
+    try:
+        st = os.statvfs(full)
+        with open(full / "filler", "wb") as fh:
+            fh.write(b"\0" * (st.f_bavail * st.f_frsize - 200 * 1024))
+        for argv in (["shaft", "-o", "full/s.usda"], ["column", "-o", "full/c.usdc"]):
+            r = _ionic(argv, tmp_path)
+            assert r.returncode == 2 and len(r.stderr.splitlines()) == 1, r.stderr
+            assert r.stderr.startswith("ionic-usd: error: No space left on device"), r.stderr
+            assert argv[-1] in r.stderr and "ionic-tmp" not in r.stderr
+        assert os.listdir(full) == ["filler"]
+    finally:
+        subprocess.run(["umount", "-l", str(full)], capture_output=True)
