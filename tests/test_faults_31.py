@@ -277,3 +277,33 @@ def test_full_disk_named_first(tmp_path):
         assert os.listdir(full) == ["filler"]
     finally:
         subprocess.run(["umount", "-l", str(full)], capture_output=True)
+
+
+@pytest.mark.slow
+def test_two_temple_processes_into_one_folder(tmp_path):
+    """Two real `ionic-usd temple` processes into T: the second (detail plain) is refused
+    naming the first's pid while the first builds; the first finishes and T is its build."""
+    from pxr import Usd
+
+    first = subprocess.Popen(
+        [sys.executable, "-m", "ionic_usd", "temple", "-o", "T", "--texture-size", "16", "-q"],
+        cwd=tmp_path,
+        env=_env(),
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    lock = tmp_path / ".T.ionic-lock"
+    deadline = time.monotonic() + 120
+    while not (lock.exists() and lock.stat().st_size) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert first.poll() is None, "the first build finished before the second started"
+    second = _ionic(["temple", "-o", "T", "--texture-size", "16", "--detail", "plain"], tmp_path)
+    assert second.returncode == 2 and len(second.stderr.splitlines()) == 1, second.stderr
+    assert f"pid {first.pid}" in second.stderr
+    out, err = first.communicate(timeout=600)
+    assert first.returncode == 0, err
+    stage = Usd.Stage.Open(str(tmp_path / "T" / "Temple.usda"))
+    detail = stage.GetPrimAtPath("/Temple").GetVariantSets().GetVariantSet("detail")
+    assert detail.GetVariantSelection() == "carved"  # the first's default, not plain
+    assert sorted(os.listdir(tmp_path)) == ["T"]
