@@ -86,7 +86,10 @@ class UsdWarnings:
             self._thread.join(timeout=2.0)
         if with_own is not None:
             with_own.close()
-        os.close(self._saved)
+        if self._thread is None or not self._thread.is_alive():
+            os.close(self._saved)
+        # else a child process still holds the pipe: the reader keeps passing its lines to
+        # the saved descriptor, which stays open (closing it could let the number be reused)
         self._saved = None
 
     def stop(self) -> None:
