@@ -29,13 +29,18 @@ SLIVER_ANGLE_DEG = 1.0
 SLIVER_TOL = 1e-4
 
 
-def _tri_angles(p: np.ndarray) -> np.ndarray:
-    """(t, 3, 3) corner points → (t, 3) corner angles in degrees."""
+def _tri_cosines(p: np.ndarray) -> np.ndarray:
+    """(t, 3, 3) corner points → (t, 3) cosines of the corner angles, in [-1, 1]."""
     a = np.roll(p, -1, axis=1) - p
     b = np.roll(p, -2, axis=1) - p
     la, lb = np.linalg.norm(a, axis=2), np.linalg.norm(b, axis=2)
-    c = np.einsum("tij,tij->ti", a, b) / np.maximum(la * lb, 1e-300)
-    return np.degrees(np.arccos(np.clip(c, -1.0, 1.0)))
+    return np.clip(np.einsum("tij,tij->ti", a, b) / np.maximum(la * lb, 1e-300), -1.0, 1.0)
+
+
+def _tri_angles(p: np.ndarray) -> np.ndarray:
+    """(t, 3, 3) corner points → (t, 3) corner angles in degrees (for reports: numpy's arccos
+    differs in the last bits by CPU, so the clean-up itself orders by :func:`_tri_cosines`)."""
+    return np.degrees(np.arccos(_tri_cosines(p)))  # noqa: TID251
 
 
 def _angles(p: list[float], q: list[float], r: list[float]) -> tuple[float, float, float]:
@@ -171,6 +176,7 @@ def remove_slivers(
     cn: dict[int, np.ndarray] = {}  # the (3, n_ch) corners of each edited or new face
     n_dim = 3 if corner_n is not None else 0
     alive = [True] * len(T)
+    cos_min = math.cos(math.radians(min_angle))
 
     def corners_of(f: int) -> np.ndarray:
         got = cn.get(f)
@@ -404,13 +410,16 @@ def remove_slivers(
         else:
             cand = np.array(sorted({f for v in touched for f in faces_of(v)}), dtype=np.int64)
             tri = np.array([T[f] for f in cand.tolist()], dtype=np.int64).reshape(-1, 3)
-        worst = _tri_angles(pts[tri]).min(axis=1)
-        low = worst < min_angle
+        # the smallest angle is the largest cosine: candidates and their order from + - * / and
+        # sqrt only (arccos is CPU-dependent); a margin of 1e-12 keeps every triangle under
+        # min_angle a candidate, and _angles decides each exactly as before
+        worst = _tri_cosines(pts[tri]).max(axis=1)
+        low = worst > cos_min - 1e-12
         bad, worst = cand[low], worst[low]
         if not len(bad):
             break
         touched = set()
-        for t in bad[np.argsort(worst, kind="stable")].tolist():
+        for t in bad[np.argsort(-worst, kind="stable")].tolist():
             if not alive[t]:
                 continue
             r = T[t]
