@@ -181,7 +181,9 @@ def check_file(path: Path) -> str | None:
             return _check_png(path.read_bytes())
         if suffix == ".glb":
             data = path.read_bytes()
-            magic, version, length = struct.unpack_from("<4sII", data) if len(data) >= 12 else (b"", 0, 0)
+            magic, version, length = (
+                struct.unpack_from("<4sII", data) if len(data) >= 12 else (b"", 0, 0)
+            )
             if magic != b"glTF" or version != 2 or length != len(data):
                 return "not a glTF 2.0 binary of its own length"
             return None
@@ -219,11 +221,14 @@ def _check_stl(data: bytes) -> str | None:
 
 
 def _check_usd(path: Path) -> str | None:
-    sys.path.insert(0, str(ROOT))  # the checkout's ionic_usd when run from a source tree
-    from ionic_usd.usd.stage import validate_stage  # noqa: PLC0415 - pxr only when needed
-    from pxr import Usd  # noqa: PLC0415
+    from pxr import Usd  # noqa: PLC0415 - pxr only when a block wrote USD
 
-    stage = Usd.Stage.Open(str(path))
+    from ionic_usd.usd.stage import validate_stage  # noqa: PLC0415
+
+    try:
+        stage = Usd.Stage.Open(str(path))
+    except Exception as exc:  # noqa: BLE001 - pxr raises Tf.ErrorException for a bad layer
+        return f"USD cannot open it: {str(exc).strip().splitlines()[-1]}"
     if stage is None:
         return "USD cannot open it"
     errors = validate_stage(stage)
