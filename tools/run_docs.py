@@ -299,8 +299,13 @@ def check_outputs(block: Block, cwd: Path, before: dict[Path, tuple[int, int]]) 
     return problems
 
 
+def n_commands(block: Block) -> int:
+    """Commands in a block: a bash block's command lines, or 1 for a python script."""
+    return len(logical_lines(block.code)) if block.lang == "bash" else 1
+
+
 def run_page(page: Path, blocks: list[Block], keep: bool) -> tuple[int, list[str]]:
-    """Run a page's blocks in a fresh scratch folder; (blocks run, failures)."""
+    """Run a page's blocks in a fresh scratch folder; (commands run, failures)."""
     scratch = Path(tempfile.mkdtemp(prefix="ionic-docs-"))
     cwd = scratch / "work"
     shutil.copytree(ROOT / "examples", cwd / "examples")
@@ -316,7 +321,7 @@ def run_page(page: Path, blocks: list[Block], keep: bool) -> tuple[int, list[str
             t0 = time.perf_counter()
             before = snapshot(cwd)
             ok, why = run_block(block, cwd, env, n)
-            ran += 1
+            ran += n_commands(block)
             bad = check_outputs(block, cwd, before) if ok else []
             status = "ok" if ok and not bad else "FAIL"
             print(f"  {status} {where} {time.perf_counter() - t0:.1f} s", flush=True)
@@ -362,14 +367,18 @@ def main(argv: list[str] | None = None) -> int:
             for b in blocks:
                 print(f"  {b.line} {b.lang}{' (skip: ' + b.skip + ')' if b.skip else ''}")
                 print(_indent(b.code))
+            total += sum(n_commands(b) for b in blocks if not b.skip)
             continue
         if problems or not any(not b.skip for b in blocks):
             continue
         ran, bad = run_page(page, blocks, args.keep)
         total += ran
         failures += bad
-    verb = "listed" if args.list else "ran"
-    print(f"{verb} {total} blocks of {len(pages)} pages in {time.perf_counter() - t0:.0f} s")
+    verb = "would run" if args.list else "ran"
+    print(
+        f"{verb} {total} commands (bash command lines and python scripts) of {len(pages)} pages "
+        f"in {time.perf_counter() - t0:.0f} s"
+    )
     for f in failures:
         print(f"FAILED {f}", file=sys.stderr)
     return 1 if failures else 0
