@@ -19,12 +19,13 @@ import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import TextIO
 
 ROOT = Path(__file__).resolve().parent.parent
 
 
 class _Tee(io.TextIOBase):
-    def __init__(self, *streams: io.TextIOBase) -> None:
+    def __init__(self, *streams: TextIO) -> None:
         self.streams = streams
 
     def write(self, s: str) -> int:
@@ -91,7 +92,7 @@ def run(main: Callable[[], int | None]) -> int | None:
     sys.argv = [sys.argv[0], *rest]
     buf = io.StringIO()
     stdout = sys.stdout
-    sys.stdout = _Tee(stdout, buf)  # type: ignore[assignment]
+    sys.stdout = _Tee(stdout, buf)
     t0 = time.perf_counter()
     try:
         rc = main()
