@@ -147,7 +147,7 @@ def _add_asset(sub: Any, full: bool) -> None:
         "write the column as a USD component asset with variant sets",
         "Write IonicColumn/IonicColumn.usda (interface: kind=component, assetInfo, "
         "variant sets lod/base/scroll/flutes/form/finish, payload) with "
-        "Payload/Contents.usda, Geometry.usdc, Materials.usda and Textures/ (xatlas "
+        "Payload/Contents.usda, Geometry.usdc, Materials.usda and Textures/ (analytic "
         "UVs, OpenImageIO stone maps).",
         cmd_asset,
     )

@@ -7,7 +7,7 @@ The per-item costs are measured peaks of this package (RSS, Linux, numpy 2, usd-
 
 * a column written as USD: 2.03 M triangles → 642 MB peak (≈ 300 B per triangle with the
   interpreter);
-* the asset adds xatlas UVs and one Vt array copy per mesh: counted at 2x that;
+* the asset adds UVs (analytic charts) and one Vt array copy per mesh: counted at 2x that;
 * a stone texture set: 1024² → 266 MB, 2048² → 707 MB peak (≈ 140 B per pixel, one style at a
   time).
 """

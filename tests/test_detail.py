@@ -185,14 +185,15 @@ def test_cli_bad_moulding_section_names_file_and_key(tmp_path, capsys):
     assert not out.exists()
 
 
-def test_readme_detail_table_matches_the_default_temple(stage):
-    """The README's triangle table, row by row, from the default build's own stage."""
+def test_docs_detail_table_matches_the_default_temple(stage):
+    """The triangle table of docs/specification/temple.md, row by row, from the default build."""
     import re
     from pathlib import Path
 
     from ionic_usd.usd.temple import triangles_with
 
-    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text("utf-8")
+    page = Path(__file__).resolve().parents[1] / "docs" / "specification" / "temple.md"
+    readme = page.read_text("utf-8")
     rows = re.findall(
         r"^\| (plain|moulded|carved)(?: \(default\))? \| .* \| ([\d,]+) \| ([\d,]+) \|$",
         readme,

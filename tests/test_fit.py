@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import tomllib
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -25,6 +26,7 @@ from ionic_usd.evaluate.metrics import curve_length, resample
 from ionic_usd.evaluate.reference import align
 from ionic_usd.evaluate.sections import base_section, shaft_silhouette_section, volute_section
 
+ROOT = Path(__file__).resolve().parents[1]
 V0 = VoluteParams()
 # a volute clearly unlike the Vitruvian start: 10 % larger, tighter, rotated start, fewer turns
 TRUE_VOLUTE = V0.with_(
@@ -289,3 +291,42 @@ def test_fit_shaft_refuses_a_closed_curve():
 
     with pytest.raises(ParameterError, match="cross-section"):
         fit_shaft(shaft_cross_section_at(portunus_column_params(), 1.0))
+
+
+def test_fit_volute_report_lists_every_model_once(tmp_path):
+    """as_dict of a fit with alternatives: a ``models`` table, no table nested in itself."""
+    import json
+
+    from ionic_usd.evaluate.reference import read_csv_curve
+
+    ref = read_csv_curve(ROOT / "examples" / "volute_twelve_centres.csv")
+    res = fit_volute(ref, samples=64, popsize=4, maxiter=1, polish_evals=0)
+    entry = json.loads(json.dumps(res.as_dict()))  # plain JSON: no cycle, no nesting
+    models = entry["models"]
+    assert sorted(models) == sorted([res.model, *(a.model for a in res.alternatives)])
+    assert len(models) == 2
+    for name, fitted in models.items():
+        assert "models" not in fitted
+        same = res if name == res.model else next(a for a in res.alternatives if a.model == name)
+        assert fitted["hausdorff"] == pytest.approx(same.after.hausdorff)
+    assert entry["hausdorff"] == models[res.model]["hausdorff"]
+
+
+@pytest.mark.slow
+def test_documented_fit_volute_command_writes_its_json(tmp_path):
+    """The docs' example, as written, in a folder holding a copy of examples/ (issue 31)."""
+    import json
+    import shlex
+    import shutil
+    import subprocess
+    import sys
+
+    shutil.copytree(ROOT / "examples", tmp_path / "examples")
+    cmd = "ionic-usd fit volute --reference examples/volute_twelve_centres.csv --json fit.json"
+    args = [sys.executable, "-m", "ionic_usd", *shlex.split(cmd)[1:]]
+    out = subprocess.run(args, cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr[-2000:]
+    report = json.loads((tmp_path / "fit.json").read_text("utf-8"))
+    volute = report["parts"]["volute"]
+    assert sorted(volute["models"]) == ["centred_arcs", "log_spiral"]
+    assert volute["model"] == "centred_arcs"  # the twelve-centre drawing: centred arcs win

@@ -236,3 +236,30 @@ def test_linear_and_dot_are_numpys_products_summed_in_order():
     assert libm.linear(p.astype(np.float32), m.astype(np.float32)).dtype == np.float32
     assert libm.linear(p.astype(np.float32), m).dtype == np.float64
     assert libm.linear(p[:, :2], m[:2, :2]).shape == (1000, 2)
+
+
+def test_flat_slope_literal_is_tan_of_its_angle():
+    # charts.py keeps tan(FLAT_SLOPE_DEG) as a literal (numpy's tan is CPU-dependent)
+    from ionic_usd.column import charts
+
+    exact = math.tan(math.radians(charts.FLAT_SLOPE_DEG))
+    assert abs(charts._FLAT_SLOPE - exact) <= math.ulp(exact)
+
+
+def test_sliver_order_by_cosine_matches_angles():
+    # the clean-up picks and orders its slivers by the largest corner cosine: the same triangles
+    # as the smallest angle under the threshold, in the same order
+    from ionic_usd.geometry.slivers import _tri_angles, _tri_cosines
+
+    rng = np.random.default_rng(5)
+    p = rng.normal(size=(4000, 3, 3))
+    p[:2000, 2] = p[:2000, 0] + 1e-3 * rng.normal(size=(2000, 3))  # needles
+    worst_angle = _tri_angles(p).min(axis=1)
+    worst_cos = _tri_cosines(p).max(axis=1)
+    low = worst_angle < 1.0
+    assert low.sum() > 100
+    cand = worst_cos > math.cos(math.radians(1.0)) - 1e-12
+    assert np.all(cand[low])  # every triangle under the angle is a candidate
+    order_a = np.argsort(worst_angle[low], kind="stable")
+    order_c = np.argsort(-worst_cos[low], kind="stable")
+    assert np.array_equal(order_a, order_c)

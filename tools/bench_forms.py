@@ -103,4 +103,6 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    import bench_md
+
+    raise SystemExit(bench_md.run(main))

@@ -137,9 +137,15 @@ def _timed(fn) -> float:
     return time.perf_counter() - t0
 
 
-if __name__ == "__main__":
+def _run() -> None:
     if "--cli-only" not in sys.argv:
         main()
     if "--baseline" in sys.argv:
         cli_temple(sys.argv[sys.argv.index("--baseline") + 1])
     cli_temple()
+
+
+if __name__ == "__main__":
+    import bench_md
+
+    raise SystemExit(bench_md.run(_run))

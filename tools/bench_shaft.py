@@ -176,4 +176,6 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    import bench_md
+
+    raise SystemExit(bench_md.run(main))

@@ -25,6 +25,8 @@ from ionic_usd.geometry import libm
 __all__ = ["revolved_st", "split_seam", "FLAT_SLOPE_DEG", "SIDE_RADIUS_SPREAD"]
 
 FLAT_SLOPE_DEG = 35.0
+# tan(35°) as a literal: numpy's tan differs in the last bit by CPU (tests/test_libm.py checks it)
+_FLAT_SLOPE = 0.7002075382097097
 SIDE_RADIUS_SPREAD = 1.3
 
 
@@ -57,7 +59,7 @@ def split_seam(st: np.ndarray, corners: np.ndarray, period: float) -> tuple[np.n
 def _charts(nodes: np.ndarray) -> tuple[np.ndarray, list[tuple[str, float]]]:
     """Chart of every band, and each chart's kind ('up', 'down', 'side') and radius."""
     d = np.diff(nodes, axis=0)
-    flat = np.abs(d[:, 1]) < np.tan(np.radians(FLAT_SLOPE_DEG)) * np.abs(d[:, 0])
+    flat = np.abs(d[:, 1]) < _FLAT_SLOPE * np.abs(d[:, 0])
     chart = np.zeros(len(d), dtype=np.int64)
     kinds: list[tuple[str, float]] = []
     lo = hi = 0.0

@@ -76,8 +76,8 @@ class Lod:
     shaft_rows: int = 1
 
 
-# Triangle budgets (default Portunus column, measured by tools/bench_column.py):
-# high ≈ 40k, medium ≈ 14k, low ≈ 6k triangles.
+# Triangles of the default Portunus column (three parts): high 40,862, medium 16,054, low 7,996
+# (the LOD table of docs/specification/column.md, checked by tests/test_shaft.py).
 LODS: dict[str, Lod] = {
     "high": Lod(8, 4, 8, 192, 48, 32, 24),  # rows ≈ 0.29 m apart
     "medium": Lod(4, 2, 4, 96, 24, 16, 8),  # ≈ 0.88 m

@@ -61,10 +61,41 @@ def shaft_st(
         (:attr:`ionic_usd.geometry.mesh.Mesh.st_distinct`)
     st_indices : (3 t,) int32
     """
-    e, h = flutes, flute_slices
+    n_side = len(points) - 2  # the cap centres are on no side triangle: no side value
+    s = _side_s(points, flutes, flute_slices, perimeter, starts)
+    half = 0.5 * perimeter
+    n = int(starts[2] - starts[1])
+    wraps = _seam_triangles(s, int(starts[4]), tri, n_grid, n_lateral, n, half)
+    sub = tri[wraps]
+    low_c = s[sub] < half
+    dup_v = np.unique(sub[low_c])
+    dup_of = np.zeros(n_side, dtype=np.int32)
+    dup_of[dup_v] = n_side + np.arange(len(dup_v), dtype=np.int32)
+    st_idx = tri.astype(np.int32, copy=True)  # side corners: their point's value
+    st_idx[wraps] = np.where(low_c, dup_of[sub], sub)
+    side = np.empty((n_side, 2), dtype=np.float32)
+    side[:, 0] = s
+    side[:, 1] = points[:n_side, 1]
+    values = [side, (np.stack([s[dup_v] + perimeter, points[dup_v, 1]], axis=1))]
+    base = n_side + len(dup_v)
+    caps = tri[n_lateral:]
+    for k, sign in ((0, 1.0), (3, -1.0)):  # caps: bottom ring row 0, top ring row 3
+        sel = np.all(np.abs(points[caps, 1] - points[starts[k], 1]) < 1e-12, axis=1)
+        if not sel.any():
+            continue
+        v = np.unique(caps[sel])
+        values.append(np.stack([points[v, 0], sign * points[v, 2]], axis=1))
+        st_idx[n_lateral + np.flatnonzero(sel)] = base + np.searchsorted(v, caps[sel])
+        base += len(v)
+    out = np.concatenate([a.astype(np.float32, copy=False) for a in values])
+    return out, st_idx.reshape(-1)
+
+
+def _side_s(points: np.ndarray, e: int, h: int, perimeter: float, starts: np.ndarray) -> np.ndarray:
+    """s (metres, in [0, perimeter)) of every side point (the cap centres excluded)."""
     n = int(starts[2] - starts[1])  # a fluted row's width (the plain rows at its angles)
     k_per = n // e  # vertices per flute period in a fluted row
-    n_side = len(points) - 2  # the cap centres are on no side triangle: no side value
+    n_side = len(points) - 2
     base_fl = int(starts[4])
     s = np.empty(n_side)
     # plain rings (other angles): s proportional to the angle
@@ -89,11 +120,15 @@ def shaft_st(
     s_rows = ((np.arange(e) + 0.5)[None, :, None] * (perimeter / e) + local).reshape(-1)
     s[starts[1] : starts[3]] = s_rows[: 2 * n]
     s[base_fl:] = s_rows[2 * n :]
-    s = np.mod(s, perimeter)
-    half = 0.5 * perimeter
-    # the seam: a side triangle spanning more than half the perimeter wraps around s = 0. A
-    # grid triangle can only if its quad has corners on both sides of s = perimeter / 2, so
-    # the span is measured on those quads (two columns) and on the bands, not on every one
+    return np.mod(s, perimeter)
+
+
+def _seam_triangles(
+    s: np.ndarray, base_fl: int, tri: np.ndarray, n_grid: int, n_lateral: int, n: int, half: float
+) -> np.ndarray:
+    """The side triangles that wrap round s = 0 (span more than ``half`` the perimeter). A
+    grid triangle can only if its quad has corners on both sides of s = half, so the span is
+    measured on those quads (two columns) and on the bands, not on every one."""
     cand = [np.arange(n_grid, n_lateral)]
     if n_grid:
         low = (s[base_fl:] < half).reshape(-1, n)
@@ -102,33 +137,9 @@ def shaft_st(
         mixed = np.flatnonzero((q00 != q01) | (q00 != q10) | (q00 != q11))
         cand.insert(0, (2 * mixed[:, None] + np.arange(2)).reshape(-1))
     cand_t = np.concatenate(cand)
-    c = tri[cand_t]
-    sc = s[c]
+    sc = s[tri[cand_t]]
     span = sc.max(axis=1) - sc.min(axis=1)
-    wraps = cand_t[span > half]
-    sub = tri[wraps]
-    low_c = s[sub] < half
-    dup_v = np.unique(sub[low_c])
-    dup_of = np.zeros(n_side, dtype=np.int32)
-    dup_of[dup_v] = n_side + np.arange(len(dup_v), dtype=np.int32)
-    st_idx = tri.astype(np.int32, copy=True)  # side corners: their point's value
-    st_idx[wraps] = np.where(low_c, dup_of[sub], sub)
-    side = np.empty((n_side, 2), dtype=np.float32)
-    side[:, 0] = s
-    side[:, 1] = points[:n_side, 1]
-    values = [side, (np.stack([s[dup_v] + perimeter, points[dup_v, 1]], axis=1))]
-    base = n_side + len(dup_v)
-    caps = tri[n_lateral:]
-    for k, sign in ((0, 1.0), (3, -1.0)):  # caps: bottom ring row 0, top ring row 3
-        sel = np.all(np.abs(points[caps, 1] - points[starts[k], 1]) < 1e-12, axis=1)
-        if not sel.any():
-            continue
-        v = np.unique(caps[sel])
-        values.append(np.stack([points[v, 0], sign * points[v, 2]], axis=1))
-        st_idx[n_lateral + np.flatnonzero(sel)] = base + np.searchsorted(v, caps[sel])
-        base += len(v)
-    out = np.concatenate([a.astype(np.float32, copy=False) for a in values])
-    return out, st_idx.reshape(-1)
+    return cand_t[span > half]
 
 
 def grid_normals(pts: np.ndarray, col: np.ndarray, h: int) -> tuple[np.ndarray, np.ndarray]:

@@ -80,17 +80,9 @@ def prism(
     faces seen from outside.
     """
     pts = np.asarray(points2d, dtype=np.float64)
-    tri = np.asarray(triangles, dtype=np.int64)
     if not z1 > z0:
         raise GeometryError(f"prism {name!r}: z1 must exceed z0")
-    p = pts[tri]
-    area2 = (p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1]) - (p[:, 1, 1] - p[:, 0, 1]) * (
-        p[:, 2, 0] - p[:, 0, 0]
-    )
-    if np.all(area2 < 0):
-        tri, area2 = tri[:, ::-1], -area2
-    if not np.all(area2 > 0):
-        raise GeometryError(f"prism {name!r}: the region's triangles fold over or are degenerate")
+    tri = _ccw_triangles(pts, np.asarray(triangles, dtype=np.int64), name)
     if loop is None:
         loop = _boundary_loop(tri)
     loop = np.asarray(loop, dtype=np.int64)
@@ -98,17 +90,7 @@ def prism(
     if np.dot(lp[:, 0], np.roll(lp[:, 1], -1)) - np.dot(np.roll(lp[:, 0], -1), lp[:, 1]) < 0:
         loop = loop[::-1]
     n = len(pts)
-    # wall normals: outward edge normals of the counter-clockwise loop, averaged at smooth
-    # vertices and kept per edge at creases (so a sharp corner stays crisp)
-    d = pts[np.roll(loop, -1)] - pts[loop]
-    en = np.stack([d[:, 1], -d[:, 0]], axis=1)
-    en /= np.linalg.norm(en, axis=1, keepdims=True)
-    prev_en = np.roll(en, 1, axis=0)
-    crease = np.einsum("ij,ij->i", prev_en, en) < math.cos(math.radians(crease_deg))
-    vn = prev_en + en
-    vn /= np.linalg.norm(vn, axis=1, keepdims=True)
-    n_start = np.where(crease[:, None], en, vn)  # normal at the edge's first vertex
-    n_end = np.roll(np.where(crease[:, None], prev_en, vn), -1, axis=0)  # at its second vertex
+    n_start, n_end = _wall_normals(pts, loop, crease_deg)
     u, v = loop, np.roll(loop, -1)
     # wall quad (v_top, u_top, u_bot, v_bot): reverses the cap edge u→v on top, runs u→v below
     walls = np.concatenate([np.stack([v + n, u + n, u], axis=1), np.stack([v + n, u, v], axis=1)])
@@ -124,9 +106,55 @@ def prism(
     points = np.concatenate(
         [np.column_stack([pts, np.full(n, z0)]), np.column_stack([pts, np.full(n, z1)])]
     )
-    # st: the front cap's n values, the back cap's n, then the walls' 2 (b + 1): loop vertex k
-    # at s = arc length to it (the last edge ends at the whole length: the strip's seam)
-    b = len(loop)
+    st, sti = _prism_st(pts, tri, loop, z0, z1)
+    return Mesh(
+        points,
+        np.full(len(faces), 3, np.int32),
+        faces.reshape(-1),
+        normals.reshape(-1, 3),
+        "faceVarying",
+        st.astype(np.float32),
+        sti.reshape(-1),
+        name=name,
+    )
+
+
+def _ccw_triangles(pts: np.ndarray, tri: np.ndarray, name: str) -> np.ndarray:
+    """The region's triangles turned counter-clockwise (all of one orientation, none
+    degenerate, else GeometryError)."""
+    p = pts[tri]
+    area2 = (p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1]) - (p[:, 1, 1] - p[:, 0, 1]) * (
+        p[:, 2, 0] - p[:, 0, 0]
+    )
+    if np.all(area2 < 0):
+        tri, area2 = tri[:, ::-1], -area2
+    if not np.all(area2 > 0):
+        raise GeometryError(f"prism {name!r}: the region's triangles fold over or are degenerate")
+    return tri
+
+
+def _wall_normals(pts: np.ndarray, loop: np.ndarray, crease_deg: float):
+    """The walls' normals at each loop edge's first and second vertex: outward edge normals
+    of the counter-clockwise loop, averaged at smooth vertices and kept per edge at creases
+    (so a sharp corner stays crisp)."""
+    d = pts[np.roll(loop, -1)] - pts[loop]
+    en = np.stack([d[:, 1], -d[:, 0]], axis=1)
+    en /= np.linalg.norm(en, axis=1, keepdims=True)
+    prev_en = np.roll(en, 1, axis=0)
+    crease = np.einsum("ij,ij->i", prev_en, en) < math.cos(math.radians(crease_deg))
+    vn = prev_en + en
+    vn /= np.linalg.norm(vn, axis=1, keepdims=True)
+    n_start = np.where(crease[:, None], en, vn)
+    n_end = np.roll(np.where(crease[:, None], prev_en, vn), -1, axis=0)
+    return n_start, n_end
+
+
+def _prism_st(pts: np.ndarray, tri: np.ndarray, loop: np.ndarray, z0: float, z1: float):
+    """st values and per-corner indices: the front cap's n values, the back cap's n, then the
+    walls' 2 (b + 1): loop vertex k at s = arc length to it (the last edge ends at the whole
+    length: the strip's seam)."""
+    n, b = len(pts), len(loop)
+    d = pts[np.roll(loop, -1)] - pts[loop]
     arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(d, axis=1))])
     w0 = 2 * n
     k = np.arange(b)
@@ -142,17 +170,7 @@ def prism(
     wall_st = np.concatenate(
         [np.stack([top + 1, top, bot], axis=1), np.stack([top + 1, bot, bot + 1], axis=1)]
     )
-    sti = np.concatenate([tri, tri[:, ::-1] + n, wall_st])
-    return Mesh(
-        points,
-        np.full(len(faces), 3, np.int32),
-        faces.reshape(-1),
-        normals.reshape(-1, 3),
-        "faceVarying",
-        st.astype(np.float32),
-        sti.reshape(-1),
-        name=name,
-    )
+    return st, np.concatenate([tri, tri[:, ::-1] + n, wall_st])
 
 
 def _lift(p: VoluteParams, xy: np.ndarray) -> np.ndarray:

@@ -360,7 +360,18 @@ class FitResult:
     alternatives: tuple[FitResult, ...] = ()
 
     def as_dict(self) -> dict[str, object]:
-        """The ``ionic_usd.evaluate/1`` entry of this part (see :mod:`.report`)."""
+        """The ``ionic_usd.evaluate/1`` entry of this part (see :mod:`.report`).
+
+        With alternatives (a volute fitted with several models), ``models`` holds every model's
+        entry, this one included, each without a ``models`` table of its own.
+        """
+        out = self._entry()
+        if self.alternatives:
+            out["models"] = {a.model: a._entry() for a in (self, *self.alternatives)}
+        return out
+
+    def _entry(self) -> dict[str, object]:
+        """This fit's figures alone (no ``models`` table)."""
         out: dict[str, object] = dict(self.after.as_dict())
         out.update(
             model=self.model or self.part,
@@ -375,8 +386,6 @@ class FitResult:
             evaluations=self.evaluations,
             notes=list(self.notes),
         )
-        if self.alternatives:
-            out["models"] = {a.model: a.as_dict() for a in (self, *self.alternatives)}
         return out
 
     def tables(self) -> dict[str, dict]:

@@ -86,7 +86,6 @@ def clip_mesh(
     n = n / ln
     if mesh.n_faces == 0:
         raise GeometryError(f"clip_mesh: mesh {mesh.name!r} is empty, nothing is left")
-
     pts = mesh.points
     if eps is None:
         eps = _REL_EPS * max(float(np.linalg.norm(np.ptp(pts, axis=0))), 1e-300)
@@ -95,20 +94,7 @@ def clip_mesh(
     d = np.where(near, 0.0, raw)
     s = np.sign(d).astype(np.int8)
     tri = mesh.triangles.astype(np.int64)
-    ts = s[tri]
-    has_pos = (ts > 0).any(axis=1)
-    has_neg = (ts < 0).any(axis=1)
-    flat = ~has_pos & ~has_neg
-    if flat.any():
-        # a face in the plane bounds kept solid iff it faces away from the kept side
-        fp = pts[tri[flat]]
-        fn = libm.dot(np.cross(fp[:, 1] - fp[:, 0], fp[:, 2] - fp[:, 0]), n)
-        keep_flat = np.zeros(len(tri), dtype=bool)
-        keep_flat[flat] = fn < 0
-    else:
-        keep_flat = np.zeros(len(tri), dtype=bool)
-    whole = (has_pos & ~has_neg) | keep_flat
-    split = has_pos & has_neg
+    whole, split = _classify(pts, tri, s, n)
     if whole.all():
         return mesh if mesh.name == name else mesh.with_(name=name)
     if not whole.any() and not split.any():
@@ -116,11 +102,47 @@ def clip_mesh(
             f"clip_mesh: mesh {mesh.name!r} lies entirely behind the plane "
             f"(point {p0.tolist()}, normal {n.tolist()}); nothing is left"
         )
-
     pts = np.where(near[:, None], pts - raw[:, None] * n, pts)  # snap onto the plane
     corner = triangulate_fan(
         mesh.face_vertex_counts, np.arange(mesh.face_vertex_indices.size)
     ).astype(np.int64)
+    fv, sid = _corner_values(mesh, corner)
+    cut = _Cut(pts, tri[split], s[tri[split]].astype(np.int64), d, p0, n)
+    all_pts = np.concatenate([pts, cut.new_pts])
+    faces = [np.concatenate([tri[whole], cut.poly_tri.astype(np.int64)])]
+    ids = None if sid is None else [cut.kept_ids(sid, whole, split)]
+    values = None if fv is None else [cut.kept_values(fv, corner, whole, split)]
+    if cap:
+        on_plane = np.concatenate([s == 0, np.ones(len(cut.new_pts), dtype=bool)])
+        cap_tri, outline = cap_outline(all_pts, faces[0], on_plane, n, mesh.name)
+        if len(cap_tri):
+            faces.append(cap_tri)
+            if ids is not None:  # every outline's cap is a chart of its own: ids below -1
+                ids.append(np.stack([np.repeat(-2 - outline, 3), np.full(3 * len(outline), -1)], 1))
+            if values is not None:
+                values.append(_cap_values(all_pts, cap_tri, n, values[0].shape[-1]))
+    return _assemble(all_pts, faces, values, ids, mesh.normals is not None, n, name)
+
+
+def _classify(
+    pts: np.ndarray, tri: np.ndarray, s: np.ndarray, n: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """(triangles kept whole, triangles the plane splits), by the side ``s`` (-1, 0, 1) of
+    their corners; a face in the plane bounds kept solid iff it faces away from the kept side."""
+    ts = s[tri]
+    has_pos = (ts > 0).any(axis=1)
+    has_neg = (ts < 0).any(axis=1)
+    flat = ~has_pos & ~has_neg
+    keep_flat = np.zeros(len(tri), dtype=bool)
+    if flat.any():
+        fp = pts[tri[flat]]
+        keep_flat[flat] = libm.dot(np.cross(fp[:, 1] - fp[:, 0], fp[:, 2] - fp[:, 0]), n) < 0
+    return (has_pos & ~has_neg) | keep_flat, has_pos & has_neg
+
+
+def _corner_values(mesh: Mesh, corner: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """The per-corner values carried through the cut (normals, then st: (c, 3) or (c, 5), or
+    None) and which st value each corner is ((triangles, 3) input st indices, or None)."""
     fv = None
     cn0 = corner_normals(mesh)  # None iff the mesh has no normals
     if cn0 is not None:
@@ -134,79 +156,81 @@ def clip_mesh(
         # its edge's end indices for a cut corner; never the value itself, so two charts
         # whose values meet at a shared point (mirrored planar maps on an axis) stay apart
         sid = np.asarray(mesh.st_indices, dtype=np.int64)[corner]
+    return fv, sid
 
-    # -- split the crossing triangles: one new vertex per crossing undirected edge ----------
-    st_ = tri[split]
-    ss = ts[split].astype(np.int64)
-    a, b = st_, np.roll(st_, -1, axis=1)  # edge k runs from corner k to corner k+1
-    cross = ss * np.roll(ss, -1, axis=1) < 0
-    lo, hi = np.minimum(a, b)[cross], np.maximum(a, b)[cross]
-    key = lo * len(pts) + hi
-    ukey, inv = np.unique(key, return_inverse=True)
-    elo, ehi = ukey // len(pts), ukey % len(pts)
-    # interpolate from the lower index so both triangles of an edge compute the same point
-    t = d[elo] / (d[elo] - d[ehi])
-    new_pts = pts[elo] + t[:, None] * (pts[ehi] - pts[elo])
-    new_pts -= libm.dot(new_pts - p0, n)[:, None] * n
-    edge_vertex = np.full(a.shape, -1, dtype=np.int64)
-    edge_vertex[cross] = len(pts) + inv.reshape(-1)
-    # candidate polygon per triangle: v0, x01, v1, x12, v2, x20 (Sutherland–Hodgman order)
-    cand = np.empty((len(st_), 6), dtype=np.int64)
-    cand[:, 0::2], cand[:, 1::2] = st_, edge_vertex
-    mask = np.empty((len(st_), 6), dtype=bool)
-    mask[:, 0::2], mask[:, 1::2] = ss >= 0, cross
-    counts = mask.sum(axis=1)  # 3 or 4: a clipped triangle is a triangle or a convex quad
-    poly_tri = triangulate_fan(counts, cand[mask])
 
-    all_pts = np.concatenate([pts, new_pts])
-    kept_tri = np.concatenate([tri[whole], poly_tri.astype(np.int64)])
-    kept_nrm = kept_sid = None
-    if sid is not None:
+class _Cut:
+    """The crossing triangles ``st_`` (sides ``ss``) split by the plane: one new vertex per
+    crossing undirected edge, shared by both its triangles, and each triangle's kept polygon
+    (3 or 4 corners, Sutherland–Hodgman order v0, x01, v1, x12, v2, x20) fanned."""
+
+    def __init__(self, pts, st_, ss, d, p0, n) -> None:
+        self.ss, self.d, self.st_ = ss, d, st_
+        a, b = st_, np.roll(st_, -1, axis=1)  # edge k runs from corner k to corner k+1
+        self.cross = cross = ss * np.roll(ss, -1, axis=1) < 0
+        lo, hi = np.minimum(a, b)[cross], np.maximum(a, b)[cross]
+        ukey, inv = np.unique(lo * len(pts) + hi, return_inverse=True)
+        elo, ehi = ukey // len(pts), ukey % len(pts)
+        # interpolate from the lower index so both triangles of an edge compute the same point
+        t = d[elo] / (d[elo] - d[ehi])
+        new_pts = pts[elo] + t[:, None] * (pts[ehi] - pts[elo])
+        self.new_pts = new_pts - libm.dot(new_pts - p0, n)[:, None] * n
+        edge_vertex = np.full(a.shape, -1, dtype=np.int64)
+        edge_vertex[cross] = len(pts) + inv.reshape(-1)
+        cand = np.empty((len(st_), 6), dtype=np.int64)
+        cand[:, 0::2], cand[:, 1::2] = st_, edge_vertex
+        self.mask = mask = np.empty((len(st_), 6), dtype=bool)
+        mask[:, 0::2], mask[:, 1::2] = ss >= 0, cross
+        self.counts = mask.sum(axis=1)  # 3 or 4: a clipped triangle is a triangle or a quad
+        self.poly_tri = triangulate_fan(self.counts, cand[mask])
+        self.poly_i = triangulate_fan(self.counts, np.arange(int(self.counts.sum())))
+
+    def kept_ids(self, sid: np.ndarray, whole: np.ndarray, split: np.ndarray) -> np.ndarray:
+        """(corners, 2) st identities of the kept triangles' corners, whole ones first."""
         cs, ns = sid[split], np.roll(sid[split], -1, axis=1)
-        cand_id = np.empty((len(st_), 6, 2), dtype=np.int64)
+        cand_id = np.empty((len(self.st_), 6, 2), dtype=np.int64)
         cand_id[:, 0::2, 0], cand_id[:, 0::2, 1] = cs, -1
         cand_id[:, 1::2, 0], cand_id[:, 1::2, 1] = np.minimum(cs, ns), np.maximum(cs, ns)
-        poly_i = triangulate_fan(counts, np.arange(int(counts.sum())))
         whole_id = np.stack([sid[whole], np.full(sid[whole].shape, -1)], axis=-1)
-        kept_sid = np.concatenate([whole_id.reshape(-1, 2), cand_id[mask][poly_i].reshape(-1, 2)])
-    if fv is not None:
-        cc = corner[split]
-        cn = fv[cc]  # (m, 3 corners, 3)
-        sd = d[st_]
+        return np.concatenate(
+            [whole_id.reshape(-1, 2), cand_id[self.mask][self.poly_i].reshape(-1, 2)]
+        )
+
+    def kept_values(
+        self, fv: np.ndarray, corner: np.ndarray, whole: np.ndarray, split: np.ndarray
+    ) -> np.ndarray:
+        """The kept triangles' corner values, cut corners interpolated along their edges."""
+        cross, sd = self.cross, self.d[self.st_]
+        cn = fv[corner[split]]  # (m, 3 corners, channels)
         w = sd / np.where(cross, sd - np.roll(sd, -1, axis=1), 1.0)  # share of the next corner
         en = cn + w[..., None] * (np.roll(cn, -1, axis=1) - cn)
-        cand_n = np.empty((len(st_), 6, fv.shape[1]))
+        cand_n = np.empty((len(self.st_), 6, fv.shape[1]))
         cand_n[:, 0::2], cand_n[:, 1::2] = cn, en
-        poly_n = triangulate_fan(counts, np.arange(int(counts.sum())))
-        kept_nrm = np.concatenate([fv[corner[whole]], cand_n[mask][poly_n]])
+        return np.concatenate([fv[corner[whole]], cand_n[self.mask][self.poly_i]])
 
-    faces = [kept_tri]
-    normals = [kept_nrm] if kept_nrm is not None else None
-    ids = [kept_sid] if kept_sid is not None else None
-    if cap:
-        on_plane = np.concatenate([s == 0, np.ones(len(new_pts), dtype=bool)])
-        cap_tri, outline = cap_outline(all_pts, kept_tri, on_plane, n, mesh.name)
-        if len(cap_tri):
-            faces.append(cap_tri)
-            if ids is not None:  # every outline's cap is a chart of its own: ids below -1
-                ids.append(np.stack([np.repeat(-2 - outline, 3), np.full(3 * len(outline), -1)], 1))
-            if normals is not None:
-                cap_v = np.broadcast_to(-n, (3 * len(cap_tri), 3))
-                if fv is not None and fv.shape[1] == 5:  # planar st on the cap, box-mapped
-                    cap_v = np.concatenate(
-                        [cap_v, box_st(all_pts[cap_tri.reshape(-1)], cap_v)], axis=1
-                    )
-                normals.append(cap_v)
+
+def _cap_values(all_pts: np.ndarray, cap_tri: np.ndarray, n: np.ndarray, channels: int):
+    """The cap's corner values: -n, and planar (box-mapped, metric) st when carried."""
+    cap_v = np.broadcast_to(-n, (3 * len(cap_tri), 3))
+    if channels == 5:
+        cap_v = np.concatenate([cap_v, box_st(all_pts[cap_tri.reshape(-1)], cap_v)], axis=1)
+    return cap_v
+
+
+def _assemble(all_pts, faces, values, ids, has_normals: bool, n, name) -> Mesh:
+    """The result: unused points dropped, st re-indexed by (point, st identity), normals
+    unit length (-n where a cut interpolated them to zero)."""
     faces_all = np.concatenate(faces)
     used, remap = np.unique(faces_all, return_inverse=True)
     out_nrm = st = sti = None
-    if normals is not None and fv is not None:  # (normals exist only when fv does)
-        out_nrm = np.concatenate([np.reshape(x, (-1, fv.shape[1])) for x in normals])
+    if values is not None:
+        channels = values[0].shape[-1]
+        out_nrm = np.concatenate([np.reshape(x, (-1, channels)) for x in values])
         if out_nrm.shape[1] == 5 and ids is not None:
             key = np.concatenate([faces_all.reshape(-1, 1), np.concatenate(ids)], axis=1)
             _, first, sti = unique_rows(key, return_index=True, return_inverse=True)
             st, sti = out_nrm[first, 3:], sti.reshape(-1)
-            out_nrm = out_nrm[:, :3] if mesh.normals is not None else None
+            out_nrm = out_nrm[:, :3] if has_normals else None
     if out_nrm is not None:
         ln_ = np.linalg.norm(out_nrm, axis=1, keepdims=True)
         out_nrm = np.where(ln_ > 0, out_nrm / np.where(ln_ > 0, ln_, 1.0), -n)

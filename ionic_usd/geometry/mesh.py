@@ -310,32 +310,14 @@ def smooth_normals(mesh: Mesh, groups: np.ndarray | None = None, *, indexed: boo
     if not np.all(mesh.face_vertex_counts == 3):
         raise GeometryError("smooth_normals expects a triangle mesh")
     tri = mesh.triangles
-    pts = mesh.points
-    p0, p1, p2 = pts[tri[:, 0]], pts[tri[:, 1]], pts[tri[:, 2]]
-    e0, e1, e2 = p1 - p0, p2 - p1, p0 - p2
-    cr = np.cross(e0, -e2)
-    twice_area = np.linalg.norm(cr, axis=1)
-    unit = cr / np.where(twice_area > 0, twice_area, 1.0)[:, None]
-    # corner angles (atan2 of |cross| and dot) weight each face: independent of how a flat
-    # region is triangulated, unlike area weights
-    dots = (
-        -np.einsum("ij,ij->i", e0, e2),
-        -np.einsum("ij,ij->i", e1, e0),
-        -np.einsum("ij,ij->i", e2, e1),
-    )
-    angle = [libm.arctan2(twice_area, d) for d in dots]
+    npts = len(mesh.points)
+    unit, angle = _face_units_and_angles(mesh.points, tri)
     corner_vertex = tri.reshape(-1)
-    npts = len(pts)
-
-    def by_vertex(weights) -> np.ndarray:
-        # one bincount per corner column avoids materialising per-corner weight arrays
-        return np.sum(
-            [np.bincount(tri[:, c], weights=weights[c], minlength=npts) for c in range(3)],
-            axis=0,
-        )
-
     per_vertex = _normalise(
-        np.stack([by_vertex([unit[:, k] * angle[c] for c in range(3)]) for k in range(3)], axis=1)
+        np.stack(
+            [_by_vertex(tri, [unit[:, k] * angle[c] for c in range(3)], npts) for k in range(3)],
+            axis=1,
+        )
     )
     if groups is None:
         return mesh.with_(
@@ -346,33 +328,7 @@ def smooth_normals(mesh: Mesh, groups: np.ndarray | None = None, *, indexed: boo
     groups = np.asarray(groups, dtype=np.int64).reshape(-1)
     if groups.size != len(tri):
         raise GeometryError("smooth_normals: one group per triangle expected")
-    # a vertex lies in a single group iff its corners' groups all equal one of them (any one)
-    some = np.empty(npts, dtype=np.int64)
-    for c in range(3):
-        some[tri[:, c]] = groups
-    spread = by_vertex([np.abs(groups - some[tri[:, c]]) for c in range(3)])
-    single = spread == 0
-    multi = np.flatnonzero(~single[corner_vertex])
-    crease = np.zeros((0, 3))
-    inv = np.zeros(0, dtype=np.int64)
-    if multi.size:
-        face = multi // 3
-        key = corner_vertex[multi].astype(np.int64) * (int(groups.max()) + 1) + groups[face]
-        # number the (vertex, group) pairs by first occurrence: sorted keys would scatter the
-        # indices, and the crate writer stores runs of nearby indices more compactly
-        uniq, first, inv = np.unique(key, return_index=True, return_inverse=True)
-        rank = np.empty(len(uniq), dtype=np.int64)
-        rank[np.argsort(first, kind="stable")] = np.arange(len(uniq))
-        inv = rank[inv.reshape(-1)]
-        wcorner = np.stack(angle, axis=1).reshape(-1)[multi]
-        acc = np.stack(
-            [
-                np.bincount(inv, weights=unit[face, k] * wcorner, minlength=len(uniq))
-                for k in range(3)
-            ],
-            axis=1,
-        )
-        crease = _normalise(acc)
+    multi, crease, inv = _crease_normals(tri, groups, unit, angle, npts)
     if indexed:
         nidx = corner_vertex.astype(np.int64)
         nidx[multi] = npts + inv
@@ -386,6 +342,57 @@ def smooth_normals(mesh: Mesh, groups: np.ndarray | None = None, *, indexed: boo
     if multi.size:
         out[multi] = crease[inv]
     return mesh.with_(normals=out, normals_interpolation="faceVarying", normals_indices=None)
+
+
+def _face_units_and_angles(pts: np.ndarray, tri: np.ndarray) -> tuple[np.ndarray, list]:
+    """Unit face normals (t, 3) and their weights, the three corner angles (each (t,)): unlike
+    area weights, independent of how a flat region is triangulated."""
+    p0, p1, p2 = pts[tri[:, 0]], pts[tri[:, 1]], pts[tri[:, 2]]
+    e0, e1, e2 = p1 - p0, p2 - p1, p0 - p2
+    cr = np.cross(e0, -e2)
+    twice_area = np.linalg.norm(cr, axis=1)
+    unit = cr / np.where(twice_area > 0, twice_area, 1.0)[:, None]
+    dots = (
+        -np.einsum("ij,ij->i", e0, e2),
+        -np.einsum("ij,ij->i", e1, e0),
+        -np.einsum("ij,ij->i", e2, e1),
+    )
+    return unit, [libm.arctan2(twice_area, d) for d in dots]
+
+
+def _by_vertex(tri: np.ndarray, weights, npts: int) -> np.ndarray:
+    """Per-vertex sums of per-corner weights (three (t,) columns, one bincount each)."""
+    return np.sum(
+        [np.bincount(tri[:, c], weights=weights[c], minlength=npts) for c in range(3)],
+        axis=0,
+    )
+
+
+def _crease_normals(tri, groups, unit, angle, npts):
+    """Corners at vertices of several smoothing groups (flat corner indices), a normal per
+    (vertex, group) pair there, numbered by first occurrence (the crate writer compresses
+    runs of nearby indices), and each such corner's pair number."""
+    corner_vertex = tri.reshape(-1)
+    # a vertex lies in a single group iff its corners' groups all equal one of them (any one)
+    some = np.empty(npts, dtype=np.int64)
+    for c in range(3):
+        some[tri[:, c]] = groups
+    spread = _by_vertex(tri, [np.abs(groups - some[tri[:, c]]) for c in range(3)], npts)
+    multi = np.flatnonzero(spread[corner_vertex] != 0)
+    if not multi.size:
+        return multi, np.zeros((0, 3)), np.zeros(0, dtype=np.int64)
+    face = multi // 3
+    key = corner_vertex[multi].astype(np.int64) * (int(groups.max()) + 1) + groups[face]
+    uniq, first, inv = np.unique(key, return_index=True, return_inverse=True)
+    rank = np.empty(len(uniq), dtype=np.int64)
+    rank[np.argsort(first, kind="stable")] = np.arange(len(uniq))
+    inv = rank[inv.reshape(-1)]
+    wcorner = np.stack(angle, axis=1).reshape(-1)[multi]
+    acc = np.stack(
+        [np.bincount(inv, weights=unit[face, k] * wcorner, minlength=len(uniq)) for k in range(3)],
+        axis=1,
+    )
+    return multi, _normalise(acc), inv
 
 
 def _normalise(v: np.ndarray) -> np.ndarray:

@@ -61,23 +61,8 @@ def _split(c: _Corners, axis: int, at: float, near_q: np.ndarray, eps: float, ti
     split edge. Points within ``eps`` of the plane (``tiny`` where they are on no triangle
     reaching the quadrant) are moved onto it first. Returns the new soup and each triangle's
     side of this plane (−1, +1; 0: not separated by it, away from the quadrant)."""
-    pts = c.points.copy()
+    pts, d, ts, side = _sides(c, axis, at, near_q, eps, tiny)
     tri = c.tri
-    d = pts[:, axis] - at
-    reach = np.zeros(len(pts), dtype=bool)
-    reach[tri[near_q].reshape(-1)] = True
-    on = np.abs(d) <= np.where(reach, eps, tiny)
-    pts[on, axis] = at
-    d[on] = 0.0
-    s = np.sign(d).astype(np.int64)
-    ts = s[tri]
-    pos, neg = (ts > 0).any(axis=1), (ts < 0).any(axis=1)
-    side = np.where(pos & ~neg, 1, np.where(neg & ~pos, -1, 0))
-    flat = ~pos & ~neg
-    if flat.any():  # a face in the plane belongs to the side its solid is on
-        q = pts[tri[flat]]
-        facing = np.cross(q[:, 1] - q[:, 0], q[:, 2] - q[:, 0])[:, axis]
-        side[flat] = np.where(facing < 0, 1, -1)
     n = len(pts)
     nxt = np.roll(tri, -1, axis=1)  # edge k runs from corner k to corner k+1
     crossing = ts * np.roll(ts, -1, axis=1) < 0
@@ -91,14 +76,60 @@ def _split(c: _Corners, axis: int, at: float, near_q: np.ndarray, eps: float, ti
     t_e = d[elo] / (d[elo] - d[ehi])  # from the lower index: both triangles get one point
     new_pts = pts[elo] + t_e[:, None] * (pts[ehi] - pts[elo])
     new_pts[:, axis] = at
-    w_tri, w_s, w_cut = tri[work], ts[work], is_cut[work]
+    w_tri, w_cut = tri[work], is_cut[work]
     m = len(w_tri)
     full = w_cut.sum(axis=1) == crossing[work].sum(axis=1)  # pieces on either side
     cand = np.empty((m, 6), dtype=np.int64)
     cand[:, 0::2] = w_tri
     cand[:, 1::2] = np.where(w_cut, n + np.searchsorted(cut_keys, key[work]), -1)
+    cands = _slot_values(c, work, w_cut, d, key)
+    rows, slots, piece_side = _pieces(ts[work], w_cut, full)
+    keep = ~work
+    tri2 = np.concatenate([tri[keep], cand[rows[:, None], slots]])
+    out: list[np.ndarray | None] = [None, None]
+    k = 0
+    for j, arr in enumerate((c.values, c.ids)):
+        if arr is not None:
+            out[j] = np.concatenate([arr[keep], cands[k][rows[:, None], slots]])
+            k += 1
+    zside = np.concatenate([c.side[keep], c.side[work][rows]])
+    side2 = np.concatenate([side[keep], piece_side])
+    return _Corners(np.concatenate([pts, new_pts]), tri2, out[0], out[1], zside), side2
+
+
+def _sides(c: _Corners, axis: int, at: float, near_q: np.ndarray, eps: float, tiny: float):
+    """The points snapped onto the plane (within ``eps`` near the quadrant, ``tiny``
+    elsewhere), their signed distances, each corner's side (t, 3) and each triangle's side
+    (a face in the plane belongs to the side its solid is on)."""
+    pts = c.points.copy()
+    tri = c.tri
+    d = pts[:, axis] - at
+    reach = np.zeros(len(pts), dtype=bool)
+    reach[tri[near_q].reshape(-1)] = True
+    on = np.abs(d) <= np.where(reach, eps, tiny)
+    pts[on, axis] = at
+    d[on] = 0.0
+    ts = np.sign(d).astype(np.int64)[tri]
+    pos, neg = (ts > 0).any(axis=1), (ts < 0).any(axis=1)
+    side = np.where(pos & ~neg, 1, np.where(neg & ~pos, -1, 0))
+    flat = ~pos & ~neg
+    if flat.any():
+        q = pts[tri[flat]]
+        facing = np.cross(q[:, 1] - q[:, 0], q[:, 2] - q[:, 0])[:, axis]
+        side[flat] = np.where(facing < 0, 1, -1)
+    return pts, d, ts, side
+
+
+def _slot_values(
+    c: _Corners, work: np.ndarray, w_cut: np.ndarray, d: np.ndarray, key: np.ndarray
+) -> list[np.ndarray]:
+    """Per-slot (v0, x01, v1, x12, v2, x20) corner data of the split triangles: values
+    interpolated along each cut edge from its lower-index end (both triangles of an edge get
+    the same), and ids, a new one per cut edge and pair of end ids."""
+    w_tri = c.tri[work]
+    m = len(w_tri)
     lo_first = w_tri < np.roll(w_tri, -1, axis=1)  # the edge's lower-index end is corner k
-    cands = []  # per-slot corner data: (m, 6, ...) arrays
+    cands = []
     if c.values is not None:
         v0 = c.values[work]
         v1 = np.roll(v0, -1, axis=1)
@@ -123,14 +154,22 @@ def _split(c: _Corners, axis: int, at: float, near_q: np.ndarray, eps: float, ti
         ci = np.empty((m, 6), dtype=np.int64)
         ci[:, 0::2], ci[:, 1::2] = i0, new_id
         cands.append(ci)
-    polys = []  # (rows into the working triangles, (k, 3) slots, side of each piece)
+    return cands
+
+
+def _pieces(w_s: np.ndarray, w_cut: np.ndarray, full: np.ndarray):
+    """The split triangles' pieces: (row into them, (3,) slots, side) per new triangle. A
+    triangle cut on two edges gives a piece on either side; one cut on one edge (beside a
+    split neighbour) gives one polygon of its three corners and the edge point."""
+    m = len(w_s)
+    polys = []
     for sign in (1, -1):
         mask = np.zeros((m, 6), dtype=bool)
         mask[:, 0::2], mask[:, 1::2] = w_s * sign >= 0, w_cut
         r, sl = _fan(mask[full], edge_first=False)
         polys.append((np.flatnonzero(full)[r], sl, sign))
     part = np.flatnonzero(~full)
-    if len(part):  # one polygon: the three corners and the edge point
+    if len(part):
         mask = np.zeros((len(part), 6), dtype=bool)
         mask[:, 0::2], mask[:, 1::2] = True, w_cut[part]
         r, sl = _fan(mask, edge_first=True)
@@ -138,17 +177,7 @@ def _split(c: _Corners, axis: int, at: float, near_q: np.ndarray, eps: float, ti
     rows = np.concatenate([p[0] for p in polys])
     slots = np.concatenate([p[1] for p in polys])
     piece_side = np.concatenate([np.full(len(p[0]), p[2]) for p in polys])
-    keep = ~work
-    tri2 = np.concatenate([tri[keep], cand[rows[:, None], slots]])
-    out: list[np.ndarray | None] = [None, None]
-    k = 0
-    for j, arr in enumerate((c.values, c.ids)):
-        if arr is not None:
-            out[j] = np.concatenate([arr[keep], cands[k][rows[:, None], slots]])
-            k += 1
-    zside = np.concatenate([c.side[keep], c.side[work][rows]])
-    side2 = np.concatenate([side[keep], piece_side])
-    return _Corners(np.concatenate([pts, new_pts]), tri2, out[0], out[1], zside), side2
+    return rows, slots, piece_side
 
 
 def cut_quadrant(
@@ -185,24 +214,8 @@ def cut_quadrant(
     eps = tiny if eps is None else max(float(eps), tiny)
     if not np.any((pts[:, 0] < x0 - tiny) & (pts[:, 2] < z0 - tiny)):
         return mesh if mesh.name == name else mesh.with_(name=name)
-    corner = triangulate_fan(mesh.face_vertex_counts, np.arange(mesh.face_vertex_indices.size))
-    corner = corner.reshape(-1, 3).astype(np.int64)
-    tri = mesh.face_vertex_indices.astype(np.int64)[corner]
-    parts = []
-    cn = corner_normals(mesh)
-    if cn is not None:
-        parts.append(np.asarray(cn, dtype=np.float64)[corner])
-    has_st = mesh.st is not None and mesh.st_indices is not None
-    ids = None
-    if has_st:
-        assert mesh.st is not None and mesh.st_indices is not None
-        sti = np.asarray(mesh.st_indices, dtype=np.int64)[corner]
-        if cn is None:
-            parts.append(np.zeros((len(tri), 3, 3)))
-        parts.append(np.asarray(mesh.st, dtype=np.float64)[sti])
-        ids = sti
-    values = np.concatenate(parts, axis=2) if parts else None
-    soup = _Corners(pts, tri, values, ids, np.zeros(len(tri), dtype=np.int64))
+    soup = _soup(mesh, pts)
+    values, has_normals = soup.values, mesh.normals is not None
 
     p = soup.points[soup.tri]
     near_z = p[:, :, 0].min(axis=1) <= x0 + eps
@@ -218,9 +231,38 @@ def cut_quadrant(
     P = soup.points
     cap_tri, cap_plane, cap_id = _caps(P, kept, x0, z0, mesh.name)
 
-    faces = np.concatenate([kept, cap_tri])
+    return _assemble(soup, inside, cap_tri, cap_plane, cap_id, values, has_normals, name)
+
+
+def _soup(mesh: Mesh, pts: np.ndarray) -> _Corners:
+    """The mesh as a triangle soup with its corner values (normals, then st; zero normals
+    when it has st but none) and st ids, every triangle undecided."""
+    corner = triangulate_fan(mesh.face_vertex_counts, np.arange(mesh.face_vertex_indices.size))
+    corner = corner.reshape(-1, 3).astype(np.int64)
+    tri = mesh.face_vertex_indices.astype(np.int64)[corner]
+    parts = []
+    cn = corner_normals(mesh)
+    if cn is not None:
+        parts.append(np.asarray(cn, dtype=np.float64)[corner])
+    ids = None
+    if mesh.st is not None and mesh.st_indices is not None:
+        sti = np.asarray(mesh.st_indices, dtype=np.int64)[corner]
+        if cn is None:
+            parts.append(np.zeros((len(tri), 3, 3)))
+        parts.append(np.asarray(mesh.st, dtype=np.float64)[sti])
+        ids = sti
+    values = np.concatenate(parts, axis=2) if parts else None
+    return _Corners(pts, tri, values, ids, np.zeros(len(tri), dtype=np.int64))
+
+
+def _assemble(soup, inside, cap_tri, cap_plane, cap_id, values, has_normals, name) -> Mesh:
+    """The kept triangles and the caps as one mesh: normals carried (unit; the cap's where
+    a cut interpolated one to zero), st re-indexed by (point, st id), planar st on the caps."""
+    P = soup.points
+    faces = np.concatenate([soup.tri[~inside], cap_tri])
     used, remap = np.unique(faces, return_inverse=True)
     nrm = st = st_idx = None
+    has_st = soup.ids is not None
     if values is not None:
         plane_n = np.array([[0.0, 0.0, -1.0], [-1.0, 0.0, 0.0]])[cap_plane]
         cap_n = np.repeat(plane_n, 3, axis=0)
@@ -229,12 +271,11 @@ def cut_quadrant(
             cv = np.concatenate([cap_n, box_st(P[cap_tri.reshape(-1)], cap_n)], axis=1)
         assert soup.values is not None
         allv = np.concatenate([soup.values[~inside].reshape(-1, values.shape[2]), cv])
-        if cn is not None:
+        if has_normals:
             nrm = allv[:, :3]
             ln = np.linalg.norm(nrm, axis=1, keepdims=True)
             nrm = np.where(ln > 0, nrm / np.where(ln > 0, ln, 1.0), cap_n[:1]).astype(np.float32)
         if has_st:
-            assert soup.ids is not None
             cid = np.concatenate([soup.ids[~inside].reshape(-1), np.repeat(cap_id, 3)])
             key = np.stack([faces.reshape(-1), cid], axis=1)
             _, first, inv = unique_rows(key, return_index=True, return_inverse=True)

@@ -132,22 +132,7 @@ def stitch(
             row_parameters(b_points, m, is_closed),
             is_closed,
         )
-    seq = np.asarray(sequence, dtype=np.int64).reshape(-1)
-    # a closed ring against a single vertex is a fan (a cone tip or a cap centre)
-    want = (n + m - (m == 1)) if is_closed else n + m - 1
-    if len(seq) != n:
-        raise ParameterError(
-            "sequence", f"{len(seq)} numbers", f"one number per node of a ({n})", context="stitch"
-        )
-    if seq.min() < 1:
-        raise ParameterError("sequence", seq.tolist(), "every count >= 1", context="stitch")
-    if int(seq.sum()) != want:
-        raise ParameterError(
-            "sequence",
-            f"sum {int(seq.sum())}",
-            f"sum == {want} for {'closed' if is_closed else 'open'} rows of {n} and {m}",
-            context="stitch",
-        )
+    seq = _checked_sequence(sequence, n, m, is_closed)
     # start of each a-node's run of b-nodes
     start = np.concatenate([[0], np.cumsum(seq - 1)[:-1]])
     # fan triangles (apex on a, base edge on b)
@@ -166,3 +151,25 @@ def stitch(
     if direction == -1:
         tri = tri[:, ::-1]
     return np.ascontiguousarray(tri)
+
+
+def _checked_sequence(sequence, n: int, m: int, is_closed: bool) -> np.ndarray:
+    """``sequence`` as int64, checked: one count >= 1 per node of a, summing to the band's
+    number of connections."""
+    seq = np.asarray(sequence, dtype=np.int64).reshape(-1)
+    # a closed ring against a single vertex is a fan (a cone tip or a cap centre)
+    want = (n + m - (m == 1)) if is_closed else n + m - 1
+    if len(seq) != n:
+        raise ParameterError(
+            "sequence", f"{len(seq)} numbers", f"one number per node of a ({n})", context="stitch"
+        )
+    if seq.min() < 1:
+        raise ParameterError("sequence", seq.tolist(), "every count >= 1", context="stitch")
+    if int(seq.sum()) != want:
+        raise ParameterError(
+            "sequence",
+            f"sum {int(seq.sum())}",
+            f"sum == {want} for {'closed' if is_closed else 'open'} rows of {n} and {m}",
+            context="stitch",
+        )
+    return seq

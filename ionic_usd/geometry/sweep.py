@@ -197,15 +197,9 @@ def sweep(
     """
     prof, pts, ax = _check(profile, path, axis, closed)
     if closed:
-        # orient the loop so that the side normal points out of the enclosed area
-        e1 = _unit(pts[1] - pts[0])
-        e2 = np.cross(ax, e1)
-        loop2 = libm.linear(pts - pts[0], np.stack([e1, e2]))
-        if polygon_area(loop2) < 0:
-            pts = pts[::-1].copy()
+        pts = _outward_loop(pts, ax)
     k, m = len(prof), len(pts)
-    sides = side_normals(pts, ax, closed)
-    mit = mitre_vectors(sides, closed)
+    mit = mitre_vectors(side_normals(pts, ax, closed), closed)
     if len(pts) > 2:
         _check_offsets(pts, mit, (float(prof[:, 0].min()), float(prof[:, 0].max())), ax, closed)
     verts = (
@@ -214,6 +208,46 @@ def sweep(
         + prof[None, :, 1, None] * ax[None, None, :]
     )  # (m, k, 3)
     points = verts.reshape(-1, 3)
+    quads, caps = _faces(prof, points, m, closed)
+    normals = _quad_corner_normals(points, quads, crease_deg).reshape(-1, 3)
+    st = _side_st(verts, prof, quads, closed)
+    counts = [np.full(quads.shape[0] * k, 4, dtype=np.int32)]
+    indices = [quads.reshape(-1)]
+    if len(caps):
+        cap_pts = points[caps]
+        cn = _unit(np.cross(cap_pts[:, 1] - cap_pts[:, 0], cap_pts[:, 2] - cap_pts[:, 0]))
+        counts.append(np.full(len(caps), 3, dtype=np.int32))
+        indices.append(caps.reshape(-1))
+        normals = np.vstack([normals, np.repeat(cn, 3, axis=0)])
+        # caps: planar projection of the section itself
+        st = np.vstack([st, prof[caps.reshape(-1) % k]])
+    st = (st * uv_scale).astype(np.float32)
+    return Mesh(
+        points,
+        np.concatenate(counts),
+        np.concatenate(indices),
+        normals.astype(np.float32),
+        "faceVarying",
+        st,
+        np.arange(len(st), dtype=np.int32),
+        name=name,
+    )
+
+
+def _outward_loop(pts: np.ndarray, ax: np.ndarray) -> np.ndarray:
+    """A closed path ordered so that its side normal points out of the enclosed area."""
+    e1 = _unit(pts[1] - pts[0])
+    e2 = np.cross(ax, e1)
+    loop2 = libm.linear(pts - pts[0], np.stack([e1, e2]))
+    return pts[::-1].copy() if polygon_area(loop2) < 0 else pts
+
+
+def _faces(
+    prof: np.ndarray, points: np.ndarray, m: int, closed: bool
+) -> tuple[np.ndarray, np.ndarray]:
+    """The side quads (nseg, k, 4) and, for an open path, the end caps' triangles, wound so
+    that the solid is outward (positive volume)."""
+    k = len(prof)
     nseg = m if closed else m - 1
     i = np.arange(nseg)[:, None]
     j = np.arange(k)[None, :]
@@ -237,7 +271,14 @@ def sweep(
     if _signed_volume(points, tris) < 0:
         quads = quads[..., ::-1]
         caps = caps[:, ::-1]
-    # -- normals: flat per quad, smoothed across gentle section corners ---------------------
+    return quads, caps
+
+
+def _quad_corner_normals(points: np.ndarray, quads: np.ndarray, crease_deg: float) -> np.ndarray:
+    """(nseg, k, 4, 3) corner normals of the side quads: flat per quad, smoothed across
+    section corners gentler than ``crease_deg``."""
+    k = quads.shape[1]
+    j = np.arange(k)[None, :]
     q = points[quads]  # (nseg, k, 4, 3)
     qn = _unit(np.cross(q[..., 2, :] - q[..., 0, :], q[..., 3, :] - q[..., 1, :]))
     prev = np.roll(qn, 1, axis=1)  # quad of section edge j − 1 (wraps: the section is closed)
@@ -247,38 +288,23 @@ def sweep(
     # order was reversed when the winding flipped, so pick by which section vertex each is
     nstart = np.where(smooth[None, :, None], shared, qn)
     nend = np.where(np.roll(smooth, -1)[None, :, None], np.roll(shared, -1, axis=1), qn)
-    corner_j = quads % k  # section vertex of each corner
-    at_start = corner_j == j[..., None]
-    corner_n = np.where(at_start[..., None], nstart[:, :, None, :], nend[:, :, None, :])
-    # -- texture coordinates -----------------------------------------------------------------
+    at_start = quads % k == j[..., None]
+    return np.where(at_start[..., None], nstart[:, :, None, :], nend[:, :, None, :])
+
+
+def _side_st(verts: np.ndarray, prof: np.ndarray, quads: np.ndarray, closed: bool) -> np.ndarray:
+    """(nseg·k·4, 2) st of the side quads' corners: (arc length along the row, length along
+    the section), unscaled."""
+    k = len(prof)
+    i = np.arange(quads.shape[0])[:, None]
+    j = np.arange(k)[None, :]
     rows = verts if not closed else np.concatenate([verts, verts[:1]], axis=0)
     seglen = np.linalg.norm(np.diff(rows, axis=0), axis=2)  # (nseg, k)
     arc = np.vstack([np.zeros((1, k)), np.cumsum(seglen, axis=0)])  # (nseg + 1, k)
     plen = np.linalg.norm(np.roll(prof, -1, axis=0) - prof, axis=1)
     vlen = np.concatenate([[0.0], np.cumsum(plen)])  # (k + 1,)
-    corner_i = quads // k
-    ci = np.where(corner_i == i[..., None], i[..., None], i[..., None] + 1)
+    corner_j = quads % k  # section vertex of each corner
+    at_start = corner_j == j[..., None]
+    ci = np.where(quads // k == i[..., None], i[..., None], i[..., None] + 1)
     cj_v = np.where(at_start, j[..., None], j[..., None] + 1)
-    st = np.stack([arc[ci, corner_j], vlen[cj_v]], axis=-1).reshape(-1, 2)
-    normals = corner_n.reshape(-1, 3)
-    counts = [np.full(quads.shape[0] * k, 4, dtype=np.int32)]
-    indices = [quads.reshape(-1)]
-    if len(caps):
-        cap_pts = points[caps]
-        cn = _unit(np.cross(cap_pts[:, 1] - cap_pts[:, 0], cap_pts[:, 2] - cap_pts[:, 0]))
-        counts.append(np.full(len(caps), 3, dtype=np.int32))
-        indices.append(caps.reshape(-1))
-        normals = np.vstack([normals, np.repeat(cn, 3, axis=0)])
-        # caps: planar projection of the section itself
-        st = np.vstack([st, prof[caps.reshape(-1) % k]])
-    st = (st * uv_scale).astype(np.float32)
-    return Mesh(
-        points,
-        np.concatenate(counts),
-        np.concatenate(indices),
-        normals.astype(np.float32),
-        "faceVarying",
-        st,
-        np.arange(len(st), dtype=np.int32),
-        name=name,
-    )
+    return np.stack([arc[ci, corner_j], vlen[cj_v]], axis=-1).reshape(-1, 2)

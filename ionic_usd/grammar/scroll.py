@@ -117,50 +117,7 @@ def parse_scroll(source: str) -> ScrollGrammar:
             raise GrammarError(
                 f"empty module {mod}: expected 'R<r> P<p>'", source, at, module=mod, grammar=GRAMMAR
             )
-        values: dict[str, tuple[float, Token]] = {}
-        for t in words:
-            sym = t.letter if t.kind == "item" else t.kind
-            if sym not in ("R", "P"):
-                text = source[t.offset : t.offset + t.length]
-                raise GrammarError(
-                    f"unknown token {text!r}: expected R<radius> or P<position>",
-                    source,
-                    t.offset,
-                    length=t.length,
-                    module=mod,
-                    grammar=GRAMMAR,
-                )
-            if sym in values:
-                raise GrammarError(
-                    f"second {sym} in one module (separate rings with commas)",
-                    source,
-                    t.offset,
-                    length=t.length,
-                    module=mod,
-                    grammar=GRAMMAR,
-                )
-            if sym == "P" and "R" not in values:
-                raise GrammarError(
-                    "P before R: a ring is written 'R<r> P<p>'",
-                    source,
-                    t.offset,
-                    length=t.length,
-                    module=mod,
-                    grammar=GRAMMAR,
-                )
-            what = "radius" if sym == "R" else "position"
-            val = token_number(t, source, grammar=GRAMMAR, module=mod, what=what)
-            lo, hi = RADIUS_RANGE if sym == "R" else POSITION_RANGE
-            if not lo <= val <= hi:
-                raise GrammarError(
-                    f"{what} {sym.lower()} = {_fmt(val)} is outside [{_fmt(lo)}, {_fmt(hi)}]",
-                    source,
-                    t.text_offset,
-                    length=len(t.text),
-                    module=mod,
-                    grammar=GRAMMAR,
-                )
-            values[sym] = (val, t)
+        values = _module_values(words, source, mod)
         if "P" not in values:
             last = words[-1]
             raise GrammarError(
@@ -186,6 +143,39 @@ def parse_scroll(source: str) -> ScrollGrammar:
         end = words[-1].offset + words[-1].length
         rings.append(ScrollRing(r, p, (start, end - start)))
     return ScrollGrammar(tuple(rings), source)
+
+
+def _module_values(words: list[Token], source: str, mod: int) -> dict[str, tuple[float, Token]]:
+    """The R and P values of one module (each once, R first, in range), with their tokens."""
+    values: dict[str, tuple[float, Token]] = {}
+    for t in words:
+        sym = t.letter if t.kind == "item" else t.kind
+
+        def error(message: str, at: int, length: int, t=t) -> GrammarError:
+            return GrammarError(message, source, at, length=length, module=mod, grammar=GRAMMAR)
+
+        if sym not in ("R", "P"):
+            text = source[t.offset : t.offset + t.length]
+            raise error(
+                f"unknown token {text!r}: expected R<radius> or P<position>", t.offset, t.length
+            )
+        if sym in values:
+            raise error(
+                f"second {sym} in one module (separate rings with commas)", t.offset, t.length
+            )
+        if sym == "P" and "R" not in values:
+            raise error("P before R: a ring is written 'R<r> P<p>'", t.offset, t.length)
+        what = "radius" if sym == "R" else "position"
+        val = token_number(t, source, grammar=GRAMMAR, module=mod, what=what)
+        lo, hi = RADIUS_RANGE if sym == "R" else POSITION_RANGE
+        if not lo <= val <= hi:
+            raise error(
+                f"{what} {sym.lower()} = {_fmt(val)} is outside [{_fmt(lo)}, {_fmt(hi)}]",
+                t.text_offset,
+                len(t.text),
+            )
+        values[sym] = (val, t)
+    return values
 
 
 # -- presets -----------------------------------------------------------------------------

@@ -275,9 +275,36 @@ def generate_stone_maps(style: StoneStyle | str, size: int = 1024, seed: int = 0
     st = get_stone_style(style)
     n = _check_size(size)
     seed = _check_seed(seed)
-    sp = Spectrum(n, seed)
+    fld = Spectrum(n, seed).fields(_noise_specs(st))
+    zeros = np.zeros((n, n), dtype=np.float32)
+    cloud, grain = fld["cloud"], fld["grain"]
+    band = fld.get("band", zeros)
+    veins = _veins(st, fld) if st.vein_strength > 0.0 else zeros
+    pores = zeros
+    if st.pore_density > 0.0:
+        # Pores cluster in the porous layers: the threshold drops where the band field is high;
+        # the threshold is scaled by the std of the sum so the covered fraction stays as asked.
+        coupling = 1.2 * st.banding
+        t = gauss_quantile(1.0 - st.pore_density) * math.sqrt(1.0 + coupling**2)
+        pores = smoothstep(t, t + 0.6, fld["pore"] + np.float32(coupling) * band)
+    height = _height(st, cloud, grain, band, veins, pores)
+    normal = height_to_normal(height, st.normal_strength)
+    normal *= 0.5
+    normal += 0.5
+    np.clip(normal, 0.0, 1.0, out=normal)
+    return StoneMaps(
+        base_color=_base_color(st, cloud, grain, band, veins, pores),
+        roughness=_roughness(st, fld["rough"], grain, veins, pores),
+        normal=normal,
+        height=height,
+        style=st.name,
+        seed=seed,
+    )
 
-    # Each field has its own random streams, so skipping an unused one changes no other field.
+
+def _noise_specs(st: StoneStyle) -> dict[str, NoiseSpec]:
+    """The noise fields a style needs. Each field has its own random streams, so skipping an
+    unused one changes no other field."""
     specs = {
         "cloud": NoiseSpec(1, beta=1.6, f_lo=1.0, f_hi=24.0),
         "grain": NoiseSpec(2, beta=0.3, f_lo=40.0, f_hi=260.0),
@@ -292,35 +319,29 @@ def generate_stone_maps(style: StoneStyle | str, size: int = 1024, seed: int = 0
     if st.pore_density > 0.0:
         # Pores are elongated along the layers in banded stone.
         specs["pore"] = NoiseSpec(6, 0.0, 20.0, 140.0, stretch=(1.0 + 5.0 * st.banding, 1.0))
-    fld = sp.fields(specs)
-    zeros = np.zeros((n, n), dtype=np.float32)
-    cloud, grain, rough_f = fld["cloud"], fld["grain"], fld["rough"]
-    band = fld.get("band", zeros)
+    return specs
 
-    veins = zeros
-    if st.vein_strength > 0.0:
-        # Veins: thin neighbourhoods of the zero sets of smooth noise (meandering lines).
-        vein_a, vein_b = fld["vein_a"], fld["vein_b"]
-        # Widths and presence vary along each vein (large-scale cloud), so veins swell, thin
-        # out and fade instead of looking like uniform contour lines.
-        fade_a = smoothstep(-0.8, 0.6, cloud)
-        fade_b = smoothstep(0.2, 1.4, -cloud + 0.5 * grain)
-        width = np.float32(0.06) * (1.0 + 0.6 * cloud)
-        # Gaussians through libm.exp (float32): the same texels on every CPU
-        primary = _gauss(vein_a / np.maximum(width, 0.015))
-        halo = 0.25 * _gauss(vein_a / np.float32(0.3))
-        veins = np.maximum(primary, halo) * fade_a
-        veins = np.maximum(veins, 0.45 * _gauss(vein_b / np.float32(0.035)) * fade_b)
-        veins *= np.float32(st.vein_strength)
 
-    pores = zeros
-    if st.pore_density > 0.0:
-        # Pores cluster in the porous layers: the threshold drops where the band field is high;
-        # the threshold is scaled by the std of the sum so the covered fraction stays as asked.
-        coupling = 1.2 * st.banding
-        t = gauss_quantile(1.0 - st.pore_density) * math.sqrt(1.0 + coupling**2)
-        pores = smoothstep(t, t + 0.6, fld["pore"] + np.float32(coupling) * band)
+def _veins(st: StoneStyle, fld: dict[str, np.ndarray]) -> np.ndarray:
+    """Veins: thin neighbourhoods of the zero sets of smooth noise (meandering lines)."""
+    cloud, grain, vein_a, vein_b = fld["cloud"], fld["grain"], fld["vein_a"], fld["vein_b"]
+    # Widths and presence vary along each vein (large-scale cloud), so veins swell, thin out
+    # and fade instead of looking like uniform contour lines.
+    fade_a = smoothstep(-0.8, 0.6, cloud)
+    fade_b = smoothstep(0.2, 1.4, -cloud + 0.5 * grain)
+    width = np.float32(0.06) * (1.0 + 0.6 * cloud)
+    # Gaussians through libm.exp (float32): the same texels on every CPU
+    primary = _gauss(vein_a / np.maximum(width, 0.015))
+    halo = 0.25 * _gauss(vein_a / np.float32(0.3))
+    veins = np.maximum(primary, halo) * fade_a
+    veins = np.maximum(veins, 0.45 * _gauss(vein_b / np.float32(0.035)) * fade_b)
+    veins *= np.float32(st.vein_strength)
+    return veins
 
+
+def _base_color(st: StoneStyle, cloud, grain, band, veins, pores) -> np.ndarray:
+    """(n, n, 3) sRGB-encoded base colour: mottled, banded, veined and pored."""
+    n = cloud.shape[0]
     base = srgb_to_linear(np.array(st.base_color, dtype=np.float32))
     vein_c = srgb_to_linear(np.array(st.vein_color, dtype=np.float32))
     pore_c = srgb_to_linear(np.array(st.pore_color, dtype=np.float32))
@@ -347,7 +368,11 @@ def generate_stone_maps(style: StoneStyle | str, size: int = 1024, seed: int = 0
             ch += (pore_c[c] - ch) * pore_mix
         base_color[..., c] = ch
     encode_srgb_inplace(base_color)
+    return base_color
 
+
+def _height(st: StoneStyle, cloud, grain, band, veins, pores) -> np.ndarray:
+    """(n, n) height in [0, 1]."""
     height = 0.25 * grain
     height += (0.35 * st.mottling) * cloud
     if st.banding > 0.0:
@@ -360,11 +385,11 @@ def generate_stone_maps(style: StoneStyle | str, size: int = 1024, seed: int = 0
     height -= h_min
     height *= np.float32(1.0 / max(h_max - h_min, 1e-12))
     np.clip(height, 0.0, 1.0, out=height)  # float rounding can leave 1 + 1 ulp
-    normal = height_to_normal(height, st.normal_strength)
-    normal *= 0.5
-    normal += 0.5
-    np.clip(normal, 0.0, 1.0, out=normal)
+    return height
 
+
+def _roughness(st: StoneStyle, rough_f, grain, veins, pores) -> np.ndarray:
+    """(n, n) roughness in the style's range."""
     lo, hi = st.roughness_range
     r = 0.2 * rough_f
     r += 0.08 * grain
@@ -376,15 +401,7 @@ def generate_stone_maps(style: StoneStyle | str, size: int = 1024, seed: int = 0
     np.clip(r, 0.0, 1.0, out=r)
     r *= np.float32(hi - lo)
     r += np.float32(lo)
-
-    return StoneMaps(
-        base_color=base_color,
-        roughness=r,
-        normal=normal,
-        height=height,
-        style=st.name,
-        seed=seed,
-    )
+    return r
 
 
 def write_stone_textures(

@@ -42,13 +42,15 @@ keeps its height.
 Every mesh is one closed solid: the capital's abacus, echinus, volutes, canales and bolsters are
 united (manifold3d), so the capital mesh depends on the scroll and capital variants. Each mesh
 is authored once: the shaft does not depend on the base. Triangle budgets of the default
-column (three parts, form = full): high ≈ 40.7k, medium ≈ 15.9k, low ≈ 7.9k.
+column (three parts, form = full): high 40,862, medium 16,054, low 7,996.
 
-Texture coordinates come from xatlas, one chart set per part and LOD, at one texel density per
-LOD (``ASSET_TEXELS_PER_METRE``); every LOD's pixel coordinates are divided by
-``texels_per_metre × UV_SPAN`` so that ``st`` ∈ [0, 1] spans the same ``UV_SPAN`` metres on every
-part and LOD. The material repeats its tileable stone maps ``UV_SPAN / TILE_METRES`` times per
-unit of ``st`` (UsdTransform2d), i.e. once every ``TILE_METRES`` metres of stone.
+Texture coordinates come from each part's analytic charts (its generator's parametrisation, packed
+by :func:`ionic_usd.texture.atlas.analytic_atlas`; xatlas only for a mesh without charts), one
+chart set per part and LOD, at one texel density per LOD (``ASSET_TEXELS_PER_METRE``); every LOD's
+pixel coordinates are divided by ``texels_per_metre × UV_SPAN`` so that ``st`` ∈ [0, 1] spans the
+same ``UV_SPAN`` metres on every part and LOD. The material repeats its tileable stone maps
+``UV_SPAN / TILE_METRES`` times per unit of ``st`` (UsdTransform2d), i.e. once every
+``TILE_METRES`` metres of stone.
 """
 
 from __future__ import annotations
@@ -104,8 +106,8 @@ FINISHES = {
 ENGAGED_INSET = 0.05  # m: the cut lies this far behind the wall face (axis on the face)
 # Atlas density of the asset's UVs. The materials tile 2 m stone maps, so the atlas density
 # only sets the chart gutters (4 texels = 3 cm at 128 px/m) and the resolution available to a
-# later bake; xatlas's packing time grows with the atlas area (measured: the four parts of
-# the high-LOD column take 4.3 s at 256 px/m, 2.4 s at 64 px/m).
+# later bake; packing time grows with the atlas area (measured when xatlas still unwrapped
+# every part: the four parts of the high-LOD column took 4.3 s at 256 px/m, 2.4 s at 64 px/m).
 ASSET_TEXELS_PER_METRE = {"high": 128.0, "medium": 64.0, "low": 32.0}
 BASE_CHART_BOUNDARY = 2.0  # m: see texture.uv.unwrap(max_chart_boundary=…)
 UV_SPAN = 32.0  # m of surface across st ∈ [0, 1]

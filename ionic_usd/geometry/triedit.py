@@ -1,0 +1,424 @@
+"""A closed triangle mesh open for local edits: the operations of the sliver clean-up.
+
+:class:`TriangleEditor` keeps a triangle mesh as Python lists (points, triangles, per-corner
+values: normals, st and the st chart) with exact vertex → triangle incidence, and offers the
+three local operations :func:`ionic_usd.geometry.slivers.remove_slivers` mends slivers with
+(COMPAS keeps the same operations on its half-edge mesh): :meth:`~TriangleEditor.flip` an
+edge, :meth:`~TriangleEditor.snap` a vertex onto the opposite edge (splitting the neighbour)
+and :meth:`~TriangleEditor.collapse` an edge. Each checks first that it moves the surface by
+at most ``tol``, keeps the shell a closed 2-manifold, turns no triangle over and makes the
+worst angle better, and does nothing (returns False) otherwise. Rows are made Python lists on
+first read: an edit touches a few hundred of a mesh's rows, and plain float math on lists is
+~10x faster than numpy on 3-vectors. :meth:`~TriangleEditor.to_mesh` gives the result back.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ionic_usd.geometry.mesh import Mesh, chart_labels, corner_normals, unique_rows
+
+__all__ = ["TriangleEditor"]
+
+
+def _angles(p: list[float], q: list[float], r: list[float]) -> tuple[float, float, float]:
+    """The corner angles (degrees) of the triangle pqr (3 floats each), in plain float math
+    (numpy costs ~1 µs a call on 3-vectors)."""
+    out = []
+    for o, u, w in ((p, q, r), (q, r, p), (r, p, q)):
+        ax, ay, az = u[0] - o[0], u[1] - o[1], u[2] - o[2]
+        bx, by, bz = w[0] - o[0], w[1] - o[1], w[2] - o[2]
+        la = math.sqrt(ax * ax + ay * ay + az * az)
+        lb = math.sqrt(bx * bx + by * by + bz * bz)
+        c = (ax * bx + ay * by + az * bz) / max(la * lb, 1e-300)
+        out.append(math.degrees(math.acos(min(max(c, -1.0), 1.0))))
+    return out[0], out[1], out[2]
+
+
+def _normal(p: list[float], q: list[float], r: list[float]) -> tuple[float, float, float]:
+    """The unit normal of the triangle pqr (zero for a degenerate one)."""
+    ux, uy, uz = q[0] - p[0], q[1] - p[1], q[2] - p[2]
+    vx, vy, vz = r[0] - p[0], r[1] - p[1], r[2] - p[2]
+    nx, ny, nz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+    ln = max(math.sqrt(nx * nx + ny * ny + nz * nz), 1e-300)
+    return nx / ln, ny / ln, nz / ln
+
+
+def _cross(p: list[float], q: list[float], r: list[float]) -> tuple[float, float, float]:
+    """(q − p) × (r − p): twice the vector area of the triangle pqr."""
+    ux, uy, uz = q[0] - p[0], q[1] - p[1], q[2] - p[2]
+    vx, vy, vz = r[0] - p[0], r[1] - p[1], r[2] - p[2]
+    return uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+
+
+def _dot(u, v) -> float:
+    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
+
+
+def _tet_height(a: list[float], b: list[float], c: list[float], d: list[float]) -> float:
+    """Smallest height of the tetrahedron abcd: how far a flip of edge ab (triangles abc, abd
+    → acd, bcd) moves the surface."""
+    n = _cross(a, b, c)
+    v = abs(n[0] * (d[0] - a[0]) + n[1] * (d[1] - a[1]) + n[2] * (d[2] - a[2]))
+    areas = [math.sqrt(_dot(x, x)) for x in (n, _cross(a, b, d), _cross(a, c, d), _cross(b, c, d))]
+    return v / max(max(areas), 1e-300)
+
+
+class _Rows(dict):
+    """Rows of a numpy array as Python lists, made on first read (an edit touches a few
+    hundred of a mesh's rows: converting them all costs more than the edits); rows set or
+    appended are kept here. ``len`` is the number of rows, appended ones included."""
+
+    def __init__(self, src: np.ndarray) -> None:
+        super().__init__()
+        self.src = src
+        self.n = len(src)
+
+    def __missing__(self, k: int) -> list:
+        row = self[k] = self.src[k].tolist()
+        return row
+
+    def __len__(self) -> int:
+        return self.n
+
+    def append(self, row: list) -> None:
+        self[self.n] = row
+        self.n += 1
+
+    def array(self) -> np.ndarray:
+        """All rows (appended included) as one array."""
+        out = np.empty((self.n, *self.src.shape[1:]), dtype=self.src.dtype)
+        out[: len(self.src)] = self.src
+        for k, row in self.items():
+            out[k] = row
+        return out
+
+
+class TriangleEditor:
+    """A closed, consistently wound triangle mesh under local edits (see the module).
+
+    Parameters
+    ----------
+    mesh : triangle mesh with faceVarying normals (or none) and indexed st (or none)
+    """
+
+    def __init__(self, mesh: Mesh) -> None:
+        self.name = mesh.name
+        self.pts = np.array(mesh.points, dtype=np.float64)
+        self.P = _Rows(self.pts)  # the points as floats (kept equal to pts)
+        self.tri0 = mesh.triangles.astype(np.int64).reshape(-1, 3)
+        self.T = _Rows(self.tri0)
+        # per-corner values carried through every edit: the normals (3), st (2) and the st
+        # chart (1: an edit never joins two charts, whose values may meet at a point)
+        parts = []
+        corner_n = corner_normals(mesh)
+        if corner_n is not None:
+            parts.append(np.asarray(corner_n, dtype=np.float64).reshape(-1, 3, 3))
+        if mesh.st is not None and mesh.st_indices is not None:
+            parts.append(np.asarray(mesh.st, dtype=np.float64)[mesh.st_indices].reshape(-1, 3, 2))
+            chart = chart_labels(mesh.st_indices, len(mesh.st)).astype(np.float64)
+            parts.append(np.repeat(chart, 3).reshape(-1, 3, 1))
+        self.cn0 = np.concatenate(parts, axis=2) if parts else None
+        self.n_ch = 0 if self.cn0 is None else self.cn0.shape[2]
+        self.cn: dict[int, np.ndarray] = {}  # the (3, n_ch) corners of each edited or new face
+        self.n_dim = 3 if corner_n is not None else 0
+        self.alive = [True] * len(self.T)
+        # vertex → the live triangles using it, made on first use from the input's incidence
+        # (every edit goes through faces_of for each vertex it touches, so it stays exact)
+        flat = self.tri0.reshape(-1)
+        counts = np.bincount(flat, minlength=len(self.pts))
+        self._first_use = np.concatenate([[0], np.cumsum(counts)]).tolist()
+        self._by_vertex = (np.argsort(flat, kind="stable") // 3).tolist()
+        self._inc: dict[int, set[int]] = {}
+
+    # ---- queries ----------------------------------------------------------------------------
+    def corners_of(self, f: int) -> np.ndarray:
+        """The (3, n_ch) per-corner values of triangle ``f``."""
+        got = self.cn.get(f)
+        return self.cn0[f] if got is None else got  # type: ignore[index]
+
+    def faces_of(self, v: int) -> set[int]:
+        """The live triangles using vertex ``v`` (the set itself: edits keep it exact)."""
+        got = self._inc.get(v)
+        if got is None:
+            got = self._inc[v] = set(self._by_vertex[self._first_use[v] : self._first_use[v + 1]])
+        return got
+
+    def edge_faces(self, a: int, b: int) -> set[int]:
+        return self.faces_of(a) & self.faces_of(b)
+
+    def angles_of(self, t: int) -> tuple[float, float, float]:
+        """Corner angles (degrees) of triangle ``t``, in its corners' order."""
+        P, r = self.P, self.T[t]
+        return _angles(P[r[0]], P[r[1]], P[r[2]])
+
+    def min_angle_of(
+        self, rows: list[list[int]], at: dict[int, list[float]] | _Rows | None = None
+    ) -> float:
+        """Smallest angle of the triangles ``rows`` (vertex triples), at the points ``at``."""
+        at = self.P if at is None else at
+        return min(min(_angles(at[r[0]], at[r[1]], at[r[2]])) for r in rows)
+
+    def across(self, t: int, a: int, b: int) -> tuple[int, int] | None:
+        """The one other triangle on edge ab and its vertex off that edge."""
+        other = self.edge_faces(a, b) - {t}
+        if len(other) != 1:
+            return None
+        (o,) = other
+        d = next(v for v in self.T[o] if v != a and v != b)
+        return o, d
+
+    def flat_fan(self, v: int) -> bool:
+        """Every triangle round ``v`` lies in one plane with one set of corner values at
+        ``v`` (same normal, st and chart: no crease or seam through it): ``v`` is inside a
+        flat face, and removing it leaves the surface where it is."""
+        P, T = self.P, self.T
+        fs = sorted(self.faces_of(v))
+        if self.cn0 is not None:  # the cheap test first: one property vertex at v
+            ref = self.corners_of(fs[0])[T[fs[0]].index(v)].tolist()
+            for f in fs[1:]:
+                if self.corners_of(f)[T[f].index(v)].tolist() != ref:
+                    return False
+        vec = [_cross(*(P[i] for i in T[f])) for f in fs]
+        big = max(range(len(fs)), key=lambda i: _dot(vec[i], vec[i]))
+        n0 = _normal(*(P[i] for i in T[fs[big]]))
+        p0 = P[v]
+        for f, w in zip(fs, vec, strict=True):
+            if _dot(w, n0) < 0:
+                return False  # a fold
+            for i in T[f]:
+                q = P[i]
+                if abs(_dot(n0, (q[0] - p0[0], q[1] - p0[1], q[2] - p0[2]))) > 1e-12:
+                    return False  # off the plane by more than rounding (1e-12 m)
+        return True
+
+    # ---- edits ------------------------------------------------------------------------------
+    def _set_tri(self, f: int, new: list[int]) -> None:
+        if f < len(self.T):
+            for v in self.T[f]:
+                self.faces_of(v).discard(f)
+        for v in new:
+            self.faces_of(v).add(f)
+
+    def _kill(self, f: int) -> None:
+        for v in self.T[f]:
+            self.faces_of(v).discard(f)
+        self.alive[f] = False
+
+    def flip(self, t: int, k: int, tol: float) -> bool:
+        """Flip the edge opposite corner k of triangle t, if the flip moves the surface by at
+        most ``tol`` (the tetrahedron of the four vertices is that flat), raises the pair's
+        smallest angle, turns no triangle over and crosses no st seam."""
+        P, T = self.P, self.T
+        row = T[t]
+        c, a, b = row[k], row[(k + 1) % 3], row[(k + 2) % 3]
+        od = self.across(t, a, b)
+        if od is None:
+            return False
+        o, d = od
+        if self.edge_faces(c, d):
+            return False  # the new edge exists already
+        pa, pb, pc, pd = P[a], P[b], P[c], P[d]
+        if _tet_height(pa, pb, pc, pd) > tol:
+            return False
+        ro = T[o]
+        r1, r2 = _cross(P[row[0]], P[row[1]], P[row[2]]), _cross(P[ro[0]], P[ro[1]], P[ro[2]])
+        ref = (r1[0] + r2[0], r1[1] + r2[1], r1[2] + r2[2])  # vector area
+        n0, n1 = _normal(pc, pa, pd), _normal(pd, pb, pc)
+        if _dot(n0, ref) <= 0 or _dot(n1, ref) <= 0 or _dot(n0, n1) <= 0:
+            return False
+        before = self.min_angle_of([row, ro])
+        if min(min(_angles(pc, pa, pd)), min(_angles(pd, pb, pc))) <= before:
+            return False
+        if self.cn0 is not None:
+            n_dim = self.n_dim
+            ct, co = self.corners_of(t), self.corners_of(o)
+            ic, ia, id_, ib = row.index(c), row.index(a), ro.index(d), ro.index(b)
+            if self.n_ch > n_dim and not (
+                np.array_equal(ct[ia, n_dim:], co[ro.index(a), n_dim:])
+                and np.array_equal(ct[row.index(b), n_dim:], co[ib, n_dim:])
+            ):
+                return False  # ab is an st seam: the new triangles would span two charts
+            self.cn[t] = np.array([ct[ic], ct[ia], co[id_]])
+            self.cn[o] = np.array([co[id_], co[ib], ct[ic]])
+        self._set_tri(t, [c, a, d])
+        self._set_tri(o, [d, b, c])
+        T[t], T[o] = [c, a, d], [d, b, c]
+        return True
+
+    def snap(self, t: int, k: int, tol: float) -> bool:
+        """Move the vertex at corner k of a cap t onto its opposite edge (at most ``tol``) and
+        split the neighbour across that edge there; t vanishes."""
+        P, T = self.P, self.T
+        row = T[t]
+        c, a, b = row[k], row[(k + 1) % 3], row[(k + 2) % 3]
+        od = self.across(t, a, b)
+        if od is None:
+            return False
+        o, d = od
+        pa, pb, pc = P[a], P[b], P[c]
+        ab = (pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2])
+        ac = (pc[0] - pa[0], pc[1] - pa[1], pc[2] - pa[2])
+        u = min(max(_dot(ac, ab) / max(_dot(ab, ab), 1e-300), 0.0), 1.0)
+        fl = [pa[0] + u * ab[0], pa[1] + u * ab[1], pa[2] + u * ab[2]]  # the foot on ab
+        off = (fl[0] - pc[0], fl[1] - pc[1], fl[2] - pc[2])
+        if math.sqrt(_dot(off, off)) > tol or self.edge_faces(c, d):
+            return False
+        around = [T[f] for f in sorted(self.faces_of(c)) if f != t]
+        moved = {v: P[v] for r in around for v in r}
+        moved[c] = fl
+        for r in around:
+            n_old = _normal(P[r[0]], P[r[1]], P[r[2]])
+            n_new = _normal(moved[r[0]], moved[r[1]], moved[r[2]])
+            if _dot(n_old, n_new) < 0.5:
+                return False
+        halves = [[b, c, d], [c, a, d]]
+        moved.update({a: P[a], b: P[b], d: P[d]})
+        before = min(self.min_angle_of(around), self.min_angle_of([row, T[o]]))
+        after = min(self.min_angle_of(around, moved), self.min_angle_of(halves, moved))
+        if after <= before:
+            return False
+        self.pts[c] = fl
+        P[c] = fl
+        if self.cn0 is not None:
+            ro, co = T[o], self.corners_of(o)
+            ia, ib, id_ = ro.index(a), ro.index(b), ro.index(d)
+            n_a, n_b, n_d = co[ia], co[ib], co[id_]
+            nf = (1 - u) * n_a + u * n_b
+            if self.n_dim:
+                nf[: self.n_dim] /= max(float(np.linalg.norm(nf[: self.n_dim])), 1e-12)
+            self.cn[o] = np.array([n_b, nf, n_d])  # halves[0] = b, c, d
+            # halves[1] = c, a, d takes o's old corners at a and d (the loop version read
+            # them back after overwriting o's, giving this half o's new corners: wrong st
+            # and normals, an st fold on the cut capitals)
+            self.cn[len(T)] = np.array([nf, n_a, n_d])
+        self._set_tri(o, halves[0])
+        T[o] = halves[0]
+        self._set_tri(len(T), halves[1])
+        T.append(halves[1])
+        self.alive.append(True)
+        self._kill(t)
+        return True
+
+    def collapse(self, t: int, k: int, tol: float, min_angle: float) -> bool:
+        """Collapse the edge opposite corner k of triangle t (one end onto the other), if that
+        edge is shorter than ``tol`` or one of its ends lies inside a flat face, the link
+        condition holds and no triangle round it turns over or gets an angle under
+        ``min_angle`` (or its old worst)."""
+        T = self.T
+        row = T[t]
+        a, b = row[(k + 1) % 3], row[(k + 2) % 3]
+        pa, pb = self.P[a], self.P[b]
+        ab = (pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2])
+        short = math.sqrt(_dot(ab, ab)) <= tol
+        flat = {} if short else {a: self.flat_fan(a), b: self.flat_fan(b)}
+        if not short and not (flat[a] or flat[b]):
+            return False
+        shared = self.edge_faces(a, b)
+        if len(shared) != 2 or not self._link_condition(a, b, shared):
+            return False
+        for keep, drop in ((a, b), (b, a)):
+            if not short and not flat[drop]:
+                continue
+            moved = [f for f in sorted(self.faces_of(drop)) if f not in shared]
+            if not moved:
+                continue  # drop is on the two shared triangles only (a flap): leave it
+            new = [[keep if v == drop else v for v in T[f]] for f in moved]
+            if not self._collapse_keeps_shape(moved, new, min_angle):
+                continue
+            if self.cn0 is not None and (self.n_ch > self.n_dim or not short):
+                self._move_corners(keep, drop, shared, moved, short)
+            for f, nr in zip(moved, new, strict=True):
+                self._set_tri(f, nr)
+                T[f] = nr
+            for f in sorted(shared):
+                self._kill(f)
+            return True
+        return False
+
+    def _link_condition(self, a: int, b: int, shared: set[int]) -> bool:
+        """The ends of edge ab share exactly its two opposite vertices as neighbours (else a
+        pinch or a fold would follow the collapse)."""
+        T = self.T
+        ring_a = {v for f in self.faces_of(a) for v in T[f]} - {a}
+        ring_b = {v for f in self.faces_of(b) for v in T[f]} - {b}
+        opp = {v for f in shared for v in T[f] if v != a and v != b}
+        return ring_a & ring_b == opp
+
+    def _collapse_keeps_shape(self, moved: list[int], new: list[list[int]], min_angle: float):
+        """No moved triangle turns by more than 60 degrees, and none gets an angle under
+        ``min_angle`` (or under the old triangles' worst)."""
+        P, T = self.P, self.T
+        old = [T[f] for f in moved]
+        if any(
+            _dot(_normal(P[r[0]], P[r[1]], P[r[2]]), _normal(P[s[0]], P[s[1]], P[s[2]])) < 0.5
+            for r, s in zip(old, new, strict=True)
+        ):
+            return False
+        return self.min_angle_of(new) >= min(min_angle, self.min_angle_of(old))
+
+    def _move_corners(
+        self, keep: int, drop: int, shared: set[int], moved: list[int], short: bool
+    ) -> None:
+        """The moved corners take keep's own values where keep has them in the same chart (st
+        is a function of the position on a chart: drop's values would stretch the triangles
+        round keep, by up to tol on a short edge); inside a flat fan of one chart (a long
+        edge: the surface does not move) every value."""
+        T, n_dim = self.T, self.n_dim
+        at: dict[float, np.ndarray] = {}
+        for f0 in sorted(shared):
+            row0 = self.corners_of(f0)[T[f0].index(keep)]
+            at.setdefault(float(row0[-1]), row0)
+        for f in moved:
+            c = self.corners_of(f).copy()
+            k = T[f].index(drop)
+            if not short:
+                c[k] = next(iter(at.values()))
+            elif float(c[k, -1]) in at:
+                c[k, n_dim:] = at[float(c[k, -1])][n_dim:]
+            else:
+                continue
+            self.cn[f] = c
+
+    # ---- result -----------------------------------------------------------------------------
+    def live_rows(self, faces: list[int]) -> np.ndarray:
+        """(len(faces), 3) vertex rows of the given triangles."""
+        T = self.T
+        return np.array([T[f] for f in faces], dtype=np.int64).reshape(-1, 3)
+
+    def to_mesh(self) -> Mesh:
+        """The live triangles as a mesh (unused points removed; st re-indexed per corner,
+        equal values of one point and chart shared, first occurrence first)."""
+        alive = np.array(self.alive, dtype=bool)
+        tri = self.T.array()[alive]
+        used, idx = np.unique(tri, return_inverse=True)
+        n_dim, corners = self.n_dim, None
+        if self.cn0 is not None:
+            full = np.empty((len(self.T), 3, self.n_ch))
+            full[: len(self.cn0)] = self.cn0
+            for f, rows in self.cn.items():
+                full[f] = rows
+            corners = full[alive].reshape(-1, self.n_ch)
+        nrm = None if corners is None or not n_dim else corners[:, :3].astype(np.float32)
+        st = sti = None
+        if corners is not None and corners.shape[1] > n_dim:
+            q = np.round(corners[:, n_dim:] * 1e7).astype(np.int64)
+            q = np.concatenate([idx.reshape(-1, 1), q], axis=1)
+            _, first, inv = unique_rows(q, return_index=True, return_inverse=True)
+            order = np.argsort(first, kind="stable")
+            rank = np.empty_like(order)
+            rank[order] = np.arange(len(order))
+            st = corners[first[order], n_dim : n_dim + 2].astype(np.float32)
+            sti = rank[inv.reshape(-1)].astype(np.int32)
+        return Mesh(
+            self.pts[used],
+            np.full(len(tri), 3, np.int32),
+            idx.reshape(-1),
+            nrm,
+            "faceVarying",
+            st,
+            sti,
+            name=self.name,
+        )
