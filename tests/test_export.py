@@ -62,11 +62,52 @@ def temple_glb(tiny_temple, tmp_path_factory):
     return res, pygltflib.GLTF2().load(str(out)), read_scene(tiny_temple.root)
 
 
-def test_glb_keeps_instancing_as_gpu_instances(temple_glb, tiny_temple):
+@pytest.fixture(scope="module")
+def temple_gpu_glb(tiny_temple, tmp_path_factory):
+    out = tmp_path_factory.mktemp("glb") / "temple_gpu.glb"
+    res = export_scene(tiny_temple.root, out, gpu_instancing=True)
+    return res, pygltflib.GLTF2().load(str(out)), read_scene(tiny_temple.root)
+
+
+def _drawn(g: pygltflib.GLTF2) -> tuple[int, int]:
+    """(triangles, draw calls) a client without EXT_mesh_gpu_instancing draws: every node
+    reachable from the scene draws its mesh once."""
+    tris = calls = 0
+    todo = list(g.scenes[g.scene].nodes)
+    while todo:
+        n = g.nodes[todo.pop()]
+        todo += n.children or []
+        if n.mesh is not None:
+            for prim in g.meshes[n.mesh].primitives:
+                tris += g.accessors[prim.indices].count // 3
+                calls += 1
+    return tris, calls
+
+
+def test_glb_default_needs_no_extension_to_draw_every_copy(temple_glb, tiny_temple):
+    """Core glTF only: a client that knows no extension draws every triangle of the temple."""
     res, g, scene = temple_glb
+    assert "EXT_mesh_gpu_instancing" not in (g.extensionsUsed or [])
+    assert not g.extensionsRequired
+    tris, calls = _drawn(g)
+    assert tris == res.report.triangles_drawn == tiny_temple.triangles
+    assert calls == res.report.draw_calls
+    # repeated column parts: one glTF mesh, one node per column that draws it
+    stage = Usd.Stage.Open(str(tiny_temple.root))
+    uses: dict[int, int] = {}
+    for n in g.nodes:
+        if n.mesh is not None:
+            uses[n.mesh] = uses.get(n.mesh, 0) + 1
+    want = sorted(n for n in usd_mesh_copies(stage) if n > 1)
+    assert sorted(u for u in uses.values() if u > 1) == want
+
+
+def test_glb_gpu_instancing_is_required(temple_gpu_glb, tiny_temple):
+    res, g, scene = temple_gpu_glb
     assert len(g.meshes) == len(scene.meshes)
+    # no fallback exists (a client without it would draw one copy): required, not just used
     assert "EXT_mesh_gpu_instancing" in g.extensionsUsed
-    assert not g.extensionsRequired  # every extension has a fallback
+    assert "EXT_mesh_gpu_instancing" in g.extensionsRequired
     inst_nodes = [n for n in g.nodes if n.extensions.get("EXT_mesh_gpu_instancing")]
     # one instanced node per mesh of each prototype that several columns share, with as many
     # copies as the prototype has instances (counted on the stage with Usd directly)
@@ -116,8 +157,8 @@ def test_glb_materials_textures_and_transform(temple_glb):
             assert a.TEXCOORD_0 is not None
 
 
-def test_glb_paradata_in_extras(temple_glb):
-    _, g, _ = temple_glb
+def test_glb_paradata_in_extras(temple_gpu_glb):
+    _, g, _ = temple_gpu_glb
     extras = g.scenes[0].extras
     hyps = extras["ionic_usd"]["hypotheses"]
     assert "flutes_20" in hyps and hyps["flutes_20"]["certainty"]
@@ -512,3 +553,63 @@ def test_shared_paradata_is_stored_once():
     common, rest = split_common([a, b])
     assert common == {"ionic_usd": {"temple": "T"}, "x": 1}
     assert rest == [{"path": "/a", "ionic_usd": {"hypothesis": {"id": "h1"}}}, {"path": "/b"}]
+
+
+def _instancer_stage(path) -> None:
+    """Two point instancers laid out alike (one moved) of a closed wedge; a mirrored and a
+    non-uniformly scaled copy among the three."""
+    stage = Usd.Stage.CreateNew(str(path))
+    UsdGeom.SetStageUpAxis(stage, "Y")
+    UsdGeom.SetStageMetersPerUnit(stage, 1.0)
+    stage.SetDefaultPrim(UsdGeom.Xform.Define(stage, "/R").GetPrim())
+    pts = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 2), (1, 0, 2), (0, 1, 2)]
+    for k, dx in ((0, 0.0), (1, 10.0)):
+        pi = UsdGeom.PointInstancer.Define(stage, f"/R/I{k}")
+        UsdGeom.Xformable(pi).AddTranslateOp().Set((dx, 0, 0))
+        m = UsdGeom.Mesh.Define(stage, f"/R/I{k}/Protos/Wedge")
+        m.CreatePointsAttr(pts)
+        m.CreateFaceVertexCountsAttr([3, 3, 4, 4, 4])
+        m.CreateFaceVertexIndicesAttr([0, 2, 1, 3, 4, 5, 0, 1, 4, 3, 1, 2, 5, 4, 2, 0, 3, 5])
+        pi.CreatePrototypesRel().SetTargets([m.GetPath()])
+        pi.CreateProtoIndicesAttr([0, 0, 0])
+        pi.CreatePositionsAttr([(0, 0, 0), (3, 0, 0), (0, 4, 0)])
+        q = [Gf.Quath(1, 0, 0, 0), Gf.Quath(0, 0, 1, 0), Gf.Quath(1, 0, 0, 0)]
+        pi.CreateOrientationsAttr(q)
+        pi.CreateScalesAttr([(1, 1, 1), (-1, 1, 1), (2, 0.5, 1)])
+    stage.Save()
+
+
+def test_glb_merges_instancer_copies_exactly(tmp_path):
+    _instancer_stage(tmp_path / "w.usda")
+    scene = read_scene(tmp_path / "w.usda")
+    out = tmp_path / "w.glb"
+    res = export_scene(tmp_path / "w.usda", out)
+    g = pygltflib.GLTF2().load(str(out))
+    # the two instancers share one merged mesh; each is one node, one draw call
+    mesh_nodes = [n for n in g.nodes if n.mesh is not None]
+    assert len(g.meshes) == 1 and len(mesh_nodes) == 2
+    assert res.report.draw_calls == 2 and res.report.merged == 6
+    assert _drawn(g) == (res.report.triangles_drawn, 2) and res.report.triangles_drawn == 6 * 8
+    prim = g.meshes[0].primitives[0]
+    pos = _accessor(g, prim.attributes.POSITION).astype(np.float64)
+    nrm = _accessor(g, prim.attributes.NORMAL).astype(np.float64)
+    tri = _accessor(g, prim.indices).reshape(-1, 3)
+    world = []
+    for n in mesh_nodes:
+        m = np.array(n.matrix).reshape(4, 4) if n.matrix else np.eye(4)
+        world.append(np.c_[pos, np.ones(len(pos))] @ m)
+    got = np.unique(np.round(np.concatenate(world)[:, :3], 5), axis=0)
+    key = next(iter(scene.meshes))
+    src = scene.meshes[key].points
+    want = np.concatenate(
+        [(np.c_[src, np.ones(len(src))] @ p.matrix)[:, :3] for p in scene.placements]
+    )
+    assert_allclose(got, np.unique(np.round(want, 5), axis=0), atol=1e-5)
+    # every triangle winds counter-clockwise about its normals, the mirrored copy's included
+    geo = np.cross(pos[tri[:, 1]] - pos[tri[:, 0]], pos[tri[:, 2]] - pos[tri[:, 0]])
+    assert np.all(np.einsum("ij,ij->i", geo, nrm[tri].mean(axis=1)) > 0)
+    assert_allclose(np.linalg.norm(nrm, axis=1), 1.0, atol=1e-6)
+    # without merging: one node per copy, the same triangles
+    res2 = export_scene(tmp_path / "w.usda", tmp_path / "n.glb", merge=False)
+    g2 = pygltflib.GLTF2().load(str(tmp_path / "n.glb"))
+    assert _drawn(g2) == (res.report.triangles_drawn, 6) and res2.report.merged == 0
