@@ -482,6 +482,8 @@ def test_cli_export_formats(tiny_temple, tmp_path, capsys):
         (["-o", "{tmp}/nodir/x.glb"], "does not exist"),
         (["-o", "{tmp}/x.stl", "--compress", "draco"], "--compress"),
         (["-o", "{tmp}/x.glb", "--compress", "zip"], "invalid choice"),
+        (["-o", "{tmp}/x.usdz", "--gpu-instancing"], "--gpu-instancing"),
+        (["-o", "{tmp}/x.stl", "--no-merge"], "--no-merge"),
     ],
 )
 def test_cli_errors_are_one_line_and_write_nothing(tiny_temple, tmp_path, capsys, args, needle):

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
-from pxr import Gf, Usd, UsdGeom
+from pxr import Gf, Sdf, Usd, UsdGeom
 
 from ionic_usd.export import export_scene
 from ionic_usd.usd import validate_stage
@@ -23,8 +23,9 @@ _PTS = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 2), (1, 0, 2), (0, 1, 2)]
 _IDX = [0, 2, 1, 3, 4, 5, 0, 1, 4, 3, 1, 2, 5, 4, 2, 0, 3, 5]
 
 
-def _wedge_instancer(stage: Usd.Stage, path: str) -> None:
-    """A closed wedge placed three times: plain, mirrored (scale −1 in x) and stretched."""
+def _wedge_instancer(stage: Usd.Stage, path: str, primvar: bool = False) -> None:
+    """A closed wedge placed three times: plain, mirrored (scale −1 in x) and stretched; its
+    normals as the attribute, or as the indexed ``primvars:normals``."""
     pi = UsdGeom.PointInstancer.Define(stage, path)
     m = UsdGeom.Mesh.Define(stage, f"{path}/Protos/Wedge")
     m.CreatePointsAttr(_PTS)
@@ -38,9 +39,19 @@ def _wedge_instancer(stage: Usd.Stage, path: str) -> None:
         n = np.cross(f[1] - f[0], f[2] - f[0])
         normals += [tuple(n / np.linalg.norm(n))] * c
         start += c
-    m.CreateNormalsAttr(normals)
-    m.SetNormalsInterpolation(UsdGeom.Tokens.faceVarying)
-    st = UsdGeom.PrimvarsAPI(m).CreatePrimvar("st", Sdf_tc2(), UsdGeom.Tokens.faceVarying)
+    if primvar:
+        values = sorted(set(normals))
+        pv = UsdGeom.PrimvarsAPI(m).CreatePrimvar(
+            "normals", Sdf.ValueTypeNames.Normal3fArray, UsdGeom.Tokens.faceVarying
+        )
+        pv.Set(values)
+        pv.SetIndices([values.index(n) for n in normals])
+    else:
+        m.CreateNormalsAttr(normals)
+        m.SetNormalsInterpolation(UsdGeom.Tokens.faceVarying)
+    st = UsdGeom.PrimvarsAPI(m).CreatePrimvar(
+        "st", Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.faceVarying
+    )
     st.Set([(i / 18.0, 1 - i / 18.0) for i in range(18)])
     pi.CreatePrototypesRel().SetTargets([m.GetPath()])
     pi.CreateProtoIndicesAttr([0, 0, 0])
@@ -48,12 +59,6 @@ def _wedge_instancer(stage: Usd.Stage, path: str) -> None:
     q = [Gf.Quath(1, 0, 0, 0), Gf.Quath(0, 0, 1, 0), Gf.Quath(1, 0, 0, 0)]
     pi.CreateOrientationsAttr(q)
     pi.CreateScalesAttr([(1, 1, 1), (-1, 1, 1), (2, 0.5, 1)])
-
-
-def Sdf_tc2():
-    from pxr import Sdf
-
-    return Sdf.ValueTypeNames.TexCoord2fArray
 
 
 def _scene(path: Path) -> None:
@@ -64,7 +69,7 @@ def _scene(path: Path) -> None:
     stage.SetDefaultPrim(UsdGeom.Xform.Define(stage, "/R").GetPrim())
     _wedge_instancer(stage, "/R/Loose")
     proto = stage.CreateClassPrim("/_Proto")
-    _wedge_instancer(stage, "/_Proto/Orn")
+    _wedge_instancer(stage, "/_Proto/Orn", primvar=True)
     del proto
     for k in range(2):
         x = UsdGeom.Xform.Define(stage, f"/R/Inst{k}")
@@ -111,6 +116,10 @@ def test_usdz_expands_point_instancers_and_draws_the_same(tmp_path):
     stage = Usd.Stage.Open(str(out))
     every = list(Usd.PrimRange.Stage(stage, Usd.TraverseInstanceProxies(Usd.PrimAllPrimsPredicate)))
     assert not any(p.IsA(UsdGeom.PointInstancer) for p in every)
+    # normals only as the attribute (Blender reads a primvars:normals twice)
+    meshes = [p for p in every if p.IsA(UsdGeom.Mesh)]
+    assert meshes and not any(p.HasAttribute("primvars:normals") for p in meshes)
+    assert all(UsdGeom.Mesh(p).GetNormalsAttr().HasAuthoredValue() for p in meshes)
     a, b = read_scene(tmp_path / "s.usda"), read_scene(out)
     assert a.n_triangles == b.n_triangles == 9 * 8
     pa, _ = _world(a)

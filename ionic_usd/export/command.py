@@ -43,6 +43,9 @@ def cmd_export(args: argparse.Namespace) -> int:
             args.scale,
             "1 unless the output is .stl or .3mf (glTF and usdz stay in metres)",
         )
+    for flag, on in (("--gpu-instancing", args.gpu_instancing), ("--no-merge", args.no_merge)):
+        if on and fmt not in (".glb", ".gltf"):
+            raise ParameterError(flag, "given", "only with a .glb or .gltf output")
     if args.compress != "none" and fmt not in (".glb", ".gltf"):
         raise ParameterError("--compress", args.compress, "none unless the output is glTF")
     if args.compress == "draco":

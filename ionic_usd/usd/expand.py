@@ -22,7 +22,7 @@ from pxr import Sdf, Usd, UsdGeom, UsdShade, Vt
 
 from ionic_usd.errors import UsdAuthoringError
 
-__all__ = ["expand_point_instancers"]
+__all__ = ["expand_point_instancers", "normals_as_attributes"]
 
 _INSTANCER_PROPS = (
     "positions",
@@ -220,3 +220,33 @@ def expand_point_instancers(layer: Sdf.Layer) -> int:
     for p in found:
         total += _expand(stage, UsdGeom.PointInstancer(p))
     return total
+
+
+def normals_as_attributes(layer: Sdf.Layer) -> int:
+    """Every mesh's ``primvars:normals`` of ``layer`` moved to its ``normals`` attribute
+    (flattened, same interpolation), in place; returns how many meshes changed.
+
+    Blender (5.0) reads every array primvar as a generic attribute as well, so a
+    ``primvars:normals`` arrives twice: as the custom normals and as a ``normals`` attribute.
+    The attribute cannot be indexed, which is why the asset's files keep the indexed primvar
+    (one normal per corner would more than double the column's geometry file, every level of
+    detail in it); a usdz holds one selection of it, flattened, and pays far less.
+    """
+    stage = Usd.Stage.Open(layer)
+    changed = 0
+    for p in Usd.PrimRange.Stage(stage, Usd.PrimAllPrimsPredicate):
+        if not p.IsA(UsdGeom.Mesh):
+            continue
+        pv = UsdGeom.PrimvarsAPI(p).GetPrimvar("normals")
+        if not pv or not pv.HasAuthoredValue():
+            continue
+        flat, interp = pv.ComputeFlattened(), pv.GetInterpolation()
+        names = [pv.GetAttr().GetName(), pv.GetIndicesAttr().GetName()]
+        mesh = UsdGeom.Mesh(p)
+        for name in names:
+            if p.HasProperty(name):
+                p.RemoveProperty(name)
+        mesh.CreateNormalsAttr(flat)
+        mesh.SetNormalsInterpolation(interp)
+        changed += 1
+    return changed

@@ -31,7 +31,7 @@ from pathlib import Path
 from pxr import Ar, Sdf
 
 from ionic_usd.errors import UsdAuthoringError
-from ionic_usd.usd.expand import expand_point_instancers
+from ionic_usd.usd.expand import expand_point_instancers, normals_as_attributes
 from ionic_usd.usd.stage import validate_stage
 from ionic_usd.usd.variants import open_stage, select_variants
 
@@ -241,6 +241,7 @@ def write_usdz(
     _relative_paths(flat, Path(scene))
     stable_prototypes(flat)
     expanded = expand_point_instancers(flat)  # the ARKit profile has no PointInstancer
+    normals_as_attributes(flat)  # Blender reads primvars:normals twice
     # what Flatten keeps of variant sets: none should be left (the ARKit profile forbids them)
     left = 0
 
