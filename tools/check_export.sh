@@ -5,8 +5,10 @@
 #      a non-empty textured picture (saved as docs/export_threejs.png unless PNG= is given);
 #      the default temple.glb draws the same triangles with and without three.js's
 #      EXT_mesh_gpu_instancing plugin (it needs no extension), and its draw calls are printed;
-#   3. Blender (bpy 5.0.1) imports the temple .glb with every triangle and its textures;
-#   4. the .usdz packages pass pxr.UsdValidation (the exporter refuses to write one that fails).
+#   3. Blender (bpy 5.0.1) imports the temple .glb with every triangle and its textures, and
+#      the temple .usdz with every mesh, its textures, and no mesh with normals twice;
+#   4. the .usdz packages pass pxr.UsdValidation (the exporter refuses to write one that fails);
+#      the ARKit profile is tools/check_arkit.sh (CI step 5b).
 #
 # Usage (from anywhere; the project's Python environment active):
 #   tools/check_export.sh                 # builds a temple and a 4 x 4 city in a temp folder
@@ -99,6 +101,8 @@ EOF2
 step "Blender import"
 TRIS=$("$PY" -c "from ionic_usd.usd.reader import read_scene; print(read_scene('$TEMPLE').n_triangles)")
 "$PY" "$ROOT/tools/blender_glb_check.py" "$E/temple.glb" --triangles "$TRIS" || fail=1
+"$PY" "$ROOT/tools/blender_check.py" "$E/temple.usdz" --no-duplicate-normals --instances 18 \
+  | grep -v '^    ' || fail=1
 
 step "done: $([[ $fail -eq 0 ]] && echo 'all checks passed' || echo 'SOME CHECKS FAILED')"
 exit $fail

@@ -80,6 +80,7 @@ def cmd_export(args: argparse.Namespace) -> int:
     elif res.format == "usdz":
         print(
             f"wrote {res.path}: {r.bytes / 1e6:.2f} MB, {r.files} files packaged, "
+            f"{r.expanded_copies} point-instanced copies expanded into meshes, "
             f"{r.validation_errors} validation errors ({r.seconds:.2f} s)"
         )
     else:
