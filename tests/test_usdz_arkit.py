@@ -61,13 +61,38 @@ def _wedge_instancer(stage: Usd.Stage, path: str, primvar: bool = False) -> None
     pi.CreateScalesAttr([(1, 1, 1), (-1, 1, 1), (2, 0.5, 1)])
 
 
+def _big_instancer(stage: Usd.Stage, path: str) -> None:
+    """A prototype over the bake limit (a 2,048-triangle grid under a moved Xform), placed
+    twice: kept once, the copies native instances of it."""
+    pi = UsdGeom.PointInstancer.Define(stage, path)
+    root = UsdGeom.Xform.Define(stage, f"{path}/Protos/Grid")
+    root.AddTranslateOp().Set((0.0, 1.0, 0.0))  # the prototype root's own transform
+    m = UsdGeom.Mesh.Define(stage, f"{path}/Protos/Grid/Plane")
+    n = 33
+    xs, zs = np.meshgrid(np.arange(n, dtype=float), np.arange(n, dtype=float))
+    m.CreatePointsAttr([(x, 0.0, z) for x, z in zip(xs.ravel(), zs.ravel(), strict=True)])
+    quads = [
+        (r * n + c, (r + 1) * n + c, (r + 1) * n + c + 1, r * n + c + 1)
+        for r in range(n - 1)
+        for c in range(n - 1)
+    ]
+    m.CreateFaceVertexCountsAttr([4] * len(quads))
+    m.CreateFaceVertexIndicesAttr([i for q in quads for i in q])
+    pi.CreatePrototypesRel().SetTargets([root.GetPath()])
+    pi.CreateProtoIndicesAttr([0, 0])
+    pi.CreatePositionsAttr([(0, 0, 50), (0, 0, 100)])
+    pi.CreateOrientationsAttr([Gf.Quath(1, 0, 0, 0), Gf.Quath(0.7071, 0, 0.7071, 0)])
+
+
 def _scene(path: Path) -> None:
-    """An instancer at the root, and one inside a prototype two native instances share."""
+    """An instancer at the root, one inside a prototype two native instances share, and one
+    of a prototype too big to bake."""
     stage = Usd.Stage.CreateNew(str(path))
     UsdGeom.SetStageUpAxis(stage, "Y")
     UsdGeom.SetStageMetersPerUnit(stage, 1.0)
     stage.SetDefaultPrim(UsdGeom.Xform.Define(stage, "/R").GetPrim())
     _wedge_instancer(stage, "/R/Loose")
+    _big_instancer(stage, "/R/Big")
     proto = stage.CreateClassPrim("/_Proto")
     _wedge_instancer(stage, "/_Proto/Orn", primvar=True)
     del proto
@@ -110,8 +135,9 @@ def test_usdz_expands_point_instancers_and_draws_the_same(tmp_path):
     out = tmp_path / "s.usdz"
     res = export_scene(tmp_path / "s.usda", out)
     # 3 copies each: the root instancer, the one in the flattened prototype (edited once,
-    # drawn by both instances) and the class's own (not drawn; ARKit checks every prim)
-    assert res.report.expanded_copies == 9
+    # drawn by both instances) and the class's own (not drawn; ARKit checks every prim);
+    # and the big grid's 2
+    assert res.report.expanded_copies == 11
     assert validate_stage(out) == []
     stage = Usd.Stage.Open(str(out))
     every = list(Usd.PrimRange.Stage(stage, Usd.TraverseInstanceProxies(Usd.PrimAllPrimsPredicate)))
@@ -119,9 +145,12 @@ def test_usdz_expands_point_instancers_and_draws_the_same(tmp_path):
     # normals only as the attribute (Blender reads a primvars:normals twice)
     meshes = [p for p in every if p.IsA(UsdGeom.Mesh)]
     assert meshes and not any(p.HasAttribute("primvars:normals") for p in meshes)
-    assert all(UsdGeom.Mesh(p).GetNormalsAttr().HasAuthoredValue() for p in meshes)
+    wedges = [p for p in meshes if p.GetName() != "Plane"]  # the grid has no normals
+    assert all(UsdGeom.Mesh(p).GetNormalsAttr().HasAuthoredValue() for p in wedges)
+    big = [p for p in stage.GetPrimAtPath("/R/Big").GetChildren()]
+    assert len(big) == 2 and all(p.IsInstance() for p in big)
     a, b = read_scene(tmp_path / "s.usda"), read_scene(out)
-    assert a.n_triangles == b.n_triangles == 9 * 8
+    assert a.n_triangles == b.n_triangles == 9 * 8 + 2 * 2048
     pa, _ = _world(a)
     pb, faces = _world(b)
     assert_allclose(pa, pb, atol=1e-5)

@@ -6,7 +6,11 @@ and the capitals' egg-and-dart and bead-and-reel. :func:`expand_point_instancers
 (flattened) stage so that each point instancer becomes an ``Xform`` at the same path holding,
 for every mesh of every prototype, one ``Mesh`` with all its copies baked in (points moved,
 normals by the inverse transpose, faces of mirrored copies reversed, primvars repeated per
-copy). The prototypes, no longer referenced, are removed. What is drawn stays the same: the
+copy). A prototype of more than :data:`BAKE_MAX_TRIANGLES` triangles (a city street's
+columns) is not baked copy by copy: it is kept once under the class
+:data:`PROTOTYPES_ROOT` and each copy becomes an instanceable ``Xform`` referencing it (native
+instancing, which ARKit allows). The prototypes, no longer referenced, are removed (materials
+inside them copied out first). What is drawn stays the same: the
 instancer's own transform, visibility and purpose are kept on the Xform, each baked mesh keeps
 the material its prototype was bound to.
 
@@ -18,7 +22,7 @@ proxies (an instancer *inside* a native prototype is edited in that prototype, o
 from __future__ import annotations
 
 import numpy as np
-from pxr import Sdf, Usd, UsdGeom, UsdShade, Vt
+from pxr import Gf, Sdf, Usd, UsdGeom, UsdShade, Vt
 
 from ionic_usd.errors import UsdAuthoringError
 
@@ -39,6 +43,54 @@ _INSTANCER_PROPS = (
     "extent",
 )
 _PREDICATE = Usd.TraverseInstanceProxies(Usd.PrimAllPrimsPredicate)
+#: a prototype of more triangles than this (a street's columns) is placed as native instances
+#: of one copy of it, kept under :data:`PROTOTYPES_ROOT`, instead of baked copy by copy
+BAKE_MAX_TRIANGLES = 2000
+PROTOTYPES_ROOT = Sdf.Path("/_ExpandedPrototypes")
+
+
+def _triangles(proto: Usd.Prim) -> int:
+    n = 0
+    for p in Usd.PrimRange(proto, _PREDICATE):
+        if p.IsA(UsdGeom.Mesh):
+            counts = p.GetAttribute("faceVertexCounts").Get()
+            n += int(np.sum(np.asarray(counts) - 2)) if counts else 0
+    return n
+
+
+def _as_instances(
+    stage: Usd.Stage, owner: Sdf.Path, target: Sdf.Path, mats: np.ndarray, names: set[str]
+) -> None:
+    """One instanceable ``Xform`` per matrix of ``mats`` under ``owner``, each referencing a
+    copy of the prototype ``target`` kept under the class :data:`PROTOTYPES_ROOT`. ``mats``
+    include the prototype root's own transform: the copies' ``xformOpOrder`` (a stronger
+    opinion than the referenced root's) leaves the root's own ops unused."""
+    layer = stage.GetEditTarget().GetLayer()
+    if not layer.GetPrimAtPath(PROTOTYPES_ROOT):
+        Sdf.CreatePrimInLayer(layer, PROTOTYPES_ROOT).specifier = Sdf.SpecifierClass
+    base = f"{str(owner).strip('/').replace('/', '_')}_{target.name}"
+    name, i = base, 1
+    while layer.GetPrimAtPath(PROTOTYPES_ROOT.AppendChild(name)):
+        name, i = f"{base}_{i}", i + 1
+    dst = PROTOTYPES_ROOT.AppendChild(name)
+    src = next((x for x in stage.GetPrimAtPath(target).GetPrimStack() if x.layer == layer), None)
+    if src is None or not Sdf.CopySpec(layer, src.path, layer, dst):
+        raise UsdAuthoringError(f"{target}: could not keep the prototype as {dst}")
+    with Sdf.ChangeBlock():
+        for k, m in enumerate(mats):
+            child = f"{target.name}_{k}"
+            while child in names:
+                child += "_"
+            names.add(child)
+            spec = Sdf.CreatePrimInLayer(layer, owner.AppendChild(child))
+            spec.specifier, spec.typeName, spec.instanceable = Sdf.SpecifierDef, "Xform", True
+            spec.referenceList.Prepend(Sdf.Reference(primPath=dst))
+            op = Sdf.AttributeSpec(spec, "xformOp:transform", Sdf.ValueTypeNames.Matrix4d)
+            op.default = Gf.Matrix4d(*(float(x) for x in m.reshape(-1)))
+            order = Sdf.AttributeSpec(
+                spec, "xformOpOrder", Sdf.ValueTypeNames.TokenArray, Sdf.VariabilityUniform
+            )
+            order.default = Vt.TokenArray(["xformOp:transform"])
 
 
 def _arr(value, dtype=np.float64) -> np.ndarray:
@@ -113,8 +165,47 @@ def _source_info(src: UsdGeom.Mesh) -> dict:
         a = src.GetPrim().GetAttribute(attr)
         if a and a.HasAuthoredValue():
             attrs[attr] = a.Get()
+    purpose = UsdGeom.Imageable(src).ComputePurpose()
+    if purpose != UsdGeom.Tokens.default_:  # a proxy stays a proxy (not drawn for render)
+        attrs["purpose"] = purpose
     mat, _ = UsdShade.MaterialBindingAPI(src.GetPrim()).ComputeBoundMaterial()
-    return {"attrs": attrs, "material": mat.GetPath() if mat else None}
+    return {"attrs": attrs, "material": mat.GetPrim() if mat else None}
+
+
+def _keep_materials(
+    stage: Usd.Stage, owner: Sdf.Path, targets: list[Sdf.Path], made: list[tuple]
+) -> None:
+    """Materials that live inside a prototype about to be removed (or inside a native
+    instance under it, read through an instance proxy) are copied under ``owner/Materials``
+    from the layer's own spec, and the baked meshes bound to the copies; other materials are
+    bound where they are."""
+    layer = stage.GetEditTarget().GetLayer()
+    copies: dict[Sdf.Path, Sdf.Path] = {}
+    for _, info, _ in made:
+        mat = info["material"]
+        if mat is None:
+            continue
+        path = mat.GetPath()
+        doomed = mat.IsInstanceProxy() or any(path.HasPrefix(t) for t in targets)
+        if not doomed:
+            info["material"] = path
+            continue
+        if path not in copies:
+            spec = next((s for s in mat.GetPrimStack() if s.layer == layer), None)
+            if spec is None:
+                raise UsdAuthoringError(f"{path}: no spec of the material in the package layer")
+            folder = owner.AppendChild("Materials")
+            if not layer.GetPrimAtPath(folder):
+                f = Sdf.CreatePrimInLayer(layer, folder)
+                f.specifier, f.typeName = Sdf.SpecifierDef, "Scope"
+            name, i = mat.GetName(), 1
+            while layer.GetPrimAtPath(folder.AppendChild(name)):
+                name, i = f"{mat.GetName()}_{i}", i + 1
+            dst = folder.AppendChild(name)
+            if not Sdf.CopySpec(layer, spec.path, layer, dst):
+                raise UsdAuthoringError(f"{path}: could not copy the material to {dst}")
+            copies[path] = dst
+        info["material"] = copies[path]
 
 
 def _author(stage: Usd.Stage, path: Sdf.Path, info: dict, baked: dict) -> None:
@@ -174,6 +265,9 @@ def _expand(stage: Usd.Stage, pi: UsdGeom.PointInstancer) -> int:
         sel = np.flatnonzero(ids == j)
         if not proto or len(sel) == 0:
             continue
+        if _triangles(proto) > BAKE_MAX_TRIANGLES:
+            _as_instances(stage, prim.GetPath(), target, mats[sel], names)
+            continue
         for p in Usd.PrimRange(proto, _PREDICATE):
             img = UsdGeom.Imageable(p)
             if img and img.ComputeVisibility(t) == UsdGeom.Tokens.invisible:
@@ -191,12 +285,15 @@ def _expand(stage: Usd.Stage, pi: UsdGeom.PointInstancer) -> int:
             info = _source_info(UsdGeom.Mesh(p))
             made.append((prim.GetPath().AppendChild(name), info, baked))
     # read everything first, then rewrite: the prototypes go, the instancer becomes an Xform
+    _keep_materials(stage, prim.GetPath(), list(targets), made)
     for tgt in targets:
         if tgt.HasPrefix(prim.GetPath()):
             stage.RemovePrim(tgt)
-    for child in prim.GetChildren():  # the prototypes' container, now empty
-        if not child.GetChildren() and child.GetTypeName() in ("", "Scope", "Xform"):
-            stage.RemovePrim(child.GetPath())
+    for folder in {t.GetParentPath() for t in targets}:  # the prototypes' container
+        f = stage.GetPrimAtPath(folder)
+        if folder.HasPrefix(prim.GetPath()) and folder != prim.GetPath() and f:
+            if not f.GetAllChildren() and f.GetTypeName() in ("", "Scope", "Xform"):
+                stage.RemovePrim(folder)
     for name in _INSTANCER_PROPS:
         if prim.HasProperty(name):
             prim.RemoveProperty(name)
