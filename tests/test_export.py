@@ -62,11 +62,52 @@ def temple_glb(tiny_temple, tmp_path_factory):
     return res, pygltflib.GLTF2().load(str(out)), read_scene(tiny_temple.root)
 
 
-def test_glb_keeps_instancing_as_gpu_instances(temple_glb, tiny_temple):
+@pytest.fixture(scope="module")
+def temple_gpu_glb(tiny_temple, tmp_path_factory):
+    out = tmp_path_factory.mktemp("glb") / "temple_gpu.glb"
+    res = export_scene(tiny_temple.root, out, gpu_instancing=True)
+    return res, pygltflib.GLTF2().load(str(out)), read_scene(tiny_temple.root)
+
+
+def _drawn(g: pygltflib.GLTF2) -> tuple[int, int]:
+    """(triangles, draw calls) a client without EXT_mesh_gpu_instancing draws: every node
+    reachable from the scene draws its mesh once."""
+    tris = calls = 0
+    todo = list(g.scenes[g.scene].nodes)
+    while todo:
+        n = g.nodes[todo.pop()]
+        todo += n.children or []
+        if n.mesh is not None:
+            for prim in g.meshes[n.mesh].primitives:
+                tris += g.accessors[prim.indices].count // 3
+                calls += 1
+    return tris, calls
+
+
+def test_glb_default_needs_no_extension_to_draw_every_copy(temple_glb, tiny_temple):
+    """Core glTF only: a client that knows no extension draws every triangle of the temple."""
     res, g, scene = temple_glb
+    assert "EXT_mesh_gpu_instancing" not in (g.extensionsUsed or [])
+    assert not g.extensionsRequired
+    tris, calls = _drawn(g)
+    assert tris == res.report.triangles_drawn == tiny_temple.triangles
+    assert calls == res.report.draw_calls
+    # repeated column parts: one glTF mesh, one node per column that draws it
+    stage = Usd.Stage.Open(str(tiny_temple.root))
+    uses: dict[int, int] = {}
+    for n in g.nodes:
+        if n.mesh is not None:
+            uses[n.mesh] = uses.get(n.mesh, 0) + 1
+    want = sorted(n for n in usd_mesh_copies(stage) if n > 1)
+    assert sorted(u for u in uses.values() if u > 1) == want
+
+
+def test_glb_gpu_instancing_is_required(temple_gpu_glb, tiny_temple):
+    res, g, scene = temple_gpu_glb
     assert len(g.meshes) == len(scene.meshes)
+    # no fallback exists (a client without it would draw one copy): required, not just used
     assert "EXT_mesh_gpu_instancing" in g.extensionsUsed
-    assert not g.extensionsRequired  # every extension has a fallback
+    assert "EXT_mesh_gpu_instancing" in g.extensionsRequired
     inst_nodes = [n for n in g.nodes if n.extensions.get("EXT_mesh_gpu_instancing")]
     # one instanced node per mesh of each prototype that several columns share, with as many
     # copies as the prototype has instances (counted on the stage with Usd directly)
@@ -116,8 +157,8 @@ def test_glb_materials_textures_and_transform(temple_glb):
             assert a.TEXCOORD_0 is not None
 
 
-def test_glb_paradata_in_extras(temple_glb):
-    _, g, _ = temple_glb
+def test_glb_paradata_in_extras(temple_gpu_glb):
+    _, g, _ = temple_gpu_glb
     extras = g.scenes[0].extras
     hyps = extras["ionic_usd"]["hypotheses"]
     assert "flutes_20" in hyps and hyps["flutes_20"]["certainty"]
@@ -441,6 +482,8 @@ def test_cli_export_formats(tiny_temple, tmp_path, capsys):
         (["-o", "{tmp}/nodir/x.glb"], "does not exist"),
         (["-o", "{tmp}/x.stl", "--compress", "draco"], "--compress"),
         (["-o", "{tmp}/x.glb", "--compress", "zip"], "invalid choice"),
+        (["-o", "{tmp}/x.usdz", "--gpu-instancing"], "--gpu-instancing"),
+        (["-o", "{tmp}/x.stl", "--no-merge"], "--no-merge"),
     ],
 )
 def test_cli_errors_are_one_line_and_write_nothing(tiny_temple, tmp_path, capsys, args, needle):

@@ -137,13 +137,57 @@ def test_roof_tiles_cover_both_slabs(layout):
         "Imbrex": 2 * rows * (cols - 1),
         "Antefix": 2 * (cols - 1),
     }
-    # every tegula's origin lies on its slab's top plane
-    teg = t.positions[t.proto_indices == 0]
-    top = lv["y_top"] + p.roof_slab_thickness + (xc - np.abs(teg[:, 0])) * math.tan(phi)
-    assert_allclose(teg[:, 1], top, atol=1e-9)
-    # and its local +Y is the slab's normal (tilted by the pitch)
+    # its local +Y is the slab's normal (tilted by the pitch)
     r = quaternion_matrices(t.orientations[t.proto_indices == 0])
     assert_allclose(np.degrees(np.arccos(r[:, 1, 1])), math.degrees(phi), atol=1e-9)
+
+
+def _placed(t, kind: int) -> list[np.ndarray]:
+    """World points of every copy of prototype ``kind`` (scale, rotate, move)."""
+    m = t.prototypes[kind]
+    sel = np.flatnonzero(t.proto_indices == kind)
+    r = quaternion_matrices(t.orientations[sel])
+    return [(m.points * t.scales[i]) @ r[j].T + t.positions[i] for j, i in enumerate(sel)]
+
+
+@pytest.mark.parametrize("apply", [(), ("roof-pitch-15",)])
+def test_roof_tiles_lie_on_the_slab_and_leave_no_gap(apply):
+    """The tiles rest on the slab mesh itself (none sinks into it, so the slab cannot show
+    through a pan), and the tegulae close each slab: side by side across (no slot between
+    neighbours), overlapping up the slope, from the eaves to the ridge."""
+    from ionic_usd.temple import cuboid_mesh
+    from ionic_usd.temple.layout import Layer
+
+    layout = portunus_layout(apply=apply)
+    t = roof_tiles(layout)
+    for name, sgn in (("roof_left", -1.0), ("roof_right", 1.0)):
+        slab = next(c for c in layout.cuboids[Layer.ROOF] if c.name == name)
+        sm = cuboid_mesh(slab)
+        # the slab's top: its face whose normal points most upward, from the mesh itself
+        faces = np.split(sm.face_vertex_indices, np.cumsum(sm.face_vertex_counts)[:-1])
+        normals = [np.cross(*(sm.points[f[1:3]] - sm.points[f[0]])) for f in faces]
+        k = int(np.argmax([nn[1] / np.linalg.norm(nn) for nn in normals]))
+        top, n = sm.points[faces[k]], normals[k] / np.linalg.norm(normals[k])
+        up = -sgn * np.array([n[1], -n[0], 0.0])  # up the slope
+        eave = top[np.argmin(top[:, 1])]
+        slope = float(np.max((top - eave) @ up))
+        half = float(np.max(np.abs(top[:, 2])))
+        tiles = [w for k in (0, 1) for w in _placed(t, k) if np.sign(w[:, 0].mean()) == sgn]
+        heights = np.concatenate([(w - eave) @ n for w in tiles])
+        assert heights.min() > -1e-9, f"{name}: a tile sinks {-heights.min():.3f} m into it"
+        # tegula footprints on the slab: (along the slope, across) intervals
+        teg = [w for w in _placed(t, 0) if np.sign(w[:, 0].mean()) == sgn]
+        a = np.array([[((w - eave) @ up).min(), ((w - eave) @ up).max()] for w in teg])
+        z = np.array([[w[:, 2].min(), w[:, 2].max()] for w in teg])
+        rows = np.unique(np.round(a[:, 0], 6))
+        for lo in rows:
+            zr = z[np.abs(a[:, 0] - lo) < 1e-6]
+            zr = zr[np.argsort(zr[:, 0])]
+            assert zr[0, 0] <= -half + 1e-6 and zr[-1, 1] >= half - 1e-6
+            assert np.all(zr[1:, 0] <= zr[:-1, 1] + 1e-6), f"{name}: a slot between tegulae"
+        ar = np.unique(np.round(a, 6), axis=0)
+        assert ar[0, 0] <= 1e-6 and ar[-1, 1] >= slope - 1e-6
+        assert np.all(ar[1:, 0] < ar[:-1, 1]), f"{name}: a course does not reach the next"
 
 
 def test_capital_ornament_rings(capital):

@@ -64,7 +64,8 @@ def main() -> None:
         temple = compose_temple(work / "PortunusTemple", portunus_layout()).root
     cases = [
         ("temple.glb", temple, {}),
-        ("temple_nodes.glb", temple, {"gpu_instancing": False}),
+        ("temple_gpu.glb", temple, {"gpu_instancing": True}),
+        ("temple_unmerged.glb", temple, {"merge": False}),
         ("temple_draco.glb", temple, {"compress": "draco"}),
         ("temple_low.glb", temple, {"lod": "low"}),
         ("temple_low_draco.glb", temple, {"lod": "low", "compress": "draco"}),

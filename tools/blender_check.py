@@ -66,6 +66,11 @@ def inside_blender(path: str) -> dict:
         "materials": materials,
         "meshes": len(bpy.data.meshes),
         "images": [i.name for i in bpy.data.images],
+        # Blender reads every array primvar as a generic attribute: a primvars:normals
+        # arrives both as the custom normals and as a 'normals' attribute
+        "normals_attribute": sorted(
+            me.name for me in bpy.data.meshes if "normals" in me.attributes
+        ),
     }
 
 
@@ -128,6 +133,11 @@ def main() -> int:
     ap.add_argument("--instances", type=int, help="expected collection instances")
     ap.add_argument("--prototypes", type=int, help="expected instanced prototypes")
     ap.add_argument("--json", help="write the full report here")
+    ap.add_argument(
+        "--no-duplicate-normals",
+        action="store_true",
+        help="fail when a mesh arrives with a 'normals' attribute beside its custom normals",
+    )
     args = ap.parse_args()
     path = str(Path(args.usd).resolve())
     if args.inside:
@@ -171,6 +181,9 @@ def main() -> int:
             problems.append("instanced meshes were copied, not shared")
         if args.prototypes is not None and protos != args.prototypes:
             problems.append(f"{protos} prototypes, expected {args.prototypes}")
+    dn = rep["normals_attribute"]
+    if args.no_duplicate_normals and dn:
+        problems.append(f"{len(dn)} meshes with a 'normals' attribute beside custom_normal")
     if args.instances is not None and len(inst) != args.instances:
         problems.append(f"{len(inst)} instances, expected {args.instances}")
 
@@ -188,6 +201,10 @@ def main() -> int:
         )
     mats = ", ".join(f"{k} ({len(v)} images)" for k, v in rep["materials"].items())
     print(f"  materials: {mats}")
+    print(
+        f"  mesh datablocks with a 'normals' attribute beside custom_normal (primvars:normals "
+        f"read twice): {len(dn)} of {rep['meshes']}"
+    )
     if args.json:
         Path(args.json).write_text(json.dumps({"stage": facts, "blender": rep}, indent=1))
     if problems:

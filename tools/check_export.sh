@@ -3,8 +3,12 @@
 #   1. the Khronos glTF-Validator (npm gltf-validator) on every exported .glb/.gltf: 0 errors;
 #   2. three.js's GLTFLoader in headless Chromium (playwright-core) loads the temple and renders
 #      a non-empty textured picture (saved as docs/export_threejs.png unless PNG= is given);
-#   3. Blender (bpy 5.0.1) imports the temple .glb with every triangle and its textures;
-#   4. the .usdz packages pass pxr.UsdValidation (the exporter refuses to write one that fails).
+#      the default temple.glb draws the same triangles with and without three.js's
+#      EXT_mesh_gpu_instancing plugin (it needs no extension), and its draw calls are printed;
+#   3. Blender (bpy 5.0.1) imports the temple .glb with every triangle and its textures, and
+#      the temple .usdz with every mesh, its textures, and no mesh with normals twice;
+#   4. the .usdz packages pass pxr.UsdValidation (the exporter refuses to write one that fails);
+#      the ARKit profile is tools/check_arkit.sh (CI step 5b).
 #
 # Usage (from anywhere; the project's Python environment active):
 #   tools/check_export.sh                 # builds a temple and a 4 x 4 city in a temp folder
@@ -52,7 +56,8 @@ CITY="$WORK/city/City.usda"
 step "exports"
 E="$WORK/export"; mkdir -p "$E"
 cli export "$TEMPLE" -o "$E/temple.glb" --force
-cli export "$TEMPLE" -o "$E/temple_nodes.glb" --no-gpu-instancing --force
+cli export "$TEMPLE" -o "$E/temple_gpu.glb" --gpu-instancing --force
+cli export "$TEMPLE" -o "$E/temple_unmerged.glb" --no-merge --force
 cli export "$TEMPLE" -o "$E/temple.gltf" --force
 cli export "$TEMPLE" -o "$E/temple_bare_stone.glb" --variant hyp_finish_bare_stone=alternative --force
 cli export "$TEMPLE" -o "$E/temple_low.glb" --lod low --force
@@ -75,10 +80,29 @@ node "$ROOT/tools/node/render.mjs" "$E/temple_bare_stone.glb" "$PNG" --chromium 
   || fail=1
 node "$ROOT/tools/node/render.mjs" "$E/temple_draco.glb" "$E/temple_draco.png" \
   --chromium "$CHROMIUM" || fail=1  # Draco decoded by three.js's DRACOLoader
+for f in temple temple_unmerged; do
+  node "$ROOT/tools/node/render.mjs" "$E/$f.glb" "$E/$f.png" --chromium "$CHROMIUM" \
+    --json "$E/$f.with.json" || fail=1
+done
+node "$ROOT/tools/node/render.mjs" "$E/temple.glb" "$E/temple_without.png" --chromium "$CHROMIUM" \
+  --without EXT_mesh_gpu_instancing --json "$E/temple.without.json" || fail=1
+"$PY" - "$E" <<'EOF2' || fail=1
+import json, sys
+e = sys.argv[1]
+w, wo, un = (json.load(open(f"{e}/{n}.json")) for n in 
+    ("temple.with", "temple.without", "temple_unmerged.with"))
+print(f"three.js draw calls for the temple: {un['drawCalls']} one node per copy (--no-merge), "
+      f"{w['drawCalls']} merged (default)")
+print(f"triangles drawn with / without EXT_mesh_gpu_instancing: {w['trianglesDrawn']:,} / "
+      f"{wo['trianglesDrawn']:,}")
+sys.exit(0 if w["trianglesDrawn"] == wo["trianglesDrawn"] == un["trianglesDrawn"] else 1)
+EOF2
 
 step "Blender import"
 TRIS=$("$PY" -c "from ionic_usd.usd.reader import read_scene; print(read_scene('$TEMPLE').n_triangles)")
 "$PY" "$ROOT/tools/blender_glb_check.py" "$E/temple.glb" --triangles "$TRIS" || fail=1
+"$PY" "$ROOT/tools/blender_check.py" "$E/temple.usdz" --no-duplicate-normals --instances 18 \
+  | grep -v '^    ' || fail=1
 
 step "done: $([[ $fail -eq 0 ]] && echo 'all checks passed' || echo 'SOME CHECKS FAILED')"
 exit $fail

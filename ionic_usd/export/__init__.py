@@ -35,7 +35,8 @@ def export_scene(
     *,
     variants: Mapping[str, str] | None = None,
     lod: str | None = None,
-    gpu_instancing: bool = True,
+    gpu_instancing: bool = False,
+    merge: bool = True,
     compress: str | None = None,
     scale: float = 1.0,
     force: bool = False,
@@ -48,7 +49,9 @@ def export_scene(
     output : the file to write (atomically; an existing one needs ``force``)
     variants : ``{set: value}`` selected on every prim that has the set (default: authored)
     lod : shorthand for ``variants["lod"]``
-    gpu_instancing : glTF only: ``EXT_mesh_gpu_instancing`` for repeated meshes
+    gpu_instancing : glTF only: ``EXT_mesh_gpu_instancing`` (required) for repeated meshes
+        (default: one node per copy, the mesh shared; core glTF)
+    merge : glTF only: bake the copies of small meshes into one mesh per point instancer
     compress : glTF only: None or ``"draco"`` (KHR_draco_mesh_compression, needs DracoPy)
     scale : STL/3MF only: model scale (1:20 → 0.05)
     """
@@ -60,7 +63,9 @@ def export_scene(
 
         s = read_scene(scene, variants=variants, lod=lod)
         return ExportResult(
-            out, fmt, write_gltf(s, out, gpu_instancing=gpu_instancing, compress=compress)
+            out,
+            fmt,
+            write_gltf(s, out, gpu_instancing=gpu_instancing, merge=merge, compress=compress),
         )
     if fmt == "usdz":
         from ionic_usd.usd.package import write_usdz

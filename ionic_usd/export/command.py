@@ -48,6 +48,9 @@ def cmd_export(args: argparse.Namespace) -> int:
             args.scale,
             "1 unless the output is .stl or .3mf (glTF and usdz stay in metres)",
         )
+    for flag, on in (("--gpu-instancing", args.gpu_instancing), ("--no-merge", args.no_merge)):
+        if on and fmt not in (".glb", ".gltf"):
+            raise ParameterError(flag, "given", "only with a .glb or .gltf output")
     if args.compress != "none" and fmt not in (".glb", ".gltf"):
         raise ParameterError("--compress", args.compress, "none unless the output is glTF")
     if args.compress == "draco":
@@ -67,7 +70,8 @@ def cmd_export(args: argparse.Namespace) -> int:
         args.output,
         variants=variants,
         lod=args.lod,
-        gpu_instancing=not args.no_gpu_instancing,
+        gpu_instancing=args.gpu_instancing,
+        merge=not args.no_merge,
         compress=None if args.compress == "none" else args.compress,
         scale=scale,
         force=args.force,
@@ -78,11 +82,13 @@ def cmd_export(args: argparse.Namespace) -> int:
             f"wrote {res.path}: {r.bytes / 1e6:.2f} MB, {r.meshes} meshes, "
             f"{r.materials} materials, {r.images} images, {r.triangles_drawn:,} triangles "
             f"drawn ({r.triangles:,} stored), {r.draw_calls} draw calls, "
-            f"{r.gpu_instanced_meshes} GPU-instanced meshes ({r.seconds:.2f} s)"
+            f"{r.gpu_instanced_meshes} GPU-instanced meshes, {r.merged} copies merged "
+            f"({r.seconds:.2f} s)"
         )
     elif res.format == "usdz":
         print(
             f"wrote {res.path}: {r.bytes / 1e6:.2f} MB, {r.files} files packaged, "
+            f"{r.expanded_copies} point-instanced copies expanded into meshes, "
             f"{r.validation_errors} validation errors ({r.seconds:.2f} s)"
         )
     else:
@@ -134,10 +140,18 @@ def add_parser(sub: Any, parser_class: Any = None, *, arguments: bool = True) ->
     )
     p.add_argument("--lod", help="level of detail (same as --variant lod=LOD)")
     p.add_argument(
-        "--no-gpu-instancing",
+        "--gpu-instancing",
+        action=argparse.BooleanOptionalAction,
+        default=False,
+        help="glTF: draw a mesh's copies as one EXT_mesh_gpu_instancing node, the extension "
+        "then required (clients without it refuse the file) [default: one node per copy, "
+        "the mesh shared, drawn alike by every client]",
+    )
+    p.add_argument(
+        "--no-merge",
         action="store_true",
-        help="glTF: one plain node per copy instead of EXT_mesh_gpu_instancing "
-        "(meshes are still shared)",
+        help="glTF: keep every copy of small meshes (tiles, dentils, egg-and-dart) as its own "
+        "node instead of one merged mesh per instancer",
     )
     p.add_argument(
         "--compress",

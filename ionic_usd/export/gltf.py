@@ -12,10 +12,13 @@ What carries over, and how:
   glTF's), flipping green if the USD decode flips it. A ``UsdTransform2d`` on ``st`` becomes
   ``KHR_texture_transform`` (conjugated by the v flip).
 * instancing: a mesh placed more than once (native instances at any depth, PointInstancers,
-  equal prims) is one glTF mesh. With ``gpu_instancing`` its placements become one node with
-  ``EXT_mesh_gpu_instancing`` (TRANSLATION/ROTATION/SCALE accessors; used, not required — a
-  client without it draws one copy at the origin); without it (or when a placement has shear),
-  one node per placement referencing the shared mesh.
+  equal prims) is one glTF mesh. Copies of a small mesh (ornament, tiles) are baked into one
+  mesh per point instancer (:mod:`ionic_usd.export.gltf_merge`), shared by groups laid out
+  alike; other copies are one node each referencing the shared mesh — core glTF, which every
+  client draws the same. With ``gpu_instancing`` those copies become one node with
+  ``EXT_mesh_gpu_instancing`` (TRANSLATION/ROTATION/SCALE accessors), and the extension is
+  *required*: the extension has no fallback (a client without it would draw one copy at the
+  origin), so such a client must refuse the file rather than draw a wrong temple.
 * space: Y-up metres (the reader already applied the stage's upAxis and metersPerUnit).
 * paradata: the scene's in ``scenes[0].extras``, a mesh's in ``meshes[i].extras``, an
   instance's in its node's ``extras`` (GPU instanced: ``extras.instances``, one entry each).
@@ -45,6 +48,7 @@ from ionic_usd.export.gltf_buffers import (
     texture_transform,
     vertex_streams,
 )
+from ionic_usd.export.gltf_merge import MergeGroup, merged_streams, plan_merges
 from ionic_usd.usd.reader import MaterialData, Scene, TextureRef
 
 __all__ = ["GltfReport", "write_gltf", "trs_decompose", "texture_transform", "split_common"]
@@ -76,6 +80,7 @@ class GltfReport:
     gpu_instanced_meshes: int
     instances: int
     seconds: float
+    merged: int = 0  # copies baked into merged meshes
 
 
 def split_common(dicts: list[dict]) -> tuple[dict, list[dict]]:
@@ -248,11 +253,99 @@ def _pack_metallic_roughness(rt: TextureRef | None, mt: TextureRef | None) -> by
 
 
 # -- scene -------------------------------------------------------------------------------------
+def _primitive(b: GltfBuilder, streams, compress: str | None):
+    """A glTF primitive (triangles) of ``(pos, nrm, uv, tan, tris)``."""
+    g = b.g
+    pos, nrm, uv, tan, tris = streams
+    if compress == "draco":
+        from ionic_usd.export.draco import DRACO, draco_primitive  # noqa: PLC0415
+
+        attrs, indices, ext, _ = draco_primitive(b, pos, nrm, uv, tan, tris)
+        b.used.add(DRACO)
+        b.required.add(DRACO)
+        return g.Primitive(attributes=attrs, mode=4, indices=indices, extensions={DRACO: ext})
+    attrs = g.Attributes(
+        POSITION=b.accessor(pos, "VEC3", ARRAY_BUFFER, bounds=True),
+        NORMAL=b.accessor(nrm, "VEC3", ARRAY_BUFFER),
+    )
+    if uv is not None:
+        attrs.TEXCOORD_0 = b.accessor(uv, "VEC2", ARRAY_BUFFER)
+        attrs.TANGENT = b.accessor(tan, "VEC4", ARRAY_BUFFER)
+    itype = np.uint16 if len(pos) < 65536 else np.uint32
+    return g.Primitive(
+        attributes=attrs,
+        mode=4,
+        indices=b.accessor(tris.reshape(-1).astype(itype), "SCALAR", ELEMENT_ARRAY_BUFFER),
+    )
+
+
+class _Meshes:
+    """glTF meshes of a scene's meshes (each once) and of merged groups (each layout once)."""
+
+    def __init__(self, b: GltfBuilder, scene: Scene, compress: str | None) -> None:
+        self.b, self.scene, self.compress = b, scene, compress
+        self.streams: dict[str, tuple] = {}
+        self.index: dict[str, int | None] = {}
+        self.materials: dict[tuple[str, bool], int] = {}
+        self.stored = 0  # triangles stored
+
+    def _streams(self, key: str) -> tuple:
+        if key not in self.streams:
+            self.streams[key] = vertex_streams(self.scene.meshes[key])
+        return self.streams[key]
+
+    def _add(self, key: str, streams, name: str, extras: dict) -> int | None:
+        if len(streams[4]) == 0:
+            return None
+        m = self.scene.meshes[key]
+        prim = _primitive(self.b, streams, self.compress)
+        if m.material is not None and m.material in self.scene.materials:
+            mk = (m.material, m.double_sided)
+            if mk not in self.materials:
+                self.materials[mk] = _material(
+                    self.b, self.scene.materials[m.material], m.double_sided
+                )
+            prim.material = self.materials[mk]
+        self.b.doc.meshes.append(self.b.g.Mesh(name=name, primitives=[prim], extras=extras))
+        self.stored += len(streams[4])
+        return len(self.b.doc.meshes) - 1
+
+    def mesh(self, key: str) -> int | None:
+        """The glTF mesh of one scene mesh."""
+        if key not in self.index:
+            m = self.scene.meshes[key]
+            extras = {"usdPath": m.source, **m.paradata}
+            self.index[key] = self._add(key, self._streams(key), m.name, extras)
+        return self.index[key]
+
+    def merged(self, grp: MergeGroup) -> int | None:
+        """The glTF mesh of a merged group (shared by groups laid out alike)."""
+        if grp.key not in self.index:
+            m = self.scene.meshes[grp.mesh]
+            streams = merged_streams(self._streams(grp.mesh), grp.relative)
+            extras = {"usdPath": m.source, "copies": len(grp.placements), **m.paradata}
+            name = f"{m.name} x{len(grp.placements)}"
+            self.index[grp.key] = self._add(grp.mesh, streams, name, extras)
+        return self.index[grp.key]
+
+
+def _triangles(b: GltfBuilder, mi: int) -> int:
+    return b.doc.accessors[b.doc.meshes[mi].primitives[0].indices].count // 3
+
+
+def _matrix_node(g, name: str, mi: int | None, matrix: np.ndarray, extras: dict):
+    node = g.Node(name=name, mesh=mi, extras=extras)
+    if not np.allclose(matrix, np.eye(4), atol=1e-12):
+        node.matrix = [float(x) for x in np.asarray(matrix).reshape(-1)]
+    return node
+
+
 def write_gltf(
     scene: Scene,
     path: str | os.PathLike,
     *,
-    gpu_instancing: bool = True,
+    gpu_instancing: bool = False,
+    merge: bool = True,
     binary: bool | None = None,
     compress: str | None = None,
 ) -> GltfReport:
@@ -262,8 +355,12 @@ def write_gltf(
     ----------
     scene : from :func:`ionic_usd.usd.reader.read_scene`
     path : output file (written atomically)
-    gpu_instancing : keep repeated meshes as ``EXT_mesh_gpu_instancing`` nodes (else one plain
-        node per copy, the mesh still shared)
+    gpu_instancing : draw a mesh's copies as one ``EXT_mesh_gpu_instancing`` node, the
+        extension then listed in ``extensionsRequired`` (a client without it must refuse the
+        file: it would draw one copy). Default: one plain node per copy, the mesh shared —
+        core glTF, drawn alike by every client
+    merge : bake the copies of small meshes (:mod:`ionic_usd.export.gltf_merge`) into one mesh
+        per group: a few hundred draw calls for a temple instead of thousands
     binary : GLB or JSON (default: from the extension)
     compress : None, or ``"draco"`` (KHR_draco_mesh_compression, needs DracoPy; see
         :mod:`ionic_usd.export.draco`)
@@ -276,57 +373,31 @@ def write_gltf(
     binary = path.suffix.lower() != ".gltf" if binary is None else binary
     b = GltfBuilder()
     g = b.g
-    mat_index: dict[tuple[str, bool], int] = {}
-    mesh_index: dict[str, int] = {}
     by_mesh: dict[str, list] = {}
     for p in scene.placements:
         by_mesh.setdefault(p.mesh, []).append(p)
-    tris_total = 0
-    for key in by_mesh:
-        m = scene.meshes[key]
-        pos, nrm, uv, tan, tris = vertex_streams(m)
-        if len(tris) == 0:
-            continue
-        if compress == "draco":
-            from ionic_usd.export.draco import DRACO, draco_primitive  # noqa: PLC0415
-
-            attrs, indices, ext, _ = draco_primitive(b, pos, nrm, uv, tan, tris)
-            prim = g.Primitive(attributes=attrs, mode=4, indices=indices, extensions={DRACO: ext})
-            b.used.add(DRACO)
-            b.required.add(DRACO)
-        else:
-            attrs = g.Attributes(
-                POSITION=b.accessor(pos, "VEC3", ARRAY_BUFFER, bounds=True),
-                NORMAL=b.accessor(nrm, "VEC3", ARRAY_BUFFER),
-            )
-            if uv is not None:
-                attrs.TEXCOORD_0 = b.accessor(uv, "VEC2", ARRAY_BUFFER)
-                attrs.TANGENT = b.accessor(tan, "VEC4", ARRAY_BUFFER)
-            itype = np.uint16 if len(pos) < 65536 else np.uint32
-            prim = g.Primitive(
-                attributes=attrs,
-                mode=4,
-                indices=b.accessor(tris.reshape(-1).astype(itype), "SCALAR", ELEMENT_ARRAY_BUFFER),
-            )
-        if m.material is not None and m.material in scene.materials:
-            mk = (m.material, m.double_sided)
-            if mk not in mat_index:
-                mat_index[mk] = _material(b, scene.materials[m.material], m.double_sided)
-            prim.material = mat_index[mk]
-        extras = {"usdPath": m.source, **m.paradata}
-        b.doc.meshes.append(g.Mesh(name=m.name, primitives=[prim], extras=extras))
-        mesh_index[key] = len(b.doc.meshes) - 1
-        tris_total += len(tris)
-
+    keep, groups = plan_merges(scene, by_mesh) if merge else (by_mesh, [])
+    meshes = _Meshes(b, scene, compress)
     roots: list[int] = []
-    draws = gpu_meshes = instances = drawn = 0
-    for key, placements in by_mesh.items():
-        if key not in mesh_index:
+    draws = gpu_meshes = instances = drawn = merged = 0
+    for grp in groups:
+        mi = meshes.merged(grp)
+        if mi is None:
             continue
-        mi = mesh_index[key]
-        n_tris = b.doc.meshes[mi].primitives[0].indices
-        n_tris = b.doc.accessors[n_tris].count // 3
-        drawn += n_tris * len(placements)
+        each = [{"path": p.path, **p.paradata} for p in grp.placements]
+        common, each = split_common(each)
+        name = f"{scene.meshes[grp.mesh].name} x{len(each)}"
+        b.doc.nodes.append(_matrix_node(g, name, mi, grp.frame, {**common, "instances": each}))
+        roots.append(len(b.doc.nodes) - 1)
+        drawn += _triangles(b, mi)
+        draws += 1
+        instances += len(each)
+        merged += len(each)
+    for key, placements in keep.items():
+        mi = meshes.mesh(key)
+        if mi is None:
+            continue
+        drawn += _triangles(b, mi) * len(placements)
         trs = [trs_decompose(p.matrix) for p in placements] if gpu_instancing else []
         # paradata every copy shares goes on the node once; the rest per copy
         each = [{"path": p.path, **p.paradata} for p in placements]
@@ -348,6 +419,7 @@ def write_gltf(
                 name=name, mesh=mi, extensions={_GPU: ext}, extras={**common, "instances": each}
             )
             b.used.add(_GPU)
+            b.required.add(_GPU)
             b.doc.nodes.append(node)
             roots.append(len(b.doc.nodes) - 1)
             draws += 1
@@ -356,10 +428,9 @@ def write_gltf(
             continue
         children = []
         for p, extras in zip(placements, each, strict=True):
-            node = g.Node(name=p.path.rsplit("/", 1)[-1] or p.path, mesh=mi, extras=extras)
-            if not np.allclose(p.matrix, np.eye(4), atol=1e-12):
-                node.matrix = [float(x) for x in np.asarray(p.matrix).reshape(-1)]
-            b.doc.nodes.append(node)
+            b.doc.nodes.append(
+                _matrix_node(g, p.path.rsplit("/", 1)[-1] or p.path, mi, p.matrix, extras)
+            )
             children.append(len(b.doc.nodes) - 1)
             draws += 1
             instances += int(p.instanced)
@@ -412,10 +483,11 @@ def write_gltf(
         len(b.doc.nodes),
         len(b.doc.materials),
         len(b.doc.images),
-        tris_total,
+        meshes.stored,
         drawn,
         draws,
         gpu_meshes,
         instances,
         time.perf_counter() - t0,
+        merged,
     )

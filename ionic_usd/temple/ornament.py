@@ -38,7 +38,7 @@ from ionic_usd.column.ornament import (
 from ionic_usd.errors import ParameterError
 from ionic_usd.geometry.mesh import Mesh
 from ionic_usd.geometry.sweep import sweep
-from ionic_usd.temple.layout import TempleLayout
+from ionic_usd.temple.layout import Layer, TempleLayout
 from ionic_usd.temple.mouldings import cornice_levels
 
 __all__ = [
@@ -200,6 +200,15 @@ def antefix_prototype(tp: TileParams) -> Mesh:
     )
 
 
+def _slab_top_at_eaves(layout: TempleLayout) -> float:
+    """Height of the roof slabs' top at the eaves, read from the layout's ``roof_left``
+    cuboid (its max-x side is raised to the ridge): the tiles lie on the slab itself, bed
+    included (:data:`ionic_usd.temple.layout.ROOF_BED`). Laid on the cornice top + slab
+    thickness instead, they sank 5 cm into the slab, which showed through every pan."""
+    slab = next(c for c in layout.cuboids[Layer.ROOF] if c.name == "roof_left")
+    return float(slab.max[1])
+
+
 def roof_tiles(layout: TempleLayout, tp: TileParams | None = None) -> Instances:
     """Tegulae, imbrices and antefixes on the two roof slabs (module docstring)."""
     tp = tp or TileParams()
@@ -208,7 +217,7 @@ def roof_tiles(layout: TempleLayout, tp: TileParams | None = None) -> Instances:
     tan = 2.0 / p.roof_tympanum_ratio
     phi = math.atan(tan)
     xc, zc = lv["xe"] + lv["projection"], lv["ze"] + lv["projection"]
-    y_eave = lv["y_top"] + p.roof_slab_thickness  # the slab's top at its eaves edge
+    y_eave = _slab_top_at_eaves(layout)
     slope = xc / math.cos(phi)
     step = tp.tegula_length - tp.overlap
     rows = int(math.ceil((slope - tp.tegula_length) / step)) + 1

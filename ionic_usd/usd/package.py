@@ -31,6 +31,7 @@ from pathlib import Path
 from pxr import Ar, Sdf
 
 from ionic_usd.errors import UsdAuthoringError
+from ionic_usd.usd.expand import expand_point_instancers, normals_as_attributes
 from ionic_usd.usd.stage import validate_stage
 from ionic_usd.usd.variants import open_stage, select_variants
 
@@ -47,6 +48,7 @@ class UsdzReport:
     variant_sets_left: int
     validation_errors: int
     seconds: float
+    expanded_copies: int = 0  # point-instancer copies baked into meshes
 
 
 def _gather_textures(layer: Sdf.Layer, folder: Path) -> int:
@@ -238,6 +240,8 @@ def write_usdz(
     flat = stage.Flatten()
     _relative_paths(flat, Path(scene))
     stable_prototypes(flat)
+    expanded = expand_point_instancers(flat)  # the ARKit profile has no PointInstancer
+    normals_as_attributes(flat)  # Blender reads primvars:normals twice
     # what Flatten keeps of variant sets: none should be left (the ARKit profile forbids them)
     left = 0
 
@@ -267,4 +271,4 @@ def write_usdz(
         with zipfile.ZipFile(pkg) as z:
             files = len(z.namelist())
         os.replace(pkg, out)
-    return UsdzReport(out, out.stat().st_size, files, left, 0, time.perf_counter() - t0)
+    return UsdzReport(out, out.stat().st_size, files, left, 0, time.perf_counter() - t0, expanded)

@@ -3,6 +3,10 @@
 // loaded, its textures decoded, and the frame is not empty. Exit 1 on failure.
 //
 //   node render.mjs MODEL.glb OUT.png [--width 1280 --height 800] [--chromium /usr/bin/chromium]
+//                   [--without EXT_mesh_gpu_instancing] [--json OUT.json]
+// --without NAME: the loader's plugin for that extension is removed, as a client without it
+// loads the file. The report gives the frame's draw calls (renderer.info.render.calls) and
+// the triangles three.js drew (renderer.info.render.triangles).
 import fs from "node:fs";
 import http from "node:http";
 import path from "node:path";
@@ -18,6 +22,8 @@ const opt = (name, dflt) => {
 const width = Number(opt("--width", 1280));
 const height = Number(opt("--height", 800));
 const exe = opt("--chromium", process.env.CHROMIUM || "/usr/bin/chromium");
+const without = opt("--without", "");
+const jsonOut = opt("--json", "");
 const [model, outPng] = args;
 if (!model || !outPng) {
   console.error("usage: node render.mjs MODEL.glb OUT.png [--width W --height H]");
@@ -47,6 +53,12 @@ try {
   sun.position.set(-30, 50, 40);
   scene.add(sun);
   const loader = new GLTFLoader();
+  const WITHOUT = ${JSON.stringify(without)};
+  if (WITHOUT) {  // a client that does not know the extension: drop its plugin
+    const n = loader.pluginCallbacks.length;
+    loader.pluginCallbacks = loader.pluginCallbacks.filter((cb) => cb({}).name !== WITHOUT);
+    if (loader.pluginCallbacks.length !== n - 1) throw new Error("no plugin " + WITHOUT);
+  }
   loader.setDRACOLoader(new DRACOLoader().setDecoderPath("/three/examples/jsm/libs/draco/gltf/"));
   const gltf = await loader.loadAsync("/model.glb");
   scene.add(gltf.scene);
@@ -76,6 +88,8 @@ try {
   camera.position.copy(centre).addScaledVector(dir, radius / Math.sin(THREE.MathUtils.degToRad(35 / 2)) * 0.7);
   camera.lookAt(centre);
   renderer.render(scene, camera);
+  stats.drawCalls = renderer.info.render.calls;
+  stats.trianglesDrawn = renderer.info.render.triangles;
   // picture checks on the drawn pixels
   const gl = renderer.getContext();
   const px = new Uint8Array(W * H * 4);
@@ -144,7 +158,10 @@ try {
       `InstancedMesh, ${r.instances} instances), ${Math.round(r.triangles)} triangles, ` +
       `${r.texturesDecoded}/${r.textures} textures decoded, picture coverage ` +
       `${(100 * r.coverage).toFixed(1)} %, luma std ${r.lumaStd.toFixed(1)}, bounds ` +
-      `${r.bounds.map((x) => x.toFixed(2)).join(" x ")} m -> ${outPng}: ${ok ? "OK" : "FAILED"}`);
+      `${r.bounds.map((x) => x.toFixed(2)).join(" x ")} m, ${r.drawCalls} draw calls, ` +
+      `${r.trianglesDrawn} triangles rendered` + (without ? ` (without ${without})` : "") +
+      ` -> ${outPng}: ${ok ? "OK" : "FAILED"}`);
+    if (jsonOut) fs.writeFileSync(jsonOut, JSON.stringify({ model, without, ...r }, null, 1));
     for (const l of logs.filter((l) => l.startsWith("error") || l.startsWith("pageerror"))) console.log("  " + l);
   }
 } finally {
