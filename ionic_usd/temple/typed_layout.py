@@ -38,11 +38,11 @@ from typing import Any
 from ionic_usd.errors import ParameterError
 from ionic_usd.temple.cuboid import Cuboid
 from ionic_usd.temple.description import (
+    SECTIONS,
     ColumnKind,
     ColumnPlacement,
     Hypothesis,
     Layer,
-    SECTIONS,
     TempleParams,
 )
 from ionic_usd.temple.vitruvius import (
