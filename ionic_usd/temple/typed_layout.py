@@ -239,10 +239,9 @@ def _row(xs, z, y, prefix, rot, corners=False, kind=ColumnKind.FREE) -> list[Col
         angle = None
         if corners and j in (0, n - 1):
             angle = _outer_rotation(1.0 if x > 0 else -1.0, 1.0 if z > 0 else -1.0)
+        r = rot if angle is None else angle  # a corner turns its angle capital outward
         out.append(
-            ColumnPlacement(
-                (x, y, z), rot, kind, name=f"{prefix}_{j + 1}", angle_rotation_deg=angle
-            )
+            ColumnPlacement((x, y, z), r, kind, name=f"{prefix}_{j + 1}", angle_rotation_deg=angle)
         )
     return out
 

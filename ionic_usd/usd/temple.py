@@ -229,6 +229,7 @@ def _part_layer(layer: Layer, meshes: dict, material: str) -> Sdf.Layer:
 
 def _colonnade_layer(layout: TempleLayout) -> Sdf.Layer:
     lay = new_layer("Temple", kind="assembly")
+    typed = getattr(layout.params, "vitruvian", None) is not None
     with Sdf.ChangeBlock():
         col = define_prim(lay, "/Temple/Colonnade", "Xform")
         col.kind = "group"
@@ -241,6 +242,10 @@ def _colonnade_layer(layout: TempleLayout) -> Sdf.Layer:
                 spec.referenceList.Prepend(Sdf.Reference(ASSET_REF))
                 spec.variantSelections["form"] = FORMS[kind]
                 spec.variantSelections["finish"] = BASELINE_FINISH
+                if typed and c.angle_rotation_deg is not None:
+                    # a typed temple's peristyle turns its corners on angle capitals (the
+                    # layout already turned the column: rotation_deg = angle_rotation_deg)
+                    spec.variantSelections["capital"] = "angle"
                 column_xform(spec, c.position, c.rotation_deg, c.scale)
     return lay
 
