@@ -159,6 +159,21 @@ def _box(name, x0, y0, z0, x1, y1, z1) -> Cuboid:
     return Cuboid((x0, y0, z0), (x1, y1, z1), name=name)
 
 
+def _entablature(p: TypeParams) -> tuple[list[Cuboid], float, float, float, float]:
+    """Architrave, frieze (none in the Asiatic order), cornice (layout._entablature's rule)."""
+    a, f, c = p.entablature_heights
+    xe, ze = p.entablature_x, p.entablature_z
+    proj = c * p.entablature_cornice_projection_ratio
+    y = p.podium_height + p.columns_height
+    out = [_box("architrave", -xe, y, -ze, xe, y + a, ze)]
+    if f > 0:
+        out.append(_box("frieze", -xe, y + a, -ze, xe, y + a + f, ze))
+    out.append(
+        _box("cornice", -xe - proj, y + a + f, -ze - proj, xe + proj, y + a + f + c, ze + proj)
+    )
+    return out, y + a + f + c, xe, ze, proj
+
+
 def _crepidoma(pl: TypePlan) -> list[Cuboid]:
     w2, l2, n = pl.stylobate_width / 2, pl.stylobate_length / 2, pl.steps
     out = []
@@ -327,7 +342,7 @@ def type_layout(
 ):
     """The layout of a type (module docstring); ``apply``: ids of hypotheses whose
     ``type.…`` changes to apply."""
-    from ionic_usd.temple.layout import TempleLayout, _entablature, _podium, _roof
+    from ionic_usd.temple.layout import TempleLayout, _podium, _roof
 
     hyps = tuple(hypotheses)
     by_id = {h.id: h for h in hyps}
@@ -347,8 +362,6 @@ def type_layout(
     p = type_params(t, name)
     pl = resolve(t)
     ent, y_top, xe, ze, proj = _entablature(p)
-    if pl.frieze_ratio == 0.0:
-        ent = [c for c in ent if c.name != "frieze"]
     w = _walls(pl, p)
     groups: dict[Layer, list[Cuboid]] = {
         Layer.PODIUM: _crepidoma(pl) if pl.foundation is Foundation.CREPIDOMA else _podium(p),
@@ -384,7 +397,7 @@ def layout_from_type_mapping(data: Mapping[str, Any], *, context: str, apply: It
             )
     name = check_table(
         check_value("temple", data.get("temple", {}), FieldSpec("table"), context=context),
-        {"name": FieldSpec("str", max_len=256)},
+        {"name": FieldSpec("str", max_len=256), "sources": FieldSpec("strings")},
         context=f"{context} [temple]",
     ).get("name", "temple")
     t = type_from_table(data["type"], context=context)

@@ -360,6 +360,14 @@ def resolve(t: TempleType) -> TypePlan:
         margin = t.margin if t.margin is not None else mu * d
         if t.stylobate_width is not None and t.margin is None:
             margin = (t.stylobate_width - span * d) / 2
+        elif t.stylobate_width is not None and t.clear_bay is None:
+            # measured D, width and margin: the bays follow (the middle keeps its excess)
+            extra = middle - clear
+            even = t.front % 2 == 0
+            axes = (t.stylobate_width - 2 * margin) / d  # outer axes apart, in D
+            clear = (axes - extra * even) / (t.front - 1) - 1
+            middle = clear + extra
+            flank = t.flank_bay if t.flank_bay is not None else clear
     else:
         assert t.stylobate_width is not None
         if t.margin is not None:
