@@ -1,0 +1,63 @@
+"""Build every built-in temple and render them side by side at one scale into docs/temples.png.
+
+Run: ``python tools/render_temples.py [--work DIR]`` (needs the preview extra). Each preset is
+composed (``Temple.from_toml``, 64 px textures, the default detail) into DIR/<name>/, the
+folders are referenced side by side along +X (front to the camera, 6 m apart) by one
+DIR/temples.usda, and that scene is rendered with the headless preview at LOD ``low``.
+Prints the build time per preset.
+"""
+
+from __future__ import annotations
+
+import argparse
+import tempfile
+import time
+from pathlib import Path
+
+from pxr import Gf, Sdf, Usd, UsdGeom
+
+from ionic_usd.api import Temple
+from ionic_usd.preview import render_preview
+from ionic_usd.temple.presets import PRESETS, preset_path
+
+DOCS = Path(__file__).resolve().parent.parent / "docs"
+GAP = 6.0
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--work", type=Path, default=None)
+    ap.add_argument("--out", type=Path, default=DOCS / "temples.png")
+    args = ap.parse_args()
+    work = args.work or Path(tempfile.mkdtemp(prefix="temples_"))
+    stage = Usd.Stage.CreateNew(str(work / "temples.usda"))
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.y)
+    UsdGeom.SetStageMetersPerUnit(stage, 1.0)
+    world = UsdGeom.Xform.Define(stage, "/World")
+    stage.SetDefaultPrim(world.GetPrim())
+    x = 0.0
+    for name in PRESETS:
+        temple = Temple.from_toml(preset_path(name))
+        t0 = time.perf_counter()
+        temple.save(work / name, force=True, texture_size=64)
+        dt = time.perf_counter() - t0
+        p = temple.layout.params
+        half = p.podium_base_width / 2 if p.podium_base_width else p.stylobate_width / 2
+        half = max(half, p.stylobate_width / 2 + 2.0)
+        x += half
+        xf = UsdGeom.Xform.Define(stage, f"/World/{name}")
+        xf.AddTranslateOp().Set(Gf.Vec3d(x, 0.0, -p.stylobate_length / 2))
+        xf.GetPrim().GetReferences().AddReference(f"./{name}/Temple.usda")
+        x += half + GAP
+        print(f"{name}: {temple.layout.name}, built in {dt:.1f} s")
+    stage.GetRootLayer().Save()
+    del Sdf
+    s = render_preview(
+        work / "temples.usda", args.out, width=2400, height=700, camera="front", lod="low",
+        force=True,
+    )  # fmt: skip
+    print(f"wrote {args.out}: {s}")
+
+
+if __name__ == "__main__":
+    main()
