@@ -200,11 +200,11 @@ def cmd_temple(args: argparse.Namespace) -> int:
     from ionic_usd.resources import check_estimate, estimate_temple
 
     check_output_folder(args.output, force=args.force)
-    if args.config and args.preset:
+    if args.config and args.preset is not None:
         raise ParameterError("--preset", args.preset, "not with --config (one description)")
     if args.config:
         temple = Temple.from_toml(args.config)
-    elif args.preset:
+    elif args.preset is not None:
         from ionic_usd.temple.presets import preset_path
 
         temple = Temple.from_toml(preset_path(args.preset))

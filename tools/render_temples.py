@@ -14,7 +14,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from pxr import Gf, Sdf, Usd, UsdGeom
+from pxr import Gf, Usd, UsdGeom
 
 from ionic_usd.api import Temple
 from ionic_usd.preview import render_preview
@@ -51,7 +51,6 @@ def main() -> None:
         x += half + GAP
         print(f"{name}: {temple.layout.name}, built in {dt:.1f} s")
     stage.GetRootLayer().Save()
-    del Sdf
     s = render_preview(
         work / "temples.usda", args.out, width=2400, height=700, camera="front", lod="low",
         force=True,

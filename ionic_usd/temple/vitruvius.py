@@ -268,6 +268,13 @@ class TempleType:
             context=ctx,
         )
         arr = Arrangement(self.arrangement)
+        if self.base is not None:
+            from ionic_usd.column.base import base_preset_names
+
+            if self.base not in base_preset_names():
+                raise ParameterError(
+                    "base", self.base, "one of " + ", ".join(base_preset_names()), context=ctx
+                )
         if self.front not in FRONTS[arr] and self.side is None:
             raise ParameterError(
                 "front",

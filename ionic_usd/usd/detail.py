@@ -115,7 +115,7 @@ class DetailGeometry:
         }
         if variant == "carved":
             out.update({f"/Temple/{rel}": inst for rel, inst in self.ornament.items()})
-            if garlands:
+            if garlands and self.frieze is not None:
                 out[FRIEZE_PATH] = self.frieze
         return out
 
