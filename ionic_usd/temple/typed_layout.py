@@ -51,6 +51,7 @@ from ionic_usd.temple.vitruvius import (
     TYPE_SCHEMA,
     Arrangement,
     Foundation,
+    Order,
     TempleType,
     TypePlan,
     resolve,
@@ -72,6 +73,7 @@ class TypeParams(TempleParams):
     (its faces less the upper radius); ``vitruvian`` is the type itself."""
 
     vitruvian: TempleType = field(default_factory=lambda: TempleType(lower_diameter=1.0))
+    column_base: str = "attic_bezier_plinth"  # the column's base preset
     entablature_x: float = 1.0  # half extents of the architrave
     entablature_z: float = 1.0
     spacing: float = 1.0
@@ -94,6 +96,11 @@ class TypeParams(TempleParams):
     @property
     def axial_spacing(self) -> float:
         return self.spacing
+
+    @property
+    def podium_mouldings(self) -> bool:
+        """A Roman podium carries the moulded base and crown; a crepidoma does not."""
+        return Foundation(resolve(self.vitruvian).foundation) is Foundation.PODIUM
 
     @property
     def margin(self) -> float:
@@ -149,6 +156,8 @@ def type_params(t: TempleType, name: str = "temple") -> TypeParams:
         roof_tympanum_ratio=t.tympanum_ratio,
         roof_slab_thickness=t.roof_slab,
         vitruvian=t,
+        # the Asiatic order stands on the Ionic (Ephesian) base, the Attic on the Attic base
+        column_base=t.base or ("ephesian" if pl.order is Order.ASIATIC else "attic_bezier_plinth"),
         entablature_x=ex,
         entablature_z=ez,
         spacing=pl.flank_spacing if pl.side else pl.front_spacing,

@@ -60,6 +60,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ionic_usd import __version__
+from ionic_usd.column.base import base_preset_names
 from ionic_usd.column.column import (
     LODS,
     ColumnParams,
@@ -140,7 +141,7 @@ class ColumnAssetOptions:
                     raise ParameterError(name, g, f"one of {', '.join(valid)}")
 
         check("lod", self.lods, tuple(LODS))
-        check("base", self.bases, BASE_VARIANTS)
+        check("base", self.bases, base_preset_names())  # any preset; default BASE_VARIANTS
         check("scroll", self.scrolls, SCROLL_VARIANTS)
         check("flutes", self.flutes, tuple(FLUTE_VARIANTS))
         check("form", self.forms, FORM_VARIANTS)

@@ -436,11 +436,17 @@ def plan_temple(
     """
     p = layout.params
     column = column or portunus_column_params(
-        height=p.columns_height, lower_diameter=p.columns_lower_diameter
+        height=p.columns_height,
+        lower_diameter=p.columns_lower_diameter,
+        base=getattr(p, "column_base", "attic_bezier_plinth"),  # a typed temple names its base
     )
     opts = asset_options or ColumnAssetOptions(params=column, texture_size=texture_size, seed=seed)
     if opts.params != column:
         opts = dataclasses.replace(opts, params=column)
+    if opts.bases[0] != column.base:  # the asset's default base is the column's
+        opts = dataclasses.replace(
+            opts, bases=(column.base, *(b for b in opts.bases if b != column.base))
+        )
     detail = check_detail(detail or DEFAULT_DETAIL)
     if not opts.carved:
         opts = dataclasses.replace(opts, carved=True)  # the carved capital goes with the detail
