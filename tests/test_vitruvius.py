@@ -133,8 +133,8 @@ CITED = {
     "nike": dict(width=5.38, length=8.16, front=4, d=0.52, h=4.04),
     "ilissos": dict(width=5.85, length=12.68, front=4, d=0.55, h=4.47),
     "magnesia": dict(width=31.60, length=57.90, side=15, front=8, d=1.40, h=12.90, axial=3.94),
-    "ephesus": dict(width=55.10, length=115.0, side=21, front=8, d=1.84, h=17.65),
-    "saturn": dict(front=6, d=1.43, h=11.0),
+    "ephesus": dict(width=55.10, length=115.0, side=21, front=8, rear=9, d=1.84, h=17.65),
+    "saturn": dict(front=6, d=1.43, h=11.0, columns=8),
 }
 
 
@@ -151,6 +151,10 @@ def test_presets_match_their_sources(name):
     assert p.columns_height == rel(want["h"], rel=0.01)
     n_front = sum(1 for c in layout.columns if abs(c.position[2] - pl.z_front) < EPS)
     assert n_front == want["front"]
+    if "rear" in want:
+        assert sum(1 for c in layout.columns if abs(c.position[2] + pl.z_front) < EPS) == 9
+    if "columns" in want:
+        assert len(layout.columns) == want["columns"]
     if "side" in want:
         n_flank = sum(1 for c in layout.columns if abs(c.position[0] - pl.x_outer) < EPS)
         assert n_flank == want["side"]
@@ -258,3 +262,16 @@ def test_every_type_composes(tmp_path, arrangement, front, ic):
     layout = type_layout(t, name=f"{arrangement}_{front}_{ic}")
     rep, _ = _compose(tmp_path, layout)
     assert rep.instances == len(layout.columns)
+
+
+def test_porch_returns_and_rear_count():
+    t = TempleType(arrangement="amphiprostyle", front=4, lower_diameter=1.0, porch=2, rear=5)
+    lay = type_layout(t)
+    _check_plan(lay)
+    pl = resolve(t)
+    rear = [c for c in lay.columns if abs(c.position[2] + pl.z_front) < EPS]
+    assert len(rear) == 5 and len(lay.columns) == 4 + 5 + 2 * 2
+    xs = sorted(c.position[0] for c in rear)
+    assert np.diff(xs) == pytest.approx([np.diff(xs)[0]] * 4)  # evenly between the corners
+    with pytest.raises(ParameterError, match="rear"):
+        TempleType(arrangement="prostyle", front=4, lower_diameter=1.0, rear=6)

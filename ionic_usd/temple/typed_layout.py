@@ -223,8 +223,8 @@ def _walls(pl: TypePlan, p: TypeParams) -> _Walls:
     x = pl.x_outer
     if arr is Arrangement.IN_ANTIS:
         z1 = zf + t / 2
-    else:
-        z1 = zf - pl.front_spacing + t / 2
+    else:  # prostyle: the antae ``porch`` bays behind the front row (default 1)
+        z1 = zf - (pl.type.porch or 1) * pl.front_spacing + t / 2
     z0 = -z1 if arr is Arrangement.AMPHIPROSTYLE else -(p.entablature_z)
     pron = pl.type.pronaos if pl.type.pronaos is not None else 0.375 * (z1 - z0)
     return _Walls(x, z0, z1, z1 - t / 2 - pron, z0 + t / 2)
@@ -276,14 +276,15 @@ def _columns(pl: TypePlan, w: _Walls) -> list[ColumnPlacement]:
     if arr is Arrangement.IN_ANTIS:
         return _row(xs[1:-1], zf, y, "front", 0.0)
     out += _row(xs, zf, y, "front", 0.0, corners=True)
-    if arr is Arrangement.PROSTYLE:
-        return out
-    if arr is Arrangement.AMPHIPROSTYLE:
-        return out + _row(xs, -zf, y, "rear", 180.0, corners=True)
+    if arr in (Arrangement.PROSTYLE, Arrangement.AMPHIPROSTYLE):
+        out += _returns(pl, 1.0)
+        if arr is Arrangement.PROSTYLE:
+            return out
+        return out + _row(pl.xs_rear, -zf, y, "rear", 180.0, corners=True) + _returns(pl, -1.0)
     s, n = pl.flank_spacing, pl.side
     if arr is Arrangement.PSEUDOPERIPTERAL:
         return out + _pseudo(pl)
-    out += _row(xs, -zf, y, "rear", 180.0, corners=True)
+    out += _row(pl.xs_rear, -zf, y, "rear", 180.0, corners=True)
     for side, sgn in (("left", -1.0), ("right", 1.0)):
         for k in range(1, n - 1):
             out.append(
@@ -307,6 +308,18 @@ def _columns(pl: TypePlan, w: _Walls) -> list[ColumnPlacement]:
     out += _row(inner, w.z1 - pl.wall_thickness / 2, y, "pronaos", 0.0)
     if w.z_back > w.z0 + pl.wall_thickness:  # an opisthodomos
         out += _row(inner, w.z0 + pl.wall_thickness / 2, y, "opisthodomos", 180.0)
+    return out
+
+
+def _returns(pl: TypePlan, sz: float) -> list[ColumnPlacement]:
+    """A prostyle porch ``porch`` rows deep: the columns behind the corners (Saturn's)."""
+    y, a = pl.base_height, pl.front_spacing
+    out = []
+    for side, sgn in (("left", -1.0), ("right", 1.0)):
+        for k in range(1, pl.type.porch or 1):
+            z = sz * (pl.z_front - k * a)
+            name = f"{side}_{'front' if sz > 0 else 'rear'}_{k + 1}"
+            out.append(ColumnPlacement((sgn * pl.x_outer, y, z), sgn * 90.0, name=name))
     return out
 
 

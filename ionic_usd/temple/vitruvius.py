@@ -193,6 +193,7 @@ TYPE_SCHEMA: dict[str, FieldSpec] = {
     "stylobate_width": _M,
     "stylobate_length": _M,
     "side": FieldSpec("int", 0, 40, "count"),
+    "rear": FieldSpec("int", 2, 13, "count"),
     "clear_bay": FieldSpec("float", 0.5, 10.0),
     "middle_bay": FieldSpec("float", 0.5, 10.0),
     "flank_bay": FieldSpec("float", 0.5, 10.0),
@@ -233,6 +234,7 @@ class TempleType:
     stylobate_width: float | None = None
     stylobate_length: float | None = None
     side: int | None = None
+    rear: int | None = None
     clear_bay: float | None = None
     middle_bay: float | None = None
     flank_bay: float | None = None
@@ -287,6 +289,16 @@ class TempleType:
             raise ParameterError(
                 "lower_diameter", "(missing)", "lower_diameter or stylobate_width", context=ctx
             )
+        if self.rear is not None and (
+            self.rear < self.front
+            or arr in (Arrangement.IN_ANTIS, Arrangement.PROSTYLE, Arrangement.PSEUDOPERIPTERAL)
+        ):
+            raise ParameterError(
+                "rear",
+                self.rear,
+                f"≥ front = {self.front}, and a rear colonnade (not {arr.value})",
+                context=ctx,
+            )
         if arr in PERIPTERAL_FAMILY and self.side is not None and self.side < self.front:
             raise ParameterError("side", self.side, f"≥ front = {self.front}", context=ctx)
 
@@ -309,6 +321,7 @@ class TypePlan:
     middle_bay: float  # D
     flank_bay: float  # D
     xs: tuple[float, ...]  # front column axes, left to right
+    xs_rear: tuple[float, ...]  # rear column axes (= xs unless ``rear`` differs)
     side: int  # flank columns counting the corners (0: none)
     flank_spacing: float  # axial, m
     x_outer: float  # |x| of the outer front axes
@@ -395,6 +408,10 @@ def resolve(t: TempleType) -> TypePlan:
     h = t.column_height if t.column_height is not None else HEIGHT_IN_D[ic] * d
     xs = _front_axes(t.front, d, clear, middle)
     x_outer = xs[-1]
+    # a rear row of another count spans the same corners evenly (the late Artemision: 9)
+    xs_rear = xs
+    if t.rear is not None and t.rear != t.front:
+        xs_rear = tuple(-x_outer + 2 * x_outer * i / (t.rear - 1) for i in range(t.rear))
     width = 2 * (x_outer + margin)
     side = t.side if t.side is not None else side_rule(arr, t.front)
     flank_spacing = d * (1 + flank)
@@ -439,7 +456,7 @@ def resolve(t: TempleType) -> TypePlan:
             "side", side, f"a flank longer than the front ({t.front})", context=ctx
         )
     return TypePlan(
-        t, arr, order, found, d, h, ratio, clear, middle, flank, xs, side, flank_spacing,
+        t, arr, order, found, d, h, ratio, clear, middle, flank, xs, xs_rear, side, flank_spacing,
         x_outer, z_front, margin, width, length, wall, base_h, steps, rise, tread, div, fr,
     )  # fmt: skip
 
