@@ -318,6 +318,8 @@ def temple_type_cases() -> list[tuple[list[str], dict[str, bytes | None]]]:
         out.append((["temple", "--preset", v, "-o", "T"], {}))
     out.append((["temple", "--preset", "nike", "--config", "t.toml", "-o", "T"], {"t.toml": b""}))
     out.append((["presets", "extra"], {}))
+    for v in ("nosuch", "", "missing.toml", "t.toml"):
+        out.append((["city", "C", "--rows", "1", "--cols", "1", "--temple", v], {"t.toml": b"x"}))
     head = '[type]\narrangement = "peripteral"\nfront = 6\nlower_diameter = 1.2\n'
     for key in TYPE_SCHEMA:
         for v in TOML_BAD:

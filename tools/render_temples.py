@@ -3,7 +3,9 @@
 Run: ``python tools/render_temples.py [--work DIR]`` (needs the preview extra). Each preset is
 composed (``Temple.from_toml``, 64 px textures, the default detail) into DIR/<name>/, the
 folders are referenced side by side along +X (front to the camera, 6 m apart) by one
-DIR/temples.usda, and that scene is rendered with the headless preview at LOD ``low``.
+DIR/temples.usda, and that scene is rendered with the headless preview at LOD ``low`` through a
+narrow field of view (``--fov``, 8°: the camera stands far off, so the fronts, all on one line,
+show at nearly one scale and the flanks hardly at all).
 Prints the build time per preset.
 """
 
@@ -17,7 +19,7 @@ from pathlib import Path
 from pxr import Gf, Usd, UsdGeom
 
 from ionic_usd.api import Temple
-from ionic_usd.preview import render_preview
+from ionic_usd.preview import camera, render_preview
 from ionic_usd.temple.presets import PRESETS, preset_path
 
 DOCS = Path(__file__).resolve().parent.parent / "docs"
@@ -28,6 +30,9 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--work", type=Path, default=None)
     ap.add_argument("--out", type=Path, default=DOCS / "temples.png")
+    ap.add_argument(
+        "--fov", type=float, default=8.0, help="field of view, degrees (narrow: near one scale)"
+    )
     args = ap.parse_args()
     work = args.work or Path(tempfile.mkdtemp(prefix="temples_"))
     stage = Usd.Stage.CreateNew(str(work / "temples.usda"))
@@ -51,6 +56,7 @@ def main() -> None:
         x += half + GAP
         print(f"{name}: {temple.layout.name}, built in {dt:.1f} s")
     stage.GetRootLayer().Save()
+    camera.FOV_DEG = args.fov  # a far, narrow camera: every front at nearly one scale
     s = render_preview(
         work / "temples.usda", args.out, width=2400, height=700, camera="front", lod="low",
         force=True,
