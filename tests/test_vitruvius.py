@@ -203,6 +203,12 @@ def test_type_toml_few_lines(tmp_path):
     f.write_text('[type]\narrangement = "peripteral"\nfront = 6\nlower_diameter = "big"\n')
     with pytest.raises(ParameterError, match="lower_diameter"):
         layout_from_toml(f)
+    f.write_text(
+        '[type]\narrangement = "peripteral"\nfront = 6\nlower_diameter = 1.0\n'
+        '[[cuboid]]\nname = "wall_left"\nlayer = "cella"\nmin = [0, 0, 0]\nmax = [1, 1, 1]\n'
+    )
+    with pytest.raises(ParameterError, match="wall_left"):
+        layout_from_toml(f)
 
 
 def test_cli_presets_and_bad_preset(tmp_path):

@@ -36,6 +36,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 from ionic_usd.errors import ParameterError
+from ionic_usd.params import prim_key
 from ionic_usd.temple.cuboid import Cuboid
 from ionic_usd.temple.description import (
     SECTIONS,
@@ -393,6 +394,17 @@ def type_layout(
     }
     for layer, cs in (extra_cuboids or {}).items():
         groups[Layer(layer)].extend(cs)
+    seen: dict[str, str] = {}  # two names that author the same prim would lose a cuboid
+    for c in (c for cs in groups.values() for c in cs):
+        other = seen.get(prim_key(c.name))
+        if other is not None:
+            raise ParameterError(
+                "cuboid name",
+                c.name,
+                f"a name distinct from {other!r} (both would author the same prim)",
+                context=f"temple {name!r}",
+            )
+        seen[prim_key(c.name)] = c.name
     layout = TempleLayout(
         name, {k: tuple(v) for k, v in groups.items()}, tuple(_columns(pl, w)), p, hyps, applied
     )
