@@ -132,7 +132,7 @@ CITED = {
     "priene": dict(width=19.53, length=37.17, side=11, front=6, d=1.29, h=10.10, axial=3.533),
     "nike": dict(width=5.38, length=8.16, front=4, d=0.52, h=4.06),
     "ilissos": dict(width=5.85, length=12.68, front=4, d=0.55, h=4.47),
-    "magnesia": dict(width=31.60, length=57.90, side=15, front=8, d=1.40, h=12.90, axial=3.94),
+    "magnesia": dict(width=31.60, length=57.90, side=15, front=8, d=1.40, h=12.19, axial=3.94),
     "ephesus": dict(width=55.10, length=115.0, side=21, front=8, rear=9, d=1.84, h=17.65),
     "saturn": dict(front=6, d=1.43, h=11.0, columns=8),
 }
