@@ -164,7 +164,9 @@ class Temple:
 
         p = self.layout.params
         return portunus_column_params(
-            height=p.columns_height, lower_diameter=p.columns_lower_diameter
+            height=p.columns_height,
+            lower_diameter=p.columns_lower_diameter,
+            base=getattr(p, "column_base", "attic_bezier_plinth"),  # a typed temple's base
         )
 
     def with_hypotheses(self, *ids: str) -> Temple:

@@ -26,6 +26,7 @@ from ionic_usd.make_commands import (
     PARTS,
     cmd_asset,
     cmd_column,
+    cmd_presets,
     cmd_preview,
     cmd_shaft,
     cmd_temple,
@@ -127,6 +128,12 @@ def _add_temple(sub: Any, full: bool) -> None:
         "[column], [shaft], [capital], [volute] tables for the column)",
     )
     p.add_argument("--layout", default="portunus", help="built-in temple layout (portunus)")
+    p.add_argument(
+        "--preset",
+        default=None,
+        help="a built-in temple (see `ionic-usd presets`: portunus, priene, nike, ilissos, "
+        "magnesia, ephesus, saturn)",
+    )
     add_stone_flags(p)
     p.add_argument(
         "--detail",
@@ -138,6 +145,17 @@ def _add_temple(sub: Any, full: bool) -> None:
     )
     add_rebuild_flag(p)
     add_memory_flag(p)
+
+
+def _add_presets(sub: Any, full: bool) -> None:
+    _command(
+        sub,
+        "presets",
+        "list the built-in temples (name, type, title, sources)",
+        "Print the built-in temples one a line: the name for `ionic-usd temple --preset "
+        "NAME`, its type after Vitruvius, its title and its sources (tab-separated).",
+        cmd_presets,
+    )
 
 
 def _add_asset(sub: Any, full: bool) -> None:
@@ -235,6 +253,7 @@ _COMMANDS: dict[str, _AddCommand] = {
     "shaft": _add_shaft,
     "column": _add_column,
     "temple": _add_temple,
+    "presets": _add_presets,
     "city": _add_city,
     "asset": _add_asset,
     "preview": _add_preview,

@@ -15,7 +15,15 @@ from pathlib import Path
 from ionic_usd.cli_flags import collect_flags
 from ionic_usd.errors import ParameterError
 
-__all__ = ["PARTS", "cmd_asset", "cmd_column", "cmd_preview", "cmd_shaft", "cmd_temple"]
+__all__ = [
+    "PARTS",
+    "cmd_asset",
+    "cmd_column",
+    "cmd_presets",
+    "cmd_preview",
+    "cmd_shaft",
+    "cmd_temple",
+]
 
 
 # -- commands ----------------------------------------------------------------------------------
@@ -210,8 +218,14 @@ def cmd_temple(args: argparse.Namespace) -> int:
     from ionic_usd.resources import check_estimate, estimate_temple
 
     check_output_folder(args.output, force=args.force)
+    if args.config and args.preset is not None:
+        raise ParameterError("--preset", args.preset, "not with --config (one description)")
     if args.config:
         temple = Temple.from_toml(args.config)
+    elif args.preset is not None:
+        from ionic_usd.temple.presets import preset_path
+
+        temple = Temple.from_toml(preset_path(args.preset))
     else:
         layouts = {"portunus": Temple.portunus}
         if args.layout not in layouts:
@@ -245,6 +259,16 @@ def cmd_temple(args: argparse.Namespace) -> int:
         f"  open {rep.root} in usdview, Blender, Houdini or Omniverse; put your own edits in "
         f"{Path(args.output) / 'overrides.usda'} (kept on rebuilds)"
     )
+    return 0
+
+
+def cmd_presets(args: argparse.Namespace) -> int:
+    """The built-in temples, one a line: name, title, type, sources."""
+    from ionic_usd.temple.presets import PRESETS, preset_summary
+
+    for name in PRESETS:
+        title, kind, sources = preset_summary(name)
+        print(f"{name}\t{kind}\t{title}\t{'; '.join(sources)}")
     return 0
 
 

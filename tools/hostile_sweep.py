@@ -383,6 +383,40 @@ def cases_31() -> list[tuple[list[str], dict[str, bytes | None]]]:
 _CSV = b"0,0\n0.1,0.05\n0.2,0.1\n"
 
 
+# --- temple types and presets (issue 34): a separate block --------------------------------
+def temple_type_cases() -> list[tuple[list[str], dict[str, bytes | None]]]:
+    """``temple --preset`` and ``[type]`` documents with bad values (every key x TOML_BAD)."""
+    from ionic_usd.temple.vitruvius import TYPE_SCHEMA
+
+    out: list[tuple[list[str], dict[str, bytes | None]]] = []
+    for v in ("nosuch", "", "../portunus", "PRIENE", "portunus.toml"):
+        out.append((["temple", "--preset", v, "-o", "T"], {}))
+    out.append((["temple", "--preset", "nike", "--config", "t.toml", "-o", "T"], {"t.toml": b""}))
+    out.append((["presets", "extra"], {}))
+    for v in ("nosuch", "", "missing.toml", "t.toml"):
+        out.append((["city", "C", "--rows", "1", "--cols", "1", "--temple", v], {"t.toml": b"x"}))
+    head = '[type]\narrangement = "peripteral"\nfront = 6\nlower_diameter = 1.2\n'
+    for key in TYPE_SCHEMA:
+        for v in TOML_BAD:
+            body = "\n".join(line for line in head.splitlines() if not line.startswith(key + " "))
+            doc = f"{body}\n{key} = {v}\n".encode()
+            out.append((["temple", "--config", "t.toml", "-o", "T"], {"t.toml": doc}))
+    for doc in (
+        b'[type]\narrangement = "dipteral"\nfront = 4\nlower_diameter = 1\n',
+        b'[type]\narrangement = "peripteral"\nfront = 6\n',
+        b"[type]\nfront = 6\nlower_diameter = 1\n",
+        b'[type]\narrangement = "peripteral"\nfront = 6\nstylobate_width = 3\nclear_bay = 3\n'
+        b"lower_diameter = 1\n",
+        b'[type]\narrangement = "peripteral"\nfront = 6\nlower_diameter = 1\n'
+        b"[podium]\nheight = 2\n",
+        b'[type]\narrangement = "peripteral"\nfront = 6\nlower_diameter = 1\n[[hypothesis]]\n'
+        b'id = "a"\ndescription = "d"\nsources = []\ncertainty = "low"\n'
+        b'changes = { "type.front" = 3 }\n',
+    ):
+        out.append((["temple", "--config", "t.toml", "-o", "T"], {"t.toml": doc}))
+    return out
+
+
 def fault_cases() -> list[tuple[list[str], dict[str, bytes | None]]]:
     """Outputs onto a read-only and onto a full file system ({RO}, {FULL}; root only)."""
     outs = [
@@ -443,7 +477,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--quick", action="store_true", help="fewer cases (about a third)")
     args = ap.parse_args(argv)
     os.environ.pop("IONIC_USD_DEBUG", None)
-    todo = cases(args.quick)
+    todo = cases(args.quick) + temple_type_cases()
     counts: Counter[str] = Counter()
     with fault_mounts() as mounts:
         if mounts is None:

@@ -11,8 +11,10 @@ northing ``-z``, so north is ``-Z`` and the plan reads the right way round from 
 Features (``properties``)
 -------------------------
 Polygon, ``type = "temple"``
-    ``temple`` (a built-in description, ``"portunus"``, or a temple TOML path relative to the
-    plan), ``orientation`` (azimuth of the front in degrees clockwise from north; default: along
+    ``temple`` (a built-in description — ``ionic-usd presets`` lists them: ``"portunus"``,
+    ``"priene"``, … —, ``"auto"`` for a type after Vitruvius chosen to fit the lot from a
+    seeded draw (:mod:`ionic_usd.city.types`), or a temple TOML path relative to the plan),
+    ``orientation`` (azimuth of the front in degrees clockwise from north; default: along
     the lot's long axis, the front towards the plan's centre), ``hypotheses`` (``{id:
     "baseline" | "alternative"}``; unnamed ones are drawn per lot, seeded, unless the city is
     built with variety off), ``column`` (``{"height": m, "lower_diameter": m}``), ``scale``
@@ -302,7 +304,13 @@ def read_geojson(path: str | os.PathLike) -> CityPlan:
 
 
 def grid_plan(
-    rows: int = 4, cols: int = 4, block: float = 60.0, *, street: float = 8.0, spacing: float = 3.0
+    rows: int = 4,
+    cols: int = 4,
+    block: float = 60.0,
+    *,
+    street: float = 8.0,
+    spacing: float = 3.0,
+    temple: str = "portunus",
 ) -> CityPlan:
     """The default city: ``rows × cols`` square lots, fronts facing south, temples at their
     own size (scale 1), with a colonnade on both sides of every street running east–west
@@ -326,7 +334,7 @@ def grid_plan(
             ring = np.array(
                 [[cx - h, cy - h], [cx + h, cy - h], [cx + h, cy + h], [cx - h, cy + h]]
             )
-            lots.append(Lot(f"{i}_{j}", ring, orientation=180.0, scale=(1.0, 1.0)))
+            lots.append(Lot(f"{i}_{j}", ring, temple, orientation=180.0, scale=(1.0, 1.0)))
     x0, x1 = -block / 2, (cols - 0.5) * block
     ys = [(i + 0.5) * block for i in range(rows - 1)] or [-block / 2]
     porticoes = tuple(

@@ -72,6 +72,7 @@ class CityOptions:
     """What ``ionic-usd city`` can set (defaults = the CLI's)."""
 
     plan: str | None = None
+    temple: str = "portunus"  # the grid's temples: a preset name, "auto" or a TOML path
     rows: int = 4
     cols: int = 4
     block: float = 60.0
@@ -132,6 +133,21 @@ class CityOptions:
             raise ParameterError("--instancer-threshold", it, "an integer >= 0")
         if self.workers is not None and (not isinstance(self.workers, int) or self.workers < 1):
             raise ParameterError("--workers", self.workers, "an integer >= 1")
+
+
+AUTO = "auto"  # a lot's ``temple``: the city chooses a type that fits it
+
+
+def _auto_spec(outline, seed: int, index: int, texture_size: int) -> TempleSpec:
+    """The typed temple chosen for lot ``index`` (its own generator: the other draws keep
+    their order)."""
+    from ionic_usd.city.types import choose_type, lot_size
+
+    width, depth = lot_size(outline)
+    slug, text = choose_type(width, depth, np.random.default_rng([seed, index]))
+    spec = TempleSpec(slug, text, int(texture_size))
+    spec.layout()  # validated before any build
+    return spec
 
 
 def footprint_of(spec: TempleSpec) -> Footprint:
@@ -201,7 +217,9 @@ def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | 
     plan: CityPlan = (
         read_geojson(opts.plan)
         if opts.plan
-        else grid_plan(opts.rows, opts.cols, opts.block, spacing=opts.column_spacing)
+        else grid_plan(
+            opts.rows, opts.cols, opts.block, spacing=opts.column_spacing, temple=opts.temple
+        )
     )
     notes: list[str] = []
     if opts.plan:
@@ -225,6 +243,12 @@ def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | 
     diameters: dict[str, float] = {}
     for i, lot in enumerate(plan.lots):
         ctx = f"{plan.source} lot {lot.id}"
+        if lot.temple == AUTO:  # a type fitted to the lot, seeded per lot (ionic_usd.city.types)
+            spec = _auto_spec(lot.outline, opts.seed, i, opts.texture_size)
+            build[i] = spec_index.setdefault(spec.key, len(spec_index))
+            if build[i] == len(specs):
+                specs.append(spec)
+            continue
         base = base_specs.get(lot.temple) or temple_spec(
             lot.temple, base_dir=plan.base_dir, texture_size=opts.texture_size, context=ctx
         )

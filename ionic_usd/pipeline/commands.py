@@ -82,6 +82,7 @@ def cmd_city(args: argparse.Namespace) -> int:
     limit_gb = DEFAULT_MAX_MEMORY_GB if args.max_memory is None else args.max_memory
     opts = CityOptions(
         plan=str(args.plan) if args.plan else None,
+        temple=args.temple,
         rows=args.rows,
         cols=args.cols,
         block=args.block,
@@ -148,6 +149,12 @@ def add_city_parser(sub, parser_class, *, arguments: bool = True) -> None:
         "--plan",
         type=Path,
         help="GeoJSON FeatureCollection (see examples/forum.geojson); default: a grid",
+    )
+    p.add_argument(
+        "--temple",
+        default="portunus",
+        help="the grid's temples: a preset (ionic-usd presets), `auto` (a type after Vitruvius "
+        "fitted to each lot, seeded) or a temple TOML [default portunus]",
     )
     p.add_argument("--rows", type=int, default=4, help="grid rows [default 4]")
     p.add_argument("--cols", type=int, default=4, help="grid columns [default 4]")

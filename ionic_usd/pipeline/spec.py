@@ -20,12 +20,16 @@ from pathlib import Path
 from typing import Any
 
 from ionic_usd.errors import ParameterError
+from ionic_usd.temple.presets import PRESETS
 
 __all__ = ["TempleSpec", "temple_spec", "BUILTIN_TEMPLES"]
 
-BUILTIN_TEMPLES = {"portunus": "portunus.toml"}
+#: the built-in temples (ionic_usd.temple.presets: Portunus and the typed presets)
+BUILTIN_TEMPLES = dict(PRESETS)
 # what the column overrides of a lot may set, and the [columns] key each sets
 _COLUMN_KEYS = {"height": "height", "lower_diameter": "lower_diameter"}
+# the same in a typed description's [type] table (ionic_usd.temple.vitruvius)
+_TYPE_KEYS = {"height": "column_height", "lower_diameter": "lower_diameter"}
 
 
 @dataclass(frozen=True)
@@ -119,8 +123,12 @@ def temple_spec(
     except tomllib.TOMLDecodeError as exc:
         raise ParameterError("temple", temple, f"valid TOML ({exc})", context=context) from None
     if column:
-        extra = [f"{_COLUMN_KEYS[k]} = {_toml_value(v)}" for k, v in sorted(column.items())]
-        text = _set_columns(text, extra)
+        typed = "type" in tomllib.loads(text)
+        keys = _TYPE_KEYS if typed else _COLUMN_KEYS
+        extra = [f"{keys[k]} = {_toml_value(v)}" for k, v in sorted(column.items())]
+        # a typed temple with another lower diameter takes its stylobate from the module
+        drop = {"stylobate_width"} if typed and "lower_diameter" in column else set()
+        text = _set_columns(text, extra, table="type" if typed else "columns", drop=drop)
     spec = TempleSpec(name, text, int(texture_size), int(seed))
     try:
         spec.layout()  # validates the description (and the overrides) before any build
@@ -129,17 +137,20 @@ def temple_spec(
     return spec
 
 
-def _set_columns(text: str, assignments: list[str]) -> str:
-    """Override keys of the ``[columns]`` table: TOML forbids a repeated key, so the old
-    assignments are dropped and the new ones appended at the table's start."""
-    keys = {a.split("=")[0].strip() for a in assignments}
+def _set_columns(
+    text: str, assignments: list[str], *, table: str = "columns", drop: set[str] | None = None
+) -> str:
+    """Override keys of the ``[columns]`` (or another) table: TOML forbids a repeated key, so
+    the old assignments (and the keys in ``drop``) are dropped and the new ones appended at
+    the table's start."""
+    keys = {a.split("=")[0].strip() for a in assignments} | set(drop or ())
     out: list[str] = []
     in_columns = False
     seen = False
     for line in text.splitlines():
         s = line.strip()
         if s.startswith("["):
-            in_columns = s == "[columns]"
+            in_columns = s == f"[{table}]"
             out.append(line)
             if in_columns:
                 seen = True
@@ -149,5 +160,5 @@ def _set_columns(text: str, assignments: list[str]) -> str:
             continue
         out.append(line)
     if not seen:
-        out += ["", "[columns]", *assignments]
+        out += ["", f"[{table}]", *assignments]
     return "\n".join(out) + "\n"

@@ -356,6 +356,9 @@ def build_layout(
         are left to the composer)
     extra_cuboids : more cuboids per layer, appended as given (e.g. an altar)
     """
+    rebuild = getattr(params, "rebuild_layout", None)
+    if rebuild is not None:  # a typed temple (ionic_usd.temple.typed_layout) lays itself out
+        return rebuild(hypotheses=hypotheses, apply=apply, extra_cuboids=extra_cuboids)
     hyps = tuple(hypotheses)
     by_id = {h.id: h for h in hyps}
     applied = tuple(apply)
@@ -424,6 +427,10 @@ def layout_from_mapping(
 
     if isinstance(data, Mapping) and "extends" in data:
         data = resolve_extends(data, context=ctx)
+    if isinstance(data, Mapping) and "type" in data:  # a temple type (temple.vitruvius)
+        from ionic_usd.temple.typed_layout import layout_from_type_mapping
+
+        return layout_from_type_mapping(data, context=ctx, apply=apply)
     check_temple_tables(data, context=ctx)  # types and ranges of every table, at the boundary
     params = params_from_tables(data, context=ctx)
     hyps = hypotheses_from_tables(data.get("hypothesis", []), ctx)

@@ -358,6 +358,8 @@ def moulding_meshes(
             p.podium_height - mp.podium_crown_height,
         ),
     ):
+        if not getattr(p, "podium_mouldings", True):
+            break  # a Greek crepidoma: steps, no moulded podium (temple.typed_layout)
         if y0 < p.podium_footing_height - 1e-9 or y0 + hgt > p.podium_height + 1e-9:
             raise ParameterError(
                 f"mouldings.{name}_height",

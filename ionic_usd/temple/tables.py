@@ -157,9 +157,13 @@ def cuboids_to_toml(groups: Mapping[str, Iterable[Cuboid]]) -> str:
     return "\n".join(out)
 
 
-def hypotheses_from_tables(entries, context: str) -> tuple[Hypothesis, ...]:
+def hypotheses_from_tables(
+    entries, context: str, *, sections: Mapping[str, tuple[str, ...]] | None = None
+) -> tuple[Hypothesis, ...]:
     """``[[hypothesis]]`` tables as :class:`Hypothesis` values: required keys, distinct ids,
-    and ``changes`` that name a temple ``section.key`` (or a composer namespace)."""
+    and ``changes`` that name a temple ``section.key`` of ``sections`` (default: the
+    dimension sections) or a composer namespace."""
+    sections = SECTIONS if sections is None else sections
     out = []
     allowed = {"id", "description", "sources", "certainty", "changes"}
     for i, e in enumerate(entries, 1):
@@ -201,10 +205,10 @@ def hypotheses_from_tables(entries, context: str) -> tuple[Hypothesis, ...]:
             sec, k = key.split(".")
             if sec in COMPOSER_NAMESPACES:
                 continue  # the composer checks these (ionic_usd.usd.hypotheses)
-            if sec not in SECTIONS or k not in SECTIONS[sec]:
+            if sec not in sections or k not in sections[sec]:
                 valid = (
-                    f"one of {sec}.{', '.join(SECTIONS[sec])}"
-                    if sec in SECTIONS
+                    f"one of {sec}.{', '.join(sections[sec])}"
+                    if sec in sections
                     else "section.key of the temple TOML, or column.… / material.…"
                 )
                 raise ParameterError(

@@ -62,6 +62,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ionic_usd import __version__
+from ionic_usd.column.base import base_preset_names
 from ionic_usd.column.column import (
     LODS,
     ColumnParams,
@@ -157,7 +158,7 @@ class ColumnAssetOptions:
 
         check_stone_options(self.texture_size, self.seed)
         check("lod", self.lods, tuple(LODS))
-        check("base", self.bases, BASE_VARIANTS)
+        check("base", self.bases, base_preset_names())  # any preset; default BASE_VARIANTS
         check("scroll", self.scrolls, SCROLL_VARIANTS)
         check("flutes", self.flutes, tuple(FLUTE_VARIANTS))
         check("form", self.forms, FORM_VARIANTS)

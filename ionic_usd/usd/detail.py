@@ -101,7 +101,7 @@ class DetailGeometry:
 
     mouldings: dict[str, dict[str, Mesh]]  # part prim name → member name → mesh
     ornament: dict[str, Instances]  # path below /Temple → instances
-    frieze: Instances
+    frieze: Instances | None
     podium_cuboids: tuple[str, ...] = field(default=())
 
     def prims(self, variant: str, *, garlands: bool = False) -> dict[str, Mesh | Instances]:
@@ -115,7 +115,7 @@ class DetailGeometry:
         }
         if variant == "carved":
             out.update({f"/Temple/{rel}": inst for rel, inst in self.ornament.items()})
-            if garlands:
+            if garlands and self.frieze is not None:
                 out[FRIEZE_PATH] = self.frieze
         return out
 
@@ -140,7 +140,9 @@ def detail_geometry(layout: TempleLayout, mp: MouldingParams | None = None) -> D
         by_part.setdefault(part, {})[m.name] = m.mesh
     orn = {"Entablature/Ornament/Dentils": dentils(layout), "Roof/Tiles": roof_tiles(layout)}
     podium = tuple(_ident(c.name) for c in layout.cuboids.get(Layer.PODIUM, ()))
-    return DetailGeometry(by_part, orn, frieze_garlands(layout), podium)
+    # an entablature without a frieze (the Asiatic order) has no relief to carry
+    has_frieze = any(c.name == "frieze" for c in layout.cuboids.get(Layer.ENTABLATURE, ()))
+    return DetailGeometry(by_part, orn, frieze_garlands(layout) if has_frieze else None, podium)
 
 
 def detail_counts(geom: DetailGeometry) -> dict[str, dict[str, int]]:
@@ -192,6 +194,8 @@ def frieze_layer(h: Hypothesis, geom: DetailGeometry) -> Sdf.Layer:
     lay = new_layer(
         "Temple", kind="assembly", comment=f"reconstruction hypothesis {h.id!r} (ionic_usd)"
     )
+    if geom.frieze is None:
+        raise ParameterError(FRIEZE_KEY, "garlands", "a temple with a frieze", context=h.id)
     with Sdf.ChangeBlock():
         define_prim(lay, FRIEZE_PATH.rsplit("/", 1)[0], "Scope")
         spec = author_point_instancer(lay, FRIEZE_PATH, geom.frieze)

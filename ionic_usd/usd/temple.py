@@ -229,6 +229,7 @@ def _part_layer(layer: Layer, meshes: dict, material: str) -> Sdf.Layer:
 
 def _colonnade_layer(layout: TempleLayout) -> Sdf.Layer:
     lay = new_layer("Temple", kind="assembly")
+    typed = getattr(layout.params, "vitruvian", None) is not None
     with Sdf.ChangeBlock():
         col = define_prim(lay, "/Temple/Colonnade", "Xform")
         col.kind = "group"
@@ -241,6 +242,10 @@ def _colonnade_layer(layout: TempleLayout) -> Sdf.Layer:
                 spec.referenceList.Prepend(Sdf.Reference(ASSET_REF))
                 spec.variantSelections["form"] = FORMS[kind]
                 spec.variantSelections["finish"] = BASELINE_FINISH
+                if typed and c.angle_rotation_deg is not None:
+                    # a typed temple's peristyle turns its corners on angle capitals (the
+                    # layout already turned the column: rotation_deg = angle_rotation_deg)
+                    spec.variantSelections["capital"] = "angle"
                 column_xform(spec, c.position, c.rotation_deg, c.scale)
     return lay
 
@@ -434,11 +439,17 @@ def plan_temple(
     check_hypothesis_budget(layout)  # bounded work: before anything else
     p = layout.params
     column = column or portunus_column_params(
-        height=p.columns_height, lower_diameter=p.columns_lower_diameter
+        height=p.columns_height,
+        lower_diameter=p.columns_lower_diameter,
+        base=getattr(p, "column_base", "attic_bezier_plinth"),  # a typed temple names its base
     )
     opts = asset_options or ColumnAssetOptions(params=column, texture_size=texture_size, seed=seed)
     if opts.params != column:
         opts = dataclasses.replace(opts, params=column)
+    if opts.bases[0] != column.base:  # the asset's default base is the column's
+        opts = dataclasses.replace(
+            opts, bases=(column.base, *(b for b in opts.bases if b != column.base))
+        )
     detail = check_detail(detail or DEFAULT_DETAIL)
     if not opts.carved:
         opts = dataclasses.replace(opts, carved=True)  # the carved capital goes with the detail
