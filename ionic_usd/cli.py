@@ -203,6 +203,11 @@ def _add_preview(sub: Any, full: bool) -> None:
     p.add_argument("--background", default="0.80,0.84,0.89", help="R,G,B in [0, 1]")
     p.add_argument("--samples", type=int, default=4, help="MSAA samples")
     p.add_argument("--no-ground", action="store_true", help="no ground plane")
+    p.add_argument(
+        "--view",
+        choices=["appearance", "reliability"],
+        help="select this `view` variant (reliability: the Extended Matrix colour chart)",
+    )
 
 
 def _add_city(sub: Any, full: bool) -> None:

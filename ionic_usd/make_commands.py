@@ -245,6 +245,7 @@ def cmd_preview(args: argparse.Namespace) -> int:
         samples=args.samples,
         ground=not args.no_ground,
         force=args.force,
+        variants={"view": args.view} if getattr(args, "view", None) else None,
     )
     print(
         f"wrote {args.output}: {s.triangles:,} triangles, {s.meshes} meshes, "

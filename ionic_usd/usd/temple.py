@@ -104,6 +104,7 @@ from ionic_usd.usd.hypotheses import (
 from ionic_usd.usd.instancer import drawn_triangles
 from ionic_usd.usd.materials import bind_material_spec, stone_material
 from ionic_usd.usd.mesh import author_mesh, define_prim
+from ionic_usd.usd.paradata import annotate_temple
 from ionic_usd.usd.stage import new_layer, save_layer
 
 log = logging.getLogger(__name__)
@@ -375,6 +376,8 @@ class TemplePlan:
         save_layer(_root_layer(layout.name), tmp / ROOT_LAYER)
         # created only where absent: an existing overrides.usda (or symlink) is never touched
         save_layer(_user_overrides_layer(), tmp / OVERRIDES_LAYER)
+        # paradata on every part and the view variant set (ionic_usd.usd.paradata)
+        annotate_temple(tmp, layout.paradata, layout.hypotheses)
         # checks and hints on the generated layer alone: the user's opinions are theirs
         # opened without payloads: the columns are bounded by the asset's extentsHints and
         # the checks compare transforms, not column geometry (composition ~30 % cheaper)
