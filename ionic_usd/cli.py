@@ -136,6 +136,12 @@ def _add_temple(sub: Any, full: bool) -> None:
         "(cuboids), moulded (swept mouldings) or carved (mouldings, dentils, roof "
         "tiles, frieze relief hypothesis) [default: carved]",
     )
+    p.add_argument(
+        "--paradata",
+        type=Path,
+        help="an Extended Matrix GraphML (from `ionic-usd paradata`, edited in yEd) whose "
+        "units' classes, certainty and sources override the temple description's",
+    )
     add_rebuild_flag(p)
     add_memory_flag(p)
 
@@ -234,6 +240,18 @@ def _add_export(sub: Any, full: bool) -> None:
     add_parser(sub, _Parser, arguments=full)
 
 
+def _add_paradata(sub: Any, full: bool) -> None:
+    from ionic_usd.paradata_command import add_paradata_parser
+
+    add_paradata_parser(sub, full)
+
+
+def _add_web(sub: Any, full: bool) -> None:
+    from ionic_usd.paradata_command import add_web_parser
+
+    add_web_parser(sub, full)
+
+
 #: subcommand → the function that adds it (in the order ``--help`` lists them)
 _COMMANDS: dict[str, _AddCommand] = {
     "shaft": _add_shaft,
@@ -245,6 +263,8 @@ _COMMANDS: dict[str, _AddCommand] = {
     "evaluate": _add_evaluate,
     "fit": _add_fit,
     "export": _add_export,
+    "paradata": _add_paradata,
+    "web": _add_web,
 }
 
 

@@ -6,7 +6,7 @@
   layer's variants, the hypothesis layers) and writes on each *part* prim spec — a ``def``
   of a Mesh, a PointInstancer, a column instance or a finish Material; in a hypothesis' layer
   (or variant) every prim it touches — the part's :class:`~ionic_usd.temple.paradata.Record`
-  as ``customData["ionic_usd"]["paradata"]`` and as ``userProperties:em:<field>`` string
+  as ``customData["paradata"]`` and as ``userProperties:em:<field>`` string
   attributes (Blender imports those as custom properties; the glTF exporter copies both into
   ``extras``). A hypothesis' alternative carries the hypothesis' own record, so the record
   composed on a prim is that of the strongest selection;
@@ -63,9 +63,7 @@ def write_record(spec: Sdf.PrimSpec, unit: str, rec: Record) -> None:
     """``rec`` on ``spec``: customData ``ionic_usd.paradata`` and ``userProperties:em:*``."""
     values = rec.as_dict(unit)
     custom = dict(spec.customData)
-    top = dict(custom.get("ionic_usd", {}))
-    top["paradata"] = {**values, "sources": Vt.StringArray(values["sources"])}
-    custom["ionic_usd"] = top
+    custom["paradata"] = {**values, "sources": Vt.StringArray(values["sources"])}
     spec.customData = custom
     for name, value in values.items():
         text = "; ".join(value) if isinstance(value, list) else str(value)
