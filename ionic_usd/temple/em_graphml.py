@@ -120,14 +120,14 @@ def _bpmn(graph: ET.Element, nid: str, label: str, desc: str, kind: str, xy) -> 
     _label(gen, label)
     props = _sub(gen, "y:StyleProperties")
     enum = "com.yworks.yfiles.bpmn.view."
+    values = [("BPMNTypeEnum", "com.yworks.bpmn.type", "ARTIFACT_TYPE_ANNOTATION")]
     if kind == "document":
-        _sub(props, "y:Property", **{"class": enum + "BPMNTypeEnum", "name": "com.yworks.bpmn.type",
-             "value": "ARTIFACT_TYPE_DATA_OBJECT"})  # fmt: skip
-        _sub(props, "y:Property", **{"class": enum + "DataObjectTypeEnum",
-             "name": "com.yworks.bpmn.dataObjectType", "value": "DATA_OBJECT_TYPE_PLAIN"})  # fmt: skip
-    else:
-        _sub(props, "y:Property", **{"class": enum + "BPMNTypeEnum", "name": "com.yworks.bpmn.type",
-             "value": "ARTIFACT_TYPE_ANNOTATION"})  # fmt: skip
+        values = [
+            ("BPMNTypeEnum", "com.yworks.bpmn.type", "ARTIFACT_TYPE_DATA_OBJECT"),
+            ("DataObjectTypeEnum", "com.yworks.bpmn.dataObjectType", "DATA_OBJECT_TYPE_PLAIN"),
+        ]
+    for cls, name, value in values:
+        _sub(props, "y:Property", **{"class": enum + cls, "name": name, "value": value})
 
 
 _LINE = {"has_data_provenance": "dashed", "contrasts_with": "dashed_dotted"}

@@ -67,23 +67,32 @@ def read_scene_paradata(path: str | os.PathLike) -> SceneParadata:
         str(v.get("id", k)): dict(v)
         for k, v in root.GetCustomData().get("ionic_usd", {}).get("hypotheses", {}).items()
     }
-    for p, unit, rec in _walk(stage):
-        if not rec.hypothesis:
-            out.parts.setdefault(unit, rec)
-            out.prims[p] = unit
     session = stage.GetSessionLayer()
-    for name in root.GetVariantSets().GetNames():
-        if not name.startswith("hyp_"):
-            continue
-        with Usd.EditContext(stage, session):
-            spec = Sdf.CreatePrimInLayer(session, root.GetPath())
-            spec.variantSelections[name] = "alternative"
-        touched: dict[str, Record] = {}
-        for _, unit, rec in _walk(stage):
-            if rec.hypothesis:
-                touched.setdefault(unit, rec)
-        spec.variantSelections[name] = "baseline"
-        hid = next((r.hypothesis for r in touched.values()), "")
-        if hid:
-            out.hypotheses[hid] = (next(iter(touched.values())), tuple(sorted(touched)))
+    spec = Sdf.CreatePrimInLayer(session, root.GetPath())
+    sets = root.GetVariantSets()
+    # every detail level: a part may exist in one only (the carved tiles, the mouldings)
+    details = sets.GetVariantSet("detail").GetVariantNames() if sets.HasVariantSet("detail") else []
+    for detail in details or [""]:
+        if detail:
+            spec.variantSelections["detail"] = detail
+        for p, unit, rec in _walk(stage):
+            if not rec.hypothesis:
+                out.parts.setdefault(unit, rec)
+                out.prims.setdefault(p, unit)
+        for name in sets.GetNames():
+            if name.startswith("hyp_"):
+                _hypothesis(stage, spec, name, out)
     return out
+
+
+def _hypothesis(stage: Usd.Stage, spec: Sdf.PrimSpec, name: str, out: SceneParadata) -> None:
+    spec.variantSelections[name] = "alternative"
+    touched: dict[str, Record] = {}
+    for _, unit, rec in _walk(stage):
+        if rec.hypothesis:
+            touched.setdefault(unit, rec)
+    del spec.variantSelections[name]
+    hid = next((r.hypothesis for r in touched.values()), "")
+    if hid:
+        rec, before = out.hypotheses.get(hid, (next(iter(touched.values())), ()))
+        out.hypotheses[hid] = (rec, tuple(sorted({*before, *touched})))
