@@ -172,8 +172,8 @@ def part_key(path: str) -> str | None:
     """The part key of a prim path of a temple (``/Temple/Podium/step_03`` → ``stair``), or
     None for a prim that is not a part (scopes, prototypes, shaders)."""
     segs = [s for s in path.split("/") if s]
-    if len(segs) < 3 or "Prototypes" in segs:
-        return None
+    if len(segs) < 3 or "Prototypes" in segs or segs[-1] in ("Mouldings", "Ornament"):
+        return None  # scopes that group parts
     comp, leaf = segs[1], segs[-1]
     if comp == "Materials":
         finishes = {"PaintedStucco": "stucco", "Travertine": "travertine"}

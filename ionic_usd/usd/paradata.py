@@ -38,7 +38,15 @@ from ionic_usd.temple.paradata import EM_CHART, Evidence, Paradata, Record, defa
 from ionic_usd.temple.paradata import part_key as _part_key
 from ionic_usd.usd.hypotheses import hyp_set
 
-__all__ = ["Units", "annotate_temple", "write_record", "em_material_path", "VIEW_SET", "VIEWS"]
+__all__ = [
+    "Units",
+    "annotate_temple",
+    "annotate_hypothesis_layer",
+    "write_record",
+    "em_material_path",
+    "VIEW_SET",
+    "VIEWS",
+]
 
 VIEW_SET = "view"
 VIEWS = ("appearance", "reliability")
@@ -95,6 +103,8 @@ def _hyp_of_file(rel: str, ids: dict[str, str]) -> str:
 
 
 def _is_part(spec: Sdf.PrimSpec, key: str, in_hyp: bool) -> bool:
+    if spec.typeName in ("Scope", "Shader"):
+        return False
     if in_hyp:
         return True
     if spec.specifier != Sdf.SpecifierDef:
@@ -227,6 +237,16 @@ def _hypothesis_moves(spec: Sdf.PrimSpec, units: Units, ids: dict[str, str]) -> 
             rel.targetPathList.appendedItems = [*rel.targetPathList.appendedItems, Sdf.Path(path)]
 
 
+def annotate_hypothesis_layer(
+    lay: Sdf.Layer, hid: str, paradata: Paradata | None, hypotheses: Iterable[Hypothesis]
+) -> None:
+    """Write hypothesis ``hid``'s record on the prims its layer touches (the shipped
+    ``layers/<id>.usda`` carry their paradata as built)."""
+    hyps = tuple(hypotheses)
+    pd = paradata or default_paradata(hyps)
+    _annotate_layer(lay, f"layers/{hid}.usda", pd, {h.id: h.id for h in hyps}, {})
+
+
 def annotate_temple(
     folder: Path, paradata: Paradata | None, hypotheses: Iterable[Hypothesis]
 ) -> Units:
@@ -243,6 +263,7 @@ def annotate_temple(
         if rel == "materials.usda":
             found += _finish_overs(lay, pd)
             _em_materials(lay)
+
         for p, key, hid, rec in found:
             if hid:
                 units.hypotheses.setdefault(hid, {})[p] = (key, rec)

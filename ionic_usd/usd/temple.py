@@ -104,7 +104,7 @@ from ionic_usd.usd.hypotheses import (
 from ionic_usd.usd.instancer import drawn_triangles
 from ionic_usd.usd.materials import bind_material_spec, stone_material
 from ionic_usd.usd.mesh import author_mesh, define_prim
-from ionic_usd.usd.paradata import annotate_temple
+from ionic_usd.usd.paradata import annotate_hypothesis_layer, annotate_temple
 from ionic_usd.usd.stage import new_layer, save_layer
 
 log = logging.getLogger(__name__)
@@ -177,7 +177,7 @@ def hypothesis_layers(
     """
     opts = opts or ColumnAssetOptions()
     changes = _changes(layout, opts)
-    return {
+    out = {
         h.id: hypothesis_layer(
             [h],
             layout,
@@ -190,6 +190,10 @@ def hypothesis_layers(
         )
         for h in layout.hypotheses
     }
+    for hid, lay in out.items():  # each carries its hypothesis' paradata as shipped
+        if lay is not None:
+            annotate_hypothesis_layer(lay, hid, layout.paradata, layout.hypotheses)
+    return out
 
 
 def _materials_layer() -> Sdf.Layer:
