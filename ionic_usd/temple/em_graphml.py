@@ -183,7 +183,10 @@ def _evidence_of(shape: str, border: str) -> Evidence | None:
 
 def _parse(path: Path) -> ET.Element:
     try:
-        return ET.parse(path).getroot()
+        head = path.read_bytes()
+        if b"<!DOCTYPE" in head or b"<!ENTITY" in head:  # no entity expansion (a GraphML has none)
+            raise ParameterError("--paradata", str(path), "a GraphML file without a DTD")
+        return ET.fromstring(head)
     except (ET.ParseError, OSError) as exc:
         raise ParameterError("--paradata", str(path), f"a readable GraphML file ({exc})") from None
 
@@ -257,4 +260,6 @@ def read_graphml(path: str | os.PathLike) -> tuple[dict[str, Record], dict[str, 
         hid = label[len(HYP_PREFIX) :] if label.startswith(HYP_PREFIX) else ""
         rec = Record(ev, certainty, tuple(dict.fromkeys(sources)), info["desc"], hid)
         (hyps if hid else parts)[hid or label] = rec
+    if not parts and not hyps:
+        raise ParameterError("--paradata", str(p), "a GraphML holding Extended Matrix units")
     return parts, hyps

@@ -54,7 +54,10 @@ def _walk(stage: Usd.Stage) -> list[tuple[str, str, Record]]:
 
 def read_scene_paradata(path: str | os.PathLike) -> SceneParadata:
     """The paradata of a temple scene (refused: a scene without any)."""
-    stage = Usd.Stage.Open(str(path), Usd.Stage.LoadNone)
+    try:
+        stage = Usd.Stage.Open(str(path), Usd.Stage.LoadNone)
+    except Exception:  # pxr raises Tf errors for files it cannot read
+        stage = None
     if stage is None:
         raise ParameterError("SCENE", str(path), "a USD scene that opens")
     root = stage.GetDefaultPrim()

@@ -245,6 +245,7 @@ function isVisible(o, i) {
 function select(path) {
   const unit = data.prims[path];
   const rec = unit ? { ...data.parts[unit], unit, path } : null;
+  if (rec) rec.evidenceLabel = (data.chart[rec.evidence] || {}).label || "";
   state.sel = rec ? path : "";
   showPart(rec);
   writeHash();
