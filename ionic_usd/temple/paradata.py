@@ -109,9 +109,10 @@ DEFAULT_EVIDENCE = Evidence.USV_S
 
 
 def _evidence(value: object, context: str) -> Evidence:
-    text = str(value).strip() if isinstance(value, str) else value
     spelled = {"USVs": "USV/s", "USVn": "USV/n"}  # the EM tools' codes
-    return enum_value(Evidence, spelled.get(text, text), "evidence", context)  # type: ignore[arg-type]
+    if isinstance(value, str):
+        value = spelled.get(value.strip(), value.strip())
+    return enum_value(Evidence, value, "evidence", context)
 
 
 @dataclass(frozen=True)
