@@ -15,6 +15,9 @@ JavaScript dependency, installed from npm: ``npm install three`` — CI runs ``n
   description, certainty, sources, evidence class and the parts they change; the part records
   and the EM colour chart. The reliability view recolours each part by its evidence class, read
   from its glTF ``extras``.
+
+Another scene (a city of temples) gets the scene, the reliability view, picking and the
+permalink, with no hypothesis toggles.
 """
 
 from __future__ import annotations
@@ -70,11 +73,11 @@ def _record(rec) -> dict:
     }
 
 
-def _data(scene: Path, changes: dict, base: list[str]) -> dict:
+def _data(pd, changes: dict, base: list[str]) -> dict:
     from ionic_usd.temple.paradata import EM_CHART
-    from ionic_usd.usd.paradata_scene import read_scene_paradata
+    from ionic_usd.usd.paradata_scene import SceneParadata
 
-    pd = read_scene_paradata(scene)
+    pd = pd or SceneParadata()
     hyps = []
     for hid, entry in pd.listing.items():
         vset = entry.get("variantSet") or ""
@@ -121,7 +124,10 @@ def write_site(
         raise ParameterError("SCENE", str(scene), "an existing USD file")
     three_dir = find_three(three)
     dest = check_output_folder(out, force=force)
-    read_scene_paradata(src)  # refuses a scene that is not a temple with paradata
+    try:
+        pd = read_scene_paradata(src)
+    except ParameterError:  # not a temple (a city of temples): its parts' extras only
+        pd = None
     changes, base = hypothesis_changes(src, {"lod": lod})
     dest.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=".site-", dir=dest.parent))
@@ -129,7 +135,7 @@ def write_site(
     try:
         export_scene(src, tmp / "scene.glb", variants={"lod": lod})
         (tmp / "hyp").mkdir()
-        data = _data(src, changes, base)
+        data = _data(pd, changes, base)
         data["centres"] = part_centres(src, {"lod": lod})
         for h in data["hypotheses"]:
             if not h["glb"]:
