@@ -257,3 +257,30 @@ def test_reliability_collections_exist_only_in_the_variant(tiny_temple):
     spec = gen.GetPrimAtPath("/Temple")
     assert list(spec.variantSets["view"].variants.keys()) == ["appearance", "reliability"]
     assert not [p for p in spec.properties if p.name.startswith("material:binding:collection")]
+
+
+def test_gltf_extras_carry_every_parts_paradata(tiny_temple, tmp_path):
+    pygltflib = pytest.importorskip("pygltflib")
+    from ionic_usd.export import export_scene
+
+    out = tmp_path / "t.glb"
+    export_scene(tiny_temple.root, out, variants={"view": "reliability"})
+    g = pygltflib.GLTF2().load(str(out))
+    parent = {c: i for i, n in enumerate(g.nodes) for c in (n.children or [])}
+    seen = set()
+    for i, n in enumerate(g.nodes):
+        if n.mesh is None:
+            continue
+        ex, j = dict(n.extras or {}), i
+        while "paradata" not in ex and j in parent:  # a group node holds what copies share
+            j = parent[j]
+            ex = {**(g.nodes[j].extras or {}), **ex}
+        entries = ex.get("instances") or [ex]
+        for e in entries:
+            rec = {**ex.get("paradata", {}), **e.get("paradata", {})}
+            assert Evidence(rec["evidence"]) in EM_CHART and rec["sources"], (n.name, e)
+            seen.add(rec["unit"])
+    assert {"podium", "stair", "cella", "roof", "column.front_1"} <= seen
+    # the reliability view exports the chart's materials, nothing else
+    names = {m.name for m in g.materials}
+    assert names <= {ev.name for ev in EM_CHART} and names
