@@ -143,6 +143,12 @@ def _add_temple(sub: Any, full: bool) -> None:
         "(cuboids), moulded (swept mouldings) or carved (mouldings, dentils, roof "
         "tiles, frieze relief hypothesis) [default: carved]",
     )
+    p.add_argument(
+        "--paradata",
+        type=Path,
+        help="an Extended Matrix GraphML (from `ionic-usd paradata`, edited in yEd) whose "
+        "units' classes, certainty and sources override the temple description's",
+    )
     add_rebuild_flag(p)
     add_memory_flag(p)
 
@@ -222,6 +228,11 @@ def _add_preview(sub: Any, full: bool) -> None:
     p.add_argument("--samples", type=int, default=4, help="MSAA samples")
     p.add_argument("--no-ground", action="store_true", help="no ground plane")
     add_memory_flag(p, what="a picture")
+    p.add_argument(
+        "--view",
+        choices=["appearance", "reliability"],
+        help="select this `view` variant (reliability: the Extended Matrix colour chart)",
+    )
 
 
 def _add_city(sub: Any, full: bool) -> None:
@@ -248,6 +259,18 @@ def _add_export(sub: Any, full: bool) -> None:
     add_parser(sub, _Parser, arguments=full)
 
 
+def _add_paradata(sub: Any, full: bool) -> None:
+    from ionic_usd.paradata_command import add_paradata_parser
+
+    add_paradata_parser(sub, full)
+
+
+def _add_web(sub: Any, full: bool) -> None:
+    from ionic_usd.paradata_command import add_web_parser
+
+    add_web_parser(sub, full)
+
+
 #: subcommand → the function that adds it (in the order ``--help`` lists them)
 _COMMANDS: dict[str, _AddCommand] = {
     "shaft": _add_shaft,
@@ -260,6 +283,8 @@ _COMMANDS: dict[str, _AddCommand] = {
     "evaluate": _add_evaluate,
     "fit": _add_fit,
     "export": _add_export,
+    "paradata": _add_paradata,
+    "web": _add_web,
 }
 
 

@@ -212,6 +212,33 @@ def cmd_asset(args: argparse.Namespace) -> int:
     return 0
 
 
+def _with_graphml_paradata(temple, path: Path):
+    """``temple`` with the records an edited EM GraphML states over its own."""
+    import dataclasses
+
+    from ionic_usd.temple.em_graphml import read_graphml
+    from ionic_usd.temple.paradata import PART_KEYS, default_paradata
+
+    if not Path(path).is_file():
+        raise ParameterError("--paradata", str(path), "an existing GraphML file")
+    parts, hyps = read_graphml(path)
+    lay = temple.layout
+    pd = lay.paradata or default_paradata(lay.hypotheses)
+    for unit in parts:
+        if unit not in PART_KEYS and unit.split(".")[0] not in ("column", "finish"):
+            raise ParameterError(
+                "unit", unit, "a part key: " + ", ".join(PART_KEYS), context=str(path)
+            )
+    known = {h.id for h in lay.hypotheses}
+    for hid in hyps:
+        if hid not in known:
+            raise ParameterError(
+                "unit", "hyp:" + hid, "a hypothesis of the temple", context=str(path)
+            )
+    pd = dataclasses.replace(pd.with_parts(parts), hypotheses={**pd.hypotheses, **hyps})
+    return dataclasses.replace(temple, layout=dataclasses.replace(lay, paradata=pd))
+
+
 def cmd_temple(args: argparse.Namespace) -> int:
     from ionic_usd.api import Temple
     from ionic_usd.io import check_output_folder
@@ -236,6 +263,8 @@ def cmd_temple(args: argparse.Namespace) -> int:
                 "(or describe a temple in a TOML file: --config)",
             )
         temple = layouts[args.layout]()
+    if getattr(args, "paradata", None) is not None:
+        temple = _with_graphml_paradata(temple, args.paradata)
     layout = temple.layout
     options = {"texture_size": args.texture_size, "seed": args.seed, "detail": args.detail}
     from ionic_usd.outputs import folder_lock
@@ -294,6 +323,7 @@ def cmd_preview(args: argparse.Namespace) -> int:
         samples=args.samples,
         ground=not args.no_ground,
         force=args.force,
+        variants={"view": args.view} if getattr(args, "view", None) else None,
     )
     print(
         f"wrote {args.output}: {s.triangles:,} triangles, {s.meshes} meshes, "

@@ -156,7 +156,7 @@ def _temple_sets(stage):
     vsets = root.GetVariantSets()
     sets = {n: vsets.GetVariantSet(n).GetVariantNames() for n in vsets.GetNames()}
     # lod, detail and one set per hypothesis (all six of portunus.toml are realised)
-    assert {"lod", "detail"} <= set(sets) and len(sets) == 8
+    assert {"lod", "detail", "view"} <= set(sets) and len(sets) == 9  # view: paradata.md
     return sets
 
 

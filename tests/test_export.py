@@ -167,7 +167,10 @@ def test_glb_paradata_in_extras(temple_gpu_glb):
     node = next(n for n in g.nodes if n.extensions.get("EXT_mesh_gpu_instancing"))
     # the column asset's generator parameters are shared by every copy: stored once
     assert "parameters" in node.extras["ionic_usd"]
-    assert all(set(i) == {"path"} for i in node.extras["instances"])
+    # per copy: its path and what differs between columns (the part's unit, e.g. column.front_1)
+    assert all(set(i) <= {"path", "paradata", "userProperties"} for i in node.extras["instances"])
+    assert all(i["paradata"]["unit"].startswith("column.") for i in node.extras["instances"])
+    assert node.extras["paradata"]["evidence"] == "US"  # shared by every column: stored once
     assert json.loads(g.to_json())["scenes"][0]["extras"] == extras  # plain JSON
 
 

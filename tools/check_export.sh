@@ -61,6 +61,7 @@ cli export "$TEMPLE" -o "$E/temple_unmerged.glb" --no-merge --force
 cli export "$TEMPLE" -o "$E/temple.gltf" --force
 cli export "$TEMPLE" -o "$E/temple_bare_stone.glb" --variant hyp_finish_bare_stone=alternative --force
 cli export "$TEMPLE" -o "$E/temple_low.glb" --lod low --force
+cli export "$TEMPLE" -o "$E/temple_reliability.glb" --variant view=reliability --lod low --force
 cli export "$TEMPLE" -o "$E/temple_draco.glb" --compress draco --force
 cli export "$CITY" -o "$E/city.glb" --force
 cli export "$CITY" -o "$E/city_low.glb" --lod low --force

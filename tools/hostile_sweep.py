@@ -417,6 +417,42 @@ def temple_type_cases() -> list[tuple[list[str], dict[str, bytes | None]]]:
     return out
 
 
+def paradata_cases() -> list[tuple[list[str], dict[str, bytes | None]]]:
+    """``ionic-usd paradata``, ``ionic-usd web``, ``temple --paradata``, ``preview --view``."""
+    not_temple = {"s.usda": b'#usda 1.0\n(defaultPrim = "T")\ndef Xform "T" {}\n'}
+    junk = {"s.usda": os.urandom(512)}
+    out: list[tuple[list[str], dict[str, bytes | None]]] = []
+    for cmd in (["paradata"], ["web"]):
+        out.append(([*cmd, "missing.usda"], {}))
+        out.append(([*cmd, "s.usda"], not_temple))
+        out.append(([*cmd, "s.usda"], junk))
+        out.append(([*cmd, "d.usda"], {"d.usda": None}))
+    out.append((["paradata", "s.usda", "-o", "g.txt"], not_temple))
+    out.append((["web", "s.usda", "-o", "site"], {**not_temple, "site": None}))
+    unit = (
+        '<graphml xmlns="http://graphml.graphdrawing.org/xmlns" '
+        'xmlns:y="http://www.yworks.com/xml/graphml"><key id="g" for="node" '
+        'yfiles.type="nodegraphics"/><graph><node id="n0"><data key="g"><y:ShapeNode>'
+        '<y:BorderStyle color="{c}"/><y:NodeLabel>{label}</y:NodeLabel><y:Shape type="{s}"/>'
+        "</y:ShapeNode></data></node></graph></graphml>"
+    )
+    graphs = [
+        os.urandom(256),
+        b"",
+        b"<graphml>",
+        unit.format(c="#9B3333", label="roof", s="star").encode(),
+        unit.format(c="#123456", label="roof", s="octagon").encode(),
+        unit.format(c="#9B3333", label="nave", s="rectangle").encode(),
+        unit.format(c="#9B3333", label="hyp:no-such", s="rectangle").encode(),
+        b"<!DOCTYPE x [<!ENTITY a 'aaaa'><!ENTITY b '&a;&a;&a;&a;'>]><graphml>&b;</graphml>",
+    ]
+    for g in graphs:
+        out.append((["temple", "-o", "T", "--paradata", "e.graphml"], {"e.graphml": g}))
+    out.append((["temple", "-o", "T", "--paradata", "missing.graphml"], {}))
+    out.append((["preview", "s.usda", "-o", "p.png", "--view", "xray"], not_temple))
+    return out
+
+
 def fault_cases() -> list[tuple[list[str], dict[str, bytes | None]]]:
     """Outputs onto a read-only and onto a full file system ({RO}, {FULL}; root only)."""
     outs = [
@@ -477,7 +513,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--quick", action="store_true", help="fewer cases (about a third)")
     args = ap.parse_args(argv)
     os.environ.pop("IONIC_USD_DEBUG", None)
-    todo = cases(args.quick) + temple_type_cases()
+    todo = cases(args.quick) + temple_type_cases() + paradata_cases()
     counts: Counter[str] = Counter()
     with fault_mounts() as mounts:
         if mounts is None:

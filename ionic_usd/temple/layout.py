@@ -83,6 +83,7 @@ from ionic_usd.temple.description import (
 )
 
 # the TOML readers, re-exported for callers of the layout
+from ionic_usd.temple.paradata import paradata_from_tables
 from ionic_usd.temple.tables import (
     check_temple_tables,
     cuboids_from_tables,
@@ -167,6 +168,8 @@ class TempleLayout:
     params: TempleParams
     hypotheses: tuple[Hypothesis, ...] = ()
     applied: tuple[str, ...] = ()
+    # per-part evidence (ionic_usd.temple.paradata.Paradata); None: stated nowhere
+    paradata: Any = None
 
     def __post_init__(self) -> None:
         groups = {
@@ -436,7 +439,8 @@ def layout_from_mapping(
     hyps = hypotheses_from_tables(data.get("hypothesis", []), ctx)
     extra = cuboids_from_tables(data.get("cuboid", []), context=ctx)
     resolve_extends(data, context=ctx)  # missing tables: after what is there is checked
-    return build_layout(params, hypotheses=hyps, apply=apply, extra_cuboids=extra)
+    layout = build_layout(params, hypotheses=hyps, apply=apply, extra_cuboids=extra)
+    return replace(layout, paradata=paradata_from_tables(data, hyps, context=ctx))
 
 
 def portunus_layout(*, apply: Iterable[str] = ()) -> TempleLayout:

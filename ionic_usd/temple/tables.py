@@ -68,7 +68,8 @@ def params_from_tables(data: Mapping[str, Any], *, context: str) -> TempleParams
     if "name" in temple:
         kw["name"] = temple["name"]
     for sec, table in data.items():
-        if sec in ("temple", "hypothesis", "cuboid", "mouldings"):  # mouldings: temple.mouldings
+        if sec in ("temple", "hypothesis", "cuboid", "mouldings", "paradata"):  # temple.mouldings,
+            # temple.paradata read these
             continue
         if sec not in SECTIONS:
             raise ParameterError(
@@ -166,14 +167,15 @@ def hypotheses_from_tables(
     sections = SECTIONS if sections is None else sections
     out = []
     allowed = {"id", "description", "sources", "certainty", "changes"}
+    optional = {"evidence"}  # read by ionic_usd.temple.paradata
     for i, e in enumerate(entries, 1):
         where = f"{context} [[hypothesis]] #{i}"
         if not isinstance(e, Mapping):
             raise ParameterError("[[hypothesis]]", e, "a table", context=where)
         for key in e:
-            if key not in allowed:
+            if key not in allowed | optional:
                 raise ParameterError(
-                    key, e[key], f"one of {', '.join(sorted(allowed))}", context=where
+                    key, e[key], f"one of {', '.join(sorted(allowed | optional))}", context=where
                 )
         for key in sorted(allowed):
             if key not in e:
@@ -235,6 +237,7 @@ _HYPOTHESIS = {
     "sources": FieldSpec("strings"),
     "certainty": FieldSpec("str", max_len=32),
     "changes": FieldSpec("table"),
+    "evidence": FieldSpec("str", max_len=16),
 }
 #: hypothesis changes outside the temple's dimension sections, realised by the composer
 HYPOTHESIS_EXTRA_CHANGES = {
@@ -273,7 +276,7 @@ def check_temple_tables(data: Mapping[str, Any], *, context: str) -> None:
                 {f"{sec}.{k}": v for k, v in sections[sec].items()},
                 context=context,
             )
-        elif sec == "mouldings":  # sections and sizes: checked by temple.mouldings
+        elif sec in ("mouldings", "paradata"):  # checked by temple.mouldings / .paradata
             check_value(sec, table, FieldSpec("table"), context=context)
         elif sec in ("cuboid", "hypothesis"):
             if not isinstance(table, list):
@@ -288,6 +291,7 @@ def check_temple_tables(data: Mapping[str, Any], *, context: str) -> None:
                         "temple",
                         *sections,
                         "mouldings",
+                        "paradata",
                         "cuboid",
                         "hypothesis",
                         *sorted(column_tables),

@@ -104,6 +104,7 @@ from ionic_usd.usd.hypotheses import (
 from ionic_usd.usd.instancer import drawn_triangles
 from ionic_usd.usd.materials import bind_material_spec, stone_material
 from ionic_usd.usd.mesh import author_mesh, define_prim
+from ionic_usd.usd.paradata import annotate_hypothesis_layer, annotate_temple
 from ionic_usd.usd.stage import new_layer, save_layer
 
 log = logging.getLogger(__name__)
@@ -176,7 +177,7 @@ def hypothesis_layers(
     """
     opts = opts or ColumnAssetOptions()
     changes = _changes(layout, opts)
-    return {
+    out = {
         h.id: hypothesis_layer(
             [h],
             layout,
@@ -189,6 +190,10 @@ def hypothesis_layers(
         )
         for h in layout.hypotheses
     }
+    for hid, lay in out.items():  # each carries its hypothesis' paradata as shipped
+        if lay is not None:
+            annotate_hypothesis_layer(lay, hid, layout.paradata, layout.hypotheses)
+    return out
 
 
 def _materials_layer() -> Sdf.Layer:
@@ -380,6 +385,8 @@ class TemplePlan:
         save_layer(_root_layer(layout.name), tmp / ROOT_LAYER)
         # created only where absent: an existing overrides.usda (or symlink) is never touched
         save_layer(_user_overrides_layer(), tmp / OVERRIDES_LAYER)
+        # paradata on every part and the view variant set (ionic_usd.usd.paradata)
+        annotate_temple(tmp, layout.paradata, layout.hypotheses)
         # checks and hints on the generated layer alone: the user's opinions are theirs
         # opened without payloads: the columns are bounded by the asset's extentsHints and
         # the checks compare transforms, not column geometry (composition ~30 % cheaper)

@@ -1,0 +1,101 @@
+"""``ionic-usd web`` in a real browser (headless Chromium through playwright-core, run by
+``tools/node/web_check.mjs``): toggles change the image only where they should, the panel
+shows the USD's paradata, the permalink restores the view. Needs ``npm ci`` in tools/node and
+Chromium (``tools/check_web.sh`` installs both; CI runs it)."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+from pxr import Usd
+
+NODE_DIR = Path(__file__).resolve().parent.parent / "tools" / "node"
+CHROMIUM = os.environ.get("CHROMIUM", "/usr/bin/chromium")
+
+pytestmark = [
+    pytest.mark.slow,
+    pytest.mark.skipif(
+        not (NODE_DIR / "node_modules" / "playwright-core").is_dir()
+        or not Path(CHROMIUM).is_file()
+        or shutil.which("node") is None,
+        reason="needs node, `npm ci` in tools/node and Chromium (tools/check_web.sh)",
+    ),
+]
+
+
+@pytest.fixture(scope="module")
+def checked(tiny_temple, tmp_path_factory):
+    from ionic_usd.web import write_site
+
+    site = tmp_path_factory.mktemp("web") / "site"
+    write_site(tiny_temple.root, site, three=NODE_DIR / "node_modules" / "three")
+    proc = subprocess.run(
+        ["node", str(NODE_DIR / "web_check.mjs"), str(site), "--width", "960", "--height", "600"],
+        capture_output=True,
+        text=True,
+        timeout=1200,
+    )
+    line = next((x for x in proc.stdout.splitlines() if x.startswith("RESULT ")), None)
+    assert proc.returncode == 0 and line, proc.stderr[-3000:]
+    return json.loads(line[len("RESULT ") :]), site
+
+
+def test_no_console_error_and_nothing_from_outside(checked):
+    res, _ = checked
+    assert res["errors"] == [] and res["outside"] == []
+
+
+def test_each_toggle_changes_the_image_only_where_its_parts_are(checked):
+    res, site = checked
+    data = json.loads((site / "data.json").read_text())
+    toggles = [h["id"] for h in data["hypotheses"] if h["glb"]]
+    assert toggles and sorted(res["hypotheses"]) == sorted(toggles)
+    for hid, r in res["hypotheses"].items():
+        assert r["inside"] > 0, hid  # it draws something different ...
+        assert r["outside"] == 0, hid  # ... only inside the box of what it draws or hides
+        assert r["restored"], hid  # and off again is the baseline image, pixel for pixel
+
+
+def test_reliability_view_recolours_and_returns(checked):
+    res, _ = checked
+    assert res["reliability"]["changed"] > 10_000 and res["reliability"]["restored"]
+
+
+def _usd_record(stage, path: str) -> dict:
+    prim = stage.GetPrimAtPath(path.split("[")[0])
+    while prim and "paradata" not in prim.GetCustomData():
+        prim = prim.GetParent()
+    assert prim, path
+    return dict(prim.GetCustomData()["paradata"])
+
+
+def test_a_click_shows_the_paradata_of_the_usd(checked, tiny_temple):
+    res, _ = checked
+    stage = Usd.Stage.Open(str(tiny_temple.root))
+    stage.GetDefaultPrim().GetVariantSets().GetVariantSet("lod").SetVariantSelection("low")
+    shown = [c["shown"] for c in res["clicks"] if c["shown"].get("path")]
+    assert len(shown) >= 3
+    for f in shown:
+        rec = _usd_record(stage, f["path"])
+        assert f["unit"] == rec["unit"] and f["evidence"] == rec["evidence"], f
+        assert f["certainty"] == rec["certainty"] and f["description"] == rec["description"]
+        assert f["sources"].split("\n") == list(rec["sources"])
+
+
+def test_permalink_restores_view_hypotheses_selection_and_image(checked):
+    res, _ = checked
+    p = res["permalink"]
+    assert p["state"] == p["reopened"] and p["state"]["view"] == "reliability"
+    assert p["state"]["sel"] == "/Temple/Podium/die" and p["same"]
+
+
+def test_frame_times_are_reported(checked):
+    res, _ = checked
+    ft = res["frameTimes"]
+    print("frame times (ms):", ft)
+    assert 0 < ft["median"] <= ft["p95"] <= ft["max"] and ft["triangles"] > 0
