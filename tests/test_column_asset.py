@@ -399,7 +399,6 @@ def _capital(stage) -> Usd.Prim:
 def _capital_name(stage) -> str:
     (name,) = [path.rsplit("/", 1)[1] for path in active_meshes(stage) if "/CapitalBody/" in path]
     return name
-    return prim
 
 
 def test_volute_variant_switches_the_capital_to_the_centred_arcs(column_asset):

@@ -149,12 +149,12 @@ def _set_xform(spec: Sdf.PrimSpec, x: float, z: float, yaw: float, scale: float)
 
 
 def _group(layer: Sdf.Layer, path: str, type_name: str = "Xform") -> Sdf.PrimSpec:
-    """A prim of ``type_name``; kind = group on an Xform (kinds belong to models, and a
-    PointInstancer or a Scope of prototypes is none)."""
+    """A group model of ``type_name``. A PointInstancer whose prototypes are models (temples,
+    the column asset) is a group too, and so is its Prototypes scope: draw modes (the cards)
+    apply to models only, and a prototype is a model only when the hierarchy above it is
+    one (docs/usd.md)."""
     spec = Sdf.CreatePrimInLayer(layer, path)
-    spec.specifier, spec.typeName = Sdf.SpecifierDef, type_name
-    if type_name == "Xform":
-        spec.kind = "group"
+    spec.specifier, spec.typeName, spec.kind = Sdf.SpecifierDef, type_name, "group"
     return spec
 
 
@@ -172,6 +172,13 @@ def _default_render(lo4: np.ndarray, hi4: np.ndarray) -> tuple[np.ndarray, np.nd
     if not ok:
         return np.zeros(3), np.zeros(3)
     return lo4[ok].min(axis=0), hi4[ok].max(axis=0)
+
+
+def _as_default(ext: tuple[np.ndarray, np.ndarray], n: int) -> tuple[np.ndarray, np.ndarray]:
+    lo4, hi4 = np.full((4, 3), np.inf), np.full((4, 3), -np.inf)
+    if n:
+        lo4[0], hi4[0] = ext
+    return lo4, hi4
 
 
 def _extents_hint(lo4: np.ndarray, hi4: np.ndarray) -> Vt.Vec3fArray:
@@ -429,8 +436,13 @@ def compose_city(
             _instancer(body, "/City/Porticus", cprotos, cidx, columns.xz, columns.yaw, None, c_ext)
     # the city's extentsHint per purpose (default, render, proxy, guide), as BBoxCache with
     # useExtentsHint reads it: the union of the placed prototypes' bounds of that purpose
-    t4 = purpose_bounds(tlo4, thi4, proto_of, temples.xz, temples.yaw, temples.scale)
-    c4 = purpose_bounds(clo4, chi4, cidx, columns.xz, columns.yaw, None)
+    # (a PointInstancer is bounded by its authored extent, which counts for its own purpose,
+    # default: the street columns and a field of temples enter the default range)
+    c4 = _as_default(c_ext, len(columns))
+    if as_instancer:
+        t4 = _as_default(t_ext, len(temples))
+    else:
+        t4 = purpose_bounds(tlo4, thi4, proto_of, temples.xz, temples.yaw, temples.scale)
     lo4, hi4 = np.minimum(t4[0], c4[0]), np.maximum(t4[1], c4[1])
     lo, hi = _default_render(lo4, hi4)
     root = new_layer(
@@ -533,7 +545,7 @@ def load_region(stage: Usd.Stage, lo: Sequence[float], hi: Sequence[float]) -> l
     opened with ``Usd.Stage.LoadNone`` (each temple is a payload); returns their paths."""
     loaded = []
     holder = stage.GetPrimAtPath("/City/Temples")
-    for prim in holder.GetChildren() if holder else []:
+    for prim in holder.GetAllChildren() if holder else []:
         t = prim.GetAttribute("xformOp:translate").Get()
         if t is not None and lo[0] <= t[0] <= hi[0] and lo[1] <= t[2] <= hi[1]:
             loaded.append(str(prim.GetPath()))
