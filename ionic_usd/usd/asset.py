@@ -4,17 +4,19 @@
 
     <Name>/<Name>.usda            interface: Xform default prim, kind = component, assetInfo,
                                   variant sets, extentsHint, payload → ./Payload/Contents.usda
-    <Name>/Payload/Contents.usda  sublayers ./Materials.usda and ./Geometry.usdc
-    <Name>/Payload/Geometry.usdc  every mesh once: /<Name>/Geom/<Part>/<Variant>_<lod>
+    <Name>/Payload/Contents.usda  sublayers ./Materials.usda and ./Geometry.usdc; the stable
+                                  slots (Geom/<Part>, Proxy/<Part>) and the variants that point
+                                  each at its library item
+    <Name>/Payload/Geometry.usdc  every mesh once, in the library class /_<Name>Parts/<Part>/<name>
     <Name>/Payload/Materials.usda UsdPreviewSurface materials, default binding on Geom
     <Name>/Payload/Textures/      texture images (./Textures/… from Materials.usda)
 
 Variant sets live on the interface's default prim, so they are visible before the payload is
-loaded. Each mesh carries tags — the variant it belongs to in each variant set that concerns
-it (a shaft is tagged only with its ``lod``; a base with ``lod`` and ``base``). A variant
-deactivates (``active = false``) every mesh whose tag for that set differs, so the active
-meshes are those matching every selection, geometry shared between variants is authored once,
-and switching one set changes exactly the meshes tagged by it.
+loaded; the same sets, nested by name in ``Contents.usda``, hold the geometry. Each mesh
+carries tags — the variant it belongs to in each variant set that concerns it (a shaft is
+tagged only with ``lod``, ``flutes`` and ``form``). A slot (``Geom/Shaft``) references the
+mesh whose tags match the selection (:mod:`ionic_usd.usd.asset_slots`): switching a set
+changes what is under the paths of the parts it tags, never a path.
 """
 
 from __future__ import annotations

@@ -15,8 +15,9 @@ already right it writes a layer of absolute values and references it from the va
 * a single hypothesis whose own layer composes a cuboid or column wrongly is a bug: an error.
 
 Values are written relative to the composed parent, so a part's translation from another
-layer still applies; ``active`` is authored only on a prim a hypothesis deactivated, so the
-``detail`` variants keep switching what they show.
+layer still applies; a prim that must not show is hidden (``visibility``, its path stays),
+and one a hypothesis hid is shown again only where a combination needs it, so the ``detail``
+variants keep switching what they show.
 """
 
 from __future__ import annotations
@@ -179,7 +180,7 @@ def _correction_layer(
     inactive: set[str],
 ) -> Sdf.Layer:
     """Absolute values (relative to the composed parents) for the prims in ``fixes``;
-    ``inactive``: those a hypothesis deactivated where they were checked."""
+    ``inactive``: those a hypothesis hid where they were checked."""
     lay = new_layer(
         "Temple",
         kind="assembly",

@@ -20,9 +20,10 @@ Files of a temple folder that hold the detail (written by :func:`write_detail`, 
                          hypothesis' own layer over the detail is not already right)
 
 The variant set itself lives in ``generated.usda`` (:func:`author_detail_variants`), where the
-whole temple composes, so that none of its opinions dangles: ``plain`` deactivates the
-mouldings and the ornament (the cuboid temple); ``moulded`` shows the mouldings and
-deactivates the ``architrave`` and ``cornice`` cuboids they replace; ``carved`` adds the
+whole temple composes, so that none of its opinions dangles: ``plain`` hides
+(``visibility = invisible``: every variant keeps every prim path) the mouldings and the
+ornament (the cuboid temple); ``moulded`` shows the mouldings and hides the ``architrave`` and
+``cornice`` cuboids they replace; ``carved`` adds the
 instanced dentils, roof tiles and (with its hypothesis) the frieze relief. Both detailed
 variants bind the podium (cuboids and mouldings) to Travertine — the podium's facing [C];
 the tiles are Terracotta in every variant that shows them; walls, entablature and mouldings
