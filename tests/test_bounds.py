@@ -121,6 +121,22 @@ def check_hint(prim: Usd.Prim, where, brute: bool = True, atol: float = 1e-4) ->
     lo = np.min([h[0] for h in drawn], axis=0)
     hi = np.max([h[1] for h in drawn], axis=0)
     np.testing.assert_allclose([r.GetMin(), r.GetMax()], [lo, hi], atol=atol, err_msg=str(where))
+    # and per purpose, BBoxCache reading the hint equals BBoxCache computing the bound
+    for purpose in PURPOSES[:3]:
+        hinted, computed = (
+            UsdGeom.BBoxCache(Usd.TimeCode.Default(), [purpose], useExtentsHint=use)
+            .ComputeUntransformedBound(prim)
+            .ComputeAlignedRange()
+            for use in (True, False)
+        )
+        assert hinted.IsEmpty() == computed.IsEmpty(), (where, purpose)
+        if not computed.IsEmpty():
+            np.testing.assert_allclose(
+                [hinted.GetMin(), hinted.GetMax()],
+                [computed.GetMin(), computed.GetMax()],
+                atol=atol,
+                err_msg=str((where, purpose)),
+            )
 
 
 def every_combination(stage, root, sets):

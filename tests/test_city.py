@@ -85,14 +85,60 @@ def test_grid_city_layers_hierarchy_and_bounds(grid_city):
     stage = Usd.Stage.Open(str(out / "City.usda"))
     assert _model_hierarchy_ok(stage) == []
     assert Usd.ModelAPI(stage.GetPrimAtPath("/City")).GetKind() == "assembly"
-    hint = UsdGeom.ModelAPI(stage.GetPrimAtPath("/City")).GetExtentsHintAttr().Get()
-    box = (
-        UsdGeom.BBoxCache(Usd.TimeCode.Default(), ["default", "render"])
+    # the hint (a range per purpose) read as BBoxCache reads it equals the computed bound
+    hinted, box = (
+        UsdGeom.BBoxCache(Usd.TimeCode.Default(), ["default", "render"], useExtentsHint=use)
         .ComputeWorldBound(stage.GetPrimAtPath("/City"))
         .ComputeAlignedRange()
+        for use in (True, False)
     )
-    np.testing.assert_allclose(np.array(hint[0]), np.array(box.GetMin()), atol=1e-3)
-    np.testing.assert_allclose(np.array(hint[1]), np.array(box.GetMax()), atol=1e-3)
+    np.testing.assert_allclose(np.array(hinted.GetMin()), np.array(box.GetMin()), atol=1e-3)
+    np.testing.assert_allclose(np.array(hinted.GetMax()), np.array(box.GetMax()), atol=1e-3)
+
+
+def _meshes(stage: Usd.Stage) -> int:
+    pred = Usd.TraverseInstanceProxies(Usd.PrimAllPrimsPredicate)
+    return sum(1 for p in Usd.PrimRange(stage.GetPseudoRoot(), pred) if p.IsA(UsdGeom.Mesh))
+
+
+def test_unloaded_city_composes_no_mesh_and_loads_by_region(grid_city):
+    """Each temple is a payload (the street columns' asset has its own): a city opened with
+    LoadNone composes no mesh at all; load_region loads the temples of one block only."""
+    from ionic_usd.usd.city import load_region
+
+    out, s, _ = grid_city
+    stage = Usd.Stage.Open(str(out / "City.usda"), Usd.Stage.LoadNone)
+    assert _meshes(stage) == 0
+    temples = stage.GetPrimAtPath("/City/Temples").GetAllChildren()  # unloaded: not "Children"
+    xz = {str(t.GetPath()): t.GetAttribute("xformOp:translate").Get() for t in temples}
+    x0 = min(v[0] for v in xz.values())
+    z0 = min(v[2] for v in xz.values())
+    loaded = load_region(stage, (x0 - 1, z0 - 1), (x0 + 1, z0 + 1))
+    assert len(loaded) == 1
+    assert stage.GetPrimAtPath(loaded[0]).IsLoaded()
+    assert not any(stage.GetPrimAtPath(p).IsLoaded() for p in xz if p not in loaded)
+    one = _meshes(stage)
+    assert one > 0
+    full = Usd.Stage.Open(str(out / "City.usda"))
+    assert _meshes(full) > one * (s["temples"] - 1)
+
+
+def test_city_extents_hint_is_uniform_true_for_every_purpose(grid_city):
+    out, _, _ = grid_city
+    stage = Usd.Stage.Open(str(out / "City.usda"))
+    city = stage.GetPrimAtPath("/City")
+    attr = UsdGeom.ModelAPI(city).GetExtentsHintAttr()
+    assert attr.GetVariability() == Sdf.VariabilityUniform
+    for purposes in (["default"], ["render"], ["proxy"], ["default", "render"]):
+        hinted, computed = (
+            UsdGeom.BBoxCache(Usd.TimeCode.Default(), purposes, useExtentsHint=use)
+            .ComputeUntransformedBound(city)
+            .ComputeAlignedRange()
+            for use in (True, False)
+        )
+        assert not computed.IsEmpty(), purposes
+        np.testing.assert_allclose(hinted.GetMin(), computed.GetMin(), atol=1e-3)
+        np.testing.assert_allclose(hinted.GetMax(), computed.GetMax(), atol=1e-3)
 
 
 def test_rebuild_reuses_and_is_byte_identical(grid_city, tmp_path):

@@ -19,6 +19,7 @@ from ionic_usd.texture.stone import TextureError
 from ionic_usd.usd import validate_stage
 from ionic_usd.usd.column_asset import ColumnAssetOptions
 
+LIB = "/_IonicColumnParts/"
 VARIANTS = {
     "lod": ("high", "medium", "low"),
     "base": ("attic_bezier_plinth", "attic_bezier", "G1", "G2"),
@@ -35,14 +36,22 @@ def open_stage(report) -> Usd.Stage:
     return Usd.Stage.Open(str(report.path))
 
 
+def source(prim: Usd.Prim) -> str:
+    """The library item (``/_IonicColumnParts/<part>/<name>``) a slot references."""
+    (name,) = {s.path.name for s in prim.GetPrimStack() if s.path.pathString.startswith(LIB)}
+    return name
+
+
 def active_meshes(stage, purpose: str = "render") -> dict[str, Usd.Prim]:
-    """Active part meshes of one purpose (render: the selected lod under Geom; proxy: Proxy),
-    not the ornament prototypes under PointInstancers."""
+    """Drawn part meshes of one purpose (render: the selected lod under Geom; proxy: Proxy),
+    not the ornament prototypes under PointInstancers, keyed by their stable path and the
+    library item they reference (``/IonicColumn/Geom/Base/Base_G1_high``)."""
     return {
-        str(p.GetPath()): p
+        f"{p.GetPath()}/{source(p)}": p
         for p in stage.Traverse()
         if p.IsA(UsdGeom.Mesh)
         and UsdGeom.Imageable(p).ComputePurpose() == purpose
+        and UsdGeom.Imageable(p).ComputeVisibility() != UsdGeom.Tokens.invisible
         and not _prototype_of_instancer(p)
     }
 
@@ -61,16 +70,38 @@ def test_low_lod_is_the_proxy_of_every_selection(column_asset):
         assert set(proxy) == {n.replace(f"_{combo[0]}", "_low") for n in render}, combo
         for prim in proxy.values():
             assert UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial()[0], prim.GetPath()
-    layer = Sdf.Layer.FindOrOpen(str(column_asset.path.parent / "Payload/Geometry.usdc"))
+        # every render mesh names its proxy (UsdGeomImageable proxyPrim), the same part
+        for prim in active_meshes(stage).values():
+            (target,) = UsdGeom.Imageable(prim).GetProxyPrimRel().GetTargets()
+            assert target == Sdf.Path(f"/IonicColumn/Proxy/{prim.GetName()}")
     # proxies are references to the low meshes, not second copies of their arrays
-    proxies = layer.GetPrimAtPath("/IonicColumn/Proxy").nameChildren
-    assert len(proxies) > 0
-    for spec in proxies:
-        assert "_low" in spec.name and not spec.attributes, spec.path
-        (ref,) = spec.referenceList.prependedItems
-        target = layer.GetPrimAtPath(ref.primPath)
-        assert target is not None and target.name == spec.name, spec.path
-        assert str(ref.primPath).startswith("/IonicColumn/Geom/")
+    layer = Sdf.Layer.FindOrOpen(str(column_asset.path.parent / "Payload/Geometry.usdc"))
+    assert not layer.GetPrimAtPath("/IonicColumn/Proxy")
+    for prim in stage.GetPrimAtPath("/IonicColumn/Proxy").GetChildren():
+        assert [s.layer for s in prim.GetPrimStack() if s.attributes] == [layer]
+
+
+def test_prim_paths_are_the_same_under_every_selection(column_asset):
+    """Switching a variant swaps what is under a path, never the path (all sets, sampled)."""
+    import random
+
+    stage = open_stage(column_asset)
+    root = stage.GetDefaultPrim()
+    vsets = root.GetVariantSets()
+
+    def paths():
+        return [str(p.GetPath()) for p in Usd.PrimRange(root, Usd.PrimAllPrimsPredicate)]
+
+    first = paths()
+    assert "/IonicColumn/Geom/Shaft" in first and "/IonicColumn/Proxy/Shaft" in first
+    rnd = random.Random(32)
+    sources = set()
+    for _ in range(60):
+        for n, vs in VARIANTS.items():
+            vsets.GetVariantSet(n).SetVariantSelection(rnd.choice(vs))
+        assert paths() == first, vsets.GetAllVariantSelections()
+        sources.add(source(stage.GetPrimAtPath("/IonicColumn/Geom/Shaft")))
+    assert len(sources) == 3 * 2 * 3  # lod x flutes x form: the content did change
 
 
 def _prototype_of_instancer(p: Usd.Prim) -> bool:
@@ -155,7 +186,7 @@ def test_every_mesh_closed_with_uvs_in_unit_square(column_asset):
     stage = Usd.Stage.Open(layer)
     prims = [
         p
-        for p in stage.Traverse()
+        for p in stage.TraverseAll()
         if p.IsA(UsdGeom.Mesh)
         and "Proxy" not in str(p.GetPath())
         and not _prototype_of_instancer(p)
@@ -181,7 +212,7 @@ def test_charts_do_not_overlap_in_any_mesh(column_asset):
     layer = Sdf.Layer.FindOrOpen(str(column_asset.path.parent / "Payload/Geometry.usdc"))
     stage = Usd.Stage.Open(layer)
     checked = 0
-    for prim in stage.Traverse():
+    for prim in stage.TraverseAll():
         if (
             not prim.IsA(UsdGeom.Mesh)
             or prim.GetParent().GetName() == "Proxy"
@@ -365,6 +396,11 @@ def _capital(stage) -> Usd.Prim:
     return prim
 
 
+def _capital_name(stage) -> str:
+    (name,) = [path.rsplit("/", 1)[1] for path in active_meshes(stage) if "/CapitalBody/" in path]
+    return name
+
+
 def test_volute_variant_switches_the_capital_to_the_centred_arcs(column_asset):
     """The ``volute`` set swaps the capital mesh at every lod; centred_arcs holds the
     generator's centred-arc capital (same points), and the two curves differ by centimetres."""
@@ -384,7 +420,7 @@ def test_volute_variant_switches_the_capital_to_the_centred_arcs(column_asset):
         for v in VARIANTS["volute"]:
             vs.SetVariantSelection(v)
             prim = _capital(stage)
-            assert prim.GetName().endswith(f"_{v}_{lod}"), prim.GetPath()
+            assert _capital_name(stage).endswith(f"_{v}_{lod}"), prim.GetPath()
             pts[v] = np.array(UsdGeom.Mesh(prim).GetPointsAttr().Get(), dtype=np.float64)
         d, _ = cKDTree(pts["log_spiral"]).query(pts["centred_arcs"])
         assert d.max() > 0.005, lod  # the volute's face is another curve
@@ -420,18 +456,18 @@ def test_every_volute_selection_validates_and_is_one_solid(column_asset, lod):
         for n, v in zip(names, combo, strict=True):
             vsets.GetVariantSet(n).SetVariantSelection(v)
         assert validate_stage(stage) == [], combo
-        seen.add(_capital(stage).GetPath())
-    assert len(seen) == 2 * 2 * 2 * 3  # every combination its own mesh
-    # closed and outward: test_every_mesh_closed_with_uvs_in_unit_square; here one shell
-    for path in seen:
-        prim = stage.GetPrimAtPath(path)
+        seen.add(_capital_name(stage))
+        prim = _capital(stage)
+        assert prim.GetPath() == Sdf.Path("/IonicColumn/Geom/CapitalBody")
         g = UsdGeom.Mesh(prim)
         m = Mesh(
             np.array(g.GetPointsAttr().Get()),
             np.array(g.GetFaceVertexCountsAttr().Get()),
             np.array(g.GetFaceVertexIndicesAttr().Get()),
         )
-        assert shell_count(m) == 1, path
+        assert shell_count(m) == 1, combo
+    assert len(seen) == 2 * 2 * 2 * 3  # every combination its own mesh
+    # closed and outward: test_every_mesh_closed_with_uvs_in_unit_square; here one shell
 
 
 def test_high_lod_carries_the_carved_capital_cut_by_each_form(column_asset):
@@ -444,13 +480,20 @@ def test_high_lod_carries_the_carved_capital_cut_by_each_form(column_asset):
         vsets.GetVariantSet("lod").SetVariantSelection(lod)
         for form in VARIANTS["form"]:
             vsets.GetVariantSet("form").SetVariantSelection(form)
+            every = [p for p in stage.Traverse() if p.IsA(UsdGeom.PointInstancer)]
+            assert [str(p.GetPath()) for p in every] == [
+                "/IonicColumn/Geom/Ornament/EggAndDart",
+                "/IonicColumn/Geom/Ornament/BeadAndReel",
+            ]
             inst = [
-                UsdGeom.PointInstancer(p) for p in stage.Traverse() if p.IsA(UsdGeom.PointInstancer)
+                UsdGeom.PointInstancer(p)
+                for p in every
+                if UsdGeom.Imageable(p).ComputeVisibility() != UsdGeom.Tokens.invisible
             ]
             if lod != "high":
                 assert inst == [], (lod, form)
                 continue
-            assert sorted(i.GetPrim().GetName().split("_high")[0] for i in inst) == [
+            assert sorted(source(i.GetPrim()).split("_high")[0] for i in inst) == [
                 "BeadAndReel",
                 "EggAndDart",
             ], form

@@ -121,12 +121,17 @@ def test_temple_placements_and_triangles_match_the_composer(tiny_temple):
 def test_variant_selection_reaches_nested_instances(tiny_city):
     base = read_scene(tiny_city)
     engaged = read_scene(tiny_city, variants={"form": "engaged"})
-    names = {m.name for m in engaged.meshes.values()}
-    column_names = {n for n in names if n.startswith(("Shaft", "Base", "Capital", "Scroll"))}
-    assert column_names and all(n.endswith("_engaged") for n in column_names)
-    assert any(
-        not m.name.endswith("_engaged") for m in base.meshes.values() if m.name.startswith("Shaft")
-    )
+
+    # the column parts keep their names (stable prim paths); the engaged selection swaps
+    # their content: cut by the wall plane 5 cm behind the axis (z >= -0.05 in the part's
+    # frame), where the full column reaches -r
+    def column_parts(scene):
+        parts = [m for m in scene.meshes.values() if m.name in ("Shaft", "Base", "CapitalBody")]
+        assert {m.name for m in parts} == {"Shaft", "Base", "CapitalBody"}
+        return parts
+
+    assert all(m.points[:, 2].min() >= -0.05 - 1e-6 for m in column_parts(engaged))
+    assert any(m.points[:, 2].min() < -0.3 for m in column_parts(base))
 
 
 @pytest.mark.parametrize(

@@ -147,9 +147,15 @@ def test_each_hypothesis_switches_exactly_its_prims(portunus_temple, hid):
     after = composed_values(stage)
     changed = {p for p in after if before.get(p) != after[p] and not p.startswith("/__")}
     changed.discard("/Temple")  # its variant selection itself
-    # prims the default `detail` variant deactivates show no change; an activated prim
+
+    # prims the default `detail` variant hides show no change; an activated prim
     # brings its descendants along
-    named = {p for p in named if stage.GetPrimAtPath(p).IsActive()}
+    def shown(p: str) -> bool:
+        prim = stage.GetPrimAtPath(p)
+        return prim.IsActive() and UsdGeom.Imageable(prim).ComputeVisibility() != "invisible"
+
+    named = {p for p in named if shown(p)}
+    changed = {p for p in changed if shown(p)}
     changed = {p for p in changed if not any(p.startswith(n + "/") for n in named)}
     # instances whose variant selection changed re-point to other prototypes; their
     # descendants are instance proxies and are not traversed

@@ -113,7 +113,13 @@ def test_model_hierarchy_and_scopes(portunus_temple):
         assert col.IsModel() and Usd.ModelAPI(col).GetKind() == "component"
         proto = col.GetPrototype()
         assert proto.GetChild("Geom").GetTypeName() == "Scope"
-        assert {c.GetTypeName() for c in proto.GetChild("Geom").GetChildren()} == {"Scope"}
+        # stable slots: Geom/Base, Geom/Shaft, Geom/CapitalBody meshes, Geom/Ornament
+        assert {c.GetName(): c.GetTypeName() for c in proto.GetChild("Geom").GetChildren()} == {
+            "Base": "Mesh",
+            "Shaft": "Mesh",
+            "CapitalBody": "Mesh",
+            "Ornament": "Scope",
+        }
     # every Xform either is a model or carries transform ops: organising prims are Scopes
     for p in Usd.PrimRange(stage.GetPseudoRoot(), EVERYTHING):
         if p.GetTypeName() == "Xform" and not p.IsModel():
@@ -224,6 +230,38 @@ def layer_paradata(folder: Path) -> dict[str, dict[str, set[str]]]:
     return out
 
 
+def shown(prim: Usd.Prim) -> bool:
+    """Active and visible: a variant hides what it does not show (its prim paths stay)."""
+    return prim.IsActive() and UsdGeom.Imageable(prim).ComputeVisibility() != "invisible"
+
+
+def test_temple_prim_paths_are_the_same_under_every_selection(portunus_temple):
+    """Every prim path of the temple, the columns' instance proxies included, is the same
+    under sampled selections of all its variant sets (lod, detail, every hypothesis)."""
+    import random
+
+    stage = Usd.Stage.Open(str(portunus_temple.root))
+    root = stage.GetDefaultPrim()
+    vsets = root.GetVariantSets()
+    pred = Usd.TraverseInstanceProxies(Usd.PrimAllPrimsPredicate)
+
+    def paths() -> list[str]:
+        return [str(p.GetPath()) for p in Usd.PrimRange(root, pred)]
+
+    first = paths()
+    assert sum(p.endswith("/Geom/Shaft") for p in first) == 18  # one slot per column
+    options = {n: vsets.GetVariantSet(n).GetVariantNames() for n in vsets.GetNames()}
+    assert len(options) >= 8  # lod, detail and the hypotheses
+    rnd = random.Random(32)
+    drawn = set()
+    for _ in range(12):
+        for n, vs in options.items():
+            vsets.GetVariantSet(n).SetVariantSelection(rnd.choice(vs))
+        assert paths() == first, vsets.GetAllVariantSelections()
+        drawn.add(temple_triangles(stage))
+    assert len(drawn) > 6  # the selections did change what is drawn
+
+
 def check_combination(stage, hyps, chosen, detail, recorded, layout) -> None:
     """Compose one selection of hypotheses x ``detail`` variant and check that the parts meet
     (columns between stylobate and architrave, roof on the cornice, ornament on its member),
@@ -239,13 +277,13 @@ def check_combination(stage, hyps, chosen, detail, recorded, layout) -> None:
 
     def world(path: str) -> Gf.Range3d:
         prim = stage.GetPrimAtPath(path)
-        assert prim and prim.IsActive(), (where, path)
+        assert prim and shown(prim), (where, path)
         return bbox.ComputeWorldBound(prim).ComputeAlignedRange()
 
     # plain shows the cuboids; the detailed variants the mouldings that replace two of them
     member = "/Temple/Entablature/" + ("" if detail == "plain" else "Mouldings/")
     for name in ("cornice", "architrave"):
-        gone = stage.GetPrimAtPath(f"/Temple/Entablature/{name}").IsActive()
+        gone = shown(stage.GetPrimAtPath(f"/Temple/Entablature/{name}"))
         assert gone == (detail == "plain"), (where, name)
     cornice = world(member + "cornice")
     cornice_top = cornice.GetMax()[1]
@@ -288,6 +326,8 @@ def check_combination(stage, hyps, chosen, detail, recorded, layout) -> None:
     for p in stage.Traverse():
         if p.IsA(UsdGeom.Mesh):
             assert np.isfinite(np.array(p.GetAttribute("points").Get())).all()
+        if not shown(p):
+            continue  # a hidden prim (a variant not selected) shows nothing: no paradata
         listed = set(p.GetCustomData().get("ionic_usd", {}).get("hypotheses", {}))
         if str(p.GetPath()) == "/Temple":
             continue  # the listing of all hypotheses
@@ -472,8 +512,14 @@ def test_temple_lod_passes_to_every_column(portunus_temple):
     per_proto, proxies = {}, 0
     for proto in stage.GetPrototypes():
         meshes = [p for p in Usd.PrimRange(proto) if p.IsA(UsdGeom.Mesh)]
-        drawn = [p for p in meshes if UsdGeom.Imageable(p).ComputePurpose() == "render"]
-        proxies += len(meshes) - len(drawn)
+        # the carved ornament keeps its paths at every lod, invisible but in lod high
+        visible = [
+            p
+            for p in meshes
+            if UsdGeom.Imageable(p).ComputeVisibility() != UsdGeom.Tokens.invisible
+        ]
+        drawn = [p for p in visible if UsdGeom.Imageable(p).ComputePurpose() == "render"]
+        proxies += len(visible) - len(drawn)
         per_proto[proto.GetPath()] = sum(
             int(np.sum(np.array(UsdGeom.Mesh(p).GetFaceVertexCountsAttr().Get()) - 2))
             for p in drawn
@@ -490,7 +536,9 @@ def test_temple_lod_passes_to_every_column(portunus_temple):
     own, copies = 0, 0
     it = iter(stage.Traverse())
     for p in it:
-        if p.IsA(UsdGeom.PointInstancer):
+        if not shown(p):  # what a variant hides (its paths stay) is not drawn
+            it.PruneChildren()
+        elif p.IsA(UsdGeom.PointInstancer):
             it.PruneChildren()
             pi = UsdGeom.PointInstancer(p)
             per = [tris(stage.GetPrimAtPath(t)) for t in pi.GetPrototypesRel().GetTargets()]

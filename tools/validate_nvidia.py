@@ -46,12 +46,19 @@ def find_validator(given: str | None) -> str:
     )
 
 
-def validate(validator: str, path: Path, timeout: float) -> dict:
-    """The validator's JSON report for one layer (``{"status", "rules": [...]}``)."""
+def validate(validator: str, path: Path, timeout: float, variants: bool = False) -> dict:
+    """The validator's JSON report for one layer (``{"status", "rules": [...]}``); with
+    ``variants`` every combination of every prim's variant sets (the validator's default)."""
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "report.json"
         proc = subprocess.run(
-            [validator, str(path), "--no-variants", "--json-output", str(out)],
+            [
+                validator,
+                str(path),
+                "--variants" if variants else "--no-variants",
+                "--json-output",
+                str(out),
+            ],
             capture_output=True,
             text=True,
             timeout=timeout,
@@ -83,6 +90,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--validator", help="path of nvidia_usd_validate")
     ap.add_argument("--timeout", type=float, default=900.0, help="seconds per layer")
     ap.add_argument("--json", type=Path, help="write every report here")
+    ap.add_argument(
+        "--variants",
+        action="store_true",
+        help="validate every combination of every prim's variant sets (the validator's "
+        "default; it composes their Cartesian product, instance prims included)",
+    )
     args = ap.parse_args(argv)
     validator = find_validator(args.validator)
     root = args.folder
@@ -99,7 +112,7 @@ def main(argv: list[str] | None = None) -> int:
         name = f.name if root.is_file() else f.relative_to(root).as_posix()
         t0 = time.perf_counter()
         try:
-            report = validate(validator, f, args.timeout)
+            report = validate(validator, f, args.timeout, args.variants)
         except subprocess.TimeoutExpired:
             report = {"status": "TIMEOUT", "rules": []}
         everything[name] = report

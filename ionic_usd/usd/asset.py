@@ -4,17 +4,19 @@
 
     <Name>/<Name>.usda            interface: Xform default prim, kind = component, assetInfo,
                                   variant sets, extentsHint, payload → ./Payload/Contents.usda
-    <Name>/Payload/Contents.usda  sublayers ./Materials.usda and ./Geometry.usdc
-    <Name>/Payload/Geometry.usdc  every mesh once: /<Name>/Geom/<Part>/<Variant>_<lod>
+    <Name>/Payload/Contents.usda  sublayers ./Materials.usda and ./Geometry.usdc; the stable
+                                  slots (Geom/<Part>, Proxy/<Part>) and the variants that point
+                                  each at its library item
+    <Name>/Payload/Geometry.usdc  every mesh once, in the library class /_<Name>Parts/<Part>/<name>
     <Name>/Payload/Materials.usda UsdPreviewSurface materials, default binding on Geom
     <Name>/Payload/Textures/      texture images (./Textures/… from Materials.usda)
 
 Variant sets live on the interface's default prim, so they are visible before the payload is
-loaded. Each mesh carries tags — the variant it belongs to in each variant set that concerns
-it (a shaft is tagged only with its ``lod``; a base with ``lod`` and ``base``). A variant
-deactivates (``active = false``) every mesh whose tag for that set differs, so the active
-meshes are those matching every selection, geometry shared between variants is authored once,
-and switching one set changes exactly the meshes tagged by it.
+loaded; the same sets, nested by name in ``Contents.usda``, hold the geometry. Each mesh
+carries tags — the variant it belongs to in each variant set that concerns it (a shaft is
+tagged only with ``lod``, ``flutes`` and ``form``). A slot (``Geom/Shaft``) references the
+mesh whose tags match the selection (:mod:`ionic_usd.usd.asset_slots`): switching a set
+changes what is under the paths of the parts it tags, never a path.
 """
 
 from __future__ import annotations
@@ -29,18 +31,21 @@ from pxr import Sdf, Usd
 
 from ionic_usd.errors import ParameterError
 from ionic_usd.geometry.mesh import Mesh
-from ionic_usd.usd.bounds import (
-    author_extents_hints,
-    toggled_extents_hints,
-    variant_extents_hints,
+from ionic_usd.usd.asset_slots import (
+    Slot,
+    author_slot_variants,
+    library_path,
+    slot_extents_hints,
+    slots,
 )
+from ionic_usd.usd.bounds import author_extents_hints
 from ionic_usd.usd.materials import (
     MaterialTextures,
     author_preview_material,
     bind_material,
     bind_material_spec,
 )
-from ionic_usd.usd.mesh import author_mesh, define_prim
+from ionic_usd.usd.mesh import author_mesh
 from ionic_usd.usd.stage import new_layer, save_layer
 
 if TYPE_CHECKING:  # the ornament module is imported only when an asset has instancers
@@ -128,37 +133,23 @@ class AssetSpec:
 
 
 def _geometry_layer(spec: AssetSpec) -> Sdf.Layer:
+    """Every mesh and instancer once, in the library class ``/_<Name>Parts/<part>/<name>``
+    (:mod:`ionic_usd.usd.asset_slots`): the composed asset references them from stable slots."""
     layer = new_layer(spec.name, kind=None)
+    lib = library_path(spec.name)
     with Sdf.ChangeBlock():
-        geom = define_prim(layer, f"/{spec.name}/Geom", "Scope")
         for m in spec.meshes:
-            define_prim(layer, f"/{spec.name}/Geom/{m.part}", "Scope")
-            author_mesh(layer, f"/{spec.name}/Geom/{m.part}/{m.name}", m.mesh)
+            author_mesh(layer, f"{lib}/{m.part}/{m.name}", m.mesh)
         if spec.instancers:
             from ionic_usd.usd.instancer import author_point_instancer
 
             for a in spec.instancers:
-                define_prim(layer, f"/{spec.name}/Geom/{a.part}", "Scope")
-                author_point_instancer(layer, f"/{spec.name}/Geom/{a.part}/{a.name}", a.instances)
-        if spec.proxy_lod is not None:
-            # render/proxy split: Geom (the selected lod) renders; Proxy shows the light lod's
-            # meshes in viewports. Each proxy mesh is an internal reference (no second copy
-            # of the arrays), named flat so that part-name lookups under Geom stay unique.
-            _purpose(geom, "render")
-            proxy = define_prim(layer, f"/{spec.name}/Proxy", "Scope")
-            _purpose(proxy, "proxy")
-            for m in _proxy_meshes(spec):
-                ref = define_prim(layer, f"/{spec.name}/Proxy/{m.name}", "Mesh")
-                ref.referenceList.Prepend(
-                    Sdf.Reference(primPath=Sdf.Path(f"/{spec.name}/Geom/{m.part}/{m.name}"))
-                )
+                author_point_instancer(layer, f"{lib}/{a.part}/{a.name}", a.instances)
+        for child in layer.GetPrimAtPath(lib).nameChildren:
+            child.typeName = "Scope"
+        top = layer.GetPrimAtPath(lib)
+        top.specifier, top.typeName = Sdf.SpecifierClass, "Scope"
     return layer
-
-
-def _purpose(spec: Sdf.PrimSpec, purpose: str) -> None:
-    Sdf.AttributeSpec(
-        spec, "purpose", Sdf.ValueTypeNames.Token, Sdf.VariabilityUniform
-    ).default = purpose
 
 
 def _tagged(spec: AssetSpec) -> tuple[AssetMesh | AssetInstancer, ...]:
@@ -166,20 +157,8 @@ def _tagged(spec: AssetSpec) -> tuple[AssetMesh | AssetInstancer, ...]:
     return (*spec.meshes, *spec.instancers)
 
 
-def _toggled(spec: AssetSpec) -> dict[str, Mapping[str, str]]:
-    """What the variants switch (:func:`_interface_layer`): each mesh and instancer under Geom
-    with its tags, each proxy mesh with its tags but ``lod``."""
-    out: dict[str, Mapping[str, str]] = {
-        f"/{spec.name}/Geom/{m.part}/{m.name}": m.tags for m in _tagged(spec)
-    }
-    if spec.proxy_lod is not None:
-        for m in _proxy_meshes(spec):
-            out[f"/{spec.name}/Proxy/{m.name}"] = {s: v for s, v in m.tags.items() if s != "lod"}
-    return out
-
-
-def _proxy_meshes(spec: AssetSpec) -> list[AssetMesh]:
-    return [m for m in spec.meshes if m.tags.get("lod") == spec.proxy_lod]
+def _slots(spec: AssetSpec) -> list[Slot]:
+    return slots(spec.name, _tagged(spec), spec.variant_sets, spec.proxy_lod)
 
 
 def _materials_layer(spec: AssetSpec) -> Sdf.Layer:
@@ -199,9 +178,12 @@ def _materials_layer(spec: AssetSpec) -> Sdf.Layer:
 
 
 def _contents_layer(spec: AssetSpec) -> Sdf.Layer:
+    """The payload's root: the materials and the library as sublayers, the stable slots and
+    the variants that point them at the library."""
     layer = new_layer(spec.name, kind=None)
     layer.subLayerPaths.append("./Materials.usda")
     layer.subLayerPaths.append("./Geometry.usdc")
+    author_slot_variants(layer, f"/{spec.name}", _slots(spec), spec.defaults)
     return layer
 
 
@@ -235,15 +217,6 @@ def _interface_layer(spec: AssetSpec) -> Sdf.Layer:
             for v in variants:
                 var = Sdf.VariantSpec(vs_spec, v)
                 vprim = var.primSpec
-                for m in _tagged(spec):
-                    if vset in m.tags and m.tags[vset] != v:
-                        geom = _over(vprim, "Geom")
-                        part = _over(geom, m.part)
-                        _over(part, m.name).active = False
-                if vset != "lod":  # the proxy follows every set but lod
-                    for m in _proxy_meshes(spec):
-                        if vset in m.tags and m.tags[vset] != v:
-                            _over(_over(vprim, "Proxy"), m.name).active = False
                 if vset == "finish" and v in spec.finishes:
                     scopes = ["Geom"] + (["Proxy"] if spec.proxy_lod is not None else [])
                     for scope in scopes:
@@ -273,18 +246,14 @@ def write_asset_layers(spec: AssetSpec, folder: Path) -> dict[str, Path]:
     }
     interface = _interface_layer(spec)
     written["interface"] = save_layer(interface, folder / f"{spec.name}.usda", force=True)
-    # extentsHint lets a renderer cull and a DCC frame the asset before its payload loads;
-    # computed on the composed asset for every combination of the sets that switch meshes
+    # extentsHint lets a renderer cull and a DCC frame the asset before its payload loads:
+    # per combination of the sets that switch geometry, the union of what the slots reference
     tagging = {
         vs: spec.variant_sets[vs]
         for vs in spec.variant_sets
-        if any(vs in m.tags for m in spec.meshes)
+        if any(vs in m.tags for m in _tagged(spec))
     }
-    stage = Usd.Stage.Open(str(written["interface"]))
-    hints = toggled_extents_hints(stage, f"/{spec.name}", _toggled(spec), tagging)
-    if hints is None:
-        hints = variant_extents_hints(stage, f"/{spec.name}", [f"/{spec.name}"], tagging)
-    del stage
+    hints = slot_extents_hints(str(written["geometry"]), f"/{spec.name}", _slots(spec), tagging)
     author_extents_hints(interface, f"/{spec.name}", hints, list(tagging))
     save_layer(interface, written["interface"], force=True)
     return written

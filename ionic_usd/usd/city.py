@@ -43,7 +43,9 @@ from ionic_usd.errors import OutputExistsError, ParameterError, UsdAuthoringErro
 from ionic_usd.usd.city_prototypes import (
     instance_bounds,
     prim_identifier,
+    prototype_purpose_stats,
     prototype_stats,
+    purpose_bounds,
     temple_selection,
     temple_variant_sets,
 )
@@ -55,6 +57,7 @@ __all__ = [
     "TempleInstances",
     "ColumnInstances",
     "compose_city",
+    "load_region",
     "ROOT_LAYER",
     "INSTANCES_LAYER",
     "DEFAULT_INSTANCER_THRESHOLD",
@@ -146,9 +149,50 @@ def _set_xform(spec: Sdf.PrimSpec, x: float, z: float, yaw: float, scale: float)
 
 
 def _group(layer: Sdf.Layer, path: str, type_name: str = "Xform") -> Sdf.PrimSpec:
+    """A group model of ``type_name``. A PointInstancer whose prototypes are models (temples,
+    the column asset) is a group too, and so is its Prototypes scope: draw modes (the cards)
+    apply to models only, and a prototype is a model only when the hierarchy above it is
+    one (docs/usd.md)."""
     spec = Sdf.CreatePrimInLayer(layer, path)
     spec.specifier, spec.typeName, spec.kind = Sdf.SpecifierDef, type_name, "group"
     return spec
+
+
+def _arc(spec: Sdf.PrimSpec, ref: str) -> None:
+    """A temple by payload (an unloaded city composes none of it), anything else by reference
+    (the column asset carries its own payload)."""
+    if ref.endswith("/Temple.usda"):
+        spec.payloadList.Prepend(Sdf.Payload(ref))
+    else:
+        spec.referenceList.Prepend(Sdf.Reference(ref))
+
+
+def _default_render(lo4: np.ndarray, hi4: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    ok = [k for k in (0, 1) if np.all(lo4[k] <= hi4[k])]
+    if not ok:
+        return np.zeros(3), np.zeros(3)
+    return lo4[ok].min(axis=0), hi4[ok].max(axis=0)
+
+
+def _as_default(ext: tuple[np.ndarray, np.ndarray], n: int) -> tuple[np.ndarray, np.ndarray]:
+    lo4, hi4 = np.full((4, 3), np.inf), np.full((4, 3), -np.inf)
+    if n:
+        lo4[0], hi4[0] = ext
+    return lo4, hi4
+
+
+def _extents_hint(lo4: np.ndarray, hi4: np.ndarray) -> Vt.Vec3fArray:
+    """``UsdGeomModelAPI`` extentsHint: a (min, max) pair per ordered purpose, trailing empty
+    purposes dropped, an empty one in between as Gf's empty range."""
+    ok = [k for k in range(4) if np.all(lo4[k] <= hi4[k])]
+    out = []
+    for k in range(max(ok) + 1 if ok else 1):
+        if k in ok:
+            out += [Gf.Vec3f(*map(float, lo4[k])), Gf.Vec3f(*map(float, hi4[k]))]
+        else:
+            empty = Gf.Range3f()
+            out += [empty.GetMin(), empty.GetMax()]
+    return Vt.Vec3fArray(out)
 
 
 def _instancer(
@@ -169,7 +213,7 @@ def _instancer(
     for name, ref, sel, cards in protos:
         spec = Sdf.CreatePrimInLayer(layer, f"{path}/Prototypes/{name}")
         spec.specifier, spec.typeName = Sdf.SpecifierDef, "Xform"
-        spec.referenceList.Prepend(Sdf.Reference(ref))
+        _arc(spec, ref)
         for k, v in sorted(sel.items()):
             spec.variantSelections[k] = v
         if cards is not None:
@@ -259,6 +303,7 @@ def compose_city(
     # per-prototype bounds and triangles, from each build's own stage (not the city)
     t1 = time.perf_counter()
     tlo, thi = np.zeros((len(protos), 3)), np.zeros((len(protos), 3))
+    tlo4, thi4 = np.zeros((len(protos), 4, 3)), np.zeros((len(protos), 4, 3))
     ttri: dict[str, np.ndarray] = {
         s: np.zeros(len(protos), dtype=np.int64) for s in ("as authored", *LOD_NAMES)
     }
@@ -266,7 +311,10 @@ def compose_city(
     for k, (b, sel, card) in enumerate(protos):
         stage = stages.get(b) or Usd.Stage.Open(str(folder / temples.folders[b] / "Temple.usda"))
         stages[b] = stage
-        lo, hi, ttri["as authored"][k] = prototype_stats(stage, "/Temple", dict(sel))
+        tlo4[k], thi4[k], ttri["as authored"][k] = prototype_purpose_stats(
+            stage, "/Temple", dict(sel)
+        )
+        lo, hi = _default_render(tlo4[k], thi4[k])
         if card:  # a box of cards stands in for the temple
             ttri["as authored"][k] = CARD_TRIANGLES
         tlo[k], thi[k] = lo, hi
@@ -301,6 +349,7 @@ def compose_city(
     card_li = LOD_NAMES.index(COLUMN_CARD_SELECTION["lod"])
     box_lods = col_lods + ([card_li] if ccard.any() else [])
     clo, chi = np.zeros((len(box_lods), 3)), np.zeros((len(box_lods), 3))
+    clo4, chi4 = np.zeros((len(box_lods), 4, 3)), np.zeros((len(box_lods), 4, 3))
     col_tri = {}
     if len(columns):
         cstage = Usd.Stage.Open(str(folder / columns.asset))
@@ -308,9 +357,10 @@ def compose_city(
             raise UsdAuthoringError(f"cannot open the column asset {folder / columns.asset}")
         root = str(cstage.GetDefaultPrim().GetPath())
         for k, li in enumerate(box_lods):
-            clo[k], chi[k], _ = prototype_stats(
+            clo4[k], chi4[k], _ = prototype_purpose_stats(
                 cstage, root, {"lod": LOD_NAMES[li], "form": "full", "finish": finish}
             )
+            clo[k], chi[k] = _default_render(clo4[k], chi4[k])
         for lod in LOD_NAMES:
             col_tri[lod] = prototype_stats(
                 cstage, root, {"lod": lod, "form": "full", "finish": finish}
@@ -352,7 +402,7 @@ def compose_city(
                 spec.specifier, spec.typeName = Sdf.SpecifierDef, "Xform"
                 spec.instanceable = True
                 k = int(proto_of[i])
-                spec.referenceList.Prepend(Sdf.Reference(refs[k]))
+                spec.payloadList.Prepend(Sdf.Payload(refs[k]))  # a temple loads on demand
                 for vs, v in protos[k][1]:
                     spec.variantSelections[vs] = v
                 if dirs[k] is not None:
@@ -384,9 +434,17 @@ def compose_city(
                     )
                 )
             _instancer(body, "/City/Porticus", cprotos, cidx, columns.xz, columns.yaw, None, c_ext)
-    have = [e for e, n in ((t_ext, len(temples)), (c_ext, len(columns))) if n]
-    lo = np.min([e[0] for e in have], axis=0) if have else np.zeros(3)
-    hi = np.max([e[1] for e in have], axis=0) if have else np.zeros(3)
+    # the city's extentsHint per purpose (default, render, proxy, guide), as BBoxCache with
+    # useExtentsHint reads it: the union of the placed prototypes' bounds of that purpose
+    # (a PointInstancer is bounded by its authored extent, which counts for its own purpose,
+    # default: the street columns and a field of temples enter the default range)
+    c4 = _as_default(c_ext, len(columns))
+    if as_instancer:
+        t4 = _as_default(t_ext, len(temples))
+    else:
+        t4 = purpose_bounds(tlo4, thi4, proto_of, temples.xz, temples.yaw, temples.scale)
+    lo4, hi4 = np.minimum(t4[0], c4[0]), np.maximum(t4[1], c4[1])
+    lo, hi = _default_render(lo4, hi4)
     root = new_layer(
         "City",
         kind="assembly",
@@ -395,9 +453,9 @@ def compose_city(
     )
     root.subLayerPaths.append(f"./{INSTANCES_LAYER}")
     city = root.GetPrimAtPath("/City")
-    Sdf.AttributeSpec(city, "extentsHint", _T.Float3Array).default = Vt.Vec3fArray(
-        [Gf.Vec3f(*map(float, lo)), Gf.Vec3f(*map(float, hi))]
-    )
+    Sdf.AttributeSpec(
+        city, "extentsHint", _T.Float3Array, Sdf.VariabilityUniform
+    ).default = _extents_hint(lo4, hi4)
     counts = np.bincount(proto_of, minlength=len(protos))
     ccounts = np.bincount(cidx[~ccard], minlength=len(col_lods))
     triangles = {}
@@ -480,3 +538,16 @@ def _vt_dict(d: Mapping) -> dict:
         elif isinstance(v, bool) or isinstance(v, (int, float, str)):
             out[str(k)] = v
     return out
+
+
+def load_region(stage: Usd.Stage, lo: Sequence[float], hi: Sequence[float]) -> list[str]:
+    """Load the temples whose position (x, z) lies in the rectangle ``lo``–``hi`` of a city
+    opened with ``Usd.Stage.LoadNone`` (each temple is a payload); returns their paths."""
+    loaded = []
+    holder = stage.GetPrimAtPath("/City/Temples")
+    for prim in holder.GetAllChildren() if holder else []:
+        t = prim.GetAttribute("xformOp:translate").Get()
+        if t is not None and lo[0] <= t[0] <= hi[0] and lo[1] <= t[2] <= hi[1]:
+            loaded.append(str(prim.GetPath()))
+    stage.LoadAndUnload({Sdf.Path(p) for p in loaded}, set())
+    return loaded

@@ -83,23 +83,67 @@ def temple_card_bound(
     return model_card_bound(temple_root, selections)
 
 
+PURPOSES = ("default", "render", "proxy", "guide")  # UsdGeom's ordered purpose tokens
+
+
 def prototype_stats(
     stage: Usd.Stage, root: str, selections: Mapping[str, str]
 ) -> tuple[np.ndarray, np.ndarray, int]:
     """Bounds (lo (3,), hi (3,)) and drawn triangles of ``root`` with ``selections`` made in
     the stage's session layer (default + render purposes, visible prims only); earlier
     selections there are cleared first, so "as authored" means the file's own."""
+    lo, hi, tris = prototype_purpose_stats(stage, root, selections)
+    both = [k for k in (0, 1) if np.all(lo[k] <= hi[k])]
+    if not both:
+        return np.zeros(3), np.zeros(3), tris
+    return lo[both].min(axis=0), hi[both].max(axis=0), tris
+
+
+def prototype_purpose_stats(
+    stage: Usd.Stage, root: str, selections: Mapping[str, str]
+) -> tuple[np.ndarray, np.ndarray, int]:
+    """:func:`prototype_stats` per purpose (:data:`PURPOSES`): lo, hi (4, 3), an empty
+    purpose as lo = +inf, hi = -inf; and the drawn triangles."""
     stage.GetSessionLayer().Clear()
     prim = stage.GetPrimAtPath(root)
     with Usd.EditContext(stage, stage.GetSessionLayer()):
         for name, value in selections.items():
             prim.GetVariantSet(name).SetVariantSelection(value)
-    cache = UsdGeom.BBoxCache(
-        Usd.TimeCode.Default(), [UsdGeom.Tokens.default_, UsdGeom.Tokens.render]
-    )
-    rng = cache.ComputeWorldBound(prim).ComputeAlignedRange()
-    tris = drawn_triangles(prim)
-    return np.array(rng.GetMin()), np.array(rng.GetMax()), tris
+    lo, hi = np.full((4, 3), np.inf), np.full((4, 3), -np.inf)
+    for k, purpose in enumerate(PURPOSES):
+        cache = UsdGeom.BBoxCache(Usd.TimeCode.Default(), [purpose])
+        rng = cache.ComputeWorldBound(prim).ComputeAlignedRange()
+        if not rng.IsEmpty():
+            lo[k], hi[k] = rng.GetMin(), rng.GetMax()
+    return lo, hi, drawn_triangles(prim)
+
+
+def purpose_bounds(
+    lo: np.ndarray,
+    hi: np.ndarray,
+    index: np.ndarray,
+    xz: np.ndarray,
+    yaw: np.ndarray,
+    scale: np.ndarray | None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`instance_bounds` per purpose from per-prototype (p, 4, 3) bounds; an instance
+    whose prototype is empty for a purpose does not count there. Returns lo, hi (4, 3)."""
+    out_lo, out_hi = np.full((4, 3), np.inf), np.full((4, 3), -np.inf)
+    for k in range(4):
+        ok = np.all(lo[:, k] <= hi[:, k], axis=1)
+        use = ok[index] if len(index) else np.zeros(0, dtype=bool)
+        if not use.any():
+            continue
+        sc = None if scale is None else np.asarray(scale)[use]
+        out_lo[k], out_hi[k] = instance_bounds(
+            np.where(ok[:, None], lo[:, k], 0.0),
+            np.where(ok[:, None], hi[:, k], 0.0),
+            index[use],
+            xz[use],
+            np.asarray(yaw)[use],
+            sc,
+        )
+    return out_lo, out_hi
 
 
 def prim_identifier(name: str) -> str:

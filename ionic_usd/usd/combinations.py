@@ -15,8 +15,9 @@ already right it writes a layer of absolute values and references it from the va
 * a single hypothesis whose own layer composes a cuboid or column wrongly is a bug: an error.
 
 Values are written relative to the composed parent, so a part's translation from another
-layer still applies; ``active`` is authored only on a prim a hypothesis deactivated, so the
-``detail`` variants keep switching what they show.
+layer still applies; a prim that must not show is hidden (``visibility``, its path stays),
+and one a hypothesis hid is shown again only where a combination needs it, so the ``detail``
+variants keep switching what they show.
 """
 
 from __future__ import annotations
@@ -89,11 +90,18 @@ def _world(cache: UsdGeom.XformCache, prim: Usd.Prim, pts) -> np.ndarray:
     return np.asarray(pts, dtype=np.float64).reshape(-1, 3) @ xf[:3, :3] + xf[3, :3]
 
 
+def _shown(prim: Usd.Prim) -> bool:
+    """Active and visible: a variant hides what it does not show (the path stays)."""
+    return (
+        prim.IsActive() and UsdGeom.Imageable(prim).ComputeVisibility() != UsdGeom.Tokens.invisible
+    )
+
+
 def _differs(
     stage: Usd.Stage, cache: UsdGeom.XformCache, path: str, want: Mesh | Instances, atol: float
 ) -> bool:
     prim = stage.GetPrimAtPath(path)
-    if not prim or not prim.IsActive():
+    if not prim or not _shown(prim):
         return True
     if isinstance(want, Instances):
         pi = UsdGeom.PointInstancer(prim)
@@ -141,7 +149,7 @@ def mismatches(
         for holder in (f"/Temple/{part}", f"/Temple/{part}/Mouldings"):
             prim = stage.GetPrimAtPath(holder)
             for child in prim.GetChildren() if prim else []:  # active children only
-                if child.IsA(UsdGeom.Mesh) and str(child.GetPath()) not in want:
+                if child.IsA(UsdGeom.Mesh) and _shown(child) and str(child.GetPath()) not in want:
                     out[str(child.GetPath())] = None
     ratio = expected.params.columns_height / column_height
     cols = {column_path(c): c for c in expected.columns}
@@ -149,16 +157,28 @@ def mismatches(
         prim = stage.GetPrimAtPath(path)
         if (
             not prim
-            or not prim.IsActive()
+            or not _shown(prim)
             or not Gf.IsClose(cache.GetLocalToWorldTransform(prim), expected_column(c, ratio), atol)
         ):
             out[path] = c
     for group in GROUPS.values():
         prim = stage.GetPrimAtPath(f"/Temple/Colonnade/{group}")
         for child in prim.GetChildren() if prim else []:
-            if str(child.GetPath()) not in cols:
+            if _shown(child) and str(child.GetPath()) not in cols:
                 out[str(child.GetPath())] = None
     return out
+
+
+def _set_visibility(spec: Sdf.PrimSpec, value: str) -> None:
+    attr = spec.attributes.get("visibility") or Sdf.AttributeSpec(
+        spec, "visibility", Sdf.ValueTypeNames.Token
+    )
+    attr.default = value
+
+
+def _show(spec: Sdf.PrimSpec) -> None:
+    spec.active = True
+    _set_visibility(spec, UsdGeom.Tokens.inherited)
 
 
 def _correction_layer(
@@ -169,7 +189,7 @@ def _correction_layer(
     inactive: set[str],
 ) -> Sdf.Layer:
     """Absolute values (relative to the composed parents) for the prims in ``fixes``;
-    ``inactive``: those a hypothesis deactivated where they were checked."""
+    ``inactive``: those a hypothesis hid where they were checked."""
     lay = new_layer(
         "Temple",
         kind="assembly",
@@ -192,7 +212,7 @@ def _correction_layer(
             if want is None:
                 spec = Sdf.CreatePrimInLayer(lay, path)
                 spec.specifier = Sdf.SpecifierOver
-                spec.active = False
+                _set_visibility(spec, UsdGeom.Tokens.invisible)
             elif isinstance(want, Mesh | Instances):
                 if isinstance(want, Mesh):
                     local = want.points @ to_parent[:3, :3] + to_parent[3, :3]
@@ -211,8 +231,8 @@ def _correction_layer(
                             want.scales,
                         ),
                     )
-                if off:  # deactivated by a hypothesis, needed by the combination
-                    spec.active = True
+                if off:  # hidden by a hypothesis, needed by the combination
+                    _show(spec)
                 Sdf.AttributeSpec(
                     spec, "xformOpOrder", Sdf.ValueTypeNames.TokenArray, Sdf.VariabilityUniform
                 ).default = Vt.TokenArray([])
@@ -221,7 +241,7 @@ def _correction_layer(
                 spec = Sdf.CreatePrimInLayer(lay, path)
                 spec.specifier = Sdf.SpecifierOver
                 if off:
-                    spec.active = True
+                    _show(spec)
                 column_xform(
                     spec, Gf.Transform(m).GetTranslation(), want.rotation_deg, want.scale * ratio
                 )
@@ -293,7 +313,7 @@ def realise_combinations(
                 garlands=garlands,
                 memo=memo,
             )
-            off |= {p for p in found if (q := gen.GetPrimAtPath(p)) and not q.IsActive()}
+            off |= {p for p in found if (q := gen.GetPrimAtPath(p)) and not _shown(q)}
             bad.update(found)
         return bad, off
 

@@ -20,9 +20,10 @@ Files of a temple folder that hold the detail (written by :func:`write_detail`, 
                          hypothesis' own layer over the detail is not already right)
 
 The variant set itself lives in ``generated.usda`` (:func:`author_detail_variants`), where the
-whole temple composes, so that none of its opinions dangles: ``plain`` deactivates the
-mouldings and the ornament (the cuboid temple); ``moulded`` shows the mouldings and
-deactivates the ``architrave`` and ``cornice`` cuboids they replace; ``carved`` adds the
+whole temple composes, so that none of its opinions dangles: ``plain`` hides
+(``visibility = invisible``: every variant keeps every prim path) the mouldings and the
+ornament (the cuboid temple); ``moulded`` shows the mouldings and hides the ``architrave`` and
+``cornice`` cuboids they replace; ``carved`` adds the
 instanced dentils, roof tiles and (with its hypothesis) the frieze relief. Both detailed
 variants bind the podium (cuboids and mouldings) to Travertine — the podium's facing [C];
 the tiles are Terracotta in every variant that shows them; walls, entablature and mouldings
@@ -203,6 +204,10 @@ def frieze_layer(h: Hypothesis, geom: DetailGeometry) -> Sdf.Layer:
     return lay
 
 
+def _hide(spec: Sdf.PrimSpec) -> None:
+    Sdf.AttributeSpec(spec, "visibility", Sdf.ValueTypeNames.Token).default = "invisible"
+
+
 def _over(parent: Sdf.PrimSpec, rel: str) -> Sdf.PrimSpec:
     """An ``over`` at ``rel`` below ``parent`` (a variant's prim spec)."""
     spec = parent
@@ -226,15 +231,17 @@ def author_detail_variants(spec: Sdf.PrimSpec, geom: DetailGeometry, default: st
     )
     for v in DETAIL_VARIANTS:
         prim = Sdf.VariantSpec(vs, v).primSpec
+        # hidden, not deactivated: every variant keeps every prim path (an override or a
+        # collection keyed by a path holds under every selection); invisible draws nothing
         if v == "plain":
             for p in (*sweeps, *ornament):
-                _over(prim, p).active = False
+                _hide(_over(prim, p))
             continue
         for c in REPLACED_CUBOIDS:
-            _over(prim, f"Entablature/{c}").active = False
+            _hide(_over(prim, f"Entablature/{c}"))
         if v == "moulded":
             for p in ornament:
-                _over(prim, p).active = False
+                _hide(_over(prim, p))
         for name in geom.podium_cuboids:
             bind_material_spec(_over(prim, f"Podium/{name}"), TRAVERTINE)
         if "Podium" in geom.mouldings:
@@ -266,8 +273,11 @@ def write_frieze_hypotheses(
             spec.variantSetNameList.Append(vset)
             Sdf.VariantSpec(vs, "baseline")
             Sdf.VariantSpec(vs, "alternative")
-        alt = spec.variantSets[vset].variants["alternative"].primSpec
-        alt.referenceList.Append(Sdf.Reference(f"./layers/{name}"))
+        # both variants reference the relief, the baseline hides it: the same prim paths
+        variants = spec.variantSets[vset].variants
+        for v in ("baseline", "alternative"):
+            variants[v].primSpec.referenceList.Append(Sdf.Reference(f"./layers/{name}"))
+        _hide(_over(variants["baseline"].primSpec, FRIEZE_PATH.removeprefix("/Temple/")))
         spec.variantSelections[vset] = "baseline"
         listing.setdefault(_ident(h.id), {}).update(realised=True, variantSet=vset)
         done.append(h)

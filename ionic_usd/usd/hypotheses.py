@@ -291,7 +291,7 @@ def _shape_opinions(
             path = f"{part}/{name}"
             if name not in news:
                 spec = _over(lay, path)
-                spec.active = False
+                _hide(spec)  # hidden, not deactivated: the prim paths stay
             elif name not in olds:
                 author_mesh(lay, path, news[name])
                 spec = lay.GetPrimAtPath(path)
@@ -329,8 +329,12 @@ def _shape_opinions(
         touched.append(spec)
     for path in olds_c:
         spec = _over(lay, path)
-        spec.active = False
+        _hide(spec)
         touched.append(spec)
+
+
+def _hide(spec: Sdf.PrimSpec) -> None:
+    Sdf.AttributeSpec(spec, "visibility", Sdf.ValueTypeNames.Token).default = "invisible"
 
 
 def hypothesis_layer(
