@@ -6,7 +6,7 @@ import itertools
 import xml.etree.ElementTree as ET
 
 import pytest
-from pxr import Sdf, Usd, UsdShade
+from pxr import Sdf, Usd, UsdGeom, UsdShade
 
 from ionic_usd.temple.em_graphml import HYP_PREFIX, graph_of, read_graphml, write_graphml
 from ionic_usd.temple.layout import portunus_layout
@@ -18,11 +18,15 @@ PARTS = {"Mesh", "PointInstancer"}
 
 
 def part_prims(stage: Usd.Stage) -> list[Usd.Prim]:
-    """Every part: a mesh or instancer of the temple's own layers, or a column instance."""
+    """Every part drawn: a mesh or instancer of the temple's own layers, or a column instance
+    (a detail or hypothesis hides what it does not show, keeping its path: skipped)."""
     out = []
     for p in stage.Traverse():
         path = str(p.GetPath())
         if "Prototypes" in path or path.startswith("/Temple/Materials"):
+            continue
+        img = UsdGeom.Imageable(p)
+        if img and img.ComputeVisibility() == UsdGeom.Tokens.invisible:
             continue
         if p.GetTypeName() in PARTS or (path.startswith("/Temple/Colonnade/") and p.IsInstance()):
             out.append(p)
@@ -117,6 +121,8 @@ def meshes_with_part(stage):
     for p in stage.Traverse(pred):
         if p.GetTypeName() != "Mesh" or "/Materials" in str(p.GetPath()):
             continue
+        if UsdGeom.Imageable(p).ComputeVisibility() == UsdGeom.Tokens.invisible:
+            continue  # hidden by a detail or hypothesis (its path kept): not drawn
         anc = p
         while anc and "paradata" not in anc.GetCustomData():
             anc = anc.GetParent()
@@ -271,10 +277,15 @@ def test_gltf_extras_carry_every_parts_paradata(tiny_temple, tmp_path):
     for i, n in enumerate(g.nodes):
         if n.mesh is None:
             continue
-        ex, j = dict(n.extras or {}), i
-        while "paradata" not in ex and j in parent:  # a group node holds what copies share
+        # a group node holds what its copies share: the record is the chain's, nearer first
+        chain, j = [n], i
+        while j in parent:
             j = parent[j]
-            ex = {**(g.nodes[j].extras or {}), **ex}
+            chain.append(g.nodes[j])
+        ex: dict = {}
+        for node in reversed(chain):
+            mine = dict(node.extras or {})
+            ex = {**ex, **mine, "paradata": {**ex.get("paradata", {}), **mine.get("paradata", {})}}
         entries = ex.get("instances") or [ex]
         for e in entries:
             rec = {**ex.get("paradata", {}), **e.get("paradata", {})}

@@ -7,7 +7,7 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass, field
 
-from pxr import Sdf, Usd
+from pxr import Sdf, Usd, UsdGeom
 
 from ionic_usd.errors import ParameterError
 from ionic_usd.temple.description import Certainty
@@ -45,7 +45,17 @@ def prim_record(prim: Usd.Prim) -> tuple[str, Record] | None:
 def _walk(stage: Usd.Stage) -> list[tuple[str, str, Record]]:
     out = []
     # unloaded payloads (the columns' geometry) still carry their prim's paradata
-    for prim in stage.Traverse(Usd.PrimIsActive & Usd.PrimIsDefined & ~Usd.PrimIsAbstract):
+    it = iter(
+        Usd.PrimRange(
+            stage.GetPseudoRoot(), Usd.PrimIsActive & Usd.PrimIsDefined & ~Usd.PrimIsAbstract
+        )
+    )
+    for prim in it:
+        # a detail or hypothesis hides (visibility) what it does not show, keeping its path
+        img = UsdGeom.Imageable(prim)
+        if img and img.GetVisibilityAttr().Get() == UsdGeom.Tokens.invisible:
+            it.PruneChildren()
+            continue
         got = prim_record(prim)
         if got is not None:
             out.append((str(prim.GetPath()), *got))
@@ -92,7 +102,7 @@ def _hypothesis(stage: Usd.Stage, spec: Sdf.PrimSpec, name: str, out: SceneParad
     spec.variantSelections[name] = "alternative"
     touched: dict[str, Record] = {}
     for _, unit, rec in _walk(stage):
-        if rec.hypothesis:
+        if rec.hypothesis and "hyp_" + rec.hypothesis.replace("-", "_") == name:
             touched.setdefault(unit, rec)
     del spec.variantSelections[name]
     hid = next((r.hypothesis for r in touched.values()), "")

@@ -46,18 +46,23 @@ for (const root of [base, ...Object.values(alts)]) {
 }
 
 function extrasOf(obj, instanceId) {
-  // the paradata a mesh (or one instance of it) carries: its node's extras or an ancestor's
+  // the paradata a mesh (or one instance of it) carries: the exporter keeps what copies share
+  // on their group node (and on a GPU-instanced node), the rest per copy, so a record is
+  // merged from the node up through its ancestors, the nearer taking precedence
+  let out = null;
   for (let o = obj; o; o = o.parent) {
-    const u = o.userData || {};
+    let u = o.userData || {};
     if (instanceId !== undefined && o === obj && Array.isArray(u.instances)) {
       const e = u.instances[instanceId] || {};
-      // the exporter keeps what every instance shares on the node, the rest per instance
-      const para = { ...(u.paradata || {}), ...(e.paradata || {}) };
-      return { ...u, ...e, paradata: para, instances: undefined };
+      u = { ...u, ...e, paradata: { ...(u.paradata || {}), ...(e.paradata || {}) } };
+      delete u.instances;
     }
-    if (u.paradata) return { ...u, path: u.path || (obj.userData || {}).path };
+    if (!u.paradata) continue;
+    out = out
+      ? { ...u, ...out, paradata: { ...u.paradata, ...out.paradata } }
+      : { ...u, path: u.path || (obj.userData || {}).path };
   }
-  return null;
+  return out;
 }
 function pathOf(obj) {
   for (let o = obj; o; o = o.parent) if (o.userData && o.userData.path) return o.userData.path;
