@@ -24,7 +24,31 @@ from typing import Any
 
 from ionic_usd.errors import ParameterError
 
-__all__ = ["check_fields", "check_number"]
+__all__ = [
+    "SEED_RANGE",
+    "TEXTURE_SIZES",
+    "check_fields",
+    "check_number",
+    "check_stone_options",
+]
+
+#: the one schema of the stone flags every command shares (``--texture-size``, ``--seed``), and
+#: of the same options in the Python API: (low, high)
+TEXTURE_SIZES = (16, 8192)
+SEED_RANGE = (0, 2**63 - 1)
+
+
+def check_stone_options(texture_size: object, seed: object) -> None:
+    """``texture_size`` a power of two in :data:`TEXTURE_SIZES`, ``seed`` an integer in
+    :data:`SEED_RANGE` (ParameterError naming the flag otherwise)."""
+    ts = (
+        texture_size if isinstance(texture_size, int) and not isinstance(texture_size, bool) else -1
+    )
+    if not TEXTURE_SIZES[0] <= ts <= TEXTURE_SIZES[1] or ts & (ts - 1):
+        raise ParameterError("--texture-size", texture_size, "a power of two in [16, 8192]")
+    sd = seed if isinstance(seed, int) and not isinstance(seed, bool) else -1
+    if not SEED_RANGE[0] <= sd <= SEED_RANGE[1]:
+        raise ParameterError("--seed", seed, "an integer in [0, 2**63 - 1]")
 
 
 def check_number(

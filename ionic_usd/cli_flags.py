@@ -17,6 +17,8 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
+from ionic_usd.checks import SEED_RANGE, TEXTURE_SIZES
+
 __all__ = [
     "add_command",
     "add_config_flags",
@@ -109,9 +111,8 @@ def add_config_flags(p: argparse.ArgumentParser, help: str, *, print_config: boo
         )
 
 
-#: the one schema of the flags several commands share: (low, high) of each
-TEXTURE_SIZES = (16, 8192)
-SEED_RANGE = (0, 2**63 - 1)
+#: the one schema of the flags several commands share: (low, high) of each (the stone flags'
+#: in ionic_usd.checks, which the Python API checks too)
 MEMORY_GB_RANGE = (0.1, float(1 << 20))
 
 

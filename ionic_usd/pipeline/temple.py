@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from ionic_usd.checks import check_stone_options
 from ionic_usd.errors import OutputExistsError
 from ionic_usd.io import manifest_record, replace_folder, up_to_date
 from ionic_usd.pipeline.keys import build_key, file_digests
@@ -207,8 +208,6 @@ def compose_temple(
     anything is written.
     """
     t0 = time.perf_counter()
-    from ionic_usd.usd.column_asset import check_stone_options
-
     check_stone_options(texture_size, seed)
     dest = Path(folder)
     if dest.exists() and not force:

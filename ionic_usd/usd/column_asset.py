@@ -62,6 +62,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ionic_usd import __version__
+from ionic_usd.checks import check_stone_options
 from ionic_usd.column.base import base_preset_names
 from ionic_usd.column.column import (
     LODS,
@@ -112,20 +113,6 @@ ENGAGED_INSET = 0.05  # m: the cut lies this far behind the wall face (axis on t
 ASSET_TEXELS_PER_METRE = {"high": 128.0, "medium": 64.0, "low": 32.0}
 BASE_CHART_BOUNDARY = 2.0  # m: see texture.uv.unwrap(max_chart_boundary=…)
 UV_SPAN = 32.0  # m of surface across st ∈ [0, 1]
-
-
-def check_stone_options(texture_size: object, seed: object) -> None:
-    """The stone flags' schema (that of ``--texture-size`` and ``--seed`` on every command)."""
-    from ionic_usd.cli_flags import SEED_RANGE, TEXTURE_SIZES
-
-    ts = (
-        texture_size if isinstance(texture_size, int) and not isinstance(texture_size, bool) else -1
-    )
-    if not TEXTURE_SIZES[0] <= ts <= TEXTURE_SIZES[1] or ts & (ts - 1):
-        raise ParameterError("--texture-size", texture_size, "a power of two in [16, 8192]")
-    sd = seed if isinstance(seed, int) and not isinstance(seed, bool) else -1
-    if not SEED_RANGE[0] <= sd <= SEED_RANGE[1]:
-        raise ParameterError("--seed", seed, "an integer in [0, 2**63 - 1]")
 
 
 @dataclass(frozen=True)
