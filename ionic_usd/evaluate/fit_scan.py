@@ -146,6 +146,11 @@ def fit_column_scan(
 
     t0 = time.perf_counter()
     pts = np.asarray(points, dtype=np.float64)
+    if pts.ndim != 2 or pts.shape[1] != 3 or len(pts) < 100 or not np.all(np.isfinite(pts)):
+        raise GeometryError("scan: at least 100 finite points (x, y, z) needed")
+    from ionic_usd.evaluate.scan_io import check_scan_extent
+
+    check_scan_extent(pts, "scan")
     rng = np.random.default_rng(seed)
     sub = (
         pts
@@ -277,6 +282,7 @@ def fit_column_scan(
         tree = other_parts_tree(col)
     dev = scan_deviation(pts, col, m, tree=tree)
     fits = _part_report(frame.local(pts)[:, 2], dev, frame, sec, base_fit, col, cap_fit)
+    _check_is_column(fits, diameter, e)
     return ScanFit(
         col,
         frame,
@@ -292,6 +298,25 @@ def fit_column_scan(
         notes,
         fits,
     )
+
+
+#: Largest p95 deviation of the shaft's points from the fitted shaft, as a fraction of the
+#: fitted diameter: past it the scan is refused as not a column (a scanned column's shaft
+#: stays within a few noise widths; a sphere of points leaves 31 %).
+MAX_SHAFT_P95 = 0.05
+
+
+def _check_is_column(fits: dict[str, dict[str, Any]], diameter: float, flutes: int) -> None:
+    """Refuse a fit whose shaft does not follow its points (:data:`MAX_SHAFT_P95`)."""
+    dev = fits.get("shaft", {}).get("deviation", {})
+    p95 = dev.get("p95")
+    if p95 is not None and not p95 <= MAX_SHAFT_P95 * diameter:
+        raise GeometryError(
+            f"scan: not a column: the best fluted shaft (D {diameter:.3g} m, {flutes} flutes) "
+            f"leaves its points {p95 * 1000:.3g} mm from it at p95 = "
+            f"{100 * p95 / diameter:.3g} % of D (a column stays within "
+            f"{100 * MAX_SHAFT_P95:g} %)"
+        )
 
 
 #: where the first fluted section is sought, as fractions of the narrow band: its lower part
