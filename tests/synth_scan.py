@@ -11,6 +11,7 @@ default (``unit`` = metres per unit).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -34,10 +35,25 @@ class Truth:
     plinth_height: float = 130.0
     rotation_deg: float = 4.0  # flute phase
 
+    def scaled(self, radius: float) -> Truth:
+        """The same column at another shaft radius (mm)."""
+        k = radius / self.radius
+        return dataclasses.replace(
+            self,
+            radius=radius,
+            shaft_length=k * self.shaft_length,
+            ring=k * self.ring,
+            drum_height=k * self.drum_height,
+            plinth_half=k * self.plinth_half,
+            plinth_height=k * self.plinth_height,
+        )
+
 
 def attic_profile(t: Truth, n: int = 400) -> np.ndarray:
-    """(m, 2) (r, y) lathe profile above the plinth, bottom to top, ending at the joint."""
-    hp = t.plinth_height
+    """(m, 2) (r, y) lathe profile above the plinth, bottom to top, ending at the joint
+    (drawn for a 400 mm shaft radius, scaled to ``t.radius``)."""
+    sc = t.radius / 400.0
+    hp = t.plinth_height / sc
     phi = np.linspace(-0.5 * np.pi, 0.5 * np.pi, n // 4)
     lower = np.c_[500.0 + 62.0 * np.cos(phi), hp + 62.0 + 62.0 * np.sin(phi)]
     y1 = hp + 124.0
@@ -48,8 +64,8 @@ def attic_profile(t: Truth, n: int = 400) -> np.ndarray:
     fil2 = np.array([[480.0, y2 + 10.0], [462.0, y2 + 10.0]])
     up = np.c_[424.0 + 38.0 * np.cos(phi), y2 + 48.0 + 38.0 * np.sin(phi)]
     top = up[-1, 1]
-    joint = np.array([[t.radius + 6.0, top], [t.radius + 6.0, top + 8.0], [t.radius, top + 8.0]])
-    return np.vstack([lower, fil1, scotia, fil2, up, joint])
+    joint = np.array([[406.0, top], [406.0, top + 8.0], [400.0, top + 8.0]])
+    return sc * np.vstack([lower, fil1, scotia, fil2, up, joint])
 
 
 def joint_height(t: Truth) -> float:

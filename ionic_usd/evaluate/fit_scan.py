@@ -37,13 +37,14 @@ from ionic_usd.evaluate.fit_core import FitResult
 from ionic_usd.evaluate.scan_alone import is_fluted
 from ionic_usd.evaluate.scan_axis import ColumnFrame, estimate_axis, find_parts
 from ionic_usd.evaluate.scan_capital import CapitalFit
-from ionic_usd.evaluate.scan_flutes import plinth_turn, section_noise, shaft_details
+from ionic_usd.evaluate.scan_checks import _check_is_column, _part_report
 from ionic_usd.evaluate.scan_deviation import (
     heat_colours,
     other_parts_tree,
     scan_deviation,
     shaft_deviation,
 )
+from ionic_usd.evaluate.scan_flutes import plinth_turn, section_noise, shaft_details, shaft_taper
 from ionic_usd.evaluate.scan_parts import base_meridian, base_top, has_square_plinth, to_column
 from ionic_usd.evaluate.scan_section import outer_profile, section_at, taper
 
@@ -218,6 +219,14 @@ def fit_column_scan(
     if "base" in frame.parts and math.isfinite(det["tip"]):
         b0 = frame.parts["base"][0]
         joint, tip = det["joint"], det["tip"]
+        # no step between the mouldings and the ring: the base may end in a fillet at the
+        # ring's radius; the joint the flutes' start gives (the model's ring below them)
+        # then splits the plain part
+        r0 = det["a"] + det["b"] * joint
+        col0 = portunus_column_params(lower_diameter=2.0 * r0, flutes=e)
+        onset = _joint(frame, loc, col0, r0, sec, []).parts["base"][1]
+        if joint < onset < tip:
+            joint = onset
         ring_bottom = tip - joint
         notes.append(
             f"flutes end {tip - b0:.4f} m up (the tip whose flute ends fit best); the base's "
@@ -263,10 +272,16 @@ def fit_column_scan(
             "fragment: shaft length kept from the Vitruvian column, its top radius from the "
             "measured taper"
         )
+    r_top, entasis = r_bottom * top_ratio, 0.0
+    tap = shaft_taper(loc, frame.parts["shaft"], sec, e, sh.length)
+    if tap is not None:
+        r_bottom, r_top, entasis = tap
+        notes.append(f"taper and entasis fitted: entasis {entasis:.4f} of the radius")
     sh = dataclasses.replace(
         sh,
         bottom_radius=r_bottom,
-        top_radius=r_bottom * top_ratio,
+        top_radius=r_top,
+        entasis=entasis,
         flutes=e,
         flute_angle=sec["flute_angle"],
         flute_depth=sec["flute_depth"],
@@ -334,25 +349,6 @@ def fit_column_scan(
         notes,
         fits,
     )
-
-
-#: Largest p95 deviation of the shaft's points from the fitted shaft, as a fraction of the
-#: fitted diameter: past it the scan is refused as not a column (a scanned column's shaft
-#: stays within a few noise widths; a sphere of points leaves 31 %).
-MAX_SHAFT_P95 = 0.05
-
-
-def _check_is_column(fits: dict[str, dict[str, Any]], diameter: float, flutes: int) -> None:
-    """Refuse a fit whose shaft does not follow its points (:data:`MAX_SHAFT_P95`)."""
-    dev = fits.get("shaft", {}).get("deviation", {})
-    p95 = dev.get("p95")
-    if p95 is not None and not p95 <= MAX_SHAFT_P95 * diameter:
-        raise GeometryError(
-            f"scan: not a column: the best fluted shaft (D {diameter:.3g} m, {flutes} flutes) "
-            f"leaves its points {p95 * 1000:.3g} mm from it at p95 = "
-            f"{100 * p95 / diameter:.3g} % of D (a column stays within "
-            f"{100 * MAX_SHAFT_P95:g} %)"
-        )
 
 
 #: where the first fluted section is sought, as fractions of the narrow band: its lower part
@@ -555,63 +551,6 @@ def _fit_scanned_base(
         return col, fit
     notes.append(f"{what}; the column takes the fitted base")
     return fit.column, fit
-
-
-def _part_report(
-    h: np.ndarray,
-    dev: np.ndarray,
-    frame: ColumnFrame,
-    sec: dict[str, float],
-    base_fit: FitResult | None,
-    col: ColumnParams,
-    cap_fit: CapitalFit | None = None,
-) -> dict[str, dict[str, Any]]:
-    """Per part found: what was fitted or only rebuilt, and the deviations of its points."""
-    out: dict[str, dict[str, Any]] = {}
-    for part, (a, b) in frame.parts.items():
-        d = dev[(h >= a) & (h <= b)]
-        rep: dict[str, Any] = {
-            "points": int(len(d)),
-            "deviation": {
-                "rms": float(np.sqrt(np.mean(d**2))) if len(d) else None,
-                "p95": float(np.percentile(d, 95)) if len(d) else None,
-            },
-        }
-        if part == "shaft":
-            rep.update(
-                status="fitted",
-                model="fluted section",
-                fitted=["diameter", "flutes", "flute_angle", "flute_depth", "taper", "rotation"],
-                values={k: sec[k] for k in ("radius", "flute_angle", "flute_depth") if k in sec},
-            )
-        elif part == "base" and base_fit is not None:
-            plinth = col.base_plinth == 1 and col.base != base_fit.column.base
-            rep.update(
-                status="fitted"
-                if col.base == base_fit.column.base or plinth
-                else "fitted (reported; the column keeps the Vitruvian plinth base)",
-                model="plinth box + bezier lathe" if plinth else "bezier meridian",
-                height=base_fit.column.base_params().height,
-                measures={
-                    "hausdorff_pct": base_fit.after.hausdorff_pct,
-                    "discrete_frechet_pct": base_fit.after.discrete_frechet_pct,
-                },
-            )
-        elif part == "capital" and cap_fit is not None:
-            rep.update(
-                status="fitted",
-                model=f"generator capital, volute {cap_fit.model}",
-                fitted=["scale", "height", "volute_scale", "eye_height", "eye_spacing"],
-                values=cap_fit.values,
-                models=cap_fit.models,
-                bounds_hit=cap_fit.bounds_hit,
-                rebuilt_rms=cap_fit.rms_start,
-                seconds=cap_fit.seconds,
-            )
-        else:
-            rep.update(status="rebuilt", model="Vitruvian proportions at the diameter")
-        out[part] = rep
-    return out
 
 
 def _matrix(frame: ColumnFrame, rotation_deg: float, h0: float) -> np.ndarray:

@@ -146,6 +146,41 @@ def section_noise(slab: np.ndarray, sec: dict[str, float], flutes: int) -> float
     return 1.4826 * float(np.median(PolylineIndex(poly).distances(slab)))
 
 
+def _flat_points(
+    loc: np.ndarray, band: tuple[float, float], sect: tuple[int, float, float, float]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Height, flute factor and radius of the shaft band's points on fillets and flute
+    bottoms (where a radial residual is a distance: the walls between are steep)."""
+    s0, s1 = band
+    h = loc[:, 2]
+    body = (h > s0 + 0.15 * (s1 - s0)) & (h < s1 - 0.02 * (s1 - s0))
+    theta = np.arctan2(loc[body, 1], loc[body, 0])
+    f = flute_factor(theta, np.ones(len(theta)), *sect)
+    f_min = float(f.min()) if len(f) else 1.0
+    flat = (f > 0.999) | (f < f_min + 0.15 * (1.0 - f_min))
+    return h[body][flat], f[flat], np.hypot(loc[body, 0], loc[body, 1])[flat]
+
+
+def shaft_taper(
+    loc: np.ndarray,
+    band: tuple[float, float],
+    sec: dict[str, float],
+    flutes: int,
+    length: float,
+) -> tuple[float, float, float] | None:
+    """(bottom radius, top radius, entasis ratio) of a shaft of ``length`` starting at
+    ``band[0]``, fitted with its entasis when the points span at least a fifth of it
+    (None: too short to tell a bulge from the taper)."""
+    sect = (flutes, sec["flute_angle"], sec["flute_depth"], sec["rotation_deg"])
+    hb, fb, rb = _flat_points(loc, band, sect)
+    if len(hb) < 50 or float(np.ptp(hb)) < 0.2 * length:
+        return None
+    r0, r1, e = fit_taper((hb - band[0]) / length, fb, rb, entasis=True)
+    if not (r0 > 0 and r1 > 0 and abs(e / r0) <= 0.2):
+        return None
+    return r0, r1, e / r0
+
+
 def shaft_details(
     loc: np.ndarray,
     parts: dict[str, tuple[float, float]],
@@ -164,16 +199,11 @@ def shaft_details(
     h = loc[:, 2]
     theta = np.arctan2(loc[:, 1], loc[:, 0])
     r = np.hypot(loc[:, 0], loc[:, 1])
-    s0, s1 = parts["shaft"]
     sect = (flutes, sec["flute_angle"], sec["flute_depth"], sec["rotation_deg"])
-    body = (h > s0 + 0.15 * (s1 - s0)) & (h < s1 - 0.02 * (s1 - s0))
-    f = flute_factor(theta[body], np.ones(np.count_nonzero(body)), *sect)
-    f_min = float(f.min()) if len(f) else 1.0
-    flat = (f > 0.999) | (f < f_min + 0.15 * (1.0 - f_min))  # fillets and flute bottoms
-    hb = h[body][flat]
+    hb, fb, rb = _flat_points(loc, parts["shaft"], sect)
     span = max(float(np.ptp(hb)), 1e-9)
     h0 = float(hb.min())
-    rb_, rt_, _ = fit_taper((hb - h0) / span, f[flat], r[body][flat], entasis=False)
+    rb_, rt_, _ = fit_taper((hb - h0) / span, fb, rb, entasis=False)
     b = (rt_ - rb_) / span
     a = rb_ - b * h0
     out = {"a": a, "b": b, "tip": float("nan"), "joint": float("nan")}
@@ -182,9 +212,7 @@ def shaft_details(
     guess = parts["base"][1]
     d = 2.0 * (a + b * guess)
     arc = arc_ratio * (a + b * guess) * math.sin(math.radians(sec["flute_angle"]) / 2.0)
-    tip = flute_tip(
-        h, theta, r, a + b * guess, arc, sect, guess - 0.15 * d, guess + 0.25 * d, noise
-    )
+    tip = flute_tip(h, theta, r, a + b * guess, arc, sect, guess - 0.15 * d, guess + 0.6 * d, noise)
     if tip is None:
         return out
     out["tip"] = tip

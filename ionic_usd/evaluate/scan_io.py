@@ -163,6 +163,28 @@ def check_scan_extent(pts: np.ndarray, where: str) -> None:
         )
 
 
+#: Metres per unit of the ``--units`` names.
+UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254, "ft": 0.3048}
+
+
+def detect_units(pts: np.ndarray, where: str) -> tuple[float, str]:
+    """Metres per unit of a scan, from its least principal extent (a column's diameter, also
+    in a colonnade): up to 6 units → metres, from 200 → millimetres; between, inches and
+    centimetres cannot be told apart and the scan is refused (``--units`` names them)."""
+    c = pts - pts.mean(axis=0)
+    step = max(1, len(c) // 200_000)
+    _, _, vt = np.linalg.svd(c[::step], full_matrices=False)
+    extent = float(np.ptp(c @ vt[2]))
+    if extent <= 6.0:
+        return 1.0, "m"
+    if extent >= 200.0:
+        return 0.001, "mm"
+    raise ReferenceCurveError(
+        f"{where}: the points span {extent:.4g} units across: neither metres nor millimetres; "
+        "give --units (in, cm, ft)"
+    )
+
+
 def sample_surface(
     points: np.ndarray, triangles: np.ndarray, n: int, *, seed: int = 0
 ) -> tuple[np.ndarray, np.ndarray]:
