@@ -11,7 +11,6 @@ from __future__ import annotations
 import numpy as np
 
 from ionic_usd.column.column import ColumnParams, build_column
-from ionic_usd.evaluate.polyline import PolylineIndex
 
 __all__ = ["heat_colours", "other_parts_tree", "scan_deviation", "shaft_deviation"]
 
@@ -68,9 +67,17 @@ def shaft_deviation(col_pts: np.ndarray, col: ColumnParams) -> np.ndarray:
             sec = fluted_section(
                 1.0, sp.flutes, q * sp.flute_angle, sp.flute_depth, sp.flute_phase, slices=64
             )
-            d[at] = PolylineIndex(sec).distances(xy[at])
+            d[at] = _dist(xy[at], sec)
         dev[in_shaft] = d * k
     return dev
+
+
+def _dist(points: np.ndarray, poly: np.ndarray) -> np.ndarray:
+    """Exact distances from 2-D points to a polyline (the compiled grid search)."""
+    from ionic_usd.evaluate.polyline import closest_on_polyline
+
+    p = np.ascontiguousarray(points, dtype=np.float64)
+    return closest_on_polyline(p, np.ascontiguousarray(poly, dtype=np.float64))[0]
 
 
 def base_deviation(col_pts: np.ndarray, col: ColumnParams) -> np.ndarray:
@@ -83,7 +90,7 @@ def base_deviation(col_pts: np.ndarray, col: ColumnParams) -> np.ndarray:
     outer, _, half, ptop, _ = _layout(bp)
     x, y, z = col_pts[:, 0], col_pts[:, 1], col_pts[:, 2]
     ry = np.column_stack([np.hypot(x, z), y])
-    d = PolylineIndex(outer).distances(ry) if len(outer) > 1 else np.full(len(ry), np.inf)
+    d = _dist(ry, outer) if len(outer) > 1 else np.full(len(ry), np.inf)
     if half > 0:
         c = np.column_stack(
             [np.abs(x) - half, np.abs(y - 0.5 * ptop) - 0.5 * ptop, np.abs(z) - half]
