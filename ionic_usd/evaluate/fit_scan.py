@@ -531,8 +531,17 @@ def _fit_scanned_base(
 
         got = fit_plinth_base(col_pts, col, top, noise)
         if got is not None:
-            notes.append(got[2] + "; the column takes the plinth and the fitted lathe")
-            return got[0], got[1]
+            from ionic_usd.evaluate.scan_deviation import base_deviation
+
+            near = col_pts[col_pts[:, 1] < top]
+            rms = [float(np.sqrt(np.mean(base_deviation(near, c) ** 2))) for c in (got[0], col)]
+            if rms[0] <= rms[1]:
+                notes.append(got[2] + "; the column takes the plinth and the fitted lathe")
+                return got[0], got[1]
+            notes.append(
+                f"{got[2]}; kept the Vitruvian base, nearer its points ({rms[1] * 1000:.3g} "
+                f"against {rms[0] * 1000:.3g} mm rms)"
+            )
     mer = base_meridian(col_pts, 0.0, top)
     if mer is None:
         notes.append("base found but its meridian is too sparse to fit: the Vitruvian base")

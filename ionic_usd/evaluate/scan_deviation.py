@@ -83,11 +83,16 @@ def _dist(points: np.ndarray, poly: np.ndarray) -> np.ndarray:
 def base_deviation(col_pts: np.ndarray, col: ColumnParams) -> np.ndarray:
     """(n,) exact distance (m) of column-coordinate points from the base: the lathe's
     meridian in (r, y) (a surface of revolution is as far from a point as its meridian is in
-    the point's half-plane) and, with a square plinth, the plinth's box."""
+    the point's half-plane, closed by its top and bottom discs) and, with a square plinth,
+    the plinth's box."""
     from ionic_usd.column.base import _layout
 
     bp = col.base_params()
     outer, _, half, ptop, _ = _layout(bp)
+    # the top disc under the shaft and, without a plinth, the bottom disc close the solid
+    outer = np.vstack([outer, [0.0, outer[-1, 1]]])
+    if half <= 0:
+        outer = np.vstack([[0.0, outer[0, 1]], outer])
     x, y, z = col_pts[:, 0], col_pts[:, 1], col_pts[:, 2]
     ry = np.column_stack([np.hypot(x, z), y])
     d = _dist(ry, outer) if len(outer) > 1 else np.full(len(ry), np.inf)

@@ -31,14 +31,18 @@ def plinth_box(col_pts: np.ndarray, top: float) -> tuple[float, float] | None:
     low = p[:, 1] < 0.1 * top
     if np.count_nonzero(low) < 20:
         return None
-    half = float(np.median(proj[low]))
-    # the corners: beyond the face distance only the plinth's sides and top face lie
+    pl = proj[low]
+    half = float(np.median(pl[pl > 0.9 * np.percentile(pl, 95)]))  # not a bottom face's
+    # the corners: beyond the face distance only the plinth's sides and faces lie
     corner = hyp > 1.02 * half
     side = corner & (np.abs(proj - half) < 0.01 * half)
-    face_top = corner & (proj < 0.98 * half)
-    if np.count_nonzero(face_top) < 10 or np.count_nonzero(side) < 10:
+    if np.count_nonzero(side) < 10:
         return None
     half = float(np.median(proj[side]))
+    rough_top = float(np.percentile(p[side, 1], 98))
+    face_top = corner & (proj < 0.98 * half) & (p[:, 1] > 0.5 * rough_top)
+    if np.count_nonzero(face_top) < 10:
+        return None
     return half, float(np.median(p[face_top, 1]))
 
 
