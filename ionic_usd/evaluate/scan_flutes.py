@@ -119,7 +119,7 @@ def fit_taper(
         cols.append(np.sin(np.pi * t) * factor)
     a = np.column_stack(cols)
     w = np.ones(len(r))
-    x = np.zeros(a.shape[1])
+    x: np.ndarray = np.zeros(a.shape[1])
     for _ in range(6):
         x = np.linalg.lstsq(a * w[:, None], r * w, rcond=None)[0]
         res = r - a @ x
