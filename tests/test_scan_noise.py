@@ -35,6 +35,7 @@ def _check(fit, truth: Truth) -> None:
         rms_mm = 1000.0 * s["parts"][part]["deviation"]["rms"]
         assert rms_mm <= 2.0 * NOISE, (part, rms_mm)
     assert s["parts"]["base"]["status"] == "fitted"
+    assert s["not_fitted"] == ["capital", "shaft length and top ring"]
     col = fit.column
     assert col.base_plinth == 1  # the plinth is a box, not a lathe
     sh = col.shaft

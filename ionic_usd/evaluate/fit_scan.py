@@ -64,6 +64,7 @@ class ScanSummary(TypedDict):
     section: dict[str, float]
     seconds: float
     parts: dict[str, dict[str, Any]]
+    not_fitted: list[str]
     notes: list[str]
 
 
@@ -100,6 +101,14 @@ class ScanFit:
     notes: list[str] = field(default_factory=list)
     fits: dict[str, dict[str, Any]] = field(default_factory=dict)
 
+    def not_fitted(self) -> list[str]:
+        """What the scan does not show, kept from the column description."""
+        found = self.frame.parts
+        out = [p for p in ("base", "shaft", "capital") if p not in found]
+        if "shaft" in found and not ("base" in found and "capital" in found):
+            out.append("shaft length and top ring")
+        return out
+
     def summary(self) -> ScanSummary:
         """The R.json keys: diameter, flutes, axis, parts_found, deviation, …"""
         d = self.deviation
@@ -121,6 +130,7 @@ class ScanFit:
             "section": self.section,
             "seconds": self.seconds,
             "parts": self.fits,
+            "not_fitted": self.not_fitted(),
             "notes": self.notes,
         }
 

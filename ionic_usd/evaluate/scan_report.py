@@ -218,6 +218,10 @@ def cmd_fit_column(args) -> int:
             f"  {part}: {rep['status']} ({rep['model']}); {rep['points']:,} points, "
             f"{dev_txt}{extra}"
         )
+    if summary["not_fitted"]:
+        print(
+            f"  not fitted (kept from the column description): {', '.join(summary['not_fitted'])}"
+        )
     for note in fit.notes:
         print(f"  {note}")
     for p in files.values():
