@@ -308,7 +308,7 @@ def cases(quick: bool) -> list[tuple[list[str], dict[str, bytes | None]]]:
     out.append((["column", "--config", "d.toml"], {"d.toml": None}))
     out.append((["column", "--config", "missing.toml"], {}))
     out += cases_31()
-    return out
+    return out + fit_scan_cases()
 
 
 def cases_31() -> list[tuple[list[str], dict[str, bytes | None]]]:
@@ -451,6 +451,55 @@ def paradata_cases() -> list[tuple[list[str], dict[str, bytes | None]]]:
     out.append((["temple", "-o", "T", "--paradata", "missing.graphml"], {}))
     out.append((["preview", "s.usda", "-o", "p.png", "--view", "xray"], not_temple))
     return out
+
+
+# --- fit helper's block: scans and sections that are not what `fit` expects (issue 31) ---
+def fit_scan_cases() -> list[tuple[list[str], dict[str, bytes | None]]]:
+    """Scans no column gives and closed sections no shaft gives: each must be refused."""
+    import numpy as np
+
+    rng = np.random.default_rng(31)
+    head = b"ply\nformat %s 1.0\nelement vertex 200\n" + b"".join(
+        b"property float %s\n" % c for c in (b"x", b"y", b"z")
+    )
+    xyz = rng.random((200, 3)).astype("<f4").tobytes()
+    sphere = rng.normal(size=(3000, 3))
+    sphere /= np.linalg.norm(sphere, axis=1)[:, None]
+    scans = {
+        "garbage.ply": head % b"ascii" + b"end_header\n" + b"foo bar baz\n" * 200,
+        "truncated.ply": head % b"binary_little_endian" + b"end_header\n" + xyz[:1000],
+        "same.xyz": b"1 1 1\n" * 5000,
+        "huge.xyz": _rows(1e300 * (1 + rng.random((2000, 3)))),
+        "plane.xyz": _rows(np.c_[rng.random((3000, 2)) * 2, np.zeros(3000)]),
+        "line.xyz": _rows(np.outer(rng.random(3000), [1.0, 2.0, 3.0])),
+        "sphere.xyz": _rows(sphere),
+    }
+    out: list[tuple[list[str], dict[str, bytes | None]]] = [
+        (["fit", "column", "--scan", name, "-o", "out"], {name: data})
+        for name, data in scans.items()
+    ]
+    t = np.linspace(0.0, 2.0 * np.pi, 400)
+    eight = np.c_[0.3 * np.sin(t), 0.2 * np.sin(2.0 * t)]
+    corners = np.array([[0.0, 0.0], [0.6, 0.0], [0.3, 0.5], [0.0, 0.0]])
+    tri = np.concatenate(
+        [
+            np.linspace(a, b, 60, endpoint=False)
+            for a, b in zip(corners[:-1], corners[1:], strict=True)
+        ]
+    )
+    for name, sec in (("eight.csv", eight), ("triangle.csv", np.vstack([tri, tri[:1]]))):
+        data = "\n".join(f"{x:.9g},{y:.9g}" for x, y in sec).encode()
+        out.append(
+            (["fit", "shaft", "--section", "--reference", name, "-o", "f.toml"], {name: data})
+        )
+    return out
+
+
+def _rows(a) -> bytes:
+    return "\n".join(" ".join(f"{v:.17g}" for v in r) for r in a).encode()
+
+
+# --- end of the fit helper's block ---
 
 
 def fault_cases() -> list[tuple[list[str], dict[str, bytes | None]]]:

@@ -6,6 +6,10 @@ Usage: python tools/scan_table.py [--points N] [--cases whole,capital,base_drum]
 Every case samples the generator's own column (noise 0.5 mm, four 5 cm holes, a 60° missing
 sector, the joints and the ground hidden, a random rigid pose) and fits it with
 :func:`ionic_usd.evaluate.fit_scan.fit_column_scan`. Prints one row per part found.
+
+``--fragments`` instead prints the per-part deviation table of the independent fragment
+scans of tests/synth_scan.py (a square plinth, an Attic base and a fluted drum with a broken
+side, 0.8 mm noise, random pose; mm or inches): rms and p95 per part against the noise.
 """
 
 from __future__ import annotations
@@ -41,6 +45,43 @@ def make_scan(diameter: float, n: int, seed: int, case: str, params=None):
     return p, pts, rot, t
 
 
+#: (shaft radius mm, metres per scan unit, seed) of the ``--fragments`` table
+FRAGMENTS = ((400.0, 1e-3, 0), (250.0, 0.0254, 1), (700.0, 1e-3, 2), (400.0, 1e-3, 3))
+
+
+def fragments(points: int) -> None:
+    """The per-part deviation table of the independent fragment scans."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+    from synth_scan import Truth, fragment_scan
+
+    from ionic_usd.evaluate.fit_scan import fit_column_scan
+
+    print(
+        f"{'R mm':>5} {'unit':>6} {'seed':>4} {'points':>6} {'D fit/true':>14} {'part':6} "
+        f"{'rms mm':>7} {'p95 mm':>7} {'rms/noise':>9}"
+    )
+    for radius, unit, seed in FRAGMENTS:
+        truth = Truth().scaled(radius)
+        pts, _, _ = fragment_scan(points, truth=truth, noise=0.8, seed=seed, unit=unit)
+        name = {1e-3: "mm", 0.0254: "in"}[unit]
+        try:
+            s = fit_column_scan(pts * unit).summary()
+        except Exception as exc:  # a table row, not a crash
+            print(f"{radius:5.0f} {name:>6} {seed:4d} FAILED {type(exc).__name__}: {exc}")
+            continue
+        dd = f"{s['diameter']:.4f}/{2e-3 * radius:.4f}"
+        for part in ("all", *sorted(s["parts"])):
+            dv = s["deviation"] if part == "all" else s["parts"][part]["deviation"]
+            rms, p95 = 1000 * dv["rms"], 1000 * dv["p95"]
+            print(
+                f"{radius:5.0f} {name:>6} {seed:4d} {len(pts):6d} {dd:>14} {part:6} "
+                f"{rms:7.2f} {p95:7.2f} {rms / 0.8:9.2f}"
+            )
+
+
 def main() -> None:
     from ionic_usd.evaluate.fit_scan import fit_column_scan
 
@@ -49,7 +90,11 @@ def main() -> None:
     ap.add_argument("--cases", default="whole,capital,base_drum")
     ap.add_argument("--diameters", default="0.6,0.95,1.2")
     ap.add_argument("--seed", type=int, default=2)
+    ap.add_argument("--fragments", action="store_true", help="the independent fragment table")
     a = ap.parse_args()
+    if a.fragments:
+        fragments(a.points)
+        return
     print(f"{'case':10} {'D':>5} {'part':8} {'status':9} {'fitted vs truth':52} rms/p95 mm")
     for case in a.cases.split(","):
         for d in (float(x) for x in a.diameters.split(",")):

@@ -121,9 +121,16 @@ class ColumnParams:
     base: str = "attic_bezier_plinth"
     base_height: float | None = PORTUNUS_LOWER_DIAMETER / 2.0
     lod: str = "high"
+    base_plinth: int | None = None
 
     def __post_init__(self) -> None:
         _lod(self.lod)
+        if self.base_plinth is not None and (
+            isinstance(self.base_plinth, bool)
+            or not isinstance(self.base_plinth, int)
+            or self.base_plinth < 0
+        ):
+            raise ParameterError("base_plinth", self.base_plinth, "a count >= 0 or unset")
         if self.base_height is not None and not (
             math.isfinite(self.base_height) and self.base_height > 0
         ):
@@ -147,6 +154,8 @@ class ColumnParams:
                 bp = BaseParams(grammar=name, **common)
             else:
                 raise
+        if self.base_plinth is not None:
+            bp = dataclasses.replace(bp, plinth_modules=self.base_plinth)
         h = guarded(lambda: bp.height, "base", name)
         if not (math.isfinite(h) and h > 0):
             raise ParameterError("base", name, "a base grammar with a height > 0 (m)")
@@ -365,6 +374,11 @@ COLUMN_DOCS: dict[str, tuple[str, str, str]] = {
         "base grammar string (tori v1 or Bézier v2, the paper's Tables 2–3)",
     ),
     "base_height": ("", "m", "height every base is scaled to (unset: the grammar's own)"),
+    "base_plinth": (
+        "",
+        "count",
+        "bottom base modules built as a square plinth (unset: the preset's; a grammar: 0)",
+    ),
     "scroll": ("", "name|grammar", "scroll-body ring grammar: S1, S2 or 'R<r> P<p>, …'"),
 }
 
@@ -373,6 +387,7 @@ _COLUMN_TABLE = {
     "lod": FieldSpec("str", max_len=16),
     "base": FieldSpec("str", max_len=4096),
     "base_height": FieldSpec("float", 0.0, UNIT_LIMITS["m"], "m"),
+    "base_plinth": FieldSpec("int", 0, 64),
     "scroll": FieldSpec("str", max_len=4096),
 }
 
@@ -470,6 +485,8 @@ def column_params_to_tables(p: ColumnParams) -> dict[str, dict]:
     column = {"lod": p.lod, "base": p.base, "scroll": scroll}
     if p.base_height is not None:
         column["base_height"] = p.base_height
+    if p.base_plinth is not None:
+        column["base_plinth"] = p.base_plinth
     return {
         "column": column,
         "shaft": plain(p.shaft),

@@ -83,6 +83,11 @@ SHAFT_PARAMETER_DOCS: dict[str, tuple[str, str, str]] = {
         "vertices of the bottom/top rings (0: from the fillet step); "
         "the column sets one count for every flute variant so bases fit all",
     ),
+    "flute_phase": (
+        "",
+        "deg",
+        "turn of the flutes about the axis (0: a fillet faces +x, as the plinth's face)",
+    ),
 }
 
 
@@ -110,6 +115,7 @@ class ShaftParams:
     entasis_rows: int = 16
     body_rows: int = 1
     ring_vertices: int = 0
+    flute_phase: float = 0.0
 
     def __post_init__(self) -> None:
         ctx = "shaft"
@@ -156,6 +162,10 @@ class ShaftParams:
                 self.flute_slices_per_fillet_slice,
                 "an integer >= 1",
                 context=ctx,
+            )
+        if not -180.0 <= self.flute_phase <= 180.0:
+            raise ParameterError(
+                "flute_phase", self.flute_phase, "-180 <= phase <= 180 deg", context=ctx
             )
         for name in ("ring_bottom", "ring_top"):
             if getattr(self, name) < 0:
@@ -290,7 +300,7 @@ def _fluted_rows(p: ShaftParams, ys: np.ndarray, ks: np.ndarray) -> tuple[np.nda
     delta = np.concatenate([libm.arctan2(x_t, x_r), fil_delta], axis=1)  # (R,K) local angle
     rc = np.concatenate([x_r, r * np.cos(fil_delta)], axis=1)  # rad·cos(delta)
     rs = np.concatenate([x_t, r * np.sin(fil_delta)], axis=1)  # rad·sin(delta)
-    centre = (np.arange(e) + 0.5) * period
+    centre = (np.arange(e) + 0.5) * period + np.radians(p.flute_phase)
     cc, sc = np.cos(centre)[None, :, None], np.sin(centre)[None, :, None]
     rc, rs = rc[:, None, :], rs[:, None, :]
     R, K = len(ys), h + nf

@@ -323,6 +323,8 @@ def cmd_fit(args: argparse.Namespace) -> int:
         raise ParameterError("--section", args.part, "used only with `fit shaft`")
     if args.scan is not None:
         raise ParameterError("--scan", str(args.scan), "used only with `fit column`")
+    if args.units is not None:
+        raise ParameterError("--units", args.units, "used only with `fit column --scan`")
     column = _column(args.config)
     ref = _reference(args)
     res = _fit_part(args, column, ref)
@@ -531,8 +533,13 @@ def add_fit_parser(subparsers: Any, *, arguments: bool = True) -> None:
         action="store_true",
         help="shaft: the reference is a closed fluted cross-section",
     )
+    p.add_argument("--scan", type=Path, help="column: point cloud or mesh (.ply, .obj, .xyz, .csv)")
     p.add_argument(
-        "--scan", type=Path, help="column: point cloud or mesh (.ply, .obj, .xyz, .csv), metres"
+        "--units",
+        choices=("auto", "m", "cm", "mm", "in", "ft"),
+        default=None,
+        help="column: the scan's units [default auto: metres or millimetres from its extent, "
+        "unless --scale is given]",
     )
 
 

@@ -37,12 +37,14 @@ from ionic_usd.evaluate.fit_core import FitResult
 from ionic_usd.evaluate.scan_alone import is_fluted
 from ionic_usd.evaluate.scan_axis import ColumnFrame, estimate_axis, find_parts
 from ionic_usd.evaluate.scan_capital import CapitalFit
+from ionic_usd.evaluate.scan_checks import _check_is_column, _part_report
 from ionic_usd.evaluate.scan_deviation import (
     heat_colours,
     other_parts_tree,
     scan_deviation,
     shaft_deviation,
 )
+from ionic_usd.evaluate.scan_flutes import plinth_turn, section_noise, shaft_details, shaft_taper
 from ionic_usd.evaluate.scan_parts import base_meridian, base_top, has_square_plinth, to_column
 from ionic_usd.evaluate.scan_section import outer_profile, section_at, taper
 
@@ -62,6 +64,7 @@ class ScanSummary(TypedDict):
     section: dict[str, float]
     seconds: float
     parts: dict[str, dict[str, Any]]
+    not_fitted: list[str]
     notes: list[str]
 
 
@@ -98,6 +101,14 @@ class ScanFit:
     notes: list[str] = field(default_factory=list)
     fits: dict[str, dict[str, Any]] = field(default_factory=dict)
 
+    def not_fitted(self) -> list[str]:
+        """What the scan does not show, kept from the column description."""
+        found = self.frame.parts
+        out = [p for p in ("base", "shaft", "capital") if p not in found]
+        if "shaft" in found and not ("base" in found and "capital" in found):
+            out.append("shaft length and top ring")
+        return out
+
     def summary(self) -> ScanSummary:
         """The R.json keys: diameter, flutes, axis, parts_found, deviation, …"""
         d = self.deviation
@@ -119,6 +130,7 @@ class ScanFit:
             "section": self.section,
             "seconds": self.seconds,
             "parts": self.fits,
+            "not_fitted": self.not_fitted(),
             "notes": self.notes,
         }
 
@@ -146,6 +158,11 @@ def fit_column_scan(
 
     t0 = time.perf_counter()
     pts = np.asarray(points, dtype=np.float64)
+    if pts.ndim != 2 or pts.shape[1] != 3 or len(pts) < 100 or not np.all(np.isfinite(pts)):
+        raise GeometryError("scan: at least 100 finite points (x, y, z) needed")
+    from ionic_usd.evaluate.scan_io import check_scan_extent
+
+    check_scan_extent(pts, "scan")
     rng = np.random.default_rng(seed)
     sub = (
         pts
@@ -205,14 +222,39 @@ def fit_column_scan(
     shift = sec["centre_u"] * frame.u + sec["centre_v"] * frame.v
     frame = dataclasses.replace(frame, origin=frame.origin + shift)
     loc = frame.local(sub)
-    scale = sec["radius"] / (ra + rb * hs)  # the fillet radius vs the bins' outer radius
-    r_bottom = (ra + rb * s0) * scale
+    noise = section_noise(slab, sec, e)
+    notes.append(f"noise {noise * 1000:.3g} mm (1.4826 × the section's median residual)")
+    det = shaft_details(loc, frame.parts, sec, e, noise)
+    ring_bottom = None
+    if "base" in frame.parts and math.isfinite(det["tip"]):
+        b0 = frame.parts["base"][0]
+        joint, tip = det["joint"], det["tip"]
+        # no step between the mouldings and the ring: the base may end in a fillet at the
+        # ring's radius; the joint the flutes' start gives (the model's ring below them)
+        # then splits the plain part
+        r0 = det["a"] + det["b"] * joint
+        col0 = portunus_column_params(lower_diameter=2.0 * r0, flutes=e)
+        onset = _joint(frame, loc, col0, r0, sec, []).parts["base"][1]
+        if joint < onset < tip:
+            joint = onset
+        ring_bottom = tip - joint
+        notes.append(
+            f"flutes end {tip - b0:.4f} m up (the tip whose flute ends fit best); the base's "
+            f"mouldings end at {joint - b0:.4f} m: plain ring {ring_bottom * 1000:.3g} mm"
+        )
+        frame = dataclasses.replace(
+            frame,
+            parts=dict(frame.parts, base=(b0, joint), shaft=(joint, frame.parts["shaft"][1])),
+        )
+    r_bottom = det["a"] + det["b"] * frame.parts["shaft"][0]
     diameter = 2.0 * r_bottom
     col = portunus_column_params(lower_diameter=diameter, flutes=e)
-    if "base" in frame.parts:
+    if "base" in frame.parts and ring_bottom is None:
         frame = _joint(frame, loc, col, r_bottom, sec, notes)
     sh = col.shaft
-    top_ratio = sh.top_radius / sh.bottom_radius
+    if ring_bottom is not None:
+        sh = dataclasses.replace(sh, ring_bottom=max(ring_bottom, 0.0))
+    top_ratio = (r_bottom + det["b"] * sh.length) / r_bottom
     has_base, has_cap = "base" in frame.parts, "capital" in frame.parts
     if has_base and has_cap:
         # the capital's volutes hang below the shaft's top: measure the hang on the model
@@ -231,16 +273,25 @@ def fit_column_scan(
             )
         )
         length = frame.parts["capital"][0] + hang - frame.parts["base"][1]
-        r_top = (ra + rb * frame.parts["capital"][0]) * scale
+        r_top = det["a"] + det["b"] * frame.parts["capital"][0]
         top_ratio = r_top / r_bottom
         notes.append("whole column: shaft length and top radius measured")
         sh = dataclasses.replace(sh, height=max(length - sh.length + sh.height, 0.1))
     else:
-        notes.append("fragment: shaft length and top ratio kept from the Vitruvian column")
+        notes.append(
+            "fragment: shaft length kept from the Vitruvian column, its top radius from the "
+            "measured taper"
+        )
+    r_top, entasis = r_bottom * top_ratio, 0.0
+    tap = shaft_taper(loc, frame.parts["shaft"], sec, e, sh.length)
+    if tap is not None:
+        r_bottom, r_top, entasis = tap
+        notes.append(f"taper and entasis fitted: entasis {entasis:.4f} of the radius")
     sh = dataclasses.replace(
         sh,
         bottom_radius=r_bottom,
-        top_radius=r_bottom * top_ratio,
+        top_radius=r_top,
+        entasis=entasis,
         flutes=e,
         flute_angle=sec["flute_angle"],
         flute_depth=sec["flute_depth"],
@@ -258,17 +309,32 @@ def fit_column_scan(
     # volutes (180° symmetric) choose among the periods: the one nearest the scan wins
     tree = other_parts_tree(col)
     probe = sub[rng.choice(len(sub), min(len(sub), 5000), replace=False)]
-    turns: list[tuple[float, np.ndarray, int]] = []
-    for j in range(e // 2 if (has_base or has_cap) else 1):
-        m = _matrix(frame, sec["rotation_deg"] + j * 360.0 / e, h_col0)
-        d = scan_deviation(probe, col, m, tree=tree)
-        turns.append((float(np.sqrt(np.mean(d**2))), m, j))
+    plinth = None
+    if has_base:
+        b0, b1 = frame.parts["base"]
+        lsub = frame.local(sub)
+        low = lsub[(lsub[:, 2] > b0 + 0.02 * (b1 - b0)) & (lsub[:, 2] < b0 + 0.12 * (b1 - b0))]
+        plinth = plinth_turn(low[:, :2])
+    period = 360.0 / e
+    if plinth is not None:  # the plinth's faces set the turn, the flutes their own phase
+        cands = [plinth + 90.0 * j for j in range(4 if has_cap else 1)]
+        notes.append(f"square plinth turned {plinth:.3f}° about the axis; flutes phased apart")
+    else:  # the flutes fix the turn up to a period; the volutes choose among the periods
+        cands = [sec["rotation_deg"] + j * period for j in range(e // 2 if has_cap else 1)]
+    turns = []
+    for rot in cands:
+        phase = (sec["rotation_deg"] - rot + 0.5 * period) % period - 0.5 * period
+        c_j = dataclasses.replace(col, shaft=dataclasses.replace(col.shaft, flute_phase=phase))
+        m = _matrix(frame, rot, h_col0)
+        d = scan_deviation(probe, c_j, m, tree=tree)
+        turns.append((float(np.sqrt(np.mean(d**2))), m, c_j))
     best = min(turns, key=lambda t: t[0])  # the first of equal scores
-    m = best[1]
-    sec["rotation_deg"] += best[2] * 360.0 / e
+    m, col = best[1], best[2]
     base_fit = None
     if has_base:  # the turn about the axis is known now: the plinth's faces face ±x, ±z
-        col, base_fit = _fit_scanned_base(to_column(sub, m), col, frame, notes, fit_base_grammar)
+        col, base_fit = _fit_scanned_base(
+            to_column(sub, m), col, frame, notes, fit_base_grammar, noise
+        )
         if base_fit is not None:
             tree = other_parts_tree(col)
     cap_fit = None
@@ -277,6 +343,7 @@ def fit_column_scan(
         tree = other_parts_tree(col)
     dev = scan_deviation(pts, col, m, tree=tree)
     fits = _part_report(frame.local(pts)[:, 2], dev, frame, sec, base_fit, col, cap_fit)
+    _check_is_column(fits, diameter, e)
     return ScanFit(
         col,
         frame,
@@ -459,6 +526,7 @@ def _fit_scanned_base(
     frame: ColumnFrame,
     notes: list[str],
     use_on_plinth: bool,
+    noise: float = 0.001,
 ) -> tuple[ColumnParams, FitResult | None]:
     """The base's meridian (:func:`.scan_parts.base_meridian`) fitted with
     :func:`.fit_base.fit_base`; the column takes the fitted base unless the scanned base has
@@ -468,6 +536,22 @@ def _fit_scanned_base(
 
     b0, b1 = frame.parts["base"]
     top = b1 - b0  # the parts' bins: the joint with the shaft may fall short of the top
+    if has_square_plinth(col_pts, 0.0, top) and not use_on_plinth:
+        from ionic_usd.evaluate.scan_plinth import fit_plinth_base
+
+        got = fit_plinth_base(col_pts, col, top, noise)
+        if got is not None:
+            from ionic_usd.evaluate.scan_deviation import base_deviation
+
+            near = col_pts[col_pts[:, 1] < top]
+            rms = [float(np.sqrt(np.mean(base_deviation(near, c) ** 2))) for c in (got[0], col)]
+            if rms[0] <= rms[1]:
+                notes.append(got[2] + "; the column takes the plinth and the fitted lathe")
+                return got[0], got[1]
+            notes.append(
+                f"{got[2]}; kept the Vitruvian base, nearer its points ({rms[1] * 1000:.3g} "
+                f"against {rms[0] * 1000:.3g} mm rms)"
+            )
     mer = base_meridian(col_pts, 0.0, top)
     if mer is None:
         notes.append("base found but its meridian is too sparse to fit: the Vitruvian base")
@@ -486,62 +570,6 @@ def _fit_scanned_base(
         return col, fit
     notes.append(f"{what}; the column takes the fitted base")
     return fit.column, fit
-
-
-def _part_report(
-    h: np.ndarray,
-    dev: np.ndarray,
-    frame: ColumnFrame,
-    sec: dict[str, float],
-    base_fit: FitResult | None,
-    col: ColumnParams,
-    cap_fit: CapitalFit | None = None,
-) -> dict[str, dict[str, Any]]:
-    """Per part found: what was fitted or only rebuilt, and the deviations of its points."""
-    out: dict[str, dict[str, Any]] = {}
-    for part, (a, b) in frame.parts.items():
-        d = dev[(h >= a) & (h <= b)]
-        rep: dict[str, Any] = {
-            "points": int(len(d)),
-            "deviation": {
-                "rms": float(np.sqrt(np.mean(d**2))) if len(d) else None,
-                "p95": float(np.percentile(d, 95)) if len(d) else None,
-            },
-        }
-        if part == "shaft":
-            rep.update(
-                status="fitted",
-                model="fluted section",
-                fitted=["diameter", "flutes", "flute_angle", "flute_depth", "taper", "rotation"],
-                values={k: sec[k] for k in ("radius", "flute_angle", "flute_depth") if k in sec},
-            )
-        elif part == "base" and base_fit is not None:
-            rep.update(
-                status="fitted"
-                if col.base == base_fit.column.base
-                else "fitted (reported; the column keeps the Vitruvian plinth base)",
-                model="bezier meridian",
-                height=base_fit.column.base_params().height,
-                measures={
-                    "hausdorff_pct": base_fit.after.hausdorff_pct,
-                    "discrete_frechet_pct": base_fit.after.discrete_frechet_pct,
-                },
-            )
-        elif part == "capital" and cap_fit is not None:
-            rep.update(
-                status="fitted",
-                model=f"generator capital, volute {cap_fit.model}",
-                fitted=["scale", "height", "volute_scale", "eye_height", "eye_spacing"],
-                values=cap_fit.values,
-                models=cap_fit.models,
-                bounds_hit=cap_fit.bounds_hit,
-                rebuilt_rms=cap_fit.rms_start,
-                seconds=cap_fit.seconds,
-            )
-        else:
-            rep.update(status="rebuilt", model="Vitruvian proportions at the diameter")
-        out[part] = rep
-    return out
 
 
 def _matrix(frame: ColumnFrame, rotation_deg: float, h0: float) -> np.ndarray:

@@ -16,7 +16,7 @@ import numpy as np
 
 from ionic_usd.column.column import ColumnParams, portunus_column_params
 from ionic_usd.column.shaft import ShaftParams, shaft_radius_at
-from ionic_usd.errors import IonicError
+from ionic_usd.errors import IonicError, ReferenceCurveError
 from ionic_usd.evaluate import fit_core as core
 from ionic_usd.evaluate.fit_core import FitResult, compare_aligned
 
@@ -260,6 +260,24 @@ def _flute_estimate(ref: np.ndarray, centre: np.ndarray) -> tuple[int, float, fl
     return k, float(np.degrees(centre_ang - np.pi / k + np.pi)) % (360.0 / k), float(rad.max())
 
 
+#: Largest residual (node-to-curve Hausdorff, % of the mean curve length) of a fitted
+#: section: past it the reference is refused as not a fluted section (hand-drawn and scanned
+#: sections fit within 0.1 %; a triangle leaves 4.7 %, a figure-eight is refused before).
+SECTION_MAX_PCT = 2.0
+
+
+def check_simple_section(ref: np.ndarray) -> None:
+    """Refuse a closed section that crosses itself (a figure-eight), naming where."""
+    from shapely import Polygon
+    from shapely.validation import explain_validity
+
+    poly = Polygon(ref)
+    if not poly.is_valid:
+        raise ReferenceCurveError(
+            f"reference: a shaft section must not cross itself ({explain_validity(poly)})"
+        )
+
+
 def fit_shaft_section(
     reference: np.ndarray,
     *,
@@ -296,6 +314,7 @@ def fit_shaft_section(
         raise ParameterError(
             "reference", "an open curve", "a closed cross-section (its last node on its first)"
         )
+    check_simple_section(ref)
     column = initial or portunus_column_params()
     from ionic_usd.evaluate.reference import arc_centroid
 
@@ -362,6 +381,12 @@ def fit_shaft_section(
     al = Alignment(
         (float(x[4]), float(x[5])), False, before.hausdorff, after.hausdorff, float(x[3])
     )
+    if not after.hausdorff_pct <= SECTION_MAX_PCT:
+        raise ReferenceCurveError(
+            f"reference: not a fluted shaft section: the best {e}-flute section stays "
+            f"{after.hausdorff_pct:.3g} % of the curve's length from it (node-to-curve "
+            f"Hausdorff; a fluted section fits within {SECTION_MAX_PCT:g} %)"
+        )
     values = dict(zip(names, (float(v) for v in x), strict=True))
     values["flutes"] = float(e)
     return FitResult(

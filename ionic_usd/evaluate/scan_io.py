@@ -101,21 +101,88 @@ def read_scan(path: str | Path, *, scale: float = 1.0) -> np.ndarray:
             pts = _text_points(path)
     except ReferenceCurveError:
         raise
-    except (
-        OSError,
-        ValueError,
-        KeyError,
-        IndexError,
-        TypeError,
-        AttributeError,
-        UnicodeDecodeError,
-    ) as exc:
+    except Exception as exc:  # plyfile's parse errors, trimesh's, numpy's: all one refusal
+        if not isinstance(exc, _READ_ERRORS) and type(exc).__module__.split(".")[0] not in (
+            "plyfile",
+            "trimesh",
+        ):
+            raise
         raise ReferenceCurveError(f"{path}: cannot read the scan ({exc})") from None
     if pts.ndim != 2 or pts.shape[1] != 3 or len(pts) < 100:
         raise ReferenceCurveError(f"{path}: a scan needs at least 100 points (x, y, z)")
     if not np.all(np.isfinite(pts)):
         raise ReferenceCurveError(f"{path}: non-finite coordinates")
+    check_scan_extent(pts * scale, str(path))
     return pts * scale
+
+
+#: What a scan reader may raise for a bad file (besides plyfile's and trimesh's own errors).
+_READ_ERRORS = (
+    OSError,
+    ValueError,
+    KeyError,
+    IndexError,
+    TypeError,
+    AttributeError,
+    UnicodeDecodeError,
+    EOFError,
+)
+
+#: Largest coordinate (m) a scan may hold: a point farther than the Earth's radius from the
+#: origin is not a survey of a column (and squares of such numbers overflow float64 sums).
+MAX_COORDINATE = 1.0e7
+
+#: Smallest extent (m) of a scan along its second and third principal directions, relative
+#: to its first: below this the points lie on a line or a plane, not on a column.
+MIN_FLATNESS = 0.01
+
+
+def check_scan_extent(pts: np.ndarray, where: str) -> None:
+    """Refuse points no column could give: coordinates past :data:`MAX_COORDINATE`, all
+    points (nearly) one point, or points on a line or a plane (:data:`MIN_FLATNESS`)."""
+    big = float(np.max(np.abs(pts)))
+    if not big <= MAX_COORDINATE:
+        raise ReferenceCurveError(
+            f"{where}: coordinates up to {big:.3g} m (after --scale); a scan must lie within "
+            f"{MAX_COORDINATE:.0e} m of its origin"
+        )
+    c = pts - pts.mean(axis=0)
+    size = float(np.max(np.ptp(c, axis=0)))
+    if not size > 1e-4:
+        raise ReferenceCurveError(
+            f"{where}: the points span {size * 1000:.3g} mm; a scan of a column spans more "
+            "than 0.1 mm"
+        )
+    step = max(1, len(c) // 200_000)
+    sv = np.linalg.svd(c[::step] / size, compute_uv=False)
+    if sv[2] < MIN_FLATNESS * sv[0]:
+        what = "a line" if sv[1] < MIN_FLATNESS * sv[0] else "a plane"
+        raise ReferenceCurveError(
+            f"{where}: the points lie on {what} (principal spreads {sv[0]:.3g} : {sv[1]:.3g} : "
+            f"{sv[2]:.3g}, the least below {MIN_FLATNESS:g} of the greatest): not a column"
+        )
+
+
+#: Metres per unit of the ``--units`` names.
+UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254, "ft": 0.3048}
+
+
+def detect_units(pts: np.ndarray, where: str) -> tuple[float, str]:
+    """Metres per unit of a scan, from its least principal extent (a column's diameter, also
+    in a colonnade): up to 6 units → metres, from 200 → millimetres; between, inches and
+    centimetres cannot be told apart and the scan is refused (``--units`` names them)."""
+    c = pts - pts.mean(axis=0)
+    step = max(1, len(c) // 200_000)
+    _, _, vt = np.linalg.svd(c[::step], full_matrices=False)
+    extent = float(np.ptp(c @ vt[2]))
+    if extent <= 6.0:
+        return 1.0, "m"
+    if extent >= 200.0:
+        return 0.001, "mm"
+    raise ReferenceCurveError(
+        f"{where}: the points span {extent:.4g} units across: neither metres nor millimetres; "
+        "give --units (in, cm, ft)"
+    )
 
 
 def sample_surface(

@@ -134,6 +134,7 @@ def write_outputs(
             metadata={
                 "scan": str(args.scan),
                 "scale": args.scale,
+                "units": getattr(args, "units", None) or "auto",
                 "outputs": {k: str(v) for k, v in files.items()},
             },
         )
@@ -170,13 +171,26 @@ def cmd_fit_column(args) -> int:
             raise ParameterError("--json", str(args.json), "a file ending in .json")
         if args.json.exists() and not args.force:
             raise OutputExistsError(f"{args.json} exists; pass --force to overwrite it")
-    pts = read_scan(args.scan, scale=args.scale)
+    from ionic_usd.evaluate.scan_io import UNITS, check_scan_extent, detect_units
+
+    units = getattr(args, "units", None) or "auto"
+    if units == "auto" and args.scale == 1.0:
+        pts = read_scan(args.scan)
+        factor, units = detect_units(pts, str(args.scan))
+        pts = pts * factor
+        check_scan_extent(pts, str(args.scan))
+        unit_note = f"units: {units} (detected from the scan's least extent; --units sets them)"
+    else:
+        unit_note = f"units: {units}, scale {args.scale:g}"
+        factor = UNITS.get(units, 1.0)
+        pts = read_scan(args.scan, scale=args.scale * factor)
     fit = fit_column_scan(pts, seed=args.seed)
     summary = fit.summary()
     out.mkdir(parents=True, exist_ok=True)
     write_outputs(fit, pts, files, args, summary)
     dev = summary["deviation"]
     print(f"scan {args.scan}: {len(pts):,} points; parts {', '.join(summary['parts_found'])}")
+    print(f"  {unit_note}")
     print(
         f"  diameter {fit.diameter:.4f} m, {fit.flutes} flutes; axis "
         f"{np.round(fit.frame.direction, 5).tolist()} through "
@@ -203,6 +217,10 @@ def cmd_fit_column(args) -> int:
         print(
             f"  {part}: {rep['status']} ({rep['model']}); {rep['points']:,} points, "
             f"{dev_txt}{extra}"
+        )
+    if summary["not_fitted"]:
+        print(
+            f"  not fitted (kept from the column description): {', '.join(summary['not_fitted'])}"
         )
     for note in fit.notes:
         print(f"  {note}")
