@@ -37,9 +37,12 @@ def _front(fit) -> np.ndarray:
 
 def test_forum_example_reads():
     plan = read_geojson(FORUM)
-    assert len(plan.lots) == 5 and len(plan.porticoes) == 6
+    assert len(plan.lots) == 21 and len(plan.porticoes) == 6
     east = next(lot for lot in plan.lots if lot.id == "aedes_east")
     assert east.orientation is None and east.column == {"lower_diameter": 0.9}
+    assert east.temple is None and east.choice == {"preset": "portunus"}
+    cap = next(lot for lot in plan.lots if lot.id == "capitolium")
+    assert cap.choice == {"front": 6, "intercolumniation": "eustyle"}
     assert east.hypotheses == {"flutes-20": "alternative"}
     deck = next(p for p in plan.porticoes if p.id == "decumanus")
     assert deck.sides == 2 and deck.spacing == 3.5 and deck.offset == 5.0

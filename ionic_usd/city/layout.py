@@ -25,6 +25,8 @@ __all__ = [
     "Footprint",
     "TempleFit",
     "fit_temple",
+    "lot_azimuth",
+    "lot_box",
     "porticus_columns",
     "extra_columns",
     "drop_inside",
@@ -135,17 +137,7 @@ def fit_temple(
             "outline", shapely.is_valid_reason(poly), "a simple polygon", context=ctx
         )
     smin, smax = lot.scale or scale_range
-    cen = np.array(poly.centroid.coords[0])
-    if lot.orientation is not None:
-        az = lot.orientation
-    else:
-        rect = np.asarray(shapely.minimum_rotated_rectangle(poly).exterior.coords)[:4]
-        e1, e2 = rect[1] - rect[0], rect[2] - rect[1]
-        axis = e1 if np.hypot(*e1) >= np.hypot(*e2) else e2
-        tgt = np.asarray(toward, dtype=float) if toward is not None else cen + axis
-        if np.dot(axis, tgt - cen) < 0:
-            axis = -axis
-        az = _azimuth(*axis)
+    az = lot_azimuth(lot, poly, toward)
     yaw = (180.0 - az) % 360.0
     R = _rot(yaw)
     world = np.stack([lot.outline[:, 0], -lot.outline[:, 1]])  # (2, n) USD x, z
@@ -190,6 +182,37 @@ def fit_temple(
         f"{az:.0f}°); enlarge the lot, lower its scale minimum or turn it",
         context=ctx,
     )
+
+
+def lot_azimuth(lot: Lot, poly, toward: Sequence[float] | None) -> float:
+    """The azimuth a temple on ``lot`` faces: ``lot.orientation``, or along the long axis of
+    the lot's minimum rotated rectangle towards ``toward`` (plan point)."""
+    shapely = _shapely()
+    if lot.orientation is not None:
+        return lot.orientation
+    cen = np.array(poly.centroid.coords[0])
+    rect = np.asarray(shapely.minimum_rotated_rectangle(poly).exterior.coords)[:4]
+    e1, e2 = rect[1] - rect[0], rect[2] - rect[1]
+    axis = e1 if np.hypot(*e1) >= np.hypot(*e2) else e2
+    tgt = np.asarray(toward, dtype=float) if toward is not None else cen + axis
+    if np.dot(axis, tgt - cen) < 0:
+        axis = -axis
+    return _azimuth(*axis)
+
+
+def lot_box(lot: Lot, toward: Sequence[float] | None = None) -> tuple[float, float]:
+    """(width, depth) in metres of the lot's box in the frame of the temple it holds (across
+    and along the direction :func:`lot_azimuth` gives)."""
+    shapely = _shapely()
+    poly = shapely.Polygon(lot.outline)
+    if not poly.is_valid or poly.area <= 0:
+        raise ParameterError(
+            "outline", shapely.is_valid_reason(poly), "a simple polygon", context=f"lot {lot.id}"
+        )
+    yaw = (180.0 - lot_azimuth(lot, poly, toward)) % 360.0
+    local = _rot(yaw).T @ np.stack([lot.outline[:, 0], -lot.outline[:, 1]])
+    span = local.max(axis=1) - local.min(axis=1)
+    return float(span[0]), float(span[1])
 
 
 def _containment(poly, ring: np.ndarray):

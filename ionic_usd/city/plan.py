@@ -12,11 +12,15 @@ Features (``properties``)
 -------------------------
 Polygon, ``type = "temple"``
     ``temple`` (a built-in description, ``"portunus"``, or a temple TOML path relative to the
-    plan), ``orientation`` (azimuth of the front in degrees clockwise from north; default: along
-    the lot's long axis, the front towards the plan's centre), ``hypotheses`` (``{id:
-    "baseline" | "alternative"}``; unnamed ones are drawn per lot, seeded, unless the city is
-    built with variety off), ``column`` (``{"height": m, "lower_diameter": m}``), ``scale``
-    (``[min, max]``: the uniform scales the temple may take to fit its lot), ``id``.
+    plan) or ``preset`` (a built-in description by name) or a type: ``arrangement``,
+    ``front`` (4, 6, 8), ``intercolumniation`` (pycnostyle … araeostyle), ``lower_diameter``
+    (m) — each optional; what the lot leaves open the city chooses, seeded, to fit the lot
+    (:mod:`ionic_usd.city.choose`); ``orientation`` (azimuth of the front in degrees clockwise
+    from north; default: along the lot's long axis, the front towards the plan's centre),
+    ``hypotheses`` (``{id: "baseline" | "alternative"}``; unnamed ones are drawn per lot,
+    seeded, unless the city is built with variety off), ``column`` (``{"height": m,
+    "lower_diameter": m}``), ``scale`` (``[min, max]``: the uniform scales the temple may take
+    to fit its lot), ``id``.
 LineString / MultiLineString, ``type = "porticus"``
     a colonnade along the street: ``spacing`` (m between column axes), ``sides`` (1: on the line,
     the columns facing to its right as drawn; 2: on both sides of it, facing the street),
@@ -67,7 +71,9 @@ class Lot:
     ----------
     id : feature id (names the prim and error messages)
     outline : (n, 2) float — the exterior ring in plan metres (easting, northing), not closed
-    temple : built-in description name or a TOML path
+    temple : built-in description name or a TOML path, or None (``choice`` decides)
+    choice : the lot's preset or type keys (``preset``, ``arrangement``, ``front``,
+        ``intercolumniation``, ``lower_diameter``); what it leaves open the city chooses
     orientation : azimuth of the front (degrees clockwise from north) or None (automatic)
     hypotheses : id → "baseline" | "alternative" chosen in the plan (others drawn per lot)
     column : column overrides, e.g. ``{"height": 8.0, "lower_diameter": 0.9}``
@@ -76,11 +82,12 @@ class Lot:
 
     id: str
     outline: np.ndarray
-    temple: str = "portunus"
+    temple: str | None = None
     orientation: float | None = None
     hypotheses: Mapping[str, str] = field(default_factory=dict)
     column: Mapping[str, float] = field(default_factory=dict)
     scale: tuple[float, float] | None = None
+    choice: Mapping[str, object] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -191,10 +198,34 @@ def _lot(fid: str, geom: Mapping, props: Mapping, ctx: str) -> Lot:
         if lo > hi:
             raise ParameterError("scale", scale, "[min, max] with min <= max", context=ctx)
         scale = (lo, hi)
-    temple = props.get("temple", "portunus")
-    if not isinstance(temple, str) or not temple:
+    temple = props.get("temple")
+    if temple is not None and (not isinstance(temple, str) or not temple):
         raise ParameterError("temple", temple, "a description name or TOML path", context=ctx)
-    return Lot(fid, outline, temple, orient, dict(hyps), column, scale)
+    return Lot(fid, outline, temple, orient, dict(hyps), column, scale, _choice(props, ctx))
+
+
+def _choice(props: Mapping, ctx: str) -> dict[str, object]:
+    """The lot's preset or type keys, checked for their types (their values are checked by
+    :mod:`ionic_usd.city.choose`)."""
+    out: dict[str, object] = {}
+    for key in ("preset", "arrangement", "intercolumniation"):
+        if key in props:
+            v = props[key]
+            if not isinstance(v, str) or not v:
+                raise ParameterError(key, v, "a name", context=ctx)
+            out[key] = v
+    if "front" in props:
+        v = props["front"]
+        if isinstance(v, bool) or v not in (4, 6, 8):
+            raise ParameterError("front", v, "4, 6 or 8 columns", context=ctx)
+        out["front"] = int(v)
+    if "lower_diameter" in props:
+        out["lower_diameter"] = _num(props["lower_diameter"], "lower_diameter", ctx, positive=True)
+    if "preset" in out and (len(out) > 1 or props.get("temple") is not None):
+        raise ParameterError(
+            "preset", out["preset"], "alone (not with temple or type keys)", context=ctx
+        )
+    return out
 
 
 def _porticoes(fid: str, geom: Mapping, props: Mapping, ctx: str) -> list[Porticus]:

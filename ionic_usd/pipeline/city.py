@@ -41,6 +41,7 @@ from ionic_usd.city.plan import CityPlan, grid_plan, read_geojson
 from ionic_usd.errors import BudgetError, OutputExistsError, ParameterError
 from ionic_usd.io import atomic_write_bytes
 from ionic_usd.pipeline.build import PrototypeCache, build_prototypes
+from ionic_usd.pipeline.city_lots import lot_specs
 from ionic_usd.pipeline.spec import TempleSpec, temple_spec
 
 __all__ = ["CityOptions", "build_city", "estimate_memory", "footprint_of", "write_summary"]
@@ -69,13 +70,14 @@ class CityOptions:
     """What ``ionic-usd city`` can set (defaults = the CLI's)."""
 
     plan: str | None = None
-    rows: int = 4
-    cols: int = 4
+    rows: int = 5
+    cols: int = 5
     block: float = 60.0
     columns: int | None = None
     column_spacing: float = 3.0
     variety: bool = True
     column_variety: int = 1
+    temple: str | None = None  # lots that name no temple, preset or type: None = choose
     seed: int = 0
     focus: tuple[float, float] | None = None
     lod_distances: tuple[float, float] = (150.0, 400.0)
@@ -187,40 +189,9 @@ def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | 
     rng = np.random.default_rng(opts.seed)
 
     # -- 1. builds and per-lot choices -------------------------------------------------------
-    specs: list[TempleSpec] = []
-    spec_index: dict[str, int] = {}
-    build = np.zeros(len(plan.lots), dtype=np.int32)
-    base_specs: dict[str, TempleSpec] = {}
-    variants: dict[tuple, TempleSpec] = {}
-    diameters: dict[str, float] = {}
-    for i, lot in enumerate(plan.lots):
-        ctx = f"{plan.source} lot {lot.id}"
-        base = base_specs.get(lot.temple) or temple_spec(
-            lot.temple, base_dir=plan.base_dir, texture_size=opts.texture_size, context=ctx
-        )
-        base_specs[lot.temple] = base
-        column = dict(lot.column)
-        if not column and opts.column_variety > 1:
-            if lot.temple not in diameters:
-                diameters[lot.temple] = base.layout().params.columns_lower_diameter
-            d0 = diameters[lot.temple]
-            levels = np.linspace(0.95 * d0, 1.05 * d0, opts.column_variety)
-            column = {"lower_diameter": round(float(levels[rng.integers(opts.column_variety)]), 4)}
-        spec = base
-        if column:
-            vkey = (lot.temple, tuple(sorted(column.items())))
-            if vkey not in variants:
-                variants[vkey] = temple_spec(
-                    lot.temple,
-                    column,
-                    base_dir=plan.base_dir,
-                    texture_size=opts.texture_size,
-                    context=ctx,
-                )
-            spec = variants[vkey]
-        build[i] = spec_index.setdefault(spec.key, len(spec_index))
-        if build[i] == len(specs):
-            specs.append(spec)
+    centre = np.mean([lot.outline.mean(axis=0) for lot in plan.lots], axis=0) if plan.lots else None
+    chosen = lot_specs(plan, opts, centre)
+    specs, build = chosen.specs, chosen.build
     hyp_ids = {s.key: [h.id for h in s.layout().hypotheses] for s in specs}
     selections = []
     for i, lot in enumerate(plan.lots):
@@ -245,7 +216,6 @@ def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | 
     # -- 2. fitting and colonnades ----------------------------------------------------------
     t1 = time.perf_counter()
     fps = [footprint_of(s) for s in specs]
-    centre = np.mean([lot.outline.mean(axis=0) for lot in plan.lots], axis=0) if plan.lots else None
     fits: list[TempleFit] = []
     # a grid's lots differ by a translation only: fit one, move the others
     same_shape: dict[tuple, tuple[TempleFit, np.ndarray]] = {}
@@ -255,7 +225,7 @@ def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | 
             key = (
                 int(build[i]),
                 lot.orientation,
-                lot.scale,
+                chosen.scale_ranges[i],
                 (lot.outline - lot.outline[0]).round(9).tobytes(),
             )
         if key is not None and key in same_shape:
@@ -263,7 +233,12 @@ def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | 
             d = lot.outline[0] - o0
             fits.append(replace(f0, x=f0.x + float(d[0]), z=f0.z - float(d[1])))
             continue
-        fit = fit_temple(lot, fps[build[i]], scale_range=opts.scale_range, toward=centre)
+        fit = fit_temple(
+            lot,
+            fps[build[i]],
+            scale_range=chosen.scale_ranges[i] or opts.scale_range,
+            toward=centre,
+        )
         if key is not None:
             same_shape[key] = (fit, lot.outline[0])
         fits.append(fit)
@@ -303,9 +278,7 @@ def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | 
 
     # -- 4. builds ------------------------------------------------------------------------
     t2 = time.perf_counter()
-    needed = specs or [
-        base_specs.get("portunus") or temple_spec("portunus", texture_size=opts.texture_size)
-    ]
+    needed = specs or [temple_spec("portunus", texture_size=opts.texture_size)]
     cache = PrototypeCache(Path(opts.prototype_cache)) if opts.prototype_cache else PrototypeCache()
     res = build_prototypes(
         needed, cache=cache, scheduler=opts.scheduler, n_workers=opts.workers, progress=progress
@@ -343,6 +316,7 @@ def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | 
         "columns": int(len(cxz)),
         "columns_dropped_inside_temples": dropped,
         "builds": len(needed),
+        "lots": chosen.choices,
     }
     rep = compose_city(
         out,

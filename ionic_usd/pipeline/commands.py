@@ -63,12 +63,14 @@ def cmd_city(args: argparse.Namespace) -> int:
             if args.instancer_threshold is None
             else args.instancer_threshold
         )
-        est = estimate_memory(temples, street, 1, threshold)
+        builds = 1 if args.temple else temples  # chosen types: a build a lot, at most
+        est = estimate_memory(temples, street, builds, threshold)
         if est > args.memory_limit * 1e9:
             raise BudgetError(
                 f"this city needs about {est / 1e9:.1f} GB ({temples:,} temples, "
-                f"about {street:,} columns), above --memory-limit "
+                f"about {street:,} columns, up to {builds:,} builds), above --memory-limit "
                 f"{args.memory_limit:g} GB; raise the limit to build it anyway"
+                + ("" if args.temple else " (or --temple portunus: one build)")
             )
     opts = CityOptions(
         plan=str(args.plan) if args.plan else None,
@@ -79,6 +81,7 @@ def cmd_city(args: argparse.Namespace) -> int:
         column_spacing=args.column_spacing,
         variety=not args.baseline,
         column_variety=args.column_variety,
+        temple=args.temple,
         seed=args.seed,
         focus=args.focus,
         lod_distances=args.lod_distances,
@@ -135,8 +138,8 @@ def add_city_parser(sub, parser_class, *, arguments: bool = True) -> None:
         type=Path,
         help="GeoJSON FeatureCollection (see examples/forum.geojson); default: a grid",
     )
-    p.add_argument("--rows", type=int, default=4, help="grid rows [default 4]")
-    p.add_argument("--cols", type=int, default=4, help="grid columns [default 4]")
+    p.add_argument("--rows", type=int, default=5, help="grid rows [default 5]")
+    p.add_argument("--cols", type=int, default=5, help="grid columns [default 5]")
     p.add_argument("--block", type=float, default=60.0, help="grid spacing (m) [default 60]")
     p.add_argument(
         "--columns",
@@ -154,6 +157,14 @@ def add_city_parser(sub, parser_class, *, arguments: bool = True) -> None:
         "--baseline",
         action="store_true",
         help="no per-lot variety: every temple at the baseline hypotheses",
+    )
+    p.add_argument(
+        "--temple",
+        metavar="NAME",
+        help="the temple of every lot that names none (a built-in description such as "
+        "portunus, or a TOML path): one build for them all [default: each lot chooses a "
+        "type that fits it, seeded: pseudoperipteral, 4/6/8 columns across, pycnostyle to "
+        "araeostyle, the module sized to the lot]",
     )
     p.add_argument(
         "--column-variety",

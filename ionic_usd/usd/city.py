@@ -473,6 +473,8 @@ def _vt_dict(d: Mapping) -> dict:
         if isinstance(v, Mapping):
             out[str(k)] = _vt_dict(v)
         elif isinstance(v, (list, tuple)):
+            if any(isinstance(x, Mapping) for x in v):
+                continue  # per-lot records stay in the JSON summary
             if all(isinstance(x, str) for x in v):
                 out[str(k)] = Vt.StringArray([str(x) for x in v])
             else:
