@@ -19,7 +19,6 @@ import numpy as np
 
 from ionic_usd.city.plan import Lot, Porticus
 from ionic_usd.errors import IonicError, ParameterError
-from ionic_usd.geometry import libm
 
 __all__ = [
     "Footprint",
@@ -268,43 +267,19 @@ def _sample_polyline(
 
 
 def porticus_columns(p: Porticus, spacing: float) -> tuple[np.ndarray, np.ndarray]:
-    """Column axes of a colonnade.
+    """Column axes of a colonnade: a column on every vertex of its line(s), each straight run
+    divided into equal bays of about ``spacing`` (:func:`ionic_usd.city.stoa.porticus_stoa`).
 
     Returns
     -------
     xz : (n, 2) float — USD (x, z) of each column
     yaw : (n,) float — rotation about Y (degrees): each column faces the line it lines
     """
-    shapely = _shapely()
-    spacing = p.spacing or spacing
-    if not (math.isfinite(spacing) and spacing > 0):
-        raise ParameterError("spacing", spacing, "a length > 0 (m)", context=f"porticus {p.id}")
-    lines: list[tuple[np.ndarray, float]] = []
-    if p.sides == 1:
-        lines.append((p.line, 0.0))
-    else:
-        geom = shapely.LinearRing(p.line) if p.closed else shapely.LineString(p.line)
-        for sign in (1.0, -1.0):
-            off = shapely.offset_curve(geom, sign * p.offset, join_style="mitre")
-            parts = shapely.get_parts(off)
-            for part in parts:
-                c = shapely.get_coordinates(part)
-                lines.append((c, sign))
-    xs, yaws = [], []
-    for coords, sign in lines:
-        closed = p.closed and len(coords) > 2
-        if closed and np.array_equal(coords[0], coords[-1]):
-            coords = coords[:-1]
-        pts, tan = _sample_polyline(np.asarray(coords, dtype=float), spacing, closed)
-        # the front faces the line: for the left side (sign > 0) that is the right normal
-        normal = np.stack([tan[:, 1], -tan[:, 0]], axis=1) * (sign if sign else 1.0)
-        xs.append(np.stack([pts[:, 0], -pts[:, 1]], axis=1))
-        # front (+Z local) → plan direction `normal`: yaw = 180° − azimuth(normal)
-        # libm.arctan2: the same yaws (and so the same instance file) on every CPU
-        yaws.append((180.0 - np.degrees(libm.arctan2(normal[:, 0], normal[:, 1]))) % 360.0)
-    if not xs:
-        return np.zeros((0, 2)), np.zeros(0)
-    return np.concatenate(xs), np.concatenate(yaws)
+    from ionic_usd.city.stoa import porticus_stoa
+
+    _shapely()
+    lay = porticus_stoa(p, spacing)
+    return lay.column_xz, lay.column_yaw
 
 
 def extra_columns(

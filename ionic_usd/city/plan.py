@@ -29,7 +29,7 @@ Polygon, ``type = "porticus"``
     a colonnaded square: columns along its outline (``spacing``), facing in when the ring is
     drawn clockwise.
 Polygon, ``type = "plaza"``
-    open ground (accepted, nothing is built).
+    open ground: paved in its own stone (:mod:`ionic_usd.city.ground`).
 
 Only the standard library reads the file; shapely is used later, for geometry.
 """
@@ -61,6 +61,9 @@ __all__ = [
 FEATURE_TYPES = ("temple", "porticus", "plaza")
 GEOGRAPHIC_CRS = ("EPSG:4326", "OGC:CRS84", "CRS84", "EPSG:4258", "EPSG:4269", "EPSG:4979")
 _HYP_CHOICES = ("baseline", "alternative")
+#: how far behind its column axes a stoa reaches (depth 6 m + wall 0.6 m + eave 0.4 m: the
+#: defaults of :class:`ionic_usd.city.stoa.StoaDims`)
+STOA_BACK = 7.0
 
 
 @dataclass(frozen=True)
@@ -120,6 +123,7 @@ class CityPlan:
     porticoes: tuple[Porticus, ...]
     source: str = "grid"
     base_dir: Path | None = None
+    plazas: tuple[np.ndarray, ...] = ()  # open areas' outlines (plan metres), paved apart
 
 
 def _num(value: object, name: str, ctx: str, *, positive: bool = False) -> float:
@@ -290,6 +294,7 @@ def read_geojson(path: str | os.PathLike) -> CityPlan:
         raise ParameterError("features", feats, "a list of features", context=where)
     lots: list[Lot] = []
     porticoes: list[Porticus] = []
+    plazas: list[np.ndarray] = []
     seen: set[str] = set()
     for i, f in enumerate(feats):
         if not isinstance(f, dict) or not isinstance(f.get("geometry"), dict):
@@ -309,11 +314,20 @@ def read_geojson(path: str | os.PathLike) -> CityPlan:
             lots.append(_lot(fid, f["geometry"], props, ctx))
         elif kind == "porticus":
             porticoes += _porticoes(fid, f["geometry"], props, ctx)
+        else:
+            geom = f["geometry"]
+            if geom.get("type") != "Polygon":
+                raise ParameterError(
+                    "geometry.type", geom.get("type"), "Polygon for a plaza", context=ctx
+                )
+            plazas.append(_ring((geom.get("coordinates") or [None])[0], ctx, closed=True))
     if not lots and not porticoes:
         raise ParameterError(
             "features", len(feats), "at least one temple or porticus", context=where
         )
-    return CityPlan(tuple(lots), tuple(porticoes), source=where, base_dir=p.parent)
+    return CityPlan(
+        tuple(lots), tuple(porticoes), source=where, base_dir=p.parent, plazas=tuple(plazas)
+    )
 
 
 def grid_plan(
@@ -324,7 +338,8 @@ def grid_plan(
     between the rows.
 
     Lot (i, j) is centred at easting ``j·block``, northing ``i·block``; each lot is the block
-    minus the street (``block − street`` square).
+    minus the street and the stoas behind its colonnades (``block − street − 2·STOA_BACK``
+    square; at most half of what the street leaves).
     """
     for name, n in (("--rows", rows), ("--cols", cols)):
         if isinstance(n, bool) or not isinstance(n, int) or n < 1:
@@ -334,6 +349,7 @@ def grid_plan(
     if street >= block:
         raise ParameterError("block", block, f"more than the street width ({street} m)")
     h = (block - street) / 2
+    h -= min(STOA_BACK, h / 2)  # room for the stoas behind the street's columns
     lots = []
     for i in range(rows):
         for j in range(cols):

@@ -31,16 +31,15 @@ from ionic_usd.city.layout import (
     Footprint,
     TempleFit,
     distance_from,
-    drop_inside,
     extra_columns,
     fit_temple,
     lod_by_distance,
-    porticus_columns,
 )
-from ionic_usd.city.plan import CityPlan, grid_plan, read_geojson
+from ionic_usd.city.plan import STOA_BACK, CityPlan, grid_plan, read_geojson
 from ionic_usd.errors import BudgetError, OutputExistsError, ParameterError
 from ionic_usd.io import atomic_write_bytes
 from ionic_usd.pipeline.build import PrototypeCache, build_prototypes
+from ionic_usd.pipeline.city_extras import lay_stoas, street_column_spec, write_stoas_and_ground
 from ionic_usd.pipeline.city_lots import lot_specs
 from ionic_usd.pipeline.spec import TempleSpec, temple_spec
 
@@ -243,13 +242,12 @@ def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | 
             same_shape[key] = (fit, lot.outline[0])
         fits.append(fit)
     placed = [f.footprint_plan(fps[build[i]]) for i, f in enumerate(fits)]
-    parts = [porticus_columns(p, opts.column_spacing) for p in plan.porticoes]
-    cxz = np.concatenate([p[0] for p in parts]) if parts else np.zeros((0, 2))
-    cyaw = np.concatenate([p[1] for p in parts]) if parts else np.zeros(0)
-    clear = drop_inside(cxz, placed)
-    dropped = int((~clear).sum())
-    cxz, cyaw = cxz[clear], cyaw[clear]
+    stoas = lay_stoas(plan, opts.column_spacing, placed, STOA_BACK)
+    cxz, cyaw, dropped = stoas.column_xz, stoas.column_yaw, stoas.dropped
     if opts.columns is not None:
+        stoas = replace(stoas, bay_xz=np.zeros((0, 2)), corner_xz=np.zeros((0, 2)))
+        stoas = replace(stoas, bay_yaw=np.zeros(0), bay_length=np.zeros(0))
+        stoas = replace(stoas, corner_yaw=np.zeros(0), corner_normal=np.zeros((0, 2)))
         if opts.columns <= len(cxz):
             cxz, cyaw = cxz[: opts.columns], cyaw[: opts.columns]
         else:
@@ -290,9 +288,10 @@ def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | 
     # -- 4b. cards for the far field -------------------------------------------------------
     t3 = time.perf_counter()
     tcards, card_dirs, card_note = _far_cards(out, opts, specs, build, selections, txz, progress)
-    column_asset = f"Temples/{needed[0].folder}/{ASSET_NAME}/{ASSET_NAME}.usda"
+    street = street_column_spec(needed)
+    column_asset = f"Temples/{street.folder}/{ASSET_NAME}/{ASSET_NAME}.usda"
     ccards, column_card_dir = _far_column_cards(
-        out, opts, needed[0], column_asset, cxz, card_note, progress
+        out, opts, street, column_asset, cxz, card_note, progress
     )
     timings["cards"] = time.perf_counter() - t3
 
@@ -309,12 +308,22 @@ def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | 
         cards=tcards,
     )
     columns = ColumnInstances(column_asset, cxz, cyaw, clod, ccards)
+    t4 = time.perf_counter()
+    extent_pts = [lot.outline for lot in plan.lots] + list(plan.plazas)
+    extent_pts += [np.stack([cxz[:, 0], -cxz[:, 1]], axis=1)]
+    extent_pts += [p.line for p in plan.porticoes]
+    stoa, ground = write_stoas_and_ground(
+        out, plan, stoas, street, opts.column_spacing, np.concatenate(extent_pts)
+    )
+    timings["stoas and ground"] = time.perf_counter() - t4
     # what the file records depends on the inputs only (not on who built what, or when)
     summary = {
         "plan": Path(plan.source).name if opts.plan else "grid",
         "temples": len(plan.lots),
         "columns": int(len(cxz)),
         "columns_dropped_inside_temples": dropped,
+        "stoa_bays": int(len(stoas.bay_xz)),
+        "stoa_corners": int(len(stoas.corner_xz)),
         "builds": len(needed),
         "lots": chosen.choices,
     }
@@ -322,6 +331,8 @@ def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | 
         out,
         temples,
         columns,
+        stoa=stoa,
+        ground=ground,
         instancer_threshold=threshold,
         summary=summary,
         card_dirs=card_dirs,

@@ -210,6 +210,8 @@ def compose_city(
     summary: Mapping | None = None,
     card_dirs: Mapping[tuple[int, tuple], str] | None = None,
     column_card_dir: str | None = None,
+    stoa: tuple | None = None,
+    ground: tuple | None = None,
     force: bool = False,
 ) -> CityReport:
     """Write ``City.usda`` + ``Instances.usdc`` into ``folder`` (its ``Temples/`` must hold
@@ -225,6 +227,9 @@ def compose_city(
         ``selections`` is ``tuple(sorted(temple_selection(...).items()))`` without a lod
     column_card_dir : the city-relative folder of the street column's card images, needed
         when ``columns.cards`` has any far column (baked with :data:`COLUMN_CARD_SELECTION`)
+    stoa : ``(asset, prototype names, StoaInstances, bounds per prototype, triangles per
+        prototype)`` — the stoas' parts, placed by ``/City/Stoas`` (:mod:`ionic_usd.usd.stoa`)
+    ground : ``(asset, triangles, lo, hi)`` — the ground layer, referenced by ``/City/Ground``
     """
     t0 = time.perf_counter()
     folder = Path(folder)
@@ -384,7 +389,9 @@ def compose_city(
                     )
                 )
             _instancer(body, "/City/Porticus", cprotos, cidx, columns.xz, columns.yaw, None, c_ext)
+        extra_tris = _stoa_and_ground(body, stoa, ground)
     have = [e for e, n in ((t_ext, len(temples)), (c_ext, len(columns))) if n]
+    have += extra_tris[1]
     lo = np.min([e[0] for e in have], axis=0) if have else np.zeros(3)
     hi = np.max([e[1] for e in have], axis=0) if have else np.zeros(3)
     root = new_layer(
@@ -413,7 +420,7 @@ def compose_city(
             col += CARD_TRIANGLES * int(ccard.sum())
         else:
             col = col_tri[s] * len(columns)
-        triangles[s] = int(np.dot(counts, ttri[s])) + col
+        triangles[s] = int(np.dot(counts, ttri[s])) + col + extra_tris[0]
     far_t = temples.cards is not None and bool(np.any(temples.cards))
     if far_t or ccard.any():
         # the same city with each card temple and column at its LOD by distance instead
@@ -464,6 +471,22 @@ def compose_city(
         (tuple(map(float, lo)), tuple(map(float, hi))),
         secs,
     )
+
+
+def _stoa_and_ground(body: Sdf.Layer, stoa: tuple | None, ground: tuple | None) -> tuple:
+    """Author ``/City/Stoas`` and ``/City/Ground``; returns (their triangles, their extents)."""
+    from ionic_usd.usd.stoa import author_ground, author_stoa_instancer
+
+    tris, extents = 0, []
+    if stoa is not None and len(stoa[2]):
+        asset, names, inst, bounds, ptris = stoa
+        extents.append(author_stoa_instancer(body, "/City/Stoas", asset, names, inst, bounds))
+        tris += int(np.bincount(inst.proto, minlength=len(names)) @ np.asarray(ptris))
+    if ground is not None:
+        author_ground(body, "/City/Ground", ground[0])
+        tris += int(ground[1])
+        extents.append((np.asarray(ground[2]), np.asarray(ground[3])))
+    return tris, extents
 
 
 def _vt_dict(d: Mapping) -> dict:
