@@ -31,6 +31,8 @@ def _files(folder: Path) -> dict[str, bytes]:
 def _validate_each_layer(folder: Path) -> None:
     """Every layer the city writes is valid on its own, and the composed city too."""
     assert validate_stage(Usd.Stage.Open(str(folder / "Instances.usdc"))) == []
+    for extra in ("Ground.usda", "Stoas/Stoa.usda"):  # the ground and the stoas' parts
+        assert validate_stage(Usd.Stage.Open(str(folder / extra))) == [], extra
     # the root without its sublayer, saved beside it so relative paths anchor the same way
     alone = folder / "_root_alone.usda"
     layer = Sdf.Layer.OpenAsAnonymous(str(folder / "City.usda"))
@@ -56,7 +58,9 @@ def _model_hierarchy_ok(stage: Usd.Stage) -> list[str]:
 @pytest.fixture(scope="module")
 def grid_city(tmp_path_factory):
     out = tmp_path_factory.mktemp("grid") / "city"
-    opts = CityOptions(rows=3, cols=3, texture_size=TEX, seed=1)
+    # one description for every lot (the uniform city: one build); the varied city's many
+    # builds are tested (slow) in test_city_vary.py
+    opts = CityOptions(rows=3, cols=3, texture_size=TEX, seed=1, temple="portunus")
     return out, build_city(out, opts), opts
 
 
@@ -138,7 +142,8 @@ def test_plan_city_buildings_on_lots_porticoes_on_lines(tmp_path):
     )
     plan = read_geojson(FORUM)
     stage = Usd.Stage.Open(str(out / "City.usda"))
-    assert s["builds"] == 2  # the east temple's thinner columns are a build of their own
+    # every lot a build of its own: 21 lots, types chosen or named, the east one Portunus
+    assert s["builds"] == len({c["build"] for c in s["lots"]}) >= 20
     for lot in plan.lots:
         prim = stage.GetPrimAtPath(f"/City/Temples/Temple_{lot.id}")
         assert prim.IsInstance()
@@ -219,6 +224,8 @@ def test_cli_city_json_and_errors(grid_city, tmp_path, capsys):
                 "3",
                 "--seed",
                 "1",
+                "--temple",
+                "portunus",
                 "--texture-size",
                 str(TEX),
                 "--json",
@@ -337,6 +344,7 @@ def card_city(tmp_path_factory):
     opts = CityOptions(
         rows=1,
         cols=3,
+        temple="portunus",
         texture_size=TEX,
         seed=1,
         focus=(0.0, 0.0),
@@ -494,6 +502,7 @@ def column_card_city(tmp_path_factory):
     opts = CityOptions(
         rows=1,
         cols=2,
+        temple="portunus",
         texture_size=TEX,
         seed=1,
         focus=(0.0, 0.0),

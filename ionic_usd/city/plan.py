@@ -331,7 +331,7 @@ def read_geojson(path: str | os.PathLike) -> CityPlan:
 
 
 def grid_plan(
-    rows: int = 4, cols: int = 4, block: float = 60.0, *, street: float = 8.0, spacing: float = 3.0
+    rows: int = 5, cols: int = 5, block: float = 60.0, *, street: float = 8.0, spacing: float = 3.0
 ) -> CityPlan:
     """The default city: ``rows × cols`` square lots, fronts facing south, temples at their
     own size (scale 1), with a colonnade on both sides of every street running east–west
