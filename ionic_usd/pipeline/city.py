@@ -125,6 +125,8 @@ class CityOptions:
             isinstance(self.scheduler, str) and "://" in self.scheduler
         ):
             raise ParameterError("--scheduler", self.scheduler, "an address like tcp://HOST:PORT")
+        if self.temple is not None and (not isinstance(self.temple, str) or not self.temple):
+            raise ParameterError("--temple", self.temple, "a description name or TOML path")
         if self.workers is not None and (not isinstance(self.workers, int) or self.workers < 1):
             raise ParameterError("--workers", self.workers, "an integer >= 1")
 
