@@ -285,11 +285,12 @@ def porticus_stoa(p: Porticus, spacing: float) -> StoaLayout:
         # the street side: for the left side (sign > 0) that is the right normal
         normal = np.stack([tangent[:, 1], -tangent[:, 0]], axis=1) * (sign if sign else 1.0)
         nbay = np.maximum(1, np.rint(length / spacing).astype(int))
-        line_cols, line_yaw = [], []
-        first = []
+        line_cols: list[np.ndarray] = []
+        line_yaw: list[np.ndarray] = []
+        first: list[int] = []
         for k in range(len(seg)):
             t = np.arange(nbay[k]) / nbay[k]
-            first.append(base + sum(len(c) for c in line_cols))
+            first.append(base + int(sum(len(c) for c in line_cols)))
             line_cols.append(starts[k] + t[:, None] * seg[k])
             line_yaw.append(np.full(nbay[k], _yaw(normal[k : k + 1])[0]))
         if not closed:  # the line's last column

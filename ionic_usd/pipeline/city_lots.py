@@ -8,6 +8,7 @@ and what was chosen (for the summary).
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -37,7 +38,7 @@ class LotSpecs:
     choices: list[dict]
 
 
-def lot_specs(plan: CityPlan, opts, centre: np.ndarray | None) -> LotSpecs:
+def lot_specs(plan: CityPlan, opts, centre: Sequence[float] | np.ndarray | None) -> LotSpecs:
     """The temple build of every lot of ``plan`` (``opts``: a :class:`CityOptions`)."""
     specs: list[TempleSpec] = []
     index: dict[str, int] = {}
@@ -66,7 +67,7 @@ def lot_specs(plan: CityPlan, opts, centre: np.ndarray | None) -> LotSpecs:
                 context=ctx,
             )
         else:
-            w, d = lot_box(lot, centre)
+            w, d = lot_box(lot, None if centre is None else [float(c) for c in centre])
             choice = temple_for_lot(
                 props,
                 lot_rng(opts.seed, lot.id),
@@ -86,7 +87,7 @@ def lot_specs(plan: CityPlan, opts, centre: np.ndarray | None) -> LotSpecs:
 
 def _spec(
     choice: TempleChoice,
-    column: dict | object,
+    column: Mapping[str, float],
     plan: CityPlan,
     opts,
     ctx: str,
@@ -109,7 +110,7 @@ def _spec(
         cache[base_key] = temple_spec(
             name, base_dir=plan.base_dir, texture_size=opts.texture_size, context=ctx
         )
-    col = dict(column)  # type: ignore[call-overload]
+    col: dict[str, float] = dict(column)
     if not col and opts.column_variety > 1:
         if name not in diameters:
             diameters[name] = cache[base_key].layout().params.columns_lower_diameter

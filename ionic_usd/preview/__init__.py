@@ -120,14 +120,14 @@ def perspective_view(
         return View(vp, e, (e - t) / np.linalg.norm(e - t))
     lo, hi = corners.min(axis=0), corners.max(axis=0)
     direction = camera_direction(camera, lo, hi)
-    eye, target, dist, radius = frame(corners, direction, aspect)
+    at, aim, dist, radius = frame(corners, direction, aspect)
     radius = max(radius, 1e-6)
     near = max(dist - 1.5 * radius, dist * 1e-3)
     far = dist + 12.0 * radius
     viewproj = perspective(math.radians(FOV_DEG), aspect, near, far) @ look_at(
-        eye, target, np.array([0.0, 1.0, 0.0])
+        at, aim, np.array([0.0, 1.0, 0.0])
     )
-    return View(viewproj, eye, direction)
+    return View(viewproj, at, direction)
 
 
 def render_preview(
