@@ -97,6 +97,21 @@ def test_grid_city_layers_hierarchy_and_bounds(grid_city):
     )
     np.testing.assert_allclose(np.array(hint[0]), np.array(box.GetMin()), atol=1e-3)
     np.testing.assert_allclose(np.array(hint[1]), np.array(box.GetMax()), atol=1e-3)
+    # the stoas: one bay between every two neighbouring street columns, each bay starting on
+    # a column; the ground under it all
+    stoas = UsdGeom.PointInstancer(stage.GetPrimAtPath("/City/Stoas"))
+    idx = np.asarray(stoas.GetProtoIndicesAttr().Get())
+    assert len(idx) == s["stoa_bays"] + s["stoa_corners"] and s["stoa_bays"] > 0
+    bays = np.asarray(stoas.GetPositionsAttr().Get(), dtype=float)[idx == 0]
+    cols = np.asarray(
+        UsdGeom.PointInstancer(stage.GetPrimAtPath("/City/Porticus")).GetPositionsAttr().Get()
+    )
+    near = np.min(np.linalg.norm(bays[:, None, [0, 2]] - cols[None, :, [0, 2]], axis=2), axis=1)
+    assert (near < 1e-3).all()
+    # 2 streets x 2 sides: 4 lines of 61 columns and 60 bays each
+    assert s["columns"] == 244 and s["stoa_bays"] == 240 and s["stoa_corners"] == 0
+    ground = stage.GetPrimAtPath("/City/Ground")
+    assert ground.IsModel() and {c.GetName() for c in ground.GetChildren()} >= {"Paving", "Lots"}
 
 
 def test_rebuild_reuses_and_is_byte_identical(grid_city, tmp_path):

@@ -1,7 +1,8 @@
 """Cities that vary: each lot's temple type, stoas on the colonnades, the paved ground.
 
-Fast tests work on the plan, the choices and the stoa/ground geometry (no temple build); the
-slow ones build the varied forum and grid (20+ temple builds each).
+Fast tests work on the plan, the choices and the stoa/ground geometry (no temple build). The
+built cities are tested in test_city.py (a grid with stoas and ground; slow: the varied forum,
+21 builds, every layer validated alone) and test_city_dask.py (a real scheduler and workers).
 """
 
 from __future__ import annotations

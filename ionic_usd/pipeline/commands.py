@@ -106,7 +106,8 @@ def cmd_city(args: argparse.Namespace) -> int:
     print(
         f"wrote {s['city']}: {s['temples']:,} temples ({s['temples_as']}, "
         f"{s['temple_prototypes']} prototypes of {s['builds']} builds), {s['columns']:,} "
-        f"street columns ({s['column_prototypes']} prototypes); builds: "
+        f"street columns ({s['column_prototypes']} prototypes), {s['stoa_bays']:,} stoa bays "
+        f"and {s['stoa_corners']} corners on paved ground; builds: "
         f"{s['prototypes_built']} built, {s['prototypes_reused']} reused; "
         f"{s['timings']['total']:.2f} s"
     )
