@@ -12,7 +12,10 @@ Every case runs in a fresh subprocess (so peak memory is that case's alone):
   distinct temple builds, built from an empty cache (prototypes, meshes, UVs, textures: every
   run does the same work) by a real ``dask scheduler`` with 1 and then 2 ``dask worker``
   processes on 127.0.0.1 (single-threaded, started and stopped here), and locally (no
-  ``--scheduler``); the SHA-256 of every file of the three cities must agree.
+  ``--scheduler``); the SHA-256 of every file of the three cities must agree. Besides the
+  wall times the table gives Σ task s / build s: the workers' build seconds over the build
+  step's wall time, i.e. how many builds ran at once (on a machine shared with other jobs
+  the tasks slow down, this ratio shows whether both workers were kept busy).
 
 Usage: ``python tools/bench_city.py [--quick] [--json out.json]`` (run from the repository
 with PYTHONPATH set to it). Prints a Markdown table. Uses a private cache in a temporary
@@ -81,6 +84,7 @@ def case_city(folder: str, *args: str) -> dict:
         "workers": s["workers"],
         "cluster_workers": s["cluster_workers"],
         "digest": digest.hexdigest()[:16],
+        "task_s": sum(s["build_task_seconds"].values()),
     }
 
 
@@ -195,8 +199,8 @@ def distributed(tmp: Path, which: list[str], local: bool) -> tuple[list[str], di
     plans = {"forum": ["--plan", str(Path(repo) / "examples" / "forum.geojson")], "grid": []}
     rows = [
         "| city | temples | builds | run | workers | build s | whole s | speed-up | "
-        "files = local |",
-        "|---|---:|---:|---|---:|---:|---:|---:|---|",
+        "Σ task s / build s | files = local |",
+        "|---|---:|---:|---|---:|---:|---:|---:|---:|---|",
     ]
     raw: dict = {}
     for name in which:
@@ -220,6 +224,7 @@ def distributed(tmp: Path, which: list[str], local: bool) -> tuple[list[str], di
             rows.append(
                 f"| {name} | {c['temples']} | {c['built']} | {run} | {c['cluster_workers']} | "
                 f"{c['build']:.1f} | {c['wall']:.1f} | {base / c['wall']:.2f} | "
+                f"{c['task_s'] / max(c['build'], 1e-9):.2f} | "
                 f"{'yes' if same else 'NO'} ({len(digests[run])} files) |"
             )
             print(rows[-1], file=sys.stderr)
