@@ -234,8 +234,8 @@ def cases(quick: bool) -> list[tuple[list[str], dict[str, bytes | None]]]:
         (["asset", "-o", "f/A"], {"f": b""}),
         (["preview", "s.usda", "-o", "p.png"], {}),
         (["preview", "s.usda", "-o", "p.jpg"], {"s.usda": b"#usda 1.0\n"}),
-        (["city", "c"], {}),
-        (["city", "c"], {"c": None}),
+        (["city", "c", "--rows", "1", "--cols", "1"], {}),
+        (["city", "c", "--rows", "1", "--cols", "1"], {"c": None}),
     ):
         out.append((argv, files))
     # 6. flags of city, asset, preview, evaluate

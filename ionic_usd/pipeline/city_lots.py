@@ -16,6 +16,7 @@ import numpy as np
 from ionic_usd.city.choose import TempleChoice, lot_rng, temple_for_lot
 from ionic_usd.city.layout import lot_box
 from ionic_usd.city.plan import CityPlan
+from ionic_usd.errors import ParameterError
 from ionic_usd.pipeline.spec import TempleSpec, temple_spec
 
 __all__ = ["LotSpecs", "lot_specs", "PORTUNUS_LOWER_DIAMETER"]
@@ -50,6 +51,13 @@ def lot_specs(plan: CityPlan, opts, centre: Sequence[float] | np.ndarray | None)
     col_rng = np.random.default_rng(opts.seed)
     lo, hi = opts.scale_range
     module = (lo * PORTUNUS_LOWER_DIAMETER, hi * PORTUNUS_LOWER_DIAMETER)
+    if opts.temple is not None:  # checked once, named as the flag that gave it
+        try:
+            temple_spec(opts.temple, base_dir=plan.base_dir, texture_size=opts.texture_size)
+        except ParameterError:
+            raise ParameterError(
+                "--temple", opts.temple, "a built-in description (portunus) or a temple TOML"
+            ) from None
     for i, lot in enumerate(plan.lots):
         ctx = f"{plan.source} lot {lot.id}"
         props: dict[str, object] = dict(lot.choice)
