@@ -31,6 +31,8 @@ def _files(folder: Path) -> dict[str, bytes]:
 def _validate_each_layer(folder: Path) -> None:
     """Every layer the city writes is valid on its own, and the composed city too."""
     assert validate_stage(Usd.Stage.Open(str(folder / "Instances.usdc"))) == []
+    for extra in ("Ground.usda", "Stoas/Stoa.usda"):  # the ground and the stoas' parts
+        assert validate_stage(Usd.Stage.Open(str(folder / extra))) == [], extra
     # the root without its sublayer, saved beside it so relative paths anchor the same way
     alone = folder / "_root_alone.usda"
     layer = Sdf.Layer.OpenAsAnonymous(str(folder / "City.usda"))
@@ -56,7 +58,9 @@ def _model_hierarchy_ok(stage: Usd.Stage) -> list[str]:
 @pytest.fixture(scope="module")
 def grid_city(tmp_path_factory):
     out = tmp_path_factory.mktemp("grid") / "city"
-    opts = CityOptions(rows=3, cols=3, texture_size=TEX, seed=1)
+    # one description for every lot (the uniform city: one build); the varied city's many
+    # builds are tested (slow) in test_city_vary.py
+    opts = CityOptions(rows=3, cols=3, texture_size=TEX, seed=1, temple="portunus")
     return out, build_city(out, opts), opts
 
 
@@ -94,6 +98,21 @@ def test_grid_city_layers_hierarchy_and_bounds(grid_city):
     )
     np.testing.assert_allclose(np.array(hinted.GetMin()), np.array(box.GetMin()), atol=1e-3)
     np.testing.assert_allclose(np.array(hinted.GetMax()), np.array(box.GetMax()), atol=1e-3)
+    # the stoas: one bay between every two neighbouring street columns, each bay starting on
+    # a column; the ground under it all
+    stoas = UsdGeom.PointInstancer(stage.GetPrimAtPath("/City/Stoas"))
+    idx = np.asarray(stoas.GetProtoIndicesAttr().Get())
+    assert len(idx) == s["stoa_bays"] + s["stoa_corners"] and s["stoa_bays"] > 0
+    bays = np.asarray(stoas.GetPositionsAttr().Get(), dtype=float)[idx == 0]
+    cols = np.asarray(
+        UsdGeom.PointInstancer(stage.GetPrimAtPath("/City/Porticus")).GetPositionsAttr().Get()
+    )
+    near = np.min(np.linalg.norm(bays[:, None, [0, 2]] - cols[None, :, [0, 2]], axis=2), axis=1)
+    assert (near < 1e-3).all()
+    # 2 streets x 2 sides: 4 lines of 61 columns and 60 bays each
+    assert s["columns"] == 244 and s["stoa_bays"] == 240 and s["stoa_corners"] == 0
+    ground = stage.GetPrimAtPath("/City/Ground")
+    assert ground.IsModel() and {c.GetName() for c in ground.GetChildren()} >= {"Paving", "Lots"}
 
 
 def _meshes(stage: Usd.Stage) -> int:
@@ -184,7 +203,8 @@ def test_plan_city_buildings_on_lots_porticoes_on_lines(tmp_path):
     )
     plan = read_geojson(FORUM)
     stage = Usd.Stage.Open(str(out / "City.usda"))
-    assert s["builds"] == 2  # the east temple's thinner columns are a build of their own
+    # every lot a build of its own: 21 lots, types chosen or named, the east one Portunus
+    assert s["builds"] == len({c["build"] for c in s["lots"]}) >= 20
     for lot in plan.lots:
         prim = stage.GetPrimAtPath(f"/City/Temples/Temple_{lot.id}")
         assert prim.IsInstance()
@@ -265,6 +285,8 @@ def test_cli_city_json_and_errors(grid_city, tmp_path, capsys):
                 "3",
                 "--seed",
                 "1",
+                "--temple",
+                "portunus",
                 "--texture-size",
                 str(TEX),
                 "--json",
@@ -383,6 +405,7 @@ def card_city(tmp_path_factory):
     opts = CityOptions(
         rows=1,
         cols=3,
+        temple="portunus",
         texture_size=TEX,
         seed=1,
         focus=(0.0, 0.0),
@@ -540,6 +563,7 @@ def column_card_city(tmp_path_factory):
     opts = CityOptions(
         rows=1,
         cols=2,
+        temple="portunus",
         texture_size=TEX,
         seed=1,
         focus=(0.0, 0.0),

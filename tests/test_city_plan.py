@@ -37,9 +37,12 @@ def _front(fit) -> np.ndarray:
 
 def test_forum_example_reads():
     plan = read_geojson(FORUM)
-    assert len(plan.lots) == 5 and len(plan.porticoes) == 6
+    assert len(plan.lots) == 21 and len(plan.porticoes) == 6
     east = next(lot for lot in plan.lots if lot.id == "aedes_east")
     assert east.orientation is None and east.column == {"lower_diameter": 0.9}
+    assert east.temple is None and east.choice == {"preset": "portunus"}
+    cap = next(lot for lot in plan.lots if lot.id == "capitolium")
+    assert cap.choice == {"front": 6, "intercolumniation": "eustyle"}
     assert east.hypotheses == {"flutes-20": "alternative"}
     deck = next(p for p in plan.porticoes if p.id == "decumanus")
     assert deck.sides == 2 and deck.spacing == 3.5 and deck.offset == 5.0
@@ -179,9 +182,12 @@ def test_porticus_columns_line_the_street(sides):
     want = 0.0 if sides == 1 else 4.0
     # on the line or `offset` from it; at a mitred outer corner a little further
     assert (d >= want - 1e-6).all() and (np.abs(d - want) < 1e-6).mean() > 0.9
-    # consecutive columns along a straight run are one spacing apart
+    # consecutive columns along a straight run are equally spaced, the run divided into
+    # round(length / spacing) bays (a column on each vertex): 60 m -> 20 bays of 3 m; a side
+    # offset by 4 m runs 56 m -> 19 bays of 2.947 m
     step = np.hypot(*np.diff(plan[:10], axis=0).T)
-    np.testing.assert_allclose(step, 3.0, atol=1e-9)
+    want_step = 3.0 if sides == 1 else 56.0 / 19
+    np.testing.assert_allclose(step, want_step, atol=1e-9)
     if sides == 2:
         # every column faces the line: its front points at the nearest point of the line
         a = np.radians(yaw)

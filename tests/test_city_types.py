@@ -7,8 +7,8 @@ import tomllib
 import numpy as np
 import pytest
 
+from ionic_usd.city.choose import lot_rng, temple_for_lot
 from ionic_usd.city.types import FILL, _footprint, choose_type, lot_size
-from ionic_usd.pipeline.city import _auto_spec
 from ionic_usd.pipeline.spec import temple_spec
 from ionic_usd.temple.vitruvius import TempleType
 
@@ -33,12 +33,19 @@ def test_choices_fit_their_lots_and_vary():
     assert len(slugs) >= 9  # a city of such lots holds many distinct builds
 
 
-def test_auto_spec_is_seeded_per_lot():
-    ring = np.array([[0, 0], [40, 0], [40, 60], [0, 60.0]])
-    a, b = _auto_spec(ring, 0, 3, 64), _auto_spec(ring, 0, 3, 64)
-    assert a.key == b.key
-    keys = {_auto_spec(ring, 0, i, 64).key for i in range(12)}
-    assert len(keys) >= 8
+def _auto(seed: int, lot: str) -> str:
+    got = temple_for_lot(
+        {"temple": "auto"}, lot_rng(seed, lot), width=40.0, depth=60.0, module_range=(0.3, 3.0)
+    )
+    assert got.description is not None
+    return got.description
+
+
+def test_auto_is_seeded_per_lot():
+    assert _auto(0, "3") == _auto(0, "3")
+    kinds = {tomllib.loads(_auto(0, str(i)))["type"]["arrangement"] for i in range(12)}
+    texts = {_auto(0, str(i)) for i in range(12)}
+    assert len(texts) >= 8 and len(kinds) >= 3  # arrangements beyond the pseudoperipteral
 
 
 def test_lot_names_a_preset_with_column_variety():

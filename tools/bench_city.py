@@ -7,9 +7,15 @@ Every case runs in a fresh subprocess (so peak memory is that case's alone):
   peak RSS, file size, then ``Usd.Stage.Open`` + counting instances in another process;
 * the anchor: a raw usd-core PointInstancer of N instances of one cube, arrays from numpy,
   saved as .usdc, opened and counted the same way;
-* the prototype build on Dask: a city needing two temple builds (``--column-variety 2``)
-  from an empty prototype cache on a LocalCluster of 1 and of 2 workers (the UV cache is
-  warmed first, so both do the same work).
+* the prototype build on Dask (``--distributed``, or alone with ``--only-distributed``):
+  the example forum (21 temple lots) and the default grid (5 × 5), each a city of 20+
+  distinct temple builds, built from an empty cache (prototypes, meshes, UVs, textures: every
+  run does the same work) by a real ``dask scheduler`` with 1 and then 2 ``dask worker``
+  processes on 127.0.0.1 (single-threaded, started and stopped here), and locally (no
+  ``--scheduler``); the SHA-256 of every file of the three cities must agree. Besides the
+  wall times the table gives Σ task s / build s: the workers' build seconds over the build
+  step's wall time, i.e. how many builds ran at once (on a machine shared with other jobs
+  the tasks slow down, this ratio shows whether both workers were kept busy).
 
 Usage: ``python tools/bench_city.py [--quick] [--json out.json]`` (run from the repository
 with PYTHONPATH set to it). Prints a Markdown table. Uses a private cache in a temporary
@@ -78,6 +84,7 @@ def case_city(folder: str, *args: str) -> dict:
         "workers": s["workers"],
         "cluster_workers": s["cluster_workers"],
         "digest": digest.hexdigest()[:16],
+        "task_s": sum(s["build_task_seconds"].values()),
     }
 
 
@@ -123,6 +130,108 @@ def case_raw(n: int, path: str) -> dict:
     return {"author_save": t1 - t0, "peak_mib": _peak_mib(), "bytes": Path(path).stat().st_size}
 
 
+def _free_port() -> int:
+    import socket
+
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]
+
+
+class _Cluster:
+    """A real ``dask scheduler`` and ``n`` ``dask worker`` processes (one thread each) on
+    127.0.0.1, with this environment (the private cache, PYTHONPATH); stopped on exit."""
+
+    def __init__(self, n: int, logs: Path):
+        self.n, self.logs = n, logs
+        self.procs: list[subprocess.Popen] = []
+
+    def __enter__(self) -> str:
+        dask = str(Path(sys.executable).with_name("dask"))
+        port = _free_port()
+        self.address = f"tcp://127.0.0.1:{port}"
+        self.logs.mkdir(parents=True, exist_ok=True)
+        start = [dask, "scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard"]
+        self._spawn(start, "scheduler")
+        for k in range(self.n):
+            w = [dask, "worker", self.address, "--host", "127.0.0.1", "--nthreads", "1"]
+            self._spawn([*w, "--nworkers", "1", "--no-dashboard", "--name", f"w{k}"], f"w{k}")
+        from distributed import Client
+
+        deadline = time.monotonic() + 120
+        while True:
+            try:
+                with Client(self.address, timeout="5s") as client:
+                    client.wait_for_workers(self.n, timeout=120)
+                return self.address
+            except (OSError, TimeoutError):
+                if time.monotonic() > deadline:
+                    raise
+                time.sleep(0.5)
+
+    def _spawn(self, argv: list[str], name: str) -> None:
+        log = open(self.logs / f"{name}.log", "w")  # noqa: SIM115 - closed with the process
+        self.procs.append(subprocess.Popen(argv, stdout=log, stderr=subprocess.STDOUT))
+
+    def __exit__(self, *exc) -> None:
+        for p in reversed(self.procs):
+            p.terminate()
+        for p in self.procs:
+            try:
+                p.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                p.kill()
+
+
+def _digests(folder: Path) -> dict[str, str]:
+    return {
+        f.relative_to(folder).as_posix(): hashlib.sha256(f.read_bytes()).hexdigest()
+        for f in sorted(folder.rglob("*"))
+        if f.is_file()
+    }
+
+
+def distributed(tmp: Path, which: list[str], local: bool) -> tuple[list[str], dict]:
+    """The 1-vs-2-worker comparison (see the module docstring); returns (table rows, raw)."""
+    cache = Path(os.environ["IONIC_USD_CACHE"])
+    repo = str(Path(__file__).resolve().parents[1])
+    os.environ["PYTHONPATH"] = os.pathsep.join([repo, os.environ.get("PYTHONPATH", "")])
+    plans = {"forum": ["--plan", str(Path(repo) / "examples" / "forum.geojson")], "grid": []}
+    rows = [
+        "| city | temples | builds | run | workers | build s | whole s | speed-up | "
+        "Σ task s / build s | files = local |",
+        "|---|---:|---:|---|---:|---:|---:|---:|---:|---|",
+    ]
+    raw: dict = {}
+    for name in which:
+        runs: dict[str, dict] = {}
+        digests: dict[str, dict] = {}
+        for run, n in (("1 worker", 1), ("2 workers", 2), ("local", 0)):
+            if run == "local" and not local:
+                continue
+            shutil.rmtree(cache, ignore_errors=True)  # every run from the same (empty) cache
+            folder = tmp / f"{name}_{n}"
+            if n:
+                with _Cluster(n, tmp / "logs" / f"{name}_{n}") as address:
+                    c = _child(["_city", str(folder), *plans[name], "--scheduler", address])
+            else:
+                c = _child(["_city", str(folder), *plans[name]])
+            runs[run], digests[run] = c, _digests(folder)
+            shutil.rmtree(folder, ignore_errors=True)
+        base = runs["1 worker"]["wall"]
+        for run, c in runs.items():
+            same = digests[run] == digests.get("local", digests["1 worker"])
+            rows.append(
+                f"| {name} | {c['temples']} | {c['built']} | {run} | {c['cluster_workers']} | "
+                f"{c['build']:.1f} | {c['wall']:.1f} | {base / c['wall']:.2f} | "
+                f"{c['task_s'] / max(c['build'], 1e-9):.2f} | "
+                f"{'yes' if same else 'NO'} ({len(digests[run])} files) |"
+            )
+            print(rows[-1], file=sys.stderr)
+        raw[name] = {"runs": runs, "identical": len({json.dumps(d) for d in digests.values()}) == 1}
+    return rows, raw
+
+
 def _row(name: str, c: dict, o: dict) -> str:
     return (
         f"| {name} | {c.get('instances', o['instances']):,} | {c['author_save']:.2f} | "
@@ -142,6 +251,13 @@ def main() -> None:
     ap.add_argument("--quick", action="store_true", help="skip the 1M and 100×100 cases")
     ap.add_argument("--json", type=Path, help="also write the raw numbers here")
     ap.add_argument("--skip-workers", action="store_true", help="skip the Dask comparison")
+    ap.add_argument(
+        "--only-distributed",
+        nargs="*",
+        choices=("forum", "grid"),
+        help="only the 1-vs-2-worker comparison, of these cities [default both]",
+    )
+    ap.add_argument("--no-local", action="store_true", help="no local build to compare with")
     args = ap.parse_args()
     tmp = Path(tempfile.mkdtemp(prefix="bench_city_"))
     # a private cache: the runs below delete its prototypes, never the user's
@@ -152,8 +268,19 @@ def main() -> None:
         "MB on disk |",
         "|---|---:|---:|---:|---:|---:|---:|",
     ]
+    if args.only_distributed is not None:
+        try:
+            rows, raw = distributed(
+                tmp, args.only_distributed or ["forum", "grid"], not args.no_local
+            )
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
+        print("\n".join(rows))
+        if args.json:
+            args.json.write_text(json.dumps(raw, indent=1))
+        return
     try:
-        _child(["_city", str(tmp / "warm")])  # builds (or reuses) the temple once
+        _child(["_city", str(tmp / "warm"), "--temple", "portunus"])  # the one temple build
         counts = [1000, 100_000] + ([] if args.quick else [1_000_000])
         cases = [("default city (4×4 temples)", [])]
         cases += [(f"4×4 temples + {n:,} columns", ["--columns", str(n)]) for n in counts]
@@ -175,7 +302,10 @@ def main() -> None:
             ]
         for name, extra in cases:
             folder = tmp / f"c{len(results)}"
-            c = _child(["_city", str(folder), *extra])
+            # one build for every lot (the uniform city): this table is about instances
+            uniform = ["--temple", "portunus"] + ([] if "--rows" in extra else ["--rows", "4"])
+            uniform += [] if "--cols" in extra else ["--cols", "4"]
+            c = _child(["_city", str(folder), *uniform, *extra])
             o = _child(["_open", str(folder / "City.usda")])
             results[name] = {"city": c, "open": o}
             rows.append(_row(name, {**c, "instances": o["instances"]}, o))
@@ -189,24 +319,9 @@ def main() -> None:
             rows.append(_row(f"raw usd-core PointInstancer, {n:,}", r, o))
             print(rows[-1], file=sys.stderr)
         if not args.skip_workers:
-            rows += [
-                "",
-                "| prototype build (2 temple builds, empty prototype cache) | workers |"
-                " build s | whole s | output digest |",
-                "|---|---:|---:|---:|---|",
-            ]
-            variety = ["--column-variety", "2", "--rows", "2", "--cols", "2", "--seed", "3"]
-            proto = Path(os.environ["IONIC_USD_CACHE"]) / "prototypes"
-            _child(["_city", str(tmp / "wwarm"), *variety])  # warms the UV/texture caches
-            for w in (1, 2):
-                shutil.rmtree(proto, ignore_errors=True)  # each run builds both temples
-                c = _child(["_city", str(tmp / f"w{w}"), *variety, "--workers", str(w)])
-                results[f"workers {w}"] = {"city": c}
-                rows.append(
-                    f"| local cluster | {c['cluster_workers']} | {c['build']:.1f} | "
-                    f"{c['wall']:.1f} | {c['digest']} |"
-                )
-                print(rows[-1], file=sys.stderr)
+            drows, raw = distributed(tmp, ["forum", "grid"], not args.no_local)
+            rows += ["", *drows]
+            results["distributed"] = raw
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     print("\n".join(rows))

@@ -19,6 +19,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import io
+import json
 import os
 import random
 import sys
@@ -235,8 +236,8 @@ def cases(quick: bool) -> list[tuple[list[str], dict[str, bytes | None]]]:
         (["asset", "-o", "f/A"], {"f": b""}),
         (["preview", "s.usda", "-o", "p.png"], {}),
         (["preview", "s.usda", "-o", "p.jpg"], {"s.usda": b"#usda 1.0\n"}),
-        (["city", "c"], {}),
-        (["city", "c"], {"c": None}),
+        (["city", "c", "--rows", "1", "--cols", "1"], {}),
+        (["city", "c", "--rows", "1", "--cols", "1"], {"c": None}),
     ):
         out.append((argv, files))
     # 6. flags of city, asset, preview, evaluate
@@ -250,6 +251,26 @@ def cases(quick: bool) -> list[tuple[list[str], dict[str, bytes | None]]]:
     ):
         for v in vals:
             out.append((["city", "c", flag, v], {"c/PortunusTemple/Temple.usda": b"#usda 1.0\n"}))
+    # 6b. a plan's temple lots naming bad presets and types
+    ring = [[0, 0], [30, 0], [30, 40], [0, 40], [0, 0]]
+    for props in (
+        {"front": 5},
+        {"front": "6"},
+        {"intercolumniation": "wide"},
+        {"arrangement": "dipteral"},
+        {"preset": "nope"},
+        {"preset": "portunus", "front": 4},
+        {"lower_diameter": -1},
+        {"lower_diameter": 40.0},
+        {"front": 8, "lower_diameter": 2.5},
+    ):
+        feature = {
+            "type": "Feature",
+            "properties": {"type": "temple", **props},
+            "geometry": {"type": "Polygon", "coordinates": [ring]},
+        }
+        doc = json.dumps({"type": "FeatureCollection", "features": [feature]}).encode()
+        out.append((["city", "c", "--plan", "p.geojson"], {"p.geojson": doc}))
     for argv in (
         ["--texture-size", "8192"],
         ["--texture-size", "1000"],

@@ -19,12 +19,13 @@ import numpy as np
 
 from ionic_usd.city.plan import Lot, Porticus
 from ionic_usd.errors import IonicError, ParameterError
-from ionic_usd.geometry import libm
 
 __all__ = [
     "Footprint",
     "TempleFit",
     "fit_temple",
+    "lot_azimuth",
+    "lot_box",
     "porticus_columns",
     "extra_columns",
     "drop_inside",
@@ -135,17 +136,7 @@ def fit_temple(
             "outline", shapely.is_valid_reason(poly), "a simple polygon", context=ctx
         )
     smin, smax = lot.scale or scale_range
-    cen = np.array(poly.centroid.coords[0])
-    if lot.orientation is not None:
-        az = lot.orientation
-    else:
-        rect = np.asarray(shapely.minimum_rotated_rectangle(poly).exterior.coords)[:4]
-        e1, e2 = rect[1] - rect[0], rect[2] - rect[1]
-        axis = e1 if np.hypot(*e1) >= np.hypot(*e2) else e2
-        tgt = np.asarray(toward, dtype=float) if toward is not None else cen + axis
-        if np.dot(axis, tgt - cen) < 0:
-            axis = -axis
-        az = _azimuth(*axis)
+    az = lot_azimuth(lot, poly, toward)
     yaw = (180.0 - az) % 360.0
     R = _rot(yaw)
     world = np.stack([lot.outline[:, 0], -lot.outline[:, 1]])  # (2, n) USD x, z
@@ -190,6 +181,37 @@ def fit_temple(
         f"{az:.0f}°); enlarge the lot, lower its scale minimum or turn it",
         context=ctx,
     )
+
+
+def lot_azimuth(lot: Lot, poly, toward: Sequence[float] | None) -> float:
+    """The azimuth a temple on ``lot`` faces: ``lot.orientation``, or along the long axis of
+    the lot's minimum rotated rectangle towards ``toward`` (plan point)."""
+    shapely = _shapely()
+    if lot.orientation is not None:
+        return lot.orientation
+    cen = np.array(poly.centroid.coords[0])
+    rect = np.asarray(shapely.minimum_rotated_rectangle(poly).exterior.coords)[:4]
+    e1, e2 = rect[1] - rect[0], rect[2] - rect[1]
+    axis = e1 if np.hypot(*e1) >= np.hypot(*e2) else e2
+    tgt = np.asarray(toward, dtype=float) if toward is not None else cen + axis
+    if np.dot(axis, tgt - cen) < 0:
+        axis = -axis
+    return _azimuth(*axis)
+
+
+def lot_box(lot: Lot, toward: Sequence[float] | None = None) -> tuple[float, float]:
+    """(width, depth) in metres of the lot's box in the frame of the temple it holds (across
+    and along the direction :func:`lot_azimuth` gives)."""
+    shapely = _shapely()
+    poly = shapely.Polygon(lot.outline)
+    if not poly.is_valid or poly.area <= 0:
+        raise ParameterError(
+            "outline", shapely.is_valid_reason(poly), "a simple polygon", context=f"lot {lot.id}"
+        )
+    yaw = (180.0 - lot_azimuth(lot, poly, toward)) % 360.0
+    local = _rot(yaw).T @ np.stack([lot.outline[:, 0], -lot.outline[:, 1]])
+    span = local.max(axis=1) - local.min(axis=1)
+    return float(span[0]), float(span[1])
 
 
 def _containment(poly, ring: np.ndarray):
@@ -245,43 +267,19 @@ def _sample_polyline(
 
 
 def porticus_columns(p: Porticus, spacing: float) -> tuple[np.ndarray, np.ndarray]:
-    """Column axes of a colonnade.
+    """Column axes of a colonnade: a column on every vertex of its line(s), each straight run
+    divided into equal bays of about ``spacing`` (:func:`ionic_usd.city.stoa.porticus_stoa`).
 
     Returns
     -------
     xz : (n, 2) float — USD (x, z) of each column
     yaw : (n,) float — rotation about Y (degrees): each column faces the line it lines
     """
-    shapely = _shapely()
-    spacing = p.spacing or spacing
-    if not (math.isfinite(spacing) and spacing > 0):
-        raise ParameterError("spacing", spacing, "a length > 0 (m)", context=f"porticus {p.id}")
-    lines: list[tuple[np.ndarray, float]] = []
-    if p.sides == 1:
-        lines.append((p.line, 0.0))
-    else:
-        geom = shapely.LinearRing(p.line) if p.closed else shapely.LineString(p.line)
-        for sign in (1.0, -1.0):
-            off = shapely.offset_curve(geom, sign * p.offset, join_style="mitre")
-            parts = shapely.get_parts(off)
-            for part in parts:
-                c = shapely.get_coordinates(part)
-                lines.append((c, sign))
-    xs, yaws = [], []
-    for coords, sign in lines:
-        closed = p.closed and len(coords) > 2
-        if closed and np.array_equal(coords[0], coords[-1]):
-            coords = coords[:-1]
-        pts, tan = _sample_polyline(np.asarray(coords, dtype=float), spacing, closed)
-        # the front faces the line: for the left side (sign > 0) that is the right normal
-        normal = np.stack([tan[:, 1], -tan[:, 0]], axis=1) * (sign if sign else 1.0)
-        xs.append(np.stack([pts[:, 0], -pts[:, 1]], axis=1))
-        # front (+Z local) → plan direction `normal`: yaw = 180° − azimuth(normal)
-        # libm.arctan2: the same yaws (and so the same instance file) on every CPU
-        yaws.append((180.0 - np.degrees(libm.arctan2(normal[:, 0], normal[:, 1]))) % 360.0)
-    if not xs:
-        return np.zeros((0, 2)), np.zeros(0)
-    return np.concatenate(xs), np.concatenate(yaws)
+    from ionic_usd.city.stoa import porticus_stoa
+
+    _shapely()
+    lay = porticus_stoa(p, spacing)
+    return lay.column_xz, lay.column_yaw
 
 
 def extra_columns(

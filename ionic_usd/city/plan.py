@@ -12,13 +12,16 @@ Features (``properties``)
 -------------------------
 Polygon, ``type = "temple"``
     ``temple`` (a built-in description — ``ionic-usd presets`` lists them: ``"portunus"``,
-    ``"priene"``, … —, ``"auto"`` for a type after Vitruvius chosen to fit the lot from a
-    seeded draw (:mod:`ionic_usd.city.types`), or a temple TOML path relative to the plan),
-    ``orientation`` (azimuth of the front in degrees clockwise from north; default: along
-    the lot's long axis, the front towards the plan's centre), ``hypotheses`` (``{id:
-    "baseline" | "alternative"}``; unnamed ones are drawn per lot, seeded, unless the city is
-    built with variety off), ``column`` (``{"height": m, "lower_diameter": m}``), ``scale``
-    (``[min, max]``: the uniform scales the temple may take to fit its lot), ``id``.
+    ``"priene"``, … —, ``"auto"`` (the city chooses, as for a lot that names nothing), or a
+    temple TOML path relative to the plan) or ``preset`` (a built-in description by name) or a
+    type: ``arrangement``, ``front`` (4, 6, 8), ``intercolumniation`` (pycnostyle …
+    araeostyle), ``lower_diameter`` (m) — each optional; what the lot leaves open the city
+    chooses, seeded, to fit the lot (:mod:`ionic_usd.city.choose`); ``orientation`` (azimuth
+    of the front in degrees clockwise from north; default: along the lot's long axis, the
+    front towards the plan's centre), ``hypotheses`` (``{id: "baseline" | "alternative"}``;
+    unnamed ones are drawn per lot, seeded, unless the city is built with variety off),
+    ``column`` (``{"height": m, "lower_diameter": m}``), ``scale`` (``[min, max]``: the
+    uniform scales the temple may take to fit its lot), ``id``.
 LineString / MultiLineString, ``type = "porticus"``
     a colonnade along the street: ``spacing`` (m between column axes), ``sides`` (1: on the line,
     the columns facing to its right as drawn; 2: on both sides of it, facing the street),
@@ -27,7 +30,7 @@ Polygon, ``type = "porticus"``
     a colonnaded square: columns along its outline (``spacing``), facing in when the ring is
     drawn clockwise.
 Polygon, ``type = "plaza"``
-    open ground (accepted, nothing is built).
+    open ground: paved in its own stone (:mod:`ionic_usd.city.ground`).
 
 Only the standard library reads the file; shapely is used later, for geometry.
 """
@@ -59,6 +62,9 @@ __all__ = [
 FEATURE_TYPES = ("temple", "porticus", "plaza")
 GEOGRAPHIC_CRS = ("EPSG:4326", "OGC:CRS84", "CRS84", "EPSG:4258", "EPSG:4269", "EPSG:4979")
 _HYP_CHOICES = ("baseline", "alternative")
+#: how far behind its column axes a stoa reaches (depth 6 m + wall 0.6 m + eave 0.4 m: the
+#: defaults of :class:`ionic_usd.city.stoa.StoaDims`)
+STOA_BACK = 7.0
 
 
 @dataclass(frozen=True)
@@ -69,7 +75,9 @@ class Lot:
     ----------
     id : feature id (names the prim and error messages)
     outline : (n, 2) float — the exterior ring in plan metres (easting, northing), not closed
-    temple : built-in description name or a TOML path
+    temple : built-in description name or a TOML path, or None (``choice`` decides)
+    choice : the lot's preset or type keys (``preset``, ``arrangement``, ``front``,
+        ``intercolumniation``, ``lower_diameter``); what it leaves open the city chooses
     orientation : azimuth of the front (degrees clockwise from north) or None (automatic)
     hypotheses : id → "baseline" | "alternative" chosen in the plan (others drawn per lot)
     column : column overrides, e.g. ``{"height": 8.0, "lower_diameter": 0.9}``
@@ -78,11 +86,12 @@ class Lot:
 
     id: str
     outline: np.ndarray
-    temple: str = "portunus"
+    temple: str | None = None
     orientation: float | None = None
     hypotheses: Mapping[str, str] = field(default_factory=dict)
     column: Mapping[str, float] = field(default_factory=dict)
     scale: tuple[float, float] | None = None
+    choice: Mapping[str, object] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -115,6 +124,7 @@ class CityPlan:
     porticoes: tuple[Porticus, ...]
     source: str = "grid"
     base_dir: Path | None = None
+    plazas: tuple[np.ndarray, ...] = ()  # open areas' outlines (plan metres), paved apart
 
 
 #: largest plan coordinate (m): a local frame near the site (a UTM northing is below 1e7);
@@ -209,10 +219,34 @@ def _lot(fid: str, geom: Mapping, props: Mapping, ctx: str) -> Lot:
         if lo > hi:
             raise ParameterError("scale", scale, "[min, max] with min <= max", context=ctx)
         scale = (lo, hi)
-    temple = props.get("temple", "portunus")
-    if not isinstance(temple, str) or not temple:
+    temple = props.get("temple")
+    if temple is not None and (not isinstance(temple, str) or not temple):
         raise ParameterError("temple", temple, "a description name or TOML path", context=ctx)
-    return Lot(fid, outline, temple, orient, dict(hyps), column, scale)
+    return Lot(fid, outline, temple, orient, dict(hyps), column, scale, _choice(props, ctx))
+
+
+def _choice(props: Mapping, ctx: str) -> dict[str, object]:
+    """The lot's preset or type keys, checked for their types (their values are checked by
+    :mod:`ionic_usd.city.choose`)."""
+    out: dict[str, object] = {}
+    for key in ("preset", "arrangement", "intercolumniation"):
+        if key in props:
+            v = props[key]
+            if not isinstance(v, str) or not v:
+                raise ParameterError(key, v, "a name", context=ctx)
+            out[key] = v
+    if "front" in props:
+        v = props["front"]
+        if isinstance(v, bool) or v not in (4, 6, 8):
+            raise ParameterError("front", v, "4, 6 or 8 columns", context=ctx)
+        out["front"] = int(v)
+    if "lower_diameter" in props:
+        out["lower_diameter"] = _num(props["lower_diameter"], "lower_diameter", ctx, positive=True)
+    if "preset" in out and (len(out) > 1 or props.get("temple") is not None):
+        raise ParameterError(
+            "preset", out["preset"], "alone (not with temple or type keys)", context=ctx
+        )
+    return out
 
 
 def _porticoes(fid: str, geom: Mapping, props: Mapping, ctx: str) -> list[Porticus]:
@@ -277,6 +311,7 @@ def read_geojson(path: str | os.PathLike) -> CityPlan:
         raise ParameterError("features", feats, "a list of features", context=where)
     lots: list[Lot] = []
     porticoes: list[Porticus] = []
+    plazas: list[np.ndarray] = []
     seen: set[str] = set()
     for i, f in enumerate(feats):
         if not isinstance(f, dict) or not isinstance(f.get("geometry"), dict):
@@ -296,28 +331,32 @@ def read_geojson(path: str | os.PathLike) -> CityPlan:
             lots.append(_lot(fid, f["geometry"], props, ctx))
         elif kind == "porticus":
             porticoes += _porticoes(fid, f["geometry"], props, ctx)
+        else:
+            geom = f["geometry"]
+            if geom.get("type") != "Polygon":
+                raise ParameterError(
+                    "geometry.type", geom.get("type"), "Polygon for a plaza", context=ctx
+                )
+            plazas.append(_ring((geom.get("coordinates") or [None])[0], ctx, closed=True))
     if not lots and not porticoes:
         raise ParameterError(
             "features", len(feats), "at least one temple or porticus", context=where
         )
-    return CityPlan(tuple(lots), tuple(porticoes), source=where, base_dir=p.parent)
+    return CityPlan(
+        tuple(lots), tuple(porticoes), source=where, base_dir=p.parent, plazas=tuple(plazas)
+    )
 
 
 def grid_plan(
-    rows: int = 4,
-    cols: int = 4,
-    block: float = 60.0,
-    *,
-    street: float = 8.0,
-    spacing: float = 3.0,
-    temple: str = "portunus",
+    rows: int = 5, cols: int = 5, block: float = 60.0, *, street: float = 8.0, spacing: float = 3.0
 ) -> CityPlan:
     """The default city: ``rows × cols`` square lots, fronts facing south, temples at their
     own size (scale 1), with a colonnade on both sides of every street running east–west
     between the rows.
 
     Lot (i, j) is centred at easting ``j·block``, northing ``i·block``; each lot is the block
-    minus the street (``block − street`` square).
+    minus the street and the stoas behind its colonnades (``block − street − 2·STOA_BACK``
+    square; at most half of what the street leaves).
     """
     for name, n in (("--rows", rows), ("--cols", cols)):
         if isinstance(n, bool) or not isinstance(n, int) or n < 1:
@@ -327,6 +366,7 @@ def grid_plan(
     if street >= block:
         raise ParameterError("block", block, f"more than the street width ({street} m)")
     h = (block - street) / 2
+    h -= min(STOA_BACK, h / 2)  # room for the stoas behind the street's columns
     lots = []
     for i in range(rows):
         for j in range(cols):
@@ -334,7 +374,7 @@ def grid_plan(
             ring = np.array(
                 [[cx - h, cy - h], [cx + h, cy - h], [cx + h, cy + h], [cx - h, cy + h]]
             )
-            lots.append(Lot(f"{i}_{j}", ring, temple, orientation=180.0, scale=(1.0, 1.0)))
+            lots.append(Lot(f"{i}_{j}", ring, orientation=180.0, scale=(1.0, 1.0)))
     x0, x1 = -block / 2, (cols - 0.5) * block
     ys = [(i + 0.5) * block for i in range(rows - 1)] or [-block / 2]
     porticoes = tuple(

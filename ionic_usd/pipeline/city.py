@@ -31,16 +31,16 @@ from ionic_usd.city.layout import (
     Footprint,
     TempleFit,
     distance_from,
-    drop_inside,
     extra_columns,
     fit_temple,
     lod_by_distance,
-    porticus_columns,
 )
-from ionic_usd.city.plan import CityPlan, grid_plan, read_geojson
+from ionic_usd.city.plan import STOA_BACK, CityPlan, grid_plan, read_geojson
 from ionic_usd.errors import BudgetError, OutputExistsError, ParameterError
 from ionic_usd.io import atomic_write_bytes
 from ionic_usd.pipeline.build import PrototypeCache, build_prototypes
+from ionic_usd.pipeline.city_extras import lay_stoas, street_column_spec, write_stoas_and_ground
+from ionic_usd.pipeline.city_lots import lot_specs
 from ionic_usd.pipeline.spec import TempleSpec, temple_spec
 
 __all__ = ["CityOptions", "build_city", "estimate_memory", "footprint_of", "write_summary"]
@@ -72,14 +72,14 @@ class CityOptions:
     """What ``ionic-usd city`` can set (defaults = the CLI's)."""
 
     plan: str | None = None
-    temple: str = "portunus"  # the grid's temples: a preset name, "auto" or a TOML path
-    rows: int = 4
-    cols: int = 4
+    rows: int = 5
+    cols: int = 5
     block: float = 60.0
     columns: int | None = None
     column_spacing: float = 3.0
     variety: bool = True
     column_variety: int = 1
+    temple: str | None = None  # lots that name no temple, preset or type: None = choose
     seed: int = 0
     focus: tuple[float, float] | None = None
     lod_distances: tuple[float, float] = (150.0, 400.0)
@@ -131,23 +131,10 @@ class CityOptions:
         it = self.instancer_threshold
         if it is not None and (isinstance(it, bool) or not isinstance(it, int) or it < 0):
             raise ParameterError("--instancer-threshold", it, "an integer >= 0")
+        if self.temple is not None and (not isinstance(self.temple, str) or not self.temple):
+            raise ParameterError("--temple", self.temple, "a description name or TOML path")
         if self.workers is not None and (not isinstance(self.workers, int) or self.workers < 1):
             raise ParameterError("--workers", self.workers, "an integer >= 1")
-
-
-AUTO = "auto"  # a lot's ``temple``: the city chooses a type that fits it
-
-
-def _auto_spec(outline, seed: int, index: int, texture_size: int) -> TempleSpec:
-    """The typed temple chosen for lot ``index`` (its own generator: the other draws keep
-    their order)."""
-    from ionic_usd.city.types import choose_type, lot_size
-
-    width, depth = lot_size(outline)
-    slug, text = choose_type(width, depth, np.random.default_rng([seed, index]))
-    spec = TempleSpec(slug, text, int(texture_size))
-    spec.layout()  # validated before any build
-    return spec
 
 
 def footprint_of(spec: TempleSpec) -> Footprint:
@@ -217,9 +204,7 @@ def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | 
     plan: CityPlan = (
         read_geojson(opts.plan)
         if opts.plan
-        else grid_plan(
-            opts.rows, opts.cols, opts.block, spacing=opts.column_spacing, temple=opts.temple
-        )
+        else grid_plan(opts.rows, opts.cols, opts.block, spacing=opts.column_spacing)
     )
     notes: list[str] = []
     if opts.plan:
@@ -235,46 +220,9 @@ def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | 
     rng = np.random.default_rng(opts.seed)
 
     # -- 1. builds and per-lot choices -------------------------------------------------------
-    specs: list[TempleSpec] = []
-    spec_index: dict[str, int] = {}
-    build = np.zeros(len(plan.lots), dtype=np.int32)
-    base_specs: dict[str, TempleSpec] = {}
-    variants: dict[tuple, TempleSpec] = {}
-    diameters: dict[str, float] = {}
-    for i, lot in enumerate(plan.lots):
-        ctx = f"{plan.source} lot {lot.id}"
-        if lot.temple == AUTO:  # a type fitted to the lot, seeded per lot (ionic_usd.city.types)
-            spec = _auto_spec(lot.outline, opts.seed, i, opts.texture_size)
-            build[i] = spec_index.setdefault(spec.key, len(spec_index))
-            if build[i] == len(specs):
-                specs.append(spec)
-            continue
-        base = base_specs.get(lot.temple) or temple_spec(
-            lot.temple, base_dir=plan.base_dir, texture_size=opts.texture_size, context=ctx
-        )
-        base_specs[lot.temple] = base
-        column = dict(lot.column)
-        if not column and opts.column_variety > 1:
-            if lot.temple not in diameters:
-                diameters[lot.temple] = base.layout().params.columns_lower_diameter
-            d0 = diameters[lot.temple]
-            levels = np.linspace(0.95 * d0, 1.05 * d0, opts.column_variety)
-            column = {"lower_diameter": round(float(levels[rng.integers(opts.column_variety)]), 4)}
-        spec = base
-        if column:
-            vkey = (lot.temple, tuple(sorted(column.items())))
-            if vkey not in variants:
-                variants[vkey] = temple_spec(
-                    lot.temple,
-                    column,
-                    base_dir=plan.base_dir,
-                    texture_size=opts.texture_size,
-                    context=ctx,
-                )
-            spec = variants[vkey]
-        build[i] = spec_index.setdefault(spec.key, len(spec_index))
-        if build[i] == len(specs):
-            specs.append(spec)
+    centre = np.mean([lot.outline.mean(axis=0) for lot in plan.lots], axis=0) if plan.lots else None
+    chosen = lot_specs(plan, opts, centre)
+    specs, build = chosen.specs, chosen.build
     hyp_ids = {s.key: [h.id for h in s.layout().hypotheses] for s in specs}
     selections = []
     for i, lot in enumerate(plan.lots):
@@ -299,7 +247,6 @@ def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | 
     # -- 2. fitting and colonnades ----------------------------------------------------------
     t1 = time.perf_counter()
     fps = [footprint_of(s) for s in specs]
-    centre = np.mean([lot.outline.mean(axis=0) for lot in plan.lots], axis=0) if plan.lots else None
     fits: list[TempleFit] = []
     # a grid's lots differ by a translation only: fit one, move the others
     same_shape: dict[tuple, tuple[TempleFit, np.ndarray]] = {}
@@ -309,7 +256,7 @@ def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | 
             key = (
                 int(build[i]),
                 lot.orientation,
-                lot.scale,
+                chosen.scale_ranges[i],
                 (lot.outline - lot.outline[0]).round(9).tobytes(),
             )
         if key is not None and key in same_shape:
@@ -317,18 +264,22 @@ def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | 
             d = lot.outline[0] - o0
             fits.append(replace(f0, x=f0.x + float(d[0]), z=f0.z - float(d[1])))
             continue
-        fit = fit_temple(lot, fps[build[i]], scale_range=opts.scale_range, toward=centre)
+        fit = fit_temple(
+            lot,
+            fps[build[i]],
+            scale_range=chosen.scale_ranges[i] or opts.scale_range,
+            toward=centre,
+        )
         if key is not None:
             same_shape[key] = (fit, lot.outline[0])
         fits.append(fit)
     placed = [f.footprint_plan(fps[build[i]]) for i, f in enumerate(fits)]
-    parts = [porticus_columns(p, opts.column_spacing) for p in plan.porticoes]
-    cxz = np.concatenate([p[0] for p in parts]) if parts else np.zeros((0, 2))
-    cyaw = np.concatenate([p[1] for p in parts]) if parts else np.zeros(0)
-    clear = drop_inside(cxz, placed)
-    dropped = int((~clear).sum())
-    cxz, cyaw = cxz[clear], cyaw[clear]
+    stoas = lay_stoas(plan, opts.column_spacing, placed, STOA_BACK)
+    cxz, cyaw, dropped = stoas.column_xz, stoas.column_yaw, stoas.dropped
     if opts.columns is not None:
+        stoas = replace(stoas, bay_xz=np.zeros((0, 2)), corner_xz=np.zeros((0, 2)))
+        stoas = replace(stoas, bay_yaw=np.zeros(0), bay_length=np.zeros(0))
+        stoas = replace(stoas, corner_yaw=np.zeros(0), corner_normal=np.zeros((0, 2)))
         if opts.columns <= len(cxz):
             cxz, cyaw = cxz[: opts.columns], cyaw[: opts.columns]
         else:
@@ -357,9 +308,7 @@ def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | 
 
     # -- 4. builds ------------------------------------------------------------------------
     t2 = time.perf_counter()
-    needed = specs or [
-        base_specs.get("portunus") or temple_spec("portunus", texture_size=opts.texture_size)
-    ]
+    needed = specs or [temple_spec("portunus", texture_size=opts.texture_size)]
     cache = PrototypeCache(Path(opts.prototype_cache)) if opts.prototype_cache else PrototypeCache()
     res = build_prototypes(
         needed, cache=cache, scheduler=opts.scheduler, n_workers=opts.workers, progress=progress
@@ -371,9 +320,10 @@ def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | 
     # -- 4b. cards for the far field -------------------------------------------------------
     t3 = time.perf_counter()
     tcards, card_dirs, card_note = _far_cards(out, opts, specs, build, selections, txz, progress)
-    column_asset = f"Temples/{needed[0].folder}/{ASSET_NAME}/{ASSET_NAME}.usda"
+    street = street_column_spec(needed)
+    column_asset = f"Temples/{street.folder}/{ASSET_NAME}/{ASSET_NAME}.usda"
     ccards, column_card_dir = _far_column_cards(
-        out, opts, needed[0], column_asset, cxz, card_note, progress
+        out, opts, street, column_asset, cxz, card_note, progress
     )
     timings["cards"] = time.perf_counter() - t3
 
@@ -390,18 +340,31 @@ def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | 
         cards=tcards,
     )
     columns = ColumnInstances(column_asset, cxz, cyaw, clod, ccards)
+    t4 = time.perf_counter()
+    extent_pts = [lot.outline for lot in plan.lots] + list(plan.plazas)
+    extent_pts += [np.stack([cxz[:, 0], -cxz[:, 1]], axis=1)]
+    extent_pts += [p.line for p in plan.porticoes]
+    stoa, ground = write_stoas_and_ground(
+        out, plan, stoas, street, opts.column_spacing, np.concatenate(extent_pts)
+    )
+    timings["stoas and ground"] = time.perf_counter() - t4
     # what the file records depends on the inputs only (not on who built what, or when)
     summary = {
         "plan": Path(plan.source).name if opts.plan else "grid",
         "temples": len(plan.lots),
         "columns": int(len(cxz)),
         "columns_dropped_inside_temples": dropped,
+        "stoa_bays": int(len(stoas.bay_xz)),
+        "stoa_corners": int(len(stoas.corner_xz)),
         "builds": len(needed),
+        "lots": chosen.choices,
     }
     rep = compose_city(
         out,
         temples,
         columns,
+        stoa=stoa,
+        ground=ground,
         instancer_threshold=threshold,
         summary=summary,
         card_dirs=card_dirs,

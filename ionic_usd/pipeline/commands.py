@@ -82,7 +82,6 @@ def cmd_city(args: argparse.Namespace) -> int:
     limit_gb = DEFAULT_MAX_MEMORY_GB if args.max_memory is None else args.max_memory
     opts = CityOptions(
         plan=str(args.plan) if args.plan else None,
-        temple=args.temple,
         rows=args.rows,
         cols=args.cols,
         block=args.block,
@@ -90,6 +89,7 @@ def cmd_city(args: argparse.Namespace) -> int:
         column_spacing=args.column_spacing,
         variety=not args.baseline,
         column_variety=args.column_variety,
+        temple=args.temple,
         seed=args.seed,
         focus=args.focus,
         lod_distances=args.lod_distances,
@@ -118,7 +118,8 @@ def cmd_city(args: argparse.Namespace) -> int:
     print(
         f"wrote {s['city']}: {s['temples']:,} temples ({s['temples_as']}, "
         f"{s['temple_prototypes']} prototypes of {s['builds']} builds), {s['columns']:,} "
-        f"street columns ({s['column_prototypes']} prototypes); builds: "
+        f"street columns ({s['column_prototypes']} prototypes), {s['stoa_bays']:,} stoa bays "
+        f"and {s['stoa_corners']} corners on paved ground; builds: "
         f"{s['prototypes_built']} built, {s['prototypes_reused']} reused; "
         f"{s['timings']['total']:.2f} s"
     )
@@ -150,14 +151,8 @@ def add_city_parser(sub, parser_class, *, arguments: bool = True) -> None:
         type=Path,
         help="GeoJSON FeatureCollection (see examples/forum.geojson); default: a grid",
     )
-    p.add_argument(
-        "--temple",
-        default="portunus",
-        help="the grid's temples: a preset (ionic-usd presets), `auto` (a type after Vitruvius "
-        "fitted to each lot, seeded) or a temple TOML [default portunus]",
-    )
-    p.add_argument("--rows", type=int, default=4, help="grid rows [default 4]")
-    p.add_argument("--cols", type=int, default=4, help="grid columns [default 4]")
+    p.add_argument("--rows", type=int, default=5, help="grid rows [default 5]")
+    p.add_argument("--cols", type=int, default=5, help="grid columns [default 5]")
     p.add_argument("--block", type=float, default=60.0, help="grid spacing (m) [default 60]")
     p.add_argument(
         "--columns",
@@ -175,6 +170,14 @@ def add_city_parser(sub, parser_class, *, arguments: bool = True) -> None:
         "--baseline",
         action="store_true",
         help="no per-lot variety: every temple at the baseline hypotheses",
+    )
+    p.add_argument(
+        "--temple",
+        metavar="NAME",
+        help="the temple of every lot that names none (a built-in description such as "
+        "portunus, or a TOML path): one build for them all [default: each lot chooses a "
+        "type that fits it, seeded: pseudoperipteral, 4/6/8 columns across, pycnostyle to "
+        "araeostyle, the module sized to the lot; `auto` says so explicitly]",
     )
     p.add_argument(
         "--column-variety",

@@ -96,20 +96,38 @@ def _validate(width, height, camera, samples, background, out: Path, force: bool
     check_output_file(out, force=force)  # a name, a writable folder, not a folder itself
 
 
-def perspective_view(corners: np.ndarray, camera: str, aspect: float) -> View:
-    """The named camera framing ``corners`` (m, 3) with a 40° vertical field of view."""
+def perspective_view(
+    corners: np.ndarray,
+    camera: str,
+    aspect: float,
+    *,
+    eye: tuple[float, float, float] | None = None,
+    target: tuple[float, float, float] | None = None,
+) -> View:
+    """The named camera framing ``corners`` (m, 3) with a 40° vertical field of view, or the
+    camera at ``eye`` looking at ``target`` (near plane 0.2 m, far beyond every corner)."""
     from ionic_usd.preview.camera import FOV_DEG, camera_direction, frame, look_at, perspective
 
+    if (eye is None) != (target is None):
+        raise ParameterError("eye", eye, "given with target (both or neither)")
+    if eye is not None and target is not None:
+        e, t = np.asarray(eye, dtype=float), np.asarray(target, dtype=float)
+        if not (np.isfinite(e).all() and np.isfinite(t).all() and np.linalg.norm(t - e) > 0):
+            raise ParameterError("target", target, "a finite point other than the eye")
+        far = float(np.max(np.linalg.norm(corners - e, axis=1))) + 1.0
+        up = np.array([0.0, 1.0, 0.0])
+        vp = perspective(math.radians(FOV_DEG), aspect, 0.2, far) @ look_at(e, t, up)
+        return View(vp, e, (e - t) / np.linalg.norm(e - t))
     lo, hi = corners.min(axis=0), corners.max(axis=0)
     direction = camera_direction(camera, lo, hi)
-    eye, target, dist, radius = frame(corners, direction, aspect)
+    at, aim, dist, radius = frame(corners, direction, aspect)
     radius = max(radius, 1e-6)
     near = max(dist - 1.5 * radius, dist * 1e-3)
     far = dist + 12.0 * radius
     viewproj = perspective(math.radians(FOV_DEG), aspect, near, far) @ look_at(
-        eye, target, np.array([0.0, 1.0, 0.0])
+        at, aim, np.array([0.0, 1.0, 0.0])
     )
-    return View(viewproj, eye, direction)
+    return View(viewproj, at, direction)
 
 
 def render_preview(
@@ -125,6 +143,8 @@ def render_preview(
     ground: bool = True,
     force: bool = False,
     variants: Mapping[str, str] | None = None,
+    eye: tuple[float, float, float] | None = None,
+    target: tuple[float, float, float] | None = None,
 ) -> PreviewStats:
     """Render a USD scene to a PNG thumbnail with OpenGL on a headless EGL context.
 
@@ -141,6 +161,8 @@ def render_preview(
     samples : MSAA samples (clamped to what the driver offers; 0 or 1 turns MSAA off)
     ground : draw a ground plane at the lowest point, with the key light's shadow
     variants : ``{set: value}`` selected on every prim that has the set, as for export
+    eye, target : world points (m, Y up) of a camera placed by hand (e.g. at eye level in a
+        city) instead of ``camera``'s framing; both or neither
 
     Models with ``model:applyDrawMode`` and draw mode ``cards`` are drawn as their textured
     cards (see :mod:`ionic_usd.usd.draw_mode`).
@@ -174,7 +196,7 @@ def render_preview(
 
     ctx = create_context()
     try:
-        view = perspective_view(corners, camera, width / height)
+        view = perspective_view(corners, camera, width / height, eye=eye, target=target)
         pixels, draws = render(
             ctx,
             items,

@@ -254,6 +254,8 @@ def compose_city(
     summary: Mapping | None = None,
     card_dirs: Mapping[tuple[int, tuple], str] | None = None,
     column_card_dir: str | None = None,
+    stoa: tuple | None = None,
+    ground: tuple | None = None,
     force: bool = False,
 ) -> CityReport:
     """Write ``City.usda`` + ``Instances.usdc`` into ``folder`` (its ``Temples/`` must hold
@@ -269,6 +271,9 @@ def compose_city(
         ``selections`` is ``tuple(sorted(temple_selection(...).items()))`` without a lod
     column_card_dir : the city-relative folder of the street column's card images, needed
         when ``columns.cards`` has any far column (baked with :data:`COLUMN_CARD_SELECTION`)
+    stoa : ``(asset, prototype names, StoaInstances, bounds per prototype, triangles per
+        prototype)`` — the stoas' parts, placed by ``/City/Stoas`` (:mod:`ionic_usd.usd.stoa`)
+    ground : ``(asset, triangles, lo, hi)`` — the ground layer, referenced by ``/City/Ground``
     """
     t0 = time.perf_counter()
     folder = Path(folder)
@@ -434,6 +439,7 @@ def compose_city(
                     )
                 )
             _instancer(body, "/City/Porticus", cprotos, cidx, columns.xz, columns.yaw, None, c_ext)
+        extra_tris = _stoa_and_ground(body, stoa, ground)
     # the city's extentsHint per purpose (default, render, proxy, guide), as BBoxCache with
     # useExtentsHint reads it: the union of the placed prototypes' bounds of that purpose
     # (a PointInstancer is bounded by its authored extent, which counts for its own purpose,
@@ -444,6 +450,8 @@ def compose_city(
     else:
         t4 = purpose_bounds(tlo4, thi4, proto_of, temples.xz, temples.yaw, temples.scale)
     lo4, hi4 = np.minimum(t4[0], c4[0]), np.maximum(t4[1], c4[1])
+    for elo, ehi in extra_tris[1]:  # the stoas' instancer and the ground: default purpose
+        lo4[0], hi4[0] = np.minimum(lo4[0], elo), np.maximum(hi4[0], ehi)
     lo, hi = _default_render(lo4, hi4)
     root = new_layer(
         "City",
@@ -471,7 +479,7 @@ def compose_city(
             col += CARD_TRIANGLES * int(ccard.sum())
         else:
             col = col_tri[s] * len(columns)
-        triangles[s] = int(np.dot(counts, ttri[s])) + col
+        triangles[s] = int(np.dot(counts, ttri[s])) + col + extra_tris[0]
     far_t = temples.cards is not None and bool(np.any(temples.cards))
     if far_t or ccard.any():
         # the same city with each card temple and column at its LOD by distance instead
@@ -524,6 +532,22 @@ def compose_city(
     )
 
 
+def _stoa_and_ground(body: Sdf.Layer, stoa: tuple | None, ground: tuple | None) -> tuple:
+    """Author ``/City/Stoas`` and ``/City/Ground``; returns (their triangles, their extents)."""
+    from ionic_usd.usd.stoa import author_ground, author_stoa_instancer
+
+    tris, extents = 0, []
+    if stoa is not None and len(stoa[2]):
+        asset, names, inst, bounds, ptris = stoa
+        extents.append(author_stoa_instancer(body, "/City/Stoas", asset, names, inst, bounds))
+        tris += int(np.bincount(inst.proto, minlength=len(names)) @ np.asarray(ptris))
+    if ground is not None:
+        author_ground(body, "/City/Ground", ground[0])
+        tris += int(ground[1])
+        extents.append((np.asarray(ground[2]), np.asarray(ground[3])))
+    return tris, extents
+
+
 def _vt_dict(d: Mapping) -> dict:
     """A JSON-like mapping as USD customData (lists of strings/numbers as arrays)."""
     out: dict = {}
@@ -531,6 +555,8 @@ def _vt_dict(d: Mapping) -> dict:
         if isinstance(v, Mapping):
             out[str(k)] = _vt_dict(v)
         elif isinstance(v, (list, tuple)):
+            if any(isinstance(x, Mapping) for x in v):
+                continue  # per-lot records stay in the JSON summary
             if all(isinstance(x, str) for x in v):
                 out[str(k)] = Vt.StringArray([str(x) for x in v])
             else:

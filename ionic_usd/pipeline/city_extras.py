@@ -1,0 +1,163 @@
+"""The city's stoas and ground: laid out from the plan, written beside the instances.
+
+:func:`lay_stoas` (step 2 of the city build) turns every porticus into columns, bays and
+corners (:func:`ionic_usd.city.stoa.porticus_stoa`) and drops what a temple stands on: the
+columns inside a temple's footprint (as before) and the bays and corners that touch one or
+lose a column. :func:`write_stoas_and_ground` (step 5, once the temple builds are in the
+city: their maps texture the stoas and the ground) writes ``Stoas/Stoa.usda`` and
+``Ground.usda`` and returns what :func:`ionic_usd.usd.city.compose_city` places.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ionic_usd.city.ground import ground_meshes
+from ionic_usd.city.layout import drop_inside
+from ionic_usd.city.plan import CityPlan
+from ionic_usd.city.stoa import StoaDims, StoaLayout, porticus_stoa
+from ionic_usd.pipeline.spec import TempleSpec
+
+__all__ = ["StoaPlan", "lay_stoas", "street_column_spec", "write_stoas_and_ground"]
+
+STOA_ASSET = "Stoas/Stoa.usda"
+GROUND_ASSET = "Ground.usda"
+_TURN_DIGITS = 6  # corner prototypes: one per distinct back normal, rounded
+
+
+@dataclass(frozen=True)
+class StoaPlan:
+    """Step 2's colonnades: the columns kept (USD x, z; yaw), the bays (start, yaw, length)
+    and corners (position, yaw, second back normal in the corner's frame) kept."""
+
+    column_xz: np.ndarray
+    column_yaw: np.ndarray
+    bay_xz: np.ndarray
+    bay_yaw: np.ndarray
+    bay_length: np.ndarray
+    corner_xz: np.ndarray
+    corner_yaw: np.ndarray
+    corner_normal: np.ndarray
+    dropped: int
+
+
+def street_column_spec(specs: list[TempleSpec]) -> TempleSpec:
+    """The build whose column lines the streets: the slenderest module (a stoa's columns are
+    smaller than a temple's), ties by key; any build if none."""
+    return min(specs, key=lambda s: (s.layout().params.columns_lower_diameter, s.key))
+
+
+def _bay_polygons(lay: StoaLayout, depth: float) -> list[np.ndarray]:
+    """Each bay's plan footprint (column line to the stoa's back)."""
+    out = []
+    for (x, z), yaw, ln in zip(lay.bay_xz, lay.bay_yaw, lay.bay_length, strict=True):
+        a = np.radians(yaw)
+        u = np.array([np.cos(a), -np.sin(a)])  # local +X in USD x, z
+        f = np.array([np.sin(a), np.cos(a)])  # local +Z
+        o = np.array([x, z])
+        quad = np.array([o, o + ln * u, o + ln * u - depth * f, o - depth * f])
+        out.append(np.stack([quad[:, 0], -quad[:, 1]], axis=1))
+    return out
+
+
+def lay_stoas(
+    plan: CityPlan, spacing: float, footprints: list[np.ndarray], dims_back: float
+) -> StoaPlan:
+    """Columns, bays and corners of every porticus, clear of the temples' footprints."""
+    import shapely
+
+    lays = [porticus_stoa(p, spacing) for p in plan.porticoes]
+    cols = [lay.column_xz for lay in lays]
+    cxz = np.concatenate(cols) if cols else np.zeros((0, 2))
+    cyaw = np.concatenate([lay.column_yaw for lay in lays]) if lays else np.zeros(0)
+    keep = drop_inside(cxz, footprints)
+    tree = shapely.STRtree([shapely.Polygon(f) for f in footprints]) if footprints else None
+    bays: list[tuple] = []
+    corners: list[tuple] = []
+    base = 0
+    for lay in lays:
+        polys = _bay_polygons(lay, dims_back)
+        hit = np.zeros(len(polys), dtype=bool)
+        if tree is not None and polys:
+            hit[tree.query([shapely.Polygon(q) for q in polys], predicate="intersects")[0]] = True
+        for i in range(len(lay.bay_xz)):
+            a, b = lay.bay_columns[i] + base
+            if keep[a] and keep[b] and not hit[i]:
+                bays.append((lay.bay_xz[i], lay.bay_yaw[i], lay.bay_length[i]))
+        if len(lay.corner_xz):
+            at = drop_inside(lay.corner_xz, footprints, margin=dims_back)
+            for k in np.flatnonzero(at):
+                corners.append((lay.corner_xz[k], lay.corner_yaw[k], lay.corner_normal[k]))
+        base += len(lay.column_xz)
+    return StoaPlan(
+        cxz[keep],
+        cyaw[keep],
+        np.array([b[0] for b in bays]).reshape(-1, 2),
+        np.array([b[1] for b in bays], dtype=float),
+        np.array([b[2] for b in bays], dtype=float),
+        np.array([c[0] for c in corners]).reshape(-1, 2),
+        np.array([c[1] for c in corners], dtype=float),
+        np.array([c[2] for c in corners]).reshape(-1, 2),
+        int((~keep).sum()),
+    )
+
+
+def stoa_dims(spec: TempleSpec) -> StoaDims:
+    """The stoa's section from its street column's build."""
+    p = spec.layout().params
+    d = p.columns_lower_diameter
+    return StoaDims(p.columns_height, d, d * p.columns_upper_diameter_ratio)
+
+
+def write_stoas_and_ground(
+    out: Path,
+    plan: CityPlan,
+    stoas: StoaPlan,
+    column_spec: TempleSpec,
+    spacing: float,
+    extent_points: np.ndarray,
+):
+    """Write the stoa asset and the ground (module docstring); returns ``(stoa, ground)``:
+    ``stoa`` = (asset, prototype names, :class:`StoaInstances`, bounds, triangles per
+    prototype) or None, ``ground`` = (asset, triangles, lo (3,), hi (3,))."""
+    from ionic_usd.usd.stoa import StoaInstances, write_ground, write_stoa
+
+    build = f"Temples/{column_spec.folder}"
+    col_tex = f"{build}/IonicColumn/Payload/Textures"
+    stoa = None
+    if len(stoas.bay_xz) or len(stoas.corner_xz):
+        normals = np.round(stoas.corner_normal, _TURN_DIGITS)
+        uniq, corner_proto = (
+            np.unique(normals, axis=0, return_inverse=True)
+            if len(normals)
+            else (np.zeros((0, 2)), np.zeros(0, dtype=int))
+        )
+        maps = {"Stucco": f"../{col_tex}/stucco_painted", "Roof": f"../{build}/Textures/terracotta"}
+        stats = write_stoa(out / STOA_ASSET, stoa_dims(column_spec), list(uniq), maps, spacing)
+        names = ["Bay"] + [f"Corner_{k}" for k in range(len(uniq))]
+        inst = StoaInstances(
+            np.concatenate([np.zeros(len(stoas.bay_xz), int), 1 + np.ravel(corner_proto)]),
+            np.concatenate([stoas.bay_xz, stoas.corner_xz]).reshape(-1, 2),
+            np.concatenate([stoas.bay_yaw, stoas.corner_yaw]),
+            np.concatenate([stoas.bay_length, np.ones(len(stoas.corner_xz))]),
+        )
+        stoa = (
+            f"./{STOA_ASSET}",
+            names,
+            inst,
+            [(lo, hi) for lo, hi, _ in stats],
+            [t for _, _, t in stats],
+        )
+    meshes = ground_meshes([lot.outline for lot in plan.lots], list(plan.plazas), extent_points)
+    tex = f"./{col_tex}"
+    maps = {
+        "Paving": f"{tex}/travertine",
+        "Plazas": f"{tex}/travertine",
+        "Lots": f"{tex}/stucco_painted",
+    }
+    tris = write_ground(out / GROUND_ASSET, meshes, {m.name: maps[m.name] for m in meshes})
+    pts = np.concatenate([m.points for m in meshes]) if meshes else np.zeros((1, 3))
+    return stoa, (f"./{GROUND_ASSET}", tris, pts.min(axis=0), pts.max(axis=0))
