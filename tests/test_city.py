@@ -32,6 +32,8 @@ def _validate_each_layer(folder: Path) -> None:
     """Every layer the city writes is valid on its own, and the composed city too."""
     assert validate_stage(Usd.Stage.Open(str(folder / "Instances.usdc"))) == []
     for extra in ("Ground.usda", "Stoas/Stoa.usda"):  # the ground and the stoas' parts
+        if not (folder / extra).exists():  # a city without porticoes has no stoas
+            continue
         assert validate_stage(Usd.Stage.Open(str(folder / extra))) == [], extra
     # the root without its sublayer, saved beside it so relative paths anchor the same way
     alone = folder / "_root_alone.usda"

@@ -135,7 +135,7 @@ def author_stoa_instancer(
     targets = []
     for name in names:
         spec = define_prim(layer, f"{path}/Prototypes/{name}", "Xform")
-        spec.referenceList.Prepend(Sdf.Reference(asset, Sdf.Path(f"/Stoa/{name}")))
+        spec.payloadList.Prepend(Sdf.Payload(asset, Sdf.Path(f"/Stoa/{name}")))  # loads on demand
         targets.append(spec.path)
     Sdf.RelationshipSpec(pi, "prototypes", custom=False).targetPathList.explicitItems = targets
     n = len(inst)
@@ -196,6 +196,7 @@ def write_ground(path: Path, meshes: Sequence[Mesh], maps: Mapping[str, str]) ->
 
 
 def author_ground(layer: Sdf.Layer, path: str, asset: str) -> None:
-    """``path`` (a component) referencing the ground layer ``asset``."""
+    """``path`` (a component) with the ground layer ``asset`` as its payload (a city opened
+    with LoadNone composes no mesh)."""
     spec = define_prim(layer, path, "Xform")
-    spec.referenceList.Prepend(Sdf.Reference(asset))
+    spec.payloadList.Prepend(Sdf.Payload(asset))
