@@ -36,7 +36,11 @@ from ionic_usd.evaluate.fit_core import FitResult, compare_aligned, densify, ori
 from ionic_usd.evaluate.metrics import compare, resample
 from ionic_usd.evaluate.reference import Alignment, align
 
-__all__ = ["fit_volute", "reference_turns", "rms_radius"]
+__all__ = ["FIT_VOLUTE_MODELS", "fit_volute", "reference_turns", "rms_radius"]
+
+#: The models ``fit volute`` compares: the generator's constructions and the free-arc chain
+#: (:mod:`~ionic_usd.evaluate.fit_volute_free`), chosen by BIC.
+FIT_VOLUTE_MODELS = (*VOLUTE_MODELS, "free_arcs")
 
 
 def reference_turns(curve: np.ndarray) -> float:
@@ -301,12 +305,17 @@ def fit_volute(
     if not isinstance(v0, VoluteParams):
         raise ParameterError("initial", v0, "a VoluteParams")
     if models is None:
-        models = VOLUTE_MODELS
+        models = FIT_VOLUTE_MODELS
     elif isinstance(models, str):
         models = (models,)
     for m in models:
-        if m not in VOLUTE_MODELS:
-            raise ParameterError("models", m, f"one of {', '.join(VOLUTE_MODELS)}")
+        if m not in FIT_VOLUTE_MODELS:
+            raise ParameterError("models", m, f"one of {', '.join(FIT_VOLUTE_MODELS)}")
+    free = "free_arcs" in models
+    keep_centred = "centred_arcs" in models
+    models = [m for m in models if m != "free_arcs"]
+    if free and not keep_centred:
+        models.append("centred_arcs")  # the free arcs start from the centred-arc fit
     e = None
     if eye is not None:
         e = np.asarray(eye, dtype=float)
@@ -403,7 +412,9 @@ def fit_volute(
                 )
             )
             bar.update(1)
-    results.sort(key=lambda r: getattr(r.after, measure))
+    from ionic_usd.evaluate.fit_volute_free import add_free_arcs, choose_by_criterion
+
+    results = choose_by_criterion(add_free_arcs(results, free=free, keep_centred=keep_centred))
     best = results[0]
     return dataclasses.replace(
         best, alternatives=tuple(results[1:]), seconds=sum(r.seconds for r in results)

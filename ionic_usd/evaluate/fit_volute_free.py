@@ -1,0 +1,124 @@
+"""The free-arc volute fit and the choice of model by an information criterion.
+
+``free_arcs`` starts from the fitted ``centred_arcs`` volute as a tangent arc chain
+(:mod:`~ionic_usd.evaluate.volute_chain`) and frees every quarter-turn arc's radius (the
+centres follow from tangency), fitted by least squares on the reference's nodes. The centred
+chain is refitted by least squares the same way, so both are judged on the same residuals;
+the log spiral's residuals are its fitted curve's distances to the nodes. Every model gets
+AIC and BIC (``n·ln(RSS/n) + 2k`` / ``+ k·ln n``, ``k`` the free parameters with the pose) and
+the lowest BIC is chosen: more arcs win only where the data support them.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ionic_usd.evaluate.fit_core import FitResult, compare_aligned, densify
+from ionic_usd.evaluate.volute_chain import chain_from_centred, criterion, fit_chain
+
+__all__ = ["CRITERION", "add_free_arcs", "choose_by_criterion"]
+
+#: The criterion that chooses the model (``aic`` and ``bic`` are both reported).
+CRITERION = "bic"
+
+#: Free parameters of the Hausdorff-fitted models (shape and start/turns, translation).
+_LOG_SPIRAL_K = 7
+
+
+def _size(ref: np.ndarray) -> float:
+    return float(np.linalg.norm(np.ptp(ref, axis=0)))
+
+
+def _rss_to_curve(ref: np.ndarray, curve: np.ndarray, h: float) -> float:
+    d, _ = cKDTree(densify(curve, h / 8.0)).query(ref)
+    return float(np.sum(d**2))
+
+
+def add_free_arcs(
+    results: list[FitResult], *, free: bool = True, keep_centred: bool = True
+) -> list[FitResult]:
+    """Give every result its criterion values and, with ``free``, append the ``free_arcs`` fit
+    (from the ``centred_arcs`` result); ``keep_centred=False`` drops the centred result (asked
+    for ``free_arcs`` alone)."""
+    out = []
+    for r in results:
+        if r.model == "centred_arcs":
+            out.extend(_free_from(r, free=free, keep_centred=keep_centred))
+        else:
+            n = len(r.reference)
+            rss = _rss_to_curve(r.reference, r.fitted, r.spacing)
+            crit = criterion(rss, n, _LOG_SPIRAL_K, _size(r.reference))
+            out.append(dataclasses.replace(r, criterion=crit))
+    return out
+
+
+def _free_from(r: FitResult, *, free: bool, keep_centred: bool) -> list[FitResult]:
+    t0 = time.perf_counter()
+    ref, n = r.reference, len(r.reference)
+    start = chain_from_centred(
+        r.params,  # type: ignore[arg-type]
+        r.alignment.mirrored,
+        (r.values["translation_x"], r.values["translation_y"]),
+    )
+    centred, rss_c, k_c = fit_chain(start, ref, "centred_arcs")
+    centred_crit = criterion(rss_c, n, k_c, _size(ref))
+    res = []
+    if keep_centred or not free:
+        res.append(
+            dataclasses.replace(
+                r,
+                criterion=centred_crit,
+                notes=(
+                    *r.notes,
+                    "criterion on the least-squares refit of the centred arcs "
+                    f"(rms {np.sqrt(rss_c / n):.3g} m)",
+                ),
+            )
+        )
+    if not free:
+        return res
+    chain, rss_f, k_f = fit_chain(centred, ref, "free_arcs")
+    after, al, fit_al = compare_aligned(
+        ref, chain.points(), allow_mirror=False, max_segment=r.spacing
+    )
+    values = {f"radius_{j}": float(v) for j, v in enumerate(chain.radii)}
+    values.update(
+        first_centre_x=chain.c0[0],
+        first_centre_y=chain.c0[1],
+        start_direction_deg=float(np.degrees(chain.phi0)),
+        last_sweep_deg=float(np.degrees(chain.sweeps[-1])),
+        mirrored=float(chain.sense < 0),
+    )
+    notes = (
+        f"every arc's radius free ({len(chain.radii)} arcs), centres from tangency, first "
+        "centre, start direction and last sweep fitted by least squares from the centred-arc fit",
+        f"rms {np.sqrt(rss_f / n):.3g} m against {np.sqrt(rss_c / n):.3g} m for the centred arcs",
+        "the column is rebuilt with the centred-arc volute (VoluteParams has no free radii)",
+    )
+    res.append(
+        dataclasses.replace(
+            r,
+            before=r.after,
+            after=after,
+            fitted=fit_al,
+            initial=r.fitted,
+            alignment=al,
+            notes=notes,
+            model="free_arcs",
+            bounds_hit=(),
+            values=values,
+            seconds=time.perf_counter() - t0,
+            criterion=criterion(rss_f, n, k_f, _size(ref)),
+            alternatives=(),
+        )
+    )
+    return res
+
+
+def choose_by_criterion(results: list[FitResult]) -> list[FitResult]:
+    """The results by increasing :data:`CRITERION` (the chosen model first)."""
+    return sorted(results, key=lambda r: r.criterion.get(CRITERION, np.inf))
