@@ -505,8 +505,8 @@ def add_fit_parser(subparsers: Any, *, arguments: bool = True) -> None:
     )
     if not arguments:
         return
+    from ionic_usd.column.volute import VOLUTE_MODELS
     from ionic_usd.evaluate import FIT_MEASURES
-    from ionic_usd.evaluate.fit_volute import FIT_VOLUTE_MODELS
     from ionic_usd.evaluate.sections import PARTS
 
     p.add_argument(
@@ -543,7 +543,7 @@ def add_fit_parser(subparsers: Any, *, arguments: bool = True) -> None:
     )
     p.add_argument(
         "--model",
-        choices=FIT_VOLUTE_MODELS,
+        choices=(*VOLUTE_MODELS, "free_arcs"),
         help="volute: fit only this model [default: every model, best chosen]",
     )
     p.add_argument(

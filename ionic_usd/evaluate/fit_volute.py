@@ -14,9 +14,11 @@ Scale-free: the start is the model's default *shape* scaled to the reference's s
 radius about its centroid) with as many turns as the reference winds (its total tangent
 turning); every bound is derived from these (sizes within ×/÷ 1.6–2, turns ± 0.6, placement
 within a quarter of the reference's diagonal). The pose (translation, rotation, mirror) joins
-the parameters. The best model by the minimised measure is returned; the others ride along in
-:attr:`~ionic_usd.evaluate.fit_core.FitResult.alternatives`. The lower diameter is estimated
-from Vitruvius' proportion: the volute is 8/18 D high (upright).
+the parameters. A third model, ``free_arcs``, refits the centred arcs by least squares with
+every arc's radius free (:mod:`~ionic_usd.evaluate.fit_volute_free`). The model with the lowest
+BIC on the residuals is returned (a model wins by its residuals *and* its parameter count);
+the others ride along in :attr:`~ionic_usd.evaluate.fit_core.FitResult.alternatives`. The
+lower diameter is estimated from Vitruvius' proportion: the volute is 8/18 D high (upright).
 """
 
 from __future__ import annotations
@@ -291,8 +293,8 @@ def fit_volute(
     polish_evals : Nelder–Mead evaluations (0: no polish)
     allow_mirror : the reference may wind the other way (a left volute)
     column : ColumnParams the fitted volute is put into (default: Portunus)
-    models : a model name or several (default: all of
-        :data:`~ionic_usd.column.volute.VOLUTE_MODELS`)
+    models : a model name or several (default: all of :data:`FIT_VOLUTE_MODELS`;
+        ``free_arcs`` fits ``centred_arcs`` first, as its start)
 
     Returns
     -------
