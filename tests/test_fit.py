@@ -304,7 +304,7 @@ def test_fit_volute_report_lists_every_model_once(tmp_path):
     entry = json.loads(json.dumps(res.as_dict()))  # plain JSON: no cycle, no nesting
     models = entry["models"]
     assert sorted(models) == sorted([res.model, *(a.model for a in res.alternatives)])
-    assert len(models) == 3  # log spiral, centred arcs and the free arcs from them
+    assert len(models) == 4  # log spiral, centred arcs and the free arcs / joints from them
     for name, fitted in models.items():
         assert "models" not in fitted
         same = res if name == res.model else next(a for a in res.alternatives if a.model == name)
@@ -328,9 +328,10 @@ def test_documented_fit_volute_command_writes_its_json(tmp_path):
     assert out.returncode == 0, out.stderr[-2000:]
     report = json.loads((tmp_path / "fit.json").read_text("utf-8"))
     volute = report["parts"]["volute"]
-    assert sorted(volute["models"]) == ["centred_arcs", "free_arcs", "log_spiral"]
-    # the twelve centres' radius steps are not linear (a side, then the step between squares):
-    # the free arcs follow them and the criterion says the data support the extra radii
-    assert volute["model"] == "free_arcs"
+    assert sorted(volute["models"]) == ["centred_arcs", "free_arcs", "free_joints", "log_spiral"]
+    # the twelve centres' radius steps are not linear (a side, then the step between squares)
+    # and the joints between squares are off the quarter turns: the free joints follow them
+    # and the criterion says the data support the extra parameters
+    assert volute["model"] == "free_joints"
     crit = {m: e["criterion"]["bic"] for m, e in volute["models"].items()}
-    assert crit["free_arcs"] == min(crit.values())
+    assert crit["free_joints"] == min(crit.values())

@@ -359,7 +359,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
         rows = {r.model: r.after for r in (res, *res.alternatives)}
         print(f"volute models side by side (best first; chosen: {res.model}):")
         print(format_table(rows))
-        _print_criterion(res)
+    _print_criterion(res)
     if out is not None:
         res.write_toml(out, force=args.force)
         print(f"wrote {out} (use: ionic-usd column --config {out})")
@@ -543,7 +543,7 @@ def add_fit_parser(subparsers: Any, *, arguments: bool = True) -> None:
     )
     p.add_argument(
         "--model",
-        choices=(*VOLUTE_MODELS, "free_arcs"),
+        choices=(*VOLUTE_MODELS, "free_arcs", "free_joints"),
         help="volute: fit only this model [default: every model, best chosen]",
     )
     p.add_argument(

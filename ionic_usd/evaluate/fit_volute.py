@@ -14,8 +14,9 @@ Scale-free: the start is the model's default *shape* scaled to the reference's s
 radius about its centroid) with as many turns as the reference winds (its total tangent
 turning); every bound is derived from these (sizes within ×/÷ 1.6–2, turns ± 0.6, placement
 within a quarter of the reference's diagonal). The pose (translation, rotation, mirror) joins
-the parameters. A third model, ``free_arcs``, refits the centred arcs by least squares with
-every arc's radius free (:mod:`~ionic_usd.evaluate.fit_volute_free`). The model with the lowest
+the parameters. Two more, ``free_arcs`` and ``free_joints``, refit the centred arcs by least
+squares with every arc's radius free, then every joint too
+(:mod:`~ionic_usd.evaluate.fit_volute_free`). The model with the lowest
 BIC on the residuals is returned (a model wins by its residuals *and* its parameter count);
 the others ride along in :attr:`~ionic_usd.evaluate.fit_core.FitResult.alternatives`. The
 lower diameter is estimated from Vitruvius' proportion: the volute is 8/18 D high (upright).
@@ -42,7 +43,7 @@ __all__ = ["FIT_VOLUTE_MODELS", "fit_volute", "reference_turns", "rms_radius"]
 
 #: The models ``fit volute`` compares: the generator's constructions and the free-arc chain
 #: (:mod:`~ionic_usd.evaluate.fit_volute_free`), chosen by BIC.
-FIT_VOLUTE_MODELS = (*VOLUTE_MODELS, "free_arcs")
+FIT_VOLUTE_MODELS = (*VOLUTE_MODELS, "free_arcs", "free_joints")
 
 
 def reference_turns(curve: np.ndarray) -> float:
@@ -313,10 +314,10 @@ def fit_volute(
     for m in models:
         if m not in FIT_VOLUTE_MODELS:
             raise ParameterError("models", m, f"one of {', '.join(FIT_VOLUTE_MODELS)}")
-    free = "free_arcs" in models
+    chains = tuple(m for m in models if m in ("free_arcs", "free_joints"))
     keep_centred = "centred_arcs" in models
-    models = [m for m in models if m != "free_arcs"]
-    if free and not keep_centred:
+    models = [m for m in dict.fromkeys(models) if m not in chains]
+    if chains and not keep_centred:
         models.append("centred_arcs")  # the free arcs start from the centred-arc fit
     e = None
     if eye is not None:
@@ -416,7 +417,7 @@ def fit_volute(
             bar.update(1)
     from ionic_usd.evaluate.fit_volute_free import add_free_arcs, choose_by_criterion
 
-    results = choose_by_criterion(add_free_arcs(results, free=free, keep_centred=keep_centred))
+    results = choose_by_criterion(add_free_arcs(results, chains=chains, keep_centred=keep_centred))
     best = results[0]
     return dataclasses.replace(
         best, alternatives=tuple(results[1:]), seconds=sum(r.seconds for r in results)

@@ -2,7 +2,9 @@
 
 ``free_arcs`` starts from the fitted ``centred_arcs`` volute as a tangent arc chain
 (:mod:`~ionic_usd.evaluate.volute_chain`) and frees every quarter-turn arc's radius (the
-centres follow from tangency), fitted by least squares on the reference's nodes. The centred
+centres follow from tangency), fitted by least squares on the reference's nodes;
+``free_joints`` then frees the joints too (each arc's sweep: a carver's centre off the
+square moves the joint). The centred
 chain is refitted by least squares the same way, so both are judged on the same residuals;
 the log spiral's residuals are its fitted curve's distances to the nodes. Every model gets
 AIC and BIC (``n·ln(RSS/n) + 2k`` / ``+ k·ln n``, ``k`` the free parameters with the pose) and
@@ -18,12 +20,15 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ionic_usd.evaluate.fit_core import FitResult, compare_aligned, densify
-from ionic_usd.evaluate.volute_chain import chain_from_centred, criterion, fit_chain
+from ionic_usd.evaluate.volute_chain import ArcChain, chain_from_centred, criterion, fit_chain
 
-__all__ = ["CRITERION", "add_free_arcs", "choose_by_criterion"]
+__all__ = ["CHAIN_MODELS", "CRITERION", "add_free_arcs", "choose_by_criterion"]
 
 #: The criterion that chooses the model (``aic`` and ``bic`` are both reported).
 CRITERION = "bic"
+
+#: The arc-chain models fitted from the centred arcs, each starting from the one before.
+CHAIN_MODELS = ("free_arcs", "free_joints")
 
 #: Free parameters of the Hausdorff-fitted models (shape and start/turns, translation).
 _LOG_SPIRAL_K = 7
@@ -39,15 +44,17 @@ def _rss_to_curve(ref: np.ndarray, curve: np.ndarray, h: float) -> float:
 
 
 def add_free_arcs(
-    results: list[FitResult], *, free: bool = True, keep_centred: bool = True
+    results: list[FitResult],
+    *,
+    chains: tuple[str, ...] = CHAIN_MODELS,
+    keep_centred: bool = True,
 ) -> list[FitResult]:
-    """Give every result its criterion values and, with ``free``, append the ``free_arcs`` fit
-    (from the ``centred_arcs`` result); ``keep_centred=False`` drops the centred result (asked
-    for ``free_arcs`` alone)."""
+    """Give every result its criterion values and append the ``chains`` fits (from the
+    ``centred_arcs`` result); ``keep_centred=False`` drops the centred result (not asked for)."""
     out = []
     for r in results:
         if r.model == "centred_arcs":
-            out.extend(_free_from(r, free=free, keep_centred=keep_centred))
+            out.extend(_chains_from(r, chains=chains, keep_centred=keep_centred))
         else:
             n = len(r.reference)
             rss = _rss_to_curve(r.reference, r.fitted, r.spacing)
@@ -56,8 +63,13 @@ def add_free_arcs(
     return out
 
 
-def _free_from(r: FitResult, *, free: bool, keep_centred: bool) -> list[FitResult]:
-    t0 = time.perf_counter()
+_FREED = {
+    "free_arcs": "every arc's radius free",
+    "free_joints": "every arc's radius and every joint (the arcs' sweeps) free",
+}
+
+
+def _chains_from(r: FitResult, *, chains: tuple[str, ...], keep_centred: bool) -> list[FitResult]:
     ref, n = r.reference, len(r.reference)
     start = chain_from_centred(
         r.params,  # type: ignore[arg-type]
@@ -65,27 +77,33 @@ def _free_from(r: FitResult, *, free: bool, keep_centred: bool) -> list[FitResul
         (r.values["translation_x"], r.values["translation_y"]),
     )
     centred, rss_c, k_c = fit_chain(start, ref, "centred_arcs")
-    centred_crit = criterion(rss_c, n, k_c, _size(ref))
     res = []
-    if keep_centred or not free:
-        res.append(
-            dataclasses.replace(
-                r,
-                criterion=centred_crit,
-                notes=(
-                    *r.notes,
-                    "criterion on the least-squares refit of the centred arcs "
-                    f"(rms {np.sqrt(rss_c / n):.3g} m)",
-                ),
-            )
-        )
-    if not free:
-        return res
-    chain, rss_f, k_f = fit_chain(centred, ref, "free_arcs")
+    if keep_centred or not chains:
+        rms = np.sqrt(rss_c / n)
+        note = f"criterion on the least-squares refit of the centred arcs (rms {rms:.3g} m)"
+        crit = criterion(rss_c, n, k_c, _size(ref))
+        res.append(dataclasses.replace(r, criterion=crit, notes=(*r.notes, note)))
+    chain = centred
+    for model in CHAIN_MODELS:  # each from the one before: centred, free radii, free joints
+        if not any(CHAIN_MODELS.index(c) >= CHAIN_MODELS.index(model) for c in chains):
+            break
+        t0 = time.perf_counter()
+        chain, rss, k = fit_chain(chain, ref, model)
+        if model in chains:
+            res.append(_chain_result(r, model, chain, rss, k, rss_c, time.perf_counter() - t0))
+    return res
+
+
+def _chain_result(
+    r: FitResult, model: str, chain: ArcChain, rss: float, k: int, rss_c: float, seconds: float
+) -> FitResult:
+    ref, n = r.reference, len(r.reference)
     after, al, fit_al = compare_aligned(
         ref, chain.points(), allow_mirror=False, max_segment=r.spacing
     )
     values = {f"radius_{j}": float(v) for j, v in enumerate(chain.radii)}
+    if model == "free_joints":
+        values.update({f"sweep_{j}_deg": float(np.degrees(v)) for j, v in enumerate(chain.sweeps)})
     values.update(
         first_centre_x=chain.c0[0],
         first_centre_y=chain.c0[1],
@@ -94,29 +112,26 @@ def _free_from(r: FitResult, *, free: bool, keep_centred: bool) -> list[FitResul
         mirrored=float(chain.sense < 0),
     )
     notes = (
-        f"every arc's radius free ({len(chain.radii)} arcs), centres from tangency, first "
-        "centre, start direction and last sweep fitted by least squares from the centred-arc fit",
-        f"rms {np.sqrt(rss_f / n):.3g} m against {np.sqrt(rss_c / n):.3g} m for the centred arcs",
+        f"{_FREED[model]} ({len(chain.radii)} arcs), centres from tangency, first centre, "
+        "start direction and last sweep fitted by least squares from the centred-arc fit",
+        f"rms {np.sqrt(rss / n):.3g} m against {np.sqrt(rss_c / n):.3g} m for the centred arcs",
         "the column is rebuilt with the centred-arc volute (VoluteParams has no free radii)",
     )
-    res.append(
-        dataclasses.replace(
-            r,
-            before=r.after,
-            after=after,
-            fitted=fit_al,
-            initial=r.fitted,
-            alignment=al,
-            notes=notes,
-            model="free_arcs",
-            bounds_hit=(),
-            values=values,
-            seconds=time.perf_counter() - t0,
-            criterion=criterion(rss_f, n, k_f, _size(ref)),
-            alternatives=(),
-        )
+    return dataclasses.replace(
+        r,
+        before=r.after,
+        after=after,
+        fitted=fit_al,
+        initial=r.fitted,
+        alignment=al,
+        notes=notes,
+        model=model,
+        bounds_hit=(),
+        values=values,
+        seconds=seconds,
+        criterion=criterion(rss, n, k, _size(ref)),
+        alternatives=(),
     )
-    return res
 
 
 def choose_by_criterion(results: list[FitResult]) -> list[FitResult]:

@@ -91,7 +91,9 @@ def _unpack(x: np.ndarray, base: ArcChain, model: str) -> ArcChain:
     k = len(base.radii)
     sweeps = base.sweeps.copy()
     sweeps[-1] = x[3]
-    if model == "free_arcs":
+    if model == "free_joints":  # every radius and every joint (sweep) free
+        sweeps[:-1] = x[4 + k :]
+    if model in ("free_arcs", "free_joints"):
         radii = np.asarray(x[4 : 4 + k])
     else:  # centred: ρ_0 (outer or inner end as the chain runs) plus linear steps
         r0, s_first, s_last = x[4], x[5], x[6]
@@ -106,6 +108,8 @@ def _pack(chain: ArcChain, model: str) -> np.ndarray:
     head = [chain.c0[0], chain.c0[1], chain.phi0, chain.sweeps[-1]]
     if model == "free_arcs":
         return np.array(head + list(chain.radii))
+    if model == "free_joints":
+        return np.array(head + list(chain.radii) + list(chain.sweeps[:-1]))
     steps = np.diff(chain.radii)
     first, last = (steps[0], steps[-1]) if len(steps) else (0.0, 0.0)
     return np.array([*head, chain.radii[0], first, last])
@@ -126,13 +130,15 @@ def fit_chain(chain: ArcChain, pts: np.ndarray, model: str) -> tuple[ArcChain, f
 
     def fun(x: np.ndarray) -> np.ndarray:
         c = _unpack(x, chain, model)
-        if np.any(c.radii <= 0) or c.sweeps[-1] <= 0:
+        if np.any(c.radii <= 0) or np.any(c.sweeps <= 0):
             return np.full(len(pts) + 4, 1e3 * float(np.ptp(pts)))
         return _residuals(c, pts)
 
     scale = float(np.mean(chain.radii))
     x_scale = np.full(len(x0), scale)
     x_scale[2:4] = 1.0
+    if model == "free_joints":
+        x_scale[4 + len(chain.radii) :] = 1.0
     sol = least_squares(fun, x0, x_scale=x_scale, method="lm", max_nfev=200 * len(x0))
     best = _unpack(sol.x, chain, model)
     rss = float(np.sum(chain_residuals(best, pts) ** 2))  # the nodes' residuals only
