@@ -102,6 +102,7 @@ def test_fit_volute_on_a_carved_volute_chooses_free_arcs():
     assert free["criterion"]["parameters"] == len(radii) + 4
 
 
+@pytest.mark.slow
 def test_fit_volute_frees_the_joints_where_the_carver_moved_them():
     ref = carved_volute(1.2, seed=1, noise=3e-4)
     res = fit_volute(ref, models=CHAINS, **FAST)
