@@ -128,10 +128,11 @@ def test_fit_volute_scale_free_chooses_the_construction(diameter):
     true = vitruvian_volute(diameter, volute_model="centred_arcs", arc_ratio=0.4)
     ref = volute_curve(true, 800) + [5.0, -3.0]
     res = fit_volute(ref)  # every model; bounds from the reference, not from Portunus
-    assert res.model == "centred_arcs"
-    assert [a.model for a in res.alternatives] == ["log_spiral"]
+    assert res.model == "centred_arcs"  # exact: the freer arc models gain nothing (BIC)
+    by = {a.model: a for a in res.alternatives}
+    assert sorted(by) == ["free_arcs", "free_joints", "log_spiral"]
     assert res.after.hausdorff_pct < 0.2 and res.after.discrete_frechet_pct < 0.2
-    assert res.alternatives[0].after.hausdorff > res.after.hausdorff
+    assert by["log_spiral"].after.hausdorff > res.after.hausdorff
     assert res.params.arc_square == pytest.approx(true.arc_square, rel=1e-2)
     # the estimate reads 8/18 D off the fitted volute's height; this construction is not
     # exactly 8 parts high, so compare with the reference's own height
