@@ -150,3 +150,13 @@ def test_fit_volute_command_reports_the_criterion(tmp_path):
     volute = json.loads(Path(tmp_path / "fit.json").read_text("utf-8"))["parts"]["volute"]
     assert volute["model"] == "free_joints"
     assert set(volute["criterion"]) == {"aic", "bic", "rss", "points", "parameters"}
+
+
+def test_too_few_nodes_for_the_free_models():
+    """Twelve traced nodes cannot support 16 or more parameters: the centred arcs alone."""
+    ref = carved_volute(0.6, noise=0.0)[::110]
+    assert len(ref) == 12
+    res = fit_volute(ref, models=CHAINS, **FAST)
+    assert res.model == "centred_arcs" and res.alternatives == ()
+    assert any("too few" in n for n in res.notes)
+    assert math.isfinite(res.criterion["bic"])

@@ -20,7 +20,13 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ionic_usd.evaluate.fit_core import FitResult, compare_aligned, densify
-from ionic_usd.evaluate.volute_chain import ArcChain, chain_from_centred, criterion, fit_chain
+from ionic_usd.evaluate.volute_chain import (
+    ArcChain,
+    chain_from_centred,
+    criterion,
+    fit_chain,
+    free_parameters,
+)
 
 __all__ = ["CHAIN_MODELS", "CRITERION", "add_free_arcs", "choose_by_criterion"]
 
@@ -76,6 +82,11 @@ def _chains_from(r: FitResult, *, chains: tuple[str, ...], keep_centred: bool) -
         r.alignment.mirrored,
         (r.values["translation_x"], r.values["translation_y"]),
     )
+    if n < 2 * free_parameters(start, "centred_arcs"):  # too few nodes to refit anything
+        rss = _rss_to_curve(ref, r.fitted, r.spacing)
+        note = f"free arc models not fitted: {n} nodes are too few"
+        crit = criterion(rss, n, free_parameters(start, "centred_arcs"), _size(ref))
+        return [dataclasses.replace(r, criterion=crit, notes=(*r.notes, note))]
     centred, rss_c, k_c = fit_chain(start, ref, "centred_arcs")
     res = []
     if keep_centred or not chains:
@@ -86,6 +97,8 @@ def _chains_from(r: FitResult, *, chains: tuple[str, ...], keep_centred: bool) -
     chain = centred
     for model in CHAIN_MODELS:  # each from the one before: centred, free radii, free joints
         if not any(CHAIN_MODELS.index(c) >= CHAIN_MODELS.index(model) for c in chains):
+            break
+        if n < 2 * free_parameters(chain, model):  # the data cannot support it
             break
         t0 = time.perf_counter()
         chain, rss, k = fit_chain(chain, ref, model)

@@ -22,7 +22,14 @@ import numpy as np
 from ionic_usd.column.volute import VoluteParams
 from ionic_usd.column.volute_arcs import arc_centres
 
-__all__ = ["ArcChain", "chain_from_centred", "chain_residuals", "criterion", "fit_chain"]
+__all__ = [
+    "ArcChain",
+    "chain_from_centred",
+    "chain_residuals",
+    "criterion",
+    "fit_chain",
+    "free_parameters",
+]
 
 
 @dataclass(frozen=True)
@@ -102,6 +109,11 @@ def _unpack(x: np.ndarray, base: ArcChain, model: str) -> ArcChain:
     return replace(
         base, c0=(float(x[0]), float(x[1])), phi0=float(x[2]), radii=radii, sweeps=sweeps
     )
+
+
+def free_parameters(chain: ArcChain, model: str) -> int:
+    """How many parameters :func:`fit_chain` frees for ``model`` on this chain."""
+    return len(_pack(chain, model))
 
 
 def _pack(chain: ArcChain, model: str) -> np.ndarray:
