@@ -252,6 +252,23 @@ def _floats(text: str | None, n: int, flag: str) -> list[float] | None:
     return vals
 
 
+def _print_criterion(res: FitResult) -> None:
+    from ionic_usd.evaluate.fit_volute_free import CRITERION
+
+    if not res.criterion:
+        return
+    print(
+        f"model chosen by the lowest {CRITERION.upper()} (AIC also shown; n nodes, k parameters):"
+    )
+    for r in (res, *res.alternatives):
+        c = r.criterion
+        rms = (c["rss"] / c["points"]) ** 0.5
+        print(
+            f"  {r.model:<13} k={int(c['parameters']):>2}  rms={rms:.4g} m"
+            f"  AIC={c['aic']:.1f}  BIC={c['bic']:.1f}" + ("  <- chosen" if r is res else "")
+        )
+
+
 def _fit_part(args: argparse.Namespace, column: ColumnParams, ref: np.ndarray) -> FitResult:
     from ionic_usd.evaluate import fit as F
     from ionic_usd.evaluate.fit_shaft import fit_shaft_section, is_closed_curve
@@ -342,6 +359,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
         rows = {r.model: r.after for r in (res, *res.alternatives)}
         print(f"volute models side by side (best first; chosen: {res.model}):")
         print(format_table(rows))
+    _print_criterion(res)
     if out is not None:
         res.write_toml(out, force=args.force)
         print(f"wrote {out} (use: ionic-usd column --config {out})")
@@ -525,7 +543,7 @@ def add_fit_parser(subparsers: Any, *, arguments: bool = True) -> None:
     )
     p.add_argument(
         "--model",
-        choices=VOLUTE_MODELS,
+        choices=(*VOLUTE_MODELS, "free_arcs", "free_joints"),
         help="volute: fit only this model [default: every model, best chosen]",
     )
     p.add_argument(

@@ -336,6 +336,8 @@ class FitResult:
     values : the fitted parameters by name (numbers)
     spacing : the longest segment (m) of both curves in the reported comparisons
     alternatives : the other models' fits (volute), best first
+    criterion : volute: ``aic``, ``bic``, ``rss``, ``points``, ``parameters`` (the model is
+        chosen by the lowest BIC; :mod:`~ionic_usd.evaluate.fit_volute_free`)
     """
 
     part: str
@@ -358,6 +360,7 @@ class FitResult:
     values: dict[str, float] = field(default_factory=dict)
     spacing: float = 0.0
     alternatives: tuple[FitResult, ...] = ()
+    criterion: dict[str, float] = field(default_factory=dict)
 
     def as_dict(self) -> dict[str, object]:
         """The ``ionic_usd.evaluate/1`` entry of this part (see :mod:`.report`).
@@ -386,6 +389,8 @@ class FitResult:
             evaluations=self.evaluations,
             notes=list(self.notes),
         )
+        if self.criterion:
+            out["criterion"] = {k: float(v) for k, v in self.criterion.items()}
         return out
 
     def tables(self) -> dict[str, dict]:

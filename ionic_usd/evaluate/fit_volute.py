@@ -14,9 +14,12 @@ Scale-free: the start is the model's default *shape* scaled to the reference's s
 radius about its centroid) with as many turns as the reference winds (its total tangent
 turning); every bound is derived from these (sizes within ×/÷ 1.6–2, turns ± 0.6, placement
 within a quarter of the reference's diagonal). The pose (translation, rotation, mirror) joins
-the parameters. The best model by the minimised measure is returned; the others ride along in
-:attr:`~ionic_usd.evaluate.fit_core.FitResult.alternatives`. The lower diameter is estimated
-from Vitruvius' proportion: the volute is 8/18 D high (upright).
+the parameters. Two more, ``free_arcs`` and ``free_joints``, refit the centred arcs by least
+squares with every arc's radius free, then every joint too
+(:mod:`~ionic_usd.evaluate.fit_volute_free`). The model with the lowest
+BIC on the residuals is returned (a model wins by its residuals *and* its parameter count);
+the others ride along in :attr:`~ionic_usd.evaluate.fit_core.FitResult.alternatives`. The
+lower diameter is estimated from Vitruvius' proportion: the volute is 8/18 D high (upright).
 """
 
 from __future__ import annotations
@@ -36,7 +39,11 @@ from ionic_usd.evaluate.fit_core import FitResult, compare_aligned, densify, ori
 from ionic_usd.evaluate.metrics import compare, resample
 from ionic_usd.evaluate.reference import Alignment, align
 
-__all__ = ["fit_volute", "reference_turns", "rms_radius"]
+__all__ = ["FIT_VOLUTE_MODELS", "fit_volute", "reference_turns", "rms_radius"]
+
+#: The models ``fit volute`` compares: the generator's constructions and the free-arc chain
+#: (:mod:`~ionic_usd.evaluate.fit_volute_free`), chosen by BIC.
+FIT_VOLUTE_MODELS = (*VOLUTE_MODELS, "free_arcs", "free_joints")
 
 
 def reference_turns(curve: np.ndarray) -> float:
@@ -287,8 +294,8 @@ def fit_volute(
     polish_evals : Nelder–Mead evaluations (0: no polish)
     allow_mirror : the reference may wind the other way (a left volute)
     column : ColumnParams the fitted volute is put into (default: Portunus)
-    models : a model name or several (default: all of
-        :data:`~ionic_usd.column.volute.VOLUTE_MODELS`)
+    models : a model name or several (default: all of :data:`FIT_VOLUTE_MODELS`;
+        ``free_arcs`` fits ``centred_arcs`` first, as its start)
 
     Returns
     -------
@@ -301,12 +308,17 @@ def fit_volute(
     if not isinstance(v0, VoluteParams):
         raise ParameterError("initial", v0, "a VoluteParams")
     if models is None:
-        models = VOLUTE_MODELS
+        models = FIT_VOLUTE_MODELS
     elif isinstance(models, str):
         models = (models,)
     for m in models:
-        if m not in VOLUTE_MODELS:
-            raise ParameterError("models", m, f"one of {', '.join(VOLUTE_MODELS)}")
+        if m not in FIT_VOLUTE_MODELS:
+            raise ParameterError("models", m, f"one of {', '.join(FIT_VOLUTE_MODELS)}")
+    chains = tuple(m for m in models if m in ("free_arcs", "free_joints"))
+    keep_centred = "centred_arcs" in models
+    models = [m for m in dict.fromkeys(models) if m not in chains]
+    if chains and not keep_centred:
+        models.append("centred_arcs")  # the free arcs start from the centred-arc fit
     e = None
     if eye is not None:
         e = np.asarray(eye, dtype=float)
@@ -403,7 +415,9 @@ def fit_volute(
                 )
             )
             bar.update(1)
-    results.sort(key=lambda r: getattr(r.after, measure))
+    from ionic_usd.evaluate.fit_volute_free import add_free_arcs, choose_by_criterion
+
+    results = choose_by_criterion(add_free_arcs(results, chains=chains, keep_centred=keep_centred))
     best = results[0]
     return dataclasses.replace(
         best, alternatives=tuple(results[1:]), seconds=sum(r.seconds for r in results)
