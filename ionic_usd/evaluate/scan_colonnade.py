@@ -27,7 +27,14 @@ from ionic_usd.errors import GeometryError
 from ionic_usd.evaluate.fit_scan import ScanFit, fit_column_scan
 from ionic_usd.evaluate.scan_axis import _prism_direction, normals
 
-__all__ = ["ColonnadeFit", "fit_colonnade", "group_columns", "split_columns", "up_axis"]
+__all__ = [
+    "ColonnadeFit",
+    "fit_colonnade",
+    "group_columns",
+    "instance_column",
+    "split_columns",
+    "up_axis",
+]
 
 #: a cluster smaller than this share of the largest is not a column (debris, a stray hit)
 MIN_SHARE = 0.1
@@ -126,7 +133,7 @@ class ColonnadeFit:
             d = self.instance_deviation[i]
             cols.append(
                 {
-                    "position": (f.frame.origin + 0.0).tolist(),
+                    "position": f.matrix[3, :3].tolist(),  # the column's y = 0 on its axis
                     "axis": s["axis"],
                     "diameter": s["diameter"],
                     "flutes": s["flutes"],
@@ -166,16 +173,20 @@ def _base_height(f: ScanFit) -> float | None:
     return f.column.base_params().height if "base" in f.frame.parts else None
 
 
+def instance_column(src: ScanFit, inst: ScanFit):
+    """The source's column description with the instance's flute phase (its pose)."""
+    return dataclasses.replace(
+        src.column,
+        shaft=dataclasses.replace(src.column.shaft, flute_phase=inst.column.shaft.flute_phase),
+    )
+
+
 def _instance_deviation(src: ScanFit, inst: ScanFit, pts: np.ndarray, tree) -> np.ndarray:
     """The instance's points against the source's description at the instance's pose
     (its own turn, flute phase and height of the base's bottom)."""
     from ionic_usd.evaluate.scan_deviation import scan_deviation
 
-    col = dataclasses.replace(
-        src.column,
-        shaft=dataclasses.replace(src.column.shaft, flute_phase=inst.column.shaft.flute_phase),
-    )
-    return scan_deviation(pts, col, inst.matrix, tree=tree)
+    return scan_deviation(pts, instance_column(src, inst), inst.matrix, tree=tree)
 
 
 def group_columns(
@@ -212,10 +223,16 @@ def group_columns(
     return sorted(groups, key=min), dev
 
 
-def fit_colonnade(points: np.ndarray, *, seed: int = 0) -> ColonnadeFit:
-    """Split, fit each column, group the instances (module docstring)."""
+def fit_colonnade(
+    points: np.ndarray,
+    *,
+    seed: int = 0,
+    split: tuple[np.ndarray, list[np.ndarray], list[str]] | None = None,
+) -> ColonnadeFit:
+    """Split, fit each column, group the instances (module docstring); ``split``: the
+    output of :func:`split_columns` when already computed."""
     pts = np.asarray(points, dtype=np.float64)
-    up, clusters, notes = split_columns(pts, seed=seed)
+    up, clusters, notes = split if split is not None else split_columns(pts, seed=seed)
     if not clusters:
         raise GeometryError("scan: no cluster of points large enough for a column")
     fits = []
