@@ -74,3 +74,32 @@ def test_split_drops_debris():
     assert len(clusters) == 2
     assert sorted(len(c) for c in clusters) == [3000, 3000]
     assert notes and "dropped" in notes[0]
+
+
+@pytest.mark.slow
+def test_cli_writes_a_column_per_column_and_a_toml_per_description(tmp_path):
+    import json
+
+    from ionic_usd.cli import main
+
+    t = Truth()
+    pts, _ = colonnade_scan([t, t.scaled(460.0), t], 4000, noise=NOISE, seed=0)
+    scan = tmp_path / "colonnade.xyz"
+    np.savetxt(scan, pts, fmt="%.3f")
+    out, rj = tmp_path / "out", tmp_path / "R.json"
+    assert main(["fit", "column", "--scan", str(scan), "-o", str(out), "--json", str(rj)]) == 0
+    doc = json.loads(rj.read_text())
+    assert len(doc["columns"]) == 3
+    assert sorted(len(g["instances"]) for g in doc["distinct_columns"]) == [1, 2]
+    for k in (1, 2, 3):
+        assert (out / f"fitted_column_{k}.usda").stat().st_size > 0
+    assert sorted(p.name for p in out.glob("*.toml")) == [
+        "fitted_column_A.toml",
+        "fitted_column_B.toml",
+    ]
+    for c in doc["columns"]:
+        assert 1000.0 * c["deviation"]["rms"] <= 2.0 * NOISE
+    # a second run refuses to overwrite, before writing anything
+    before = {p: p.stat().st_mtime_ns for p in out.iterdir()}
+    assert main(["fit", "column", "--scan", str(scan), "-o", str(out)]) == 2
+    assert {p: p.stat().st_mtime_ns for p in out.iterdir()} == before

@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from ionic_usd.errors import GeometryError
+from ionic_usd.errors import GeometryError, IonicError
 from ionic_usd.evaluate.fit_scan import ScanFit, fit_column_scan
 from ionic_usd.evaluate.scan_axis import _prism_direction, normals
 
@@ -239,7 +239,7 @@ def fit_colonnade(
     for k, idx in enumerate(clusters):
         try:
             fits.append(fit_column_scan(pts[idx], seed=seed))
-        except GeometryError as exc:
+        except IonicError as exc:  # which column could not be fitted, and why
             raise GeometryError(f"column {k + 1} of {len(clusters)}: {exc}") from exc
     groups, inst = group_columns(fits, [pts[c] for c in clusters])
     return ColonnadeFit(up, fits, clusters, groups, inst, notes)

@@ -10,8 +10,9 @@ point's distance to its column's description); R.json at ``--json``.
 from __future__ import annotations
 
 import string
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import IO, Any
 
 import numpy as np
 
@@ -80,7 +81,7 @@ def _write(fit: ColonnadeFit, pts: np.ndarray, files: dict[str, Path], args: Any
             header=f"ionic_usd column {_letter(g)} fitted to the scan {name} (instances "
             f"{', '.join(str(i + 1) for i in members)})",
         )
-        write_atomically(files[f"toml_{_letter(g)}"], lambda fh, t=text: fh.write(t.encode()))
+        write_atomically(files[f"toml_{_letter(g)}"], _writer(text.encode("utf-8")))
     if args.json is not None:
         write_fit_json(
             args.json,
@@ -93,6 +94,13 @@ def _write(fit: ColonnadeFit, pts: np.ndarray, files: dict[str, Path], args: Any
                 "outputs": {k: str(v) for k, v in files.items()},
             },
         )
+
+
+def _writer(data: bytes) -> Callable[[IO[bytes]], None]:
+    def write(fh: IO[bytes]) -> None:
+        fh.write(data)
+
+    return write
 
 
 def _mm(x: float) -> str:
