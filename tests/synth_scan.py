@@ -183,3 +183,40 @@ def fragment_scan(
     tr = rng.normal(0.0, 2000.0, 3)
     scale = 1e-3 / unit
     return (pts @ rot.T + tr) * scale, rot, tr * scale
+
+
+def colonnade_scan(
+    truths: list[Truth],
+    n: int = 3000,
+    *,
+    spacing: float = 2800.0,
+    noise: float = 0.8,
+    seed: int = 0,
+    tilt_deg: float = 0.3,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Fragments from :func:`fragment_scan` (one per truth) stood upright on a line ``spacing``
+    mm apart, each with a small random pose (tilt ≤ ``tilt_deg``, any turn about its axis,
+    ±30 mm off the line), then one random rigid pose for the whole scan (mm).
+
+    Returns
+    -------
+    points : (m, 3) mm, posed
+    labels : (m,) the column each point came from
+    """
+    from scipy.spatial.transform import Rotation
+
+    rng = np.random.default_rng(seed + 100)
+    parts, labels = [], []
+    for i, t in enumerate(truths):
+        pts, rot, tr = fragment_scan(n, truth=t, noise=noise, seed=seed + i)
+        col = (pts - tr) @ rot  # back to the column's own frame: y up
+        tilt = Rotation.from_rotvec(
+            np.radians(tilt_deg) * rng.uniform(-1, 1) * np.array([1.0, 0.0, 0.0])
+        ) * Rotation.from_rotvec(np.radians(tilt_deg) * rng.uniform(-1, 1) * np.array([0, 0, 1.0]))
+        turn = Rotation.from_rotvec([0.0, rng.uniform(0, 2 * math.pi), 0.0])
+        off = np.array([i * spacing, 0.0, rng.uniform(-30.0, 30.0)])
+        parts.append((tilt * turn).apply(col) + off)
+        labels.append(np.full(len(col), i))
+    pts = np.vstack(parts)
+    rot = Rotation.random(random_state=seed + 11).as_matrix()
+    return pts @ rot.T + rng.normal(0.0, 2000.0, 3), np.concatenate(labels)

@@ -494,6 +494,8 @@ def fit_scan_cases() -> list[tuple[list[str], dict[str, bytes | None]]]:
         "plane.xyz": _rows(np.c_[rng.random((3000, 2)) * 2, np.zeros(3000)]),
         "line.xyz": _rows(np.outer(rng.random(3000), [1.0, 2.0, 3.0])),
         "sphere.xyz": _rows(sphere),
+        # a "colonnade" of three spheres: split into three clusters, none a column
+        "spheres.xyz": _rows(np.vstack([sphere + [5.0 * k, 0.0, 0.0] for k in range(3)])),
     }
     out: list[tuple[list[str], dict[str, bytes | None]]] = [
         (["fit", "column", "--scan", name, "-o", "out"], {name: data})

@@ -15,9 +15,27 @@ from ionic_usd.column.column import ColumnParams, build_column
 __all__ = ["heat_colours", "other_parts_tree", "scan_deviation", "shaft_deviation"]
 
 
+class _LazyTree:
+    """A kd-tree built on its first query: a fragment without a capital never queries it
+    (its points are all measured exactly against the shaft and the base)."""
+
+    def __init__(self, col: ColumnParams) -> None:
+        self._col, self._tree = col, None
+
+    def query(self, *args, **kwargs):
+        if self._tree is None:
+            self._tree = _capital_tree(self._col)
+        return self._tree.query(*args, **kwargs)
+
+
 def other_parts_tree(col: ColumnParams):
     """kd-tree of dense samples (about 1 mm apart) of the capital (the shaft and the base
-    are measured exactly: :func:`shaft_deviation`, :func:`base_deviation`)."""
+    are measured exactly: :func:`shaft_deviation`, :func:`base_deviation`), built when
+    first queried."""
+    return _LazyTree(col)
+
+
+def _capital_tree(col: ColumnParams):
     from scipy.spatial import cKDTree
 
     from ionic_usd.evaluate.scan_io import sample_surface

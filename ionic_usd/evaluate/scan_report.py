@@ -184,6 +184,16 @@ def cmd_fit_column(args) -> int:
         unit_note = f"units: {units}, scale {args.scale:g}"
         factor = UNITS.get(units, 1.0)
         pts = read_scan(args.scan, scale=args.scale * factor)
+    from ionic_usd.evaluate.scan_colonnade import split_columns
+
+    split = None
+    if len(pts) >= 200 and np.all(np.isfinite(pts)):
+        check_scan_extent(pts, "scan")  # as the fit would: no split of a line or a plane
+        split = split_columns(pts, seed=args.seed)
+    if split is not None and len(split[1]) > 1:  # several columns: one fit each
+        from ionic_usd.evaluate.scan_colonnade_report import run_colonnade
+
+        return run_colonnade(pts, split, out, args, unit_note)
     fit = fit_column_scan(pts, seed=args.seed)
     summary = fit.summary()
     out.mkdir(parents=True, exist_ok=True)

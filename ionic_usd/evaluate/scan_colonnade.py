@@ -1,0 +1,245 @@
+"""Scans of several columns (a colonnade, issue 36): split, fit each, group the instances.
+
+1. :func:`split_columns` — the common up axis is the direction ⊥ the normals of the
+   vertical surfaces of every column at once (the columns stand parallel); the points
+   projected on the ground plane fill a grid whose 8-connected occupied cells
+   (``scipy.ndimage.label``) are the columns' footprints; clusters under
+   :data:`MIN_SHARE` of the largest (or under 100 points) are dropped, and said so;
+2. each cluster is fitted by :func:`.fit_scan.fit_column_scan`, unchanged;
+3. :func:`group_columns` — a column is an instance of another's description when their
+   flute counts are equal and that description, placed at the column's own pose (axis, turn,
+   flute phase, base bottom), leaves its points within :data:`SAME` × the rms deviation of
+   its own fit (the noise): a criterion on every parameter the scan shows at once
+   (diameter, taper, base profile and height, capital), in the units of the noise; else it
+   describes a distinct column. The per-instance deviation is that of its points from its
+   group's description.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ionic_usd.errors import GeometryError, IonicError
+from ionic_usd.evaluate.fit_scan import ScanFit, fit_column_scan
+from ionic_usd.evaluate.scan_axis import _prism_direction, normals
+
+__all__ = [
+    "ColonnadeFit",
+    "fit_colonnade",
+    "group_columns",
+    "instance_column",
+    "split_columns",
+    "up_axis",
+]
+
+#: a cluster smaller than this share of the largest is not a column (debris, a stray hit)
+MIN_SHARE = 0.1
+#: one description serves two columns when it leaves the second's points within this × their
+#: rms deviation from their own fit (the noise the fit reached)
+SAME = 1.5
+#: grid cell: this × the median nearest-neighbour spacing of the points (3-D)
+CELL_SPACINGS = 4.0
+
+
+def up_axis(points: np.ndarray, *, max_points: int = 20_000, seed: int = 0) -> np.ndarray:
+    """(3,) unit direction ⊥ the normals of the vertical surfaces of all the columns."""
+    rng = np.random.default_rng(seed)
+    p = points if len(points) <= max_points else points[rng.choice(len(points), max_points, False)]
+    n = normals(p)
+    a = np.linalg.eigh(n.T @ n)[1][:, 0]
+    prism = _prism_direction(a, n)
+    return a if prism is None else prism
+
+
+def _spacing(points: np.ndarray, rng) -> float:
+    from scipy.spatial import cKDTree
+
+    p = points if len(points) <= 20_000 else points[rng.choice(len(points), 20_000, False)]
+    d, _ = cKDTree(p).query(p, k=2)
+    return float(np.median(d[:, 1]))
+
+
+def split_columns(
+    points: np.ndarray, *, seed: int = 0
+) -> tuple[np.ndarray, list[np.ndarray], list[str]]:
+    """Split a scan into columns by their footprints on the ground plane.
+
+    Returns
+    -------
+    up : (3,) the common axis
+    clusters : index arrays into ``points``, largest first
+    notes : what was dropped
+    """
+    from scipy import ndimage
+
+    rng = np.random.default_rng(seed)
+    up = up_axis(points, seed=seed)
+    u = np.cross(up, [1.0, 0.0, 0.0] if abs(up[0]) < 0.9 else [0.0, 1.0, 0.0])
+    u /= np.linalg.norm(u)
+    v = np.cross(up, u)
+    xy = points @ np.column_stack([u, v])
+    lo = xy.min(axis=0)
+    ext = float(np.max(np.ptp(xy, axis=0)))
+    cell = max(CELL_SPACINGS * _spacing(points, rng), ext / 2000.0, 1e-6)
+    ij = np.floor((xy - lo) / cell).astype(np.int64)
+    grid = np.zeros(tuple(ij.max(axis=0) + 1), dtype=bool)
+    grid[ij[:, 0], ij[:, 1]] = True
+    labels, count = ndimage.label(grid, structure=np.ones((3, 3), dtype=int))
+    lab = labels[ij[:, 0], ij[:, 1]] - 1
+    sizes = np.bincount(lab, minlength=count)
+    order = np.argsort(-sizes, kind="stable")
+    keep = [k for k in order if sizes[k] >= max(100, MIN_SHARE * sizes[order[0]])]
+    notes = []
+    dropped = int(sizes.sum() - sizes[keep].sum())
+    if dropped:
+        notes.append(
+            f"split: {count - len(keep)} cluster(s) of {dropped:,} points in all dropped "
+            f"(under {MIN_SHARE:.0%} of the largest column's points or under 100)"
+        )
+    return up, [np.flatnonzero(lab == k) for k in keep], notes
+
+
+@dataclass(eq=False)
+class ColonnadeFit:
+    """Outcome of :func:`fit_colonnade` (metres, the scan's frame).
+
+    fits : one ScanFit per column found (largest cluster first)
+    indices : each column's point indices in the scan
+    groups : per distinct column description, the indices into ``fits`` of its instances
+        (the first is the description's source: the instance of least rms deviation)
+    instance_deviation : per column, its points' distances to its group's description
+    """
+
+    up: np.ndarray
+    fits: list[ScanFit]
+    indices: list[np.ndarray]
+    groups: list[list[int]]
+    instance_deviation: list[np.ndarray]
+    notes: list[str] = field(default_factory=list)
+
+    def group_of(self, i: int) -> int:
+        return next(g for g, m in enumerate(self.groups) if i in m)
+
+    def summary(self) -> dict[str, Any]:
+        """The R.json keys of a colonnade: ``columns`` (one per column found) and
+        ``distinct_columns`` (one per description)."""
+        cols = []
+        for i, f in enumerate(self.fits):
+            s = f.summary()
+            d = self.instance_deviation[i]
+            cols.append(
+                {
+                    "position": f.matrix[3, :3].tolist(),  # the column's y = 0 on its axis
+                    "axis": s["axis"],
+                    "diameter": s["diameter"],
+                    "flutes": s["flutes"],
+                    "base_height": _base_height(f),
+                    "points": s["points"],
+                    "deviation": s["deviation"],
+                    "group": self.group_of(i),
+                    "deviation_from_group": _stats(d),
+                    "parts": s["parts"],
+                    "not_fitted": s["not_fitted"],
+                }
+            )
+        return {
+            "up": self.up.tolist(),
+            "columns": cols,
+            "distinct_columns": [
+                {"instances": g, "source": g[0], "diameter": self.fits[g[0]].diameter}
+                for g in self.groups
+            ],
+            "notes": self.notes,
+        }
+
+
+def _stats(d: np.ndarray) -> dict[str, float]:
+    return {
+        "rms": float(np.sqrt(np.mean(d**2))),
+        "p95": float(np.percentile(d, 95)),
+        "max": float(d.max()),
+    }
+
+
+def _rms(d: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(d**2)))
+
+
+def _base_height(f: ScanFit) -> float | None:
+    return f.column.base_params().height if "base" in f.frame.parts else None
+
+
+def instance_column(src: ScanFit, inst: ScanFit):
+    """The source's column description with the instance's flute phase (its pose)."""
+    return dataclasses.replace(
+        src.column,
+        shaft=dataclasses.replace(src.column.shaft, flute_phase=inst.column.shaft.flute_phase),
+    )
+
+
+def _instance_deviation(src: ScanFit, inst: ScanFit, pts: np.ndarray, tree) -> np.ndarray:
+    """The instance's points against the source's description at the instance's pose
+    (its own turn, flute phase and height of the base's bottom)."""
+    from ionic_usd.evaluate.scan_deviation import scan_deviation
+
+    return scan_deviation(pts, instance_column(src, inst), inst.matrix, tree=tree)
+
+
+def group_columns(
+    fits: list[ScanFit], points: list[np.ndarray]
+) -> tuple[list[list[int]], list[np.ndarray]]:
+    """Group the fits: a fit joins the group whose source describes its points within
+    :data:`SAME` × its own rms deviation (the fits taken by increasing rms; each compared
+    with the groups' sources only, so no chaining); else it is the source of a new group.
+
+    Returns
+    -------
+    groups : fit indices per group, the source first
+    deviation : per fit, its points' distances to its group's source
+    """
+    from ionic_usd.evaluate.scan_deviation import other_parts_tree
+
+    order = sorted(range(len(fits)), key=lambda i: _rms(fits[i].deviation))
+    groups: list[list[int]] = []
+    trees: list[Any] = []
+    dev: list[np.ndarray] = [f.deviation for f in fits]
+    for i in order:
+        own = _rms(fits[i].deviation)
+        for g, tree in zip(groups, trees, strict=True):
+            if fits[g[0]].flutes != fits[i].flutes:
+                continue
+            d = _instance_deviation(fits[g[0]], fits[i], points[i], tree)
+            if _rms(d) <= SAME * own:
+                g.append(i)
+                dev[i] = d
+                break
+        else:
+            groups.append([i])
+            trees.append(other_parts_tree(fits[i].column))
+    return sorted(groups, key=min), dev
+
+
+def fit_colonnade(
+    points: np.ndarray,
+    *,
+    seed: int = 0,
+    split: tuple[np.ndarray, list[np.ndarray], list[str]] | None = None,
+) -> ColonnadeFit:
+    """Split, fit each column, group the instances (module docstring); ``split``: the
+    output of :func:`split_columns` when already computed."""
+    pts = np.asarray(points, dtype=np.float64)
+    up, clusters, notes = split if split is not None else split_columns(pts, seed=seed)
+    if not clusters:
+        raise GeometryError("scan: no cluster of points large enough for a column")
+    fits = []
+    for k, idx in enumerate(clusters):
+        try:
+            fits.append(fit_column_scan(pts[idx], seed=seed))
+        except IonicError as exc:  # which column could not be fitted, and why
+            raise GeometryError(f"column {k + 1} of {len(clusters)}: {exc}") from exc
+    groups, inst = group_columns(fits, [pts[c] for c in clusters])
+    return ColonnadeFit(up, fits, clusters, groups, inst, notes)
