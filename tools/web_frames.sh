@@ -18,7 +18,10 @@ cd "$WORK"
 for s in T/Temple.usda C/City.usda; do
   site="site-$(dirname "$s")"
   "$PY" -m ionic_usd web "$s" -o "$site" --force -q >/dev/null
-  line="$(node "$ROOT/tools/node/web_frames.mjs" "$site" --frames "$N" | grep '^FRAMES ')"
+  if ! line="$(timeout "${WEB_FRAMES_TIMEOUT:-300}" node "$ROOT/tools/node/web_frames.mjs" \
+    "$site" --frames "$N" | grep '^FRAMES ')"; then
+    echo "$s: not measured in ${WEB_FRAMES_TIMEOUT:-300} s (too slow to draw)"; continue
+  fi
   "$PY" - "$s" "$(du -sm "$site" | cut -f1)" "$N" "${line#FRAMES }" <<'PYEOF'
 import json, sys
 scene, mb, n, r = sys.argv[1], sys.argv[2], sys.argv[3], json.loads(sys.argv[4])
