@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# Frame times of `ionic-usd web` for the default temple and a 16-temple city (4 x 4 Portunus
+# grid), in headless Chromium with SwiftShader software GL (tools/node/web_frames.mjs; needs
+# `npm ci` in tools/node and Chromium, as tools/check_web.sh sets up). Prints one line per scene:
+# load seconds, the first three frames (geometry upload, shader compile) and then N frames
+# (render + gl.finish; again with a one-pixel readPixels): median, p95, max, draw calls,
+# triangles.
+#
+#   tools/web_frames.sh [FRAMES]      (default 30; 1024 x 640)
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+PY="${PYTHON:-python}"
+N="${1:-30}"
+WORK="$(mktemp -d)"; trap 'rm -rf "$WORK"' EXIT
+cd "$WORK"
+"$PY" -m ionic_usd temple -o T --force -q
+"$PY" -m ionic_usd city C --rows 4 --cols 4 --temple portunus --force -q
+for s in T/Temple.usda C/City.usda; do
+  site="site-$(dirname "$s")"
+  "$PY" -m ionic_usd web "$s" -o "$site" --force -q >/dev/null
+  if ! line="$(timeout "${WEB_FRAMES_TIMEOUT:-300}" node "$ROOT/tools/node/web_frames.mjs" \
+    "$site" --frames "$N" | grep '^FRAMES ')"; then
+    echo "$s: not measured in ${WEB_FRAMES_TIMEOUT:-300} s (too slow to draw)"; continue
+  fi
+  "$PY" - "$s" "$(du -sm "$site" | cut -f1)" "$N" "${line#FRAMES }" <<'PYEOF'
+import json, sys
+scene, mb, n, r = sys.argv[1], sys.argv[2], sys.argv[3], json.loads(sys.argv[4])
+print(
+    f"{scene}: {r['triangles']:,} triangles, {r['calls']:,} draw calls, site {mb} MB, "
+    f"loaded in {r['loadSeconds']:.1f} s; first frames {r['firstFrames']} ms; "
+    f"{n} frames: median {r['median']:.1f} ms, p95 {r['p95']:.1f} ms, max {r['max']:.1f} ms"
+    + f" (with a pixel read back: median {r['readback']['median']:.1f} ms, "
+    f"p95 {r['readback']['p95']:.1f} ms)"
+    + (f"; {len(r['errors'])} console errors" if r["errors"] else "")
+)
+PYEOF
+done
