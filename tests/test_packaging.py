@@ -42,8 +42,16 @@ def _import_names(dist: str) -> set[str]:
 
 
 RUNTIME = {_dist_name(r) for r in PYPROJECT["project"]["dependencies"]}
+#: the extras that build the docs and run benchmarks: tools around the package, which never
+#: imports them (and the test environment does not install them)
+TOOLING_EXTRAS = {"docs", "bench"}
 OPTIONAL = sorted(
-    {_dist_name(r) for reqs in PYPROJECT["project"]["optional-dependencies"].values() for r in reqs}
+    {
+        _dist_name(r)
+        for extra, reqs in PYPROJECT["project"]["optional-dependencies"].items()
+        if extra not in TOOLING_EXTRAS
+        for r in reqs
+    }
     - RUNTIME
     - {"pytest", "hypothesis", "ruff", "mypy"}
 )
