@@ -81,10 +81,14 @@ def stage_facts(path: str) -> dict:
     root = stage.GetDefaultPrim()
     selections = dict(root.GetVariantSets().GetAllVariantSelections())
 
-    def drawn(p) -> bool:  # Blender imports render and default purpose (not proxy, guide)
-        return p.IsA(UsdGeom.Mesh) and UsdGeom.Imageable(p).ComputePurpose() in (
-            UsdGeom.Tokens.default_,
-            UsdGeom.Tokens.render,
+    def drawn(p) -> bool:
+        # Blender imports render and default purpose (not proxy, guide), and not what a detail
+        # or hypothesis hides (visibility invisible: the prim keeps its path)
+        img = UsdGeom.Imageable(p)
+        return (
+            p.IsA(UsdGeom.Mesh)
+            and img.ComputePurpose() in (UsdGeom.Tokens.default_, UsdGeom.Tokens.render)
+            and img.ComputeVisibility() != UsdGeom.Tokens.invisible
         )
 
     active = [p for p in stage.Traverse() if drawn(p)]
