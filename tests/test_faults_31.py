@@ -113,6 +113,8 @@ def test_killed_fresh_city_leaves_no_partial_folder(tmp_path):
             "30",
             "--cols",
             "30",
+            "--temple",
+            "portunus",  # one build for every lot (900 chosen types are refused by memory)
             "--texture-size",
             "16",
             "-q",
