@@ -48,7 +48,7 @@ fi
 step "scenes: temple (texture $TEX px), 4 x 4 city, column"
 cli() { "$PY" -m ionic_usd.cli "$@"; }
 cli temple -o "$WORK/city/PortunusTemple" --texture-size "$TEX" --force
-cli city "$WORK/city" --force
+cli city "$WORK/city" --rows 4 --cols 4 --temple portunus --force
 cli column -o "$WORK/column.usda" --force
 TEMPLE="$WORK/city/PortunusTemple/Temple.usda"
 CITY="$WORK/city/City.usda"
