@@ -1,6 +1,7 @@
 """docs/city_cards.png and the default city's drawn triangles at each LOD setting.
 
-Builds the default city (4 x 4 grid) three ways — every temple high (no focus), LOD by distance
+Builds the 4 x 4 Portunus city (``--rows 4 --cols 4 --temple portunus``, the default before
+the lots chose their types) three ways — every temple high (no focus), LOD by distance
 from the corner (0, 0) without cards, and the same with temples beyond ``--cards-beyond`` drawn
 as card boxes — and prints what the project's renderer draws for each (``render_preview``'s
 triangle count: a card box is 12). Then renders the picture: a larger grid seen from its focus
@@ -30,12 +31,12 @@ def main() -> None:
     args = ap.parse_args()
     if args.work.exists():
         shutil.rmtree(args.work)
-    base = dict(texture_size=args.texture_size, workers=1)
+    base = dict(texture_size=args.texture_size, workers=1, temple="portunus")
     settings = {
-        "no focus (temples high, columns low)": CityOptions(**base),
-        "LOD by distance": CityOptions(**base, focus=(0.0, 0.0), cards=False),
+        "no focus (temples high, columns low)": CityOptions(**base, rows=4, cols=4),
+        "LOD by distance": CityOptions(**base, rows=4, cols=4, focus=(0.0, 0.0), cards=False),
         f"LOD + cards beyond {args.cards_beyond:g} m": CityOptions(
-            **base, focus=(0.0, 0.0), cards_beyond=args.cards_beyond
+            **base, rows=4, cols=4, focus=(0.0, 0.0), cards_beyond=args.cards_beyond
         ),
     }
     if not args.skip_counts:
