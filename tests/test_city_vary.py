@@ -25,7 +25,7 @@ from ionic_usd.city.choose import (
 )
 from ionic_usd.city.ground import ground_meshes
 from ionic_usd.city.layout import lot_box
-from ionic_usd.city.plan import Porticus, grid_plan, read_geojson
+from ionic_usd.city.plan import STOA_BACK, Lot, Porticus, grid_plan, read_geojson
 from ionic_usd.city.stoa import StoaDims, bay_parts, corner_parts, porticus_stoa
 from ionic_usd.errors import ParameterError
 from ionic_usd.geometry.check import solid_report
@@ -240,3 +240,88 @@ def test_ground_paves_the_streets_and_lies_under_every_lot():
     for lot in plan.lots:
         c = shapely.Polygon(lot.outline).representative_point()
         assert shapely.contains(polys, c).any() or shapely.touches(polys, c).any(), lot.id
+
+
+# -- stoas clear of the temples and of each other ----------------------------------------------
+
+
+def _parts(sp, back):
+    """Plan polygons of every kept bay and corner of a StoaPlan."""
+    from ionic_usd.pipeline.city_extras import _bay_polygons, _corner_polygon
+
+    class _L:
+        bay_xz, bay_yaw, bay_length = sp.bay_xz, sp.bay_yaw, sp.bay_length
+
+    polys = [shapely.Polygon(q) for q in _bay_polygons(_L, back)]
+    polys += [
+        shapely.Polygon(_corner_polygon(xz, yaw, nb, back))
+        for xz, yaw, nb in zip(sp.corner_xz, sp.corner_yaw, sp.corner_normal, strict=True)
+    ]
+    return polys
+
+
+def _overlaps(polys, others=()):
+    """Pairs that overlap by more than 1e-3 m², brute force over every pair."""
+    n = [(i, j) for i in range(len(polys)) for j in range(i + 1, len(polys))]
+    bad = [(i, j) for i, j in n if polys[i].intersection(polys[j]).area > 1e-3]
+    bad += [(i, -1) for i, p in enumerate(polys) for o in others if p.intersection(o).area > 1e-3]
+    return bad
+
+
+def test_stoas_back_to_back_crossing_and_bent_inward_leave_gaps_not_overlaps():
+    from ionic_usd.city.plan import CityPlan
+    from ionic_usd.pipeline.city_extras import lay_stoas
+
+    back = 7.0
+    porticoes = (
+        # a street colonnaded both sides, then a second one crossing it
+        Porticus("main", np.array([[-60.0, 0.0], [60.0, 0.0]]), 3.0, 2, offset=4.0),
+        Porticus("cross", np.array([[0.0, -60.0], [0.0, 60.0]]), 3.0, 2, offset=4.0),
+        # a single colonnade back to back with main's north side (4 m apart, 7 m deep each)
+        Porticus("behind", np.array([[-30.0, 12.0], [30.0, 12.0]]), 3.0, 1),
+        # an L bent so that the backs meet inside the bend
+        Porticus("bent", np.array([[-100.0, 40.0], [-70.0, 40.0], [-70.0, 70.0]]), 3.0, 1),
+    )
+    lot = np.array([[20.0, 20.0], [40.0, 20.0], [40.0, 40.0], [20.0, 40.0]])
+    plan = CityPlan((Lot("t", lot),), porticoes)
+    whole = [porticus_stoa(p, 3.0) for p in porticoes]
+    sp = lay_stoas(plan, 3.0, [], back)
+    polys = _parts(sp, back)
+    assert not _overlaps(polys, [shapely.Polygon(lot)])
+    # the first porticus (listed first) is kept whole; the others give way
+    assert len(sp.bay_xz) < sum(len(w.bay_xz) for w in whole)
+    kept = {tuple(np.round(b, 6)) for b in sp.bay_xz}
+    assert all(tuple(np.round(b, 6)) in kept for b in whole[0].bay_xz)
+    # without the checks these inputs do overlap (the test is not vacuous)
+    allp = [shapely.Polygon(q) for w in whole for q in _bay_polygons_of(w, back)]
+    assert _overlaps(allp)
+    # every kept column carries a kept bay: it is the start or the end of one
+    ends = set()
+    for (x, z), yaw, ln in zip(sp.bay_xz, sp.bay_yaw, sp.bay_length, strict=True):
+        a = math.radians(yaw)
+        ends |= {
+            (round(x, 6), round(z, 6)),
+            (round(x + ln * math.cos(a), 6), round(z - ln * math.sin(a), 6)),
+        }
+    assert {tuple(np.round(c, 6)) for c in sp.column_xz} <= ends
+    assert sp.dropped == sum(len(w.column_xz) for w in whole) - len(sp.column_xz) > 0
+
+
+def _bay_polygons_of(lay, back):
+    from ionic_usd.pipeline.city_extras import _bay_polygons
+
+    return _bay_polygons(lay, back)
+
+
+def test_example_forum_stoas_are_whole_and_clear_of_every_lot():
+    from ionic_usd.pipeline.city_extras import lay_stoas
+
+    plan = read_geojson(FORUM)
+    back = STOA_BACK
+    sp = lay_stoas(plan, 3.0, [lot.outline for lot in plan.lots], back)
+    whole = [porticus_stoa(p, 3.0) for p in plan.porticoes]
+    # the example is laid out so that nothing gives way: every bay and corner is kept
+    assert len(sp.bay_xz) == sum(len(w.bay_xz) for w in whole)
+    assert len(sp.corner_xz) == sum(len(w.corner_xz) for w in whole) == 4
+    assert sp.dropped == 0
+    assert not _overlaps(_parts(sp, back), [shapely.Polygon(lot.outline) for lot in plan.lots])

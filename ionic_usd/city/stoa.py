@@ -13,7 +13,8 @@ placed like the columns (``yaw`` about ``Y``: local ``+Z`` → ``(sin yaw, cos y
 its origin on the corner column, local ``+X`` along the run that ends there; it fills the
 wedge between the two runs' ends: the entablature's missing quarter, a roof whose two
 halves each slope like their run (they meet in a valley on the bisector) and the back walls
-mitred. Corners whose backs meet (inside a bend) overlap instead and are left as they are.
+mitred. Corners whose backs meet (inside a bend) get no piece; there the two runs' bays
+overlap, and the city keeps the first (:func:`ionic_usd.pipeline.city_extras.lay_stoas`).
 
 Dimensions (Vitruvius; :class:`StoaDims`): the architrave is ``H / 12`` (III.5.8, columns
 of 25–30 ft), the plain frieze ¾ of it and the cornice as high as the architrave, projecting

@@ -1,9 +1,9 @@
 """The city's stoas and ground: laid out from the plan, written beside the instances.
 
 :func:`lay_stoas` (step 2 of the city build) turns every porticus into columns, bays and
-corners (:func:`ionic_usd.city.stoa.porticus_stoa`) and drops what a temple stands on: the
-columns inside a temple's footprint (as before) and the bays and corners that touch one or
-lose a column. :func:`write_stoas_and_ground` (step 5, once the temple builds are in the
+corners (:func:`ionic_usd.city.stoa.porticus_stoa`) and keeps what stands clear: bays and
+corners overlapping no temple lot and no stoa part kept before them, and the columns that
+carry a kept bay. :func:`write_stoas_and_ground` (step 5, once the temple builds are in the
 city: their maps texture the stoas and the ground) writes ``Stoas/Stoa.usda`` and
 ``Ground.usda`` and returns what :func:`ionic_usd.usd.city.compose_city` places.
 """
@@ -63,35 +63,89 @@ def _bay_polygons(lay: StoaLayout, depth: float) -> list[np.ndarray]:
     return out
 
 
+def _corner_polygon(xz: np.ndarray, yaw: float, nb_local: np.ndarray, back: float) -> np.ndarray:
+    """A corner piece's plan footprint: the rhombus between its two runs' backs, ``back`` m
+    deep (the wedge it fills; a square at a right-angled corner)."""
+    a = np.radians(yaw)
+    ex = np.array([np.cos(a), -np.sin(a)])  # local +X in USD x, z
+    street = np.array([np.sin(a), np.cos(a)])  # local +Z
+    back_a = -street
+    back_b = nb_local[0] * ex + nb_local[1] * street
+    o = np.asarray(xz, dtype=float)
+    quad = np.array([o, o + back * back_a, o + back * (back_a + back_b), o + back * back_b])
+    return np.stack([quad[:, 0], -quad[:, 1]], axis=1)
+
+
+_OVERLAP_M2 = 1e-3  # parts that share an edge touch (area ~0); more than this overlaps
+
+
+def _clear_of(tree, kept: list, poly) -> bool:
+    """Whether ``poly`` overlaps none of the kept parts (by more than :data:`_OVERLAP_M2`)."""
+    return all(kept[j].intersection(poly).area <= _OVERLAP_M2 for j in tree(poly))
+
+
 def lay_stoas(
     plan: CityPlan, spacing: float, footprints: list[np.ndarray], dims_back: float
 ) -> StoaPlan:
-    """Columns, bays and corners of every porticus, clear of the temples' footprints."""
+    """Columns, bays and corners of every porticus, clear of the temples and of each other.
+
+    A bay or corner is kept when its plan footprint (column line to the stoa's back) overlaps
+    no temple lot or footprint and no bay or corner kept before it, in the plan's order (list
+    the main streets first): where two stoas would interpenetrate (back to back, at a
+    crossing, inside a bend) the later one leaves a gap instead. A column is kept when it
+    carries a kept bay (and stands clear of the temples), so no column stands carrying
+    nothing; ``dropped`` counts the columns left out.
+    """
     import shapely
 
     lays = [porticus_stoa(p, spacing) for p in plan.porticoes]
     cols = [lay.column_xz for lay in lays]
     cxz = np.concatenate(cols) if cols else np.zeros((0, 2))
     cyaw = np.concatenate([lay.column_yaw for lay in lays]) if lays else np.zeros(0)
-    keep = drop_inside(cxz, footprints)
-    tree = shapely.STRtree([shapely.Polygon(f) for f in footprints]) if footprints else None
+    clear = drop_inside(cxz, footprints)
+    blocked = [shapely.Polygon(f) for f in footprints]
+    blocked += [shapely.Polygon(lot.outline) for lot in plan.lots]
+    blocked_tree = shapely.STRtree(blocked) if blocked else None
+    kept_polys: list = []
+    grid: dict[tuple[int, int], list[int]] = {}  # kept parts by 10 m plan cell
+
+    def cells(poly) -> list[tuple[int, int]]:
+        x0, y0, x1, y1 = (int(np.floor(v / 10.0)) for v in poly.bounds)
+        return [(i, j) for i in range(x0, x1 + 1) for j in range(y0, y1 + 1)]
+
+    def near(poly) -> set[int]:
+        return {k for c in cells(poly) for k in grid.get(c, ())}
+
+    def try_keep(poly) -> bool:
+        if blocked_tree is not None:
+            for j in blocked_tree.query(poly, predicate="intersects"):
+                if blocked[j].intersection(poly).area > _OVERLAP_M2:
+                    return False
+        if not _clear_of(near, kept_polys, poly):
+            return False
+        for c in cells(poly):
+            grid.setdefault(c, []).append(len(kept_polys))
+        kept_polys.append(poly)
+        return True
+
+    carries = np.zeros(len(cxz), dtype=bool)
     bays: list[tuple] = []
     corners: list[tuple] = []
     base = 0
     for lay in lays:
-        polys = _bay_polygons(lay, dims_back)
-        hit = np.zeros(len(polys), dtype=bool)
-        if tree is not None and polys:
-            hit[tree.query([shapely.Polygon(q) for q in polys], predicate="intersects")[0]] = True
-        for i in range(len(lay.bay_xz)):
+        for i, quad in enumerate(_bay_polygons(lay, dims_back)):
             a, b = lay.bay_columns[i] + base
-            if keep[a] and keep[b] and not hit[i]:
+            if clear[a] and clear[b] and try_keep(shapely.Polygon(quad)):
                 bays.append((lay.bay_xz[i], lay.bay_yaw[i], lay.bay_length[i]))
-        if len(lay.corner_xz):
-            at = drop_inside(lay.corner_xz, footprints, margin=dims_back)
-            for k in np.flatnonzero(at):
+                carries[[a, b]] = True
+        for k in range(len(lay.corner_xz)):
+            quad = _corner_polygon(
+                lay.corner_xz[k], lay.corner_yaw[k], lay.corner_normal[k], dims_back
+            )
+            if try_keep(shapely.Polygon(quad)):
                 corners.append((lay.corner_xz[k], lay.corner_yaw[k], lay.corner_normal[k]))
         base += len(lay.column_xz)
+    keep = clear & carries
     return StoaPlan(
         cxz[keep],
         cyaw[keep],
