@@ -17,7 +17,7 @@ from synth_scan import Truth, colonnade_scan  # noqa: E402
 NOISE = 0.8  # mm
 
 
-def _check(truths: list[Truth], n: int, seed: int) -> None:
+def _check(truths: list[Truth], n: int, seed: int):
     from ionic_usd.evaluate.scan_colonnade import fit_colonnade
 
     pts, lab = colonnade_scan(truths, n, noise=NOISE, seed=seed)
@@ -46,12 +46,72 @@ def _check(truths: list[Truth], n: int, seed: int) -> None:
     order = np.argsort(source)
     gaps = np.linalg.norm(np.diff(flat[order], axis=0), axis=1)
     assert gaps == pytest.approx(2.8, abs=0.05)
+    return c
 
 
-def test_colonnade_of_three():
-    """Two equal columns and a wider one (radius 460 mm, not 400), 4,000 points each."""
+def test_colonnade_of_three(tmp_path):
+    """Two equal columns and a wider one (radius 460 mm, not 400), 4,000 points each; written
+    as instances of one column per group."""
     t = Truth()
-    _check([t, t.scaled(460.0), t], 4000, 0)
+    c = _check([t, t.scaled(460.0), t], 4000, 0)
+    _check_instanced(c, tmp_path / "colonnade.usda")
+
+
+def _check_instanced(c, path: Path) -> None:
+    """colonnade.usda: one prototype per part and group, every column's composed geometry
+    equal to its group's description at its own pose and flute phase, its deviation on it."""
+    from pxr import Usd, UsdGeom
+    from scipy.spatial import cKDTree
+
+    from ionic_usd.column.column import build_column
+    from ionic_usd.evaluate.scan_colonnade import instance_column
+    from ionic_usd.evaluate.scan_colonnade_report import colonnade_instances
+    from ionic_usd.evaluate.scan_deviation import scan_deviation
+    from ionic_usd.usd.scan import write_colonnade
+    from ionic_usd.usd.stage import validate_stage
+
+    prototypes, instances = colonnade_instances(c)
+    write_colonnade(path, prototypes, instances)
+    assert validate_stage(str(path)) == []
+    stage = Usd.Stage.Open(str(path))
+    assert len(stage.GetPrototypes()) == 3 * len(c.groups)  # Base, Shaft, CapitalBody each
+    cache = UsdGeom.XformCache()
+    s = c.summary()
+    for k, f in enumerate(c.fits):
+        g = c.group_of(k)
+        col = stage.GetPrimAtPath(f"/Colonnade/Column_{k + 1}")
+        assert col.GetCustomDataByKey("ionic_usd:fit")["group"] == "AB"[g]
+        rms = col.GetAttribute("userProperties:fit:deviation_rms_m").Get()
+        assert rms == pytest.approx(s["columns"][k]["deviation_from_group"]["rms"], rel=1e-9)
+        inst = instance_column(c.fits[c.groups[g][0]], f)
+        want = build_column(inst).parts()
+        for name, mesh in want.items():
+            prim = stage.GetPrimAtPath(f"/Colonnade/Column_{k + 1}/{name}/Mesh")
+            assert prim.IsInstanceProxy()
+            m = np.array(cache.GetLocalToWorldTransform(prim))
+            pts = np.asarray(UsdGeom.Mesh(prim).GetPointsAttr().Get(), dtype=float)
+            got = np.c_[pts, np.ones(len(pts))] @ m
+            ref = np.c_[mesh.points, np.ones(len(mesh.points))] @ f.matrix
+            assert len(got) == len(ref)
+            src = prototypes["AB"[g]][name].points
+            if name == "Shaft":  # the group's shaft turned about the axis (y) by shaft_turn
+                a = np.radians(instances[k].shaft_turn)
+                rot = np.array([[np.cos(a), 0, -np.sin(a)], [0, 1, 0], [np.sin(a), 0, np.cos(a)]])
+                src = src @ rot
+            placed = np.c_[src, np.ones(len(src))] @ f.matrix
+            assert np.abs(got - placed).max() < 2e-6, (k, name)
+            if name == "Shaft":  # ... lies on the column's own surface (its flute phase):
+                # every vertex as near it as the column's own build's (vertices sampled at
+                # fixed angles move along the surface); the shaft's interior, as the two ends
+                # are where the deviation model hands over to the base and capital
+                y = src[:, 1]
+                inner = (y > y.min() + 0.01) & (y < y.max() - 0.01)
+                d = scan_deviation(got[inner, :3], inst, f.matrix)
+                d_own = scan_deviation(ref[:, :3], inst, f.matrix)
+                assert d.max() <= d_own.max() + 1e-6, (k, d.max(), d_own.max())
+            else:  # base and capital: the column's own vertices
+                d, _ = cKDTree(ref[:, :3]).query(got[:, :3])
+                assert d.max() < 2e-6, (k, name, d.max())
 
 
 @pytest.mark.slow
@@ -91,8 +151,9 @@ def test_cli_writes_a_column_per_column_and_a_toml_per_description(tmp_path):
     doc = json.loads(rj.read_text())
     assert len(doc["columns"]) == 3
     assert sorted(len(g["instances"]) for g in doc["distinct_columns"]) == [1, 2]
+    assert (out / "colonnade.usda").stat().st_size > 0
     for k in (1, 2, 3):
-        assert (out / f"fitted_column_{k}.usda").stat().st_size > 0
+        assert (out / f"scan_fit_{k}.png").stat().st_size > 0
     assert sorted(p.name for p in out.glob("*.toml")) == [
         "fitted_column_A.toml",
         "fitted_column_B.toml",

@@ -1,10 +1,11 @@
 """``ionic-usd fit column --scan`` on a scan of several columns: the outputs and the text
 report of a :class:`.scan_colonnade.ColonnadeFit`.
 
-Written in ``-o OUTDIR``: per column k (1, 2, …, largest cluster first)
-``fitted_column_<k>.usda`` (its group's description at its own pose) and ``scan_fit_<k>.png``;
-per distinct column description ``fitted_column_<A, B, …>.toml``; ``scan_deviation.usdc`` (every
-point's distance to its column's description); R.json at ``--json``.
+Written in ``-o OUTDIR``: ``colonnade.usda`` (every column found, largest cluster first, as
+instances of its group's column at its own pose: :func:`ionic_usd.usd.scan.write_colonnade`),
+per column k (1, 2, …) ``scan_fit_<k>.png``; per distinct column description
+``fitted_column_<A, B, …>.toml``; ``scan_deviation.usdc`` (every point's distance to its
+column's description); R.json at ``--json``.
 """
 
 from __future__ import annotations
@@ -16,16 +17,15 @@ from typing import IO, Any
 
 import numpy as np
 
-from ionic_usd.evaluate.scan_colonnade import ColonnadeFit, fit_colonnade, instance_column
+from ionic_usd.evaluate.scan_colonnade import ColonnadeFit, fit_colonnade
 
-__all__ = ["colonnade_files", "run_colonnade"]
+__all__ = ["colonnade_files", "colonnade_instances", "run_colonnade"]
 
 
 def colonnade_files(out: Path, fit: ColonnadeFit) -> dict[str, Path]:
     """Output name → path."""
-    files = {"scan": out / "scan_deviation.usdc"}
+    files = {"scan": out / "scan_deviation.usdc", "colonnade": out / "colonnade.usda"}
     for k in range(len(fit.fits)):
-        files[f"column_{k + 1}"] = out / f"fitted_column_{k + 1}.usda"
         files[f"png_{k + 1}"] = out / f"scan_fit_{k + 1}.png"
     for g in range(len(fit.groups)):
         files[f"toml_{_letter(g)}"] = out / f"fitted_column_{_letter(g)}.toml"
@@ -36,27 +36,50 @@ def _letter(g: int) -> str:
     return string.ascii_uppercase[g] if g < 26 else f"G{g + 1}"
 
 
+def colonnade_instances(fit: ColonnadeFit) -> tuple[dict[str, dict], list]:
+    """What :func:`ionic_usd.usd.scan.write_colonnade` writes: per group (A, B, …) its
+    source's parts, built once; per column its group, pose, the turn of the group's shaft to
+    its flute phase and its deviation from the group's description."""
+    from ionic_usd.column.column import build_column
+    from ionic_usd.usd.scan import ColonnadeInstance
+
+    prototypes = {
+        _letter(g): build_column(fit.fits[members[0]].column).parts()
+        for g, members in enumerate(fit.groups)
+    }
+    instances = []
+    for k, f in enumerate(fit.fits):
+        g = fit.group_of(k)
+        src = fit.fits[fit.groups[g][0]].column.shaft.flute_phase
+        d = fit.instance_deviation[k]
+        dev = {"rms": float(np.sqrt(np.mean(d**2))), "p95": float(np.percentile(d, 95))}
+        dev["max"] = float(d.max())
+        turn = f.column.shaft.flute_phase - src
+        instances.append(ColonnadeInstance(_letter(g), f.matrix, turn, dev))
+    return prototypes, instances
+
+
 def _write(fit: ColonnadeFit, pts: np.ndarray, files: dict[str, Path], args: Any) -> None:
-    from ionic_usd.column.column import COLUMN_DOCS, build_column, column_params_to_tables
+    from ionic_usd.column.column import COLUMN_DOCS, column_params_to_tables
     from ionic_usd.column.shaft import SHAFT_PARAMETER_DOCS
     from ionic_usd.evaluate.report import write_atomically, write_fit_json
     from ionic_usd.evaluate.scan_deviation import heat_colours
     from ionic_usd.evaluate.scan_report import plot_scan_fit
     from ionic_usd.params import to_toml
-    from ionic_usd.usd.scan import write_fitted_column, write_scan_points
+    from ionic_usd.usd.scan import write_colonnade, write_scan_points
 
     name = Path(args.scan).name
+    prototypes, instances = colonnade_instances(fit)
     for k, f in enumerate(fit.fits):
-        g = fit.group_of(k)
-        col = build_column(instance_column(fit.fits[fit.groups[g][0]], f))
-        write_fitted_column(
-            files[f"column_{k + 1}"],
-            col.parts(),
-            f.matrix,
-            force=True,
-            comment=f"ionic_usd column {_letter(g)} (instance {k + 1}) fitted to {name}",
-        )
         plot_scan_fit(f, files[f"png_{k + 1}"])
+    write_colonnade(
+        files["colonnade"],
+        prototypes,
+        instances,
+        force=True,
+        comment=f"ionic_usd colonnade fitted to {name}: {len(fit.fits)} columns, "
+        f"{len(fit.groups)} distinct",
+    )
     dev = np.zeros(len(pts))
     for idx, d in zip(fit.indices, fit.instance_deviation, strict=True):
         dev[idx] = d
