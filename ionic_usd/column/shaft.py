@@ -355,52 +355,121 @@ def build_shaft(
             f"shaft: this level of detail needs about {est:,} triangles, above the budget of "
             f"{max_triangles:,} (lower flute_slices $h or raise max_triangles)"
         )
-    e, h, nf = p.flutes, p.flute_slices, p.fillet_slices
-    n, m = p.fluted_segments, p.ring_segments
+    e, n = p.flutes, p.fluted_segments
     ys, ks = _row_layout(p)
     fl_pts, fl_ang = _fluted_rows(p, ys, ks)
     nrows = len(ys)
-    L = p.length
-    # plain rows: the bottom and top rings (m vertices, vertex 0 at +X) and, where a plain
-    # ring has a height, its other row on the circle at the angles of the adjacent fluted
-    # row, so the flute ends meet the ring in regular quads (a stitched fan from the coarse
-    # ring into a narrow flute tip folds against the spoon's normals) and the stitch between
-    # different vertex counts lies on the plain cylinder
-    ring_ang = np.arange(m) * (2 * np.pi / m)
-    rows_ang = [ring_ang, fl_ang[0], fl_ang[-1], ring_ang]
-    ring_ys = [0.0, p.ring_bottom, L - p.ring_top, L]
-    ring_rows = []
-    for yv, ang in zip(ring_ys, rows_ang, strict=True):
-        r = float(shaft_radius_at(p, np.array([yv]))[0])
-        ring_rows.append(
-            np.stack([r * np.cos(ang), np.full(len(ang), yv), -r * np.sin(ang)], axis=1)
-        )
-    sizes = [len(x) for x in ring_rows]
-    starts = np.concatenate([[0], np.cumsum(sizes)])
+    ring_rows = _plain_rows(p, fl_ang)
+    starts = np.concatenate([[0], np.cumsum([len(x) for x in ring_rows])])
     base_fl = int(starts[-1])
     points = np.concatenate(
-        ring_rows + [fl_pts.reshape(-1, 3), np.array([[0.0, 0.0, 0.0], [0.0, L, 0.0]])]
+        ring_rows + [fl_pts.reshape(-1, 3), np.array([[0.0, 0.0, 0.0], [0.0, p.length, 0.0]])]
     )
     c_bot, c_top = base_fl + nrows * n, base_fl + nrows * n + 1
     plain = [np.arange(starts[k], starts[k + 1]) for k in range(4)]
-
+    grid_tri, grid_nrm, grid_nidx = _fluted_grid(p, fl_pts, base_fl, nrows)
     # groups: 0 = fillets and plain rings (one smooth cylinder), 1..e = flutes, e+1/e+2 caps
+    tris, groups = _band_triangles(p, fl_ang, plain, starts, base_fl, nrows)
+    n_lateral = len(grid_tri) + sum(len(t) for t in tris)
+    if cap_bottom:
+        t = stitch(plain[0], np.array([c_bot]), is_closed=True, direction=-1)
+        tris.append(t)
+        groups.append(np.full(len(t), e + 1))
+    if cap_top:
+        t = stitch(plain[3], np.array([c_top]), is_closed=True)
+        tris.append(t)
+        groups.append(np.full(len(t), e + 2))
+    rest = np.concatenate(tris)
+    # the bands and caps touch few points: compute their normals on a compact copy
+    used, local = np.unique(rest, return_inverse=True)
+    rest_mesh = Mesh(points[used], np.full(len(rest), 3, np.int32), local.reshape(-1))
+    rest_mesh = smooth_normals(rest_mesh, np.concatenate(groups), indexed=True)
+    tri = np.concatenate([grid_tri, rest.astype(np.int32)])
+    st, st_idx = shaft_st(
+        points, tri, n_lateral, len(grid_tri), e, p.flute_slices, _reference_perimeter(p), starts
+    )
+    normals = np.concatenate([grid_nrm, rest_mesh.normals])
+    assert rest_mesh.normals is not None and rest_mesh.normals_indices is not None
+    nidx = np.concatenate([grid_nidx, rest_mesh.normals_indices + len(grid_nrm)])
+    # drop points no triangle uses (cap centres of an open shaft, collapsed ring rows)
+    keep = np.ones(len(points), dtype=bool)
+    keep[[c_bot, c_top]] = [cap_bottom, cap_top]
+    if p.ring_bottom == 0:
+        keep[plain[1]] = False
+    if p.ring_top == 0:
+        keep[plain[2]] = False
+    if not keep.all():
+        points, tri, st, st_idx = _drop_unused(points, tri, st, st_idx, keep, c_bot, n_lateral)
+    if y_offset:
+        points = points + np.array([0.0, y_offset, 0.0])
+    return Mesh(
+        points,
+        np.full(len(tri), 3, np.int32),
+        tri.reshape(-1),
+        normals,
+        "faceVarying",
+        st,
+        st_idx,
+        name=name,
+        normals_indices=nidx,
+        st_distinct=True,
+    )
+
+
+def _plain_rows(p: ShaftParams, fl_ang: np.ndarray) -> list[np.ndarray]:
+    """The four plain rows: the bottom and top rings (``ring_segments`` vertices, vertex 0
+    at +X) and, where a plain ring has a height, its other row on the circle at the angles of
+    the adjacent fluted row, so the flute ends meet the ring in regular quads (a stitched fan
+    from the coarse ring into a narrow flute tip folds against the spoon's normals) and the
+    stitch between different vertex counts lies on the plain cylinder."""
+    ring_ang = np.arange(p.ring_segments) * (2 * np.pi / p.ring_segments)
+    rows_ang = [ring_ang, fl_ang[0], fl_ang[-1], ring_ang]
+    ring_ys = [0.0, p.ring_bottom, p.length - p.ring_top, p.length]
+    rows = []
+    for yv, ang in zip(ring_ys, rows_ang, strict=True):
+        r = float(shaft_radius_at(p, np.array([yv]))[0])
+        rows.append(np.stack([r * np.cos(ang), np.full(len(ang), yv), -r * np.sin(ang)], axis=1))
+    return rows
+
+
+def _fluted_grid(
+    p: ShaftParams, fl_pts: np.ndarray, base_fl: int, nrows: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The fluted bands: regular quads split along the rising diagonal, and their normals
+    from the grid directly (dense arrays, no scatter; the rest of the mesh uses
+    smooth_normals): triangles (t, 3), normal values and their faceVarying indices."""
+    n, h, nf = p.fluted_segments, p.flute_slices, p.fillet_slices
+    if nrows <= 1:
+        return (
+            np.zeros((0, 3), dtype=np.int64),
+            np.zeros((0, 3), dtype=np.float32),
+            np.zeros(0, dtype=np.int32),
+        )
+    r0 = (base_fl + np.arange(nrows - 1)[:, None] * n).astype(np.int32)
+    j = np.arange(n, dtype=np.int32)[None, :]
+    a0, a1 = r0 + j, r0 + (j + 1) % n
+    b0, b1 = a0 + n, a1 + n
+    grid_tri = np.stack([a0, a1, b0, a1, b1, b0], axis=-1).reshape(-1, 3)
+    col = np.arange(n) % (h + nf)
+    grid_nrm, grid_nidx = grid_normals(fl_pts.reshape(nrows, n, 3), col, h)
+    return grid_tri, grid_nrm, grid_nidx
+
+
+def _band_triangles(
+    p: ShaftParams,
+    fl_ang: np.ndarray,
+    plain: list[np.ndarray],
+    starts: np.ndarray,
+    base_fl: int,
+    nrows: int,
+) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """The bands between the plain rows and the fluted grid (stitched where the vertex
+    counts differ) and each triangle's smoothing group: 0 (the plain cylinder) or 1 + the
+    flute whose spoon end it continues (a triangle touching a flute's interior vertex)."""
+    n, h, nf = p.fluted_segments, p.flute_slices, p.fillet_slices
     col = np.arange(n) % (h + nf)
     flute_of_col = np.arange(n) // (h + nf)
-
-    tris, groups = [], []
-    grid_tri = np.zeros((0, 3), dtype=np.int64)
-    grid_nrm = np.zeros((0, 3), dtype=np.float32)
-    grid_nidx = np.zeros(0, dtype=np.int32)
-    # fluted bands: regular quads, split along the rising diagonal; their normals come from
-    # the grid directly (dense arrays, no scatter), the rest of the mesh uses smooth_normals
-    if nrows > 1:
-        r0 = (base_fl + np.arange(nrows - 1)[:, None] * n).astype(np.int32)
-        j = np.arange(n, dtype=np.int32)[None, :]
-        a0, a1 = r0 + j, r0 + (j + 1) % n
-        b0, b1 = a0 + n, a1 + n
-        grid_tri = np.stack([a0, a1, b0, a1, b1, b0], axis=-1).reshape(-1, 3)
-        grid_nrm, grid_nidx = grid_normals(fl_pts.reshape(nrows, n, 3), col, h)
+    ring_ang = np.arange(p.ring_segments) * (2 * np.pi / p.ring_segments)
     u_ring = ring_ang / (2 * np.pi)
     u_bot, u_top = fl_ang[0] / (2 * np.pi), fl_ang[-1] / (2 * np.pi)
     first_fl = base_fl + np.arange(n)
@@ -421,8 +490,8 @@ def build_shaft(
         ]
     else:
         bands.append((last_fl, plain[3], auto_sequence(u_top, u_ring, True)))
-    # a band triangle touching a flute's interior vertex continues that flute's spoon end
     interior = (col > 0) & (col < h)
+    tris, groups = [], []
     for lo, hi, seq in bands:
         t = stitch(lo, hi, is_closed=True, sequence=seq)
         fl_col = np.where(t >= base_fl, (t - base_fl) % n, -1)
@@ -436,60 +505,23 @@ def build_shaft(
         g[hit] = 1 + flute_of_col[fl_col[hit, which[hit]]]
         tris.append(t)
         groups.append(g)
-    n_lateral = len(grid_tri) + sum(len(t) for t in tris)
-    if cap_bottom:
-        t = stitch(plain[0], np.array([c_bot]), is_closed=True, direction=-1)
-        tris.append(t)
-        groups.append(np.full(len(t), e + 1))
-    if cap_top:
-        t = stitch(plain[3], np.array([c_top]), is_closed=True)
-        tris.append(t)
-        groups.append(np.full(len(t), e + 2))
-    rest = np.concatenate(tris)
-    # the bands and caps touch few points: compute their normals on a compact copy
-    used, local = np.unique(rest, return_inverse=True)
-    rest_mesh = Mesh(points[used], np.full(len(rest), 3, np.int32), local.reshape(-1))
-    rest_mesh = smooth_normals(rest_mesh, np.concatenate(groups), indexed=True)
-    tri = np.concatenate([grid_tri, rest.astype(np.int32)])
-    st, st_idx = shaft_st(
-        points, tri, n_lateral, len(grid_tri), e, h, _reference_perimeter(p), starts
-    )
-    normals = np.concatenate([grid_nrm, rest_mesh.normals])
-    assert rest_mesh.normals is not None and rest_mesh.normals_indices is not None
-    nidx = np.concatenate([grid_nidx, rest_mesh.normals_indices + len(grid_nrm)])
-    # drop points no triangle uses (cap centres of an open shaft, collapsed ring rows)
-    keep = np.ones(len(points), dtype=bool)
-    keep[[c_bot, c_top]] = [cap_bottom, cap_top]
-    if p.ring_bottom == 0:
-        keep[plain[1]] = False
-    if p.ring_top == 0:
-        keep[plain[2]] = False
-    if not keep.all():
-        remap = (np.cumsum(keep) - 1).astype(np.int32)
-        if keep[:c_bot].all():  # only cap centres (the last points): renumber the caps only
-            tri[n_lateral:] = remap[tri[n_lateral:]]
-        else:
-            tri = remap[tri]
-            # the side values of the dropped rows are unused: drop them too (st_distinct)
-            keep_st = np.ones(len(st), dtype=bool)
-            keep_st[:c_bot] = keep[:c_bot]
-            st_idx = (np.cumsum(keep_st, dtype=np.int32) - 1)[st_idx]
-            st = st[keep_st]
-        points = points[keep]
-    if y_offset:
-        points = points + np.array([0.0, y_offset, 0.0])
-    return Mesh(
-        points,
-        np.full(len(tri), 3, np.int32),
-        tri.reshape(-1),
-        normals,
-        "faceVarying",
-        st,
-        st_idx,
-        name=name,
-        normals_indices=nidx,
-        st_distinct=True,
-    )
+    return tris, groups
+
+
+def _drop_unused(points, tri, st, st_idx, keep, c_bot: int, n_lateral: int):
+    """Drop the points ``keep`` leaves out (cap centres of an open shaft, collapsed ring
+    rows), renumbering the triangles and, for dropped side rows, the ``st`` values too."""
+    remap = (np.cumsum(keep) - 1).astype(np.int32)
+    if keep[:c_bot].all():  # only cap centres (the last points): renumber the caps only
+        tri[n_lateral:] = remap[tri[n_lateral:]]
+    else:
+        tri = remap[tri]
+        # the side values of the dropped rows are unused: drop them too (st_distinct)
+        keep_st = np.ones(len(st), dtype=bool)
+        keep_st[:c_bot] = keep[:c_bot]
+        st_idx = (np.cumsum(keep_st, dtype=np.int32) - 1)[st_idx]
+        st = st[keep_st]
+    return points[keep], tri, st, st_idx
 
 
 def _reference_perimeter(p: ShaftParams) -> float:
