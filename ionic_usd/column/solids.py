@@ -76,6 +76,28 @@ def lathe(profile: np.ndarray, segments: int, name: str, crease_deg: float = 40.
         else:
             pts.append(np.stack([r * cos, np.full(s, y), -r * sin], axis=1))
     points = np.concatenate(pts)
+    seg_len, n_start, n_end = _profile_normals(prof, crease_deg)
+    live = (seg_len > 0) & ~(on_axis[:-1] & on_axis[1:])
+    tri, normals, band = _lathe_triangles(s, first, on_axis, live, n_start, n_end)
+    rows = [first[k] + np.arange(sizes[k]) for k in range(len(prof))]
+    st, sti = revolved_st(prof, rows, points, tri, band)
+    return Mesh(
+        points,
+        np.full(len(tri), 3, np.int32),
+        tri.reshape(-1),
+        normals,
+        "faceVarying",
+        st,
+        sti,
+        name=name,
+    )
+
+
+def _profile_normals(
+    prof: np.ndarray, crease_deg: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per profile segment: its length and its 2-D outward normal at its start and end
+    (averaged with the neighbour's across nodes turning less than ``crease_deg``)."""
     d = np.diff(prof, axis=0)
     seg_len = np.linalg.norm(d, axis=1)
     en = np.stack([d[:, 1], -d[:, 0]], axis=1) / np.where(seg_len > 0, seg_len, 1.0)[:, None]
@@ -87,17 +109,31 @@ def lathe(profile: np.ndarray, segments: int, name: str, crease_deg: float = 40.
     n_end = en.copy()
     n_start[1:][smooth[1:-1]] = avg[smooth[1:-1]]
     n_end[:-1][smooth[1:-1]] = avg[smooth[1:-1]]
+    return seg_len, n_start, n_end
+
+
+def _nvec(n2: np.ndarray, c: np.ndarray, sn: np.ndarray) -> np.ndarray:
+    """(..., 2) profile normals × (s,) angles → (..., s, 3) normals."""
+    n2 = np.asarray(n2)[..., None, :]
+    return np.stack([n2[..., 0] * c, n2[..., 1] * np.ones_like(c), -n2[..., 0] * sn], axis=-1)
+
+
+def _lathe_triangles(
+    s: int,
+    first: np.ndarray,
+    on_axis: np.ndarray,
+    live: np.ndarray,
+    n_start: np.ndarray,
+    n_end: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The revolved triangles (t, 3), their corner normals (3 t, 3) and each triangle's
+    profile segment: ring-to-ring bands all at once, then cap fans and cone tips."""
+    ang = np.arange(s) * (2 * np.pi / s)
+    cos, sin = np.cos(ang), np.sin(ang)
     j = np.arange(s)
     j1 = (j + 1) % s
     mid = ang + np.pi / s  # the angle used for corners on the axis
     cmid, smid = np.cos(mid), np.sin(mid)
-
-    def nvec(n2: np.ndarray, c: np.ndarray, sn: np.ndarray) -> np.ndarray:
-        """(..., 2) profile normals × (s,) angles → (..., s, 3) normals."""
-        n2 = np.asarray(n2)[..., None, :]
-        return np.stack([n2[..., 0] * c, n2[..., 1] * np.ones_like(c), -n2[..., 0] * sn], axis=-1)
-
-    live = (seg_len > 0) & ~(on_axis[:-1] & on_axis[1:])
     grid = np.flatnonzero(live & ~on_axis[:-1] & ~on_axis[1:])
     tris, corner_n, band = [], [], []
     if grid.size:  # ring-to-ring bands, all at once
@@ -105,8 +141,8 @@ def lathe(profile: np.ndarray, segments: int, name: str, crease_deg: float = 40.
         na, nb = n_start[grid], n_end[grid]
         t1 = np.stack([a0 + j, b0 + j1, b0 + j], axis=-1)
         t2 = np.stack([a0 + j, a0 + j1, b0 + j1], axis=-1)
-        na_j, na_j1 = nvec(na, cos, sin), nvec(na, cos[j1], sin[j1])
-        nb_j, nb_j1 = nvec(nb, cos, sin), nvec(nb, cos[j1], sin[j1])
+        na_j, na_j1 = _nvec(na, cos, sin), _nvec(na, cos[j1], sin[j1])
+        nb_j, nb_j1 = _nvec(nb, cos, sin), _nvec(nb, cos[j1], sin[j1])
         tris += [t1.reshape(-1, 3), t2.reshape(-1, 3)]
         band += [np.repeat(grid, s)] * 2
         corner_n += [
@@ -121,30 +157,19 @@ def lathe(profile: np.ndarray, segments: int, name: str, crease_deg: float = 40.
             tris.append(np.stack([np.full(s, a0), b0 + j1, b0 + j], axis=1))
             corner_n.append(
                 np.stack(
-                    [nvec(na, cmid, smid), nvec(nb, cos[j1], sin[j1]), nvec(nb, cos, sin)], axis=1
+                    [_nvec(na, cmid, smid), _nvec(nb, cos[j1], sin[j1]), _nvec(nb, cos, sin)],
+                    axis=1,
                 )
             )
         else:
             tris.append(np.stack([a0 + j, a0 + j1, np.full(s, b0)], axis=1))
             corner_n.append(
                 np.stack(
-                    [nvec(na, cos, sin), nvec(na, cos[j1], sin[j1]), nvec(nb, cmid, smid)], axis=1
+                    [_nvec(na, cos, sin), _nvec(na, cos[j1], sin[j1]), _nvec(nb, cmid, smid)],
+                    axis=1,
                 )
             )
-    tri = np.concatenate(tris)
-    normals = np.concatenate(corner_n).reshape(-1, 3)
-    rows = [first[k] + np.arange(sizes[k]) for k in range(len(prof))]
-    st, sti = revolved_st(prof, rows, points, tri, np.concatenate(band))
-    return Mesh(
-        points,
-        np.full(len(tri), 3, np.int32),
-        tri.reshape(-1),
-        normals,
-        "faceVarying",
-        st,
-        sti,
-        name=name,
-    )
+    return np.concatenate(tris), np.concatenate(corner_n).reshape(-1, 3), np.concatenate(band)
 
 
 def rigid(mesh: Mesh, lin: np.ndarray, t=(0.0, 0.0, 0.0), name: str | None = None) -> Mesh:
