@@ -274,39 +274,57 @@ def moulding_meshes(
 ) -> list[MouldedMember]:
     """The swept members of a layout (closed, outward meshes; see the module docstring)."""
     mp = mp or MouldingParams()
-    p = layout.params
-    lv = cornice_levels(layout)
-    a, _, c = p.entablature_heights
-    back = 2 * lv["half_top"]
-    up = np.array([0.0, 1.0, 0.0])
     out: list[MouldedMember] = []
 
-    def member(
-        name,
-        grammar,
-        scale,
-        path,
-        *,
-        closed,
-        chamfer,
-        back,
-        axis=up,
-        swap=False,
-        replaces=None,
-        top=None,
-        key=None,
-        inside=None,
-    ):
-        curve = moulding_section(grammar, scale, slices=mp.slices, name=f"mouldings.{key or name}")
-        sec = _close(curve, back, chamfer=chamfer, top=top)
-        if swap:  # raking: the section's height runs along the slope normal, downward
-            sec = np.stack([sec[:, 1] - curve[-1, 1], sec[:, 0]], axis=1)
-        if not closed:
-            path = _outward(path, np.asarray(axis, dtype=np.float64), inside)
-        m = sweep(sec, path, axis=axis, closed=closed, uv_scale=uv_scale, name=name)
-        out.append(MouldedMember(name, m, replaces))
+    def member(name, grammar, scale, path, **kw) -> None:
+        out.append(_member(mp, uv_scale, name, grammar, scale, path, **kw))
 
-    # architrave and cornice: closed rings round the entablature, replacing the plain cuboids
+    lv = cornice_levels(layout)
+    _entablature_members(layout, mp, lv, member)
+    _podium_members(layout, mp, member)
+    _raking_members(layout, mp, lv, member)
+    return out
+
+
+_UP = np.array([0.0, 1.0, 0.0])
+
+
+def _member(
+    mp: MouldingParams,
+    uv_scale: float,
+    name,
+    grammar,
+    scale,
+    path,
+    *,
+    closed,
+    chamfer,
+    back,
+    axis=_UP,
+    swap=False,
+    replaces=None,
+    top=None,
+    key=None,
+    inside=None,
+) -> MouldedMember:
+    """One member: ``grammar``'s section at ``scale``, closed behind (``back``), swept along
+    ``path`` (a ring when ``closed``; else turned to project away from ``inside``)."""
+    curve = moulding_section(grammar, scale, slices=mp.slices, name=f"mouldings.{key or name}")
+    sec = _close(curve, back, chamfer=chamfer, top=top)
+    if swap:  # raking: the section's height runs along the slope normal, downward
+        sec = np.stack([sec[:, 1] - curve[-1, 1], sec[:, 0]], axis=1)
+    if not closed:
+        path = _outward(path, np.asarray(axis, dtype=np.float64), inside)
+    m = sweep(sec, path, axis=axis, closed=closed, uv_scale=uv_scale, name=name)
+    return MouldedMember(name, m, replaces)
+
+
+def _entablature_members(layout: TempleLayout, mp: MouldingParams, lv: dict, member) -> None:
+    """Architrave and cornice: closed rings round the entablature, replacing the plain
+    cuboids; and the sima along both long sides, on the cornice."""
+    p = layout.params
+    a, _, c = p.entablature_heights
+    back = 2 * lv["half_top"]
     for name, grammar, scale, top in (
         ("architrave", mp.architrave, a, None),
         ("cornice", mp.cornice, c, c),
@@ -346,7 +364,12 @@ def moulding_meshes(
             key="sima",
             inside=np.array([0.0, y_sima, 0.0]),
         )
-    # podium: round the die and the cheek walls, stopping at the stairs
+
+
+def _podium_members(layout: TempleLayout, mp: MouldingParams, member) -> None:
+    """The podium's base and crown: round the die and the cheek walls, stopping at the
+    stairs (none on a Greek crepidoma: steps, no moulded podium; temple.typed_layout)."""
+    p = layout.params
     w2, l2, cw = p.stylobate_width / 2, p.stylobate_length / 2, p.podium_cheek_wall_width
     front = l2 + p.stair_run
     for name, grammar, hgt, y0 in (
@@ -359,7 +382,7 @@ def moulding_meshes(
         ),
     ):
         if not getattr(p, "podium_mouldings", True):
-            break  # a Greek crepidoma: steps, no moulded podium (temple.typed_layout)
+            break
         if y0 < p.podium_footing_height - 1e-9 or y0 + hgt > p.podium_height + 1e-9:
             raise ParameterError(
                 f"mouldings.{name}_height",
@@ -378,7 +401,13 @@ def moulding_meshes(
             ]
         )
         member(name, grammar, hgt, u, closed=False, chamfer=True, back=mp.podium_back)
-    # raking cornices under the roof slabs' soffit line, on both pediments
+
+
+def _raking_members(layout: TempleLayout, mp: MouldingParams, lv: dict, member) -> None:
+    """Raking cornices under the roof slabs' soffit line, on both pediments."""
+    p = layout.params
+    c = p.entablature_heights[2]
+    back = 2 * lv["half_top"]
     tan = 2.0 / p.roof_tympanum_ratio
     xc = lv["xe"] + lv["projection"]
     ridge = xc * tan
@@ -398,4 +427,3 @@ def moulding_meshes(
             axis=(0.0, 0.0, sgn),
             swap=True,
         )
-    return out
