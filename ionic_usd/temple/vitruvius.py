@@ -366,6 +366,58 @@ def resolve(t: TempleType) -> TypePlan:
     found = Foundation(
         t.foundation or ("podium" if arr in (Arrangement.PSEUDOPERIPTERAL,) else "crepidoma")
     )
+    d, margin, clear, middle, flank = _module(t, ic)
+    ctx = "[type]"
+    if d <= 0 or margin < 0.5 * d:
+        raise ParameterError(
+            "stylobate_width",
+            t.stylobate_width,
+            f"a width leaving the corner columns on the stylobate (margin {margin:.3f} m "
+            f"< D/2 = {d / 2:.3f} m)",
+            context=ctx,
+        )
+    h = t.column_height if t.column_height is not None else HEIGHT_IN_D[ic] * d
+    xs = _front_axes(t.front, d, clear, middle)
+    x_outer = xs[-1]
+    # a rear row of another count spans the same corners evenly (the late Artemision: 9)
+    xs_rear = xs
+    if t.rear is not None and t.rear != t.front:
+        xs_rear = tuple(-x_outer + 2 * x_outer * i / (t.rear - 1) for i in range(t.rear))
+    width = 2 * (x_outer + margin)
+    side = t.side if t.side is not None else side_rule(arr, t.front)
+    flank_spacing = d * (1 + flank)
+    if arr in PERIPTERAL_FAMILY:
+        z_front = (side - 1) * flank_spacing / 2
+        length = 2 * (z_front + margin)
+        if t.stylobate_length is not None:
+            length = t.stylobate_length
+    else:
+        side = 0
+        # IV.4.1: twice as long as wide
+        length = t.stylobate_length if t.stylobate_length is not None else 2 * width
+        z_front = length / 2 - margin
+    base_h, steps, rise, tread = _foundation(t, found, d, h)
+    ratio = t.upper_diameter_ratio or upper_ratio_rule(h)
+    div = t.architrave_divisor or architrave_divisor_rule(h, d)
+    fr = _frieze_ratio(t, order)
+    wall = t.wall_thickness if t.wall_thickness is not None else d  # IV.4.1 antae = D
+    if margin < wall / 2 and arr not in PERIPTERAL_FAMILY:
+        raise ParameterError(
+            "margin", margin, f"≥ half the wall thickness {wall / 2:.3f} m", context=ctx
+        )
+    if length <= width and arr in PERIPTERAL_FAMILY:
+        raise ParameterError(
+            "side", side, f"a flank longer than the front ({t.front})", context=ctx
+        )
+    return TypePlan(
+        t, arr, order, found, d, h, ratio, clear, middle, flank, xs, xs_rear, side, flank_spacing,
+        x_outer, z_front, margin, width, length, wall, base_h, steps, rise, tread, div, fr,
+    )  # fmt: skip
+
+
+def _module(t: TempleType, ic: Intercolumniation) -> tuple[float, float, float, float, float]:
+    """The module D, the margin from the outer axes to the stylobate's edge and the clear
+    bays (ordinary, middle, flank) in D: from the rule, or from measured D, width, margin."""
     clear = t.clear_bay if t.clear_bay is not None else CLEAR_BAY[ic]
     middle = t.middle_bay
     if middle is None:
@@ -396,37 +448,14 @@ def resolve(t: TempleType) -> TypePlan:
         else:
             d = t.stylobate_width / (span + 2 * mu)
             margin = mu * d
-    ctx = "[type]"
-    if d <= 0 or margin < 0.5 * d:
-        raise ParameterError(
-            "stylobate_width",
-            t.stylobate_width,
-            f"a width leaving the corner columns on the stylobate (margin {margin:.3f} m "
-            f"< D/2 = {d / 2:.3f} m)",
-            context=ctx,
-        )
-    h = t.column_height if t.column_height is not None else HEIGHT_IN_D[ic] * d
-    xs = _front_axes(t.front, d, clear, middle)
-    x_outer = xs[-1]
-    # a rear row of another count spans the same corners evenly (the late Artemision: 9)
-    xs_rear = xs
-    if t.rear is not None and t.rear != t.front:
-        xs_rear = tuple(-x_outer + 2 * x_outer * i / (t.rear - 1) for i in range(t.rear))
-    width = 2 * (x_outer + margin)
-    side = t.side if t.side is not None else side_rule(arr, t.front)
-    flank_spacing = d * (1 + flank)
-    if arr in PERIPTERAL_FAMILY:
-        z_front = (side - 1) * flank_spacing / 2
-        length = 2 * (z_front + margin)
-        if t.stylobate_length is not None:
-            length = t.stylobate_length
-    else:
-        side = 0
-        # IV.4.1: twice as long as wide
-        length = t.stylobate_length if t.stylobate_length is not None else 2 * width
-        z_front = length / 2 - margin
-    # (!) crepidoma risers D/3 and treads D/2; podium 0.29 H (Portunus' ratio) with
-    # risers of at most 10 in. (III.4.4)
+    return d, margin, clear, middle, flank
+
+
+def _foundation(
+    t: TempleType, found: Foundation, d: float, h: float
+) -> tuple[float, int, float, float]:
+    """Height, steps, riser and tread of the crepidoma or podium: (!) crepidoma risers D/3
+    and treads D/2; podium 0.29 H (Portunus' ratio) with risers of at most 10 in. (III.4.4)."""
     if found is Foundation.CREPIDOMA:
         steps = t.steps if t.steps is not None else 3
         rise = t.step_height if t.step_height is not None else d / 3
@@ -437,28 +466,18 @@ def resolve(t: TempleType) -> TypePlan:
         steps = t.steps if t.steps is not None else max(3, math.ceil(base_h / (10 * 0.0246)))
         rise = base_h / steps
         tread = t.step_tread if t.step_tread is not None else 1.75 * ROMAN_FOOT
-    ratio = t.upper_diameter_ratio or upper_ratio_rule(h)
-    div = t.architrave_divisor or architrave_divisor_rule(h, d)
-    # III.5.10: a frieze 1/4 higher than the architrave when it carries sculpture, 1/4 lower
-    # when plain; we take the sculptured one (Attic) and none for the Asiatic order
+    return base_h, steps, rise, tread
+
+
+def _frieze_ratio(t: TempleType, order: Order) -> float:
+    """III.5.10: a frieze 1/4 higher than the architrave when it carries sculpture, 1/4 lower
+    when plain; we take the sculptured one (Attic) and none for the Asiatic order."""
     fr = t.frieze_ratio
     if fr is None:
         fr = 1.25 if order is Order.ATTIC else 0.0
     if order is Order.ASIATIC:
         fr = 0.0
-    wall = t.wall_thickness if t.wall_thickness is not None else d  # IV.4.1 antae = D
-    if margin < wall / 2 and arr not in PERIPTERAL_FAMILY:
-        raise ParameterError(
-            "margin", margin, f"≥ half the wall thickness {wall / 2:.3f} m", context=ctx
-        )
-    if length <= width and arr in PERIPTERAL_FAMILY:
-        raise ParameterError(
-            "side", side, f"a flank longer than the front ({t.front})", context=ctx
-        )
-    return TypePlan(
-        t, arr, order, found, d, h, ratio, clear, middle, flank, xs, xs_rear, side, flank_spacing,
-        x_outer, z_front, margin, width, length, wall, base_h, steps, rise, tread, div, fr,
-    )  # fmt: skip
+    return fr
 
 
 def type_from_table(table: Any, *, context: str) -> TempleType:
