@@ -30,7 +30,10 @@ print(
     f"loaded in {r['loadSeconds']:.1f} s; first frames {r['firstFrames']} ms; "
     f"{n} frames: median {r['median']:.1f} ms, p95 {r['p95']:.1f} ms, max {r['max']:.1f} ms"
     + f" (with a pixel read back: median {r['readback']['median']:.1f} ms, "
-    f"p95 {r['readback']['p95']:.1f} ms)"
+    f"p95 {r['readback']['p95']:.1f} ms; while the camera moves: median "
+    f"{r['moving']['median']:.1f} ms, p95 {r['moving']['p95']:.1f} ms"
+    + ("; software GL: no MSAA, half resolution while moving" if r["software"] else "")
+    + ")"
     + (f"; {len(r['errors'])} console errors" if r["errors"] else "")
 )
 PYEOF

@@ -59,19 +59,28 @@ try {
   });
   Object.assign(out, await page.evaluate((n) => app.frameTimes(n), frames));
   // the same with a one-pixel readPixels after each frame: the pixels must exist, whatever
-  // gl.finish waits for
-  out.readback = await page.evaluate((n) => {
-    const gl = document.querySelector("canvas").getContext("webgl2");
-    const px = new Uint8Array(4), t = [];
-    for (let i = 0; i < n; i++) {
-      const t0 = performance.now();
-      app.render();
-      gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, px);
-      t.push(performance.now() - t0);
-    }
-    t.sort((a, b) => a - b);
-    return { median: t[Math.floor(n / 2)], p95: t[Math.floor(n * 0.95)], max: t[n - 1] };
-  }, frames);
+  // gl.finish waits for; at rest, then as while the camera moves (app.interactive)
+  const timed = (moving) =>
+    page.evaluate(
+      ([n, mv]) => {
+        const gl = document.querySelector("canvas").getContext("webgl2");
+        app.interactive(mv);
+        const px = new Uint8Array(4), t = [];
+        for (let i = 0; i < n; i++) {
+          const t0 = performance.now();
+          app.render();
+          gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, px);
+          t.push(performance.now() - t0);
+        }
+        app.interactive(false);
+        t.sort((a, b) => a - b);
+        return { median: t[Math.floor(n / 2)], p95: t[Math.floor(n * 0.95)], max: t[n - 1] };
+      },
+      [frames, moving],
+    );
+  out.readback = await timed(false);
+  out.moving = await timed(true);
+  out.software = await page.evaluate(() => app.software);
 } finally {
   await browser.close();
   server.close();

@@ -5,8 +5,24 @@ import { OrbitControls } from "three/addons/controls/OrbitControls.js";
 
 const data = await (await fetch("data.json")).json();
 const host = document.getElementById("view");
-const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+// Software GL (SwiftShader, llvmpipe, WARP: no GPU) spends most of a frame on multisampling
+// and fill: there the view draws without MSAA, and at half resolution while the camera moves
+const software = (() => {
+  const gl = document.createElement("canvas").getContext("webgl2");
+  const info = gl && gl.getExtension("WEBGL_debug_renderer_info");
+  return /swiftshader|llvmpipe|softpipe|software|warp/i.test(
+    info ? String(gl.getParameter(info.UNMASKED_RENDERER_WEBGL)) : "");
+})();
+const renderer = new THREE.WebGLRenderer({ antialias: !software, preserveDrawingBuffer: true });
 renderer.setPixelRatio(1);
+function interactive(on) {
+  // while the camera moves (software GL only): half the pixels, then the full view at rest
+  const ratio = on && software ? 0.5 : 1;
+  if (renderer.getPixelRatio() !== ratio) {
+    renderer.setPixelRatio(ratio);
+    resize();
+  }
+}
 host.appendChild(renderer.domElement);
 const scene = new THREE.Scene();
 scene.background = new THREE.Color(0.8, 0.84, 0.89);
@@ -371,6 +387,8 @@ function diff(a, b, rect, margin = 2) {
   return { inside, outside };
 }
 
+controls.addEventListener("start", () => interactive(true));
+controls.addEventListener("end", () => interactive(false));
 controls.addEventListener("change", () => {
   render();
   writeHash();
@@ -381,6 +399,7 @@ readHash();
 apply();
 window.app = {
   data, setView, setHypothesis, select, pick, screenBox, frameTimes, render, snapshot, diff, hash,
+  interactive, software,
   state: () => ({ view: state.view, hyps: [...state.hyps].sort(), sel: state.sel }),
   setCamera: (c) => {
     camera.position.set(c[0], c[1], c[2]);
