@@ -2,7 +2,7 @@
 
 Run: ``python tools/render_temples.py [--work DIR]`` (needs the preview extra). Each preset is
 composed (``Temple.from_toml``, 64 px textures, the default detail) into DIR/<name>/, the
-folders are referenced side by side along +X (front to the camera, 6 m apart) by one
+folders are referenced side by side along +X (front to the camera, their bounds 6 m apart) by one
 DIR/temples.usda, and that scene is rendered with the headless preview at LOD ``low`` through a
 narrow field of view (``--fov``, 8°: the camera stands far off, so the fronts, all on one line,
 show at nearly one scale and the flanks hardly at all).
@@ -37,6 +37,16 @@ def _cpu() -> float:
     return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
 
 
+def _bound(path: Path) -> Gf.Range3d:
+    """The temple's drawn bound at LOD low (default and render purposes)."""
+    st = Usd.Stage.Open(str(path))
+    root = st.GetDefaultPrim()
+    if root.GetVariantSets().HasVariantSet("lod"):
+        root.GetVariantSet("lod").SetVariantSelection("low")
+    cache = UsdGeom.BBoxCache(Usd.TimeCode.Default(), ["default", "render"])
+    return cache.ComputeWorldBound(root).ComputeAlignedRange()
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--work", type=Path, default=None)
@@ -58,11 +68,13 @@ def main() -> None:
         temple.save(work / name, force=True, texture_size=64)
         dt, cpu = time.perf_counter() - t0, _cpu() - c0
         p = temple.layout.params
-        half = p.podium_base_width / 2 if p.podium_base_width else p.stylobate_width / 2
-        half = max(half, p.stylobate_width / 2 + 2.0)
-        x += half
+        # the built temple's own bound (steps, podium and cornices included), so that
+        # neighbours stand GAP apart however far their parts reach
+        box = _bound(work / name / "Temple.usda")
+        x -= box.GetMin()[0]
         xf = UsdGeom.Xform.Define(stage, f"/World/{name}")
         xf.AddTranslateOp().Set(Gf.Vec3d(x, 0.0, -p.stylobate_length / 2))
+        half = box.GetMax()[0]
         xf.GetPrim().GetReferences().AddReference(f"./{name}/Temple.usda")
         x += half + GAP
         print(f"{name}: {temple.layout.name}, built in {dt:.1f} s wall, {cpu:.1f} CPU-s")
