@@ -295,7 +295,12 @@ def render(
         ground_prog["u_fade"].value = (1.0 * radius, 3.5 * radius)
         ctx.enable(moderngl.BLEND)
         ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA
-        gvao.render()  # after the meshes: depth test keeps it behind them, it blends over sky
+        # after the meshes: depth test keeps it behind them, it blends over sky; pushed back
+        # in depth so that a scene's own ground at its lowest point (a city's paving) wins
+        # instead of z-fighting with it far from the camera
+        ctx.polygon_offset = 2.0, 4.0
+        gvao.render()
+        ctx.polygon_offset = 0.0, 0.0
         ctx.disable(moderngl.BLEND)
 
     comps = 3 if background is not None else 4
