@@ -193,15 +193,19 @@ def colonnade_scan(
     noise: float = 0.8,
     seed: int = 0,
     tilt_deg: float = 0.3,
+    stylobate: int = 0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Fragments from :func:`fragment_scan` (one per truth) stood upright on a line ``spacing``
     mm apart, each with a small random pose (tilt ≤ ``tilt_deg``, any turn about its axis,
-    ±30 mm off the line), then one random rigid pose for the whole scan (mm).
+    ±30 mm off the line), then one random rigid pose for the whole scan (mm). With
+    ``stylobate`` (a point count) they stand on a stylobate scanned with them: its top (at the
+    plinths' bottom, 1.2 m beyond the end columns' axes and 1 m either side of the line; none
+    under the plinths) and its front, 300 mm high, which join all the footprints into one.
 
     Returns
     -------
     points : (m, 3) mm, posed
-    labels : (m,) the column each point came from
+    labels : (m,) the column each point came from (-1: the stylobate)
     """
     from scipy.spatial.transform import Rotation
 
@@ -217,6 +221,19 @@ def colonnade_scan(
         off = np.array([i * spacing, 0.0, rng.uniform(-30.0, 30.0)])
         parts.append((tilt * turn).apply(col) + off)
         labels.append(np.full(len(col), i))
+    if stylobate:
+        x0, x1 = -1200.0, (len(truths) - 1) * spacing + 1200.0
+        m = 4 * stylobate
+        top = np.c_[rng.uniform(x0, x1, m), np.zeros(m), rng.uniform(-1000.0, 1000.0, m)]
+        clear = np.ones(len(top), dtype=bool)
+        for i, t in enumerate(truths):  # nothing under a plinth (its turn: the corner circle)
+            clear &= np.hypot(top[:, 0] - i * spacing, top[:, 2]) > t.plinth_half * math.sqrt(2)
+        top = top[clear][: stylobate * 3 // 4]
+        k = stylobate - len(top)
+        front = np.c_[rng.uniform(x0, x1, k), rng.uniform(-300.0, 0.0, k), np.full(k, 1000.0)]
+        slab = np.vstack([top, front]) + rng.normal(0.0, noise, (len(top) + k, 3))
+        parts.append(slab)
+        labels.append(np.full(len(slab), -1))
     pts = np.vstack(parts)
     rot = Rotation.random(random_state=seed + 11).as_matrix()
     return pts @ rot.T + rng.normal(0.0, 2000.0, 3), np.concatenate(labels)

@@ -4,7 +4,9 @@
    vertical surfaces of every column at once (the columns stand parallel); the points
    projected on the ground plane fill a grid whose 8-connected occupied cells
    (``scipy.ndimage.label``) are the columns' footprints; clusters under
-   :data:`MIN_SHARE` of the largest (or under 100 points) are dropped, and said so;
+   :data:`MIN_SHARE` of the largest (or under 100 points) are dropped, and said so; a
+   footprint holding several columns (touching plinths, a stylobate or an architrave joining
+   them) is split by its mid-height band, where only the shafts stand (``_split_touching``);
 2. each cluster is fitted by :func:`.fit_scan.fit_column_scan`, unchanged;
 3. :func:`group_columns` — a column is an instance of another's description when their
    flute counts are equal and that description, placed at the column's own pose (axis, turn,
@@ -25,7 +27,7 @@ import numpy as np
 
 from ionic_usd.errors import GeometryError, IonicError
 from ionic_usd.evaluate.fit_scan import ScanFit, fit_column_scan
-from ionic_usd.evaluate.scan_axis import _prism_direction, normals
+from ionic_usd.evaluate.scan_axis import VERTICAL, _prism_direction, normals
 
 __all__ = [
     "ColonnadeFit",
@@ -50,7 +52,22 @@ def up_axis(points: np.ndarray, *, max_points: int = 20_000, seed: int = 0) -> n
     rng = np.random.default_rng(seed)
     p = points if len(points) <= max_points else points[rng.choice(len(points), max_points, False)]
     n = normals(p)
-    a = np.linalg.eigh(n.T @ n)[1][:, 0]
+    # every surface of a colonnade is vertical (shafts, tori's equators, plinths' and a
+    # stylobate's sides: normal ⊥ up) or horizontal (plinth and stylobate tops, a floor:
+    # normal ∥ up). Candidates: normals (a horizontal surface's is up) and cross products of
+    # two normals (two vertical surfaces' is up); the one most normals are ⊥ or ∥ to wins (a
+    # large floor scanned with the columns outweighs them in Σ n nᵀ, so its least eigenvector
+    # alone would not do), then it is refined on the vertical normals
+    k = min(len(n), 256)
+    cand = np.vstack([n[rng.choice(len(n), k, False)], np.linalg.eigh(n.T @ n)[1].T])
+    pairs = rng.choice(len(n), (k, 2))
+    cross = np.cross(n[pairs[:, 0]], n[pairs[:, 1]])
+    size = np.linalg.norm(cross, axis=1)
+    cand = np.vstack([cand, cross[size > 0.5] / size[size > 0.5, None]])
+    sub = n if len(n) <= 5000 else n[rng.choice(len(n), 5000, False)]
+    dots = np.abs(sub @ cand.T)
+    score = ((dots < VERTICAL) | (dots > 1.0 - VERTICAL**2 / 2)).sum(axis=0)
+    a = cand[int(np.argmax(score))]
     prism = _prism_direction(a, n)
     return a if prism is None else prism
 
@@ -100,7 +117,97 @@ def split_columns(
             f"split: {count - len(keep)} cluster(s) of {dropped:,} points in all dropped "
             f"(under {MIN_SHARE:.0%} of the largest column's points or under 100)"
         )
-    return up, [np.flatnonzero(lab == k) for k in keep], notes
+    clusters: list[np.ndarray] = []
+    for k in keep:
+        idx = np.flatnonzero(lab == k)
+        parts, shared = _split_touching(points[idx] @ up, xy[idx], cell)
+        if len(parts) > 1:
+            notes.append(
+                f"split: {len(parts)} columns stood on one footprint (a shared plinth, "
+                f"stylobate or architrave); its {shared:,} points off the columns dropped"
+            )
+        clusters += [idx[q] for q in parts]
+    clusters.sort(key=len, reverse=True)
+    return up, clusters, notes
+
+
+#: the mid-height band (shares of a footprint's height) whose points are only the shafts
+SHAFT_BAND = (0.35, 0.65)
+#: a column's points lie within this × its shaft radius of its axis (an Ionic plinth's corner
+#: is at 1.94 r for a base 1 3/8 D wide, 2.12 r for 1 1/2 D)
+KEEP_RADII = 2.3
+
+
+def _circle(xy: np.ndarray) -> tuple[np.ndarray, float]:
+    """Least-squares circle (Kåsa) through plan points: centre (2,), radius."""
+    a = np.column_stack([xy, np.ones(len(xy))])
+    b = (xy**2).sum(axis=1)
+    sol = np.linalg.lstsq(a, b, rcond=None)[0]
+    c = sol[:2] / 2
+    return c, float(np.sqrt(max(sol[2] + c @ c, 0.0)))
+
+
+def _face(h: np.ndarray, xy: np.ndarray, tol: float, *, top: bool) -> tuple[np.ndarray, float]:
+    """A horizontal face joining the columns (a stylobate's top, an architrave's soffit), as
+    the plane through its points (``h`` over ``xy``: it need not be level in the scan's up,
+    which comes from the columns' axes): fitted to the upper (``top``) or lower half of the
+    points, then to those within ``tol`` of it, three times. Returns the plane's coefficients
+    (h = c0 + c1 x + c2 y) and the margin just past it: 4.5× the robust scatter of its points
+    (1.4826 × their median absolute deviation: the scan's noise there), + above, − below."""
+    a = np.column_stack([np.ones(len(h)), xy])
+    on = h >= np.median(h) if top else h <= np.median(h)
+    for _ in range(3):
+        coef = np.linalg.lstsq(a[on], h[on], rcond=None)[0]
+        r = h - a @ coef
+        on = np.abs(r) <= tol
+        if on.sum() < 3:
+            break
+    sigma = 1.4826 * float(np.median(np.abs(r[on]))) if on.any() else tol
+    return (coef, 4.5 * sigma if top else -4.5 * sigma)
+
+
+def _split_touching(h: np.ndarray, xy: np.ndarray, cell: float) -> tuple[list[np.ndarray], int]:
+    """One footprint holding several columns (their plinths touch, or a stylobate or an
+    architrave joins them): the shafts stand apart in the footprint's mid-height band, so
+    that band's connected cells are the columns. Each column keeps the points within
+    :data:`KEEP_RADII` × its shaft radius of its axis (the band's points' circle), nearest
+    axis first; below the top of what joins them at the bottom (a stylobate) and above the
+    bottom of what joins them on top (an architrave) nothing is kept. Returns index arrays
+    into the footprint's points (one, all of them, when it is one column) and the count of
+    points dropped."""
+    from scipy import ndimage
+
+    lo_h, span = float(h.min()), float(np.ptp(h))
+    band = np.flatnonzero((h > lo_h + SHAFT_BAND[0] * span) & (h < lo_h + SHAFT_BAND[1] * span))
+    if len(band) < 200:
+        return [np.arange(len(h))], 0
+    q = xy[band]
+    ij = np.floor((q - q.min(axis=0)) / cell).astype(np.int64)
+    grid = np.zeros(tuple(ij.max(axis=0) + 1), dtype=bool)
+    grid[ij[:, 0], ij[:, 1]] = True
+    labels, count = ndimage.label(grid, structure=np.ones((3, 3), dtype=int))
+    lab = labels[ij[:, 0], ij[:, 1]] - 1
+    sizes = np.bincount(lab, minlength=count)
+    shafts = [k for k in range(count) if sizes[k] >= max(100, MIN_SHARE * sizes.max())]
+    if len(shafts) < 2:
+        return [np.arange(len(h))], 0
+    circles = [_circle(q[lab == k]) for k in shafts]
+    centres = np.array([c for c, _ in circles])
+    radii = np.array([r for _, r in circles])
+    d = np.linalg.norm(xy[:, None, :] - centres[None, :, :], axis=2)
+    near = np.argmin(d, axis=1)
+    on = d[np.arange(len(h)), near] <= KEEP_RADII * radii[near]
+    keep = on.copy()
+    tol = 0.01 * float(radii.min())
+    a = np.column_stack([np.ones(len(h)), xy])
+    for top in (True, False):  # a stylobate's top and all below; an architrave's soffit, above
+        side = ~on & ((h < lo_h + 0.5 * span) if top else (h >= lo_h + 0.5 * span))
+        if side.sum() >= 3:
+            coef, margin = _face(h[side], xy[side], tol, top=top)
+            level = a @ coef + margin
+            keep &= (h > level) if top else (h < level)
+    parts = [np.flatnonzero(keep & (near == k)) for k in range(len(shafts))]
+    return parts, int(len(h) - keep.sum())
 
 
 @dataclass(eq=False)
