@@ -12,7 +12,7 @@ import sys
 import time
 from pathlib import Path
 
-from ionic_usd.cli_flags import collect_flags
+from ionic_usd.cli.flags import collect_flags
 from ionic_usd.errors import ParameterError
 
 __all__ = [

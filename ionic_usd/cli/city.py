@@ -7,7 +7,7 @@ import math
 import sys
 from pathlib import Path
 
-from ionic_usd.cli_flags import add_command, add_memory_flag, add_seed_flag, texture_size
+from ionic_usd.cli.flags import add_command, add_memory_flag, add_seed_flag, texture_size
 from ionic_usd.errors import ParameterError
 
 __all__ = ["add_city_parser", "cmd_city"]

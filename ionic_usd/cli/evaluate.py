@@ -15,7 +15,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ionic_usd.cli_flags import (
+from ionic_usd.cli.flags import (
     add_command,
     add_config_flags,
     add_memory_flag,
