@@ -2,12 +2,17 @@
 
 - the library never imports the command line: only ``ionic_usd/cli/`` (and ``__main__.py``)
   import ``ionic_usd.cli``;
-- ``pxr`` is imported only under ``ionic_usd/usd/``.
+- ``pxr`` is imported only under ``ionic_usd/usd/``, and importing ``ionic_usd.spec`` (what to
+  write) and ``ionic_usd.lod`` loads none (checked in a fresh interpreter);
+- the levels of detail have one registry, :mod:`ionic_usd.lod`: no other module spells a
+  table keyed by the level names.
 """
 
 from __future__ import annotations
 
 import ast
+import subprocess
+import sys
 from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parents[1] / "ionic_usd"
@@ -86,3 +91,74 @@ def test_pxr_is_imported_only_under_usd():
         if _names(module, "pxr")
     ]
     assert offenders == []
+
+
+def test_spec_and_lod_import_without_pxr():
+    """What to write, and the LOD registry, load no ``pxr`` (nor the writers): a mesh worker
+    or the up-to-date check that needs a name or an option does not pay for USD."""
+    modules = [
+        "ionic_usd.spec",
+        *(f"ionic_usd.spec.{p.stem}" for p in sorted((PACKAGE / "spec").glob("[!_]*.py"))),
+        "ionic_usd.lod",
+        "ionic_usd.pipeline.forms",
+        "ionic_usd.pipeline.mesh_cache",
+        "ionic_usd.pipeline.temple",
+    ]
+    assert "ionic_usd.spec.column_asset" in modules
+    code = (
+        "import importlib, sys\n"
+        f"for m in {modules!r}:\n"
+        "    importlib.import_module(m)\n"
+        "print(sorted(m for m in sys.modules if m == 'pxr' or m.startswith(('pxr.', "
+        "'ionic_usd.usd'))))\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        check=True,
+        cwd=PACKAGE.parent,
+    )
+    assert out.stdout.strip() == "[]"
+
+
+_LEVEL_NAMES = {"high", "medium", "low"}
+
+
+def _level_tables(source: str, where: str) -> list[str]:
+    """The dict literals (and ``dict(...)`` keyword calls) of ``source`` keyed by two level
+    names or more: a table of levels of detail."""
+    tree = ast.parse(source, filename=where)
+    found = []
+    for node in ast.walk(tree):
+        keys: list[str] = []
+        if isinstance(node, ast.Dict):
+            keys = [k.value for k in node.keys if isinstance(k, ast.Constant)]
+        elif isinstance(node, ast.Call) and getattr(node.func, "id", None) == "dict":
+            keys = [k.arg for k in node.keywords if k.arg]
+        if len(_LEVEL_NAMES.intersection(k for k in keys if isinstance(k, str))) >= 2:
+            found.append(f"{where}:{node.lineno}")
+    return found
+
+
+def test_the_lod_registry_is_the_only_table_of_levels():
+    offenders = [
+        where
+        for path in _library_files()
+        if path != PACKAGE / "lod.py"
+        for where in _level_tables(
+            path.read_text(encoding="utf-8"), str(path.relative_to(PACKAGE.parent))
+        )
+    ]
+    assert offenders == []
+
+
+def test_the_level_table_check_finds_a_table():
+    """The check above can fail: it finds the table shapes it forbids, and not a certainty's
+    ``{"certainty": "high"}``."""
+    source = (
+        'RANK = {"high": 0, "medium": 1, "low": 2}\n'
+        "T = dict(high=1.0, low=2.0)\n"
+        'P = {"certainty": "high"}\n'
+    )
+    assert _level_tables(source, "probe.py") == ["probe.py:1", "probe.py:2"]

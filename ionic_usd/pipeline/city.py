@@ -178,6 +178,7 @@ def build_city(
 
 
 def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | None) -> dict:
+    from ionic_usd.spec.layers import ASSET_NAME
     from ionic_usd.usd.city import (
         DEFAULT_INSTANCER_THRESHOLD,
         INSTANCES_LAYER,
@@ -186,7 +187,6 @@ def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | 
         TempleInstances,
         compose_city,
     )
-    from ionic_usd.usd.column_asset import ASSET_NAME
 
     t0 = time.perf_counter()
     timings: dict[str, float] = {}

@@ -26,7 +26,7 @@ import numpy as np
 
 from ionic_usd.geometry.mesh import Mesh
 from ionic_usd.pipeline.keys import build_key
-from ionic_usd.usd.asset import AssetMesh
+from ionic_usd.spec.asset import AssetMesh
 
 __all__ = ["cached_meshes", "mesh_cache_folder"]
 

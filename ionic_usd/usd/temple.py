@@ -56,8 +56,19 @@ from typing import Any
 from pxr import Sdf, Usd
 
 from ionic_usd import __version__
-from ionic_usd.column.column import LODS, ColumnParams, portunus_column_params
+from ionic_usd.column.column import ColumnParams, portunus_column_params
 from ionic_usd.errors import ParameterError, UsdAuthoringError
+from ionic_usd.lod import LOD_NAMES
+from ionic_usd.spec.column_asset import FINISHES, FLUTE_VARIANTS, UV_SPAN, ColumnAssetOptions
+from ionic_usd.spec.layers import (
+    ASSET_NAME,
+    COLONNADE_LAYER,
+    GENERATED_LAYER,
+    MATERIALS_LAYER,
+    OVERRIDES_LAYER,
+    ROOT_LAYER,
+    TEMPLE_CLASS,
+)
 from ionic_usd.temple.layout import Layer, TempleLayout
 from ionic_usd.temple.mouldings import MouldingParams, portunus_mouldings
 from ionic_usd.usd.asset import class_path
@@ -65,13 +76,6 @@ from ionic_usd.usd.bounds import (
     author_extents_hints,
     bound_changing_sets,
     variant_extents_hints,
-)
-from ionic_usd.usd.column_asset import (
-    ASSET_NAME,
-    FINISHES,
-    FLUTE_VARIANTS,
-    UV_SPAN,
-    ColumnAssetOptions,
 )
 from ionic_usd.usd.combinations import realise_combinations, select_variants
 from ionic_usd.usd.detail import (
@@ -125,18 +129,12 @@ __all__ = [
     "TEMPLE_CLASS",
 ]
 
-ROOT_LAYER = "Temple.usda"
-GENERATED_LAYER = "generated.usda"
-OVERRIDES_LAYER = "overrides.usda"
-MATERIALS_LAYER = "materials.usda"
-COLONNADE_LAYER = "colonnade.usda"
 PART_LAYERS = {
     Layer.PODIUM: "podium.usda",
     Layer.CELLA: "cella.usda",
     Layer.ENTABLATURE: "entablature.usda",
     Layer.ROOF: "roof.usda",
 }
-TEMPLE_CLASS = "/_class_Temple"
 ASSET_REF = f"./{ASSET_NAME}/{ASSET_NAME}.usda"
 # baseline finish: the ancient painted stucco (see portunus.toml); bare stone is a hypothesis
 BASELINE_FINISH = "stucco"
@@ -478,7 +476,7 @@ def plan_temple(
         hyp_layers=hyp_layers,
         geometry=detail_of(layout),
         base_meshes=cuboid_meshes(layout, CUBOID_UV_SCALE),
-        lods=tuple(lod for lod in LODS if lod in opts.lods),
+        lods=tuple(lod for lod in LOD_NAMES if lod in opts.lods),
         detail_of=detail_of,
     )
 
