@@ -181,7 +181,7 @@ def estimate_asset(
     capital solid per scroll, capital and volute variant — body and bolsters united;
     ``forms`` times, the cut forms counted as full ones, an upper bound) and one stone
     texture set at a time."""
-    from ionic_usd.spec.column_asset import BASE_VARIANTS, FLUTE_VARIANTS, SCROLL_VARIANTS
+    from ionic_usd.blueprint.column_asset import BASE_VARIANTS, FLUTE_VARIANTS, SCROLL_VARIANTS
 
     tris = 0
     for lod in lods or LOD_NAMES:

@@ -206,8 +206,8 @@ def test_charts_do_not_overlap_in_any_mesh(column_asset):
     from scipy.ndimage import maximum_filter, minimum_filter
     from test_uv import rasterise, uv_charts
 
+    from ionic_usd.blueprint.column_asset import UV_SPAN
     from ionic_usd.lod import LOD_NAMES, level
-    from ionic_usd.spec.column_asset import UV_SPAN
     from ionic_usd.texture.uv import DEFAULT_PADDING
 
     layer = Sdf.Layer.FindOrOpen(str(column_asset.path.parent / "Payload/Geometry.usdc"))

@@ -2,7 +2,7 @@
 
 - the library never imports the command line: only ``ionic_usd/cli/`` (and ``__main__.py``)
   import ``ionic_usd.cli``;
-- ``pxr`` is imported only under ``ionic_usd/usd/``, and importing ``ionic_usd.spec`` (what to
+- ``pxr`` is imported only under ``ionic_usd/usd/``, and importing ``ionic_usd.blueprint`` (what to
   write) and ``ionic_usd.lod`` loads none (checked in a fresh interpreter);
 - the levels of detail have one registry, :mod:`ionic_usd.lod`: no other module spells a
   table keyed by the level names.
@@ -93,18 +93,21 @@ def test_pxr_is_imported_only_under_usd():
     assert offenders == []
 
 
-def test_spec_and_lod_import_without_pxr():
+def test_blueprint_and_lod_import_without_pxr():
     """What to write, and the LOD registry, load no ``pxr`` (nor the writers): a mesh worker
     or the up-to-date check that needs a name or an option does not pay for USD."""
     modules = [
-        "ionic_usd.spec",
-        *(f"ionic_usd.spec.{p.stem}" for p in sorted((PACKAGE / "spec").glob("[!_]*.py"))),
+        "ionic_usd.blueprint",
+        *(
+            f"ionic_usd.blueprint.{p.stem}"
+            for p in sorted((PACKAGE / "blueprint").glob("[!_]*.py"))
+        ),
         "ionic_usd.lod",
         "ionic_usd.pipeline.forms",
         "ionic_usd.pipeline.mesh_cache",
         "ionic_usd.pipeline.temple",
     ]
-    assert "ionic_usd.spec.column_asset" in modules
+    assert "ionic_usd.blueprint.column_asset" in modules
     code = (
         "import importlib, sys\n"
         f"for m in {modules!r}:\n"

@@ -546,9 +546,9 @@ def test_overlapping_triangles_match_geos_on_every_pair(seed):
 def test_metric_charts_of_a_low_capital_do_not_overlap(cache):
     # xatlas folds one chart of this capital onto itself (3 triangle pairs); repacked, the
     # fold covered 26 sub-texels of a 4x raster twice before its charts were split
+    from ionic_usd.blueprint.column_asset import ColumnAssetOptions
     from ionic_usd.column.column import build_capital_part
     from ionic_usd.lod import level
-    from ionic_usd.spec.column_asset import ColumnAssetOptions
     from ionic_usd.texture.uv import metric_charts
 
     p = ColumnAssetOptions().params.with_lod("low")

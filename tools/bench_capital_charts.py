@@ -27,14 +27,14 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from ionic_usd.blueprint.column_asset import (  # noqa: E402
+    ColumnAssetOptions,
+    volute_variant_params,
+)
 from ionic_usd.column.capital import build_capital  # noqa: E402
 from ionic_usd.geometry.boolean import union  # noqa: E402
 from ionic_usd.geometry.mesh import Mesh  # noqa: E402
 from ionic_usd.lod import level  # noqa: E402
-from ionic_usd.spec.column_asset import (  # noqa: E402
-    ColumnAssetOptions,
-    volute_variant_params,
-)
 from ionic_usd.texture.atlas import st_distortion  # noqa: E402
 from ionic_usd.texture.uv import UVCache, metric_charts  # noqa: E402
 

@@ -169,10 +169,10 @@ def cmd_column(args: argparse.Namespace) -> int:
 
 
 def cmd_asset(args: argparse.Namespace) -> int:
+    from ionic_usd.blueprint.column_asset import ColumnAssetOptions
     from ionic_usd.io import check_output_folder
     from ionic_usd.pipeline.asset import build_column_asset
     from ionic_usd.resources import check_estimate, estimate_asset
-    from ionic_usd.spec.column_asset import ColumnAssetOptions
 
     check_output_folder(args.output, force=args.force)
     params = _column_params(args)

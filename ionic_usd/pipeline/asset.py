@@ -15,7 +15,7 @@
 5. **author** the layers from those values (:func:`ionic_usd.usd.column_asset.author_column_asset`).
 
 The variant vocabulary (sets, variants, ``UV_SPAN``) is the asset's, in
-:mod:`ionic_usd.spec.column_asset`, the texel densities the levels' (:mod:`ionic_usd.lod`);
+:mod:`ionic_usd.blueprint.column_asset`, the texel densities the levels' (:mod:`ionic_usd.lod`);
 this module loads no ``pxr`` until it authors.
 """
 
@@ -34,6 +34,16 @@ from typing import Any
 import numpy as np
 
 from ionic_usd import __version__
+from ionic_usd.blueprint.asset import AssetInstancer, AssetMesh
+from ionic_usd.blueprint.column_asset import (
+    ASSET_NAME,
+    BASE_CHART_BOUNDARY,
+    FINISHES,
+    FLUTE_VARIANTS,
+    UV_SPAN,
+    ColumnAssetOptions,
+    volute_variant_params,
+)
 from ionic_usd.column.column import (
     build_base_part,
     build_capital_part,
@@ -46,16 +56,6 @@ from ionic_usd.lod import level, lod_rank
 from ionic_usd.pipeline.forms import form_cut, form_cuts, outside_walls
 from ionic_usd.pipeline.keys import build_key, file_digests
 from ionic_usd.pipeline.mesh_cache import cached_meshes
-from ionic_usd.spec.asset import AssetInstancer, AssetMesh
-from ionic_usd.spec.column_asset import (
-    ASSET_NAME,
-    BASE_CHART_BOUNDARY,
-    FINISHES,
-    FLUTE_VARIANTS,
-    UV_SPAN,
-    ColumnAssetOptions,
-    volute_variant_params,
-)
 from ionic_usd.texture.uv import UVCache, attach_uvs, unwrap_parts
 
 __all__ = [
@@ -225,7 +225,7 @@ def column_asset_meshes(
 
     Returns
     -------
-    one :class:`~ionic_usd.spec.asset.AssetMesh` per (part variant, lod, form), named
+    one :class:`~ionic_usd.blueprint.asset.AssetMesh` per (part variant, lod, form), named
     ``<Part>_<variant>_<lod>[_<form>]``; capitals are tagged with ``scroll``, ``capital`` and
     (when the asset has more than one model) ``volute``.
     """

@@ -178,7 +178,7 @@ def build_city(
 
 
 def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | None) -> dict:
-    from ionic_usd.spec.layers import ASSET_NAME
+    from ionic_usd.blueprint.layers import ASSET_NAME
     from ionic_usd.usd.city import (
         DEFAULT_INSTANCER_THRESHOLD,
         INSTANCES_LAYER,

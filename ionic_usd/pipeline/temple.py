@@ -31,15 +31,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from ionic_usd.blueprint.layers import ASSET_NAME, OVERRIDES_LAYER, ROOT_LAYER
 from ionic_usd.checks import check_stone_options
 from ionic_usd.errors import OutputExistsError
 from ionic_usd.io import manifest_record, replace_folder, up_to_date
 from ionic_usd.pipeline.keys import build_key, file_digests
-from ionic_usd.spec.layers import ASSET_NAME, OVERRIDES_LAYER, ROOT_LAYER
 
 if TYPE_CHECKING:
+    from ionic_usd.blueprint.column_asset import ColumnAssetOptions
     from ionic_usd.column.column import ColumnParams
-    from ionic_usd.spec.column_asset import ColumnAssetOptions
     from ionic_usd.temple.layout import TempleLayout
     from ionic_usd.temple.mouldings import MouldingParams
 

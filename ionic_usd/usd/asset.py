@@ -27,7 +27,7 @@ from pathlib import Path
 
 from pxr import Sdf, Usd
 
-from ionic_usd.spec.asset import AssetInstancer, AssetMesh, AssetSpec
+from ionic_usd.blueprint.asset import AssetInstancer, AssetMesh, AssetSpec
 from ionic_usd.usd.asset_slots import (
     Slot,
     author_slot_variants,

@@ -38,10 +38,10 @@ from pathlib import Path
 import numpy as np
 from pxr import Gf, Sdf, Usd, Vt
 
+from ionic_usd.blueprint.layers import CITY_INSTANCES_LAYER, CITY_ROOT_LAYER
 from ionic_usd.city.layout import DEFAULT_INSTANCER_THRESHOLD, yaw_quaternions
 from ionic_usd.errors import OutputExistsError, ParameterError, UsdAuthoringError
 from ionic_usd.lod import LOD_NAMES
-from ionic_usd.spec.layers import CITY_INSTANCES_LAYER, CITY_ROOT_LAYER
 from ionic_usd.usd.city_prototypes import (
     instance_bounds,
     prim_identifier,

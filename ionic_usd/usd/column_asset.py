@@ -1,8 +1,8 @@
 """The Ionic column as a USD component asset: :func:`author_column_asset` writes the layers of
-the asset that :func:`ionic_usd.spec.column_asset.column_asset_spec` describes.
+the asset that :func:`ionic_usd.blueprint.column_asset.column_asset_spec` describes.
 
 The variant sets, build options and texture conventions are described (and defined, without
-``pxr``) in :mod:`ionic_usd.spec.column_asset`, whose names this module hands on; the
+``pxr``) in :mod:`ionic_usd.blueprint.column_asset`, whose names this module hands on; the
 pipeline that makes the meshes (generate → clip → UV → texture) is
 :mod:`ionic_usd.pipeline.asset`, whose :func:`~ionic_usd.pipeline.asset.build_column_asset` is
 the entry point.
@@ -14,8 +14,8 @@ import os
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
-from ionic_usd.spec.asset import AssetInstancer, AssetMesh
-from ionic_usd.spec.column_asset import (
+from ionic_usd.blueprint.asset import AssetInstancer, AssetMesh
+from ionic_usd.blueprint.column_asset import (
     ASSET_NAME,
     BASE_CHART_BOUNDARY,
     BASE_VARIANTS,

@@ -292,7 +292,7 @@ def column_ornament(opts) -> tuple[AssetInstancer, ...]:
 
     Parameters
     ----------
-    opts : :class:`ionic_usd.spec.column_asset.ColumnAssetOptions`
+    opts : :class:`ionic_usd.blueprint.column_asset.ColumnAssetOptions`
     """
     if "high" not in opts.lods:
         return ()

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pxr import Gf, Sdf, Usd, UsdShade
 
-from ionic_usd.spec.materials import TILE_METRES, MaterialTextures
+from ionic_usd.blueprint.materials import TILE_METRES, MaterialTextures
 
 __all__ = [
     "FALLBACKS",

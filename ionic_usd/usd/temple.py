@@ -56,11 +56,8 @@ from typing import Any
 from pxr import Sdf, Usd
 
 from ionic_usd import __version__
-from ionic_usd.column.column import ColumnParams, portunus_column_params
-from ionic_usd.errors import ParameterError, UsdAuthoringError
-from ionic_usd.lod import LOD_NAMES
-from ionic_usd.spec.column_asset import FINISHES, FLUTE_VARIANTS, UV_SPAN, ColumnAssetOptions
-from ionic_usd.spec.layers import (
+from ionic_usd.blueprint.column_asset import FINISHES, FLUTE_VARIANTS, UV_SPAN, ColumnAssetOptions
+from ionic_usd.blueprint.layers import (
     ASSET_NAME,
     COLONNADE_LAYER,
     GENERATED_LAYER,
@@ -69,6 +66,9 @@ from ionic_usd.spec.layers import (
     ROOT_LAYER,
     TEMPLE_CLASS,
 )
+from ionic_usd.column.column import ColumnParams, portunus_column_params
+from ionic_usd.errors import ParameterError, UsdAuthoringError
+from ionic_usd.lod import LOD_NAMES
 from ionic_usd.temple.layout import Layer, TempleLayout
 from ionic_usd.temple.mouldings import MouldingParams, portunus_mouldings
 from ionic_usd.usd.asset import class_path

@@ -13,9 +13,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
+from ionic_usd.blueprint.materials import MaterialTextures
 from ionic_usd.errors import ParameterError
 from ionic_usd.geometry.mesh import Mesh
-from ionic_usd.spec.materials import MaterialTextures
 
 if TYPE_CHECKING:  # the ornament module is imported only when an asset has instancers
     from ionic_usd.column.ornament import Instances

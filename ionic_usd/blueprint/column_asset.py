@@ -1,7 +1,7 @@
 """The Ionic column asset as values (no ``pxr``): its variant vocabulary, build options and
 description.
 
-:func:`column_asset_spec` describes the asset (an :class:`~ionic_usd.spec.asset.AssetSpec`);
+:func:`column_asset_spec` describes the asset (an :class:`~ionic_usd.blueprint.asset.AssetSpec`);
 :func:`ionic_usd.usd.column_asset.author_column_asset` writes it; the pipeline that makes the
 meshes (generate → clip → UV → texture) is :mod:`ionic_usd.pipeline.asset`, whose
 :func:`~ionic_usd.pipeline.asset.build_column_asset` is the entry point.
@@ -64,6 +64,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ionic_usd import __version__
+from ionic_usd.blueprint.asset import AssetInstancer, AssetMesh, AssetSpec
+from ionic_usd.blueprint.layers import ASSET_NAME
+from ionic_usd.blueprint.materials import TILE_METRES, MaterialTextures
 from ionic_usd.checks import check_stone_options
 from ionic_usd.column.base import base_preset_names
 from ionic_usd.column.column import (
@@ -74,9 +77,6 @@ from ionic_usd.column.column import (
 from ionic_usd.column.volute import VOLUTE_MODELS, volute_extent
 from ionic_usd.errors import ParameterError
 from ionic_usd.lod import LOD_NAMES
-from ionic_usd.spec.asset import AssetInstancer, AssetMesh, AssetSpec
-from ionic_usd.spec.layers import ASSET_NAME
-from ionic_usd.spec.materials import TILE_METRES, MaterialTextures
 
 __all__ = [
     "ColumnAssetOptions",
