@@ -165,3 +165,35 @@ def test_the_level_table_check_finds_a_table():
         'P = {"certainty": "high"}\n'
     )
     assert _level_tables(source, "probe.py") == ["probe.py:1", "probe.py:2"]
+
+
+def _blueprint_names() -> set[str]:
+    """The names ``ionic_usd/blueprint/`` defines (each module's ``__all__``)."""
+    names: set[str] = set()
+    for path in (PACKAGE / "blueprint").glob("[!_]*.py"):
+        for node in ast.parse(path.read_text(encoding="utf-8")).body:
+            if isinstance(node, ast.Assign) and any(
+                isinstance(t, ast.Name) and t.id == "__all__" for t in node.targets
+            ):
+                names.update(ast.literal_eval(node.value))
+    return names
+
+
+def test_library_code_takes_the_blueprint_from_blueprint():
+    """``usd/`` hands the blueprint's names on (old imports keep working), but the library
+    outside ``usd/`` imports them from :mod:`ionic_usd.blueprint`, so it loads no ``pxr`` for
+    a name or an option."""
+    names = _blueprint_names()
+    assert {"ColumnAssetOptions", "AssetMesh", "ENGAGED_INSET", "ROOT_LAYER"} <= names
+    offenders = []
+    for path in _library_files():
+        if path.relative_to(PACKAGE).parts[0] == "usd":
+            continue
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ImportFrom) and _names(node.module or "", "ionic_usd.usd"):
+                offenders += [
+                    f"{path.relative_to(PACKAGE.parent)}: {node.module}.{a.name}"
+                    for a in node.names
+                    if a.name in names
+                ]
+    assert offenders == []
