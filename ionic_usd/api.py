@@ -176,14 +176,9 @@ class Temple:
         description's column height and lower diameter."""
         if self.column is not None:
             return self.column
-        from ionic_usd.column.column import portunus_column_params
+        from ionic_usd.blueprint.temple import temple_column_params
 
-        p = self.layout.params
-        return portunus_column_params(
-            height=p.columns_height,
-            lower_diameter=p.columns_lower_diameter,
-            base=getattr(p, "column_base", "attic_bezier_plinth"),  # a typed temple's base
-        )
+        return temple_column_params(self.layout)
 
     def with_hypotheses(self, *ids: str) -> Temple:
         """The Portunus layout with the named hypotheses applied in the geometry itself."""

@@ -13,7 +13,9 @@ worker or the up-to-date check that needs a name or an option loads no USD.
 - :mod:`ionic_usd.blueprint.asset`: a component asset's description (meshes, instancers, variant
   sets, materials), which :func:`ionic_usd.usd.asset.write_asset` authors;
 - :mod:`ionic_usd.blueprint.column_asset`: the column asset's variant vocabulary, its build options
-  and its description (:func:`~ionic_usd.blueprint.column_asset.column_asset_spec`).
+  and its description (:func:`~ionic_usd.blueprint.column_asset.column_asset_spec`);
+- :mod:`ionic_usd.blueprint.temple`: the column a temple's layout calls for and the column
+  asset it instances.
 
 The levels of detail are :mod:`ionic_usd.lod`.
 """

@@ -45,7 +45,6 @@ every temple or column of the scene at once.
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 import os
 from collections.abc import Callable, Sequence
@@ -66,7 +65,8 @@ from ionic_usd.blueprint.layers import (
     ROOT_LAYER,
     TEMPLE_CLASS,
 )
-from ionic_usd.column.column import ColumnParams, portunus_column_params
+from ionic_usd.blueprint.temple import temple_asset_options, temple_column_params
+from ionic_usd.column.column import ColumnParams
 from ionic_usd.errors import ParameterError, UsdAuthoringError
 from ionic_usd.lod import LOD_NAMES
 from ionic_usd.temple.layout import Layer, TempleLayout
@@ -442,22 +442,11 @@ def plan_temple(
     from ionic_usd.usd.combinations import check_hypothesis_budget
 
     check_hypothesis_budget(layout)  # bounded work: before anything else
-    p = layout.params
-    column = column or portunus_column_params(
-        height=p.columns_height,
-        lower_diameter=p.columns_lower_diameter,
-        base=getattr(p, "column_base", "attic_bezier_plinth"),  # a typed temple names its base
+    column = column or temple_column_params(layout)
+    opts = temple_asset_options(
+        column, texture_size=texture_size, seed=seed, asset_options=asset_options
     )
-    opts = asset_options or ColumnAssetOptions(params=column, texture_size=texture_size, seed=seed)
-    if opts.params != column:
-        opts = dataclasses.replace(opts, params=column)
-    if opts.bases[0] != column.base:  # the asset's default base is the column's
-        opts = dataclasses.replace(
-            opts, bases=(column.base, *(b for b in opts.bases if b != column.base))
-        )
     detail = check_detail(detail or DEFAULT_DETAIL)
-    if not opts.carved:
-        opts = dataclasses.replace(opts, carved=True)  # the carved capital goes with the detail
     hyp_layers = hypothesis_layers(layout, opts)  # validates every hypothesis first
     mp = mouldings or portunus_mouldings()
     detail_cache: dict[object, DetailGeometry] = {}
