@@ -103,6 +103,7 @@ def test_blueprint_and_lod_import_without_pxr():
             for p in sorted((PACKAGE / "blueprint").glob("[!_]*.py"))
         ),
         "ionic_usd.lod",
+        "ionic_usd.pipeline.asset",  # the column asset's workers: pxr only to author
         "ionic_usd.pipeline.forms",
         "ionic_usd.pipeline.mesh_cache",
         "ionic_usd.pipeline.temple",

@@ -32,7 +32,7 @@ finish      travertine, stucco                          the material bound to Ge
 The ``high`` LOD also carries the carved capital (``carved``, on by default): egg-and-dart on
 the echinus and bead-and-reel on the astragal, two PointInstancers under ``Geom/Ornament``
 per form (4 prototypes, 90 copies on the full column, 8.8k triangles drawn;
-:func:`ionic_usd.usd.detail.column_ornament`), tagged ``lod = high`` and ``form`` (an engaged
+:func:`column_ornament`), tagged ``lod = high`` and ``form`` (an engaged
 or corner column drops the copies inside its wall).
 
 The ``volute`` set's default is the model of the column's parameters (``log_spiral`` for the
@@ -82,6 +82,7 @@ __all__ = [
     "ColumnAssetOptions",
     "column_asset_spec",
     "volute_variant_params",
+    "column_ornament",
     "ASSET_NAME",
     "BASE_VARIANTS",
     "SCROLL_VARIANTS",
@@ -203,6 +204,34 @@ def volute_variant_params(params: ColumnParams, model: str) -> ColumnParams:
         margin = max(top_end_x - own_gap, 0.0)
         out = dataclasses.replace(out, capital=out.capital.with_(spiral_margin=margin))
     return out
+
+
+def column_ornament(opts: ColumnAssetOptions) -> tuple[AssetInstancer, ...]:
+    """The carved echinus and astragal of the column asset's ``high`` LOD (PointInstancers
+    tagged ``lod = high``), or nothing if the asset has no high LOD.
+
+    The one placement rule: the asset's instancers (:mod:`ionic_usd.pipeline.asset` drops,
+    per ``form``, the copies a wall would swallow) and the pictures of the detail use it.
+    """
+    from ionic_usd.column.ornament import capital_ornament
+
+    if "high" not in opts.lods:
+        return ()
+    p = opts.params.with_lod("high")
+    y_cap = p.base_params().height + p.shaft.length
+    cap = p.capital_params()
+    egg, bead = capital_ornament(
+        y_capital=y_cap,
+        top_radius=p.shaft.top_radius,
+        echinus_height=cap.echinus_height,
+        echinus_projection=cap.echinus_projection,
+        ring_top=p.shaft.ring_top,
+        capital_lift=cap.capital_position_y,
+    )
+    return (
+        AssetInstancer("Ornament", "EggAndDart_high", egg, {"lod": "high"}),
+        AssetInstancer("Ornament", "BeadAndReel_high", bead, {"lod": "high"}),
+    )
 
 
 def _margin_gap(params: ColumnParams) -> tuple[float, float]:

@@ -42,6 +42,7 @@ from ionic_usd.blueprint.column_asset import (
     FLUTE_VARIANTS,
     UV_SPAN,
     ColumnAssetOptions,
+    column_ornament,
     volute_variant_params,
 )
 from ionic_usd.column.column import (
@@ -287,12 +288,11 @@ def column_asset_ornament(opts: ColumnAssetOptions) -> tuple[AssetInstancer, ...
     centre behind the wall plane) are dropped, so an engaged column carries no eggs inside
     its wall. Nothing if the asset is not ``carved`` or has no high LOD.
 
-    The instances are :func:`ionic_usd.usd.detail.column_ornament`'s (the one placement rule).
+    The instances are :func:`ionic_usd.blueprint.column_asset.column_ornament`'s (the one
+    placement rule).
     """
     if not opts.carved or "high" not in opts.lods:
         return ()
-    from ionic_usd.usd.detail import column_ornament
-
     out = []
     for a in column_ornament(opts):
         inst: Any = a.instances  # ionic_usd.column.ornament.Instances
