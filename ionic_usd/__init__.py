@@ -24,8 +24,9 @@ Errors
     :class:`GrammarError`.
 
 Everything else lives in the subpackages: ``geometry`` (numpy kernel), ``grammar``, ``column``,
-``temple``, ``city``, ``texture``, ``pipeline``, ``usd`` (the only one that imports ``pxr``),
-``evaluate``, ``export``.
+``temple``, ``city``, ``texture``, ``blueprint`` (what to write, no ``pxr``), ``pipeline``,
+``usd`` (the only one that imports ``pxr``), ``evaluate``, ``export``, ``cli`` (the command
+line, which no other module imports); the levels of detail are ``lod``.
 """
 
 from __future__ import annotations

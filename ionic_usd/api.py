@@ -19,9 +19,12 @@ from __future__ import annotations
 
 import dataclasses
 import os
+from collections.abc import Collection
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
+
+from ionic_usd.errors import ParameterError
 
 if TYPE_CHECKING:  # imported lazily at run time: `import ionic_usd` stays light
     from ionic_usd.column.column import Column as _BuiltColumn
@@ -63,19 +66,32 @@ class Column:
         """Prim name → closed part mesh (``Base``, ``Shaft``, ``CapitalBody``)."""
         return self.built.parts()
 
-    def save(self, path: str | os.PathLike, *, force: bool = False) -> Path:
+    def save(
+        self,
+        path: str | os.PathLike,
+        *,
+        force: bool = False,
+        parts: Collection[str] | None = None,
+    ) -> Path:
         """Write the parts as ``/Column/Geom/<Part>`` into one USD file (atomically).
 
         The format follows the extension (``.usda`` text, ``.usdc``/``.usd`` binary); an
-        existing file needs ``force``. Returns the written path.
+        existing file needs ``force``. ``parts``: the names of the parts to write, in the
+        column's order (default: all). Returns the written path.
         """
         from ionic_usd.usd import check_output_path, write_meshes
 
         out = check_output_path(path, force=force)
+        meshes = self.parts()
+        if parts is not None:
+            unknown = sorted(set(parts) - set(meshes))
+            if unknown or not parts:
+                raise ParameterError("parts", sorted(parts), f"some of {', '.join(meshes)}")
+            meshes = {k: v for k, v in meshes.items() if k in parts}
         return Path(
             write_meshes(
                 out,
-                self.parts(),
+                meshes,
                 root="Column",
                 force=force,
                 comment=f"ionic_usd column ({self.params.lod}, base {self.params.base})",
@@ -160,14 +176,9 @@ class Temple:
         description's column height and lower diameter."""
         if self.column is not None:
             return self.column
-        from ionic_usd.column.column import portunus_column_params
+        from ionic_usd.blueprint.temple import temple_column_params
 
-        p = self.layout.params
-        return portunus_column_params(
-            height=p.columns_height,
-            lower_diameter=p.columns_lower_diameter,
-            base=getattr(p, "column_base", "attic_bezier_plinth"),  # a typed temple's base
-        )
+        return temple_column_params(self.layout)
 
     def with_hypotheses(self, *ids: str) -> Temple:
         """The Portunus layout with the named hypotheses applied in the geometry itself."""

@@ -425,7 +425,7 @@ def recover_folder(dest: str | os.PathLike) -> None:
             elif pid is not None or _looks_generated(p):
                 shutil.rmtree(p, ignore_errors=True)
     clean_stale_temporaries(parent, dest.name)
-    from ionic_usd.outputs import remove_stale_lock
+    from ionic_usd.lockfile import remove_stale_lock
 
     remove_stale_lock(dest)  # a killed build's lock file (the kernel released its lock)
 

@@ -24,6 +24,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from ionic_usd.errors import IonicError
+from ionic_usd.lockfile import LOCK_SUFFIX, lock_path, remove_stale_lock
 
 __all__ = [
     "LOCK_SUFFIX",
@@ -34,17 +35,11 @@ __all__ = [
     "staged_new_folder",
 ]
 
-LOCK_SUFFIX = ".ionic-lock"
 DEFAULT_WAIT = 0.0  # s: refuse at once (IONIC_USD_LOCK_WAIT=SECONDS waits)
 
 
 class FolderBusyError(IonicError):
     """Another process is building into the same output folder."""
-
-
-def lock_path(dest: str | os.PathLike) -> Path:
-    d = Path(dest)
-    return d.with_name(f".{d.name[:100]}{LOCK_SUFFIX}")
 
 
 def _holder(path: Path) -> str:
@@ -125,29 +120,3 @@ def staged_new_folder(dest: str | os.PathLike) -> Iterator[Path]:
     except BaseException:
         shutil.rmtree(stage, ignore_errors=True)
         raise
-
-
-def remove_stale_lock(dest: str | os.PathLike) -> bool:
-    """Remove ``dest``'s lock file if no process holds it (its holder was killed); True if
-    removed. Safe against a racing builder: it re-checks the file it locked is at the path."""
-    import fcntl
-
-    path = lock_path(dest)
-    try:
-        fd = os.open(path, os.O_RDWR)
-    except OSError:
-        return False
-    try:
-        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except OSError:  # held (by another process, or by this one on another descriptor)
-        os.close(fd)
-        return False
-    try:
-        if os.stat(path).st_ino == os.fstat(fd).st_ino:
-            os.unlink(path)
-            return True
-        return False
-    except OSError:
-        return False
-    finally:
-        os.close(fd)

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from ionic_usd.errors import BudgetError, ParameterError
+from ionic_usd.lod import LOD_NAMES
 
 if TYPE_CHECKING:  # pragma: no cover
     from ionic_usd.column.column import ColumnParams
@@ -180,11 +181,10 @@ def estimate_asset(
     capital solid per scroll, capital and volute variant — body and bolsters united;
     ``forms`` times, the cut forms counted as full ones, an upper bound) and one stone
     texture set at a time."""
-    from ionic_usd.column.column import LODS
-    from ionic_usd.usd.column_asset import BASE_VARIANTS, FLUTE_VARIANTS, SCROLL_VARIANTS
+    from ionic_usd.blueprint.column_asset import BASE_VARIANTS, FLUTE_VARIANTS, SCROLL_VARIANTS
 
     tris = 0
-    for lod in lods or tuple(LODS):
+    for lod in lods or LOD_NAMES:
         p = params.with_lod(lod)
         tris += sum(_part_triangles(p, base=b)[0] for b in bases or BASE_VARIANTS)
         for n in flutes or tuple(FLUTE_VARIANTS.values()):

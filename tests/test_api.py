@@ -103,3 +103,25 @@ def test_readme_python_example_runs(tmp_path):
     assert (tmp_path / "column.usda").is_file()
     assert (tmp_path / "PortunusTemple" / "Temple.usda").is_file()
     assert "column instances" in out.stdout
+
+
+def test_column_save_writes_the_parts_asked_for(tmp_path):
+    """``Column.save(parts=...)`` (what ``ionic-usd column --part`` calls) writes those parts'
+    prims, every point of each as built; an unknown part is refused before a byte is written."""
+    from pxr import Usd, UsdGeom
+
+    from ionic_usd.errors import ParameterError
+
+    col = ionic_usd.portunus_column(lod="low")
+    out = col.save(tmp_path / "c.usda", parts=("Shaft", "Base"))
+    stage = Usd.Stage.Open(str(out))
+    meshes = {p.GetName(): p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh)}
+    assert sorted(meshes) == ["Base", "Shaft"]
+    for name, prim in meshes.items():
+        pts = UsdGeom.Mesh(prim).GetPointsAttr().Get()
+        assert len(pts) == len(col.parts()[name].points)
+    with pytest.raises(ParameterError, match="Abacus"):
+        col.save(tmp_path / "d.usda", parts=("Abacus",))
+    with pytest.raises(ParameterError):
+        col.save(tmp_path / "e.usda", parts=())
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["c.usda"]

@@ -635,3 +635,27 @@ def test_far_street_columns_use_the_card_prototype(column_card_city, tmp_path):
     )
     stats = render_preview(out / "City.usda", tmp_path / "c.png", width=96, height=64, samples=0)
     assert stats.triangles == drawn.n_triangles and stats.cards == 6 * int(far.sum())
+
+
+@pytest.mark.parametrize("layer", ["City.usda", "Instances.usdc"])
+def test_an_existing_city_is_refused_before_any_work(tmp_path, capsys, layer):
+    """One check (``check_city_output``) refuses a folder holding a city's layer: the command
+    line before any work (one line, status 2, nothing touched), the API too."""
+    from ionic_usd.pipeline.city import check_city_output
+
+    folder = tmp_path / "city"
+    folder.mkdir()
+    (folder / layer).write_bytes(b"#usda 1.0\n")
+    before = _files(folder)
+    capsys.readouterr()
+    assert main(["city", str(folder), "--rows", "1", "--cols", "1", "-q"]) == 2
+    err = capsys.readouterr().err
+    assert len(err.splitlines()) == 1 and layer in err and "--force" in err
+    assert _files(folder) == before
+    with pytest.raises(OutputExistsError, match=layer):
+        build_city(folder, CityOptions(rows=1, cols=1))
+    assert _files(folder) == before
+    assert check_city_output(folder, force=True) == folder
+    (tmp_path / "file").write_bytes(b"")
+    with pytest.raises(ParameterError, match="existing file"):
+        check_city_output(tmp_path / "file", force=True)

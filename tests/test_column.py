@@ -10,7 +10,6 @@ import pytest
 from ionic_usd.cli import main
 from ionic_usd.column.base import build_base
 from ionic_usd.column.column import (
-    LODS,
     PORTUNUS_HEIGHT,
     ColumnParams,
     build_column,
@@ -21,10 +20,11 @@ from ionic_usd.column.column import (
 from ionic_usd.column.shaft import build_shaft
 from ionic_usd.errors import GrammarError, ParameterError
 from ionic_usd.geometry import inspect_mesh, merge, weld
+from ionic_usd.lod import LOD_NAMES
 from ionic_usd.usd import validate_stage
 
 
-@pytest.mark.parametrize("lod", list(LODS))
+@pytest.mark.parametrize("lod", LOD_NAMES)
 def test_portunus_column_parts_closed_and_stacked(lod):
     col = build_column(portunus_column_params(lod=lod))
     for name, mesh in col.parts().items():

@@ -206,8 +206,9 @@ def test_charts_do_not_overlap_in_any_mesh(column_asset):
     from scipy.ndimage import maximum_filter, minimum_filter
     from test_uv import rasterise, uv_charts
 
+    from ionic_usd.blueprint.column_asset import UV_SPAN
+    from ionic_usd.lod import LOD_NAMES, level
     from ionic_usd.texture.uv import DEFAULT_PADDING
-    from ionic_usd.usd.column_asset import ASSET_TEXELS_PER_METRE, UV_SPAN
 
     layer = Sdf.Layer.FindOrOpen(str(column_asset.path.parent / "Payload/Geometry.usdc"))
     stage = Usd.Stage.Open(layer)
@@ -228,8 +229,8 @@ def test_charts_do_not_overlap_in_any_mesh(column_asset):
         res = 4096
         cover, label = rasterise(m.st * res, m.st_indices, res, res, charts)
         assert cover.max() == 1, prim.GetPath()
-        lod = next(k for k in ASSET_TEXELS_PER_METRE if f"_{k}" in prim.GetName())
-        r = DEFAULT_PADDING * res // int(ASSET_TEXELS_PER_METRE[lod] * UV_SPAN)
+        lod = next(k for k in LOD_NAMES if f"_{k}" in prim.GetName())
+        r = DEFAULT_PADDING * res // int(level(lod).asset_texels_per_metre * UV_SPAN)
         occupied = label >= 0
         hi = maximum_filter(label, size=2 * r - 1)
         lo = minimum_filter(np.where(occupied, label, label.max() + 1), size=2 * r - 1)

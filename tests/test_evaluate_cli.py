@@ -10,6 +10,7 @@ import tomllib
 import numpy as np
 import pytest
 
+from ionic_usd.cli.evaluate import add_parsers
 from ionic_usd.column.column import (
     build_column,
     column_params_from_mapping,
@@ -17,7 +18,6 @@ from ionic_usd.column.column import (
     portunus_column_params,
 )
 from ionic_usd.errors import IonicError, OutputExistsError, ParameterError, ReferenceCurveError
-from ionic_usd.evaluate.commands import add_parsers
 from ionic_usd.evaluate.sections import base_section, shaft_silhouette_section
 from ionic_usd.params import to_toml
 

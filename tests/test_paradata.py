@@ -245,7 +245,7 @@ def yed_edit(src, dst, unit: str, shape: str, border: str, new_source: str) -> N
 
 def test_a_yed_edit_sets_class_and_source(graph_file, tmp_path):
     from ionic_usd.api import Temple
-    from ionic_usd.make_commands import _with_graphml_paradata
+    from ionic_usd.cli.make import _with_graphml_paradata
 
     path, _, _ = graph_file
     edited = tmp_path / "edited.graphml"

@@ -546,13 +546,14 @@ def test_overlapping_triangles_match_geos_on_every_pair(seed):
 def test_metric_charts_of_a_low_capital_do_not_overlap(cache):
     # xatlas folds one chart of this capital onto itself (3 triangle pairs); repacked, the
     # fold covered 26 sub-texels of a 4x raster twice before its charts were split
+    from ionic_usd.blueprint.column_asset import ColumnAssetOptions
     from ionic_usd.column.column import build_capital_part
+    from ionic_usd.lod import level
     from ionic_usd.texture.uv import metric_charts
-    from ionic_usd.usd.column_asset import ASSET_TEXELS_PER_METRE, ColumnAssetOptions
 
     p = ColumnAssetOptions().params.with_lod("low")
     body = build_capital_part(p, 0.0, scroll="S1")
-    tpm = ASSET_TEXELS_PER_METRE["low"]
+    tpm = level("low").asset_texels_per_metre
     (charted,) = metric_charts([body], tpm, cache=cache)
     a = unwrap(charted, texels_per_metre=tpm, cache=cache)
     assert overlap_texels(a.st_px, a.st_indices) == 0

@@ -27,16 +27,16 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from ionic_usd.column.capital import build_capital  # noqa: E402
-from ionic_usd.geometry.boolean import union  # noqa: E402
-from ionic_usd.geometry.mesh import Mesh  # noqa: E402
-from ionic_usd.texture.atlas import st_distortion  # noqa: E402
-from ionic_usd.texture.uv import UVCache, metric_charts  # noqa: E402
-from ionic_usd.usd.column_asset import (  # noqa: E402
-    ASSET_TEXELS_PER_METRE,
+from ionic_usd.blueprint.column_asset import (  # noqa: E402
     ColumnAssetOptions,
     volute_variant_params,
 )
+from ionic_usd.column.capital import build_capital  # noqa: E402
+from ionic_usd.geometry.boolean import union  # noqa: E402
+from ionic_usd.geometry.mesh import Mesh  # noqa: E402
+from ionic_usd.lod import level  # noqa: E402
+from ionic_usd.texture.atlas import st_distortion  # noqa: E402
+from ionic_usd.texture.uv import UVCache, metric_charts  # noqa: E402
 
 
 def quality(m: Mesh) -> tuple[float, float, float, int]:
@@ -77,7 +77,7 @@ def main() -> None:
     union(list(warm.as_dict().values()))
     for lod in args.lods:
         p = opts.params.with_lod(lod)
-        tpm = ASSET_TEXELS_PER_METRE[lod]
+        tpm = level(lod).asset_texels_per_metre
         for vm in opts.volutes:
             for scroll in opts.scrolls:
                 for cap in opts.capitals:

@@ -25,7 +25,8 @@ from pathlib import Path
 
 def main() -> None:
     os.environ["IONIC_USD_CACHE"] = tempfile.mkdtemp(prefix="ionic_bench_cache_")
-    from ionic_usd.column.column import LODS, build_column, portunus_column_params
+    from ionic_usd.column.column import build_column, portunus_column_params
+    from ionic_usd.lod import LOD_NAMES
     from ionic_usd.pipeline.asset import build_column_asset
     from ionic_usd.pipeline.temple import compose_temple
     from ionic_usd.temple.layout import portunus_layout
@@ -33,7 +34,7 @@ def main() -> None:
 
     print("whole column (base + shaft + capital body + scrolls), best of 5:")
     print(f"{'lod':>8} {'triangles':>10} {'ms':>8} {'Mtri/s':>8}")
-    for lod in LODS:
+    for lod in LOD_NAMES:
         p = portunus_column_params(lod=lod)
         build_column(p)
         best = min(_timed(lambda p=p: build_column(p)) for _ in range(5))

@@ -21,7 +21,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from ionic_usd.column.shaft import ShaftParams, build_shaft  # noqa: E402
 from ionic_usd.texture.uv import (  # noqa: E402
     DEFAULT_PADDING,
-    LOD_TEXELS_PER_METRE,
+    DEFAULT_TEXELS_PER_METRE,
     XATLAS_VERSION,
     UVCache,
     common_atlas_size,
@@ -38,7 +38,7 @@ def timed(fn, *args, **kwargs):
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--slices", type=int, nargs="*", default=[2, 4, 8])
-    ap.add_argument("--texels-per-metre", type=float, default=LOD_TEXELS_PER_METRE["high"])
+    ap.add_argument("--texels-per-metre", type=float, default=DEFAULT_TEXELS_PER_METRE)
     ap.add_argument("--padding", type=int, default=DEFAULT_PADDING)
     ap.add_argument("--repeat", type=int, default=3)
     args = ap.parse_args(argv)

@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 from pxr import Sdf, Usd
 
+from ionic_usd.blueprint.column_asset import column_ornament
 from ionic_usd.column.column import build_column, portunus_column_params
 from ionic_usd.column.ornament import Instances
 from ionic_usd.geometry.clip import clip_mesh
@@ -31,7 +32,7 @@ from ionic_usd.temple.cuboid import cuboid_mesh
 from ionic_usd.temple.layout import portunus_layout
 from ionic_usd.temple.mouldings import REPLACED_CUBOIDS, cornice_levels
 from ionic_usd.usd.column_asset import ColumnAssetOptions
-from ionic_usd.usd.detail import column_ornament, detail_geometry
+from ionic_usd.usd.detail import detail_geometry
 from ionic_usd.usd.instancer import author_point_instancer
 from ionic_usd.usd.mesh import author_mesh
 from ionic_usd.usd.stage import new_layer, save_layer

@@ -31,12 +31,10 @@ __all__ = [
     "drop_inside",
     "lod_by_distance",
     "distance_from",
-    "LOD_NAMES",
     "yaw_quaternions",
     "DEFAULT_INSTANCER_THRESHOLD",
 ]
 
-LOD_NAMES = ("high", "medium", "low")
 # above this many temples the city uses a PointInstancer of temple prototypes instead of
 # instanceable references. Measured (tools/bench_city.py): opening and counting a city of
 # 2,500 temple references takes 2.9-3.8 s against 0.4-0.5 s as a PointInstancer, 10,000 take
@@ -321,8 +319,9 @@ def drop_inside(
 def lod_by_distance(
     xz: np.ndarray, focus: Sequence[float] | None, distances: tuple[float, float]
 ) -> np.ndarray:
-    """(n,) int8 index into :data:`LOD_NAMES`: high within ``distances[0]`` m of the focus
-    (plan (e, n)), medium within ``distances[1]``, low beyond; all high without a focus."""
+    """(n,) int8 index into :data:`ionic_usd.lod.LOD_NAMES` (a level's rank): high within
+    ``distances[0]`` m of the focus (plan (e, n)), medium within ``distances[1]``, low beyond;
+    all high without a focus."""
     if focus is None:
         return np.zeros(len(xz), dtype=np.int8)
     d = distance_from(xz, focus)

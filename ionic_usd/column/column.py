@@ -32,6 +32,8 @@ from ionic_usd.errors import ParameterError
 from ionic_usd.geometry.boolean import union
 from ionic_usd.geometry.guard import guarded
 from ionic_usd.geometry.mesh import Mesh
+from ionic_usd.lod import LOD_NAMES
+from ionic_usd.lod import lod_sampling as _lod
 from ionic_usd.params import (
     UNIT_LIMITS,
     FieldSpec,
@@ -43,8 +45,6 @@ from ionic_usd.params import (
 
 __all__ = [
     "check_column_tables",
-    "Lod",
-    "LODS",
     "ColumnParams",
     "Column",
     "build_column",
@@ -55,43 +55,6 @@ __all__ = [
     "column_params_from_mapping",
     "column_params_to_tables",
 ]
-
-
-@dataclass(frozen=True)
-class Lod:
-    """Sampling of every part for one level of detail.
-
-    ``flute_slices``/``fillet_ratio`` are the shaft's $h/$i; ``base_slices`` the rows per curved
-    base floor; ``spiral_samples``, ``ring_segments``, ``bolster_rows`` the capital's;
-    ``shaft_rows`` the rows along the fluted body (one row of 7 m long, 2 cm wide triangles is
-    fine for a renderer but poor for displacement, booleans and LOD tools).
-    """
-
-    flute_slices: int
-    fillet_ratio: int
-    base_slices: int
-    spiral_samples: int
-    ring_segments: int
-    bolster_rows: int
-    shaft_rows: int = 1
-
-
-# Triangles of the default Portunus column (three parts): high 40,862, medium 16,054, low 7,996
-# (the LOD table of docs/specification/column.md, checked by tests/test_shaft.py).
-LODS: dict[str, Lod] = {
-    "high": Lod(8, 4, 8, 192, 48, 32, 24),  # rows ≈ 0.29 m apart
-    "medium": Lod(4, 2, 4, 96, 24, 16, 8),  # ≈ 0.88 m
-    "low": Lod(2, 1, 2, 48, 16, 8, 3),  # ≈ 2.3 m
-}
-
-
-def _lod(name: str) -> Lod | None:
-    """The named LOD; ``custom`` (None) keeps the parts' own sampling parameters."""
-    if name == "custom":
-        return None
-    if name not in LODS:
-        raise ParameterError("lod", name, f"one of {', '.join(LODS)}, custom")
-    return LODS[name]
 
 
 class _BaseSampling(TypedDict):
@@ -364,7 +327,7 @@ COLUMN_DOCS: dict[str, tuple[str, str, str]] = {
     "lod": (
         "",
         "name",
-        f"level of detail: {', '.join(LODS)}, or custom (use the sampling "
+        f"level of detail: {', '.join(LOD_NAMES)}, or custom (use the sampling "
         "fields of [shaft] and [capital] as given)",
     ),
     "base": (

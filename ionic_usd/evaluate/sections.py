@@ -36,10 +36,11 @@ import numpy as np
 
 from ionic_usd.column.base import base_profile
 from ionic_usd.column.capital import capital_layout
-from ionic_usd.column.column import LODS, ColumnParams
+from ionic_usd.column.column import ColumnParams
 from ionic_usd.column.shaft import shaft_cross_section, shaft_radius_at
 from ionic_usd.column.volute import volute_curve
 from ionic_usd.errors import GeometryError, ParameterError
+from ionic_usd.lod import LOD_NAMES
 
 __all__ = [
     "PARTS",
@@ -465,7 +466,7 @@ def section_from_usd(
     if plane_z is None:
         if params is None:
             params = _params_from_stage(path)
-            if params is not None and variants and variants.get("lod") in LODS:
+            if params is not None and variants and variants.get("lod") in LOD_NAMES:
                 params = params.with_lod(variants["lod"])  # the selected LOD's sampling
         plane_z = _volute_plane_z(pts, params)
     loops = slice_mesh(pts, tris, np.array([0.0, 0.0, plane_z]), np.array([0.0, 0.0, 1.0]))

@@ -13,11 +13,10 @@ import os
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 from ionic_usd.export.common import EXPORT_FORMATS, check_export_path
 
-__all__ = ["EXPORT_FORMATS", "ExportResult", "export_scene", "add_export_parser"]
+__all__ = ["EXPORT_FORMATS", "ExportResult", "export_scene"]
 
 
 @dataclass(frozen=True)
@@ -76,10 +75,3 @@ def export_scene(
 
     s = read_scene(scene, variants=variants, lod=lod)
     return ExportResult(out, fmt, write_solids(s, out, scale=scale))
-
-
-def add_export_parser(sub: Any, parser_class: Any = None, *, arguments: bool = True) -> None:
-    """Add the ``export`` subcommand to an argparse subparsers object."""
-    from ionic_usd.export.command import add_parser
-
-    add_parser(sub, parser_class, arguments=arguments)

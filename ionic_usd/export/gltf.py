@@ -48,7 +48,7 @@ from ionic_usd.export.gltf_buffers import (
     texture_transform,
     vertex_streams,
 )
-from ionic_usd.export.gltf_merge import MergeGroup, merged_streams, plan_merges
+from ionic_usd.export.gltf_merge import MergeGroup, merged_streams, plan_merges, trs_decompose
 from ionic_usd.usd.reader import MaterialData, Scene, TextureRef
 
 __all__ = ["GltfReport", "write_gltf", "trs_decompose", "texture_transform", "split_common"]
@@ -113,30 +113,6 @@ def split_common(dicts: list[dict]) -> tuple[dict, list[dict]]:
 
 
 _MISSING = object()
-
-
-def trs_decompose(matrix: np.ndarray, tol: float = 1e-5):
-    """Row-vector affine (4, 4) → ``(translation (3,), quaternion xyzw (4,), scale (3,))``.
-
-    Returns None when the matrix has shear or a projective part (not a TRS).
-    """
-    from scipy.spatial.transform import Rotation  # noqa: PLC0415
-
-    m = np.asarray(matrix, dtype=np.float64)
-    if not np.allclose(m[:, 3], [0, 0, 0, 1], atol=1e-9):
-        return None
-    lin = m[:3, :3].T  # column-vector linear part: columns are the scaled axes
-    scale = np.linalg.norm(lin, axis=0)
-    if np.any(scale < 1e-12):
-        return None
-    rot = lin / scale
-    if np.linalg.det(rot) < 0:
-        scale[0], rot[:, 0] = -scale[0], -rot[:, 0]
-    if not np.allclose(rot.T @ rot, np.eye(3), atol=tol):
-        return None
-    q = Rotation.from_matrix(rot).as_quat()
-    q /= np.linalg.norm(q)
-    return m[3, :3].copy(), q, scale
 
 
 def _read_image(path: str) -> np.ndarray:

@@ -24,7 +24,14 @@ import numpy as np
 
 from ionic_usd.usd.reader import Placement, Scene
 
-__all__ = ["MERGE_MAX_TRIANGLES", "MergeGroup", "group_of", "merged_streams", "plan_merges"]
+__all__ = [
+    "MERGE_MAX_TRIANGLES",
+    "MergeGroup",
+    "group_of",
+    "merged_streams",
+    "plan_merges",
+    "trs_decompose",
+]
 
 #: a mesh of at most this many triangles placed more than once is merged per group
 MERGE_MAX_TRIANGLES = 2000
@@ -52,11 +59,33 @@ def group_of(p: Placement) -> str:
     return p.path[:i] if i >= 0 else ""
 
 
+def trs_decompose(matrix: np.ndarray, tol: float = 1e-5):
+    """Row-vector affine (4, 4) → ``(translation (3,), quaternion xyzw (4,), scale (3,))``.
+
+    Returns None when the matrix has shear or a projective part (not a TRS).
+    """
+    from scipy.spatial.transform import Rotation  # noqa: PLC0415
+
+    m = np.asarray(matrix, dtype=np.float64)
+    if not np.allclose(m[:, 3], [0, 0, 0, 1], atol=1e-9):
+        return None
+    lin = m[:3, :3].T  # column-vector linear part: columns are the scaled axes
+    scale = np.linalg.norm(lin, axis=0)
+    if np.any(scale < 1e-12):
+        return None
+    rot = lin / scale
+    if np.linalg.det(rot) < 0:
+        scale[0], rot[:, 0] = -scale[0], -rot[:, 0]
+    if not np.allclose(rot.T @ rot, np.eye(3), atol=tol):
+        return None
+    q = Rotation.from_matrix(rot).as_quat()
+    q /= np.linalg.norm(q)
+    return m[3, :3].copy(), q, scale
+
+
 def _frame(m: np.ndarray) -> np.ndarray:
     """The group's node matrix: the first copy's, when glTF can store it (a TRS without
     shear), else only its translation."""
-    from ionic_usd.export.gltf import trs_decompose  # noqa: PLC0415
-
     if trs_decompose(m) is not None:
         return np.asarray(m, dtype=np.float64)
     f = np.eye(4)

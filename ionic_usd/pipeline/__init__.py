@@ -2,7 +2,7 @@
 and the city build that ties them together.
 
 The names below are imported on first use, so the ``city`` subcommand's flags
-(:mod:`ionic_usd.pipeline.commands`) load without the builders behind them.
+(:mod:`ionic_usd.cli.city`) load without the builders behind them.
 """
 
 from __future__ import annotations

@@ -14,8 +14,9 @@
    cache folder (:mod:`ionic_usd.texture.stone`);
 5. **author** the layers from those values (:func:`ionic_usd.usd.column_asset.author_column_asset`).
 
-The variant vocabulary (sets, variants, texel densities, ``UV_SPAN``) is the asset's, in
-:mod:`ionic_usd.usd.column_asset`; this module holds no ``pxr``.
+The variant vocabulary (sets, variants, ``UV_SPAN``) is the asset's, in
+:mod:`ionic_usd.blueprint.column_asset`, the texel densities the levels' (:mod:`ionic_usd.lod`);
+this module loads no ``pxr`` until it authors.
 """
 
 from __future__ import annotations
@@ -33,6 +34,17 @@ from typing import Any
 import numpy as np
 
 from ionic_usd import __version__
+from ionic_usd.blueprint.asset import AssetInstancer, AssetMesh
+from ionic_usd.blueprint.column_asset import (
+    ASSET_NAME,
+    BASE_CHART_BOUNDARY,
+    FINISHES,
+    FLUTE_VARIANTS,
+    UV_SPAN,
+    ColumnAssetOptions,
+    column_ornament,
+    volute_variant_params,
+)
 from ionic_usd.column.column import (
     build_base_part,
     build_capital_part,
@@ -41,22 +53,11 @@ from ionic_usd.column.column import (
 from ionic_usd.errors import OutputExistsError
 from ionic_usd.geometry.mesh import Mesh
 from ionic_usd.io import up_to_date
+from ionic_usd.lod import level, lod_rank
 from ionic_usd.pipeline.forms import form_cut, form_cuts, outside_walls
 from ionic_usd.pipeline.keys import build_key, file_digests
 from ionic_usd.pipeline.mesh_cache import cached_meshes
 from ionic_usd.texture.uv import UVCache, attach_uvs, unwrap_parts
-from ionic_usd.usd.asset import AssetInstancer, AssetMesh
-from ionic_usd.usd.column_asset import (
-    ASSET_NAME,
-    ASSET_TEXELS_PER_METRE,
-    BASE_CHART_BOUNDARY,
-    FINISHES,
-    FLUTE_VARIANTS,
-    UV_SPAN,
-    ColumnAssetOptions,
-    author_column_asset,
-    volute_variant_params,
-)
 
 __all__ = [
     "AssetReport",
@@ -158,7 +159,7 @@ def _unit_meshes(
 
         m0, h0 = uv_cache.misses, uv_cache.hits
         (body,) = metric_charts(
-            [body], ASSET_TEXELS_PER_METRE[unit.lod], cache=uv_cache, workers=workers
+            [body], level(unit.lod).asset_texels_per_metre, cache=uv_cache, workers=workers
         )
         counts = (uv_cache.misses - m0, uv_cache.hits - h0)
     return _with_forms(opts, unit.lod, [("CapitalBody", name, body, tag)]), counts
@@ -201,8 +202,7 @@ def _preload() -> None:
 
 def _cost(unit: _Unit) -> tuple[int, int]:
     """Scheduling order: capitals before bases, high LOD first (the longest units first)."""
-    rank = {"high": 0, "medium": 1, "low": 2}.get(unit.lod, 3)
-    return (unit.kind != "capital", rank)
+    return (unit.kind != "capital", lod_rank(unit.lod))
 
 
 def column_asset_meshes(
@@ -226,7 +226,7 @@ def column_asset_meshes(
 
     Returns
     -------
-    one :class:`~ionic_usd.usd.asset.AssetMesh` per (part variant, lod, form), named
+    one :class:`~ionic_usd.blueprint.asset.AssetMesh` per (part variant, lod, form), named
     ``<Part>_<variant>_<lod>[_<form>]``; capitals are tagged with ``scroll``, ``capital`` and
     (when the asset has more than one model) ``volute``.
     """
@@ -288,12 +288,11 @@ def column_asset_ornament(opts: ColumnAssetOptions) -> tuple[AssetInstancer, ...
     centre behind the wall plane) are dropped, so an engaged column carries no eggs inside
     its wall. Nothing if the asset is not ``carved`` or has no high LOD.
 
-    The instances are :func:`ionic_usd.usd.detail.column_ornament`'s (the one placement rule).
+    The instances are :func:`ionic_usd.blueprint.column_asset.column_ornament`'s (the one
+    placement rule).
     """
     if not opts.carved or "high" not in opts.lods:
         return ()
-    from ionic_usd.usd.detail import column_ornament
-
     out = []
     for a in column_ornament(opts):
         inst: Any = a.instances  # ionic_usd.column.ornament.Instances
@@ -327,12 +326,13 @@ def _with_uvs(meshes: list[AssetMesh], cache: UVCache | None) -> tuple[list[Asse
         return BASE_CHART_BOUNDARY if m.part == "Base" else None
 
     prefetch(
-        [(m.mesh, ASSET_TEXELS_PER_METRE[m.tags["lod"]], boundary(m)) for m in meshes], cache=cache
+        [(m.mesh, level(m.tags["lod"]).asset_texels_per_metre, boundary(m)) for m in meshes],
+        cache=cache,
     )
     out = []
     for lod in {m.tags["lod"] for m in meshes}:
         these = [m for m in meshes if m.tags["lod"] == lod]
-        tpm = ASSET_TEXELS_PER_METRE[lod]
+        tpm = level(lod).asset_texels_per_metre
         atlases = unwrap_parts(
             {f"{m.part}/{m.name}": m.mesh for m in these},
             texels_per_metre=tpm,
@@ -522,6 +522,8 @@ def build_column_asset(
     meshes, _ = _with_uvs(generated, cache)
     unwraps = cache.misses - misses0
     triangles = _default_triangles(meshes, opts)
+    from ionic_usd.usd.column_asset import author_column_asset  # pxr: only to author
+
     path = author_column_asset(
         dest,
         opts,

@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ionic_usd.blueprint.layers import CITY_INSTANCES_LAYER, CITY_ROOT_LAYER
 from ionic_usd.city.layout import (
     Footprint,
     TempleFit,
@@ -43,7 +44,14 @@ from ionic_usd.pipeline.city_extras import lay_stoas, street_column_spec, write_
 from ionic_usd.pipeline.city_lots import lot_specs
 from ionic_usd.pipeline.spec import TempleSpec, temple_spec
 
-__all__ = ["CityOptions", "build_city", "estimate_memory", "footprint_of", "write_summary"]
+__all__ = [
+    "CityOptions",
+    "build_city",
+    "check_city_output",
+    "estimate_memory",
+    "footprint_of",
+    "write_summary",
+]
 
 # measured (tools/bench_city.py, peak RSS of the build process; rounded up): the process with
 # pxr/shapely/numpy loaded, each street column (arrays + their Vt copies + temporaries), each
@@ -151,6 +159,21 @@ def estimate_memory(temples: int, columns: int, builds: int, threshold: int) -> 
     return _BASE_BYTES + columns * _PER_COLUMN + temples * per_temple + builds * _PER_BUILD
 
 
+def check_city_output(out: str | os.PathLike, *, force: bool, what: str = "output") -> Path:
+    """Refuse a city folder that cannot be written: an existing file, a folder this process
+    cannot write, or (without ``force``) a folder that already holds a city's layers.
+
+    The one check: the command line calls it before any work, :func:`build_city` again once
+    it holds the folder's lock (a city finished in between is not overwritten)."""
+    from ionic_usd.io import check_output_folder
+
+    p = check_output_folder(out, force=True, what=what)
+    for name in (CITY_ROOT_LAYER, CITY_INSTANCES_LAYER):
+        if (p / name).exists() and not force:
+            raise OutputExistsError(f"{p / name} exists; pass --force to rebuild the city")
+    return p
+
+
 def build_city(
     out: str | os.PathLike, opts: CityOptions, *, progress: Callable[[str], None] | None = None
 ) -> dict:
@@ -170,32 +193,26 @@ def build_city(
     # one writer at a time; a fresh city is built in a staging sibling and renamed in whole
     from ionic_usd.io import removed_if_failed
 
-    with folder_lock(out), staged_new_folder(out) as where:
-        with removed_if_failed(where / "Temples"):
+    with folder_lock(out):
+        check_city_output(out, force=opts.force)
+        with staged_new_folder(out) as where, removed_if_failed(where / "Temples"):
             summary = _build_city(where, opts, progress)
     summary["city"] = str(out / Path(summary["city"]).name)
     return summary
 
 
 def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | None) -> dict:
+    from ionic_usd.blueprint.layers import ASSET_NAME
     from ionic_usd.usd.city import (
         DEFAULT_INSTANCER_THRESHOLD,
-        INSTANCES_LAYER,
-        ROOT_LAYER,
         ColumnInstances,
         TempleInstances,
         compose_city,
     )
-    from ionic_usd.usd.column_asset import ASSET_NAME
 
     t0 = time.perf_counter()
     timings: dict[str, float] = {}
     out = Path(out)
-    if out.exists() and not out.is_dir():
-        raise ParameterError("output", str(out), "a folder (or a new path)")
-    for name in (ROOT_LAYER, INSTANCES_LAYER):
-        if (out / name).exists() and not opts.force:
-            raise OutputExistsError(f"{out / name} exists; pass --force to rebuild the city")
     threshold = (
         DEFAULT_INSTANCER_THRESHOLD
         if opts.instancer_threshold is None

@@ -14,10 +14,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from ionic_usd.blueprint.column_asset import ENGAGED_INSET
 from ionic_usd.geometry.boolean import new_points
 from ionic_usd.geometry.mesh import Mesh
 from ionic_usd.geometry.slivers import SLIVER_TOL, remove_slivers
-from ionic_usd.usd.column_asset import ENGAGED_INSET
 
 __all__ = ["form_cut", "form_cuts", "outside_walls"]
 

@@ -24,9 +24,9 @@ from typing import Any
 
 import numpy as np
 
+from ionic_usd.blueprint.asset import AssetMesh
 from ionic_usd.geometry.mesh import Mesh
 from ionic_usd.pipeline.keys import build_key
-from ionic_usd.usd.asset import AssetMesh
 
 __all__ = ["cached_meshes", "mesh_cache_folder"]
 

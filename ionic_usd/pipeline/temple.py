@@ -31,26 +31,21 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from ionic_usd.blueprint.layers import ASSET_NAME, OVERRIDES_LAYER, ROOT_LAYER
 from ionic_usd.checks import check_stone_options
 from ionic_usd.errors import OutputExistsError
 from ionic_usd.io import manifest_record, replace_folder, up_to_date
 from ionic_usd.pipeline.keys import build_key, file_digests
 
 if TYPE_CHECKING:
+    from ionic_usd.blueprint.column_asset import ColumnAssetOptions
     from ionic_usd.column.column import ColumnParams
     from ionic_usd.temple.layout import TempleLayout
     from ionic_usd.temple.mouldings import MouldingParams
-    from ionic_usd.usd.column_asset import ColumnAssetOptions
 
 __all__ = ["TempleReport", "compose_temple", "current_temple", "temple_key"]
 
 log = logging.getLogger(__name__)
-
-# the layer names of ionic_usd.usd.temple, repeated here so that the up-to-date path loads no pxr
-# (tests/test_temple.py checks they agree)
-ROOT_LAYER = "Temple.usda"
-OVERRIDES_LAYER = "overrides.usda"
-ASSET_NAME = "IonicColumn"
 
 
 @dataclass(frozen=True)

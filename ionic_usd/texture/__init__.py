@@ -22,7 +22,7 @@ from typing import Any
 _WHERE = {
     "DEFAULT_PADDING": "atlas",
     "DEFAULT_RESOLUTION_CAP": "atlas",
-    "LOD_TEXELS_PER_METRE": "atlas",
+    "DEFAULT_TEXELS_PER_METRE": "atlas",
     "UVAtlas": "atlas",
     "analytic_atlas": "atlas",
     "attach_uvs": "atlas",

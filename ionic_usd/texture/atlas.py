@@ -36,11 +36,12 @@ import numpy as np
 
 from ionic_usd.errors import GeometryError, ParameterError
 from ionic_usd.geometry.mesh import Mesh, chart_labels, frozen_array
+from ionic_usd.lod import level
 
 __all__ = [
     "DEFAULT_PADDING",
     "DEFAULT_RESOLUTION_CAP",
-    "LOD_TEXELS_PER_METRE",
+    "DEFAULT_TEXELS_PER_METRE",
     "UVAtlas",
     "analytic_atlas",
     "attach_uvs",
@@ -52,9 +53,9 @@ __all__ = [
     "st_distortion",
 ]
 
-#: Texel densities per level of detail (px per metre of surface). 256 px/m puts about
-#: 4 px on a 16 mm fillet of the Portunus shaft and gives it a 4096² atlas.
-LOD_TEXELS_PER_METRE: dict[str, float] = {"high": 256.0, "medium": 128.0, "low": 64.0}
+#: the default texel density (px per metre of surface): the high level of detail's
+#: ``atlas_texels_per_metre`` (:mod:`ionic_usd.lod`, where the other levels' are)
+DEFAULT_TEXELS_PER_METRE: float = level("high").atlas_texels_per_metre
 DEFAULT_PADDING = 4
 DEFAULT_RESOLUTION_CAP = 8192
 
@@ -205,7 +206,7 @@ def attach_uvs(mesh: Mesh, atlas: UVAtlas, atlas_size: int | None = None) -> Mes
 def analytic_atlas(
     mesh: Mesh,
     *,
-    texels_per_metre: float = LOD_TEXELS_PER_METRE["high"],
+    texels_per_metre: float = DEFAULT_TEXELS_PER_METRE,
     padding: int = DEFAULT_PADDING,
     resolution_cap: int = DEFAULT_RESOLUTION_CAP,
 ) -> UVAtlas:

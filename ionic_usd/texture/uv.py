@@ -41,7 +41,7 @@ from ionic_usd.geometry.mesh import Mesh, face_normals
 from ionic_usd.texture.atlas import (
     DEFAULT_PADDING,
     DEFAULT_RESOLUTION_CAP,
-    LOD_TEXELS_PER_METRE,
+    DEFAULT_TEXELS_PER_METRE,
     UVAtlas,
     analytic_atlas,
     attach_uvs,
@@ -64,7 +64,7 @@ from ionic_usd.texture.uv_cache import (
 __all__ = [
     "DEFAULT_PADDING",
     "DEFAULT_RESOLUTION_CAP",
-    "LOD_TEXELS_PER_METRE",
+    "DEFAULT_TEXELS_PER_METRE",
     "XATLAS_VERSION",
     "UVAtlas",
     "UVCache",
@@ -112,7 +112,7 @@ def _run_xatlas(
 def unwrap(
     mesh: Mesh,
     *,
-    texels_per_metre: float = LOD_TEXELS_PER_METRE["high"],
+    texels_per_metre: float = DEFAULT_TEXELS_PER_METRE,
     padding: int = DEFAULT_PADDING,
     resolution_cap: int = DEFAULT_RESOLUTION_CAP,
     cache: UVCache | None | Literal[False] = None,
@@ -308,7 +308,7 @@ def prefetch(
 def unwrap_parts(
     meshes: Mapping[str, Mesh],
     *,
-    texels_per_metre: float = LOD_TEXELS_PER_METRE["high"],
+    texels_per_metre: float = DEFAULT_TEXELS_PER_METRE,
     padding: int = DEFAULT_PADDING,
     resolution_cap: int = DEFAULT_RESOLUTION_CAP,
     cache: UVCache | None | Literal[False] = None,
@@ -347,7 +347,7 @@ def unwrap_parts(
 def apply_uvs(
     meshes: Mapping[str, Mesh],
     *,
-    texels_per_metre: float = LOD_TEXELS_PER_METRE["high"],
+    texels_per_metre: float = DEFAULT_TEXELS_PER_METRE,
     padding: int = DEFAULT_PADDING,
     cache: UVCache | None | Literal[False] = None,
     atlas_size: int | None = None,

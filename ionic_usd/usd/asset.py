@@ -22,15 +22,12 @@ changes what is under the paths of the parts it tags, never a path.
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from pxr import Sdf, Usd
 
-from ionic_usd.errors import ParameterError
-from ionic_usd.geometry.mesh import Mesh
+from ionic_usd.blueprint.asset import AssetInstancer, AssetMesh, AssetSpec
 from ionic_usd.usd.asset_slots import (
     Slot,
     author_slot_variants,
@@ -40,16 +37,12 @@ from ionic_usd.usd.asset_slots import (
 )
 from ionic_usd.usd.bounds import author_extents_hints
 from ionic_usd.usd.materials import (
-    MaterialTextures,
     author_preview_material,
     bind_material,
     bind_material_spec,
 )
 from ionic_usd.usd.mesh import author_mesh
 from ionic_usd.usd.stage import new_layer, save_layer
-
-if TYPE_CHECKING:  # the ornament module is imported only when an asset has instancers
-    from ionic_usd.column.ornament import Instances
 
 __all__ = [
     "AssetMesh",
@@ -60,76 +53,6 @@ __all__ = [
     "write_asset_layers",
     "replace_folder",
 ]
-
-
-@dataclass(frozen=True)
-class AssetMesh:
-    """One mesh of the asset: ``/<Name>/Geom/<part>/<name>`` with its variant tags."""
-
-    part: str
-    name: str
-    mesh: Mesh
-    tags: Mapping[str, str]
-
-
-@dataclass(frozen=True)
-class AssetInstancer:
-    """A PointInstancer ``/<Name>/Geom/<part>/<name>`` of ornament (see
-    :mod:`ionic_usd.usd.instancer`), switched by its variant tags like a mesh."""
-
-    part: str
-    name: str
-    instances: Instances
-    tags: Mapping[str, str]
-
-
-@dataclass(frozen=True)
-class AssetSpec:
-    """Everything an asset holds; paths of textures are relative to ``Payload/``.
-
-    ``variant_sets`` maps each set to its variants in display order; ``defaults`` gives each
-    set's selection. ``finishes`` maps a variant of the ``finish`` set (if present) to a
-    material name; ``materials`` maps material names to their textures.
-    """
-
-    name: str
-    version: str
-    meshes: tuple[AssetMesh, ...]
-    variant_sets: Mapping[str, tuple[str, ...]]
-    defaults: Mapping[str, str]
-    materials: Mapping[str, MaterialTextures]
-    default_material: str
-    finishes: Mapping[str, str] = field(default_factory=dict)
-    st_scale: float | None = None
-    custom_data: Mapping[str, object] = field(default_factory=dict)
-    documentation: str = ""
-    proxy_lod: str | None = None  # this lod's meshes, always loaded, as the proxy purpose
-    instancers: tuple[AssetInstancer, ...] = ()
-
-    def __post_init__(self) -> None:
-        for vset, variants in self.variant_sets.items():
-            sel = self.defaults.get(vset)
-            if sel not in variants:
-                raise ParameterError(f"defaults[{vset!r}]", sel, f"one of {', '.join(variants)}")
-        for m in _tagged(self):
-            for vset, v in m.tags.items():
-                if vset not in self.variant_sets or v not in self.variant_sets[vset]:
-                    raise ParameterError(
-                        f"tags of {m.part}/{m.name}",
-                        dict(m.tags),
-                        "variant sets and variants declared by the asset",
-                    )
-        if self.proxy_lod is not None and self.proxy_lod not in self.variant_sets.get("lod", ()):
-            raise ParameterError("proxy_lod", self.proxy_lod, "a variant of the lod set")
-        if self.default_material not in self.materials:
-            raise ParameterError(
-                "default_material", self.default_material, f"one of {', '.join(self.materials)}"
-            )
-        for fin, mat in self.finishes.items():
-            if mat not in self.materials:
-                raise ParameterError(
-                    f"finishes[{fin!r}]", mat, f"one of {', '.join(self.materials)}"
-                )
 
 
 def _geometry_layer(spec: AssetSpec) -> Sdf.Layer:
@@ -152,13 +75,8 @@ def _geometry_layer(spec: AssetSpec) -> Sdf.Layer:
     return layer
 
 
-def _tagged(spec: AssetSpec) -> tuple[AssetMesh | AssetInstancer, ...]:
-    """Every mesh and instancer of the asset (what variant tags switch)."""
-    return (*spec.meshes, *spec.instancers)
-
-
 def _slots(spec: AssetSpec) -> list[Slot]:
-    return slots(spec.name, _tagged(spec), spec.variant_sets, spec.proxy_lod)
+    return slots(spec.name, spec.tagged(), spec.variant_sets, spec.proxy_lod)
 
 
 def _materials_layer(spec: AssetSpec) -> Sdf.Layer:
@@ -251,7 +169,7 @@ def write_asset_layers(spec: AssetSpec, folder: Path) -> dict[str, Path]:
     tagging = {
         vs: spec.variant_sets[vs]
         for vs in spec.variant_sets
-        if any(vs in m.tags for m in _tagged(spec))
+        if any(vs in m.tags for m in spec.tagged())
     }
     hints = slot_extents_hints(str(written["geometry"]), f"/{spec.name}", _slots(spec), tagging)
     author_extents_hints(interface, f"/{spec.name}", hints, list(tagging))

@@ -1,6 +1,6 @@
 """Stable prim paths for an asset's variants: every variant swaps what is under a path.
 
-An asset's meshes and instancers (:class:`ionic_usd.usd.asset.AssetMesh`, ``AssetInstancer``)
+An asset's meshes and instancers (:class:`ionic_usd.blueprint.asset.AssetMesh`, ``AssetInstancer``)
 are authored once each in a *library*, the class prim ``/_<Name>Parts`` of ``Geometry.usdc``
 (outside the default prim, so a payload or reference of the asset never composes it). The
 composed asset has one prim per *slot* — ``Geom/<Part>`` for a mesh part, ``Geom/<Part>/<Kind>``

@@ -38,8 +38,10 @@ from pathlib import Path
 import numpy as np
 from pxr import Gf, Sdf, Usd, Vt
 
-from ionic_usd.city.layout import DEFAULT_INSTANCER_THRESHOLD, LOD_NAMES, yaw_quaternions
+from ionic_usd.blueprint.layers import CITY_INSTANCES_LAYER, CITY_ROOT_LAYER
+from ionic_usd.city.layout import DEFAULT_INSTANCER_THRESHOLD, yaw_quaternions
 from ionic_usd.errors import OutputExistsError, ParameterError, UsdAuthoringError
+from ionic_usd.lod import LOD_NAMES
 from ionic_usd.usd.city_prototypes import (
     instance_bounds,
     prim_identifier,
@@ -70,8 +72,8 @@ __all__ = [
 #: triangles of a box of cards as a renderer draws it: six quads
 CARD_TRIANGLES = 12
 
-ROOT_LAYER = "City.usda"
-INSTANCES_LAYER = "Instances.usdc"
+ROOT_LAYER = CITY_ROOT_LAYER
+INSTANCES_LAYER = CITY_INSTANCES_LAYER
 #: the variant selections of the street columns' card prototype (besides ``finish``): what a
 #: consumer that ignores draw modes draws for a far column, and what its cards are baked from
 COLUMN_CARD_SELECTION = {"lod": "low", "form": "full"}

@@ -30,7 +30,7 @@ the tiles are Terracotta in every variant that shows them; walls, entablature an
 keep the part's binding (painted stucco, or the finish hypothesis'). The materials come from the
 temple's one library, ``materials.usda`` (:func:`ionic_usd.usd.materials.stone_material`).
 The column asset's ``high`` LOD carries the carved echinus and astragal
-(:func:`column_ornament`, PointInstancers inside the asset).
+(:func:`ionic_usd.blueprint.column_asset.column_ornament`, PointInstancers inside the asset).
 """
 
 from __future__ import annotations
@@ -40,7 +40,7 @@ from pathlib import Path
 
 from pxr import Sdf, Tf, Vt
 
-from ionic_usd.column.ornament import Instances, capital_ornament
+from ionic_usd.column.ornament import Instances
 from ionic_usd.errors import ParameterError
 from ionic_usd.geometry.mesh import Mesh
 from ionic_usd.temple.layout import Hypothesis, Layer, TempleLayout
@@ -51,7 +51,6 @@ from ionic_usd.temple.mouldings import (
     portunus_mouldings,
 )
 from ionic_usd.temple.ornament import dentils, frieze_garlands, roof_tiles
-from ionic_usd.usd.asset import AssetInstancer
 from ionic_usd.usd.hypotheses import add_paradata
 from ionic_usd.usd.instancer import author_point_instancer
 from ionic_usd.usd.materials import TILE_METRES, bind_material_spec
@@ -74,7 +73,6 @@ __all__ = [
     "author_detail_variants",
     "write_frieze_hypotheses",
     "check_detail",
-    "column_ornament",
 ]
 
 DETAIL_SET = "detail"
@@ -284,30 +282,3 @@ def write_frieze_hypotheses(
     data["hypotheses"] = listing
     spec.customData = {"ionic_usd": data}
     return done
-
-
-def column_ornament(opts) -> tuple[AssetInstancer, ...]:
-    """The carved echinus and astragal of the column asset's ``high`` LOD (PointInstancers
-    tagged ``lod = high``), or nothing if the asset has no high LOD.
-
-    Parameters
-    ----------
-    opts : :class:`ionic_usd.usd.column_asset.ColumnAssetOptions`
-    """
-    if "high" not in opts.lods:
-        return ()
-    p = opts.params.with_lod("high")
-    y_cap = p.base_params().height + p.shaft.length
-    cap = p.capital_params()
-    egg, bead = capital_ornament(
-        y_capital=y_cap,
-        top_radius=p.shaft.top_radius,
-        echinus_height=cap.echinus_height,
-        echinus_projection=cap.echinus_projection,
-        ring_top=p.shaft.ring_top,
-        capital_lift=cap.capital_position_y,
-    )
-    return (
-        AssetInstancer("Ornament", "EggAndDart_high", egg, {"lod": "high"}),
-        AssetInstancer("Ornament", "BeadAndReel_high", bead, {"lod": "high"}),
-    )

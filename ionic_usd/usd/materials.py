@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 from pxr import Gf, Sdf, Usd, UsdShade
+
+from ionic_usd.blueprint.materials import TILE_METRES, MaterialTextures
 
 __all__ = [
     "FALLBACKS",
@@ -16,9 +16,6 @@ __all__ = [
     "stone_material",
 ]
 
-TILE_METRES = 2.0  # m of stone per repeat of the tileable maps
-
-
 # UsdUVTexture ``inputs:fallback`` per map, in the map's own encoding: a mid stone colour, a
 # matte roughness, and the flat tangent-space normal (0.5, 0.5, 1) that decodes to (0, 0, 1)
 FALLBACKS = {
@@ -26,19 +23,6 @@ FALLBACKS = {
     "Roughness": Gf.Vec4f(0.8, 0.8, 0.8, 1.0),
     "Normal": Gf.Vec4f(0.5, 0.5, 1.0, 1.0),
 }
-
-
-@dataclass(frozen=True)
-class MaterialTextures:
-    """Anchored relative asset paths (``./Textures/…``) of one material's texture maps.
-
-    ``basecolor`` is sRGB-encoded; ``roughness`` and ``normal`` are data (``raw``). The normal
-    map is tangent space, OpenGL convention (+Y up), 8-bit: decoded with scale 2, bias −1.
-    """
-
-    basecolor: str
-    roughness: str
-    normal: str
 
 
 def author_preview_material(

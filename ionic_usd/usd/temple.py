@@ -45,7 +45,6 @@ every temple or column of the scene at once.
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 import os
 from collections.abc import Callable, Sequence
@@ -56,8 +55,20 @@ from typing import Any
 from pxr import Sdf, Usd
 
 from ionic_usd import __version__
-from ionic_usd.column.column import LODS, ColumnParams, portunus_column_params
+from ionic_usd.blueprint.column_asset import FINISHES, FLUTE_VARIANTS, UV_SPAN, ColumnAssetOptions
+from ionic_usd.blueprint.layers import (
+    ASSET_NAME,
+    COLONNADE_LAYER,
+    GENERATED_LAYER,
+    MATERIALS_LAYER,
+    OVERRIDES_LAYER,
+    ROOT_LAYER,
+    TEMPLE_CLASS,
+)
+from ionic_usd.blueprint.temple import temple_asset_options, temple_column_params
+from ionic_usd.column.column import ColumnParams
 from ionic_usd.errors import ParameterError, UsdAuthoringError
+from ionic_usd.lod import LOD_NAMES
 from ionic_usd.temple.layout import Layer, TempleLayout
 from ionic_usd.temple.mouldings import MouldingParams, portunus_mouldings
 from ionic_usd.usd.asset import class_path
@@ -65,13 +76,6 @@ from ionic_usd.usd.bounds import (
     author_extents_hints,
     bound_changing_sets,
     variant_extents_hints,
-)
-from ionic_usd.usd.column_asset import (
-    ASSET_NAME,
-    FINISHES,
-    FLUTE_VARIANTS,
-    UV_SPAN,
-    ColumnAssetOptions,
 )
 from ionic_usd.usd.combinations import realise_combinations, select_variants
 from ionic_usd.usd.detail import (
@@ -125,18 +129,12 @@ __all__ = [
     "TEMPLE_CLASS",
 ]
 
-ROOT_LAYER = "Temple.usda"
-GENERATED_LAYER = "generated.usda"
-OVERRIDES_LAYER = "overrides.usda"
-MATERIALS_LAYER = "materials.usda"
-COLONNADE_LAYER = "colonnade.usda"
 PART_LAYERS = {
     Layer.PODIUM: "podium.usda",
     Layer.CELLA: "cella.usda",
     Layer.ENTABLATURE: "entablature.usda",
     Layer.ROOF: "roof.usda",
 }
-TEMPLE_CLASS = "/_class_Temple"
 ASSET_REF = f"./{ASSET_NAME}/{ASSET_NAME}.usda"
 # baseline finish: the ancient painted stucco (see portunus.toml); bare stone is a hypothesis
 BASELINE_FINISH = "stucco"
@@ -444,22 +442,11 @@ def plan_temple(
     from ionic_usd.usd.combinations import check_hypothesis_budget
 
     check_hypothesis_budget(layout)  # bounded work: before anything else
-    p = layout.params
-    column = column or portunus_column_params(
-        height=p.columns_height,
-        lower_diameter=p.columns_lower_diameter,
-        base=getattr(p, "column_base", "attic_bezier_plinth"),  # a typed temple names its base
+    column = column or temple_column_params(layout)
+    opts = temple_asset_options(
+        column, texture_size=texture_size, seed=seed, asset_options=asset_options
     )
-    opts = asset_options or ColumnAssetOptions(params=column, texture_size=texture_size, seed=seed)
-    if opts.params != column:
-        opts = dataclasses.replace(opts, params=column)
-    if opts.bases[0] != column.base:  # the asset's default base is the column's
-        opts = dataclasses.replace(
-            opts, bases=(column.base, *(b for b in opts.bases if b != column.base))
-        )
     detail = check_detail(detail or DEFAULT_DETAIL)
-    if not opts.carved:
-        opts = dataclasses.replace(opts, carved=True)  # the carved capital goes with the detail
     hyp_layers = hypothesis_layers(layout, opts)  # validates every hypothesis first
     mp = mouldings or portunus_mouldings()
     detail_cache: dict[object, DetailGeometry] = {}
@@ -478,7 +465,7 @@ def plan_temple(
         hyp_layers=hyp_layers,
         geometry=detail_of(layout),
         base_meshes=cuboid_meshes(layout, CUBOID_UV_SCALE),
-        lods=tuple(lod for lod in LODS if lod in opts.lods),
+        lods=tuple(lod for lod in LOD_NAMES if lod in opts.lods),
         detail_of=detail_of,
     )
 

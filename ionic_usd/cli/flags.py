@@ -1,7 +1,7 @@
 """Argparse flag families shared by the subcommands: one helper per family.
 
-Every subcommand module (:mod:`ionic_usd.cli`, :mod:`ionic_usd.evaluate.commands`,
-:mod:`ionic_usd.export.command`, :mod:`ionic_usd.pipeline.commands`) takes its common flags
+Every subcommand module (:mod:`ionic_usd.cli`, :mod:`ionic_usd.cli.evaluate`,
+:mod:`ionic_usd.cli.export`, :mod:`ionic_usd.cli.city`) takes its common flags
 from here, so ``--output``/``--force``, ``--config``, the stone texture flags, ``--max-memory``,
 ``--variant`` and the report files read and behave the same everywhere.
 

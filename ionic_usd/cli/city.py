@@ -7,7 +7,7 @@ import math
 import sys
 from pathlib import Path
 
-from ionic_usd.cli_flags import add_command, add_memory_flag, add_seed_flag, texture_size
+from ionic_usd.cli.flags import add_command, add_memory_flag, add_seed_flag, texture_size
 from ionic_usd.errors import ParameterError
 
 __all__ = ["add_city_parser", "cmd_city"]
@@ -52,7 +52,7 @@ def _check_grid_memory(args: argparse.Namespace, limit_gb: float) -> None:
 
 
 def cmd_city(args: argparse.Namespace) -> int:
-    from ionic_usd.pipeline.city import CityOptions, build_city, write_summary
+    from ionic_usd.pipeline.city import CityOptions, build_city, check_city_output, write_summary
 
     # every output path and flag is checked before any work (issue 31)
     if args.json is not None:
@@ -62,9 +62,7 @@ def cmd_city(args: argparse.Namespace) -> int:
         parent = args.json.parent
         if not parent.is_dir() and parent.resolve() != Path(args.folder).resolve():
             raise ParameterError("--json", str(args.json), "a file in an existing folder")
-    from ionic_usd.io import check_output_folder
-
-    check_output_folder(args.folder, force=True, what="folder")
+    check_city_output(args.folder, force=args.force, what="folder")
     for flag, v, lo, hi in (
         ("--rows", args.rows, 1, 10_000),
         ("--cols", args.cols, 1, 10_000),

@@ -7,7 +7,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from ionic_usd.cli_flags import add_command, add_output_flags
+from ionic_usd.cli.flags import add_command, add_output_flags
 
 __all__ = ["add_paradata_parser", "add_web_parser", "cmd_paradata", "cmd_web"]
 

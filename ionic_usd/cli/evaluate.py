@@ -15,7 +15,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ionic_usd.cli_flags import (
+from ionic_usd.cli.flags import (
     add_command,
     add_config_flags,
     add_memory_flag,
@@ -315,7 +315,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
 
     _check_memory("the fit", args.scan, args.reference, limit=args.max_memory)
     if args.part == "column":
-        from ionic_usd.evaluate.scan_report import cmd_fit_column
+        from ionic_usd.cli.fit_scan import cmd_fit_column
 
         return cmd_fit_column(args)
     if args.reference is None:

@@ -1,5 +1,9 @@
 """The ``ionic-usd`` command line: thin wrappers over the public API.
 
+The package is the whole command line (the parser here, the flag families in
+:mod:`ionic_usd.cli.flags`, the commands in its other modules); no library module imports it
+(``tests/test_layering.py``).
+
 Every command validates all input before writing anything; errors print one line
 (``ionic-usd: error: …``) and exit with status 2.
 """
@@ -12,7 +16,7 @@ from collections.abc import Callable, Collection, Sequence
 from pathlib import Path
 from typing import Any
 
-from ionic_usd.cli_flags import (
+from ionic_usd.cli.flags import (
     add_command,
     add_config_flags,
     add_dataclass_flags,
@@ -21,8 +25,7 @@ from ionic_usd.cli_flags import (
     add_rebuild_flag,
     add_stone_flags,
 )
-from ionic_usd.errors import IonicError
-from ionic_usd.make_commands import (
+from ionic_usd.cli.make import (
     PARTS,
     cmd_asset,
     cmd_column,
@@ -31,6 +34,7 @@ from ionic_usd.make_commands import (
     cmd_shaft,
     cmd_temple,
 )
+from ionic_usd.errors import IonicError
 
 __all__ = ["main", "build_parser"]
 
@@ -236,37 +240,37 @@ def _add_preview(sub: Any, full: bool) -> None:
 
 
 def _add_city(sub: Any, full: bool) -> None:
-    from ionic_usd.pipeline.commands import add_city_parser
+    from ionic_usd.cli.city import add_city_parser
 
     add_city_parser(sub, _Parser, arguments=full)
 
 
 def _add_evaluate(sub: Any, full: bool) -> None:
-    from ionic_usd.evaluate.commands import add_evaluate_parser
+    from ionic_usd.cli.evaluate import add_evaluate_parser
 
     add_evaluate_parser(sub, arguments=full)
 
 
 def _add_fit(sub: Any, full: bool) -> None:
-    from ionic_usd.evaluate.commands import add_fit_parser
+    from ionic_usd.cli.evaluate import add_fit_parser
 
     add_fit_parser(sub, arguments=full)
 
 
 def _add_export(sub: Any, full: bool) -> None:
-    from ionic_usd.export.command import add_parser
+    from ionic_usd.cli.export import add_parser
 
     add_parser(sub, _Parser, arguments=full)
 
 
 def _add_paradata(sub: Any, full: bool) -> None:
-    from ionic_usd.paradata_command import add_paradata_parser
+    from ionic_usd.cli.paradata import add_paradata_parser
 
     add_paradata_parser(sub, full)
 
 
 def _add_web(sub: Any, full: bool) -> None:
-    from ionic_usd.paradata_command import add_web_parser
+    from ionic_usd.cli.paradata import add_web_parser
 
     add_web_parser(sub, full)
 
@@ -444,7 +448,3 @@ def main(argv: list[str] | None = None) -> int:
         )
     finally:
         usd.stop()  # (nothing left to print after fail(); restores stderr on SystemExit)
-
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())

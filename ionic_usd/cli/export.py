@@ -7,7 +7,7 @@ import math
 from pathlib import Path
 from typing import Any
 
-from ionic_usd.cli_flags import add_command, add_memory_flag, add_output_flags, add_variant_flag
+from ionic_usd.cli.flags import add_command, add_memory_flag, add_output_flags, add_variant_flag
 from ionic_usd.errors import ParameterError
 
 __all__ = ["add_parser", "cmd_export", "parse_scale"]

@@ -12,7 +12,7 @@ import sys
 import time
 from pathlib import Path
 
-from ionic_usd.cli_flags import collect_flags
+from ionic_usd.cli.flags import collect_flags
 from ionic_usd.errors import ParameterError
 
 __all__ = [
@@ -118,7 +118,8 @@ PARTS = {
 
 
 def cmd_column(args: argparse.Namespace) -> int:
-    from ionic_usd.column.column import COLUMN_DOCS, build_column, column_params_to_tables
+    from ionic_usd.api import column
+    from ionic_usd.column.column import COLUMN_DOCS, column_params_to_tables
     from ionic_usd.column.shaft import SHAFT_PARAMETER_DOCS
     from ionic_usd.params import to_toml
 
@@ -142,24 +143,18 @@ def cmd_column(args: argparse.Namespace) -> int:
             )
         )
         return 0
-    from ionic_usd.usd import check_output_path, write_meshes
+    from ionic_usd.usd import check_output_path
 
-    out = check_output_path(args.output, force=args.force)
+    out = check_output_path(args.output, force=args.force)  # refused before any work
     from ionic_usd.resources import check_estimate, estimate_column
 
     check_estimate(estimate_column(params), args.max_memory)
     t0 = time.perf_counter()
-    col = build_column(params)
+    col = column(params)
     t1 = time.perf_counter()
-    meshes = {k: v for k, v in col.parts().items() if k in PARTS[args.part]}
-    write_meshes(
-        out,
-        meshes,
-        root="Column",
-        force=args.force,
-        comment=f"ionic_usd column ({params.lod}, base {params.base})",
-    )
+    col.save(out, force=args.force, parts=PARTS[args.part])
     t2 = time.perf_counter()
+    meshes = {k: v for k, v in col.parts().items() if k in PARTS[args.part]}
     tris = sum(m.n_triangles for m in meshes.values())
     print(
         f"wrote {out}: {', '.join(meshes)}; {tris:,} triangles, height {col.height:.3f} m "
@@ -169,10 +164,10 @@ def cmd_column(args: argparse.Namespace) -> int:
 
 
 def cmd_asset(args: argparse.Namespace) -> int:
+    from ionic_usd.blueprint.column_asset import ColumnAssetOptions
     from ionic_usd.io import check_output_folder
     from ionic_usd.pipeline.asset import build_column_asset
     from ionic_usd.resources import check_estimate, estimate_asset
-    from ionic_usd.usd.column_asset import ColumnAssetOptions
 
     check_output_folder(args.output, force=args.force)
     params = _column_params(args)
