@@ -95,8 +95,8 @@ from ionic_usd.usd.hypotheses import (
     column_path,
     column_xform,
     cuboid_meshes,
+    hyp_choices,
     hyp_ident,
-    hyp_set,
     hypothesis_layer,
     hypothesis_paradata,
     temple_keys,
@@ -324,20 +324,26 @@ def _generated_layer(
             over.variantSelections["lod"] = lod
     spec.variantSelections["lod"] = lods[0]
     listing = {}
+    choices = hyp_choices(layout.hypotheses)  # the alternatives of a question share one set
     for h in layout.hypotheses:
         realised = hyp_layers[h.id] is not None
+        vset, value = choices[h.id]
         entry = dict(hypothesis_paradata(h))
         entry["realised"] = realised
-        entry["variantSet"] = hyp_set(h.id) if realised else ""
+        entry["variantSet"] = vset if realised else ""
+        entry["variant"] = value if realised else ""
+        entry["question"] = h.key
         listing[hyp_ident(h.id)] = entry
         if not realised:
             continue
-        vs = Sdf.VariantSetSpec(spec, hyp_set(h.id))
-        spec.variantSetNameList.Append(hyp_set(h.id))
-        Sdf.VariantSpec(vs, "baseline")
-        alt = Sdf.VariantSpec(vs, "alternative")
+        vs = spec.variantSets.get(vset)
+        if vs is None:
+            vs = Sdf.VariantSetSpec(spec, vset)
+            spec.variantSetNameList.Append(vset)
+            Sdf.VariantSpec(vs, "baseline")
+        alt = Sdf.VariantSpec(vs, value)
         alt.primSpec.referenceList.Prepend(Sdf.Reference(f"./layers/{h.id}.usda"))
-        spec.variantSelections[hyp_set(h.id)] = "baseline"
+        spec.variantSelections[vset] = "baseline"
     spec.customData = {
         "ionic_usd": {
             "hypotheses": listing,

@@ -78,7 +78,8 @@ def part_centres(scene: str | os.PathLike, variants: Mapping[str, str]) -> dict[
 def hypothesis_changes(
     scene: str | os.PathLike, variants: Mapping[str, str]
 ) -> tuple[dict[str, list[str]], list[str]]:
-    """``({hypothesis variant set: [part paths it changes]}, [baseline part paths])`` with
+    """``({"<hypothesis variant set>=<value>": [part paths it changes]}, [baseline part
+    paths])`` (every value but ``baseline`` of every ``hyp_`` set) with
     ``variants`` (e.g. ``detail``, ``lod``) selected throughout."""
     stage = Usd.Stage.Open(str(scene))
     root = stage.GetDefaultPrim()
@@ -91,10 +92,16 @@ def hypothesis_changes(
     for name in sets.GetNames():
         if not name.startswith("hyp_"):
             continue
-        sets.GetVariantSet(name).SetVariantSelection("alternative")
-        alt = part_signatures(stage)
-        sets.GetVariantSet(name).SetVariantSelection("baseline")
-        out[name] = sorted(p for p in {*base, *alt} if base.get(p) != alt.get(p) and p in alt)
+        vset = sets.GetVariantSet(name)
+        for value in vset.GetVariantNames():
+            if value == "baseline":
+                continue
+            vset.SetVariantSelection(value)
+            alt = part_signatures(stage)
+            vset.SetVariantSelection("baseline")
+            out[f"{name}={value}"] = sorted(
+                p for p in {*base, *alt} if base.get(p) != alt.get(p) and p in alt
+            )
     return out, sorted(base)
 
 
