@@ -201,3 +201,45 @@ def test_city_lots_never_draw_two_alternatives_of_a_question():
             "plan",
         )
     assert "\n" not in str(info.value) and "lot1" in str(info.value)
+
+
+def test_web_data_groups_the_alternatives_of_a_question(tiny_temple):
+    """The web panel's data: both frieze alternatives under the question 'frieze', each with
+    its own value of hyp_frieze and the parts that value changes (the relief for garlands)."""
+    from ionic_usd.usd.paradata_scene import read_scene_paradata
+    from ionic_usd.usd.web_scene import hypothesis_changes
+    from ionic_usd.web import _data
+
+    changes, base = hypothesis_changes(tiny_temple.root, {"lod": "low", "detail": "carved"})
+    assert "hyp_frieze=frieze_plain" in changes and "hyp_frieze=frieze_garlands" in changes
+    data = _data(read_scene_paradata(tiny_temple.root), changes, base)
+    frieze = {h["id"]: h for h in data["hypotheses"] if h["question"] == "frieze"}
+    assert set(frieze) == {"frieze-plain", "frieze-garlands"}
+    assert {(h["set"], h["variant"]) for h in frieze.values()} == {
+        ("hyp_frieze", "frieze_plain"),
+        ("hyp_frieze", "frieze_garlands"),
+    }
+    assert any("FriezeGarlands" in p for p in frieze["frieze-garlands"]["changes"])
+    assert not any("FriezeGarlands" in p for p in frieze["frieze-plain"]["changes"])
+    roof = next(h for h in data["hypotheses"] if h["id"] == "roof-pitch-15")
+    assert (roof["question"], roof["variant"]) == ("roof-pitch-15", "alternative")
+
+
+def test_graphml_links_the_alternatives_of_a_question(tiny_temple, tmp_path):
+    from ionic_usd.cli import main
+    from ionic_usd.temple.em_graphml import HYP_PREFIX, graph_of, read_graphml
+    from ionic_usd.usd.paradata_scene import read_scene_paradata
+
+    pd = read_scene_paradata(tiny_temple.root)
+    asks = {hid: str(e.get("question") or hid) for hid, e in pd.listing.items()}
+    assert asks["frieze-plain"] == asks["frieze-garlands"] == "frieze"
+    g = graph_of(pd.parts, pd.hypotheses, asks)
+    between = [
+        (a, b) for a, b, _ in g.edges if a in g.units and b in g.units and a.startswith(HYP_PREFIX)
+    ]
+    between = [(a, b) for a, b in between if b.startswith(HYP_PREFIX)]
+    assert between == [(HYP_PREFIX + "frieze-garlands", HYP_PREFIX + "frieze-plain")]
+    out = tmp_path / "em.graphml"
+    assert main(["paradata", str(tiny_temple.root), "-o", str(out)]) == 0
+    parts, hyps = read_graphml(out)  # the extra edges read back without harm
+    assert {"frieze-plain", "frieze-garlands"} <= set(hyps)

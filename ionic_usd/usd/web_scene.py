@@ -39,7 +39,9 @@ def _digest(*values: object) -> str:
 def _signature(p: Usd.Prim, cache: UsdGeom.XformCache) -> tuple:
     m = np.array(cache.GetLocalToWorldTransform(p)).round(6)
     mat, _ = UsdShade.MaterialBindingAPI(p).ComputeBoundMaterial()
-    sig: list = [m.tobytes(), str(mat.GetPath()) if mat else ""]
+    # the visibility too: a question's alternative may show a part the others hide (the relief)
+    vis = str(UsdGeom.Imageable(p).ComputeVisibility())
+    sig: list = [m.tobytes(), str(mat.GetPath()) if mat else "", vis]
     if p.GetTypeName() == "Mesh":
         sig.append(_digest(UsdGeom.Mesh(p).GetPointsAttr().Get()))
     elif p.GetTypeName() == "PointInstancer":
@@ -100,7 +102,9 @@ def hypothesis_changes(
             alt = part_signatures(stage)
             vset.SetVariantSelection("baseline")
             out[f"{name}={value}"] = sorted(
-                p for p in {*base, *alt} if base.get(p) != alt.get(p) and p in alt
+                p
+                for p in {*base, *alt}
+                if base.get(p) != alt.get(p) and p in alt and alt[p][2] != "invisible"
             )
     return out, sorted(base)
 
