@@ -232,8 +232,10 @@ def _temple_sets(stage):
     root = stage.GetDefaultPrim()
     vsets = root.GetVariantSets()
     sets = {n: vsets.GetVariantSet(n).GetVariantNames() for n in vsets.GetNames()}
-    # lod, detail and one set per hypothesis (all six of portunus.toml are realised)
-    assert {"lod", "detail", "view"} <= set(sets) and len(sets) == 9  # view: paradata.md
+    # lod, detail, view (paradata.md) and the hypotheses (all six of portunus.toml are
+    # realised): four switches and the frieze's question (one set, three values)
+    assert {"lod", "detail", "view", "hyp_frieze"} <= set(sets) and len(sets) == 8
+    assert len(sets["hyp_frieze"]) == 3
     return sets
 
 
@@ -263,6 +265,15 @@ def test_temple_hints_match_sampled_combinations(portunus_temple):
                 check_hint(stage.GetPrimAtPath(p), (p, sel), brute=False)
                 worst = max(worst, overshoot(stage.GetPrimAtPath(p)))
     assert worst < TEMPLE_OVERSHOOT
+    assert nested_sets(stage.GetRootLayer()) == 0  # Temple.usda: no hint in nested variants
+    gen = Sdf.Layer.FindOrOpen(str(portunus_temple.root.parent / "generated.usda"))
+    hinted = []
+    gen.Traverse(
+        Sdf.Path.absoluteRootPath,
+        lambda p: hinted.append(p) if p.IsPropertyPath() and p.name == "extentsHint" else None,
+    )
+    # at most one variant set level above a hint (the combination layers' nesting holds none)
+    assert hinted and all(str(p).count("{") <= 1 for p in hinted), hinted
 
 
 @pytest.mark.slow

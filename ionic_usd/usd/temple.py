@@ -419,13 +419,15 @@ class TemplePlan:
             "/Temple/Colonnade",
         ]
         log.info("extentsHint per variant combination")
+        # loaded: the hints bound the columns' geometry, not the asset's own hints (which are
+        # unions over the asset's sets: a temple hint over them would not be tight)
+        gen.Load()
         memo: dict[Any, Any] = {}  # the passes and the product share combinations
         vsets = bound_changing_sets(gen, "/Temple", parts, candidates, base="lod", memo=memo)
         hints = variant_extents_hints(gen, "/Temple", parts, vsets, memo=memo)
         gen_layer = gen.GetRootLayer()
         author_extents_hints(gen_layer, "/Temple", hints, list(vsets))
         gen_layer.Save()
-        gen.Load()  # the payloads, for the triangles drawn per LOD
         lod_triangles = {lod: triangles_with(gen, {"lod": lod}) for lod in self.lods}
         del gen
         _check_resolves(tmp / ROOT_LAYER, tmp / GENERATED_LAYER)
