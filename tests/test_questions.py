@@ -243,3 +243,50 @@ def test_graphml_links_the_alternatives_of_a_question(tiny_temple, tmp_path):
     assert main(["paradata", str(tiny_temple.root), "-o", str(out)]) == 0
     parts, hyps = read_graphml(out)  # the extra edges read back without harm
     assert {"frieze-plain", "frieze-garlands"} <= set(hyps)
+
+
+@pytest.mark.slow  # a temple build of its own (~14 s)
+def test_a_question_interacting_with_a_switch_gets_nested_combination_layers(tmp_path):
+    """Two answers for the cornice (one question) with the roof pitch (a switch): where the
+    roof pitch and an answer interact the combination layer is nested inside that answer's
+    value, and every choice composes to the layout built with it."""
+    from ionic_usd.pipeline.temple import compose_temple
+    from ionic_usd.usd.detail import detail_geometry
+
+    data = load_toml(PORTUNUS)
+    data["hypothesis"] = [h for h in data["hypothesis"] if h["id"] == "roof-pitch-15"] + [
+        _hyp("deep-cornice", "cornice", {"entablature.cornice_projection_ratio": 1.6}),
+        _hyp("shallow-cornice", "cornice", {"entablature.cornice_projection_ratio": 0.7}),
+    ]
+    layout = layout_from_mapping(data, context="test")
+    rep = compose_temple(tmp_path / "T", layout, texture_size=16)
+    assert "roof-pitch-15+deep-cornice" in rep.combination_layers
+    stage = Usd.Stage.Open(str(tmp_path / "T" / "Temple.usda"))
+    vsets = stage.GetDefaultPrim().GetVariantSets()
+    assert vsets.GetVariantSet("hyp_cornice").GetVariantNames() == [
+        "baseline",
+        "deep_cornice",
+        "shallow_cornice",
+    ]
+    ids_of = {
+        "baseline": [],
+        "deep_cornice": ["deep-cornice"],
+        "shallow_cornice": ["shallow-cornice"],
+    }
+    for pitch in ("baseline", "alternative"):
+        for cornice, ids in ids_of.items():
+            with Usd.EditContext(stage, stage.GetSessionLayer()):
+                vsets.GetVariantSet("hyp_roof_pitch_15").SetVariantSelection(pitch)
+                vsets.GetVariantSet("hyp_cornice").SetVariantSelection(cornice)
+                vsets.GetVariantSet("detail").SetVariantSelection("moulded")
+            apply = ids + (["roof-pitch-15"] if pitch == "alternative" else [])
+            want = build_layout(layout.params, hypotheses=layout.hypotheses, apply=apply)
+            bad = mismatches(
+                stage,
+                want,
+                layout.params.columns_height,
+                uv_scale=CUBOID_UV_SCALE,
+                variant="moulded",
+                detail=detail_geometry(want),
+            )
+            assert bad == {}, (apply, sorted(bad))
