@@ -113,20 +113,23 @@ def test_every_detail_layer_is_valid_alone(carved_temple):
 def test_frieze_hypothesis_is_realised_and_cited(stage):
     listing = stage.GetDefaultPrim().GetCustomData()["ionic_usd"]["hypotheses"]
     entry = listing["frieze_garlands"]
-    assert entry["realised"] is True and entry["variantSet"] == "hyp_frieze_garlands"
+    assert entry["realised"] is True and entry["variantSet"] == "hyp_frieze"  # its question
+    assert entry["variant"] == "frieze_garlands" and entry["question"] == "frieze"
     assert entry["certainty"] == "medium" and len(entry["sources"]) >= 2
     path = "/Temple/Entablature/Ornament/FriezeGarlands"
     assert not shown(stage.GetPrimAtPath(path))  # a plain band by default (the path stays)
     sets = stage.GetDefaultPrim().GetVariantSets()
     try:
-        sets.GetVariantSet("hyp_frieze_garlands").SetVariantSelection("alternative")
+        sets.GetVariantSet("hyp_frieze").SetVariantSelection("frieze_plain")  # the other one
+        assert not shown(stage.GetPrimAtPath(path))
+        sets.GetVariantSet("hyp_frieze").SetVariantSelection("frieze_garlands")
         garlands = UsdGeom.PointInstancer(stage.GetPrimAtPath(path))
         assert garlands and len(garlands.GetProtoIndicesAttr().Get()) > 10
         assert garlands.GetPrim().GetCustomData()["ionic_usd"]["hypotheses"]["frieze_garlands"]
         sets.GetVariantSet("detail").SetVariantSelection("moulded")  # relief is ornament
         assert not shown(stage.GetPrimAtPath("/Temple/Entablature/Ornament"))
     finally:
-        sets.GetVariantSet("hyp_frieze_garlands").SetVariantSelection("baseline")
+        sets.GetVariantSet("hyp_frieze").SetVariantSelection("baseline")
         sets.GetVariantSet("detail").SetVariantSelection("carved")
 
 

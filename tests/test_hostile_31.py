@@ -131,7 +131,27 @@ CASES: list[tuple[list[str], dict[str, bytes | None], str]] = [
     (["temple", "--config", "t.toml", "-o", "T"], {"t.toml": b"extends = 5\n"}, "extends"),
     # hypotheses: bounded work, refused before any (the limits of usd.combinations)
     (["temple", "--config", "t.toml", "-o", "T"], {"t.toml": b"@1000"}, "at most 64"),
-    (["temple", "--config", "t.toml", "-o", "T"], {"t.toml": b"@6"}, "limit is 8"),
+    (["temple", "--config", "t.toml", "-o", "T"], {"t.toml": b"@6"}, "limit is 256"),
+    # alternatives of one question (one variant set): the same change twice, or a question
+    # named like an independent hypothesis' set
+    (
+        ["temple", "--config", "t.toml", "-o", "T"],
+        {
+            "t.toml": b'extends = "portunus"\n[[hypothesis]]\nid = "frieze-low"\n'
+            b'question = "frieze"\ndescription = "d"\nsources = ["s"]\ncertainty = "low"\n'
+            b'changes = { "entablature.frieze_ratio" = 0.75 }\n'
+        },
+        "same change",
+    ),
+    (
+        ["temple", "--config", "t.toml", "-o", "T"],
+        {
+            "t.toml": b'extends = "portunus"\n[[hypothesis]]\nid = "pitch-a"\n'
+            b'question = "roof-pitch-15"\ndescription = "d"\nsources = ["s"]\n'
+            b'certainty = "low"\nchanges = { "roof.tympanum_ratio" = 8.0 }\n'
+        },
+        "question",
+    ),
     # names and values that used to pass
     (["shaft", "-o", "a\nb.usda"], {}, "control characters"),
     (["temple", "-o", "a\tb"], {}, "control characters"),

@@ -11,6 +11,7 @@ from pxr import Sdf, Usd, UsdGeom, UsdShade
 from ionic_usd.temple.em_graphml import HYP_PREFIX, graph_of, read_graphml, write_graphml
 from ionic_usd.temple.layout import portunus_layout
 from ionic_usd.temple.paradata import EM_CHART, Evidence, part_key
+from ionic_usd.usd.hypotheses import hyp_choices
 from ionic_usd.usd.paradata import em_material_path
 from ionic_usd.usd.paradata_scene import read_scene_paradata
 
@@ -43,8 +44,12 @@ def selections(stage):
     hyps = [n for n in sets.GetNames() if n.startswith("hyp_")]
     details = sets.GetVariantSet("detail").GetVariantNames()
     yield from ({"detail": d} for d in details)
-    yield from ({h: "alternative"} for h in hyps)
-    yield {h: "alternative" for h in hyps}
+    # every value of every hypothesis set (a question's set has one per alternative)
+    values = {
+        h: [v for v in sets.GetVariantSet(h).GetVariantNames() if v != "baseline"] for h in hyps
+    }
+    yield from ({h: v} for h in hyps for v in values[h])
+    yield {h: values[h][-1] for h in hyps}
 
 
 def select(stage, sel: dict) -> None:
@@ -97,9 +102,10 @@ def test_a_hypothesis_alternative_carries_its_own_record(tiny_temple):
     stage = Usd.Stage.Open(str(tiny_temple.root))
     select(stage, {"detail": "carved"})  # the frieze relief is carved detail
     layout = portunus_layout()
+    choices = hyp_choices(layout.hypotheses)  # a question's alternatives share one set
     for h in layout.hypotheses:
-        vset = "hyp_" + h.id.replace("-", "_")
-        select(stage, {vset: "alternative"})
+        vset, value = choices[h.id]
+        select(stage, {vset: value})
         mine = [p for p in part_prims(stage) if record_of(p)["hypothesis"] == h.id]
         assert mine, h.id
         for p in mine:

@@ -124,8 +124,14 @@ def composed_values(stage) -> dict[str, tuple]:
 def test_each_hypothesis_switches_exactly_its_prims(portunus_temple, hid):
     stage = stage_of(portunus_temple)
     root = stage.GetDefaultPrim()
-    vset = "hyp_" + hid.replace("-", "_")
     listing = root.GetCustomData()["ionic_usd"]["hypotheses"][hid.replace("-", "_")]
+    # an independent hypothesis is hyp_<id> = alternative; the frieze's two alternatives are
+    # values of the one set hyp_frieze (ionic_usd/data/portunus.toml: question = "frieze")
+    vset, value = listing["variantSet"], listing["variant"]
+    if hid.startswith("frieze-"):
+        assert (vset, value) == ("hyp_frieze", hid.replace("-", "_"))
+    else:
+        assert (vset, value) == ("hyp_" + hid.replace("-", "_"), "alternative")
     assert listing["realised"] is True and root.GetVariantSets().HasVariantSet(vset)
     named = set()
     # the hypothesis' own layer and the detail re-placed for it (<id>.detail.usdc); not the
@@ -143,7 +149,7 @@ def test_each_hypothesis_switches_exactly_its_prims(portunus_temple, hid):
         )
     assert named
     before = composed_values(stage)
-    root.GetVariantSets().GetVariantSet(vset).SetVariantSelection("alternative")
+    root.GetVariantSets().GetVariantSet(vset).SetVariantSelection(value)
     after = composed_values(stage)
     changed = {p for p in after if before.get(p) != after[p] and not p.startswith("/__")}
     changed.discard("/Temple")  # its variant selection itself

@@ -262,14 +262,16 @@ def test_temple_prim_paths_are_the_same_under_every_selection(portunus_temple):
     assert len(drawn) > 6  # the selections did change what is drawn
 
 
-def check_combination(stage, hyps, chosen, detail, recorded, layout) -> None:
+def check_combination(stage, selection, detail, recorded, layout) -> None:
     """Compose one selection of hypotheses x ``detail`` variant and check that the parts meet
     (columns between stylobate and architrave, roof on the cornice, ornament on its member),
     that the geometry is finite, that every prim lists the selected hypotheses touching it,
-    and that the stage validates."""
-    select(
-        stage, detail=detail, **{h: ("alternative" if h in chosen else "baseline") for h in hyps}
-    )
+    and that the stage validates. ``selection``: hypothesis variant set → value."""
+    select(stage, detail=detail, **selection)
+    # the hypotheses chosen, as hyp_<ident> (a question's value names its alternative)
+    chosen = [
+        n if v == "alternative" else "hyp_" + v for n, v in selection.items() if v != "baseline"
+    ]
     bbox = UsdGeom.BBoxCache(
         Usd.TimeCode.Default(), [UsdGeom.Tokens.default_, UsdGeom.Tokens.render]
     )
@@ -340,31 +342,37 @@ def check_combination(stage, hyps, chosen, detail, recorded, layout) -> None:
 def _combinations(portunus_temple, sample: int | None):
     stage = Usd.Stage.Open(str(portunus_temple.root))
     root = stage.GetDefaultPrim()
-    hyps = sorted(n for n in root.GetVariantSets().GetNames() if n.startswith("hyp_"))
-    assert len(hyps) == 6  # every hypothesis of portunus.toml is realised
-    details = root.GetVariantSets().GetVariantSet("detail").GetVariantNames()
+    vsets = root.GetVariantSets()
+    hyps = sorted(n for n in vsets.GetNames() if n.startswith("hyp_"))
+    # every hypothesis of portunus.toml is realised: four switches and the frieze's question
+    # (plain or garlands: one set, so never both)
+    assert len(hyps) == 5
+    values = {n: vsets.GetVariantSet(n).GetVariantNames() for n in hyps}
+    assert sorted(values["hyp_frieze"]) == ["baseline", "frieze_garlands", "frieze_plain"]
+    details = vsets.GetVariantSet("detail").GetVariantNames()
     assert details == ["carved", "moulded", "plain"]
-    combos = list(itertools.product(itertools.product((0, 1), repeat=len(hyps)), details))
+    combos = list(itertools.product(itertools.product(*values.values()), details))
     if sample is not None:  # none, all, and a seeded sample of the rest
         rng = np.random.default_rng(17)
-        ends = [c for c in combos if len(set(c[0])) == 1]
+        ends = [c for c in combos if all(v == "baseline" for v in c[0])]
+        ends += [c for c in combos if all(v != "baseline" for v in c[0]) and c not in ends][:3]
         rest = [c for c in combos if c not in ends]
         combos = ends + [rest[k] for k in rng.choice(len(rest), sample, replace=False)]
     recorded = layer_paradata(folder_of(portunus_temple))
     layout = portunus_layout()
-    for bits, detail in combos:
-        chosen = [h for h, b in zip(hyps, bits, strict=True) if b]
-        check_combination(stage, hyps, chosen, detail, recorded, layout)
+    for chosen, detail in combos:
+        check_combination(stage, dict(zip(hyps, chosen, strict=True)), detail, recorded, layout)
     return len(combos)
 
 
 def test_sampled_combinations_of_hypotheses_and_detail_compose(portunus_temple):
-    assert _combinations(portunus_temple, sample=10) == 16
+    assert _combinations(portunus_temple, sample=10) == 16  # 3 + 3 ends, 10 drawn
 
 
 @pytest.mark.slow
 def test_every_combination_of_hypotheses_and_detail_composes(portunus_temple):
-    assert _combinations(portunus_temple, sample=None) == 2**6 * 3
+    # 2^4 switches x 3 frieze values (baseline, plain, garlands) x 3 details
+    assert _combinations(portunus_temple, sample=None) == 2**4 * 3 * 3
 
 
 def test_interacting_hypotheses_get_a_combination_layer(tmp_path):

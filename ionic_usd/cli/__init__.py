@@ -114,8 +114,9 @@ def _add_temple(sub: Any, full: bool) -> None:
         "compose a temple scene (default: the Temple of Portunus) — the main job",
         "Write a temple as a USD assembly: Temple.usda (root) with podium, cella, "
         "entablature, roof and colonnade layers, the instanced column asset, "
-        "textures, and one variant set per reconstruction hypothesis (layers/). Your "
-        "overrides.usda is kept.",
+        "textures, and one variant set per reconstruction question (layers/): a switch per "
+        "independent hypothesis, one value per alternative where hypotheses share a "
+        "`question`. Your overrides.usda is kept.",
         cmd_temple,
     )
     if not full:

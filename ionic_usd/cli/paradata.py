@@ -23,7 +23,8 @@ def cmd_paradata(args: argparse.Namespace) -> int:
 
         raise ParameterError("SCENE", str(args.scene), "an existing USD file")
     pd = read_scene_paradata(args.scene)
-    g = graph_of(pd.parts, pd.hypotheses)
+    asks = {hid: str(e.get("question") or hid) for hid, e in pd.listing.items()}
+    g = graph_of(pd.parts, pd.hypotheses, asks)
     write_graphml(g, out)
     print(
         f"wrote {out}: {len(g.units)} units ({len(pd.parts)} parts, {len(pd.hypotheses)} "

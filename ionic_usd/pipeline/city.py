@@ -145,6 +145,41 @@ class CityOptions:
             raise ParameterError("--workers", self.workers, "an integer >= 1")
 
 
+def _lot_selection(lot, hyps, rng, variety: bool, source: str) -> dict[str, str]:
+    """One lot's hypothesis choices: the plan's, the rest drawn (one draw per id, so plan
+    choices do not shift the others). At most one alternative per question: the plan naming
+    two is refused; of the drawn ones, the smallest draw of a question wins."""
+    from ionic_usd.temple.description import exclusive_clash, questions
+
+    known = [h.id for h in hyps]
+    ctx = f"{source} lot {lot.id}"
+    unknown = sorted(set(lot.hypotheses) - set(known))
+    if unknown:
+        raise ParameterError(
+            "hypotheses",
+            unknown,
+            f"ids of the temple's hypotheses: {', '.join(known) or 'none'}",
+            context=ctx,
+        )
+    planned = [h for h, v in lot.hypotheses.items() if v == "alternative"]
+    clash = exclusive_clash(planned, hyps)
+    if clash is not None:
+        raise ParameterError("hypotheses", dict(lot.hypotheses), clash, context=ctx)
+    draws = {h: rng.random() for h in known}
+    sel = {}
+    for alts in questions(hyps).values():
+        ids = [h.id for h in alts]
+        if any(lot.hypotheses.get(h) == "alternative" for h in ids):
+            for h in ids:
+                sel[h] = "alternative" if lot.hypotheses.get(h) == "alternative" else "baseline"
+            continue
+        free = [h for h in ids if h not in lot.hypotheses and variety and draws[h] < 0.3]
+        win = min(free, key=lambda h: draws[h], default=None)
+        for h in ids:
+            sel[h] = lot.hypotheses.get(h) or ("alternative" if h == win else "baseline")
+    return {h: sel[h] for h in known}
+
+
 def footprint_of(spec: TempleSpec) -> Footprint:
     """The temple's plan box (its own frame) and height, from its cuboids."""
     lay = spec.layout()
@@ -240,26 +275,11 @@ def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | 
     centre = np.mean([lot.outline.mean(axis=0) for lot in plan.lots], axis=0) if plan.lots else None
     chosen = lot_specs(plan, opts, centre)
     specs, build = chosen.specs, chosen.build
-    hyp_ids = {s.key: [h.id for h in s.layout().hypotheses] for s in specs}
+    hyps_of = {s.key: s.layout().hypotheses for s in specs}
     selections = []
     for i, lot in enumerate(plan.lots):
-        known = hyp_ids[specs[build[i]].key]
-        unknown = sorted(set(lot.hypotheses) - set(known))
-        if unknown:
-            raise ParameterError(
-                "hypotheses",
-                unknown,
-                f"ids of the temple's hypotheses: {', '.join(known) or 'none'}",
-                context=f"{plan.source} lot {lot.id}",
-            )
-        sel = {}
-        for h in known:
-            draw = rng.random()  # drawn for every id, so plan choices do not shift the others
-            if h in lot.hypotheses:
-                sel[h] = lot.hypotheses[h]
-            else:
-                sel[h] = "alternative" if opts.variety and draw < 0.3 else "baseline"
-        selections.append(sel)
+        hyps = hyps_of[specs[build[i]].key]
+        selections.append(_lot_selection(lot, hyps, rng, opts.variety, plan.source))
 
     # -- 2. fitting and colonnades ----------------------------------------------------------
     t1 = time.perf_counter()

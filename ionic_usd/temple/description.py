@@ -12,7 +12,7 @@ tables. The readers that check those tables and turn them into these values are
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, fields
 from enum import StrEnum
 from types import MappingProxyType
@@ -29,6 +29,8 @@ __all__ = [
     "Certainty",
     "ColumnPlacement",
     "Hypothesis",
+    "questions",
+    "exclusive_clash",
     "TempleParams",
     "SECTIONS",
     "COMPOSER_NAMESPACES",
@@ -143,6 +145,9 @@ class Hypothesis:
     ``changes`` maps dotted keys to the alternative values: ``section.key`` of the temple TOML
     (applied by :func:`build_layout`) or another namespace (``column.…``, ``material.…``)
     that the layout records for the composer. ``certainty`` rates the alternative.
+    ``question``: the question it answers, shared by mutually exclusive alternatives (e.g.
+    ``frieze`` for ``frieze-plain`` and ``frieze-garlands``: one variant set, one value each);
+    empty for an independent hypothesis (its own question, a switch).
     """
 
     id: str
@@ -150,10 +155,18 @@ class Hypothesis:
     sources: tuple[str, ...]
     certainty: Certainty
     changes: Mapping[str, Any]
+    question: str = ""
+
+    @property
+    def key(self) -> str:
+        """The question answered: ``question``, or the id of an independent hypothesis."""
+        return self.question or self.id
 
     def __post_init__(self) -> None:
         ctx = f"hypothesis {self.id!r}"
         check_identifier("id", self.id, context=ctx)  # it names a file: never a path
+        if self.question:
+            check_identifier("question", self.question, context=ctx)
         object.__setattr__(
             self, "certainty", enum_value(Certainty, self.certainty, "certainty", ctx)
         )
@@ -348,3 +361,26 @@ for _f in fields(TempleParams):
         _sec, _key = _f.name.split("_", 1)
         SECTIONS.setdefault(_sec, ())
         SECTIONS[_sec] += (_key,)
+
+
+def questions(hyps: Iterable[Hypothesis]) -> dict[str, tuple[Hypothesis, ...]]:
+    """Question → its alternatives, in description order (an independent hypothesis is the
+    one alternative of its own question)."""
+    out: dict[str, list[Hypothesis]] = {}
+    for h in hyps:
+        out.setdefault(h.key, []).append(h)
+    return {q: tuple(hs) for q, hs in out.items()}
+
+
+def exclusive_clash(ids: Iterable[str], hyps: Iterable[Hypothesis]) -> str | None:
+    """A one-line reason why ``ids`` cannot be applied together (two alternatives of one
+    question), or None."""
+    chosen = set(ids)
+    for q, alts in questions(hyps).items():
+        both = [h.id for h in alts if h.id in chosen]
+        if len(both) > 1:
+            return (
+                f"{' and '.join(repr(b) for b in both)} are alternatives of the question "
+                f"{q!r}: select one"
+            )
+    return None

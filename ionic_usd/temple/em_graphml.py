@@ -14,7 +14,8 @@ The graph follows the EM formal language as the EM tools read it (their parser i
 * one **document** node per distinct source (a BPMN data object, ``DATA_OBJECT_TYPE_PLAIN``),
   labelled ``D.01``, ``D.02``, … with the citation as its description;
 * dashed edges (``has_data_provenance``) unit → property → documents, and dash-dotted edges
-  (``contrasts_with``) from a hypothesis' unit to the baseline units it changes.
+  (``contrasts_with``) from a hypothesis' unit to the baseline units it changes, and between
+  the alternatives of one question (``frieze-plain`` and ``frieze-garlands``: exclusive).
 
 :func:`read_graphml` takes such a file back (as edited in yEd: a node's shape or border colour
 changed, a document's text changed, an edge added or removed) and returns the records it states,
@@ -59,9 +60,13 @@ class EmGraph:
 
 
 def graph_of(
-    parts: Mapping[str, Record], hypotheses: Mapping[str, tuple[Record, tuple[str, ...]]]
+    parts: Mapping[str, Record],
+    hypotheses: Mapping[str, tuple[Record, tuple[str, ...]]],
+    questions: Mapping[str, str] | None = None,
 ) -> EmGraph:
-    """The graph of the baseline units ``parts`` and the hypotheses (record, parts touched)."""
+    """The graph of the baseline units ``parts`` and the hypotheses (record, parts touched).
+    ``questions``: hypothesis id → the question it answers; the alternatives of one question
+    (mutually exclusive) are linked to each other by ``contrasts_with`` edges."""
     units = dict(sorted(parts.items()))
     for hid, (rec, _) in sorted(hypotheses.items()):
         units[HYP_PREFIX + hid] = rec
@@ -76,6 +81,15 @@ def graph_of(
         edges.extend((prop, docs[s], "has_data_provenance") for s in dict.fromkeys(rec.sources))
     for hid, (_, touched) in sorted(hypotheses.items()):
         edges.extend((HYP_PREFIX + hid, t, "contrasts_with") for t in sorted(touched) if t in parts)
+    groups: dict[str, list[str]] = {}
+    for hid in sorted(hypotheses):
+        groups.setdefault((questions or {}).get(hid) or hid, []).append(hid)
+    for alts in groups.values():
+        edges.extend(
+            (HYP_PREFIX + a, HYP_PREFIX + b, "contrasts_with")
+            for i, a in enumerate(alts)
+            for b in alts[i + 1 :]
+        )
     return EmGraph(units, docs, tuple(edges))
 
 

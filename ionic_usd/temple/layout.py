@@ -80,6 +80,7 @@ from ionic_usd.temple.description import (
     Layer,
     TempleParams,
     enum_value,
+    exclusive_clash,
 )
 
 # the TOML readers, re-exported for callers of the layout
@@ -359,6 +360,10 @@ def build_layout(
         are left to the composer)
     extra_cuboids : more cuboids per layer, appended as given (e.g. an altar)
     """
+    hypotheses, apply = tuple(hypotheses), tuple(apply)
+    clash = exclusive_clash(apply, hypotheses)
+    if clash is not None:
+        raise ParameterError("hypothesis", list(apply), clash, context=f"temple {params.name!r}")
     rebuild = getattr(params, "rebuild_layout", None)
     if rebuild is not None:  # a typed temple (ionic_usd.temple.typed_layout) lays itself out
         return rebuild(hypotheses=hypotheses, apply=apply, extra_cuboids=extra_cuboids)

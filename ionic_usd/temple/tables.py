@@ -10,7 +10,7 @@ then turn its tables into the value types of :mod:`ionic_usd.temple.description`
 from __future__ import annotations
 
 import os
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
 from ionic_usd.column.column import check_column_tables
@@ -167,7 +167,7 @@ def hypotheses_from_tables(
     sections = SECTIONS if sections is None else sections
     out = []
     allowed = {"id", "description", "sources", "certainty", "changes"}
-    optional = {"evidence"}  # read by ionic_usd.temple.paradata
+    optional = {"evidence", "question"}  # evidence: read by ionic_usd.temple.paradata
     for i, e in enumerate(entries, 1):
         where = f"{context} [[hypothesis]] #{i}"
         if not isinstance(e, Mapping):
@@ -184,8 +184,11 @@ def hypotheses_from_tables(
         if not isinstance(src, list) or not all(isinstance(x, str) for x in src):
             raise ParameterError("sources", src, "a list of strings", context=where)
         try:
+            q = e.get("question", "")
+            if not isinstance(q, str):
+                raise ParameterError("question", q, "a name (string)", context=where)
             out.append(
-                Hypothesis(e["id"], e["description"], tuple(src), e["certainty"], e["changes"])
+                Hypothesis(e["id"], e["description"], tuple(src), e["certainty"], e["changes"], q)
             )
         except ParameterError as exc:
             raise ParameterError(exc.name, exc.value, exc.valid, context=where) from None
@@ -202,6 +205,7 @@ def hypotheses_from_tables(
                 context=f"{context} [[hypothesis]]",
             )
         seen[prim_key(h.id)] = h.id
+    _check_questions(out, context)
     for i, h in enumerate(out, 1):
         for key, value in h.changes.items():
             sec, k = key.split(".")
@@ -238,6 +242,7 @@ _HYPOTHESIS = {
     "certainty": FieldSpec("str", max_len=32),
     "changes": FieldSpec("table"),
     "evidence": FieldSpec("str", max_len=16),
+    "question": FieldSpec("ident"),  # alternatives of one question: one variant set
 }
 #: hypothesis changes outside the temple's dimension sections, realised by the composer
 HYPOTHESIS_EXTRA_CHANGES = {
@@ -398,3 +403,37 @@ def resolve_extends(data: Mapping[str, Any], *, context: str) -> dict[str, Any]:
             context=context,
         )
     return out
+
+
+def _check_questions(hyps: Sequence[Hypothesis], context: str) -> None:
+    """Alternatives of one question are one variant set ``hyp_<question>`` with a value per
+    alternative: its name must not be another hypothesis' set, and no two alternatives may
+    declare the same change (the same part twice: which would the variant show?)."""
+    from ionic_usd.temple.description import questions
+
+    where = f"{context} [[hypothesis]]"
+    singles = {prim_key(h.id): h.id for h in hyps if not h.question}
+    for h in hyps:
+        if h.question and prim_key(h.question) in singles:
+            raise ParameterError(
+                "question",
+                h.question,
+                f"a name distinct from the hypothesis {singles[prim_key(h.question)]!r} "
+                "(both would name the variant set hyp_" + prim_key(h.question) + ")",
+                context=f"{where} {h.id!r}",
+            )
+    for q, alts in questions(hyps).items():
+        if not alts[0].question:
+            continue
+        seen: dict[tuple, str] = {}
+        for h in alts:
+            decl = tuple(sorted((k, repr(v)) for k, v in h.changes.items()))
+            if decl in seen:
+                raise ParameterError(
+                    "changes",
+                    dict(h.changes),
+                    f"changes other than those of {seen[decl]!r}: both alternatives of the "
+                    f"question {q!r} declare the same change (one variant value each)",
+                    context=f"{where} {h.id!r}",
+                )
+            seen[decl] = h.id

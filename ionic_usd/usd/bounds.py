@@ -1,14 +1,15 @@
-"""True ``extentsHint`` values per variant combination (``UsdGeom.ModelAPI.ComputeExtentsHint``).
+"""True ``extentsHint`` values under variants (``UsdGeom.ModelAPI.ComputeExtentsHint``).
 
 A model's bounds depend on some of its variant sets (the column's ``lod``, ``base``, ``form``;
-the temple's ``lod`` and the hypotheses that reshape it) and not on others (``finish``). One
-hint per prim would be wrong for every combination but the default, so the hints are computed
-on the composed stage for every combination of the candidate sets, the sets that never change
-any hint are dropped, and the rest are authored as *nested* variant sets of the same names
-inside the first relevant set's variants: ``lod{high}`` › ``form{engaged}`` › ``base{G1}`` ›
-``extentsHint``. A nested variant set with the name of a prim's variant set follows that
-set's selection (Pcp looks selections up by name), so the composed hint is always the one of
-the current combination.
+the temple's ``lod`` and the hypotheses that reshape it) and not on others (``finish``). The
+hints are computed on the composed stage for every combination of the candidate sets, and then
+authored without nested variant sets (a product of nested sets, one hint per combination,
+made NVIDIA's validator enumerate for hours): for each prim, a hint that depends on no set is
+authored on the prim; otherwise the one set that explains the hint best is picked and, inside
+each of its variants, the union of the hints of the combinations with that variant is authored.
+The hint is then exact where it depends on one set only and otherwise a *conservative* bound:
+it contains the bound of the current combination, and each of its faces is reached by some
+combination of that variant (see docs/usd.md).
 """
 
 from __future__ import annotations
@@ -26,6 +27,8 @@ __all__ = [
     "toggled_extents_hints",
     "author_extents_hints",
     "relevant_sets",
+    "split_hints",
+    "union_hint",
 ]
 
 Combo = tuple[str, ...]
@@ -261,6 +264,61 @@ def _author_hint(spec: Sdf.PrimSpec, rel: Sdf.Path, hint: np.ndarray) -> None:
     attr.default = Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(hint, dtype=np.float32))
 
 
+def _corners(hint: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """(n, 3) min and max corners of a hint's purposes, padded with empty (+inf, -inf) ones."""
+    lo = np.full((n, 3), np.inf)
+    hi = np.full((n, 3), -np.inf)
+    h = np.asarray(hint, dtype=np.float64).reshape(-1, 2, 3)
+    ok = (h[:, 0] <= h[:, 1]).all(axis=1)  # an empty purpose is an inverted box
+    lo[: len(h)][ok], hi[: len(h)][ok] = h[ok, 0], h[ok, 1]
+    return lo, hi
+
+
+def union_hint(hints: Sequence[np.ndarray]) -> np.ndarray:
+    """The hint bounding every hint of ``hints``: per purpose, the union of their ranges."""
+    n = len(UsdGeom.Imageable.GetOrderedPurposeTokens())
+    los, his = zip(*(_corners(h, n) for h in hints), strict=True)
+    lo, hi = np.min(los, axis=0), np.max(his, axis=0)
+    ranges = [
+        Gf.Range3d() if np.any(a > b) else Gf.Range3d(Gf.Vec3d(*a), Gf.Vec3d(*b))
+        for a, b in zip(lo.tolist(), hi.tolist(), strict=True)
+    ]
+    return _hint(ranges)
+
+
+def _excess(hint: np.ndarray, union: np.ndarray) -> float:
+    """How far ``union`` reaches past ``hint`` (the largest gap of a face, metres)."""
+    n = len(UsdGeom.Imageable.GetOrderedPurposeTokens())
+    (lo, hi), (ulo, uhi) = _corners(hint, n), _corners(union, n)
+    finite = np.isfinite(lo) & np.isfinite(ulo)
+    gaps = np.concatenate([lo[finite] - ulo[finite], uhi[finite] - hi[finite]])
+    return float(gaps.max(initial=0.0))
+
+
+def split_hints(
+    per_combo: Mapping[Combo, np.ndarray], names: Sequence[str], *, tol: float = 1e-6
+) -> tuple[str | None, dict[str, np.ndarray]]:
+    """One prim's hints per combination as at most one hint per variant of ONE set: the set
+    (of those that change the hint) whose variants, each bounding the union of its
+    combinations, overshoot the least (summed over the combinations). Returns that set (None:
+    the hint depends on no set) and variant → hint (``""`` → the one hint if None)."""
+    rel = relevant_sets({c: {"": h} for c, h in per_combo.items()}, names, tol=tol)
+    if not rel:
+        return None, {"": union_hint(list(per_combo.values()))}
+    best: tuple[float, str, dict[str, np.ndarray]] | None = None
+    for name in rel:
+        k = list(names).index(name)
+        groups: dict[str, list[np.ndarray]] = {}
+        for combo, h in per_combo.items():
+            groups.setdefault(combo[k], []).append(h)
+        unions = {v: union_hint(hs) for v, hs in groups.items()}
+        cost = sum(_excess(h, unions[c[k]]) for c, h in per_combo.items())
+        if best is None or cost < best[0]:
+            best = (cost, name, unions)
+    assert best is not None
+    return best[1], best[2]
+
+
 def author_extents_hints(
     layer: Sdf.Layer,
     root: str,
@@ -268,26 +326,25 @@ def author_extents_hints(
     names: Sequence[str],
     *,
     tol: float = 1e-6,
-) -> list[str]:
+) -> dict[str, str | None]:
     """Author ``hints`` (from :func:`variant_extents_hints`) into ``layer`` on ``root`` and its
-    descendants, nested in the relevant variant sets; returns those sets (outermost first)."""
-    rel_sets = relevant_sets(hints, names, tol=tol)
-    idx = [list(names).index(n) for n in rel_sets]
+    descendants, without nesting: for each prim, a hint that depends on no set is authored
+    on the prim; otherwise one hint per variant of the one set :func:`split_hints` picks,
+    authored inside that variant — the union over the combinations of the other sets, a
+    conservative bound. Returns prim path → that set (None: the hint is authored plainly)."""
     root_path = Sdf.Path(root)
     root_spec = layer.GetPrimAtPath(root_path)
-    done: set[Combo] = set()
+    prims = list(next(iter(hints.values()))) if hints else []
+    out: dict[str, str | None] = {}
     with Sdf.ChangeBlock():
-        for combo, h in hints.items():
-            key = tuple(combo[i] for i in idx)
-            if key in done:
-                continue
-            done.add(key)
-            spec = root_spec
-            for n, v in zip(rel_sets, key, strict=True):
-                spec = _variant_prim(spec, n, v)
-            for path, hint in h.items():
-                _author_hint(spec, Sdf.Path(path).MakeRelativePath(root_path), hint)
-    return rel_sets
+        for path in prims:
+            rel = Sdf.Path(path).MakeRelativePath(root_path)
+            name, per = split_hints({c: h[path] for c, h in hints.items()}, names, tol=tol)
+            out[path] = name
+            for variant, hint in per.items():
+                spec = root_spec if name is None else _variant_prim(root_spec, name, variant)
+                _author_hint(spec, rel, hint)
+    return out
 
 
 def bound_changing_sets(

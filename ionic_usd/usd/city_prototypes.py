@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 from pxr import Tf, Usd, UsdGeom
 
-from ionic_usd.errors import UsdAuthoringError
+from ionic_usd.errors import ParameterError, UsdAuthoringError
 from ionic_usd.usd.draw_mode import card_bbox_cache, card_bound
 from ionic_usd.usd.instancer import drawn_triangles
 
@@ -46,13 +46,30 @@ def temple_variant_sets(temple_root: Path) -> dict[str, tuple[str, ...]]:
 def temple_selection(
     vsets: Mapping[str, Sequence[str]], selections: Mapping[str, str], lod: str | None = None
 ) -> dict[str, str]:
-    """The variant selections of one temple: hypothesis id → ``hyp_<id>`` where the build has
-    that set (others are ignored), plus ``lod`` where the build has a lod set."""
-    sel = {
-        f"hyp_{prim_identifier(h)}": v
-        for h, v in selections.items()
-        if f"hyp_{prim_identifier(h)}" in vsets
-    }
+    """The variant selections of one temple: hypothesis id → its set where the build has it
+    (others are ignored) — ``hyp_<id>`` = the choice for an independent hypothesis; for an
+    alternative of a question, its set ``hyp_<question>`` (the one whose values name it) =
+    its value if chosen, else ``baseline`` unless another alternative of it is chosen —
+    plus ``lod`` where the build has a lod set."""
+    sel: dict[str, str] = {}
+    for h, v in selections.items():
+        ident = prim_identifier(h)
+        if f"hyp_{ident}" in vsets:
+            sel[f"hyp_{ident}"] = v
+            continue
+        owner = next((n for n, vs in vsets.items() if n.startswith("hyp_") and ident in vs), None)
+        if owner is None:
+            continue
+        if v == "alternative":
+            if sel.get(owner, "baseline") not in ("baseline", ident):
+                raise ParameterError(
+                    "hypotheses",
+                    dict(selections),
+                    f"one alternative of {owner}: {sel[owner]} and {ident} exclude each other",
+                )
+            sel[owner] = ident
+        else:
+            sel.setdefault(owner, "baseline")
     if lod is not None and "lod" in vsets:
         sel["lod"] = lod
     return sel

@@ -32,6 +32,7 @@ from pxr import Gf, Sdf, Usd, UsdGeom, Vt
 from ionic_usd.column.ornament import Instances
 from ionic_usd.errors import UsdAuthoringError
 from ionic_usd.geometry.mesh import Mesh
+from ionic_usd.temple.description import questions
 from ionic_usd.temple.layout import ColumnPlacement, Hypothesis, Layer, TempleLayout, build_layout
 from ionic_usd.temple.mouldings import REPLACED_CUBOIDS
 from ionic_usd.usd.detail import DETAIL_SET, DETAIL_VARIANTS, FRIEZE_KEY, DetailGeometry
@@ -43,7 +44,8 @@ from ionic_usd.usd.hypotheses import (
     column_xform,
     cuboid_meshes,
     define_overs,
-    hyp_set,
+    hyp_choices,
+    hyp_sets,
     temple_keys,
 )
 from ionic_usd.usd.instancer import author_point_instancer
@@ -53,6 +55,8 @@ from ionic_usd.usd.stage import new_layer, save_layer
 __all__ = [
     "MAX_HYPOTHESES",
     "MAX_SHAPE_HYPOTHESES",
+    "MAX_SHAPE_COMBINATIONS",
+    "shape_combinations",
     "Fix",
     "check_hypothesis_budget",
     "select_variants",
@@ -254,22 +258,46 @@ def _correction_layer(
     return lay
 
 
-def _nest(gen: Sdf.Layer, hyps: Sequence[Hypothesis], ref: str) -> None:
-    """Reference ``ref`` from the variant ``alternative`` of every ``hyp_<id>`` of ``hyps``,
-    nested in that order inside /Temple's variant sets."""
+def _nest(
+    gen: Sdf.Layer, hyps: Sequence[Hypothesis], ref: str, everyone: Sequence[Hypothesis]
+) -> None:
+    """Reference ``ref`` from the variant that selects each hypothesis of ``hyps`` (its
+    ``alternative``, or its value of its question's set), nested in that order inside
+    /Temple's variant sets (``everyone``: the temple's hypotheses, which group them)."""
+    choices = hyp_choices(everyone)
+    values = hyp_sets(everyone)
     spec = gen.GetPrimAtPath("/Temple")
     for i, h in enumerate(hyps):
-        name = hyp_set(h.id)
+        name, value = choices[h.id]
         vs = spec.variantSets.get(name)
         if vs is None:
             vs = Sdf.VariantSetSpec(spec, name)
             spec.variantSetNameList.Prepend(name)
-        for v in ("baseline", "alternative"):
+        for v in values[name]:
             if v not in vs.variants:
                 Sdf.VariantSpec(vs, v)
-        spec = vs.variants["alternative"].primSpec
+        spec = vs.variants[value].primSpec
         if i == len(hyps) - 1:
             spec.referenceList.Prepend(Sdf.Reference(ref))
+
+
+def _subsets(shape: Sequence[Hypothesis]):
+    """Every choice of at most one alternative per question among ``shape``, fewest first
+    (the independent hypotheses: every subset)."""
+    groups = list(questions(shape).values())
+    picks = itertools.product(*(((None,) + tuple(g)) for g in groups))
+    chosen = [tuple(h for h in p if h is not None) for p in picks]
+    order = {h.id: i for i, h in enumerate(shape)}
+    return sorted(chosen, key=lambda c: (len(c), [order[h.id] for h in c]))
+
+
+def shape_combinations(hyps: Sequence[Hypothesis]) -> int:
+    """How many combinations of the geometry hypotheses are composed and checked: the
+    product over their questions of (1 + alternatives)."""
+    out = 1
+    for g in questions([h for h in hyps if temple_keys(h) or FRIEZE_KEY in h.changes]).values():
+        out *= 1 + len(g)
+    return out
 
 
 def _is_detail(path: str) -> bool:
@@ -290,7 +318,8 @@ def realise_combinations(
     subset, and write the layers where composing is not enough (module docstring). Returns the
     layers written (names without suffix)."""
     shape = [h for h in realised if temple_keys(h) or FRIEZE_KEY in h.changes]
-    off = {hyp_set(h.id): "baseline" for h in realised}
+    choices = hyp_choices(layout.hypotheses)
+    off = {choices[h.id][0]: "baseline" for h in realised}
     has_detail = gen.GetPrimAtPath("/Temple").GetVariantSets().HasVariantSet(DETAIL_SET)
     variants = DETAIL_VARIANTS if has_detail and detail_of is not None else ("plain",)
     height = layout.params.columns_height
@@ -319,36 +348,36 @@ def realise_combinations(
 
     written: list[str] = []
     try:
-        for size in range(len(shape) + 1):
-            for subset in itertools.combinations(shape, size):
-                sel = dict(off) | {hyp_set(h.id): "alternative" for h in subset}
-                ids = [h.id for h in subset]
-                want = build_layout(layout.params, hypotheses=layout.hypotheses, apply=ids)
-                geom = detail_of(want) if detail_of is not None and has_detail else None
-                garlands = any(FRIEZE_KEY in h.changes for h in subset)
-                bad, off_prims = check(sel, want, geom, garlands)
-                if not bad:
-                    continue
-                wrong = sorted(p for p in bad if not _is_detail(p))
-                if size == 0 or (size == 1 and wrong):
-                    raise UsdAuthoringError(
-                        f"hypotheses {ids or '(none)'} compose to other geometry than the "
-                        f"layout at {', '.join(wrong or sorted(bad))}"
-                    )
-                name = "+".join(ids) + (".detail" if size == 1 else "")
-                ratio = want.params.columns_height / height
-                select_variants(gen, sel | ({DETAIL_SET: "carved"} if has_detail else {}))
-                save_layer(
-                    _correction_layer(gen, bad, subset, ratio, off_prims),
-                    folder / "layers" / f"{name}.usdc",
+        for subset in _subsets(shape):
+            size = len(subset)
+            sel = dict(off) | dict(choices[h.id] for h in subset)
+            ids = [h.id for h in subset]
+            want = build_layout(layout.params, hypotheses=layout.hypotheses, apply=ids)
+            geom = detail_of(want) if detail_of is not None and has_detail else None
+            garlands = any(FRIEZE_KEY in h.changes for h in subset)
+            bad, off_prims = check(sel, want, geom, garlands)
+            if not bad:
+                continue
+            wrong = sorted(p for p in bad if not _is_detail(p))
+            if size == 0 or (size == 1 and wrong):
+                raise UsdAuthoringError(
+                    f"hypotheses {ids or '(none)'} compose to other geometry than the "
+                    f"layout at {', '.join(wrong or sorted(bad))}"
                 )
-                _nest(gen.GetRootLayer(), subset, f"./layers/{name}.usdc")
-                written.append(name)
-                still, _ = check(sel, want, geom, garlands)
-                if still:
-                    raise UsdAuthoringError(
-                        f"hypotheses {ids} still compose wrongly at {', '.join(sorted(still))}"
-                    )
+            name = "+".join(ids) + (".detail" if size == 1 else "")
+            ratio = want.params.columns_height / height
+            select_variants(gen, sel | ({DETAIL_SET: "carved"} if has_detail else {}))
+            save_layer(
+                _correction_layer(gen, bad, subset, ratio, off_prims),
+                folder / "layers" / f"{name}.usdc",
+            )
+            _nest(gen.GetRootLayer(), subset, f"./layers/{name}.usdc", layout.hypotheses)
+            written.append(name)
+            still, _ = check(sel, want, geom, garlands)
+            if still:
+                raise UsdAuthoringError(
+                    f"hypotheses {ids} still compose wrongly at {', '.join(sorted(still))}"
+                )
     finally:
         gen.GetSessionLayer().Clear()
     if written:
@@ -356,31 +385,36 @@ def realise_combinations(
     return written
 
 
-#: at most this many hypotheses in a temple: each is a variant set and a layer of its own
+#: at most this many hypotheses in a temple: each is a variant (a layer of its own)
 MAX_HYPOTHESES = 64
-#: at most this many hypotheses that change geometry: only they can interact (a material, a
-#: flute count or a capital model is a variant of its own part and composes alone), and every
-#: subset of them is composed and checked in each detail variant — 2^8 = 256 subsets x 3
-MAX_SHAPE_HYPOTHESES = 8
+#: at most this many combinations of the hypotheses that change geometry: only they can
+#: interact (a material, a flute count or a capital model is a variant of its own part and
+#: composes alone), and every combination of them is composed and checked in each detail
+#: variant. Counted as combinations: the product over their questions of (1 + alternatives)
+#: — 8 independent ones (2^8 = 256), or e.g. 4 questions of 3 alternatives (4^4 = 256)
+MAX_SHAPE_COMBINATIONS = 256
+MAX_SHAPE_HYPOTHESES = 8  # independent switches: log2 of MAX_SHAPE_COMBINATIONS
 
 
 def check_hypothesis_budget(layout: TempleLayout) -> None:
     """Refuse, before any work, a description whose combinations cannot be checked in bounded
     time: more than :data:`MAX_HYPOTHESES` hypotheses, or more than
-    :data:`MAX_SHAPE_HYPOTHESES` that change geometry (2^n subsets to compose)."""
+    :data:`MAX_SHAPE_COMBINATIONS` combinations of those that change geometry."""
     from ionic_usd.errors import BudgetError
 
     hyps = layout.hypotheses
     if len(hyps) > MAX_HYPOTHESES:
         raise BudgetError(
             f"{len(hyps):,} hypotheses: a temple holds at most {MAX_HYPOTHESES} (each is a "
-            "variant set and a layer); split the description"
+            "variant and a layer); split the description"
         )
     shape = [h.id for h in hyps if temple_keys(h) or FRIEZE_KEY in h.changes]
-    if len(shape) > MAX_SHAPE_HYPOTHESES:
+    n = shape_combinations(hyps)
+    if n > MAX_SHAPE_COMBINATIONS:
         raise BudgetError(
             f"{len(shape)} hypotheses change the temple's geometry ({', '.join(shape[:4])}, …): "
-            f"every one of their 2^{len(shape)} = {2 ** len(shape):,} combinations would be "
-            f"composed and checked; the limit is {MAX_SHAPE_HYPOTHESES} "
-            f"({2**MAX_SHAPE_HYPOTHESES} combinations)"
+            f"every one of their {n:,} combinations (the product over their questions of "
+            f"1 + alternatives) would be composed and checked; the limit is "
+            f"{MAX_SHAPE_COMBINATIONS} combinations (e.g. {MAX_SHAPE_HYPOTHESES} independent "
+            "hypotheses)"
         )

@@ -255,29 +255,35 @@ def write_frieze_hypotheses(
 ) -> list[Hypothesis]:
     """The hypotheses realised by the detail (``detail.frieze``): their layers, their variant
     sets on ``spec`` (/Temple of ``generated.usda``) and their listing. Returns them."""
+    from ionic_usd.usd.hypotheses import hyp_choices
     from ionic_usd.usd.stage import save_layer
 
     done = []
     data = dict(spec.customData.get("ionic_usd", {}))
     listing = {k: dict(v) for k, v in data.get("hypotheses", {}).items()}
+    choices = hyp_choices(layout.hypotheses)
     for h in layout.hypotheses:
         if FRIEZE_KEY not in h.changes:
             continue
-        vset = "hyp_" + _ident(h.id)
+        vset, value = choices[h.id]
         name = f"{h.id}.usdc"
         save_layer(frieze_layer(h, geom), folder / "layers" / name, force=True)
         if vset not in spec.variantSets:
             vs = Sdf.VariantSetSpec(spec, vset)
             spec.variantSetNameList.Append(vset)
             Sdf.VariantSpec(vs, "baseline")
-            Sdf.VariantSpec(vs, "alternative")
-        # both variants reference the relief, the baseline hides it: the same prim paths
-        variants = spec.variantSets[vset].variants
-        for v in ("baseline", "alternative"):
-            variants[v].primSpec.referenceList.Append(Sdf.Reference(f"./layers/{name}"))
-        _hide(_over(variants["baseline"].primSpec, FRIEZE_PATH.removeprefix("/Temple/")))
+        if value not in spec.variantSets[vset].variants:
+            Sdf.VariantSpec(spec.variantSets[vset], value)
+        # every variant of the set references the relief, all but its own hide it: the same
+        # prim paths, and another alternative of the question never shows it
+        for v, var in spec.variantSets[vset].variants.items():
+            var.primSpec.referenceList.Append(Sdf.Reference(f"./layers/{name}"))
+            if v != value:
+                _hide(_over(var.primSpec, FRIEZE_PATH.removeprefix("/Temple/")))
         spec.variantSelections[vset] = "baseline"
-        listing.setdefault(_ident(h.id), {}).update(realised=True, variantSet=vset)
+        listing.setdefault(_ident(h.id), {}).update(
+            realised=True, variantSet=vset, variant=value, question=h.key
+        )
         done.append(h)
     data["hypotheses"] = listing
     spec.customData = {"ionic_usd": data}

@@ -36,6 +36,7 @@ from pxr import Sdf, Tf, Vt
 from ionic_usd.errors import ParameterError
 from ionic_usd.geometry.mesh import Mesh
 from ionic_usd.temple.cuboid import Cuboid, cuboid_mesh
+from ionic_usd.temple.description import questions
 from ionic_usd.temple.layout import (
     COMPOSER_NAMESPACES,
     ColumnKind,
@@ -59,6 +60,8 @@ __all__ = [
     "cuboid_meshes",
     "hyp_ident",
     "hyp_set",
+    "hyp_choices",
+    "hyp_sets",
     "hypothesis_paradata",
     "add_paradata",
     "check_composer_changes",
@@ -97,6 +100,31 @@ def hyp_ident(hid: str) -> str:
 def hyp_set(hid: str) -> str:
     """The variant set of a hypothesis on /Temple."""
     return "hyp_" + hyp_ident(hid)
+
+
+def hyp_choices(hyps: Iterable[Hypothesis]) -> dict[str, tuple[str, str]]:
+    """Hypothesis id → (variant set on /Temple, the variant that selects it).
+
+    An independent hypothesis is a switch: ``hyp_<id>`` = ``baseline`` | ``alternative``.
+    The alternatives of one question (``question = "frieze"``) are ONE set ``hyp_<question>``
+    = ``baseline`` | ``<id>`` per alternative, so two of them cannot be selected at once.
+    """
+    out: dict[str, tuple[str, str]] = {}
+    for q, alts in questions(hyps).items():
+        if len(alts) == 1 and not alts[0].question:
+            out[alts[0].id] = (hyp_set(alts[0].id), "alternative")
+        else:
+            for h in alts:
+                out[h.id] = ("hyp_" + hyp_ident(q), hyp_ident(h.id))
+    return out
+
+
+def hyp_sets(hyps: Iterable[Hypothesis]) -> dict[str, tuple[str, ...]]:
+    """Variant set on /Temple → its variants (``baseline`` first), for ``hyps``."""
+    out: dict[str, list[str]] = {}
+    for vset, value in hyp_choices(hyps).values():
+        out.setdefault(vset, ["baseline"]).append(value)
+    return {k: tuple(v) for k, v in out.items()}
 
 
 def column_path(c: ColumnPlacement) -> str:

@@ -36,7 +36,7 @@ from pxr import Gf, Sdf, Usd, UsdShade, Vt
 from ionic_usd.temple.description import Hypothesis
 from ionic_usd.temple.paradata import EM_CHART, Evidence, Paradata, Record, default_paradata
 from ionic_usd.temple.paradata import part_key as _part_key
-from ionic_usd.usd.hypotheses import hyp_set
+from ionic_usd.usd.hypotheses import hyp_choices
 
 __all__ = [
     "Units",
@@ -82,14 +82,15 @@ def write_record(spec: Sdf.PrimSpec, unit: str, rec: Record) -> None:
         attr.default = text
 
 
-def _hyp_of_variants(path: Sdf.Path, by_set: dict[str, str]) -> str:
-    """The hypothesis id whose ``alternative`` encloses ``path`` ('' if none)."""
+def _hyp_of_variants(path: Sdf.Path, by_set: dict[tuple[str, str], str]) -> str:
+    """The hypothesis id whose variant (``alternative``, or its value of its question's set)
+    encloses ``path`` ('' if none)."""
     p = path
     while p != Sdf.Path.absoluteRootPath and not p.isEmpty:
         if p.IsPrimVariantSelectionPath():
             vset, var = p.GetVariantSelection()
-            if vset in by_set and var == "alternative":
-                return by_set[vset]
+            if (vset, var) in by_set:
+                return by_set[(vset, var)]
         p = p.GetParentPath()
     return ""
 
@@ -118,7 +119,11 @@ def _layer_files(folder: Path) -> list[Path]:
 
 
 def _annotate_layer(
-    lay: Sdf.Layer, rel: str, pd: Paradata, hyps: dict[str, str], sets: dict[str, str]
+    lay: Sdf.Layer,
+    rel: str,
+    pd: Paradata,
+    hyps: dict[str, str],
+    sets: dict[tuple[str, str], str],
 ) -> list[tuple[str, str, str, Record]]:
     found: list[Sdf.Path] = []
     lay.Traverse(
@@ -179,7 +184,7 @@ def _collection(spec: Sdf.PrimSpec, name: str) -> Sdf.RelationshipSpec:
     return rel
 
 
-def _view_variants(gen: Sdf.Layer, units: Units, ids: dict[str, str]) -> None:
+def _view_variants(gen: Sdf.Layer, units: Units, ids: dict[tuple[str, str], str]) -> None:
     spec = gen.GetPrimAtPath("/Temple")
     vs = Sdf.VariantSetSpec(spec, VIEW_SET)
     spec.variantSetNameList.Append(VIEW_SET)
@@ -219,13 +224,16 @@ def _view_variants(gen: Sdf.Layer, units: Units, ids: dict[str, str]) -> None:
     _hypothesis_moves(spec, units, ids)
 
 
-def _hypothesis_moves(spec: Sdf.PrimSpec, units: Units, ids: dict[str, str]) -> None:
-    """In each hypothesis' ``alternative``: move the parts whose class it changes."""
+def _hypothesis_moves(spec: Sdf.PrimSpec, units: Units, ids: dict[tuple[str, str], str]) -> None:
+    """In each hypothesis' variant: move the parts whose class it changes."""
     for hid, touched in units.hypotheses.items():
-        vset = next((s for s, h in ids.items() if h == hid), None)
-        if vset is None or vset not in spec.variantSets:
+        choice = next((s for s, h in ids.items() if h == hid), None)
+        if choice is None or choice[0] not in spec.variantSets:
             continue
-        alt = spec.variantSets[vset].variants["alternative"].primSpec
+        variants = spec.variantSets[choice[0]].variants
+        if choice[1] not in variants:
+            continue
+        alt = variants[choice[1]].primSpec
         for path, (_, rec) in sorted(touched.items()):
             base = units.baseline.get(path)
             if base is not None and base[1].evidence == rec.evidence:
@@ -254,7 +262,7 @@ def annotate_temple(
     hyps = tuple(hypotheses)
     pd = paradata or default_paradata(hyps)
     ids = {h.id: h.id for h in hyps}
-    sets = {hyp_set(h.id): h.id for h in hyps}
+    sets = {choice: hid for hid, choice in hyp_choices(hyps).items()}
     units = Units()
     for path in _layer_files(folder):
         rel = path.relative_to(folder).as_posix()

@@ -94,15 +94,27 @@ def read_scene_paradata(path: str | os.PathLike) -> SceneParadata:
                 out.prims.setdefault(p, unit)
         for name in sets.GetNames():
             if name.startswith("hyp_"):
-                _hypothesis(stage, spec, name, out)
+                for value in sets.GetVariantSet(name).GetVariantNames():
+                    if value != "baseline":
+                        _hypothesis(stage, spec, (name, value), out)
     return out
 
 
-def _hypothesis(stage: Usd.Stage, spec: Sdf.PrimSpec, name: str, out: SceneParadata) -> None:
-    spec.variantSelections[name] = "alternative"
+def _hypothesis(
+    stage: Usd.Stage, spec: Sdf.PrimSpec, choice: tuple[str, str], out: SceneParadata
+) -> None:
+    """The parts the hypothesis selected by ``choice`` (variant set, value) touches: an
+    independent one's ``alternative``, or one value of a question's set."""
+    name, value = choice
+    ids = {
+        (str(e.get("variantSet", "")), str(e.get("variant", "alternative"))): hid
+        for hid, e in out.listing.items()
+    }
+    want = ids.get(choice)
+    spec.variantSelections[name] = value
     touched: dict[str, Record] = {}
     for _, unit, rec in _walk(stage):
-        if rec.hypothesis and "hyp_" + rec.hypothesis.replace("-", "_") == name:
+        if rec.hypothesis and rec.hypothesis == want:
             touched.setdefault(unit, rec)
     del spec.variantSelections[name]
     hid = next((r.hypothesis for r in touched.values()), "")

@@ -99,8 +99,8 @@ from ionic_usd.usd.hypotheses import (
     column_path,
     column_xform,
     cuboid_meshes,
+    hyp_choices,
     hyp_ident,
-    hyp_set,
     hypothesis_layer,
     hypothesis_paradata,
     temple_keys,
@@ -322,20 +322,26 @@ def _generated_layer(
             over.variantSelections["lod"] = lod
     spec.variantSelections["lod"] = lods[0]
     listing = {}
+    choices = hyp_choices(layout.hypotheses)  # the alternatives of a question share one set
     for h in layout.hypotheses:
         realised = hyp_layers[h.id] is not None
+        vset, value = choices[h.id]
         entry = dict(hypothesis_paradata(h))
         entry["realised"] = realised
-        entry["variantSet"] = hyp_set(h.id) if realised else ""
+        entry["variantSet"] = vset if realised else ""
+        entry["variant"] = value if realised else ""
+        entry["question"] = h.key
         listing[hyp_ident(h.id)] = entry
         if not realised:
             continue
-        vs = Sdf.VariantSetSpec(spec, hyp_set(h.id))
-        spec.variantSetNameList.Append(hyp_set(h.id))
-        Sdf.VariantSpec(vs, "baseline")
-        alt = Sdf.VariantSpec(vs, "alternative")
+        vs = spec.variantSets.get(vset)
+        if vs is None:
+            vs = Sdf.VariantSetSpec(spec, vset)
+            spec.variantSetNameList.Append(vset)
+            Sdf.VariantSpec(vs, "baseline")
+        alt = Sdf.VariantSpec(vs, value)
         alt.primSpec.referenceList.Prepend(Sdf.Reference(f"./layers/{h.id}.usda"))
-        spec.variantSelections[hyp_set(h.id)] = "baseline"
+        spec.variantSelections[vset] = "baseline"
     spec.customData = {
         "ionic_usd": {
             "hypotheses": listing,
@@ -411,13 +417,15 @@ class TemplePlan:
             "/Temple/Colonnade",
         ]
         log.info("extentsHint per variant combination")
+        # loaded: the hints bound the columns' geometry, not the asset's own hints (which are
+        # unions over the asset's sets: a temple hint over them would not be tight)
+        gen.Load()
         memo: dict[Any, Any] = {}  # the passes and the product share combinations
         vsets = bound_changing_sets(gen, "/Temple", parts, candidates, base="lod", memo=memo)
         hints = variant_extents_hints(gen, "/Temple", parts, vsets, memo=memo)
         gen_layer = gen.GetRootLayer()
         author_extents_hints(gen_layer, "/Temple", hints, list(vsets))
         gen_layer.Save()
-        gen.Load()  # the payloads, for the triangles drawn per LOD
         lod_triangles = {lod: triangles_with(gen, {"lod": lod}) for lod in self.lods}
         del gen
         _check_resolves(tmp / ROOT_LAYER, tmp / GENERATED_LAYER)

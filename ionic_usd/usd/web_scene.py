@@ -39,7 +39,9 @@ def _digest(*values: object) -> str:
 def _signature(p: Usd.Prim, cache: UsdGeom.XformCache) -> tuple:
     m = np.array(cache.GetLocalToWorldTransform(p)).round(6)
     mat, _ = UsdShade.MaterialBindingAPI(p).ComputeBoundMaterial()
-    sig: list = [m.tobytes(), str(mat.GetPath()) if mat else ""]
+    # the visibility too: a question's alternative may show a part the others hide (the relief)
+    vis = str(UsdGeom.Imageable(p).ComputeVisibility())
+    sig: list = [m.tobytes(), str(mat.GetPath()) if mat else "", vis]
     if p.GetTypeName() == "Mesh":
         sig.append(_digest(UsdGeom.Mesh(p).GetPointsAttr().Get()))
     elif p.GetTypeName() == "PointInstancer":
@@ -78,7 +80,8 @@ def part_centres(scene: str | os.PathLike, variants: Mapping[str, str]) -> dict[
 def hypothesis_changes(
     scene: str | os.PathLike, variants: Mapping[str, str]
 ) -> tuple[dict[str, list[str]], list[str]]:
-    """``({hypothesis variant set: [part paths it changes]}, [baseline part paths])`` with
+    """``({"<hypothesis variant set>=<value>": [part paths it changes]}, [baseline part
+    paths])`` (every value but ``baseline`` of every ``hyp_`` set) with
     ``variants`` (e.g. ``detail``, ``lod``) selected throughout."""
     stage = Usd.Stage.Open(str(scene))
     root = stage.GetDefaultPrim()
@@ -91,10 +94,18 @@ def hypothesis_changes(
     for name in sets.GetNames():
         if not name.startswith("hyp_"):
             continue
-        sets.GetVariantSet(name).SetVariantSelection("alternative")
-        alt = part_signatures(stage)
-        sets.GetVariantSet(name).SetVariantSelection("baseline")
-        out[name] = sorted(p for p in {*base, *alt} if base.get(p) != alt.get(p) and p in alt)
+        vset = sets.GetVariantSet(name)
+        for value in vset.GetVariantNames():
+            if value == "baseline":
+                continue
+            vset.SetVariantSelection(value)
+            alt = part_signatures(stage)
+            vset.SetVariantSelection("baseline")
+            out[f"{name}={value}"] = sorted(
+                p
+                for p in {*base, *alt}
+                if base.get(p) != alt.get(p) and p in alt and alt[p][2] != "invisible"
+            )
     return out, sorted(base)
 
 

@@ -10,8 +10,10 @@ JavaScript dependency, installed from npm: ``npm install three`` — CI runs ``n
   :func:`ionic_usd.usd.web_scene.hypothesis_changes`), exported with it selected; a toggle
   hides the baseline's copies of those parts (per node, or per instance of a GPU-instanced
   mesh) and shows these;
-* ``data.json``: hypotheses grouped by the question they answer (the first word of their
-  ids: ``frieze-plain`` and ``frieze-garlands`` are both about the frieze), with
+* ``data.json``: hypotheses grouped by the question they answer (the description's
+  ``question``: ``frieze-plain`` and ``frieze-garlands`` are alternatives for the frieze, one
+  variant set: the panel lets one of them be on at a time; an independent hypothesis is a
+  question of its own), with
   description, certainty, sources, evidence class and the parts they change; the part records
   and the EM colour chart. The reliability view recolours each part by its evidence class, read
   from its glTF ``extras``.
@@ -59,10 +61,10 @@ def find_three(given: str | os.PathLike | None = None) -> Path:
     )
 
 
-def question_of(hid: str) -> str:
-    """The question a hypothesis answers: the first word of its id (``frieze-plain`` and
-    ``frieze-garlands`` are alternatives for the frieze)."""
-    return hid.replace("_", "-").split("-")[0]
+def question_of(hid: str, entry: dict | None = None) -> str:
+    """The question a hypothesis answers: its listing's ``question`` (the description's;
+    ``frieze`` for ``frieze-plain`` and ``frieze-garlands``), else its id (independent)."""
+    return str((entry or {}).get("question") or hid)
 
 
 def _record(rec) -> dict:
@@ -82,18 +84,21 @@ def _data(pd, changes: dict, base: list[str]) -> dict:
     hyps = []
     for hid, entry in pd.listing.items():
         vset = entry.get("variantSet") or ""
+        value = entry.get("variant") or "alternative"
+        key = f"{vset}={value}"
         rec = pd.hypotheses.get(hid, (None, ()))[0]
         hyps.append(
             {
                 "id": hid,
                 "set": vset,
-                "question": question_of(hid),
+                "variant": value,
+                "question": question_of(hid, entry),
                 "description": entry.get("description", ""),
                 "certainty": entry.get("certainty", ""),
                 "sources": list(entry.get("sources", [])),
                 "evidence": str(rec.evidence) if rec else "",
-                "changes": changes.get(vset, []),
-                "glb": f"hyp/{hid}.glb" if changes.get(vset) else "",
+                "changes": changes.get(key, []),
+                "glb": f"hyp/{hid}.glb" if changes.get(key) else "",
             }
         )
     return {
@@ -144,7 +149,7 @@ def write_site(
             if not h["glb"]:
                 continue
             layer = subset_layer(
-                src, tmp / "subset.usda", {"lod": lod, h["set"]: "alternative"}, h["changes"]
+                src, tmp / "subset.usda", {"lod": lod, h["set"]: h["variant"]}, h["changes"]
             )
             export_scene(layer, tmp / h["glb"])
             layer.unlink()

@@ -200,7 +200,7 @@ const hypHost = document.getElementById("hypotheses");
 for (const [q, hs] of Object.entries(groups)) {
   const g = document.createElement("div");
   g.className = "group";
-  g.innerHTML = `<h3>${esc(q)}${hs.length > 1 ? " (alternatives)" : ""}</h3>`;
+  g.innerHTML = `<h3>${esc(q)}${hs.length > 1 ? " (alternatives: one at a time)" : ""}</h3>`;
   for (const h of hs) {
     const d = document.createElement("div");
     d.className = "hyp";
@@ -285,7 +285,11 @@ function writeHash() {
 function readHash() {
   const q = new URLSearchParams(location.hash.slice(1));
   if (q.get("v") === "reliability") state.view = "reliability";
-  for (const id of (q.get("h") || "").split(",")) if (alts[id]) state.hyps.add(id);
+  for (const id of (q.get("h") || "").split(",")) {
+    const me = data.hypotheses.find((x) => x.id === id);
+    const taken = me && me.set && data.hypotheses.some((o) => o.set === me.set && state.hyps.has(o.id));
+    if (alts[id] && !taken) state.hyps.add(id); // one alternative per question
+  }
   const c = (q.get("c") || "").split(",").map(Number);
   if (c.length === 6 && c.every(Number.isFinite)) {
     camera.position.set(c[0], c[1], c[2]);
@@ -303,6 +307,16 @@ function setView(v) {
   apply();
 }
 function setHypothesis(id, on) {
+  // the alternatives of one question share a variant set: one of them at a time
+  const me = data.hypotheses.find((x) => x.id === id);
+  if (on && me && me.set) {
+    for (const o of data.hypotheses) {
+      if (o.id !== id && o.set === me.set && state.hyps.has(o.id)) {
+        state.hyps.delete(o.id);
+        for (const b of document.querySelectorAll(`input[data-hyp="${o.id}"]`)) b.checked = false;
+      }
+    }
+  }
   if (on) state.hyps.add(id);
   else state.hyps.delete(id);
   for (const b of document.querySelectorAll(`input[data-hyp="${id}"]`)) b.checked = on;
