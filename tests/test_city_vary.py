@@ -116,7 +116,9 @@ def test_plan_names_a_type_or_a_preset():
 @pytest.mark.parametrize(
     "props, match",
     [
-        ({"arrangement": "dipteral"}, "arrangement"),
+        ({"arrangement": "tholos"}, "arrangement"),
+        ({"arrangement": "peripteral", "front": 10}, "front"),  # decastyle: dipteral only
+        ({"arrangement": "dipteral", "intercolumniation": "wide"}, "intercolumniation"),
         ({"intercolumniation": "wide"}, "intercolumniation"),
         ({"preset": "parthenon"}, "preset"),
         ({"front": 4, "lower_diameter": 3.0}, "outline"),  # too big for the lot
@@ -125,6 +127,35 @@ def test_plan_names_a_type_or_a_preset():
 def test_bad_types_name_the_key(props, match):
     with pytest.raises(ParameterError, match=match):
         temple_for_lot(props, lot_rng(0, "x"), width=30, depth=50, module_range=(0.5, 1.3))
+
+
+@pytest.mark.parametrize(
+    "props",
+    [
+        {"arrangement": "dipteral", "front": 8, "intercolumniation": "eustyle"},
+        {"arrangement": "in_antis"},
+        {"arrangement": "peripteral", "front": 6, "lower_diameter": 0.5},
+    ],
+)
+def test_a_lot_may_name_any_vitruvian_arrangement(props):
+    """Another arrangement than the derived description's is a typed temple: the named keys
+    kept, the others drawn, the module fitted to the lot (its plan within FILL of it)."""
+    import tomllib
+
+    from ionic_usd.city.types import FILL, _footprint
+    from ionic_usd.temple.vitruvius import TempleType, type_from_table
+
+    choice = temple_for_lot(props, lot_rng(0, "x"), width=30, depth=50, module_range=(0.5, 1.3))
+    assert choice.description is not None
+    typ = tomllib.loads(choice.description)["type"]
+    for key, value in props.items():
+        assert typ[key] == value
+    t = type_from_table(typ, context="test")
+    assert isinstance(t, TempleType)
+    w, ln = _footprint(t)
+    if "lower_diameter" not in props:  # sized to the lot
+        assert w <= FILL * 30 * 1.001 and ln <= FILL * 50 * 1.001
+        assert max(w / (FILL * 30), ln / (FILL * 50)) > 0.95  # and as large as it fits
 
 
 def test_plan_refuses_bad_type_values(tmp_path):

@@ -264,9 +264,11 @@ def temple_for_lot(
         if preset not in PRESETS:
             raise ParameterError("preset", preset, f"one of {', '.join(PRESETS)}", context=context)
         return TempleChoice(str(preset), temple=str(preset), type={"preset": preset})
+    arr = str(props.get("arrangement", ARRANGEMENTS[0]))
+    if arr not in ARRANGEMENTS:  # another of Vitruvius' arrangements: a typed temple
+        return _typed_choice(props, arr, rng, width, depth, context)
     fronts = [props["front"]] if "front" in props else list(FRONTS)
     ics = [props["intercolumniation"]] if "intercolumniation" in props else list(INTERCOLUMNIATIONS)
-    arr = str(props.get("arrangement", ARRANGEMENTS[0]))
     lo, hi = module_range
     if "lower_diameter" in props:
         lo = hi = float(props["lower_diameter"])  # type: ignore[arg-type]
@@ -286,6 +288,57 @@ def temple_for_lot(
         f"a lot that holds a temple of the type asked for with a module >= {lo:g} m",
         context=context,
     )
+
+
+def _typed_choice(
+    props: Mapping[str, object],
+    arr: str,
+    rng: np.random.Generator,
+    width: float,
+    depth: float,
+    context: str,
+) -> TempleChoice:
+    """A lot naming an arrangement other than the derived description's: a typed temple
+    (``ionic_usd.temple.vitruvius``) of that arrangement, its other keys kept or drawn and its
+    module fitted to the lot (:func:`ionic_usd.city.types.choose_type`)."""
+    from ionic_usd.city.types import choose_type
+    from ionic_usd.temple.vitruvius import FRONTS as TYPE_FRONTS
+    from ionic_usd.temple.vitruvius import Arrangement, Intercolumniation
+
+    names = [a.value for a in Arrangement]
+    if arr not in names:
+        raise ParameterError("arrangement", arr, f"one of {', '.join(names)}", context=context)
+    front = props.get("front")
+    allowed = TYPE_FRONTS[Arrangement(arr)]
+    if front is not None and front not in allowed:
+        raise ParameterError(
+            "front",
+            front,
+            f"{', '.join(map(str, allowed))} columns for a {arr} temple",
+            context=context,
+        )
+    ic = props.get("intercolumniation")
+    if ic is not None and ic not in [i.value for i in Intercolumniation]:
+        raise ParameterError(
+            "intercolumniation",
+            ic,
+            f"one of {', '.join(i.value for i in Intercolumniation)}",
+            context=context,
+        )
+    d = props.get("lower_diameter")
+    slug, text = choose_type(
+        min(width, depth),
+        max(width, depth),
+        rng,
+        arrangement=arr,
+        front=None if front is None else int(front),
+        intercolumniation=None if ic is None else str(ic),
+        lower_diameter=None if d is None else float(d),  # type: ignore[arg-type]
+    )
+    import tomllib
+
+    typ = tomllib.loads(text)["type"]
+    return TempleChoice(slug, description=text, type=dict(typ), scale_range=(0.5, 1.0))
 
 
 def _sized(

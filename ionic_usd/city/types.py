@@ -46,13 +46,29 @@ def _footprint(t: TempleType) -> tuple[float, float]:
     return 2 * x, z1 - z0
 
 
-def choose_type(width: float, depth: float, rng: np.random.Generator) -> tuple[str, str]:
-    """A seeded type fitted to a ``width`` × ``depth`` lot: (slug, TOML text)."""
+def choose_type(
+    width: float,
+    depth: float,
+    rng: np.random.Generator,
+    *,
+    arrangement: str | None = None,
+    front: int | None = None,
+    intercolumniation: str | None = None,
+    lower_diameter: float | None = None,
+) -> tuple[str, str]:
+    """A seeded type fitted to a ``width`` × ``depth`` lot: (slug, TOML text). What the lot
+    names (``arrangement``, ``front``, ``intercolumniation``, ``lower_diameter``) is kept; the
+    draws are made all the same, so a named key does not shift the others."""
     arrangements = list(Arrangement)
     arr = arrangements[int(rng.integers(len(arrangements)))]
-    front = int(FRONTS[arr][int(rng.integers(len(FRONTS[arr])))])
+    if arrangement is not None:
+        arr = Arrangement(arrangement)
+    drawn_front = int(FRONTS[arr][int(rng.integers(len(FRONTS[arr])))])
+    front = drawn_front if front is None else int(front)
     ics = list(Intercolumniation)
     ic = ics[int(rng.integers(len(ics)))]
+    if intercolumniation is not None:
+        ic = Intercolumniation(intercolumniation)
     d = 1.0
     for _ in range(3):  # the footprint (steps, stairs) is nearly proportional to D
         t = TempleType(
@@ -60,6 +76,8 @@ def choose_type(width: float, depth: float, rng: np.random.Generator) -> tuple[s
         )
         fw, fl = _footprint(t)
         d = round(float(d * min(FILL * width / fw, FILL * depth / fl)), 3)
+    if lower_diameter is not None:
+        d = float(lower_diameter)
     slug = f"{arr.value}-{front}-{ic.value}"
     text = (
         f'[temple]\nname = "{slug} (chosen for the lot)"\n\n[type]\n'
