@@ -220,7 +220,13 @@ def distributed(tmp: Path, which: list[str], local: bool) -> tuple[list[str], di
             shutil.rmtree(folder, ignore_errors=True)
         base = runs["1 worker"]["wall"]
         for run, c in runs.items():
-            same = digests[run] == digests.get("local", digests["1 worker"])
+            ref = digests.get("local", digests["1 worker"])
+            same = digests[run] == ref
+            if not same:  # name what differs (the folders are gone by now)
+                diff = sorted(
+                    k for k in set(ref) | set(digests[run]) if ref.get(k) != digests[run].get(k)
+                )
+                print(f"{name} {run}: {len(diff)} files differ: {diff[:20]}", file=sys.stderr)
             rows.append(
                 f"| {name} | {c['temples']} | {c['built']} | {run} | {c['cluster_workers']} | "
                 f"{c['build']:.1f} | {c['wall']:.1f} | {base / c['wall']:.2f} | "
