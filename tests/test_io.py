@@ -296,3 +296,34 @@ def test_removed_if_failed_takes_away_only_the_empty_folders_it_made(tmp_path):
     with removed_if_failed(tmp_path / "ok"):
         (tmp_path / "ok").mkdir()
     assert (tmp_path / "ok").is_dir()
+
+
+def test_scratch_writes_skip_fsync_and_stay_atomic(tmp_path, monkeypatch):
+    """Inside scratch_writes() (a Dask task's build into a temporary folder) atomic writes
+    make no fsync; outside, a file and its folder are synced; the content lands either way."""
+    import os
+
+    from ionic_usd import io as iio
+
+    calls = []
+    real = os.fsync
+    monkeypatch.setattr(os, "fsync", lambda fd: calls.append(fd) or real(fd))
+    iio.atomic_write_bytes(tmp_path / "a.bin", b"synced")
+    assert len(calls) >= 2  # the file and its folder
+    calls.clear()
+    with iio.scratch_writes():
+        iio.atomic_write_bytes(tmp_path / "b.bin", b"scratch")
+        with iio.scratch_writes():  # nested: still scratch
+            iio.atomic_write_bytes(tmp_path / "c.bin", b"nested")
+        iio.atomic_write_bytes(tmp_path / "d.bin", b"scratch again")
+    assert calls == []
+    iio.atomic_write_bytes(tmp_path / "e.bin", b"synced again")  # the block has ended
+    assert len(calls) >= 2
+    assert (tmp_path / "b.bin").read_bytes() == b"scratch"
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "a.bin",
+        "b.bin",
+        "c.bin",
+        "d.bin",
+        "e.bin",
+    ]

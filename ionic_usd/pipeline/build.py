@@ -77,7 +77,11 @@ def build_temple_files(spec: TempleSpec) -> tuple[dict[str, bytes], str, str, fl
     )
     if col_tables:
         column = column_params_from_mapping(col_tables, context=f"temple {spec.name}", base=column)
-    with tempfile.TemporaryDirectory(prefix="ionic_usd_build_") as tmp:
+    from ionic_usd.io import scratch_writes
+
+    # a scratch folder, read back and deleted: its writes need not reach the disk (the
+    # client's install of these bytes does, atomically and synced)
+    with tempfile.TemporaryDirectory(prefix="ionic_usd_build_") as tmp, scratch_writes():
         root = Path(tmp) / "Temple"
         compose_temple(root, layout, column, texture_size=spec.texture_size, seed=spec.seed)
         files = {
