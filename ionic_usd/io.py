@@ -36,6 +36,7 @@ from pathlib import Path
 from typing import Any
 
 from ionic_usd.errors import OutputExistsError, ParameterError
+from ionic_usd.sync import _fsync_dir, _fsync_file
 
 __all__ = [
     "MANIFEST_NAME",
@@ -76,49 +77,6 @@ def _pid_alive(pid: int) -> bool:
     except PermissionError:
         return True
     return True
-
-
-#: writes into a scratch folder that is read back and deleted need no trip to the disk
-#: (:func:`scratch_writes`); a finished output always gets one
-_SCRATCH = {"depth": 0}
-
-
-@contextlib.contextmanager
-def scratch_writes():
-    """Within this block (this process, its thread pools too), atomic writes skip ``fsync``:
-    for builds into a temporary folder whose files are read back and deleted (a Dask task's
-    temple), where durability buys nothing and two builds side by side would queue on the
-    disk. The rename stays atomic."""
-    _SCRATCH["depth"] += 1
-    try:
-        yield
-    finally:
-        _SCRATCH["depth"] -= 1
-
-
-def _fsync_dir(folder: Path) -> None:
-    if _SCRATCH["depth"]:
-        return
-    try:
-        fd = os.open(folder, os.O_RDONLY)
-    except OSError:
-        return
-    try:
-        os.fsync(fd)
-    except OSError:
-        pass  # some file systems cannot sync a directory; the rename is still atomic
-    finally:
-        os.close(fd)
-
-
-def _fsync_file(path: Path) -> None:
-    if _SCRATCH["depth"]:
-        return
-    fd = os.open(path, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
 
 
 def _tmp_sibling(path: Path, tag: str = _TMP_TAG) -> Path:

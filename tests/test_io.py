@@ -304,6 +304,7 @@ def test_scratch_writes_skip_fsync_and_stay_atomic(tmp_path, monkeypatch):
     import os
 
     from ionic_usd import io as iio
+    from ionic_usd.sync import scratch_writes
 
     calls = []
     real = os.fsync
@@ -311,9 +312,9 @@ def test_scratch_writes_skip_fsync_and_stay_atomic(tmp_path, monkeypatch):
     iio.atomic_write_bytes(tmp_path / "a.bin", b"synced")
     assert len(calls) >= 2  # the file and its folder
     calls.clear()
-    with iio.scratch_writes():
+    with scratch_writes():
         iio.atomic_write_bytes(tmp_path / "b.bin", b"scratch")
-        with iio.scratch_writes():  # nested: still scratch
+        with scratch_writes():  # nested: still scratch
             iio.atomic_write_bytes(tmp_path / "c.bin", b"nested")
         iio.atomic_write_bytes(tmp_path / "d.bin", b"scratch again")
     assert calls == []

@@ -77,7 +77,7 @@ def build_temple_files(spec: TempleSpec) -> tuple[dict[str, bytes], str, str, fl
     )
     if col_tables:
         column = column_params_from_mapping(col_tables, context=f"temple {spec.name}", base=column)
-    from ionic_usd.io import scratch_writes
+    from ionic_usd.sync import scratch_writes
 
     # a scratch folder, read back and deleted: its writes need not reach the disk (the
     # client's install of these bytes does, atomically and synced)
