@@ -301,7 +301,7 @@ def _overlaps(polys, others=()):
 
 def test_stoas_back_to_back_crossing_and_bent_inward_leave_gaps_not_overlaps():
     from ionic_usd.city.plan import CityPlan
-    from ionic_usd.pipeline.city_extras import lay_stoas
+    from ionic_usd.pipeline.city_extras import _bay_polygons, lay_stoas
 
     back = 7.0
     porticoes = (
@@ -324,7 +324,7 @@ def test_stoas_back_to_back_crossing_and_bent_inward_leave_gaps_not_overlaps():
     kept = {tuple(np.round(b, 6)) for b in sp.bay_xz}
     assert all(tuple(np.round(b, 6)) in kept for b in whole[0].bay_xz)
     # without the checks these inputs do overlap (the test is not vacuous)
-    allp = [shapely.Polygon(q) for w in whole for q in _bay_polygons_of(w, back)]
+    allp = [shapely.Polygon(q) for w in whole for q in _bay_polygons(w, back)]
     assert _overlaps(allp)
     # every kept column carries a kept bay: it is the start or the end of one
     ends = set()
@@ -336,12 +336,6 @@ def test_stoas_back_to_back_crossing_and_bent_inward_leave_gaps_not_overlaps():
         }
     assert {tuple(np.round(c, 6)) for c in sp.column_xz} <= ends
     assert sp.dropped == sum(len(w.column_xz) for w in whole) - len(sp.column_xz) > 0
-
-
-def _bay_polygons_of(lay, back):
-    from ionic_usd.pipeline.city_extras import _bay_polygons
-
-    return _bay_polygons(lay, back)
 
 
 def test_example_forum_stoas_are_whole_and_clear_of_every_lot():

@@ -79,11 +79,6 @@ def _corner_polygon(xz: np.ndarray, yaw: float, nb_local: np.ndarray, back: floa
 _OVERLAP_M2 = 1e-3  # parts that share an edge touch (area ~0); more than this overlaps
 
 
-def _clear_of(tree, kept: list, poly) -> bool:
-    """Whether ``poly`` overlaps none of the kept parts (by more than :data:`_OVERLAP_M2`)."""
-    return all(kept[j].intersection(poly).area <= _OVERLAP_M2 for j in tree(poly))
-
-
 def lay_stoas(
     plan: CityPlan, spacing: float, footprints: list[np.ndarray], dims_back: float
 ) -> StoaPlan:
@@ -103,48 +98,48 @@ def lay_stoas(
     cxz = np.concatenate(cols) if cols else np.zeros((0, 2))
     cyaw = np.concatenate([lay.column_yaw for lay in lays]) if lays else np.zeros(0)
     clear = drop_inside(cxz, footprints)
-    blocked = [shapely.Polygon(f) for f in footprints]
-    blocked += [shapely.Polygon(lot.outline) for lot in plan.lots]
-    blocked_tree = shapely.STRtree(blocked) if blocked else None
-    kept_polys: list = []
-    grid: dict[tuple[int, int], list[int]] = {}  # kept parts by 10 m plan cell
-
-    def cells(poly) -> list[tuple[int, int]]:
-        x0, y0, x1, y1 = (int(np.floor(v / 10.0)) for v in poly.bounds)
-        return [(i, j) for i in range(x0, x1 + 1) for j in range(y0, y1 + 1)]
-
-    def near(poly) -> set[int]:
-        return {k for c in cells(poly) for k in grid.get(c, ())}
-
-    def try_keep(poly) -> bool:
-        if blocked_tree is not None:
-            for j in blocked_tree.query(poly, predicate="intersects"):
-                if blocked[j].intersection(poly).area > _OVERLAP_M2:
-                    return False
-        if not _clear_of(near, kept_polys, poly):
-            return False
-        for c in cells(poly):
-            grid.setdefault(c, []).append(len(kept_polys))
-        kept_polys.append(poly)
-        return True
-
-    carries = np.zeros(len(cxz), dtype=bool)
-    bays: list[tuple] = []
-    corners: list[tuple] = []
+    # every candidate part, in the order decided (each porticus' bays, then its corners),
+    # then what no part may overlap (the temples' footprints and lots), in one index
+    parts: list[tuple] = []  # (porticus, "bay" or "corner", item, first column index)
+    geoms = []
     base = 0
-    for lay in lays:
+    for n, lay in enumerate(lays):
         for i, quad in enumerate(_bay_polygons(lay, dims_back)):
-            a, b = lay.bay_columns[i] + base
-            if clear[a] and clear[b] and try_keep(shapely.Polygon(quad)):
-                bays.append((lay.bay_xz[i], lay.bay_yaw[i], lay.bay_length[i]))
-                carries[[a, b]] = True
+            parts.append((n, "bay", i, base))
+            geoms.append(shapely.Polygon(quad))
         for k in range(len(lay.corner_xz)):
             quad = _corner_polygon(
                 lay.corner_xz[k], lay.corner_yaw[k], lay.corner_normal[k], dims_back
             )
-            if try_keep(shapely.Polygon(quad)):
-                corners.append((lay.corner_xz[k], lay.corner_yaw[k], lay.corner_normal[k]))
+            parts.append((n, "corner", k, base))
+            geoms.append(shapely.Polygon(quad))
         base += len(lay.column_xz)
+    geoms += [shapely.Polygon(f) for f in footprints]
+    geoms += [shapely.Polygon(lot.outline) for lot in plan.lots]
+    tree = shapely.STRtree(geoms)
+    kept = np.zeros(len(parts), dtype=bool)
+    carries = np.zeros(len(cxz), dtype=bool)
+    bays: list[tuple] = []
+    corners: list[tuple] = []
+    for i, (n, kind, k, first) in enumerate(parts):
+        lay = lays[n]
+        if kind == "bay":
+            a, b = lay.bay_columns[k] + first
+            if not (clear[a] and clear[b]):
+                continue
+        hits = tree.query(geoms[i], predicate="intersects")
+        if any(
+            (j >= len(parts) or (j < i and kept[j]))
+            and geoms[j].intersection(geoms[i]).area > _OVERLAP_M2
+            for j in hits
+        ):
+            continue
+        kept[i] = True
+        if kind == "bay":
+            bays.append((lay.bay_xz[k], lay.bay_yaw[k], lay.bay_length[k]))
+            carries[[a, b]] = True
+        else:
+            corners.append((lay.corner_xz[k], lay.corner_yaw[k], lay.corner_normal[k]))
     keep = clear & carries
     return StoaPlan(
         cxz[keep],
