@@ -72,6 +72,19 @@ def up_axis(points: np.ndarray, *, max_points: int = 20_000, seed: int = 0) -> n
     return a if prism is None else prism
 
 
+def _cells(xy: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray]:
+    """Plan points (offset to >= 0) on a grid of ``cell``: each point's 8-connected group of
+    occupied cells (``scipy.ndimage.label``) and each group's point count."""
+    from scipy import ndimage
+
+    ij = np.floor(xy / cell).astype(np.int64)
+    grid = np.zeros(tuple(ij.max(axis=0) + 1), dtype=bool)
+    grid[ij[:, 0], ij[:, 1]] = True
+    labels, count = ndimage.label(grid, structure=np.ones((3, 3), dtype=int))
+    lab = labels[ij[:, 0], ij[:, 1]] - 1
+    return lab, np.bincount(lab, minlength=count)
+
+
 def _spacing(points: np.ndarray, rng) -> float:
     from scipy.spatial import cKDTree
 
@@ -91,7 +104,6 @@ def split_columns(
     clusters : index arrays into ``points``, largest first
     notes : what was dropped
     """
-    from scipy import ndimage
 
     rng = np.random.default_rng(seed)
     up = up_axis(points, seed=seed)
@@ -102,12 +114,8 @@ def split_columns(
     lo = xy.min(axis=0)
     ext = float(np.max(np.ptp(xy, axis=0)))
     cell = max(CELL_SPACINGS * _spacing(points, rng), ext / 2000.0, 1e-6)
-    ij = np.floor((xy - lo) / cell).astype(np.int64)
-    grid = np.zeros(tuple(ij.max(axis=0) + 1), dtype=bool)
-    grid[ij[:, 0], ij[:, 1]] = True
-    labels, count = ndimage.label(grid, structure=np.ones((3, 3), dtype=int))
-    lab = labels[ij[:, 0], ij[:, 1]] - 1
-    sizes = np.bincount(lab, minlength=count)
+    lab, sizes = _cells(xy - lo, cell)
+    count = len(sizes)
     order = np.argsort(-sizes, kind="stable")
     keep = [k for k in order if sizes[k] >= max(100, MIN_SHARE * sizes[order[0]])]
     notes = []
@@ -175,19 +183,14 @@ def _split_touching(h: np.ndarray, xy: np.ndarray, cell: float) -> tuple[list[np
     bottom of what joins them on top (an architrave) nothing is kept. Returns index arrays
     into the footprint's points (one, all of them, when it is one column) and the count of
     points dropped."""
-    from scipy import ndimage
 
     lo_h, span = float(h.min()), float(np.ptp(h))
     band = np.flatnonzero((h > lo_h + SHAFT_BAND[0] * span) & (h < lo_h + SHAFT_BAND[1] * span))
     if len(band) < 200:
         return [np.arange(len(h))], 0
     q = xy[band]
-    ij = np.floor((q - q.min(axis=0)) / cell).astype(np.int64)
-    grid = np.zeros(tuple(ij.max(axis=0) + 1), dtype=bool)
-    grid[ij[:, 0], ij[:, 1]] = True
-    labels, count = ndimage.label(grid, structure=np.ones((3, 3), dtype=int))
-    lab = labels[ij[:, 0], ij[:, 1]] - 1
-    sizes = np.bincount(lab, minlength=count)
+    lab, sizes = _cells(q - q.min(axis=0), cell)
+    count = len(sizes)
     shafts = [k for k in range(count) if sizes[k] >= max(100, MIN_SHARE * sizes.max())]
     if len(shafts) < 2:
         return [np.arange(len(h))], 0

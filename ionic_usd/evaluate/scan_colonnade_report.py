@@ -17,7 +17,7 @@ from typing import IO, Any
 
 import numpy as np
 
-from ionic_usd.evaluate.scan_colonnade import ColonnadeFit, fit_colonnade
+from ionic_usd.evaluate.scan_colonnade import ColonnadeFit, _stats, fit_colonnade
 
 __all__ = ["colonnade_files", "colonnade_instances", "run_colonnade"]
 
@@ -51,10 +51,8 @@ def colonnade_instances(fit: ColonnadeFit) -> tuple[dict[str, dict], list]:
     for k, f in enumerate(fit.fits):
         g = fit.group_of(k)
         src = fit.fits[fit.groups[g][0]].column.shaft.flute_phase
-        d = fit.instance_deviation[k]
-        dev = {"rms": float(np.sqrt(np.mean(d**2))), "p95": float(np.percentile(d, 95))}
-        dev["max"] = float(d.max())
         turn = f.column.shaft.flute_phase - src
+        dev = _stats(fit.instance_deviation[k])
         instances.append(ColonnadeInstance(_letter(g), f.matrix, turn, dev))
     return prototypes, instances
 
