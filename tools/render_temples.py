@@ -23,6 +23,7 @@ from pxr import Gf, Usd, UsdGeom
 from ionic_usd.api import Temple
 from ionic_usd.preview import camera, render_preview
 from ionic_usd.temple.presets import PRESETS, preset_path
+from ionic_usd.usd.city_prototypes import prototype_stats
 
 DOCS = Path(__file__).resolve().parent.parent / "docs"
 GAP = 6.0
@@ -35,16 +36,6 @@ def _cpu() -> float:
         resource.getrusage(resource.RUSAGE_CHILDREN),
     )
     return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
-
-
-def _bound(path: Path) -> Gf.Range3d:
-    """The temple's drawn bound at LOD low (default and render purposes)."""
-    st = Usd.Stage.Open(str(path))
-    root = st.GetDefaultPrim()
-    if root.GetVariantSets().HasVariantSet("lod"):
-        root.GetVariantSet("lod").SetVariantSelection("low")
-    cache = UsdGeom.BBoxCache(Usd.TimeCode.Default(), ["default", "render"])
-    return cache.ComputeWorldBound(root).ComputeAlignedRange()
 
 
 def main() -> None:
@@ -70,11 +61,13 @@ def main() -> None:
         p = temple.layout.params
         # the built temple's own bound (steps, podium and cornices included), so that
         # neighbours stand GAP apart however far their parts reach
-        box = _bound(work / name / "Temple.usda")
-        x -= box.GetMin()[0]
+        lo, hi, _ = prototype_stats(
+            Usd.Stage.Open(str(work / name / "Temple.usda")), "/Temple", {"lod": "low"}
+        )
+        x -= lo[0]
         xf = UsdGeom.Xform.Define(stage, f"/World/{name}")
         xf.AddTranslateOp().Set(Gf.Vec3d(x, 0.0, -p.stylobate_length / 2))
-        half = box.GetMax()[0]
+        half = hi[0]
         xf.GetPrim().GetReferences().AddReference(f"./{name}/Temple.usda")
         x += half + GAP
         print(f"{name}: {temple.layout.name}, built in {dt:.1f} s wall, {cpu:.1f} CPU-s")
