@@ -55,7 +55,7 @@ def test_blender_shows_hypothesis_paradata(portunus_temple, tmp_path):
 )
 over "Temple" (
     variants = {{
-        string hyp_frieze_plain = "alternative"
+        string hyp_frieze = "frieze_plain"
         string hyp_roof_pitch_15 = "alternative"
     }}
 )
