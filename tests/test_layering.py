@@ -5,7 +5,9 @@
 - ``pxr`` is imported only under ``ionic_usd/usd/``, and importing ``ionic_usd.blueprint`` (what to
   write) and ``ionic_usd.lod`` loads none (checked in a fresh interpreter);
 - the levels of detail have one registry, :mod:`ionic_usd.lod`: no other module spells a
-  table keyed by the level names.
+  table keyed by the level names;
+- no function of the kernel (geometry, grammars, column, temple, city, texture, blueprint, lod)
+  is over 80 lines.
 """
 
 from __future__ import annotations
@@ -198,3 +200,38 @@ def test_library_code_takes_the_blueprint_from_blueprint():
                     if a.name in names
                 ]
     assert offenders == []
+
+
+# the kernel: generation and planning (numpy, no pxr); a reader holds each function in their head
+KERNEL = ("geometry", "grammar", "column", "temple", "city", "texture", "blueprint")
+MAX_FUNCTION_LINES = 80
+
+
+def _long_functions(path: Path, limit: int, root: Path = PACKAGE.parent) -> list[str]:
+    """``name (lines)`` for each function of ``path`` longer than ``limit`` lines (docstring
+    and signature included), at any depth: methods and nested functions count too."""
+    tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+    return [
+        f"{path.relative_to(root)}:{node.lineno} {node.name} "
+        f"({node.end_lineno - node.lineno + 1} lines)"
+        for node in ast.walk(tree)
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef))
+        and node.end_lineno is not None
+        and node.end_lineno - node.lineno + 1 > limit
+    ]
+
+
+def test_no_kernel_function_is_over_80_lines():
+    files = [p for sub in KERNEL for p in sorted((PACKAGE / sub).rglob("*.py"))]
+    files.append(PACKAGE / "lod.py")
+    assert len(files) > 40  # the kernel is found where it lives
+    long = [row for p in files for row in _long_functions(p, MAX_FUNCTION_LINES)]
+    assert not long, "kernel functions over 80 lines:\n" + "\n".join(long)
+
+
+def test_the_length_check_finds_a_long_function(tmp_path):
+    body = "\n".join(f"    x{i} = {i}" for i in range(81))
+    src = tmp_path / "long.py"
+    src.write_text(f"def f():\n{body}\n\n\ndef g():\n    return 1\n", encoding="utf-8")
+    rows = _long_functions(src, MAX_FUNCTION_LINES, root=tmp_path)
+    assert len(rows) == 1 and " f (82 lines)" in rows[0]

@@ -349,12 +349,7 @@ def build_shaft(
     :func:`ionic_usd.texture.uv.unwrap` packs without xatlas.
     """
     p = p or ShaftParams()
-    est = shaft_triangle_estimate(p, caps=int(cap_bottom) + int(cap_top))
-    if est > max_triangles:
-        raise BudgetError(
-            f"shaft: this level of detail needs about {est:,} triangles, above the budget of "
-            f"{max_triangles:,} (lower flute_slices $h or raise max_triangles)"
-        )
+    _check_budget(p, int(cap_bottom) + int(cap_top), max_triangles)
     e, n = p.flutes, p.fluted_segments
     ys, ks = _row_layout(p)
     fl_pts, fl_ang = _fluted_rows(p, ys, ks)
@@ -371,14 +366,7 @@ def build_shaft(
     # groups: 0 = fillets and plain rings (one smooth cylinder), 1..e = flutes, e+1/e+2 caps
     tris, groups = _band_triangles(p, fl_ang, plain, starts, base_fl, nrows)
     n_lateral = len(grid_tri) + sum(len(t) for t in tris)
-    if cap_bottom:
-        t = stitch(plain[0], np.array([c_bot]), is_closed=True, direction=-1)
-        tris.append(t)
-        groups.append(np.full(len(t), e + 1))
-    if cap_top:
-        t = stitch(plain[3], np.array([c_top]), is_closed=True)
-        tris.append(t)
-        groups.append(np.full(len(t), e + 2))
+    _add_caps(tris, groups, plain, (c_bot, c_top), e, cap_bottom, cap_top)
     rest = np.concatenate(tris)
     # the bands and caps touch few points: compute their normals on a compact copy
     used, local = np.unique(rest, return_inverse=True)
@@ -392,12 +380,7 @@ def build_shaft(
     assert rest_mesh.normals is not None and rest_mesh.normals_indices is not None
     nidx = np.concatenate([grid_nidx, rest_mesh.normals_indices + len(grid_nrm)])
     # drop points no triangle uses (cap centres of an open shaft, collapsed ring rows)
-    keep = np.ones(len(points), dtype=bool)
-    keep[[c_bot, c_top]] = [cap_bottom, cap_top]
-    if p.ring_bottom == 0:
-        keep[plain[1]] = False
-    if p.ring_top == 0:
-        keep[plain[2]] = False
+    keep = _used_points(len(points), p, plain, (c_bot, c_top), cap_bottom, cap_top)
     if not keep.all():
         points, tri, st, st_idx = _drop_unused(points, tri, st, st_idx, keep, c_bot, n_lateral)
     if y_offset:
@@ -414,6 +397,54 @@ def build_shaft(
         normals_indices=nidx,
         st_distinct=True,
     )
+
+
+def _check_budget(p: ShaftParams, caps: int, max_triangles: int) -> None:
+    """Refuse (BudgetError) a level of detail whose estimated triangles exceed the budget."""
+    est = shaft_triangle_estimate(p, caps=caps)
+    if est > max_triangles:
+        raise BudgetError(
+            f"shaft: this level of detail needs about {est:,} triangles, above the budget of "
+            f"{max_triangles:,} (lower flute_slices $h or raise max_triangles)"
+        )
+
+
+def _add_caps(
+    tris: list[np.ndarray],
+    groups: list[np.ndarray],
+    plain: list[np.ndarray],
+    centres: tuple[int, int],
+    e: int,
+    cap_bottom: bool,
+    cap_top: bool,
+) -> None:
+    """Append the flat caps (fans from the centre points; smoothing groups e+1 and e+2)."""
+    if cap_bottom:
+        t = stitch(plain[0], np.array([centres[0]]), is_closed=True, direction=-1)
+        tris.append(t)
+        groups.append(np.full(len(t), e + 1))
+    if cap_top:
+        t = stitch(plain[3], np.array([centres[1]]), is_closed=True)
+        tris.append(t)
+        groups.append(np.full(len(t), e + 2))
+
+
+def _used_points(
+    n_points: int,
+    p: ShaftParams,
+    plain: list[np.ndarray],
+    centres: tuple[int, int],
+    cap_bottom: bool,
+    cap_top: bool,
+) -> np.ndarray:
+    """Mask of the points a triangle uses (no cap centre of an open end, no collapsed ring)."""
+    keep = np.ones(n_points, dtype=bool)
+    keep[list(centres)] = [cap_bottom, cap_top]
+    if p.ring_bottom == 0:
+        keep[plain[1]] = False
+    if p.ring_top == 0:
+        keep[plain[2]] = False
+    return keep
 
 
 def _plain_rows(p: ShaftParams, fl_ang: np.ndarray) -> list[np.ndarray]:

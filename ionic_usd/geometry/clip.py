@@ -78,17 +78,9 @@ def clip_mesh(
     on the kept side) and dropped otherwise.
     """
     name = mesh.name if name is None else name
-    p0 = _unit(plane_point, "plane_point")
-    n = _unit(plane_normal, "plane_normal")
-    ln = float(np.linalg.norm(n))
-    if ln == 0.0:
-        raise GeometryError("clip_mesh: plane_normal is zero")
-    n = n / ln
-    if mesh.n_faces == 0:
-        raise GeometryError(f"clip_mesh: mesh {mesh.name!r} is empty, nothing is left")
+    p0, n = _plane(plane_point, plane_normal)
     pts = mesh.points
-    if eps is None:
-        eps = _REL_EPS * max(float(np.linalg.norm(np.ptp(pts, axis=0))), 1e-300)
+    eps = _snap_eps(mesh, eps)
     raw = libm.dot(pts - p0, n)
     near = np.abs(raw) <= eps
     d = np.where(near, 0.0, raw)
@@ -114,14 +106,47 @@ def clip_mesh(
     values = None if fv is None else [cut.kept_values(fv, corner, whole, split)]
     if cap:
         on_plane = np.concatenate([s == 0, np.ones(len(cut.new_pts), dtype=bool)])
-        cap_tri, outline = cap_outline(all_pts, faces[0], on_plane, n, mesh.name)
-        if len(cap_tri):
-            faces.append(cap_tri)
-            if ids is not None:  # every outline's cap is a chart of its own: ids below -1
-                ids.append(np.stack([np.repeat(-2 - outline, 3), np.full(3 * len(outline), -1)], 1))
-            if values is not None:
-                values.append(_cap_values(all_pts, cap_tri, n, values[0].shape[-1]))
+        _add_cap(all_pts, faces, values, ids, on_plane, n, mesh.name)
     return _assemble(all_pts, faces, values, ids, mesh.normals is not None, n, name)
+
+
+def _snap_eps(mesh: Mesh, eps: float | None) -> float:
+    """The snapping tolerance: ``eps``, or 1e-9 × the bounding-box diagonal; refuses no faces."""
+    if mesh.n_faces == 0:
+        raise GeometryError(f"clip_mesh: mesh {mesh.name!r} is empty, nothing is left")
+    if eps is not None:
+        return eps
+    return _REL_EPS * max(float(np.linalg.norm(np.ptp(mesh.points, axis=0))), 1e-300)
+
+
+def _plane(plane_point, plane_normal) -> tuple[np.ndarray, np.ndarray]:
+    """The plane's point and unit normal, refusing non-finite values and a zero normal."""
+    p0 = _unit(plane_point, "plane_point")
+    n = _unit(plane_normal, "plane_normal")
+    ln = float(np.linalg.norm(n))
+    if ln == 0.0:
+        raise GeometryError("clip_mesh: plane_normal is zero")
+    return p0, n / ln
+
+
+def _add_cap(
+    all_pts: np.ndarray,
+    faces: list[np.ndarray],
+    values: list[np.ndarray] | None,
+    ids: list[np.ndarray] | None,
+    on_plane: np.ndarray,
+    n: np.ndarray,
+    mesh_name: str,
+) -> None:
+    """Append the cut's cap triangles, and their chart ids and corner values, in place."""
+    cap_tri, outline = cap_outline(all_pts, faces[0], on_plane, n, mesh_name)
+    if not len(cap_tri):
+        return
+    faces.append(cap_tri)
+    if ids is not None:  # every outline's cap is a chart of its own: ids below -1
+        ids.append(np.stack([np.repeat(-2 - outline, 3), np.full(3 * len(outline), -1)], 1))
+    if values is not None:
+        values.append(_cap_values(all_pts, cap_tri, n, values[0].shape[-1]))
 
 
 def _classify(

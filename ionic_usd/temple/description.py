@@ -12,7 +12,7 @@ tables. The readers that check those tables and turn them into these values are
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, fields
 from enum import StrEnum
 from types import MappingProxyType
@@ -229,79 +229,78 @@ class TempleParams:
                     raise ParameterError(key, v, "an integer", context=ctx)
             else:
                 object.__setattr__(self, f.name, _finite(key, v, ctx, positive=True))
+        for key, value, expected in self._violations():
+            raise ParameterError(key, value, expected, context=ctx)
+
+    def _violations(self) -> Iterator[tuple[str, object, str]]:
+        """The proportions that do not make a temple, as (key, value, expected), in order.
+
+        Checked lazily, one at a time: a later check may rely on a derived dimension that only
+        an earlier one guarantees (``margin`` needs ``columns.side > columns.front``).
+        """
         if self.columns_front < 2 or self.columns_side < self.columns_front + 1:
-            raise ParameterError(
+            yield (
                 "columns.side",
                 self.columns_side,
                 f"> columns.front = {self.columns_front} (≥ 2)",
-                context=ctx,
             )
         if not 1 <= self.columns_porch_depth <= self.columns_side - 2:
-            raise ParameterError(
+            yield (
                 "columns.porch_depth",
                 self.columns_porch_depth,
                 f"1 … {self.columns_side - 2} (a cella needs ≥ 1 bay)",
-                context=ctx,
             )
         if self.steps_count < 1:
-            raise ParameterError("steps.count", self.steps_count, "≥ 1", context=ctx)
+            yield ("steps.count", self.steps_count, "≥ 1")
         if self.stylobate_length <= self.stylobate_width:
-            raise ParameterError(
+            yield (
                 "stylobate.length",
                 self.stylobate_length,
                 f"> stylobate.width = {self.stylobate_width}",
-                context=ctx,
             )
         if self.margin <= self.columns_lower_diameter / 2:
-            raise ParameterError(
+            yield (
                 "stylobate.width",
                 self.stylobate_width,
                 f"a value leaving the corner columns on the stylobate (margin {self.margin:.3f}"
                 f" m ≤ lower radius {self.columns_lower_diameter / 2:.3f} m)",
-                context=ctx,
             )
         if self.podium_base_width <= self.stylobate_width:
-            raise ParameterError(
+            yield (
                 "podium.base_width",
                 self.podium_base_width,
                 f"> stylobate.width = {self.stylobate_width}",
-                context=ctx,
             )
         if self.stair_run <= 0:
-            raise ParameterError(
+            yield (
                 "podium.base_length",
                 self.podium_base_length,
                 "long enough for the stairs (stylobate + projections)",
-                context=ctx,
             )
         if self.podium_footing_height >= self.podium_height:
-            raise ParameterError(
+            yield (
                 "podium.footing_height",
                 self.podium_footing_height,
                 f"< podium.height = {self.podium_height}",
-                context=ctx,
             )
         if self.podium_cheek_wall_width >= self.stylobate_width / 2:
-            raise ParameterError(
+            yield (
                 "podium.cheek_wall_width",
                 self.podium_cheek_wall_width,
                 f"< half the stylobate width ({self.stylobate_width / 2})",
-                context=ctx,
             )
         inner = 2 * (self.x_axis - self.cella_wall_thickness)
         if self.door_width >= inner or self.door_height >= self.columns_height:
-            raise ParameterError(
+            yield (
                 "cella.door_width_ratio",
                 self.cella_door_width_ratio,
                 "a door that fits inside the cella's front wall",
-                context=ctx,
             )
         if self.cella_wall_thickness >= self.axial_spacing:
-            raise ParameterError(
+            yield (
                 "cella.wall_thickness",
                 self.cella_wall_thickness,
                 f"< the axial spacing {self.axial_spacing:.3f}",
-                context=ctx,
             )
 
     # -- derived dimensions (see the module docstring) -------------------------------------
