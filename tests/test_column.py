@@ -143,3 +143,24 @@ def test_portunus_capital_scales_with_the_lower_diameter(diameter):
     top = max(m.points[:, 1].max() for m in built.parts().values())
     assert top == pytest.approx(8.22, abs=1e-6)
     assert portunus_column_params(lower_diameter=0.95) == ref
+
+
+def test_a_base_is_a_preset_by_name_else_a_grammar():
+    from ionic_usd.column.base import base_preset_names, load_base_preset
+
+    # every shipped name reads as that preset (G1 has a digit, attic_bezier none)
+    for name in base_preset_names():
+        bp = ColumnParams(base=name).base_params()
+        assert bp.grammar == load_base_preset(name, shaft_radius=bp.shaft_radius).grammar
+    # anything else is a grammar, digits or not in the text
+    grammar = "R0.12 H0.05 C1 R0.12"
+    assert ColumnParams(base=grammar).base_params().grammar == grammar
+    # neither: one error naming both readings (a preset typo with a digit, a bare word)
+    for text in ("G3", "atticc", "T(1"):
+        with pytest.raises(ParameterError) as err:
+            ColumnParams(base=text)
+        assert "a base preset (G1, G2" in str(err.value) and "base grammar" in str(err.value)
+    # a grammar wrong past its first token keeps its own error and caret
+    with pytest.raises(GrammarError) as gerr:
+        ColumnParams(base="R0.1 H0.1 C1 Q")
+    assert gerr.value.offset == 13

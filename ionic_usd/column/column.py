@@ -24,11 +24,11 @@ from typing import Any, TypedDict
 
 import numpy as np
 
-from ionic_usd.column.base import BaseParams, build_base, load_base_preset
+from ionic_usd.column.base import BaseParams, base_preset_names, build_base, load_base_preset
 from ionic_usd.column.capital import CapitalParams, build_capital, capital_height
 from ionic_usd.column.portunus import PORTUNUS_HEIGHT, PORTUNUS_LOWER_DIAMETER
 from ionic_usd.column.shaft import ShaftParams, build_shaft
-from ionic_usd.errors import ParameterError
+from ionic_usd.errors import GrammarError, ParameterError
 from ionic_usd.geometry.boolean import union
 from ionic_usd.geometry.guard import guarded
 from ionic_usd.geometry.mesh import Mesh
@@ -110,13 +110,7 @@ class ColumnParams:
             "profile_slices": lod.base_slices if lod else 8,
         }
         name = self.base if base is None else base
-        try:
-            bp = load_base_preset(name, **common)
-        except ParameterError:
-            if any(ch.isdigit() for ch in name):  # a grammar string rather than a name
-                bp = BaseParams(grammar=name, **common)
-            else:
-                raise
+        bp = _base_from_text(name, common)
         if self.base_plinth is not None:
             bp = dataclasses.replace(bp, plinth_modules=self.base_plinth)
         h = guarded(lambda: bp.height, "base", name)
@@ -456,3 +450,26 @@ def column_params_to_tables(p: ColumnParams) -> dict[str, dict]:
         "capital": cap,
         "volute": plain(p.capital.volute),
     }
+
+
+def _base_from_text(name: str, common: _BaseSampling) -> BaseParams:
+    """The base a column names: a shipped preset when ``name`` is one of
+    :func:`~ionic_usd.column.base.base_preset_names`, otherwise a base grammar string.
+
+    A text that is neither gets one error naming both readings; a grammar that goes wrong past
+    its first token keeps the grammar's own error (with the caret under the mistake).
+    """
+    presets = base_preset_names()
+    if name in presets:
+        return load_base_preset(name, **common)
+    try:
+        return BaseParams(grammar=name, **common)
+    except GrammarError as err:
+        if err.offset > 0:
+            raise
+        raise ParameterError(
+            "base",
+            name,
+            f"a base preset ({', '.join(presets)}) or a base grammar such as "
+            "'R0.12 H0.05 C1 R0.12'",
+        ) from None
