@@ -235,3 +235,21 @@ def test_the_length_check_finds_a_long_function(tmp_path):
     src.write_text(f"def f():\n{body}\n\n\ndef g():\n    return 1\n", encoding="utf-8")
     rows = _long_functions(src, MAX_FUNCTION_LINES, root=tmp_path)
     assert len(rows) == 1 and " f (82 lines)" in rows[0]
+
+
+def test_a_temple_is_planned_without_pxr():
+    """The temple's plan (hypotheses checked, asset options, cuboid meshes, the detail's
+    kernel values) is made with no ``pxr`` loaded: only writing it needs USD."""
+    code = (
+        "import sys\n"
+        "from ionic_usd.blueprint.temple_plan import plan_temple\n"
+        "from ionic_usd.temple.layout import portunus_layout\n"
+        "plan = plan_temple(portunus_layout())\n"
+        "assert plan.geometry.mouldings and plan.base_meshes and plan.changes, plan\n"
+        "print(len(plan.changes), sorted(m for m in sys.modules if m == 'pxr' or "
+        "m.startswith(('pxr.', 'ionic_usd.usd'))))\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=PACKAGE.parent
+    )
+    assert out.stdout.split(" ", 1) == ["6", "[]\n"]

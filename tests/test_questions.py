@@ -13,17 +13,18 @@ import numpy as np
 import pytest
 from pxr import Usd, UsdGeom
 
+from ionic_usd.blueprint.hypotheses import (
+    check_hypothesis_budget,
+    hyp_choices,
+    hyp_sets,
+    shape_combinations,
+)
 from ionic_usd.errors import BudgetError, ParameterError
 from ionic_usd.params import load_toml
 from ionic_usd.pipeline.city import _lot_selection
 from ionic_usd.temple.description import exclusive_clash, questions
 from ionic_usd.temple.layout import build_layout, layout_from_mapping, portunus_layout
-from ionic_usd.usd.combinations import (
-    check_hypothesis_budget,
-    mismatches,
-    shape_combinations,
-)
-from ionic_usd.usd.hypotheses import hyp_choices, hyp_sets
+from ionic_usd.usd.combinations import mismatches
 from ionic_usd.usd.temple import CUBOID_UV_SCALE
 
 PORTUNUS = Path(__file__).resolve().parent.parent / "ionic_usd/data/portunus.toml"
@@ -290,3 +291,15 @@ def test_a_question_interacting_with_a_switch_gets_nested_combination_layers(tmp
                 detail=detail_geometry(want),
             )
             assert bad == {}, (apply, sorted(bad))
+
+
+def test_prim_name_is_tf_make_valid_identifier():
+    """The blueprint names prims without pxr; its names are USD's own, byte for byte."""
+    from pxr import Tf
+
+    from ionic_usd.blueprint.hypotheses import prim_name
+
+    names = ["abc", "1abc", "a-b", "", "é", "aé", "a b", "日本", "_x", "ab.c", "x²", "٣a", "9"]
+    names += ["podium_front", "roof-pitch-15", "frieze_garlands", "Temple/A", "a\u0301"]
+    for n in names:
+        assert prim_name(n) == Tf.MakeValidIdentifier(n), n

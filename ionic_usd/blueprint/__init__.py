@@ -15,7 +15,12 @@ worker or the up-to-date check that needs a name or an option loads no USD.
 - :mod:`ionic_usd.blueprint.column_asset`: the column asset's variant vocabulary, its build options
   and its description (:func:`~ionic_usd.blueprint.column_asset.column_asset_spec`);
 - :mod:`ionic_usd.blueprint.temple`: the column a temple's layout calls for and the column
-  asset it instances.
+  asset it instances;
+- :mod:`ionic_usd.blueprint.hypotheses`: the hypotheses' variant vocabulary on ``/Temple``, the
+  part and column-group prim names, and the checks of what the composer can realise;
+- :mod:`ionic_usd.blueprint.temple_plan`: the temple's plan (:func:`plan_temple`, validated
+  before anything is written) and the ``detail`` vocabulary and kernel values, which
+  :func:`ionic_usd.usd.temple.write_temple` authors.
 
 The levels of detail are :mod:`ionic_usd.lod`.
 """

@@ -1,6 +1,6 @@
 """A temple's column, as values (no ``pxr``): the column its layout calls for and the column
 asset it instances, shared by the API (:class:`ionic_usd.api.Temple`) and the temple's plan
-(:func:`ionic_usd.usd.temple.plan_temple`)."""
+(:func:`ionic_usd.blueprint.temple_plan.plan_temple`)."""
 
 from __future__ import annotations
 

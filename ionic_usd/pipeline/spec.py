@@ -78,7 +78,7 @@ class TempleSpec:
         for k in ("column", "shaft", "capital", "volute"):
             data.pop(k, None)
         layout = layout_from_mapping(data, context=f"temple {self.name}")
-        from ionic_usd.usd.combinations import check_hypothesis_budget
+        from ionic_usd.blueprint.hypotheses import check_hypothesis_budget
 
         check_hypothesis_budget(layout)  # refused here, before any build of the city
         return layout

@@ -2,11 +2,11 @@
 
 :func:`compose_temple` writes the folder :mod:`ionic_usd.usd.temple` describes, in three steps:
 
-1. **plan** (:func:`ionic_usd.usd.temple.plan_temple`): the asset options, the hypothesis
+1. **plan** (:func:`ionic_usd.blueprint.temple_plan.plan_temple`): the asset options, the hypothesis
    layers, the detail and the cuboids, validated before anything is written;
 2. **asset** (:func:`ionic_usd.pipeline.asset.build_column_asset`) into ``IonicColumn/``, and
    the roof's terracotta maps;
-3. **layers** (:meth:`ionic_usd.usd.temple.TemplePlan.write`): parts, colonnade, detail,
+3. **layers** (:func:`ionic_usd.usd.temple.write_temple`): parts, colonnade, detail,
    hypotheses, the combination checks and the extentsHints;
 
 all in a staging folder moved into place kill-safely (:func:`ionic_usd.io.replace_folder`).
@@ -221,14 +221,14 @@ def compose_temple(
         current = _current(dest, key, t0)
         if current is not None:
             return current
+    from ionic_usd.blueprint.temple_plan import TERRACOTTA, plan_temple
     from ionic_usd.pipeline.asset import (
         asset_key,
         build_column_asset,
         copy_stone_textures,
         warm_stone_textures,
     )
-    from ionic_usd.usd.detail import TERRACOTTA
-    from ionic_usd.usd.temple import plan_temple, temple_counts
+    from ionic_usd.usd.temple import temple_counts, write_temple
 
     plan = plan_temple(layout, column, **options)
     akey = asset_key(plan.opts)
@@ -247,7 +247,7 @@ def compose_temple(
                 tmp / ASSET_NAME, plan.opts, rebuild=True, side_jobs=[(warm_stone_textures, tiles)]
             )
         copy_stone_textures(tmp / "Textures", *tiles)
-        stats = plan.write(tmp)
+        stats = write_temple(plan, tmp)
         # counted on the staged folder: the scene as generated, with the empty user's layer
         return {
             **temple_counts(tmp / ROOT_LAYER),

@@ -53,12 +53,7 @@ from ionic_usd.usd.mesh import author_mesh
 from ionic_usd.usd.stage import new_layer, save_layer
 
 __all__ = [
-    "MAX_HYPOTHESES",
-    "MAX_SHAPE_HYPOTHESES",
-    "MAX_SHAPE_COMBINATIONS",
-    "shape_combinations",
     "Fix",
-    "check_hypothesis_budget",
     "select_variants",
     "expected_column",
     "mismatches",
@@ -291,15 +286,6 @@ def _subsets(shape: Sequence[Hypothesis]):
     return sorted(chosen, key=lambda c: (len(c), [order[h.id] for h in c]))
 
 
-def shape_combinations(hyps: Sequence[Hypothesis]) -> int:
-    """How many combinations of the geometry hypotheses are composed and checked: the
-    product over their questions of (1 + alternatives)."""
-    out = 1
-    for g in questions([h for h in hyps if temple_keys(h) or FRIEZE_KEY in h.changes]).values():
-        out *= 1 + len(g)
-    return out
-
-
 def _is_detail(path: str) -> bool:
     return "/Mouldings/" in path or "/Ornament/" in path or path.endswith("/Tiles")
 
@@ -383,38 +369,3 @@ def realise_combinations(
     if written:
         gen.GetRootLayer().Save()
     return written
-
-
-#: at most this many hypotheses in a temple: each is a variant (a layer of its own)
-MAX_HYPOTHESES = 64
-#: at most this many combinations of the hypotheses that change geometry: only they can
-#: interact (a material, a flute count or a capital model is a variant of its own part and
-#: composes alone), and every combination of them is composed and checked in each detail
-#: variant. Counted as combinations: the product over their questions of (1 + alternatives)
-#: — 8 independent ones (2^8 = 256), or e.g. 4 questions of 3 alternatives (4^4 = 256)
-MAX_SHAPE_COMBINATIONS = 256
-MAX_SHAPE_HYPOTHESES = 8  # independent switches: log2 of MAX_SHAPE_COMBINATIONS
-
-
-def check_hypothesis_budget(layout: TempleLayout) -> None:
-    """Refuse, before any work, a description whose combinations cannot be checked in bounded
-    time: more than :data:`MAX_HYPOTHESES` hypotheses, or more than
-    :data:`MAX_SHAPE_COMBINATIONS` combinations of those that change geometry."""
-    from ionic_usd.errors import BudgetError
-
-    hyps = layout.hypotheses
-    if len(hyps) > MAX_HYPOTHESES:
-        raise BudgetError(
-            f"{len(hyps):,} hypotheses: a temple holds at most {MAX_HYPOTHESES} (each is a "
-            "variant and a layer); split the description"
-        )
-    shape = [h.id for h in hyps if temple_keys(h) or FRIEZE_KEY in h.changes]
-    n = shape_combinations(hyps)
-    if n > MAX_SHAPE_COMBINATIONS:
-        raise BudgetError(
-            f"{len(shape)} hypotheses change the temple's geometry ({', '.join(shape[:4])}, …): "
-            f"every one of their {n:,} combinations (the product over their questions of "
-            f"1 + alternatives) would be composed and checked; the limit is "
-            f"{MAX_SHAPE_COMBINATIONS} combinations (e.g. {MAX_SHAPE_HYPOTHESES} independent "
-            "hypotheses)"
-        )

@@ -35,25 +35,32 @@ The column asset's ``high`` LOD carries the carved echinus and astragal
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from pathlib import Path
 
-from pxr import Sdf, Tf, Vt
+from pxr import Sdf, Vt
 
-from ionic_usd.column.ornament import Instances
+from ionic_usd.blueprint.hypotheses import hyp_ident
+from ionic_usd.blueprint.temple_plan import (
+    DEFAULT_DETAIL,
+    DETAIL_LAYER,
+    DETAIL_SET,
+    DETAIL_VARIANTS,
+    FRIEZE_KEY,
+    FRIEZE_PATH,
+    TERRACOTTA,
+    DetailGeometry,
+    check_detail,
+    detail_counts,
+    detail_geometry,
+)
 from ionic_usd.errors import ParameterError
-from ionic_usd.geometry.mesh import Mesh
-from ionic_usd.temple.layout import Hypothesis, Layer, TempleLayout
+from ionic_usd.temple.layout import Hypothesis, TempleLayout
 from ionic_usd.temple.mouldings import (
     REPLACED_CUBOIDS,
-    MouldingParams,
-    moulding_meshes,
-    portunus_mouldings,
 )
-from ionic_usd.temple.ornament import dentils, frieze_garlands, roof_tiles
 from ionic_usd.usd.hypotheses import add_paradata
 from ionic_usd.usd.instancer import author_point_instancer
-from ionic_usd.usd.materials import TILE_METRES, bind_material_spec
+from ionic_usd.usd.materials import bind_material_spec
 from ionic_usd.usd.mesh import author_mesh, define_prim
 from ionic_usd.usd.stage import new_layer
 
@@ -75,92 +82,7 @@ __all__ = [
     "check_detail",
 ]
 
-DETAIL_SET = "detail"
-DETAIL_VARIANTS = ("plain", "moulded", "carved")
-# the default selection: see the README (Detail) for the measured cost of each variant
-DEFAULT_DETAIL = "carved"
-DETAIL_LAYER = "detail.usdc"
-FRIEZE_KEY = "detail.frieze"  # a hypothesis change key realised here ("garlands")
-FRIEZE_PATH = "/Temple/Entablature/Ornament/FriezeGarlands"
-# material prim name, stone style of its maps (the temple's library, materials.usda)
-TERRACOTTA = ("Terracotta", "terracotta")
 TRAVERTINE = "/Temple/Materials/Travertine"
-_PART = {
-    "podium": "Podium",
-    "architrave": "Entablature",
-    "cornice": "Entablature",
-    "sima": "Entablature",
-    "raking": "Roof",
-}
-
-
-@dataclass(frozen=True, eq=False)
-class DetailGeometry:
-    """Kernel values of a temple's detail: members by part prim, ornament by prim path."""
-
-    mouldings: dict[str, dict[str, Mesh]]  # part prim name → member name → mesh
-    ornament: dict[str, Instances]  # path below /Temple → instances
-    frieze: Instances | None
-    podium_cuboids: tuple[str, ...] = field(default=())
-
-    def prims(self, variant: str, *, garlands: bool = False) -> dict[str, Mesh | Instances]:
-        """Absolute prim path → the mesh or instances shown by ``variant`` (cuboids aside)."""
-        if variant == "plain":
-            return {}
-        out: dict[str, Mesh | Instances] = {
-            f"/Temple/{part}/Mouldings/{name}": m
-            for part, members in self.mouldings.items()
-            for name, m in members.items()
-        }
-        if variant == "carved":
-            out.update({f"/Temple/{rel}": inst for rel, inst in self.ornament.items()})
-            if garlands and self.frieze is not None:
-                out[FRIEZE_PATH] = self.frieze
-        return out
-
-
-def _ident(name: str) -> str:
-    return Tf.MakeValidIdentifier(name)
-
-
-def check_detail(value: str) -> str:
-    """``value`` if it names a ``detail`` variant, else :class:`ParameterError`."""
-    if value not in DETAIL_VARIANTS:
-        raise ParameterError("detail", value, f"one of {', '.join(DETAIL_VARIANTS)}")
-    return value
-
-
-def detail_geometry(layout: TempleLayout, mp: MouldingParams | None = None) -> DetailGeometry:
-    """Mouldings and ornament of a layout (pure numpy; see the module docstring)."""
-    mp = mp or portunus_mouldings()
-    by_part: dict[str, dict[str, Mesh]] = {}
-    for m in moulding_meshes(layout, mp, uv_scale=1.0 / TILE_METRES):
-        part = _PART[m.name.split("_")[0]]
-        by_part.setdefault(part, {})[m.name] = m.mesh
-    orn = {"Entablature/Ornament/Dentils": dentils(layout), "Roof/Tiles": roof_tiles(layout)}
-    podium = tuple(_ident(c.name) for c in layout.cuboids.get(Layer.PODIUM, ()))
-    # an entablature without a frieze (the Asiatic order) has no relief to carry
-    has_frieze = any(c.name == "frieze" for c in layout.cuboids.get(Layer.ENTABLATURE, ()))
-    return DetailGeometry(by_part, orn, frieze_garlands(layout) if has_frieze else None, podium)
-
-
-def detail_counts(geom: DetailGeometry) -> dict[str, dict[str, int]]:
-    """Triangles, prototypes and instances each ``detail`` variant *adds* to the cuboids
-    (``plain`` adds nothing; ``moulded`` adds the sweeps; ``carved`` also the ornament, its
-    triangles counted over every copy)."""
-    sweep_tris = sum(m.n_triangles for ms in geom.mouldings.values() for m in ms.values())
-    orn = list(geom.ornament.values())
-    meshes = sum(len(ms) for ms in geom.mouldings.values())
-    return {
-        "plain": {"triangles": 0, "prototypes": 0, "instances": 0, "meshes": 0},
-        "moulded": {"triangles": sweep_tris, "prototypes": 0, "instances": 0, "meshes": meshes},
-        "carved": {
-            "triangles": sweep_tris + sum(i.triangles for i in orn),
-            "prototypes": sum(len(i.prototypes) for i in orn),
-            "instances": sum(len(i) for i in orn),
-            "meshes": meshes,
-        },
-    }
 
 
 def detail_layer(geom: DetailGeometry, materials_ref: str = "./materials.usda") -> Sdf.Layer:
@@ -281,7 +203,7 @@ def write_frieze_hypotheses(
             if v != value:
                 _hide(_over(var.primSpec, FRIEZE_PATH.removeprefix("/Temple/")))
         spec.variantSelections[vset] = "baseline"
-        listing.setdefault(_ident(h.id), {}).update(
+        listing.setdefault(hyp_ident(h.id), {}).update(
             realised=True, variantSet=vset, variant=value, question=h.key
         )
         done.append(h)

@@ -27,22 +27,29 @@ turns into custom properties.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 from pxr import Sdf, Tf, Vt
 
-from ionic_usd.errors import ParameterError
+from ionic_usd.blueprint.hypotheses import (
+    FINISH_VALUES,
+    FORMS,
+    GROUPS,
+    PART_PRIMS,
+    HypothesisChanges,
+    check_composer_changes,
+    cuboid_meshes,
+    hyp_choices,
+    hyp_ident,
+    hyp_set,
+    hyp_sets,
+    temple_keys,
+)
 from ionic_usd.geometry.mesh import Mesh
-from ionic_usd.temple.cuboid import Cuboid, cuboid_mesh
-from ionic_usd.temple.description import questions
 from ionic_usd.temple.layout import (
-    COMPOSER_NAMESPACES,
-    ColumnKind,
     ColumnPlacement,
     Hypothesis,
-    Layer,
     TempleLayout,
     build_layout,
 )
@@ -71,150 +78,12 @@ __all__ = [
     "hypothesis_layer",
 ]
 
-PART_PRIMS = {
-    Layer.PODIUM: "Podium",
-    Layer.CELLA: "Cella",
-    Layer.ENTABLATURE: "Entablature",
-    Layer.ROOF: "Roof",
-}
-GROUPS = {ColumnKind.FREE: "Free", ColumnKind.ENGAGED: "Engaged", ColumnKind.CORNER: "Corner"}
-# the column asset's form variant of each kind of column
-FORMS = {ColumnKind.FREE: "full", ColumnKind.ENGAGED: "engaged", ColumnKind.CORNER: "corner"}
-# material.finish value -> the column asset's finish variant
-FINISH_VALUES = {
-    "bare_stone": "travertine",
-    "travertine": "travertine",
-    "stucco": "stucco",
-    "painted_stucco": "stucco",
-}
-# composer keys recorded for the future (listed with realised = false, never an error)
-RECORDED_ONLY: dict[str, tuple[str, ...]] = {}
 _T = Sdf.ValueTypeNames
 _TOL = 1e-9
 
 
-def hyp_ident(hid: str) -> str:
-    return Tf.MakeValidIdentifier(hid)
-
-
-def hyp_set(hid: str) -> str:
-    """The variant set of a hypothesis on /Temple."""
-    return "hyp_" + hyp_ident(hid)
-
-
-def hyp_choices(hyps: Iterable[Hypothesis]) -> dict[str, tuple[str, str]]:
-    """Hypothesis id → (variant set on /Temple, the variant that selects it).
-
-    An independent hypothesis is a switch: ``hyp_<id>`` = ``baseline`` | ``alternative``.
-    The alternatives of one question (``question = "frieze"``) are ONE set ``hyp_<question>``
-    = ``baseline`` | ``<id>`` per alternative, so two of them cannot be selected at once.
-    """
-    out: dict[str, tuple[str, str]] = {}
-    for q, alts in questions(hyps).items():
-        if len(alts) == 1 and not alts[0].question:
-            out[alts[0].id] = (hyp_set(alts[0].id), "alternative")
-        else:
-            for h in alts:
-                out[h.id] = ("hyp_" + hyp_ident(q), hyp_ident(h.id))
-    return out
-
-
-def hyp_sets(hyps: Iterable[Hypothesis]) -> dict[str, tuple[str, ...]]:
-    """Variant set on /Temple → its variants (``baseline`` first), for ``hyps``."""
-    out: dict[str, list[str]] = {}
-    for vset, value in hyp_choices(hyps).values():
-        out.setdefault(vset, ["baseline"]).append(value)
-    return {k: tuple(v) for k, v in out.items()}
-
-
 def column_path(c: ColumnPlacement) -> str:
     return f"/Temple/Colonnade/{GROUPS[c.kind]}/{Tf.MakeValidIdentifier(c.name)}"
-
-
-def temple_keys(h: Hypothesis) -> list[str]:
-    """The ``section.key`` changes of ``h`` that reshape the temple layout."""
-    return [k for k in h.changes if k.split(".")[0] not in COMPOSER_NAMESPACES]
-
-
-def cuboid_meshes(
-    layout: TempleLayout, uv_scale: float, memo: dict[tuple[Cuboid, float], Mesh] | None = None
-) -> dict[Layer, dict[str, Mesh]]:
-    """Meshes of every cuboid, by layer and prim name (``st`` at ``uv_scale`` per metre).
-
-    ``memo``: meshes already made, by (cuboid, uv_scale), read and filled (the layouts of a
-    hypothesis combination share most of their cuboids). Its meshes are shared, not copied.
-    """
-    memo = {} if memo is None else memo
-
-    def mesh_of(c: Cuboid) -> Mesh:
-        got = memo.get((c, uv_scale))
-        if got is None:
-            got = memo[(c, uv_scale)] = cuboid_mesh(c, uv_scale=uv_scale)
-        return got
-
-    return {
-        layer: {Tf.MakeValidIdentifier(c.name): mesh_of(c) for c in cs}
-        for layer, cs in layout.cuboids.items()
-    }
-
-
-@dataclass(frozen=True)
-class HypothesisChanges:
-    """What the composer will author for one hypothesis (``None`` members: nothing)."""
-
-    flutes: str | None = None  # the column asset's flutes variant
-    finish: str | None = None  # the column asset's finish variant
-    capital: str | None = None  # the column asset's capital variant on the corner columns
-    realised: bool = True
-
-
-def check_composer_changes(
-    h: Hypothesis,
-    flute_variants: Mapping[str, int],
-    finishes: Iterable[str],
-    capitals: Iterable[str] = ("normal", "angle"),
-) -> HypothesisChanges:
-    """Validate the ``column.…``/``material.…`` changes of ``h`` against what the generator can
-    realise; unknown keys or values raise :class:`ParameterError` naming them."""
-    ctx = f"hypothesis {h.id!r}"
-    flutes = finish = capital = None
-    realised = bool(temple_keys(h))
-    for key, value in h.changes.items():
-        if key.split(".")[0] not in ("column", "material"):
-            continue
-        if key == "column.flute_count":
-            by_count = {n: name for name, n in flute_variants.items()}
-            if isinstance(value, bool) or value not in by_count:
-                raise ParameterError(
-                    key, value, "one of " + ", ".join(str(n) for n in sorted(by_count)), context=ctx
-                )
-            flutes, realised = by_count[value], True
-        elif key == "material.finish":
-            valid = [k for k, v in FINISH_VALUES.items() if v in set(finishes)]
-            if value not in valid:
-                raise ParameterError(key, value, "one of " + ", ".join(valid), context=ctx)
-            finish, realised = FINISH_VALUES[value], True
-        elif key == "column.corner_capital":
-            valid_caps = [c for c in capitals if c != "normal"]
-            if value not in valid_caps:
-                raise ParameterError(key, value, "one of " + ", ".join(valid_caps), context=ctx)
-            capital, realised = value, True
-        elif key in RECORDED_ONLY:
-            if value not in RECORDED_ONLY[key]:
-                raise ParameterError(
-                    key, value, "one of " + ", ".join(RECORDED_ONLY[key]), context=ctx
-                )
-        else:
-            known = [
-                "column.flute_count",
-                "material.finish",
-                "column.corner_capital",
-                *RECORDED_ONLY,
-            ]
-            raise ParameterError(
-                key, value, "a temple key (section.key) or one of " + ", ".join(known), context=ctx
-            )
-    return HypothesisChanges(flutes, finish, capital, realised)
 
 
 def hypothesis_paradata(h: Hypothesis) -> dict:

@@ -1,7 +1,8 @@
 """The temple composer: an assembly of layers that instances the column asset.
 
 Folder written by :func:`ionic_usd.pipeline.temple.compose_temple` (layers authored here by
-:class:`TemplePlan`; all asset paths relative)::
+:func:`write_temple` from a :class:`~ionic_usd.blueprint.temple_plan.TemplePlan`; all asset
+paths relative)::
 
     Temple.usda          the root: stage metadata and two sublayers, nothing else —
                            ./overrides.usda (yours, strongest) over ./generated.usda
@@ -47,15 +48,14 @@ from __future__ import annotations
 
 import logging
 import os
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 from pxr import Sdf, Usd
 
 from ionic_usd import __version__
-from ionic_usd.blueprint.column_asset import FINISHES, FLUTE_VARIANTS, UV_SPAN, ColumnAssetOptions
+from ionic_usd.blueprint.column_asset import FINISHES, ColumnAssetOptions
 from ionic_usd.blueprint.layers import (
     ASSET_NAME,
     COLONNADE_LAYER,
@@ -65,12 +65,14 @@ from ionic_usd.blueprint.layers import (
     ROOT_LAYER,
     TEMPLE_CLASS,
 )
-from ionic_usd.blueprint.temple import temple_asset_options, temple_column_params
-from ionic_usd.column.column import ColumnParams
-from ionic_usd.errors import ParameterError, UsdAuthoringError
-from ionic_usd.lod import LOD_NAMES
+from ionic_usd.blueprint.temple_plan import (
+    BASELINE_FINISH,
+    CUBOID_UV_SCALE,
+    TemplePlan,
+    check_hypotheses,
+)
+from ionic_usd.errors import UsdAuthoringError
 from ionic_usd.temple.layout import Layer, TempleLayout
-from ionic_usd.temple.mouldings import MouldingParams, portunus_mouldings
 from ionic_usd.usd.asset import class_path
 from ionic_usd.usd.bounds import (
     author_extents_hints,
@@ -79,14 +81,10 @@ from ionic_usd.usd.bounds import (
 )
 from ionic_usd.usd.combinations import realise_combinations, select_variants
 from ionic_usd.usd.detail import (
-    DEFAULT_DETAIL,
     DETAIL_LAYER,
     DETAIL_SET,
     TERRACOTTA,
-    DetailGeometry,
     author_detail_variants,
-    check_detail,
-    detail_geometry,
     detail_layer,
     write_frieze_hypotheses,
 )
@@ -94,16 +92,12 @@ from ionic_usd.usd.hypotheses import (
     FORMS,
     GROUPS,
     PART_PRIMS,
-    HypothesisChanges,
-    check_composer_changes,
     column_path,
     column_xform,
-    cuboid_meshes,
     hyp_choices,
     hyp_ident,
     hypothesis_layer,
     hypothesis_paradata,
-    temple_keys,
 )
 from ionic_usd.usd.instancer import drawn_triangles
 from ionic_usd.usd.materials import bind_material_spec, stone_material
@@ -114,8 +108,7 @@ from ionic_usd.usd.stage import new_layer, save_layer
 log = logging.getLogger(__name__)
 
 __all__ = [
-    "TemplePlan",
-    "plan_temple",
+    "write_temple",
     "temple_counts",
     "hypothesis_layers",
     "temple_triangles",
@@ -136,34 +129,10 @@ PART_LAYERS = {
     Layer.ROOF: "roof.usda",
 }
 ASSET_REF = f"./{ASSET_NAME}/{ASSET_NAME}.usda"
-# baseline finish: the ancient painted stucco (see portunus.toml); bare stone is a hypothesis
-BASELINE_FINISH = "stucco"
-# the cuboids' st share the column asset's convention: UV_SPAN metres per unit of st
-CUBOID_UV_SCALE = 1.0 / UV_SPAN
-# temple keys the composer cannot realise: the column asset is built once per temple
-_COLUMN_SHAPE_KEYS = ("columns.lower_diameter", "columns.upper_diameter_ratio")
 
 
 def _finish_materials() -> dict[str, str]:
     return {fin: mat for fin, (mat, _) in FINISHES.items()}
-
-
-def _changes(layout: TempleLayout, opts: ColumnAssetOptions) -> dict[str, HypothesisChanges]:
-    flutes = {k: v for k, v in FLUTE_VARIANTS.items() if k in opts.flutes}
-    out = {}
-    for h in layout.hypotheses:
-        for key in temple_keys(h):
-            if key in _COLUMN_SHAPE_KEYS:
-                raise ParameterError(
-                    key,
-                    h.changes[key],
-                    "a key the composer can realise "
-                    "(the column asset is built once; change [columns] "
-                    "instead)",
-                    context=f"hypothesis {h.id!r}",
-                )
-        out[h.id] = check_composer_changes(h, flutes, FINISHES, opts.capitals)
-    return out
 
 
 def hypothesis_layers(
@@ -174,7 +143,7 @@ def hypothesis_layers(
     Raises :class:`ParameterError` for a change the generator cannot realise.
     """
     opts = opts or ColumnAssetOptions()
-    changes = _changes(layout, opts)
+    changes = check_hypotheses(layout, opts)
     out = {
         h.id: hypothesis_layer(
             [h],
@@ -352,130 +321,69 @@ def _generated_layer(
     return lay
 
 
-@dataclass
-class TemplePlan:
-    """Everything the temple's layers need, validated (:func:`plan_temple`): :meth:`write`
-    authors them into a folder that already holds the column asset."""
-
-    layout: TempleLayout
-    opts: ColumnAssetOptions
-    detail: str
-    hyp_layers: dict[str, Sdf.Layer | None]
-    geometry: DetailGeometry
-    base_meshes: dict
-    lods: tuple[str, ...]
-    detail_of: Callable[[TempleLayout], DetailGeometry]
-
-    def write(self, tmp: Path) -> dict[str, Any]:
-        """Author every temple layer into ``tmp`` (beside ``tmp/IonicColumn``), check every
-        hypothesis combination, author the extentsHints; returns the triangles per LOD and the
-        combination layers written."""
-        layout, geom = self.layout, self.geometry
-        baseline_material = FINISHES[BASELINE_FINISH][0]
-        log.info("writing the part, colonnade, detail and hypothesis layers")
-        save_layer(_materials_layer(), tmp / MATERIALS_LAYER)
-        save_layer(detail_layer(geom), tmp / DETAIL_LAYER)
-        for layer, meshes in self.base_meshes.items():
-            save_layer(_part_layer(layer, meshes, baseline_material), tmp / PART_LAYERS[layer])
-        save_layer(_colonnade_layer(layout), tmp / COLONNADE_LAYER)
-        for hid, lay in self.hyp_layers.items():
-            if lay is not None:
-                save_layer(lay, tmp / "layers" / f"{hid}.usda")
-        gen_layer = _generated_layer(layout, self.hyp_layers, self.lods)
-        spec = gen_layer.GetPrimAtPath("/Temple")
-        author_detail_variants(spec, geom, self.detail)
-        frieze = write_frieze_hypotheses(tmp, spec, layout, geom)
-        save_layer(gen_layer, tmp / GENERATED_LAYER)
-        save_layer(_root_layer(layout.name), tmp / ROOT_LAYER)
-        # created only where absent: an existing overrides.usda (or symlink) is never touched
-        save_layer(_user_overrides_layer(), tmp / OVERRIDES_LAYER)
-        # paradata on every part and the view variant set (ionic_usd.usd.paradata)
-        annotate_temple(tmp, layout.paradata, layout.hypotheses)
-        # checks and hints on the generated layer alone: the user's opinions are theirs
-        # opened without payloads: the columns are bounded by the asset's extentsHints and
-        # the checks compare transforms, not column geometry (composition ~30 % cheaper)
-        gen = Usd.Stage.Open(str(tmp / GENERATED_LAYER), Usd.Stage.LoadNone)
-        realised = [
-            h for h in layout.hypotheses if self.hyp_layers[h.id] is not None or h in frieze
-        ]
-        log.info("checking the combinations of %d hypotheses x detail", len(realised))
-        combos = realise_combinations(
-            gen, tmp, layout, realised, uv_scale=CUBOID_UV_SCALE, detail_of=self.detail_of
-        )
-        temple_sets = gen.GetPrimAtPath("/Temple").GetVariantSets()
-        candidates = {
-            "lod": self.lods,
-            **{
-                n: tuple(temple_sets.GetVariantSet(n).GetVariantNames())
-                for n in temple_sets.GetNames()
-                if n.startswith("hyp_") or n == DETAIL_SET
-            },
-        }
-        parts = [
-            "/Temple",
-            *(f"/Temple/{PART_PRIMS[la]}" for la in layout.cuboids),
-            "/Temple/Colonnade",
-        ]
-        log.info("extentsHint per variant combination")
-        # loaded: the hints bound the columns' geometry, not the asset's own hints (which are
-        # unions over the asset's sets: a temple hint over them would not be tight)
-        gen.Load()
-        memo: dict[Any, Any] = {}  # the passes and the product share combinations
-        vsets = bound_changing_sets(gen, "/Temple", parts, candidates, base="lod", memo=memo)
-        hints = variant_extents_hints(gen, "/Temple", parts, vsets, memo=memo)
-        gen_layer = gen.GetRootLayer()
-        author_extents_hints(gen_layer, "/Temple", hints, list(vsets))
-        gen_layer.Save()
-        lod_triangles = {lod: triangles_with(gen, {"lod": lod}) for lod in self.lods}
-        del gen
-        _check_resolves(tmp / ROOT_LAYER, tmp / GENERATED_LAYER)
-        return {"triangles_per_lod": lod_triangles, "combination_layers": list(combos)}
-
-
-def plan_temple(
-    layout: TempleLayout,
-    column: ColumnParams | None = None,
-    *,
-    texture_size: int = 1024,
-    seed: int = 7,
-    asset_options: ColumnAssetOptions | None = None,
-    detail: str | None = None,
-    mouldings: MouldingParams | None = None,
-) -> TemplePlan:
-    """The temple's column asset options and layers, validated before anything is written.
-
-    Parameters are :func:`ionic_usd.pipeline.temple.compose_temple`'s. Hypothesis changes the
-    generator cannot realise raise :class:`ParameterError`.
-    """
-    from ionic_usd.usd.combinations import check_hypothesis_budget
-
-    check_hypothesis_budget(layout)  # bounded work: before anything else
-    column = column or temple_column_params(layout)
-    opts = temple_asset_options(
-        column, texture_size=texture_size, seed=seed, asset_options=asset_options
+def write_temple(plan: TemplePlan, tmp: Path) -> dict[str, Any]:
+    """Author every temple layer into ``tmp`` (beside ``tmp/IonicColumn``), check every
+    hypothesis combination, author the extentsHints; returns the triangles per LOD and the
+    combination layers written."""
+    layout, geom = plan.layout, plan.geometry
+    hyp_layers = hypothesis_layers(layout, plan.opts)
+    baseline_material = FINISHES[BASELINE_FINISH][0]
+    log.info("writing the part, colonnade, detail and hypothesis layers")
+    save_layer(_materials_layer(), tmp / MATERIALS_LAYER)
+    save_layer(detail_layer(geom), tmp / DETAIL_LAYER)
+    for layer, meshes in plan.base_meshes.items():
+        save_layer(_part_layer(layer, meshes, baseline_material), tmp / PART_LAYERS[layer])
+    save_layer(_colonnade_layer(layout), tmp / COLONNADE_LAYER)
+    for hid, lay in hyp_layers.items():
+        if lay is not None:
+            save_layer(lay, tmp / "layers" / f"{hid}.usda")
+    gen_layer = _generated_layer(layout, hyp_layers, plan.lods)
+    spec = gen_layer.GetPrimAtPath("/Temple")
+    author_detail_variants(spec, geom, plan.detail)
+    frieze = write_frieze_hypotheses(tmp, spec, layout, geom)
+    save_layer(gen_layer, tmp / GENERATED_LAYER)
+    save_layer(_root_layer(layout.name), tmp / ROOT_LAYER)
+    # created only where absent: an existing overrides.usda (or symlink) is never touched
+    save_layer(_user_overrides_layer(), tmp / OVERRIDES_LAYER)
+    # paradata on every part and the view variant set (ionic_usd.usd.paradata)
+    annotate_temple(tmp, layout.paradata, layout.hypotheses)
+    # checks and hints on the generated layer alone: the user's opinions are theirs
+    # opened without payloads: the columns are bounded by the asset's extentsHints and
+    # the checks compare transforms, not column geometry (composition ~30 % cheaper)
+    gen = Usd.Stage.Open(str(tmp / GENERATED_LAYER), Usd.Stage.LoadNone)
+    realised = [h for h in layout.hypotheses if hyp_layers[h.id] is not None or h in frieze]
+    log.info("checking the combinations of %d hypotheses x detail", len(realised))
+    combos = realise_combinations(
+        gen, tmp, layout, realised, uv_scale=CUBOID_UV_SCALE, detail_of=plan.detail_of
     )
-    detail = check_detail(detail or DEFAULT_DETAIL)
-    hyp_layers = hypothesis_layers(layout, opts)  # validates every hypothesis first
-    mp = mouldings or portunus_mouldings()
-    detail_cache: dict[object, DetailGeometry] = {}
-
-    def detail_of(want: TempleLayout) -> DetailGeometry:
-        # the detail follows the dimensions (hypotheses without temple keys share one)
-        key = (want.params, tuple(want.all_cuboids()))
-        if key not in detail_cache:
-            detail_cache[key] = detail_geometry(want, mp)
-        return detail_cache[key]
-
-    return TemplePlan(
-        layout=layout,
-        opts=opts,
-        detail=detail,
-        hyp_layers=hyp_layers,
-        geometry=detail_of(layout),
-        base_meshes=cuboid_meshes(layout, CUBOID_UV_SCALE),
-        lods=tuple(lod for lod in LOD_NAMES if lod in opts.lods),
-        detail_of=detail_of,
-    )
+    temple_sets = gen.GetPrimAtPath("/Temple").GetVariantSets()
+    candidates = {
+        "lod": plan.lods,
+        **{
+            n: tuple(temple_sets.GetVariantSet(n).GetVariantNames())
+            for n in temple_sets.GetNames()
+            if n.startswith("hyp_") or n == DETAIL_SET
+        },
+    }
+    parts = [
+        "/Temple",
+        *(f"/Temple/{PART_PRIMS[la]}" for la in layout.cuboids),
+        "/Temple/Colonnade",
+    ]
+    log.info("extentsHint per variant combination")
+    # loaded: the hints bound the columns' geometry, not the asset's own hints (which are
+    # unions over the asset's sets: a temple hint over them would not be tight)
+    gen.Load()
+    memo: dict[Any, Any] = {}  # the passes and the product share combinations
+    vsets = bound_changing_sets(gen, "/Temple", parts, candidates, base="lod", memo=memo)
+    hints = variant_extents_hints(gen, "/Temple", parts, vsets, memo=memo)
+    gen_layer = gen.GetRootLayer()
+    author_extents_hints(gen_layer, "/Temple", hints, list(vsets))
+    gen_layer.Save()
+    lod_triangles = {lod: triangles_with(gen, {"lod": lod}) for lod in plan.lods}
+    del gen
+    _check_resolves(tmp / ROOT_LAYER, tmp / GENERATED_LAYER)
+    return {"triangles_per_lod": lod_triangles, "combination_layers": list(combos)}
 
 
 # ---------------------------------------------------------------------------------------------
