@@ -160,3 +160,80 @@ def test_too_few_nodes_for_the_free_models():
     assert res.model == "centred_arcs" and res.alternatives == ()
     assert any("too few" in n for n in res.notes)
     assert math.isfinite(res.criterion["bic"])
+
+
+def test_the_free_chain_rebuilds_the_column(tmp_path):
+    """The chosen free chain is the column's volute (``arc_radii``/``arc_sweeps``): placed by
+    the centred fit's pose its curve is the fitted chain, the TOML carries it to
+    ``ionic-usd column --config``, and the capital is built on it."""
+    import tomllib
+
+    from ionic_usd.column.column import build_column, column_params_from_mapping
+    from ionic_usd.evaluate.metrics import hausdorff_distance
+    from ionic_usd.evaluate.volute_chain import chain_from_centred
+    from ionic_usd.geometry.check import solid_report
+
+    ref = carved_volute(0.6, seed=1, noise=3e-4)
+    res = fit_volute(ref, models=("centred_arcs", "free_arcs"), **FAST)
+    assert res.model == "free_arcs"
+    assert any("rebuilt with this chain" in n for n in res.notes)
+    v = res.column.capital.volute
+    assert v is res.params and v.volute_model == "centred_arcs"
+    radii = [res.values[f"radius_{j}"] for j in range(len(v.arc_radii))]
+    assert v.arc_radii == pytest.approx(radii, abs=1e-12)
+    assert f"radius_{len(radii)}" not in res.values
+    assert len(v.arc_sweeps) == len(v.arc_radii) - 1
+    centred = next(a for a in res.alternatives if a.model == "centred_arcs")
+    pose = (centred.values["translation_x"], centred.values["translation_y"])
+    placed = chain_from_centred(v, centred.alignment.mirrored, pose).points()
+    # ... is the chain the fit reports, to the last bits
+    sweeps = np.full(len(radii), 0.5 * math.pi)
+    sweeps[-1] = math.radians(res.values["last_sweep_deg"])
+    fitted = ArcChain(
+        (res.values["first_centre_x"], res.values["first_centre_y"]),
+        math.radians(res.values["start_direction_deg"]),
+        -1.0 if res.values["mirrored"] else 1.0,
+        np.asarray(radii),
+        sweeps,
+    )
+    assert np.abs(placed - fitted.points()).max() < 1e-12
+    # and as close to the drawing as the fit said (its measure re-aligns the curve)
+    assert hausdorff_distance(ref, placed) == pytest.approx(res.after.hausdorff, rel=0.05)
+    assert res.after.hausdorff_pct <= 0.2
+    # the TOML round trip keeps every bit, and the column builds on it as one solid
+    col = column_params_from_mapping(tomllib.loads(res.to_toml()))
+    assert col.capital.volute == v
+    (tmp_path / "v.toml").write_text(res.to_toml(), encoding="utf-8")
+    cmd = [sys.executable, "-m", "ionic_usd", "column", "--config", "v.toml", "-o", "c.usda"]
+    out = subprocess.run(cmd, cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    cap = build_column(col).capital
+    report = solid_report(cap)
+    assert np.isfinite(cap.points).all() and report.open_edges == 0 and report.shells == 1
+    # the capital differs from the centred-arc one: the chain is what is built
+    assert cap.n_triangles != build_column(centred.column).capital.n_triangles or not np.allclose(
+        cap.points, build_column(centred.column).capital.points
+    )
+
+
+@pytest.mark.parametrize(
+    ("changes", "what"),
+    [
+        ({"arc_radii": (0.01, -0.02)}, "arc_radii"),
+        ({"arc_radii": (0.01, float("nan"))}, "arc_radii"),
+        ({"arc_radii": "0.01"}, "arc_radii"),
+        ({"arc_radii": (0.01,) * 5}, "arc_radii"),  # not one per quarter turn
+        ({"arc_sweeps": (90.0,)}, "arc_sweeps"),  # sweeps without radii
+        ({"arc_radii": (0.01, 0.02), "arc_sweeps": (90.0, 90.0)}, "arc_sweeps"),
+        ({"arc_radii": (0.01, 0.02), "arc_sweeps": (0.0,)}, "arc_sweeps"),
+        ({"arc_radii": (0.01, 0.02), "arc_sweeps": (2000.0,)}, "arc_sweeps"),
+    ],
+)
+def test_a_bad_free_chain_is_refused_by_name(changes, what):
+    from ionic_usd.column.volute import VoluteParams
+    from ionic_usd.errors import ParameterError
+
+    with pytest.raises(ParameterError, match=what):
+        VoluteParams(volute_model="centred_arcs", **changes)
+    with pytest.raises(ParameterError, match="arc_radii"):  # the spiral has no arcs
+        VoluteParams(arc_radii=(0.01,))

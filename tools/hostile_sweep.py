@@ -141,6 +141,28 @@ def cases(quick: bool) -> list[tuple[list[str], dict[str, bytes | None]]]:
                         {"c.toml": f"[{table}]\n{key} = {v}\n".encode()},
                     )
                 )
+    # 2b. the volute's free chain (arc_radii, arc_sweeps): lengths, signs, sizes, models
+    centred = 'volute_model = "centred_arcs"\n'
+    for chain in (
+        "arc_radii = [0.03, -0.04]",
+        "arc_radii = [0.03, nan]",
+        "arc_radii = [0.03, inf]",
+        "arc_radii = [0.03, 0.04]",
+        'arc_radii = ["a", "b"]',
+        "arc_radii = [[0.03]]",
+        "arc_radii = [" + ", ".join(["0.03"] * 100_000) + "]",
+        "arc_radii = [0.03, 0.04]\narc_sweeps = [90, 90, 90]",
+        "arc_radii = [0.03, 0.04]\narc_sweeps = [0]",
+        "arc_radii = [0.03, 0.04]\narc_sweeps = [1e300]",
+        "arc_sweeps = [90.0]",
+    ):
+        for model in (centred, ""):
+            out.append(
+                (
+                    ["column", "--config", "c.toml", "-o", "c.usda"],
+                    {"c.toml": f"[volute]\n{model}{chain}\n".encode()},
+                )
+            )
     for key in ("lod", "base", "base_height", "scroll"):
         for v in TOML_BAD:
             out.append(

@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 
 from ionic_usd.column.portunus import PORTUNUS_LOWER_DIAMETER
-from ionic_usd.column.volute_arcs import arc_points, check_arcs
+from ionic_usd.column.volute_arcs import arc_points, chain_arc_count, check_arcs
 from ionic_usd.column.volute_band import (
     CHECK_PER_TURN,
     band_thickness,
@@ -98,6 +98,16 @@ VOLUTE_PARAMETER_DOCS: dict[str, tuple[str, str, str]] = {
         "",
         "centred_arcs: innermost / outermost square side (steps linear in between)",
     ),
+    "arc_radii": (
+        "arc radii",
+        "m",
+        "centred_arcs, a free chain: each arc's radius from the eye out (empty: the steps above)",
+    ),
+    "arc_sweeps": (
+        "arc sweeps",
+        "deg",
+        "centred_arcs, a free chain: each joint's sweep (empty: quarter turns)",
+    ),
 }
 
 #: The fields in metres (:meth:`VoluteParams.scaled`); the others are angles, counts, ratios or
@@ -109,6 +119,11 @@ VOLUTE_LENGTHS = (
     "offset_y",
     "arc_square",
 )
+
+#: The free chain of the centred-arc model: each arc's radius and each joint's sweep (lists).
+ARC_CHAIN_FIELDS = ("arc_radii", "arc_sweeps")
+#: At most this many arcs in a free chain (a volute of 24 turns).
+MAX_CHAIN_ARCS = 96
 
 #: The volute curve constructions (``VoluteParams.volute_model``).
 VOLUTE_MODELS = ("log_spiral", "centred_arcs")
@@ -172,6 +187,8 @@ class VoluteParams:
     volute_model: str = "log_spiral"
     arc_square: float = _D_PORTUNUS / 18.0 * 6.0 / 11.0
     arc_ratio: float = 1.0 / 3.0
+    arc_radii: tuple[float, ...] = ()
+    arc_sweeps: tuple[float, ...] = ()
 
     def __post_init__(self) -> None:
         ctx = "volute"
@@ -180,7 +197,7 @@ class VoluteParams:
                 "volute_model", self.volute_model, f"one of {', '.join(VOLUTE_MODELS)}", context=ctx
             )
         for f in fields(self):
-            if f.name == "volute_model":
+            if f.name in ("volute_model", *ARC_CHAIN_FIELDS):
                 continue
             v = getattr(self, f.name)
             if isinstance(v, bool) or not isinstance(v, int | float):
@@ -223,10 +240,68 @@ class VoluteParams:
                 f"for spiral_circuits = {self.spiral_circuits:g}",
                 context=ctx,
             )
+        self._check_chain()
         if self.volute_model == "centred_arcs":
             check_arcs(self)
             return
         self._check_shape()
+
+    def _check_chain(self) -> None:
+        """``arc_radii`` / ``arc_sweeps`` (a free chain of the centred-arc model): tuples of
+        finite numbers, radii > 0 (m), sweeps in (0, 360] deg, one radius per arc and one sweep
+        per joint, the joints before the θ limit."""
+        ctx = "volute"
+        for name, unit in (("arc_radii", "lengths > 0 (m)"), ("arc_sweeps", "angles (deg)")):
+            v = getattr(self, name)
+            if isinstance(v, str) or not isinstance(v, tuple | list):
+                raise ParameterError(name, v, f"a list of {unit}", context=ctx)
+            if len(v) > MAX_CHAIN_ARCS or not all(
+                isinstance(x, int | float) and not isinstance(x, bool) and math.isfinite(x)
+                for x in v
+            ):
+                raise ParameterError(
+                    name, v, f"a list of at most {MAX_CHAIN_ARCS} finite {unit}", context=ctx
+                )
+            object.__setattr__(self, name, tuple(float(x) for x in v))
+        radii, sweeps = self.arc_radii, self.arc_sweeps
+        if not radii and not sweeps:
+            return
+        if self.volute_model != "centred_arcs":
+            raise ParameterError(
+                "arc_radii", radii, "empty unless volute_model = centred_arcs", context=ctx
+            )
+        if not radii:
+            raise ParameterError("arc_sweeps", sweeps, "given with arc_radii", context=ctx)
+        if min(radii) <= 0:
+            raise ParameterError("arc_radii", radii, "lengths > 0 (m)", context=ctx)
+        if sweeps:
+            if len(sweeps) != len(radii) - 1:
+                raise ParameterError(
+                    "arc_sweeps",
+                    sweeps,
+                    f"{len(radii) - 1} sweeps (one per joint of the {len(radii)} arcs)",
+                    context=ctx,
+                )
+            if not all(0 < x <= 360 for x in sweeps):
+                raise ParameterError("arc_sweeps", sweeps, "angles in (0, 360] deg", context=ctx)
+            last = self.start_angle + sum(sweeps)
+            limit = math.degrees(self.theta_end)
+            if last >= limit:
+                raise ParameterError(
+                    "arc_sweeps",
+                    sweeps,
+                    f"joints before the θ limit {limit:g} deg (the last arc starts at "
+                    f"{last:g} deg)",
+                    context=ctx,
+                )
+        elif len(radii) != chain_arc_count(self):
+            raise ParameterError(
+                "arc_radii",
+                radii,
+                f"{chain_arc_count(self)} radii (one per quarter turn from start_angle to the θ "
+                "limit), or arc_sweeps for other joints",
+                context=ctx,
+            )
 
     # -- derived ------------------------------------------------------------------------
     @property
@@ -259,7 +334,10 @@ class VoluteParams:
         the offsets, the arc square) scaled; angles and spiral units kept."""
         if isinstance(factor, bool) or not (isinstance(factor, int | float) and factor > 0):
             raise ParameterError("factor", factor, "a number > 0", context="volute")
-        return replace(self, **{n: getattr(self, n) * factor for n in VOLUTE_LENGTHS})
+        radii = tuple(r * factor for r in self.arc_radii)
+        return replace(
+            self, **{n: getattr(self, n) * factor for n in VOLUTE_LENGTHS}, arc_radii=radii
+        )
 
     # -- validation ---------------------------------------------------------------------
     def _check_shape(self) -> None:

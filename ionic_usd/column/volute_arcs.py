@@ -16,7 +16,7 @@ import numpy as np
 from ionic_usd.column.volute_band import VoluteShape, band_thickness, turn_samples, worst_crossing
 from ionic_usd.errors import GeometryError, ParameterError
 
-__all__ = ["arc_centres", "arc_points", "check_arcs"]
+__all__ = ["arc_centres", "arc_points", "chain_arc_count", "check_arcs"]
 
 
 def check_arcs(p: VoluteShape) -> None:
@@ -61,12 +61,21 @@ def arc_centres(p: VoluteShape) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     centres : (k, 2) float, metres from the spiral origin
     radii : (k,) float, metres
     theta0 : (k,) float, radians where each arc starts
+
+    With ``arc_radii`` (a free chain, :class:`~ionic_usd.column.volute.VoluteParams`) the
+    radii are those, and the arcs turn by ``arc_sweeps`` (degrees; quarter turns without), the
+    last one to the θ limit; the centres follow by the same tangency, centroid on the eye.
     """
-    span = p.theta_end - p.theta_start
-    k = max(1, int(math.ceil(span / (0.5 * math.pi) - 1e-9)))
-    th0 = p.theta_start + 0.5 * math.pi * np.arange(k)
-    steps = p.arc_square * np.linspace(p.arc_ratio, 1.0, k - 1) if k > 1 else np.zeros(0)
-    radii = p.capital_circle_radius + np.concatenate([[0.0], np.cumsum(steps)])
+    given = tuple(getattr(p, "arc_radii", ()))
+    if given:  # a free chain (a carved volute fitted arc by arc): radii and joints as given
+        radii = np.asarray(given, dtype=np.float64)
+        steps = np.diff(radii)
+        th0 = _chain_starts(p, len(radii))
+    else:
+        k = chain_arc_count(p)
+        th0 = p.theta_start + 0.5 * math.pi * np.arange(k)
+        steps = p.arc_square * np.linspace(p.arc_ratio, 1.0, k - 1) if k > 1 else np.zeros(0)
+        radii = p.capital_circle_radius + np.concatenate([[0.0], np.cumsum(steps)])
     u = np.stack([np.cos(th0[1:]), np.sin(th0[1:])], axis=1)
     centres = np.vstack([[0.0, 0.0], -np.cumsum(steps[:, None] * u, axis=0)])
     centres += p.eye_center - centres.mean(axis=0)
@@ -76,9 +85,28 @@ def arc_centres(p: VoluteShape) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 def arc_points(p: VoluteShape, theta: np.ndarray, inner: float) -> np.ndarray:
     """Points of the centred-arc curve at θ; ``inner`` = 1 gives the band's inner edge."""
     th = np.asarray(theta, dtype=np.float64)
-    centres, radii, _ = arc_centres(p)
-    j = np.clip(
-        np.floor((th - p.theta_start) / (0.5 * math.pi) + 1e-12).astype(np.int64), 0, len(radii) - 1
-    )
+    centres, radii, th0 = arc_centres(p)
+    if getattr(p, "arc_sweeps", ()):  # free joints: the arc whose span holds θ
+        j = np.clip(np.searchsorted(th0, th + 1e-12, side="right") - 1, 0, len(radii) - 1)
+    else:
+        j = np.clip(
+            np.floor((th - p.theta_start) / (0.5 * math.pi) + 1e-12).astype(np.int64),
+            0,
+            len(radii) - 1,
+        )
     rho = radii[j] - inner * p.capital_spiral_radius * band_thickness(p, th)
     return centres[j] + rho[:, None] * np.stack([np.cos(th), np.sin(th)], axis=1)
+
+
+def chain_arc_count(p: VoluteShape) -> int:
+    """How many arcs the θ range holds as quarter turns (the last one may be shorter)."""
+    return max(1, int(math.ceil((p.theta_end - p.theta_start) / (0.5 * math.pi) - 1e-9)))
+
+
+def _chain_starts(p: VoluteShape, k: int) -> np.ndarray:
+    """Where each of ``k`` arcs starts (radians): after ``arc_sweeps`` (degrees), or every
+    quarter turn."""
+    sweeps = tuple(getattr(p, "arc_sweeps", ()))
+    if sweeps:
+        return p.theta_start + np.concatenate([[0.0], np.cumsum(np.radians(sweeps))])
+    return p.theta_start + 0.5 * math.pi * np.arange(k)

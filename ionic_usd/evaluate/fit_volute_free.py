@@ -19,6 +19,8 @@ import time
 import numpy as np
 from scipy.spatial import cKDTree
 
+from ionic_usd.column.column import ColumnParams
+from ionic_usd.errors import GeometryError, ParameterError
 from ionic_usd.evaluate.fit_core import FitResult, compare_aligned, densify
 from ionic_usd.evaluate.volute_chain import (
     ArcChain,
@@ -26,6 +28,7 @@ from ionic_usd.evaluate.volute_chain import (
     criterion,
     fit_chain,
     free_parameters,
+    volute_from_chain,
 )
 
 __all__ = ["CHAIN_MODELS", "CRITERION", "add_free_arcs", "choose_by_criterion"]
@@ -124,14 +127,17 @@ def _chain_result(
         last_sweep_deg=float(np.degrees(chain.sweeps[-1])),
         mirrored=float(chain.sense < 0),
     )
+    params, column, rebuilt = _rebuilt(r, chain)
     notes = (
         f"{_FREED[model]} ({len(chain.radii)} arcs), centres from tangency, first centre, "
         "start direction and last sweep fitted by least squares from the centred-arc fit",
         f"rms {np.sqrt(rss / n):.3g} m against {np.sqrt(rss_c / n):.3g} m for the centred arcs",
-        "the column is rebuilt with the centred-arc volute (VoluteParams has no free radii)",
+        rebuilt,
     )
     return dataclasses.replace(
         r,
+        params=params,
+        column=column,
         before=r.after,
         after=after,
         fitted=fit_al,
@@ -145,6 +151,23 @@ def _chain_result(
         criterion=criterion(rss, n, k, _size(ref)),
         alternatives=(),
     )
+
+
+def _rebuilt(r: FitResult, chain: ArcChain) -> tuple[object, ColumnParams, str]:
+    """The fitted chain as the column's volute (``arc_radii``/``arc_sweeps`` of the centred-arc
+    model), with the note saying so; the centred-arc volute where the chain makes none."""
+    try:
+        volute = volute_from_chain(
+            chain,
+            r.params,  # type: ignore[arg-type]
+            r.alignment.mirrored,
+            (r.values["translation_x"], r.values["translation_y"]),
+        )
+    except (ParameterError, GeometryError, ValueError) as err:
+        why = str(err).splitlines()[0]
+        return r.params, r.column, f"the column keeps the centred-arc volute: the chain {why}"
+    column = dataclasses.replace(r.column, capital=r.column.capital.with_(volute=volute))
+    return volute, column, "the column is rebuilt with this chain (arc_radii, arc_sweeps)"
 
 
 def choose_by_criterion(results: list[FitResult]) -> list[FitResult]:

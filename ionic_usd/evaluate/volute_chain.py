@@ -25,6 +25,7 @@ from ionic_usd.column.volute_arcs import arc_centres
 __all__ = [
     "ArcChain",
     "chain_from_centred",
+    "volute_from_chain",
     "chain_residuals",
     "criterion",
     "fit_chain",
@@ -68,11 +69,47 @@ def chain_from_centred(
     """The chain of a fitted ``centred_arcs`` volute placed by its pose (mirror, translation)."""
     centres, radii, th0 = arc_centres(p)
     sweeps = np.full(len(radii), 0.5 * math.pi)
+    if p.arc_sweeps:  # a free chain's own joints
+        sweeps[:-1] = np.radians(p.arc_sweeps)
     sweeps[-1] = p.theta_end - th0[-1]
     sign = -1.0 if mirrored else 1.0
     c0 = (sign * centres[0, 0] + translation[0], centres[0, 1] + translation[1])
     phi0 = float(th0[0]) if not mirrored else math.pi - float(th0[0])
     return ArcChain(c0, phi0, sign, np.asarray(radii, dtype=float), sweeps)
+
+
+def volute_from_chain(
+    chain: ArcChain, base: VoluteParams, mirrored: bool, translation: tuple[float, float]
+) -> VoluteParams:
+    """The :class:`VoluteParams` that draw ``chain`` (placed by the pose a centred-arc fit gave
+    ``base``: mirror, then translation): the free chain of the centred-arc model, its radii
+    and sweeps as fitted, its start and eye (the centres' centroid) in the model's frame, the
+    θ limit at the chain's end; ``base``'s band (thickness) and spiral radius kept.
+
+    The inverse of :func:`chain_from_centred` for any chain: ``chain_from_centred(
+    volute_from_chain(c, base, m, t), m, t)`` is ``c``. Raises what :class:`VoluteParams`
+    raises when the chain makes no valid volute (a band crossing itself)."""
+    sign = -1.0 if mirrored else 1.0
+    if chain.sense != sign:
+        raise ValueError("volute_from_chain: the chain turns against the pose's mirror")
+    centres, _ = chain.frame()
+    model = np.column_stack(
+        [sign * (centres[:, 0] - translation[0]), centres[:, 1] - translation[1]]
+    )
+    phi0 = chain.phi0 if not mirrored else math.pi - chain.phi0
+    theta_end = phi0 + float(np.sum(chain.sweeps))
+    eye = model.mean(axis=0)
+    return replace(
+        base,
+        volute_model="centred_arcs",
+        start_angle=math.degrees(phi0),
+        spiral_circuits=(theta_end - 2.5 * math.pi) / (2.0 * math.pi) + 1.0,
+        capital_circle_radius=float(chain.radii[0]),
+        offset_x=float(eye[0]),
+        offset_y=float(eye[1]),
+        arc_radii=tuple(float(r) for r in chain.radii),
+        arc_sweeps=tuple(float(np.degrees(d)) for d in chain.sweeps[:-1]),
+    )
 
 
 def chain_residuals(chain: ArcChain, pts: np.ndarray) -> np.ndarray:
