@@ -28,8 +28,17 @@ class ParameterError(IonicError, ValueError):
         self.name = name
         self.value = value
         self.valid = valid
+        self.context = context
         where = f"{context}: " if context else ""
         super().__init__(f"{where}{name} = {value!r} is invalid; expected {valid}")
+
+    def __reduce__(self):
+        # picklable (a process pool or a Dask worker sends it back): rebuilt from its fields
+        return _rebuild, (
+            type(self),
+            (self.name, self.value, self.valid),
+            {"context": self.context},
+        )
 
 
 class GrammarError(IonicError, ValueError):
@@ -56,6 +65,10 @@ class GrammarError(IonicError, ValueError):
         self.module = module
         self.grammar = grammar
         super().__init__(self._render())
+
+    def __reduce__(self):
+        kwargs = {"length": self.length, "module": self.module, "grammar": self.grammar}
+        return _rebuild, (type(self), (self.message, self.source, self.offset), kwargs)
 
     def with_grammar(self, grammar: str) -> GrammarError:
         """The same error (message, source, caret) under another grammar label, e.g. one that
@@ -100,3 +113,8 @@ class OutputExistsError(IonicError, FileExistsError):
 
 class UsdAuthoringError(IonicError, RuntimeError):
     """A USD layer could not be composed or written (e.g. an unresolved reference)."""
+
+
+def _rebuild(cls: type, args: tuple, kwargs: dict) -> BaseException:
+    """An error rebuilt from its fields (:meth:`ParameterError.__reduce__`)."""
+    return cls(*args, **kwargs)

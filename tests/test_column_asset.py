@@ -672,3 +672,44 @@ def test_form_cuts_keep_the_charts_of_a_base_apart(form):
     full = build_base_part(p, "attic_bezier_plinth")
     a = unwrap(form_cut(full, form, "Base"), texels_per_metre=32.0, cache=False)
     assert overlap_texels(a.st_px, a.st_indices) == 0
+
+
+def test_an_asset_keeps_a_free_chain_of_arcs(tmp_path):
+    """A column whose volute is a free chain (a carved volute's fit) builds as an asset: the
+    log-spiral variant drops the chain, the centred-arc one keeps it, and the parameters in the
+    asset's customData read back to the same volute, bit for bit."""
+    from ionic_usd.column.column import column_params_from_mapping
+    from ionic_usd.column.volute_arcs import arc_centres
+    from ionic_usd.usd.sections_reader import stored_tables
+
+    base = ColumnAssetOptions().params
+    centred = base.capital.volute.with_(
+        volute_model="centred_arcs", capital_circle_radius=0.024, arc_square=0.026
+    )
+    _, radii, _ = arc_centres(centred)
+    bumped = tuple(float(r) * (1.0 + 0.01 * ((-1) ** j)) for j, r in enumerate(radii))
+    chain = centred.with_(arc_radii=bumped)
+    params = dataclasses.replace(base, capital=base.capital.with_(volute=chain))
+    opts = ColumnAssetOptions(
+        params=params,
+        lods=("low",),
+        bases=("G1",),
+        scrolls=("S1",),
+        flutes=("f24",),
+        forms=("full",),
+        capitals=("normal",),
+        texture_size=16,
+    )
+    build_column_asset(tmp_path / "IonicColumn", opts)
+    stage = Usd.Stage.Open(str(tmp_path / "IonicColumn" / "IonicColumn.usda"))
+    assert not validate_stage(stage)
+    tables = stored_tables(tmp_path / "IonicColumn" / "IonicColumn.usda", ("volute",))
+    assert column_params_from_mapping(tables).capital.volute == chain
+    # both volute variants were built: the chain's and the spiral's (which has no chain)
+    vset = stage.GetDefaultPrim().GetVariantSet("volute")
+    assert vset.GetVariantSelection() == "centred_arcs"
+    body = UsdGeom.Mesh(stage.GetPrimAtPath("/IonicColumn/Geom/CapitalBody"))
+    arcs = np.asarray(body.GetPointsAttr().Get())
+    vset.SetVariantSelection("log_spiral")
+    spiral = np.asarray(body.GetPointsAttr().Get())
+    assert arcs.shape != spiral.shape or not np.allclose(arcs, spiral)

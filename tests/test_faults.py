@@ -235,3 +235,37 @@ def test_kill_during_temple_rebuild(tmp_path):
 @pytest.mark.slow
 def test_kill_during_temple_rebuild_many(tmp_path):
     _kill_rebuilds(tmp_path, 10, final_run=True)
+
+
+def test_every_error_crosses_a_process_pool_intact():
+    """A refusal raised in a mesh worker (a process pool, a Dask worker) comes back as the same
+    error with the same one line, not as a broken pool (exit 70): every error pickles."""
+    import pickle
+    from concurrent.futures import ProcessPoolExecutor
+
+    from ionic_usd import errors
+
+    made = [
+        errors.ParameterError("arc_radii", (0.1, -1.0), "lengths > 0 (m)", context="volute"),
+        errors.GrammarError("unknown token 'Q'", "R0.1 Q", 5, length=1, module=1, grammar="base"),
+        errors.GeometryError("g"),
+        errors.BudgetError("b"),
+        errors.ReferenceCurveError("r"),
+        errors.OutputExistsError("o"),
+        errors.UsdAuthoringError("u"),
+    ]
+    classes = {c for c in vars(errors).values() if isinstance(c, type) and issubclass(c, Exception)}
+    assert classes - {errors.IonicError} <= {type(e) for e in made}  # a new error joins here
+    for e in made:
+        back = pickle.loads(pickle.dumps(e))
+        assert type(back) is type(e) and str(back) == str(e) and vars(back) == vars(e)
+    # and through a real pool: the worker's refusal, as the worker raised it
+    with ProcessPoolExecutor(1) as ex:
+        with pytest.raises(errors.ParameterError, match="arc_radii = .* lengths > 0"):
+            ex.submit(_refuse_in_worker).result()
+
+
+def _refuse_in_worker() -> None:
+    from ionic_usd.column.volute import VoluteParams
+
+    VoluteParams(volute_model="centred_arcs", arc_radii=(0.1, -1.0))

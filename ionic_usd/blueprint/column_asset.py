@@ -170,7 +170,7 @@ def volute_variant_params(params: ColumnParams, model: str) -> ColumnParams:
     squares from R/11 (innermost, ratio 1/3) to 4R/33 — the Portunus defaults at D = 0.95 m —
     then scaled together so that the band rises as far above the eye as the spiral's (the
     capital keeps its height: the abacus and the entablature do not move). ``log_spiral``
-    keeps the spiral's own a, b, c, d and R.
+    keeps the spiral's own a, b, c, d and R (and drops a free chain of arcs).
     """
     v = params.capital.volute
     if v.volute_model == model:
@@ -192,8 +192,8 @@ def volute_variant_params(params: ColumnParams, model: str) -> ColumnParams:
             v = v.with_(
                 capital_circle_radius=v.capital_circle_radius * k, arc_square=v.arc_square * k
             )
-    else:
-        v = v.with_(volute_model=model)
+    else:  # a free chain of arcs is the centred-arc model's own: the spiral has none
+        v = v.with_(volute_model=model, arc_radii=(), arc_sweeps=())
     own_gap = _margin_gap(params)[0]
     out = dataclasses.replace(params, capital=params.capital.with_(volute=v))
     gap, top_end_x = _margin_gap(out)

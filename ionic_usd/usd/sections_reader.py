@@ -71,4 +71,15 @@ def stored_tables(path: str | Path, keys: Iterable[str]) -> dict[str, dict]:
     if hasattr(nested, "get") and hasattr(nested.get("parameters"), "items"):
         data = dict(nested["parameters"])  # where ``ionic-usd asset`` keeps them
     wanted = set(keys)
-    return {k: dict(v) for k, v in data.items() if k in wanted and hasattr(v, "items")}
+    return {
+        k: {n: _plain(x) for n, x in v.items()}
+        for k, v in data.items()
+        if k in wanted and hasattr(v, "items")
+    }
+
+
+def _plain(value: object) -> object:
+    """A customData value as the TOML tables hold it (a ``double[]`` as a list of floats)."""
+    if isinstance(value, str | bytes) or not hasattr(value, "__len__"):
+        return value
+    return [float(x) for x in value]  # type: ignore[attr-defined]
