@@ -11,6 +11,9 @@ writer at a time (a lock beside the folder).
   refused with a message naming the holder (pid and command line, written into the lock
   file). The kernel releases the lock when its holder dies, however it dies; the holder
   removes the file when it is done (a waiter checks it locked the file still at the path).
+  A forked process pool's workers inherit the lock (``flock`` belongs to the open file, which
+  a fork shares): they start with :func:`die_with_parent`, so a killed build leaves no orphan
+  holding its folder's lock.
 """
 
 from __future__ import annotations
@@ -28,6 +31,7 @@ from ionic_usd.lockfile import LOCK_SUFFIX, lock_path, remove_stale_lock
 
 __all__ = [
     "LOCK_SUFFIX",
+    "die_with_parent",
     "FolderBusyError",
     "folder_lock",
     "lock_path",
@@ -36,6 +40,20 @@ __all__ = [
 ]
 
 DEFAULT_WAIT = 0.0  # s: refuse at once (IONIC_USD_LOCK_WAIT=SECONDS waits)
+
+
+def die_with_parent(parent: int) -> None:
+    """In a forked pool worker: be killed when ``parent`` (the process that forked the pool)
+    dies (Linux ``PR_SET_PDEATHSIG``), and exit at once if it died already. The worker shares
+    the parent's folder lock; an orphan would hold it after the parent was killed."""
+    if sys.platform.startswith("linux"):
+        import ctypes
+        import signal
+
+        with contextlib.suppress(OSError, AttributeError):
+            ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+    if os.getppid() != parent:  # the parent died before the line above
+        os._exit(0)
 
 
 class FolderBusyError(IonicError):

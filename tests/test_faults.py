@@ -269,3 +269,30 @@ def _refuse_in_worker() -> None:
     from ionic_usd.column.volute import VoluteParams
 
     VoluteParams(volute_model="centred_arcs", arc_radii=(0.1, -1.0))
+
+
+def test_a_killed_build_leaves_no_worker_holding_its_lock(tmp_path):
+    """The mesh pool's workers are forked with the build's folder lock (flock belongs to the
+    open file a fork shares): when the build is killed they die with it, so the lock is free
+    at once (before, an orphan kept building and held it, and the next run found it busy)."""
+    import psutil
+
+    from ionic_usd.outputs import lock_path, remove_stale_lock
+
+    x = tmp_path / "A"
+    env = {**os.environ, "PYTHONPATH": str(REPO), "IONIC_USD_CACHE": str(tmp_path / "cache")}
+    cmd = [sys.executable, "-m", "ionic_usd", "asset", "-o", str(x), "--texture-size", "16"]
+    p = subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    proc = psutil.Process(p.pid)
+    deadline = time.monotonic() + 120
+    workers: list = []
+    while time.monotonic() < deadline and len(workers) < 2 and p.poll() is None:
+        workers = proc.children()
+        time.sleep(0.05)
+    assert len(workers) == 2, "the asset's mesh pool did not start"
+    assert lock_path(x).exists()
+    p.send_signal(signal.SIGKILL)
+    p.wait()
+    gone, alive = psutil.wait_procs(workers, timeout=5)
+    assert not alive, f"orphaned workers: {[w.pid for w in alive]}"
+    assert remove_stale_lock(x) and not lock_path(x).exists()

@@ -169,7 +169,10 @@ def _unit_meshes(
 _WORKER_STATE: dict[str, Any] = {}
 
 
-def _worker_init(opts: ColumnAssetOptions, uv_cache: UVCache | None) -> None:
+def _worker_init(opts: ColumnAssetOptions, uv_cache: UVCache | None, parent: int) -> None:
+    from ionic_usd.outputs import die_with_parent
+
+    die_with_parent(parent)
     _WORKER_STATE["args"] = (opts, uv_cache)
 
 
@@ -246,7 +249,10 @@ def column_asset_meshes(
         ctx = mp.get_context("fork")
         first = sum(u.kind == "capital" and u.lod == order[0].lod for u in order)  # longest
         with ProcessPoolExecutor(
-            max_workers=n, mp_context=ctx, initializer=_worker_init, initargs=(opts, uv_cache)
+            max_workers=n,
+            mp_context=ctx,
+            initializer=_worker_init,
+            initargs=(opts, uv_cache, os.getpid()),
         ) as ex:
             futures = {u: ex.submit(_worker_unit, u) for u in order[:first]}
             side = [ex.submit(fn, *args) for fn, args in side_jobs]

@@ -294,7 +294,14 @@ def prefetch(
                 bar.update(1)
         else:
             ctx = mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
-            with ProcessPoolExecutor(max_workers=min(n, len(todo)), mp_context=ctx) as ex:
+            from ionic_usd.outputs import die_with_parent
+
+            with ProcessPoolExecutor(
+                max_workers=min(n, len(todo)),
+                mp_context=ctx,
+                initializer=die_with_parent,
+                initargs=(os.getpid(),),
+            ) as ex:
                 results = []
                 for r in ex.map(_unwrap_job, todo.values(), chunksize=1):
                     results.append(r)
