@@ -24,6 +24,7 @@ __all__ = [
     "model_card_bound",
     "prim_identifier",
     "prototype_stats",
+    "prototype_triangles",
     "temple_card_bound",
     "temple_selection",
     "temple_variant_sets",
@@ -116,16 +117,27 @@ def prototype_stats(
     return lo[both].min(axis=0), hi[both].max(axis=0), tris
 
 
-def prototype_purpose_stats(
-    stage: Usd.Stage, root: str, selections: Mapping[str, str]
-) -> tuple[np.ndarray, np.ndarray, int]:
-    """:func:`prototype_stats` per purpose (:data:`PURPOSES`): lo, hi (4, 3), an empty
-    purpose as lo = +inf, hi = -inf; and the drawn triangles."""
+def prototype_triangles(stage: Usd.Stage, root: str, selections: Mapping[str, str]) -> int:
+    """:func:`prototype_stats`' drawn triangles alone (no bounds: a fourth of the work)."""
+    return drawn_triangles(_selected(stage, root, selections))
+
+
+def _selected(stage: Usd.Stage, root: str, selections: Mapping[str, str]) -> Usd.Prim:
+    """``root`` with ``selections`` made in the stage's (cleared) session layer."""
     stage.GetSessionLayer().Clear()
     prim = stage.GetPrimAtPath(root)
     with Usd.EditContext(stage, stage.GetSessionLayer()):
         for name, value in selections.items():
             prim.GetVariantSet(name).SetVariantSelection(value)
+    return prim
+
+
+def prototype_purpose_stats(
+    stage: Usd.Stage, root: str, selections: Mapping[str, str]
+) -> tuple[np.ndarray, np.ndarray, int]:
+    """:func:`prototype_stats` per purpose (:data:`PURPOSES`): lo, hi (4, 3), an empty
+    purpose as lo = +inf, hi = -inf; and the drawn triangles."""
+    prim = _selected(stage, root, selections)
     lo, hi = np.full((4, 3), np.inf), np.full((4, 3), -np.inf)
     for k, purpose in enumerate(PURPOSES):
         cache = UsdGeom.BBoxCache(Usd.TimeCode.Default(), [purpose])
