@@ -43,6 +43,12 @@ def _check(truths: list[Truth], n: int, seed: int, stylobate: int = 0):
         assert col["flutes"] == t.flutes
         assert 1000.0 * col["deviation"]["rms"] <= 2.0 * NOISE, (i, col["deviation"])
         assert 1000.0 * col["deviation_from_group"]["rms"] <= 2.0 * NOISE
+        # its pose as an instance: its own, moved along its axis by a few mm at most
+        m, own = c.instance_matrix[i], c.fits[i].matrix
+        np.testing.assert_array_equal(m[:3], own[:3])
+        move = m[3, :3] - own[3, :3]
+        assert np.linalg.norm(move - (move @ own[1, :3]) * own[1, :3]) < 1e-12
+        assert abs(col["shift_from_own_pose"]) <= 0.03 * col["diameter"] + 1e-12
     # the columns stand on a line 2.8 m apart: their axes' feet, along the common up axis
     up = np.asarray(s["up"])
     pos = np.array([col["position"] for col in s["columns"]])
@@ -59,6 +65,23 @@ def test_colonnade_of_three(tmp_path):
     t = Truth()
     c = _check([t, t.scaled(460.0), t], 4000, 0)
     _check_instanced(c, tmp_path / "colonnade.usda")
+
+
+# seed 2: the equal columns' own fits stand 2.8 mm apart along their axes (their zeros are
+# their lowest points, a plinth's corner) and their plinths' heights absorb it: compared at
+# their own zeros their descriptions differed by 1.64-1.72 mm rms against 1.5 x 0.86 allowed,
+# and they were not grouped, with or without a stylobate; registered along the axis, 0.88 mm.
+# Seeds 0-7 group right; the registered shift was -13.3 to +2.8 mm
+@pytest.mark.parametrize("seed", [2] + [pytest.param(k, marks=pytest.mark.slow) for k in (1, 3, 4)])
+def test_colonnade_groups_at_any_seed(seed):
+    t = Truth()
+    _check([t, t.scaled(460.0), t], 4000, seed)
+
+
+@pytest.mark.parametrize("seed", [2, pytest.param(3, marks=pytest.mark.slow)])
+def test_colonnade_on_a_stylobate_groups_at_any_seed(seed):
+    t = Truth()
+    _check([t, t.scaled(460.0), t], 4000, seed, stylobate=6000)
 
 
 def _check_instanced(c, path: Path) -> None:
@@ -95,14 +118,15 @@ def _check_instanced(c, path: Path) -> None:
             m = np.array(cache.GetLocalToWorldTransform(prim))
             pts = np.asarray(UsdGeom.Mesh(prim).GetPointsAttr().Get(), dtype=float)
             got = np.c_[pts, np.ones(len(pts))] @ m
-            ref = np.c_[mesh.points, np.ones(len(mesh.points))] @ f.matrix
+            pose = c.instance_matrix[k]  # its own, moved along its axis (register_instance)
+            ref = np.c_[mesh.points, np.ones(len(mesh.points))] @ pose
             assert len(got) == len(ref)
             src = prototypes["AB"[g]][name].points
             if name == "Shaft":  # the group's shaft turned about the axis (y) by shaft_turn
                 a = np.radians(instances[k].shaft_turn)
                 rot = np.array([[np.cos(a), 0, -np.sin(a)], [0, 1, 0], [np.sin(a), 0, np.cos(a)]])
                 src = src @ rot
-            placed = np.c_[src, np.ones(len(src))] @ f.matrix
+            placed = np.c_[src, np.ones(len(src))] @ pose
             assert np.abs(got - placed).max() < 2e-6, (k, name)
             if name == "Shaft":  # ... lies on the column's own surface (its flute phase):
                 # every vertex as near it as the column's own build's (vertices sampled at
@@ -110,8 +134,8 @@ def _check_instanced(c, path: Path) -> None:
                 # are where the deviation model hands over to the base and capital
                 y = src[:, 1]
                 inner = (y > y.min() + 0.01) & (y < y.max() - 0.01)
-                d = scan_deviation(got[inner, :3], inst, f.matrix)
-                d_own = scan_deviation(ref[:, :3], inst, f.matrix)
+                d = scan_deviation(got[inner, :3], inst, pose)
+                d_own = scan_deviation(ref[:, :3], inst, pose)
                 assert d.max() <= d_own.max() + 1e-6, (k, d.max(), d_own.max())
             else:  # base and capital: the column's own vertices
                 d, _ = cKDTree(ref[:, :3]).query(got[:, :3])

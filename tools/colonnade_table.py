@@ -1,7 +1,7 @@
 """Print the colonnade fit's per-column table (docs/colonnade.md): the independent synthetic
 colonnade of tests/synth_scan.py (fragments on a line 2.8 m apart, small random poses, one of
 radius 460 mm instead of 400), each column's fit, and every column's rms deviation from every
-other column's description.
+other column's description (at its pose registered along its axis, as the grouping does).
 
     python tools/colonnade_table.py [--columns 4] [--points 4000] [--seed 0]
 """
@@ -21,7 +21,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 def main(argv: list[str] | None = None) -> int:
     from synth_scan import Truth, colonnade_scan
 
-    from ionic_usd.evaluate.scan_colonnade import _instance_deviation, fit_colonnade
+    from ionic_usd.evaluate.scan_colonnade import fit_colonnade, register_instance
     from ionic_usd.evaluate.scan_deviation import other_parts_tree
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -44,7 +44,7 @@ def main(argv: list[str] | None = None) -> int:
         src = int(np.bincount(lab[c.indices[i]]).argmax())
         row = []
         for j, g in enumerate(c.fits):
-            d = f.deviation if i == j else _instance_deviation(g, f, pts[c.indices[i]], trees[j])
+            d = f.deviation if i == j else register_instance(g, f, pts[c.indices[i]], trees[j])[1]
             row.append(f"{1000 * np.sqrt(np.mean(d**2)):.3g}")
         own = 1000 * np.sqrt(np.mean(f.deviation**2))
         print(

@@ -44,7 +44,13 @@ from ionic_usd.evaluate.scan_deviation import (
     scan_deviation,
     shaft_deviation,
 )
-from ionic_usd.evaluate.scan_flutes import plinth_turn, section_noise, shaft_details, shaft_taper
+from ionic_usd.evaluate.scan_flutes import (
+    plinth_turn,
+    section_noise,
+    shaft_details,
+    shaft_taper,
+    shaft_top,
+)
 from ionic_usd.evaluate.scan_parts import base_meridian, base_top, has_square_plinth, to_column
 from ionic_usd.evaluate.scan_section import outer_profile, section_at, taper
 
@@ -340,25 +346,16 @@ def fit_column_scan(
     cap_fit = None
     if has_cap:
         col, m, cap_fit = _fit_capital(sub, col, m, has_base, notes)
+        if has_base:  # its length set by the capital: the taper again, the top ring seen
+            col = shaft_top(
+                to_column(sub, m), frame.local(sub), frame.parts["shaft"], sec, col, noise, notes
+            )
         tree = other_parts_tree(col)
     dev = scan_deviation(pts, col, m, tree=tree)
     fits = _part_report(frame.local(pts)[:, 2], dev, frame, sec, base_fit, col, cap_fit)
     _check_is_column(fits, diameter, e)
-    return ScanFit(
-        col,
-        frame,
-        m,
-        diameter,
-        e,
-        sec,
-        base_fit,
-        dev,
-        time.perf_counter() - t0,
-        slab,
-        bprof,
-        notes,
-        fits,
-    )
+    secs = time.perf_counter() - t0
+    return ScanFit(col, frame, m, diameter, e, sec, base_fit, dev, secs, slab, bprof, notes, fits)
 
 
 #: where the first fluted section is sought, as fractions of the narrow band: its lower part

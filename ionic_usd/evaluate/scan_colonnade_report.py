@@ -38,7 +38,8 @@ def _letter(g: int) -> str:
 
 def colonnade_instances(fit: ColonnadeFit) -> tuple[dict[str, dict], list]:
     """What :func:`ionic_usd.usd.scan.write_colonnade` writes: per group (A, B, …) its
-    source's parts, built once; per column its group, pose, the turn of the group's shaft to
+    source's parts, built once; per column its group, pose (as an instance of the group:
+    registered along its axis), the turn of the group's shaft to
     its flute phase and its deviation from the group's description."""
     from ionic_usd.column.column import build_column
     from ionic_usd.usd.scan import ColonnadeInstance
@@ -53,7 +54,7 @@ def colonnade_instances(fit: ColonnadeFit) -> tuple[dict[str, dict], list]:
         src = fit.fits[fit.groups[g][0]].column.shaft.flute_phase
         turn = f.column.shaft.flute_phase - src
         dev = _stats(fit.instance_deviation[k])
-        instances.append(ColonnadeInstance(_letter(g), f.matrix, turn, dev))
+        instances.append(ColonnadeInstance(_letter(g), fit.instance_matrix[k], turn, dev))
     return prototypes, instances
 
 

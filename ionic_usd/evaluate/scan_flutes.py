@@ -9,16 +9,20 @@ the taper and entasis, measured on the points rather than kept from the Vitruvia
 * :func:`flute_tip` — the height where the flutes end at the bottom (the tip of their
   quarter-ellipse ends): the tip whose model leaves the least robust radial residual;
 * :func:`fit_taper` — fillet radius along the shaft, r = Rb (1 − t) + Rt t + E sin(π t),
-  by least squares on r_obs = r(t) · flute_factor(θ) over fillet and flute-bottom points.
+  by least squares on r_obs = r(t) · flute_factor(θ) over fillet and flute-bottom points;
+* :func:`shaft_top` — a whole column's shaft once the capital has set its length: the
+  taper and entasis fitted again over that length, and the plain ring at the top from the
+  flutes' top tip (:func:`flute_tip` on the heights mirrored about the shaft's top).
 """
 
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
-__all__ = ["fit_taper", "flute_factor", "flute_tip", "plinth_turn"]
+__all__ = ["fit_taper", "flute_factor", "flute_tip", "plinth_turn", "shaft_top"]
 
 
 def plinth_turn(uv: np.ndarray) -> float | None:
@@ -227,3 +231,49 @@ def shaft_details(
             joint = hi_
     out["joint"] = min(joint, tip)
     return out
+
+
+def shaft_top(
+    col_pts: np.ndarray,
+    loc: np.ndarray,
+    band: tuple[float, float],
+    sec: dict[str, float],
+    col: Any,
+    noise: float,
+    notes: list[str],
+) -> Any:
+    """A whole column's shaft at the length its capital gave (the capital's height shift
+    changes it after the taper was fitted over the first estimate): taper and entasis fitted
+    again (:func:`shaft_taper`) and the top ring from the flutes' top tip, the length kept.
+    Before, on the tests' independent whole column (0.8 mm noise), the top radius came out
+    1.1 mm small and the top ring was the Vitruvian 60 mm against 35: shaft rms 1.45 mm.
+
+    Parameters
+    ----------
+    col_pts : (n, 3) points in column coordinates (y up); loc : the same in the frame
+    band : the shaft's heights in the frame; col : the fitted ColumnParams
+
+    Returns
+    -------
+    ColumnParams
+    """
+    import dataclasses
+
+    sh = col.shaft
+    tap = shaft_taper(loc, band, sec, sh.flutes, sh.length)
+    if tap is not None:
+        sh = dataclasses.replace(sh, bottom_radius=tap[0], top_radius=tap[1], entasis=tap[2])
+    length, d = sh.length, 2.0 * sh.top_radius
+    h = length - (col_pts[:, 1] - col.base_params().height)  # depth below the shaft's top
+    theta = np.arctan2(-col_pts[:, 2], col_pts[:, 0])
+    r = np.hypot(col_pts[:, 0], col_pts[:, 2])
+    arc = sh.arc_height(sh.top_radius)
+    sect = (sh.flutes, sh.flute_angle, sh.flute_depth, sh.flute_phase)
+    tip = flute_tip(h, theta, r, sh.top_radius, arc, sect, 0.0, 0.3 * d, noise)
+    if tip is not None and 0.0 < tip < 0.25 * d:
+        sh = dataclasses.replace(sh, ring_top=tip, height=sh.height + sh.ring_top - tip)
+        notes.append(
+            f"shaft's top: taper fitted again over {length:.4f} m; flutes end {tip * 1000:.3g} "
+            "mm below it (the top ring)"
+        )
+    return dataclasses.replace(col, shaft=sh)

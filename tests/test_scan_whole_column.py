@@ -1,0 +1,72 @@
+"""A whole column with its capital, scanned (issue 36): per-part deviation against the noise,
+on scans from tests/synth_column.py — the tests' own base, shaft and capital (an echinus,
+Archimedean volutes on a cushion, a square abacus), not the project's model."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from synth_column import column_scan  # noqa: E402
+from synth_scan import Truth  # noqa: E402
+
+NOISE = 0.8  # mm
+PARTS = ("base", "shaft", "capital")
+
+
+def _fit(seed: int):
+    from ionic_usd.evaluate.fit_scan import fit_column_scan
+
+    pts, part, _, _ = column_scan(noise=NOISE, seed=seed)
+    fit = fit_column_scan(pts * 1e-3)
+    rms = {
+        name: 1000.0 * float(np.sqrt(np.mean(fit.deviation[part == k] ** 2)))
+        for k, name in enumerate(PARTS)
+    }
+    return fit, rms
+
+
+def _check_base_and_shaft(seed: int) -> None:
+    fit, rms = _fit(seed)
+    s = fit.summary()
+    t = Truth()
+    assert s["parts_found"] == ["base", "capital", "shaft"]
+    assert s["flutes"] == t.flutes
+    assert 2.0 * fit.column.shaft.bottom_radius == pytest.approx(2e-3 * t.radius, rel=0.002)
+    # the points of each part (by the generator's labels) and the fit's own split
+    for part in ("base", "shaft"):
+        assert rms[part] <= 2.0 * NOISE, (part, rms)
+        assert 1000.0 * s["parts"][part]["deviation"]["rms"] <= 2.0 * NOISE, (part, s["parts"])
+    # the top ring, from the flutes' top tip (before: the Vitruvian 60 mm, shaft rms 1.45 mm)
+    sh = fit.column.shaft
+    assert 1000.0 * sh.ring_top == pytest.approx(t.ring, abs=3.0)
+    assert 1000.0 * sh.top_radius == pytest.approx(t.radius * t.top_ratio, abs=0.5)
+
+
+def test_whole_column_base_and_shaft_fit_to_the_noise():
+    """Measured (seed 0): base 0.89, shaft 0.88 mm rms (the shaft was 1.45 before its top
+    ring and taper were fitted again at the length the capital sets)."""
+    _check_base_and_shaft(0)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [1, 2, 3, 4])
+def test_whole_column_base_and_shaft_fit_to_the_noise_any_scan(seed):
+    _check_base_and_shaft(seed)
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(
+    strict=True,
+    reason="the capital model (the project's Vitruvian capital with its volute size, eye "
+    "height and spacing, scale and height free) cannot take this capital's echinus, cushion "
+    "depth, volute relief and abacus: measured 38.7-41.8 mm rms on seeds 0-2 (issue 36)",
+)
+def test_whole_column_capital_fits_to_the_noise():
+    _, rms = _fit(0)
+    assert rms["capital"] <= 2.0 * NOISE, rms
