@@ -103,14 +103,19 @@ def bind_material(prim: Usd.Prim, material: UsdShade.Material | str) -> None:
         api.Bind(material)
 
 
-def bind_material_spec(spec: Sdf.PrimSpec, material: str) -> None:
+def bind_material_spec(spec: Sdf.PrimSpec, material: str, *, stronger: bool = False) -> None:
     """The Sdf form of :func:`bind_material`: apply MaterialBindingAPI to a prim spec and set
-    its direct binding to the material path (no stage needed, nothing resolved)."""
+    its direct binding to the material path (no stage needed, nothing resolved).
+
+    ``stronger`` authors ``bindMaterialAs = strongerThanDescendants``: the binding wins over
+    the bindings of every descendant (a column's, referenced from its asset)."""
     spec.SetInfo("apiSchemas", Sdf.TokenListOp.Create(prependedItems=["MaterialBindingAPI"]))
     rel = spec.relationships.get("material:binding") or Sdf.RelationshipSpec(
         spec, "material:binding", custom=False
     )
     rel.targetPathList.explicitItems = [Sdf.Path(material)]
+    if stronger:
+        rel.SetInfo("bindMaterialAs", UsdShade.Tokens.strongerThanDescendants)
 
 
 def stone_material(

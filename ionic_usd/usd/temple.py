@@ -41,7 +41,8 @@ realise yet are listed with ``realised = false`` and get no layer.
 
 ``class`` prims: /_class_Temple (inherited by /Temple) and /_class_IonicColumn (inherited by
 every column through the asset): an opinion authored on a class in ``overrides.usda`` changes
-every temple or column of the scene at once.
+every temple or column of the scene at once. The column class carries the binding of every
+column into the temple's library, per ``finish`` (:func:`_bind_finishes`).
 """
 
 from __future__ import annotations
@@ -199,6 +200,26 @@ def _part_layer(layer: Layer, meshes: dict, material: str) -> Sdf.Layer:
     return lay
 
 
+def _bind_finishes(spec: Sdf.PrimSpec) -> None:
+    """Bind every column to the temple's one library, per finish: on the column class
+    ``spec`` (``/_class_IonicColumn``, inherited by every column), each value of the asset's
+    ``finish`` set binds the column's root ``strongerThanDescendants`` to
+    ``/Temple/Materials/<material>``. The set has the asset's name, so a column's one
+    selection switches both; and on the class, not on each column, so the columns still
+    share their prototypes (a variant on an instance's own root would make it unique).
+
+    UsdShade resolves every mesh of every column to the temple's library. The asset keeps its
+    own library and bindings (it opens alone, Kitchen_set style), which a client that reads
+    an instance's prototype alone, such as Blender, still uses: such a client cannot see a
+    binding on the instance."""
+    vs = spec.variantSets.get("finish") or Sdf.VariantSetSpec(spec, "finish")
+    if "finish" not in spec.variantSetNameList.prependedItems:
+        spec.variantSetNameList.Prepend("finish")
+    for finish, material in _finish_materials().items():
+        var = vs.variants.get(finish) or Sdf.VariantSpec(vs, finish)
+        bind_material_spec(var.primSpec, f"/Temple/Materials/{material}", stronger=True)
+
+
 def _colonnade_layer(layout: TempleLayout) -> Sdf.Layer:
     lay = new_layer("Temple", kind="assembly")
     typed = getattr(layout.params, "vitruvian", None) is not None
@@ -270,6 +291,7 @@ def _generated_layer(
     spec.inheritPathList.Prepend(Sdf.Path(TEMPLE_CLASS))
     col_cls = Sdf.CreatePrimInLayer(lay, class_path(ASSET_NAME))
     col_cls.specifier = Sdf.SpecifierClass
+    _bind_finishes(col_cls)
     for ref in [
         f"./{MATERIALS_LAYER}",
         *(f"./{PART_LAYERS[la]}" for la in layout.cuboids),
