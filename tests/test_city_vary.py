@@ -350,3 +350,18 @@ def test_example_forum_stoas_are_whole_and_clear_of_every_lot():
     assert len(sp.corner_xz) == sum(len(w.corner_xz) for w in whole) == 4
     assert sp.dropped == 0
     assert not _overlaps(_parts(sp, back), [shapely.Polygon(lot.outline) for lot in plan.lots])
+
+
+def test_a_temple_build_key_follows_the_code(monkeypatch):
+    """A city's temple builds are cached by key: an edit of the package's code (or a new
+    library) must change it, or a city reuses temples the old code built."""
+    from ionic_usd.pipeline import keys
+    from ionic_usd.pipeline.spec import TempleSpec
+
+    text = "[temple]\nname = 'x'\n"
+    before = TempleSpec("x", text).key
+    assert TempleSpec("x", text).key == before  # deterministic
+    monkeypatch.setattr(keys, "source_digest", lambda: "an edited generator")
+    edited = TempleSpec("x", text).key
+    monkeypatch.setattr(keys, "library_versions", lambda: "numpy 9")
+    assert len({before, edited, TempleSpec("x", text).key}) == 3

@@ -50,8 +50,11 @@ class TempleSpec:
 
     @cached_property
     def key(self) -> str:
-        """SHA-256 (hex) of everything the build's bytes depend on."""
+        """SHA-256 (hex) of everything the build's bytes depend on: the description and
+        options, the version, the package's code and data (so an edited generator never
+        reuses a cached build) and the runtime libraries' versions."""
         from ionic_usd import __version__
+        from ionic_usd.pipeline.keys import library_versions, source_digest
 
         doc = {
             "name": self.name,
@@ -59,6 +62,8 @@ class TempleSpec:
             "texture_size": self.texture_size,
             "seed": self.seed,
             "version": __version__,
+            "code": source_digest(),
+            "libraries": library_versions(),
         }
         return hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()
 
