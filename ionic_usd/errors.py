@@ -15,7 +15,16 @@ __all__ = [
 
 
 class IonicError(Exception):
-    """Root of all errors raised by ionic_usd."""
+    """Root of all errors raised by ionic_usd.
+
+    Every one pickles by its own ``__reduce__`` (a process pool or a Dask worker sends it
+    back): without one, the exception pickling Dask installs (tblib) rebuilds an error through
+    its built-in base's ``__new__``, which a :class:`BudgetError` (a ``MemoryError``) or an
+    :class:`OutputExistsError` (a ``FileExistsError``) refuses.
+    """
+
+    def __reduce__(self):
+        return type(self), self.args, self.__dict__ or None
 
 
 class ParameterError(IonicError, ValueError):

@@ -256,9 +256,26 @@ def test_every_error_crosses_a_process_pool_intact():
     ]
     classes = {c for c in vars(errors).values() if isinstance(c, type) and issubclass(c, Exception)}
     assert classes - {errors.IonicError} <= {type(e) for e in made}  # a new error joins here
+    made[2].note = "an attribute of its own"  # the instance's __dict__ travels too
+    # plain pickle, and the exception pickling Dask's distributed installs (tblib: it rebuilds
+    # an exception without a __reduce__ of its own through its built-in base's __new__)
+    import copyreg
+
+    from tblib import pickling_support
+
     for e in made:
         back = pickle.loads(pickle.dumps(e))
         assert type(back) is type(e) and str(back) == str(e) and vars(back) == vars(e)
+    saved = dict(copyreg.dispatch_table)
+    try:
+        pickling_support.install()  # every exception class now pickles through tblib
+        assert all(copyreg.dispatch_table.get(type(e)) for e in made)
+        for e in made:
+            back = pickle.loads(pickle.dumps(e))
+            assert type(back) is type(e) and str(back) == str(e) and vars(back) == vars(e)
+    finally:
+        copyreg.dispatch_table.clear()
+        copyreg.dispatch_table.update(saved)
     # and through a real pool: the worker's refusal, as the worker raised it
     with ProcessPoolExecutor(1) as ex:
         with pytest.raises(errors.ParameterError, match="arc_radii = .* lengths > 0"):
