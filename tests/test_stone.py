@@ -464,3 +464,17 @@ def test_large_tile_with_frequencies_beyond_the_shared_block():
             interior = np.abs(np.diff(img, axis=axis)).max()
             wrap = np.abs(np.take(img, 0, axis=axis) - np.take(img, -1, axis=axis)).max()
             assert wrap <= interior
+
+
+def test_the_stone_maps_cache_follows_the_code(tmp_path, monkeypatch):
+    """The generated maps are cached by their options, the package's code and the libraries:
+    after an edit of the generator a run makes new maps instead of reusing the old ones."""
+    from ionic_usd.pipeline import asset, keys
+
+    monkeypatch.setenv("IONIC_USD_CACHE", str(tmp_path / "cache"))
+    first = asset._stone_store("travertine", 16, 7, False)
+    assert asset._stone_store("travertine", 16, 7, False) == first  # reused
+    monkeypatch.setattr(keys, "source_digest", lambda: "an edited generator")
+    second = asset._stone_store("travertine", 16, 7, False)
+    assert second != first and second.parent == first.parent
+    assert sorted(p.name for p in second.iterdir()) == sorted(p.name for p in first.iterdir())

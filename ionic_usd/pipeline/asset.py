@@ -33,7 +33,6 @@ from typing import Any
 
 import numpy as np
 
-from ionic_usd import __version__
 from ionic_usd.blueprint.asset import AssetInstancer, AssetMesh
 from ionic_usd.blueprint.column_asset import (
     ASSET_NAME,
@@ -387,12 +386,16 @@ def copy_stone_textures(
 
 def _stone_store(style: str, size: int, seed: int, make_tx: bool) -> Path:
     """The cache folder holding a stone style's maps, generated there on first use (verified
-    on read by its SHA-256 manifest, written atomically, rebuilt when bad)."""
+    on read by its SHA-256 manifest, written atomically, rebuilt when bad). Keyed by the
+    options, the package's code and the libraries (OpenImageIO writes the files): an edited
+    generator never finds the old maps."""
     from ionic_usd.io import verified_cache
+    from ionic_usd.pipeline.keys import build_key
     from ionic_usd.texture.stone import write_stone_textures
     from ionic_usd.texture.uv import default_cache_folder
 
-    key = f"{style}-{size}-{seed}-{__version__}{'-tx' if make_tx else ''}"
+    code = build_key("stone textures", style, size, seed, make_tx)[:16]
+    key = f"{style}-{size}-{seed}-{code}{'-tx' if make_tx else ''}"
     return verified_cache(
         default_cache_folder().parent / "textures" / key,
         lambda tmp: write_stone_textures(tmp, style, size, seed, make_tx=make_tx),
