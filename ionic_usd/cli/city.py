@@ -141,8 +141,14 @@ def add_city_parser(sub, parser_class, *, arguments: bool = True) -> None:
     )
     if not arguments:
         return
-    from ionic_usd.city.layout import DEFAULT_INSTANCER_THRESHOLD
+    _plan_arguments(p)
+    _temple_arguments(p)
+    _far_field_arguments(p)
+    _build_arguments(p)
 
+
+def _plan_arguments(p) -> None:
+    """The output folder and where the lots and streets come from: a plan or a grid."""
     p.add_argument("folder", type=Path, help="output folder (created if missing)")
     p.add_argument(
         "--plan",
@@ -164,6 +170,10 @@ def add_city_parser(sub, parser_class, *, arguments: bool = True) -> None:
         default=3.0,
         help="axial spacing of colonnades (m) [default 3]",
     )
+
+
+def _temple_arguments(p) -> None:
+    """What each lot's temple is: baseline or varied, one named temple, column variety, seed."""
     p.add_argument(
         "--baseline",
         action="store_true",
@@ -186,6 +196,10 @@ def add_city_parser(sub, parser_class, *, arguments: bool = True) -> None:
         "the description's (each level is a temple build) [default 1]",
     )
     add_seed_flag(p, "seed of the per-lot choices", default=0)
+
+
+def _far_field_arguments(p) -> None:
+    """LOD by distance from a focus point, and the far field drawn as cards."""
     p.add_argument(
         "--focus",
         type=_pair("--focus"),
@@ -216,6 +230,12 @@ def add_city_parser(sub, parser_class, *, arguments: bool = True) -> None:
         metavar="PX",
         help="card image size, longer side (px) [default 256]",
     )
+
+
+def _build_arguments(p) -> None:
+    """How the temples are fitted and built (textures, instancing, Dask, memory) and the output."""
+    from ionic_usd.city.layout import DEFAULT_INSTANCER_THRESHOLD
+
     p.add_argument(
         "--scale-range",
         type=_pair("--scale-range"),

@@ -348,79 +348,140 @@ def write_gltf(
     path = Path(path)
     binary = path.suffix.lower() != ".gltf" if binary is None else binary
     b = GltfBuilder()
-    g = b.g
     by_mesh: dict[str, list] = {}
     for p in scene.placements:
         by_mesh.setdefault(p.mesh, []).append(p)
     keep, groups = plan_merges(scene, by_mesh) if merge else (by_mesh, [])
     meshes = _Meshes(b, scene, compress)
-    roots: list[int] = []
-    draws = gpu_meshes = instances = drawn = merged = 0
+    tally = _Tally()
     for grp in groups:
-        mi = meshes.merged(grp)
-        if mi is None:
-            continue
-        each = [{"path": p.path, **p.paradata} for p in grp.placements]
-        common, each = split_common(each)
-        name = f"{scene.meshes[grp.mesh].name} x{len(each)}"
-        b.doc.nodes.append(_matrix_node(g, name, mi, grp.frame, {**common, "instances": each}))
-        roots.append(len(b.doc.nodes) - 1)
-        drawn += _triangles(b, mi)
-        draws += 1
-        instances += len(each)
-        merged += len(each)
+        tally += _merged_node(b, scene, meshes, grp)
     for key, placements in keep.items():
-        mi = meshes.mesh(key)
-        if mi is None:
-            continue
-        drawn += _triangles(b, mi) * len(placements)
-        trs = [trs_decompose(p.matrix) for p in placements] if gpu_instancing else []
-        # paradata every copy shares goes on the node once; the rest per copy
-        each = [{"path": p.path, **p.paradata} for p in placements]
-        common, each = split_common(each) if len(each) > 1 else ({}, each)
-        name = scene.meshes[key].name
-        if gpu_instancing and len(placements) > 1 and all(t is not None for t in trs):
-            t_arr = np.array([t[0] for t in trs], dtype=np.float32)
-            r_arr = np.array([t[1] for t in trs], dtype=np.float32)
-            s_arr = np.array([t[2] for t in trs], dtype=np.float32)
-            r_arr /= np.linalg.norm(r_arr, axis=1, keepdims=True)
-            ext = {
-                "attributes": {
-                    "TRANSLATION": b.accessor(t_arr, "VEC3"),
-                    "ROTATION": b.accessor(r_arr, "VEC4"),
-                    "SCALE": b.accessor(s_arr, "VEC3"),
-                }
-            }
-            node = g.Node(
-                name=name, mesh=mi, extensions={_GPU: ext}, extras={**common, "instances": each}
-            )
-            b.used.add(_GPU)
-            b.required.add(_GPU)
-            b.doc.nodes.append(node)
-            roots.append(len(b.doc.nodes) - 1)
-            draws += 1
-            gpu_meshes += 1
-            instances += len(placements)
-            continue
-        children = []
-        for p, extras in zip(placements, each, strict=True):
-            b.doc.nodes.append(
-                _matrix_node(g, p.path.rsplit("/", 1)[-1] or p.path, mi, p.matrix, extras)
-            )
-            children.append(len(b.doc.nodes) - 1)
-            draws += 1
-            instances += int(p.instanced)
-        if len(children) > 1:  # one group node per shared mesh, holding the common paradata
-            b.doc.nodes.append(
-                g.Node(name=f"{name} x{len(children)}", children=children, extras=common)
-            )
-            roots.append(len(b.doc.nodes) - 1)
-        else:
-            roots.extend(children)
-    if not roots:
+        tally += _copy_nodes(b, scene, meshes, key, placements, gpu_instancing)
+    if not tally.roots:
         raise GeometryError(f"{scene.source}: nothing to export (no triangles)")
+    _scene_and_buffer(b, scene, tally.roots, binary)
+
+    def write(tmp: Path) -> None:
+        if binary:
+            tmp.write_bytes(b"".join(b.doc.save_to_bytes()))
+        else:
+            tmp.write_text(b.doc.gltf_to_json())
+
+    atomic_write(path, write)
+    return GltfReport(
+        path,
+        path.stat().st_size,
+        len(b.doc.meshes),
+        len(b.doc.nodes),
+        len(b.doc.materials),
+        len(b.doc.images),
+        meshes.stored,
+        tally.drawn,
+        tally.draws,
+        tally.gpu_meshes,
+        tally.instances,
+        time.perf_counter() - t0,
+        tally.merged,
+    )
+
+
+@dataclass(frozen=True)
+class _Tally:
+    """Root nodes added and what they draw: triangles, draw calls, GPU-instanced meshes,
+    instances, and instances baked into merged meshes."""
+
+    roots: tuple[int, ...] = ()
+    drawn: int = 0
+    draws: int = 0
+    gpu_meshes: int = 0
+    instances: int = 0
+    merged: int = 0
+
+    def __add__(self, other: _Tally) -> _Tally:
+        return _Tally(
+            self.roots + other.roots,
+            self.drawn + other.drawn,
+            self.draws + other.draws,
+            self.gpu_meshes + other.gpu_meshes,
+            self.instances + other.instances,
+            self.merged + other.merged,
+        )
+
+
+def _merged_node(b: GltfBuilder, scene: Scene, meshes: _Meshes, grp: MergeGroup) -> _Tally:
+    """One node drawing a merged group's mesh, its copies' paradata in its extras."""
+    mi = meshes.merged(grp)
+    if mi is None:
+        return _Tally()
+    each = [{"path": p.path, **p.paradata} for p in grp.placements]
+    common, each = split_common(each)
+    name = f"{scene.meshes[grp.mesh].name} x{len(each)}"
+    b.doc.nodes.append(_matrix_node(b.g, name, mi, grp.frame, {**common, "instances": each}))
+    return _Tally((len(b.doc.nodes) - 1,), _triangles(b, mi), 1, 0, len(each), len(each))
+
+
+def _copy_nodes(
+    b: GltfBuilder,
+    scene: Scene,
+    meshes: _Meshes,
+    key: str,
+    placements: list,
+    gpu_instancing: bool,
+) -> _Tally:
+    """The nodes drawing one scene mesh's copies: one GPU-instanced node, or a node per copy
+    (grouped under one node holding the paradata they share)."""
+    mi = meshes.mesh(key)
+    if mi is None:
+        return _Tally()
+    drawn = _triangles(b, mi) * len(placements)
+    trs = [trs_decompose(p.matrix) for p in placements] if gpu_instancing else []
+    # paradata every copy shares goes on the node once; the rest per copy
+    each = [{"path": p.path, **p.paradata} for p in placements]
+    common, each = split_common(each) if len(each) > 1 else ({}, each)
+    name = scene.meshes[key].name
+    if gpu_instancing and len(placements) > 1 and all(t is not None for t in trs):
+        _gpu_node(b, name, mi, trs, {**common, "instances": each})
+        return _Tally((len(b.doc.nodes) - 1,), drawn, 1, 1, len(placements))
+    children = []
+    for p, extras in zip(placements, each, strict=True):
+        b.doc.nodes.append(
+            _matrix_node(b.g, p.path.rsplit("/", 1)[-1] or p.path, mi, p.matrix, extras)
+        )
+        children.append(len(b.doc.nodes) - 1)
+    instances = sum(int(p.instanced) for p in placements)
+    if len(children) > 1:  # one group node per shared mesh, holding the common paradata
+        b.doc.nodes.append(
+            b.g.Node(name=f"{name} x{len(children)}", children=children, extras=common)
+        )
+        return _Tally((len(b.doc.nodes) - 1,), drawn, len(children), 0, instances)
+    return _Tally(tuple(children), drawn, len(children), 0, instances)
+
+
+def _gpu_node(b: GltfBuilder, name: str, mi: int, trs: list, extras: dict) -> None:
+    """One ``EXT_mesh_gpu_instancing`` node drawing mesh ``mi`` at each (t, r, s) of ``trs``."""
+    t_arr = np.array([t[0] for t in trs], dtype=np.float32)
+    r_arr = np.array([t[1] for t in trs], dtype=np.float32)
+    s_arr = np.array([t[2] for t in trs], dtype=np.float32)
+    r_arr /= np.linalg.norm(r_arr, axis=1, keepdims=True)
+    ext = {
+        "attributes": {
+            "TRANSLATION": b.accessor(t_arr, "VEC3"),
+            "ROTATION": b.accessor(r_arr, "VEC4"),
+            "SCALE": b.accessor(s_arr, "VEC3"),
+        }
+    }
+    node = b.g.Node(name=name, mesh=mi, extensions={_GPU: ext}, extras=extras)
+    b.used.add(_GPU)
+    b.required.add(_GPU)
+    b.doc.nodes.append(node)
+
+
+def _scene_and_buffer(b: GltfBuilder, scene: Scene, roots: tuple[int, ...], binary: bool) -> None:
+    """The scene (a root node over ``roots``), the extension lists and the one buffer."""
+    g = b.g
     root_name = Path(scene.source).stem
-    b.doc.nodes.append(g.Node(name=root_name, children=roots))
+    b.doc.nodes.append(g.Node(name=root_name, children=list(roots)))
     b.doc.scenes.append(
         g.Scene(
             name=root_name,
@@ -444,26 +505,3 @@ def write_gltf(
     else:
         uri = "data:application/octet-stream;base64," + base64.b64encode(b.blob).decode()
         b.doc.buffers.append(g.Buffer(byteLength=len(b.blob), uri=uri))
-
-    def write(tmp: Path) -> None:
-        if binary:
-            tmp.write_bytes(b"".join(b.doc.save_to_bytes()))
-        else:
-            tmp.write_text(b.doc.gltf_to_json())
-
-    atomic_write(path, write)
-    return GltfReport(
-        path,
-        path.stat().st_size,
-        len(b.doc.meshes),
-        len(b.doc.nodes),
-        len(b.doc.materials),
-        len(b.doc.images),
-        meshes.stored,
-        drawn,
-        draws,
-        gpu_meshes,
-        instances,
-        time.perf_counter() - t0,
-        merged,
-    )

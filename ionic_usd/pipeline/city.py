@@ -17,13 +17,13 @@ built locally, on a cluster, by any number of workers, or taken from the cache.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -31,7 +31,6 @@ from ionic_usd.blueprint.layers import CITY_INSTANCES_LAYER, CITY_ROOT_LAYER
 from ionic_usd.city.layout import (
     Footprint,
     TempleFit,
-    distance_from,
     extra_columns,
     fit_temple,
     lod_by_distance,
@@ -40,9 +39,19 @@ from ionic_usd.city.plan import STOA_BACK, CityPlan, grid_plan, read_geojson
 from ionic_usd.errors import BudgetError, OutputExistsError, ParameterError
 from ionic_usd.io import atomic_write_bytes
 from ionic_usd.pipeline.build import PrototypeCache, build_prototypes
-from ionic_usd.pipeline.city_extras import lay_stoas, street_column_spec, write_stoas_and_ground
-from ionic_usd.pipeline.city_lots import lot_specs
+from ionic_usd.pipeline.city_cards import COLUMN_FINISH, far_cards, far_column_cards
+from ionic_usd.pipeline.city_extras import (
+    StoaPlan,
+    lay_stoas,
+    street_column_spec,
+    write_stoas_and_ground,
+)
+from ionic_usd.pipeline.city_lots import LotSpecs, lot_specs
 from ionic_usd.pipeline.spec import TempleSpec, temple_spec
+
+if TYPE_CHECKING:
+    from ionic_usd.pipeline.build import BuildResult
+    from ionic_usd.usd.city import CityReport
 
 __all__ = [
     "CityOptions",
@@ -72,7 +81,6 @@ _CARD_BAKE = f"cards-v2-{_CARD_LOD}"  # v2: Hydra's face axes (side faces Z-up)
 #: hundred million per frame at a usable frame rate); a city drawing more is warned about
 VIEWER_TRIANGLES = 500_000_000
 # the street columns' finish variant
-_COLUMN_FINISH = "stucco"
 
 
 @dataclass(frozen=True)
@@ -236,14 +244,32 @@ def build_city(
     return summary
 
 
+@dataclass(frozen=True)
+class _Lots:
+    """Step 1: the plan, its builds and each lot's choices (``centre``: the lots' mean)."""
+
+    plan: CityPlan
+    chosen: LotSpecs
+    selections: list[dict[str, str]]
+    centre: Sequence[float] | None
+
+
+@dataclass(frozen=True)
+class _Layout:
+    """Step 2: the temples fitted to their lots, the street columns and stoas, LOD by distance."""
+
+    fits: list[TempleFit]
+    txz: np.ndarray
+    stoas: StoaPlan
+    cxz: np.ndarray
+    cyaw: np.ndarray
+    tlod: np.ndarray | None
+    clod: np.ndarray | None
+
+
 def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | None) -> dict:
-    from ionic_usd.blueprint.layers import ASSET_NAME
-    from ionic_usd.usd.city import (
-        DEFAULT_INSTANCER_THRESHOLD,
-        ColumnInstances,
-        TempleInstances,
-        compose_city,
-    )
+    """Run steps 1-5 into ``out`` and return the summary."""
+    from ionic_usd.usd.city import DEFAULT_INSTANCER_THRESHOLD
 
     t0 = time.perf_counter()
     timings: dict[str, float] = {}
@@ -253,6 +279,62 @@ def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | 
         if opts.instancer_threshold is None
         else opts.instancer_threshold
     )
+    plan, notes = _read_plan(opts)
+    lots = _choose(plan, opts)
+    t1 = time.perf_counter()
+    lay = _lay_out(lots, opts)
+    timings["layout"] = time.perf_counter() - t1
+    est = _check_budget(lots, lay, threshold, opts)
+    t2 = time.perf_counter()
+    needed = lots.chosen.specs or [temple_spec("portunus", texture_size=opts.texture_size)]
+    cache = PrototypeCache(Path(opts.prototype_cache)) if opts.prototype_cache else PrototypeCache()
+    res = build_prototypes(
+        needed, cache=cache, scheduler=opts.scheduler, n_workers=opts.workers, progress=progress
+    )
+    for s in needed:
+        cache.install(s, out / "Temples" / s.folder)
+    timings["build"] = time.perf_counter() - t2
+    t3 = time.perf_counter()
+    street = street_column_spec(needed)
+    cards = _cards(out, opts, lots, lay, street, progress)
+    timings["cards"] = time.perf_counter() - t3
+    t4 = time.perf_counter()
+    extent_pts = [lot.outline for lot in plan.lots] + list(plan.plazas)
+    extent_pts += [np.stack([lay.cxz[:, 0], -lay.cxz[:, 1]], axis=1)]
+    extent_pts += [p.line for p in plan.porticoes]
+    stoa, ground = write_stoas_and_ground(
+        out, plan, lay.stoas, street, opts.column_spacing, np.concatenate(extent_pts)
+    )
+    timings["stoas and ground"] = time.perf_counter() - t4
+    # what the file records depends on the inputs only (not on who built what, or when)
+    summary = {
+        "plan": Path(plan.source).name if opts.plan else "grid",
+        "temples": len(plan.lots),
+        "columns": int(len(lay.cxz)),
+        "columns_dropped_inside_temples": lay.stoas.dropped,
+        "stoa_bays": int(len(lay.stoas.bay_xz)),
+        "stoa_corners": int(len(lay.stoas.corner_xz)),
+        "builds": len(needed),
+        "lots": lots.chosen.choices,
+    }
+    rep = _compose(out, lots, lay, cards, stoa, ground, threshold, summary)
+    timings.update({f"usd {k}": v for k, v in rep.seconds.items()})
+    timings["total"] = time.perf_counter() - t0
+    summary.update(_built_summary(rep, res, opts, cards.note, est, len(plan.lots), len(lay.cxz)))
+    summary["timings"] = {k: round(v, 3) for k, v in timings.items()}
+    most = max(rep.triangles.values(), default=0)
+    if most > VIEWER_TRIANGLES:
+        notes.append(
+            f"warning: the city draws up to {most:,} triangles, past what an interactive "
+            f"viewer draws (about {VIEWER_TRIANGLES:,}): give --focus for LOD by distance "
+            "and cards, or build fewer lots"
+        )
+    summary["notes"] = notes
+    return summary
+
+
+def _read_plan(opts: CityOptions) -> tuple[CityPlan, list[str]]:
+    """The plan (GeoJSON, lots checked apart, or the grid) and the notes it gives rise to."""
     plan: CityPlan = (
         read_geojson(opts.plan)
         if opts.plan
@@ -269,9 +351,12 @@ def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | 
                     f"note: porticus {p.id} is a Polygon: its columns stand along its outline "
                     "(a colonnaded square); give a LineString for a colonnade along a street"
                 )
-    rng = np.random.default_rng(opts.seed)
+    return plan, notes
 
-    # -- 1. builds and per-lot choices -------------------------------------------------------
+
+def _choose(plan: CityPlan, opts: CityOptions) -> _Lots:
+    """Step 1: each lot's build and hypothesis selections (seeded by ``opts.seed``)."""
+    rng = np.random.default_rng(opts.seed)
     centre = np.mean([lot.outline.mean(axis=0) for lot in plan.lots], axis=0) if plan.lots else None
     chosen = lot_specs(plan, opts, centre)
     specs, build = chosen.specs, chosen.build
@@ -280,20 +365,20 @@ def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | 
     for i, lot in enumerate(plan.lots):
         hyps = hyps_of[specs[build[i]].key]
         selections.append(_lot_selection(lot, hyps, rng, opts.variety, plan.source))
+    return _Lots(plan, chosen, selections, centre)
 
-    # -- 2. fitting and colonnades ----------------------------------------------------------
-    t1 = time.perf_counter()
-    fps = [footprint_of(s) for s in specs]
-    fits: list[TempleFit] = []
-    # a grid's lots differ by a translation only: fit one, move the others
+
+def _fit_lots(lots: _Lots, fps: list[Footprint], opts: CityOptions) -> list[TempleFit]:
+    """Fit each lot's temple; a grid's lots differ by a translation only: fit one, move the rest."""
+    build, fits = lots.chosen.build, []
     same_shape: dict[tuple, tuple[TempleFit, np.ndarray]] = {}
-    for i, lot in enumerate(plan.lots):
+    for i, lot in enumerate(lots.plan.lots):
         key = None
         if lot.orientation is not None:
             key = (
                 int(build[i]),
                 lot.orientation,
-                chosen.scale_ranges[i],
+                lots.chosen.scale_ranges[i],
                 (lot.outline - lot.outline[0]).round(9).tobytes(),
             )
         if key is not None and key in same_shape:
@@ -304,99 +389,121 @@ def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | 
         fit = fit_temple(
             lot,
             fps[build[i]],
-            scale_range=chosen.scale_ranges[i] or opts.scale_range,
-            toward=centre,
+            scale_range=lots.chosen.scale_ranges[i] or opts.scale_range,
+            toward=lots.centre,
         )
         if key is not None:
             same_shape[key] = (fit, lot.outline[0])
         fits.append(fit)
+    return fits
+
+
+def _street_columns(
+    stoas: StoaPlan, placed: list[np.ndarray], opts: CityOptions
+) -> tuple[StoaPlan, np.ndarray, np.ndarray]:
+    """The street columns (cut to, or extended south to, ``--columns``; then no stoa bays)."""
+    cxz, cyaw = stoas.column_xz, stoas.column_yaw
+    if opts.columns is None:
+        return stoas, cxz, cyaw
+    stoas = replace(stoas, bay_xz=np.zeros((0, 2)), corner_xz=np.zeros((0, 2)))
+    stoas = replace(stoas, bay_yaw=np.zeros(0), bay_length=np.zeros(0))
+    stoas = replace(stoas, corner_yaw=np.zeros(0), corner_normal=np.zeros((0, 2)))
+    if opts.columns <= len(cxz):
+        return stoas, cxz[: opts.columns], cyaw[: opts.columns]
+    pts = np.concatenate([np.concatenate(placed) * [1, -1] if placed else np.zeros((0, 2)), cxz])
+    bounds = (*pts.min(axis=0), *pts.max(axis=0)) if len(pts) else (0.0, 0.0, 0.0, 0.0)
+    exz, eyaw = extra_columns(opts.columns - len(cxz), bounds, opts.column_spacing)
+    return stoas, np.concatenate([cxz, exz]), np.concatenate([cyaw, eyaw])
+
+
+def _lay_out(lots: _Lots, opts: CityOptions) -> _Layout:
+    """Step 2: fit the temples, lay the stoas and street columns, choose LOD by distance."""
+    build = lots.chosen.build
+    fps = [footprint_of(s) for s in lots.chosen.specs]
+    fits = _fit_lots(lots, fps, opts)
     placed = [f.footprint_plan(fps[build[i]]) for i, f in enumerate(fits)]
-    stoas = lay_stoas(plan, opts.column_spacing, placed, STOA_BACK)
-    cxz, cyaw, dropped = stoas.column_xz, stoas.column_yaw, stoas.dropped
-    if opts.columns is not None:
-        stoas = replace(stoas, bay_xz=np.zeros((0, 2)), corner_xz=np.zeros((0, 2)))
-        stoas = replace(stoas, bay_yaw=np.zeros(0), bay_length=np.zeros(0))
-        stoas = replace(stoas, corner_yaw=np.zeros(0), corner_normal=np.zeros((0, 2)))
-        if opts.columns <= len(cxz):
-            cxz, cyaw = cxz[: opts.columns], cyaw[: opts.columns]
-        else:
-            pts = np.concatenate(
-                [np.concatenate(placed) * [1, -1] if placed else np.zeros((0, 2)), cxz]
-            )
-            bounds = (*pts.min(axis=0), *pts.max(axis=0)) if len(pts) else (0.0, 0.0, 0.0, 0.0)
-            exz, eyaw = extra_columns(opts.columns - len(cxz), bounds, opts.column_spacing)
-            cxz, cyaw = np.concatenate([cxz, exz]), np.concatenate([cyaw, eyaw])
+    stoas = lay_stoas(lots.plan, opts.column_spacing, placed, STOA_BACK)
+    stoas, cxz, cyaw = _street_columns(stoas, placed, opts)
     txz = np.array([[f.x, f.z] for f in fits]).reshape(-1, 2)
     focus = opts.focus
     tlod = lod_by_distance(txz, focus, opts.lod_distances) if focus is not None else None
     clod = lod_by_distance(cxz, focus, opts.lod_distances) if focus is not None else None
-    timings["layout"] = time.perf_counter() - t1
+    return _Layout(fits, txz, stoas, cxz, cyaw, tlod, clod)
 
-    # -- 3. memory estimate ------------------------------------------------------------------
-    est = estimate_memory(len(plan.lots), len(cxz), len(specs), threshold)
+
+def _check_budget(lots: _Lots, lay: _Layout, threshold: int, opts: CityOptions) -> float:
+    """Step 3: refuse a city above ``--max-memory`` or an empty one; returns the estimate."""
+    n = len(lots.plan.lots)
+    est = estimate_memory(n, len(lay.cxz), len(lots.chosen.specs), threshold)
     if est > opts.memory_limit_gb * 1e9:
         raise BudgetError(
-            f"this city needs about {est / 1e9:.1f} GB ({len(plan.lots):,} "
-            f"temples, {len(cxz):,} columns), above --max-memory "
+            f"this city needs about {est / 1e9:.1f} GB ({n:,} "
+            f"temples, {len(lay.cxz):,} columns), above --max-memory "
             f"{opts.memory_limit_gb:g} GB; raise the limit to build it anyway"
         )
-    if not plan.lots and not len(cxz):
+    if not lots.plan.lots and not len(lay.cxz):
         raise ParameterError("city", "empty", "at least one temple or column")
+    return est
 
-    # -- 4. builds ------------------------------------------------------------------------
-    t2 = time.perf_counter()
-    needed = specs or [temple_spec("portunus", texture_size=opts.texture_size)]
-    cache = PrototypeCache(Path(opts.prototype_cache)) if opts.prototype_cache else PrototypeCache()
-    res = build_prototypes(
-        needed, cache=cache, scheduler=opts.scheduler, n_workers=opts.workers, progress=progress
-    )
-    for s in needed:
-        cache.install(s, out / "Temples" / s.folder)
-    timings["build"] = time.perf_counter() - t2
 
-    # -- 4b. cards for the far field -------------------------------------------------------
-    t3 = time.perf_counter()
-    tcards, card_dirs, card_note = _far_cards(out, opts, specs, build, selections, txz, progress)
-    street = street_column_spec(needed)
+@dataclass(frozen=True)
+class _Cards:
+    """Step 4b: which temples and street columns draw as cards, their image folders, the note."""
+
+    temples: np.ndarray | None
+    dirs: dict
+    column_asset: str
+    columns: np.ndarray | None
+    column_dir: str | None
+    note: dict
+
+
+def _cards(
+    out: Path,
+    opts: CityOptions,
+    lots: _Lots,
+    lay: _Layout,
+    street: TempleSpec,
+    progress: Callable[[str], None] | None,
+) -> _Cards:
+    """Step 4b: the far temples' and street columns' cards (baked or reused)."""
+    from ionic_usd.blueprint.layers import ASSET_NAME
+
+    specs, build = lots.chosen.specs, lots.chosen.build
+    tcards, card_dirs, note = far_cards(out, opts, specs, build, lots.selections, lay.txz, progress)
     column_asset = f"Temples/{street.folder}/{ASSET_NAME}/{ASSET_NAME}.usda"
-    ccards, column_card_dir = _far_column_cards(
-        out, opts, street, column_asset, cxz, card_note, progress
+    ccards, column_card_dir = far_column_cards(
+        out, opts, street, column_asset, lay.cxz, note, progress
     )
-    timings["cards"] = time.perf_counter() - t3
+    return _Cards(tcards, card_dirs, column_asset, ccards, column_card_dir, note)
 
-    # -- 5. USD ---------------------------------------------------------------------------
+
+def _compose(
+    out: Path,
+    lots: _Lots,
+    lay: _Layout,
+    cards: _Cards,
+    stoa: tuple | None,
+    ground: tuple | None,
+    threshold: int,
+    summary: dict,
+) -> CityReport:
+    """Step 5: write the city's layers from the instance arrays (``compose_city``)."""
+    from ionic_usd.usd.city import ColumnInstances, TempleInstances, compose_city
+
     temples = TempleInstances(
-        folders=[f"Temples/{s.folder}" for s in specs],
-        build=build,
-        names=[lot.id for lot in plan.lots],
-        xz=txz,
-        yaw=np.array([f.yaw_deg for f in fits]),
-        scale=np.array([f.scale for f in fits]),
-        selections=selections,
-        lod=tlod,
-        cards=tcards,
+        folders=[f"Temples/{s.folder}" for s in lots.chosen.specs],
+        build=lots.chosen.build,
+        names=[lot.id for lot in lots.plan.lots],
+        xz=lay.txz,
+        yaw=np.array([f.yaw_deg for f in lay.fits]),
+        scale=np.array([f.scale for f in lay.fits]),
+        selections=lots.selections,
+        lod=lay.tlod,
+        cards=cards.temples,
     )
-    columns = ColumnInstances(column_asset, cxz, cyaw, clod, ccards)
-    t4 = time.perf_counter()
-    extent_pts = [lot.outline for lot in plan.lots] + list(plan.plazas)
-    extent_pts += [np.stack([cxz[:, 0], -cxz[:, 1]], axis=1)]
-    extent_pts += [p.line for p in plan.porticoes]
-    stoa, ground = write_stoas_and_ground(
-        out, plan, stoas, street, opts.column_spacing, np.concatenate(extent_pts)
-    )
-    timings["stoas and ground"] = time.perf_counter() - t4
-    # what the file records depends on the inputs only (not on who built what, or when)
-    summary = {
-        "plan": Path(plan.source).name if opts.plan else "grid",
-        "temples": len(plan.lots),
-        "columns": int(len(cxz)),
-        "columns_dropped_inside_temples": dropped,
-        "stoa_bays": int(len(stoas.bay_xz)),
-        "stoa_corners": int(len(stoas.corner_xz)),
-        "builds": len(needed),
-        "lots": chosen.choices,
-    }
-    rep = compose_city(
+    columns = ColumnInstances(cards.column_asset, lay.cxz, lay.cyaw, lay.clod, cards.columns)
+    return compose_city(
         out,
         temples,
         columns,
@@ -404,176 +511,41 @@ def _build_city(out: Path, opts: CityOptions, progress: Callable[[str], None] | 
         ground=ground,
         instancer_threshold=threshold,
         summary=summary,
-        card_dirs=card_dirs,
-        finish=_COLUMN_FINISH,
-        column_card_dir=column_card_dir,
+        card_dirs=cards.dirs,
+        finish=COLUMN_FINISH,
+        column_card_dir=cards.column_dir,
         force=True,
     )
-    timings.update({f"usd {k}": v for k, v in rep.seconds.items()})
-    timings["total"] = time.perf_counter() - t0
-    summary.update(
-        {
-            "city": str(rep.path),
-            "prototypes_built": len(res.built),
-            "prototypes_reused": len(res.reused),
-            "workers": list(res.workers),
-            "temples_as": rep.temples_as,
-            "temple_prototypes": rep.temple_prototypes,
-            "column_prototypes": rep.column_prototypes,
-            "unique_prototypes": rep.temple_prototypes + rep.column_prototypes,
-            "instances": len(plan.lots) + int(len(cxz)),
-            "triangles": rep.triangles,
-            "cards": card_note,
-            "extent": [list(rep.extent[0]), list(rep.extent[1])],
-            "memory_estimate_gb": round(est / 1e9, 3),
-            "cluster_workers": res.n_workers,
-            "scheduler": opts.scheduler or ("local" if res.n_workers else "none (all cached)"),
-            "build_task_seconds": res.task_seconds,
-            "timings": {k: round(v, 3) for k, v in timings.items()},
-        }
-    )
-    most = max(rep.triangles.values(), default=0)
-    if most > VIEWER_TRIANGLES:
-        notes.append(
-            f"warning: the city draws up to {most:,} triangles, past what an interactive "
-            f"viewer draws (about {VIEWER_TRIANGLES:,}): give --focus for LOD by distance "
-            "and cards, or build fewer lots"
-        )
-    summary["notes"] = notes
-    return summary
 
 
-def _far_cards(
-    out: Path,
+def _built_summary(
+    rep: CityReport,
+    res: BuildResult,
     opts: CityOptions,
-    specs: list[TempleSpec],
-    build: np.ndarray,
-    selections: list[dict],
-    txz: np.ndarray,
-    progress: Callable[[str], None] | None,
-) -> tuple[np.ndarray | None, dict, dict]:
-    """Which temples draw as cards (beyond ``cards_beyond`` of the focus) and their images.
-
-    One set of six images per temple prototype (build + hypothesis selections), baked by the
-    preview renderer into ``Temples/Cards/<build folder>-<key>/`` where ``key`` hashes what the
-    images depend on, so a rebuild (or another lot of the same prototype) reuses them. Returns
-    ``(cards (n,) bool or None, {(build, selections): folder}, summary note)``.
-    """
-    if opts.focus is None or not opts.cards:
-        return None, {}, {"temples": 0, "why": "no --focus" if opts.cards else "--no-cards"}
-    beyond = opts.cards_beyond if opts.cards_beyond is not None else opts.lod_distances[1]
-    cards = distance_from(txz, opts.focus) > beyond
-    note: dict = {
-        "beyond_m": beyond,
-        "temples": int(cards.sum()),
-        "prototypes": 0,
-        "baked": 0,
-        "reused": 0,
-        "size_px": opts.card_size,
+    card_note: dict,
+    est: float,
+    n: int,
+    m: int,
+) -> dict:
+    """The summary's record of what was built and written (not part of the city's bytes)."""
+    return {
+        "city": str(rep.path),
+        "prototypes_built": len(res.built),
+        "prototypes_reused": len(res.reused),
+        "workers": list(res.workers),
+        "temples_as": rep.temples_as,
+        "temple_prototypes": rep.temple_prototypes,
+        "column_prototypes": rep.column_prototypes,
+        "unique_prototypes": rep.temple_prototypes + rep.column_prototypes,
+        "instances": n + int(m),
+        "triangles": rep.triangles,
+        "cards": card_note,
+        "extent": [list(rep.extent[0]), list(rep.extent[1])],
+        "memory_estimate_gb": round(est / 1e9, 3),
+        "cluster_workers": res.n_workers,
+        "scheduler": opts.scheduler or ("local" if res.n_workers else "none (all cached)"),
+        "build_task_seconds": res.task_seconds,
     }
-    if not cards.any():
-        return None, {}, note
-    from ionic_usd.preview import PreviewUnavailableError, bake_cards
-    from ionic_usd.usd.city_prototypes import (
-        temple_card_bound,
-        temple_selection,
-        temple_variant_sets,
-    )
-    from ionic_usd.usd.draw_mode import CARD_FACES
-
-    dirs: dict[tuple, str] = {}
-    vsets: dict[int, dict] = {}
-    for i in np.flatnonzero(cards):
-        b = int(build[i])
-        root = out / "Temples" / specs[b].folder / "Temple.usda"
-        if b not in vsets:
-            vsets[b] = temple_variant_sets(root)
-        sel = temple_selection(vsets[b], selections[i])
-        key = (b, tuple(sorted(sel.items())))
-        if key in dirs:
-            continue
-        digest = hashlib.blake2b(
-            json.dumps([specs[b].key, key[1], opts.card_size, _CARD_BAKE]).encode(), digest_size=8
-        ).hexdigest()
-        rel = f"Temples/Cards/{specs[b].folder}-{digest}"
-        if all((out / rel / f"{f}.png").is_file() for f in CARD_FACES):
-            note["reused"] += 1
-        else:
-            try:
-                bake_sel = temple_selection(vsets[b], selections[i], _CARD_LOD)
-                bake_cards(
-                    root,
-                    out / rel,
-                    temple_card_bound(root, sel),
-                    variants=bake_sel,
-                    size=opts.card_size,
-                )
-            except PreviewUnavailableError as exc:
-                if opts.cards_beyond is not None:
-                    raise  # asked for by name: say why it cannot be done
-                if progress:
-                    progress(f"far temples drawn in full: cannot bake cards ({exc})")
-                return None, {}, {"temples": 0, "why": f"no renderer: {exc}"}
-            note["baked"] += 1
-            if progress:
-                progress(f"baked cards {rel}")
-        dirs[key] = rel
-    note["prototypes"] = len(dirs)
-    return cards, dirs, note
-
-
-def _far_column_cards(
-    out: Path,
-    opts: CityOptions,
-    spec: TempleSpec,
-    asset: str,
-    cxz: np.ndarray,
-    note: dict,
-    progress: Callable[[str], None] | None,
-) -> tuple[np.ndarray | None, str | None]:
-    """Which street columns draw as cards (beyond the temples' card distance from the focus)
-    and the folder of the column's six images, baked once by the preview renderer from the
-    column asset at :data:`ionic_usd.usd.city.COLUMN_CARD_SELECTION` into
-    ``Temples/Cards/<asset>-<key>/`` (content-addressed like the temples'). Records
-    ``columns`` (far columns), ``column_baked`` / ``column_reused`` in ``note``. Returns
-    ``(cards (m,) bool or None, folder or None)``."""
-    if opts.focus is None or not opts.cards or not len(cxz) or note.get("why"):
-        return None, None
-    beyond = opts.cards_beyond if opts.cards_beyond is not None else opts.lod_distances[1]
-    cards = distance_from(cxz, opts.focus) > beyond
-    note.update(
-        {"beyond_m": beyond, "columns": int(cards.sum()), "column_baked": 0, "column_reused": 0}
-    )
-    if not cards.any():
-        return None, None
-    from ionic_usd.preview import PreviewUnavailableError, bake_cards
-    from ionic_usd.usd.city import COLUMN_CARD_SELECTION
-    from ionic_usd.usd.city_prototypes import model_card_bound
-    from ionic_usd.usd.draw_mode import CARD_FACES
-
-    sel = {**COLUMN_CARD_SELECTION, "finish": _COLUMN_FINISH}
-    digest = hashlib.blake2b(
-        json.dumps([spec.key, "column", sorted(sel.items()), opts.card_size, _CARD_BAKE]).encode(),
-        digest_size=8,
-    ).hexdigest()
-    rel = f"Temples/Cards/{Path(asset).stem}-{digest}"
-    if all((out / rel / f"{f}.png").is_file() for f in CARD_FACES):
-        note["column_reused"] = 1
-        return cards, rel
-    root = out / asset
-    try:
-        bake_cards(root, out / rel, model_card_bound(root, sel), variants=sel, size=opts.card_size)
-    except PreviewUnavailableError as exc:
-        if opts.cards_beyond is not None:
-            raise
-        if progress:
-            progress(f"far columns drawn in full: cannot bake cards ({exc})")
-        note["columns"] = 0
-        return None, None
-    note["column_baked"] = 1
-    if progress:
-        progress(f"baked cards {rel}")
-    return cards, rel
 
 
 def write_summary(summary: dict, path: str | os.PathLike) -> None:

@@ -40,13 +40,21 @@ from pxr import Gf, Sdf, Usd, Vt
 
 from ionic_usd.blueprint.layers import CITY_INSTANCES_LAYER, CITY_ROOT_LAYER
 from ionic_usd.city.layout import DEFAULT_INSTANCER_THRESHOLD, yaw_quaternions
-from ionic_usd.errors import OutputExistsError, ParameterError, UsdAuthoringError
+from ionic_usd.errors import OutputExistsError, ParameterError
 from ionic_usd.lod import LOD_NAMES
+from ionic_usd.usd.city_instances import (
+    CARD_TRIANGLES,
+    COLUMN_CARD_SELECTION,
+    ColumnPrototypes,
+    TemplePrototypes,
+    city_triangles,
+    column_prototypes,
+    default_render,
+    temple_prototypes,
+)
 from ionic_usd.usd.city_prototypes import (
     instance_bounds,
     prim_identifier,
-    prototype_purpose_stats,
-    prototype_stats,
     purpose_bounds,
     temple_selection,
     temple_variant_sets,
@@ -69,14 +77,8 @@ __all__ = [
     "COLUMN_CARD_SELECTION",
 ]
 
-#: triangles of a box of cards as a renderer draws it: six quads
-CARD_TRIANGLES = 12
-
 ROOT_LAYER = CITY_ROOT_LAYER
 INSTANCES_LAYER = CITY_INSTANCES_LAYER
-#: the variant selections of the street columns' card prototype (besides ``finish``): what a
-#: consumer that ignores draw modes draws for a far column, and what its cards are baked from
-COLUMN_CARD_SELECTION = {"lod": "low", "form": "full"}
 _T = Sdf.ValueTypeNames
 
 
@@ -167,13 +169,6 @@ def _arc(spec: Sdf.PrimSpec, ref: str) -> None:
         spec.payloadList.Prepend(Sdf.Payload(ref))
     else:
         spec.referenceList.Prepend(Sdf.Reference(ref))
-
-
-def _default_render(lo4: np.ndarray, hi4: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    ok = [k for k in (0, 1) if np.all(lo4[k] <= hi4[k])]
-    if not ok:
-        return np.zeros(3), np.zeros(3)
-    return lo4[ok].min(axis=0), hi4[ok].max(axis=0)
 
 
 def _as_default(ext: tuple[np.ndarray, np.ndarray], n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -280,181 +275,172 @@ def compose_city(
     t0 = time.perf_counter()
     folder = Path(folder)
     root_path, body_path = folder / ROOT_LAYER, folder / INSTANCES_LAYER
+    _check_outputs((root_path, body_path), force, instancer_threshold)
+    secs: dict[str, float] = {}
+    t1 = time.perf_counter()
+    tp = temple_prototypes(folder, temples, card_dirs)
+    cp = column_prototypes(folder, columns, finish, column_card_dir)
+    secs["prototype stats"] = time.perf_counter() - t1
+    t2 = time.perf_counter()
+    placed = _Placed(
+        temples,
+        columns,
+        tp,
+        cp,
+        as_instancer=len(temples) > instancer_threshold,
+        t_ext=instance_bounds(tp.lo, tp.hi, tp.of, temples.xz, temples.yaw, temples.scale),
+        c_ext=instance_bounds(cp.lo, cp.hi, cp.index, columns.xz, columns.yaw, None),
+    )
+    body = new_layer("City", kind="assembly")
+    with Sdf.ChangeBlock():
+        _group(body, "/City/Temples")
+        _author_temples(body, placed, card_dirs)
+        _author_columns(body, placed, finish, column_card_dir)
+        extra_tris, extra_ext = _stoa_and_ground(body, stoa, ground)
+    lo4, hi4 = _city_bounds(placed, extra_ext)
+    root = _root_layer(lo4, hi4)
+    triangles = city_triangles(temples, columns, tp, cp, extra_tris)
+    if summary is not None:
+        root.GetPrimAtPath("/City").customData = {"ionic_usd": _vt_dict(summary)}
+    secs["author"] = time.perf_counter() - t2
+    t3 = time.perf_counter()
+    folder.mkdir(parents=True, exist_ok=True)
+    save_layer(body, body_path, force=True)
+    save_layer(root, root_path, force=True)
+    secs["save"] = time.perf_counter() - t3
+    secs["total"] = time.perf_counter() - t0
+    lo, hi = default_render(lo4, hi4)
+    return CityReport(
+        root_path,
+        len(temples),
+        len(tp.keys),
+        len(temples.folders),
+        len(columns),
+        cp.count if len(columns) else 0,
+        "point-instancer" if placed.as_instancer else "references",
+        triangles,
+        (tuple(map(float, lo)), tuple(map(float, hi))),
+        secs,
+    )
+
+
+@dataclass(frozen=True)
+class _Placed:
+    """The instances with their prototypes and placed bounds, as the authoring steps read them."""
+
+    temples: TempleInstances
+    columns: ColumnInstances
+    tp: TemplePrototypes
+    cp: ColumnPrototypes
+    as_instancer: bool
+    t_ext: tuple[np.ndarray, np.ndarray]
+    c_ext: tuple[np.ndarray, np.ndarray]
+
+
+def _check_outputs(paths: Sequence[Path], force: bool, instancer_threshold: object) -> None:
+    """Refuse existing output layers (without ``force``) and a bad instancer threshold."""
     if not force:
-        for p in (root_path, body_path):
+        for p in paths:
             if p.exists():
                 raise OutputExistsError(f"{p} exists; pass --force to overwrite it")
     if not isinstance(instancer_threshold, int) or instancer_threshold < 0:
         raise ParameterError("instancer threshold", instancer_threshold, "an integer >= 0")
-    secs: dict[str, float] = {}
 
-    # -- temple prototypes: unique (build, realised selections, lod) ---------------------------
-    vsets = [temple_variant_sets(folder / f / "Temple.usda") for f in temples.folders]
-    keys: dict[tuple, int] = {}
-    proto_of = np.zeros(len(temples), dtype=np.int32)
+
+def _author_temples(
+    body: Sdf.Layer, placed: _Placed, card_dirs: Mapping[tuple[int, tuple], str] | None
+) -> None:
+    """Author the temples under ``/City/Temples``: one PointInstancer, or a payload each."""
+    temples, protos = placed.temples, placed.tp.keys
+    refs = [f"./{temples.folders[b]}/Temple.usda" for b, _, _ in protos]
+    dirs = [card_dirs[(b, sel)] if card and card_dirs else None for b, sel, card in protos]
+    if placed.as_instancer:
+        _instancer(
+            body,
+            "/City/Temples/Field",
+            [(f"Temple_{k}", refs[k], dict(sel), dirs[k]) for k, (_, sel, _) in enumerate(protos)],
+            placed.tp.of,
+            temples.xz,
+            temples.yaw,
+            temples.scale,
+            placed.t_ext,
+        )
+        return
+    used: set[str] = set()
     for i in range(len(temples)):
-        b = int(temples.build[i])
-        card = temples.cards is not None and bool(temples.cards[i])
-        lod = LOD_NAMES[int(temples.lod[i])] if temples.lod is not None and not card else None
-        sel = temple_selection(vsets[b], temples.selections[i], lod)
-        key = (b, tuple(sorted(sel.items())), card)
-        if card and (card_dirs is None or key[:2] not in card_dirs):
-            raise ParameterError(
-                "card images",
-                f"temple {temples.names[i]}",
-                "a folder of baked cards for every temple drawn as cards (card_dirs)",
-            )
-        proto_of[i] = keys.setdefault(key, len(keys))
-    protos = list(keys)
-
-    # per-prototype bounds and triangles, from each build's own stage (not the city)
-    t1 = time.perf_counter()
-    tlo, thi = np.zeros((len(protos), 3)), np.zeros((len(protos), 3))
-    tlo4, thi4 = np.zeros((len(protos), 4, 3)), np.zeros((len(protos), 4, 3))
-    ttri: dict[str, np.ndarray] = {
-        s: np.zeros(len(protos), dtype=np.int64) for s in ("as authored", *LOD_NAMES)
-    }
-    stages: dict[int, Usd.Stage] = {}
-    for k, (b, sel, card) in enumerate(protos):
-        stage = stages.get(b) or Usd.Stage.Open(str(folder / temples.folders[b] / "Temple.usda"))
-        stages[b] = stage
-        tlo4[k], thi4[k], ttri["as authored"][k] = prototype_purpose_stats(
-            stage, "/Temple", dict(sel)
+        name = prim_identifier(f"Temple_{temples.names[i]}")
+        while name in used:
+            name += "_"
+        used.add(name)
+        spec = Sdf.CreatePrimInLayer(body, f"/City/Temples/{name}")
+        spec.specifier, spec.typeName = Sdf.SpecifierDef, "Xform"
+        spec.instanceable = True
+        k = int(placed.tp.of[i])
+        spec.payloadList.Prepend(Sdf.Payload(refs[k]))  # a temple loads on demand
+        for vs, v in protos[k][1]:
+            spec.variantSelections[vs] = v
+        if dirs[k] is not None:
+            _cards(spec, dirs[k])  # type: ignore[arg-type]
+        _set_xform(
+            spec,
+            float(temples.xz[i, 0]),
+            float(temples.xz[i, 1]),
+            float(temples.yaw[i]),
+            float(temples.scale[i]),
         )
-        lo, hi = _default_render(tlo4[k], thi4[k])
-        if card:  # a box of cards stands in for the temple
-            ttri["as authored"][k] = CARD_TRIANGLES
-        tlo[k], thi[k] = lo, hi
-        for lod in LOD_NAMES:
-            if "lod" in vsets[b]:
-                ttri[lod][k] = prototype_stats(stage, "/Temple", {**dict(sel), "lod": lod})[2]
-            else:  # before the temple has a lod set its columns draw as authored
-                ttri[lod][k] = prototype_stats(stage, "/Temple", dict(sel))[2]
-    # the street columns' prototypes: the column asset at each LOD used by a near column,
-    # then (index len(col_lods)) the card prototype for the far ones
-    ccard = (
-        np.zeros(len(columns), dtype=bool)
-        if columns.cards is None
-        else np.asarray(columns.cards, dtype=bool)
-    )
-    if ccard.shape != (len(columns),):
-        raise ParameterError("column cards", ccard.shape, f"({len(columns)},) bools")
-    if ccard.any() and not column_card_dir:
-        raise ParameterError(
-            "column card images",
-            "none",
-            "a folder of baked cards for the far street columns (column_card_dir)",
-        )
-    near_lod = (
-        np.asarray(columns.lod)[~ccard]
-        if columns.lod is not None
-        else np.full(int((~ccard).sum()), 2)
-    )
-    col_lods = sorted(set(np.unique(near_lod).tolist()))
-    cidx = np.full(len(columns), len(col_lods), dtype=np.int32)
-    cidx[~ccard] = np.searchsorted(col_lods, near_lod).astype(np.int32)
-    card_li = LOD_NAMES.index(COLUMN_CARD_SELECTION["lod"])
-    box_lods = col_lods + ([card_li] if ccard.any() else [])
-    clo, chi = np.zeros((len(box_lods), 3)), np.zeros((len(box_lods), 3))
-    clo4, chi4 = np.zeros((len(box_lods), 4, 3)), np.zeros((len(box_lods), 4, 3))
-    col_tri = {}
-    if len(columns):
-        cstage = Usd.Stage.Open(str(folder / columns.asset))
-        if cstage is None:
-            raise UsdAuthoringError(f"cannot open the column asset {folder / columns.asset}")
-        root = str(cstage.GetDefaultPrim().GetPath())
-        for k, li in enumerate(box_lods):
-            clo4[k], chi4[k], _ = prototype_purpose_stats(
-                cstage, root, {"lod": LOD_NAMES[li], "form": "full", "finish": finish}
-            )
-            clo[k], chi[k] = _default_render(clo4[k], chi4[k])
-        for lod in LOD_NAMES:
-            col_tri[lod] = prototype_stats(
-                cstage, root, {"lod": lod, "form": "full", "finish": finish}
-            )[2]
-    secs["prototype stats"] = time.perf_counter() - t1
 
-    # -- author ----------------------------------------------------------------------------------
-    t2 = time.perf_counter()
-    as_instancer = len(temples) > instancer_threshold
-    t_ext = instance_bounds(tlo, thi, proto_of, temples.xz, temples.yaw, temples.scale)
-    c_ext = instance_bounds(clo, chi, cidx, columns.xz, columns.yaw, None)
-    body = new_layer("City", kind="assembly")
-    with Sdf.ChangeBlock():
-        _group(body, "/City/Temples")
-        refs = [f"./{temples.folders[b]}/Temple.usda" for b, _, _ in protos]
-        dirs = [card_dirs[(b, sel)] if card and card_dirs else None for b, sel, card in protos]
-        if as_instancer:
-            _instancer(
-                body,
-                "/City/Temples/Field",
-                [
-                    (f"Temple_{k}", refs[k], dict(sel), dirs[k])
-                    for k, (_, sel, _) in enumerate(protos)
-                ],
-                proto_of,
-                temples.xz,
-                temples.yaw,
-                temples.scale,
-                t_ext,
+
+def _author_columns(
+    body: Sdf.Layer, placed: _Placed, finish: str, column_card_dir: str | None
+) -> None:
+    """Author the street columns' PointInstancer ``/City/Porticus`` (nothing without columns)."""
+    columns, cp = placed.columns, placed.cp
+    if not len(columns):
+        return
+    cprotos: list[tuple[str, str, dict[str, str], str | None]] = [
+        (
+            f"Column_{LOD_NAMES[li]}",
+            f"./{columns.asset}",
+            {"lod": LOD_NAMES[li], "form": "full", "finish": finish},
+            None,
+        )
+        for li in cp.lods
+    ]
+    if cp.card.any():
+        cprotos.append(
+            (
+                "Column_cards",
+                f"./{columns.asset}",
+                {**COLUMN_CARD_SELECTION, "finish": finish},
+                column_card_dir,
             )
-        else:
-            used: set[str] = set()
-            for i in range(len(temples)):
-                name = prim_identifier(f"Temple_{temples.names[i]}")
-                while name in used:
-                    name += "_"
-                used.add(name)
-                spec = Sdf.CreatePrimInLayer(body, f"/City/Temples/{name}")
-                spec.specifier, spec.typeName = Sdf.SpecifierDef, "Xform"
-                spec.instanceable = True
-                k = int(proto_of[i])
-                spec.payloadList.Prepend(Sdf.Payload(refs[k]))  # a temple loads on demand
-                for vs, v in protos[k][1]:
-                    spec.variantSelections[vs] = v
-                if dirs[k] is not None:
-                    _cards(spec, dirs[k])  # type: ignore[arg-type]
-                _set_xform(
-                    spec,
-                    float(temples.xz[i, 0]),
-                    float(temples.xz[i, 1]),
-                    float(temples.yaw[i]),
-                    float(temples.scale[i]),
-                )
-        if len(columns):
-            cprotos: list[tuple[str, str, dict[str, str], str | None]] = [
-                (
-                    f"Column_{LOD_NAMES[li]}",
-                    f"./{columns.asset}",
-                    {"lod": LOD_NAMES[li], "form": "full", "finish": finish},
-                    None,
-                )
-                for li in col_lods
-            ]
-            if ccard.any():
-                cprotos.append(
-                    (
-                        "Column_cards",
-                        f"./{columns.asset}",
-                        {**COLUMN_CARD_SELECTION, "finish": finish},
-                        column_card_dir,
-                    )
-                )
-            _instancer(body, "/City/Porticus", cprotos, cidx, columns.xz, columns.yaw, None, c_ext)
-        extra_tris = _stoa_and_ground(body, stoa, ground)
-    # the city's extentsHint per purpose (default, render, proxy, guide), as BBoxCache with
-    # useExtentsHint reads it: the union of the placed prototypes' bounds of that purpose
-    # (a PointInstancer is bounded by its authored extent, which counts for its own purpose,
-    # default: the street columns and a field of temples enter the default range)
-    c4 = _as_default(c_ext, len(columns))
-    if as_instancer:
-        t4 = _as_default(t_ext, len(temples))
+        )
+    _instancer(
+        body, "/City/Porticus", cprotos, cp.index, columns.xz, columns.yaw, None, placed.c_ext
+    )
+
+
+def _city_bounds(
+    placed: _Placed, extra: list[tuple[np.ndarray, np.ndarray]]
+) -> tuple[np.ndarray, np.ndarray]:
+    """The city's bounds per purpose (default, render, proxy, guide), as BBoxCache with
+    useExtentsHint reads them: the union of the placed prototypes' bounds of that purpose."""
+    # a PointInstancer is bounded by its authored extent, which counts for its own purpose,
+    # default: the street columns and a field of temples enter the default range
+    temples, tp = placed.temples, placed.tp
+    c4 = _as_default(placed.c_ext, len(placed.columns))
+    if placed.as_instancer:
+        t4 = _as_default(placed.t_ext, len(temples))
     else:
-        t4 = purpose_bounds(tlo4, thi4, proto_of, temples.xz, temples.yaw, temples.scale)
+        t4 = purpose_bounds(tp.lo4, tp.hi4, tp.of, temples.xz, temples.yaw, temples.scale)
     lo4, hi4 = np.minimum(t4[0], c4[0]), np.maximum(t4[1], c4[1])
-    for elo, ehi in extra_tris[1]:  # the stoas' instancer and the ground: default purpose
+    for elo, ehi in extra:  # the stoas' instancer and the ground: default purpose
         lo4[0], hi4[0] = np.minimum(lo4[0], elo), np.maximum(hi4[0], ehi)
-    lo, hi = _default_render(lo4, hi4)
+    return lo4, hi4
+
+
+def _root_layer(lo4: np.ndarray, hi4: np.ndarray) -> Sdf.Layer:
+    """The root layer ``City.usda``: /City sublayering the instances, with its extentsHint."""
     root = new_layer(
         "City",
         kind="assembly",
@@ -466,72 +452,7 @@ def compose_city(
     Sdf.AttributeSpec(
         city, "extentsHint", _T.Float3Array, Sdf.VariabilityUniform
     ).default = _extents_hint(lo4, hi4)
-    counts = np.bincount(proto_of, minlength=len(protos))
-    ccounts = np.bincount(cidx[~ccard], minlength=len(col_lods))
-    triangles = {}
-    for s in ("as authored", *LOD_NAMES):
-        if not len(columns):
-            col = 0
-        elif s == "as authored":
-            col = int(
-                sum(
-                    col_tri[LOD_NAMES[li]] * int(c) for li, c in zip(col_lods, ccounts, strict=True)
-                )
-            )
-            col += CARD_TRIANGLES * int(ccard.sum())
-        else:
-            col = col_tri[s] * len(columns)
-        triangles[s] = int(np.dot(counts, ttri[s])) + col + extra_tris[0]
-    far_t = temples.cards is not None and bool(np.any(temples.cards))
-    if far_t or ccard.any():
-        # the same city with each card temple and column at its LOD by distance instead
-        instead = 0
-        if ccard.any():
-            clods = (
-                np.asarray(columns.lod)[ccard]
-                if columns.lod is not None
-                else np.full(int(ccard.sum()), 2)
-            )
-            per_lod = np.bincount(clods.astype(np.int64), minlength=len(LOD_NAMES))
-            instead += int(
-                sum(col_tri[name] * int(c) for name, c in zip(LOD_NAMES, per_lod, strict=True))
-            )
-        triangles["without cards"] = (
-            triangles["as authored"] + instead - CARD_TRIANGLES * int(ccard.sum())
-        )
-    if far_t and temples.cards is not None:
-        # the same city with each card temple at its LOD by distance instead of its cards
-        far = np.flatnonzero(temples.cards)
-        lods = (
-            np.asarray(temples.lod)[far]
-            if temples.lod is not None
-            else np.zeros(len(far), dtype=np.int8)
-        )
-        instead = sum(
-            int(ttri[LOD_NAMES[int(li)]][proto_of[i]]) for i, li in zip(far, lods, strict=True)
-        )
-        triangles["without cards"] += instead - CARD_TRIANGLES * len(far)
-    if summary is not None:
-        city.customData = {"ionic_usd": _vt_dict(summary)}
-    secs["author"] = time.perf_counter() - t2
-    t3 = time.perf_counter()
-    folder.mkdir(parents=True, exist_ok=True)
-    save_layer(body, body_path, force=True)
-    save_layer(root, root_path, force=True)
-    secs["save"] = time.perf_counter() - t3
-    secs["total"] = time.perf_counter() - t0
-    return CityReport(
-        root_path,
-        len(temples),
-        len(protos),
-        len(temples.folders),
-        len(columns),
-        len(col_lods) + int(ccard.any()) if len(columns) else 0,
-        "point-instancer" if as_instancer else "references",
-        triangles,
-        (tuple(map(float, lo)), tuple(map(float, hi))),
-        secs,
-    )
+    return root
 
 
 def _stoa_and_ground(body: Sdf.Layer, stoa: tuple | None, ground: tuple | None) -> tuple:
