@@ -17,7 +17,7 @@ from ionic_usd.errors import ParameterError, UsdAuthoringError
 from ionic_usd.lod import LOD_NAMES
 from ionic_usd.usd.city_prototypes import (
     prototype_purpose_stats,
-    prototype_stats,
+    prototype_triangles,
     temple_selection,
     temple_variant_sets,
 )
@@ -138,9 +138,9 @@ def temple_prototypes(
         tlo[k], thi[k] = lo, hi
         for lod in LOD_NAMES:
             if "lod" in vsets[b]:
-                ttri[lod][k] = prototype_stats(stage, "/Temple", {**dict(sel), "lod": lod})[2]
+                ttri[lod][k] = prototype_triangles(stage, "/Temple", {**dict(sel), "lod": lod})
             else:  # before the temple has a lod set its columns draw as authored
-                ttri[lod][k] = prototype_stats(stage, "/Temple", dict(sel))[2]
+                ttri[lod][k] = prototype_triangles(stage, "/Temple", dict(sel))
     return TemplePrototypes(protos, proto_of, tlo, thi, tlo4, thi4, ttri)
 
 
@@ -192,9 +192,9 @@ def column_prototypes(
             )
             clo[k], chi[k] = default_render(lo4, hi4)
         for lod in LOD_NAMES:
-            col_tri[lod] = prototype_stats(
+            col_tri[lod] = prototype_triangles(
                 cstage, root, {"lod": lod, "form": "full", "finish": finish}
-            )[2]
+            )
     return ColumnPrototypes(ccard, col_lods, cidx, clo, chi, col_tri)
 
 
