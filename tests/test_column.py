@@ -164,3 +164,12 @@ def test_a_base_is_a_preset_by_name_else_a_grammar():
     with pytest.raises(GrammarError) as gerr:
         ColumnParams(base="R0.1 H0.1 C1 Q")
     assert gerr.value.offset == 13
+
+
+def test_the_base_flag_names_every_shipped_preset(capsys):
+    from ionic_usd.column.base import base_preset_names
+
+    with pytest.raises(SystemExit):
+        main(["column", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert all(name in text for name in base_preset_names()), text

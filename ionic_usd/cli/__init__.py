@@ -101,7 +101,8 @@ def _add_column(sub: Any, full: bool) -> None:
     p.add_argument("--lod", help="level of detail: high, medium, low or custom")
     p.add_argument(
         "--base",
-        help="base preset (G1, G2, attic_bezier, attic_bezier_plinth) or a base grammar string",
+        help="a shipped base preset by name (G1, G2, attic_bezier, attic_bezier_plinth, "
+        "ephesian); any other text is read as a base grammar ('R0.12 H0.05 C1 R0.12, …')",
     )
     p.add_argument("--scroll", help="scroll preset (S1, S2) or ring grammar 'R0.7 P0.05, …'")
     add_memory_flag(p)
