@@ -432,7 +432,7 @@ def column_params_to_tables(p: ColumnParams) -> dict[str, dict]:
             if f.name.startswith("_"):
                 continue
             v = getattr(obj, f.name)
-            if dataclasses.is_dataclass(v) or v == ():  # () : unset (a volute's free chain)
+            if dataclasses.is_dataclass(v) or (isinstance(v, tuple) and not v):  # () : unset
                 continue
             out[f.name] = v if not hasattr(v, "to_string") else v.to_string()
         return out
