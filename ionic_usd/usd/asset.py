@@ -22,10 +22,10 @@ changes what is under the paths of the parts it tags, never a path.
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from pathlib import Path
 
-from pxr import Sdf, Usd, Vt
+from pxr import Sdf, Usd
 
 from ionic_usd.blueprint.asset import AssetInstancer, AssetMesh, AssetSpec
 from ionic_usd.usd.asset_slots import (
@@ -42,7 +42,7 @@ from ionic_usd.usd.materials import (
     bind_material_spec,
 )
 from ionic_usd.usd.mesh import author_mesh
-from ionic_usd.usd.stage import new_layer, save_layer
+from ionic_usd.usd.stage import new_layer, save_layer, vt_dictionary
 
 __all__ = [
     "AssetMesh",
@@ -125,7 +125,7 @@ def _interface_layer(spec: AssetSpec) -> Sdf.Layer:
     }
     root.payloadList.Prepend(Sdf.Payload("./Payload/Contents.usda"))
     if spec.custom_data:
-        root.customData = _vt_dictionary(spec.custom_data)
+        root.customData = vt_dictionary(spec.custom_data)
     if spec.documentation:
         root.documentation = spec.documentation
     with Sdf.ChangeBlock():
@@ -242,19 +242,3 @@ def write_asset(
         record=None if key is None else (lambda _: dict(record or {})),
     )
     return dest / f"{spec.name}.usda"
-
-
-def _vt_dictionary(d: Mapping) -> dict:
-    """A description's customData as USD takes it: nested dictionaries as they are, a list of
-    numbers (a volute's free chain of arcs) as a ``double[]``."""
-    out: dict = {}
-    for k, v in d.items():
-        if isinstance(v, Mapping):
-            out[k] = _vt_dictionary(v)
-        elif isinstance(v, tuple | list) and all(
-            isinstance(x, int | float) and not isinstance(x, bool) for x in v
-        ):
-            out[k] = Vt.DoubleArray([float(x) for x in v])
-        else:
-            out[k] = v
-    return out

@@ -60,7 +60,7 @@ from ionic_usd.usd.city_prototypes import (
     temple_variant_sets,
 )
 from ionic_usd.usd.draw_mode import CARD_FACES, author_cards
-from ionic_usd.usd.stage import new_layer, save_layer
+from ionic_usd.usd.stage import new_layer, save_layer, vt_dictionary
 
 __all__ = [
     "CityReport",
@@ -301,7 +301,7 @@ def compose_city(
     root = _root_layer(lo4, hi4)
     triangles = city_triangles(temples, columns, tp, cp, extra_tris)
     if summary is not None:
-        root.GetPrimAtPath("/City").customData = {"ionic_usd": _vt_dict(summary)}
+        root.GetPrimAtPath("/City").customData = {"ionic_usd": vt_dictionary(summary)}
     secs["author"] = time.perf_counter() - t2
     t3 = time.perf_counter()
     folder.mkdir(parents=True, exist_ok=True)
@@ -469,24 +469,6 @@ def _stoa_and_ground(body: Sdf.Layer, stoa: tuple | None, ground: tuple | None) 
         tris += int(ground[1])
         extents.append((np.asarray(ground[2]), np.asarray(ground[3])))
     return tris, extents
-
-
-def _vt_dict(d: Mapping) -> dict:
-    """A JSON-like mapping as USD customData (lists of strings/numbers as arrays)."""
-    out: dict = {}
-    for k, v in d.items():
-        if isinstance(v, Mapping):
-            out[str(k)] = _vt_dict(v)
-        elif isinstance(v, (list, tuple)):
-            if any(isinstance(x, Mapping) for x in v):
-                continue  # per-lot records stay in the JSON summary
-            if all(isinstance(x, str) for x in v):
-                out[str(k)] = Vt.StringArray([str(x) for x in v])
-            else:
-                out[str(k)] = Vt.DoubleArray([float(x) for x in v])
-        elif isinstance(v, bool) or isinstance(v, (int, float, str)):
-            out[str(k)] = v
-    return out
 
 
 def load_region(stage: Usd.Stage, lo: Sequence[float], hi: Sequence[float]) -> list[str]:

@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import os
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 
-from pxr import Kind, Sdf, Usd, UsdGeom
+from pxr import Kind, Sdf, Usd, UsdGeom, Vt
 
 from ionic_usd.errors import ParameterError, UsdAuthoringError
 
@@ -19,6 +19,7 @@ __all__ = [
     "check_output_path",
     "validate_stage",
     "ensure_typed_ancestors",
+    "vt_dictionary",
 ]
 
 USD_EXTENSIONS = (".usda", ".usdc", ".usd")
@@ -195,3 +196,23 @@ def model_kind(prim: Usd.Prim) -> str:
 
 
 _ = (Kind, UsdGeom)
+
+
+def vt_dictionary(d: Mapping) -> dict:
+    """A JSON-like mapping as USD customData: nested mappings as dictionaries, lists of
+    strings or numbers as ``string[]`` / ``double[]``; lists of records and values of other
+    types (``None``) are left out."""
+    out: dict = {}
+    for k, v in d.items():
+        if isinstance(v, Mapping):
+            out[str(k)] = vt_dictionary(v)
+        elif isinstance(v, (list, tuple)):
+            if any(isinstance(x, Mapping) for x in v):
+                continue  # per-lot records stay in the JSON summary
+            if all(isinstance(x, str) for x in v):
+                out[str(k)] = Vt.StringArray([str(x) for x in v])
+            else:
+                out[str(k)] = Vt.DoubleArray([float(x) for x in v])
+        elif isinstance(v, bool) or isinstance(v, (int, float, str)):
+            out[str(k)] = v
+    return out
