@@ -49,7 +49,7 @@ from __future__ import annotations
 
 import logging
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -57,6 +57,7 @@ from pxr import Sdf, Usd
 
 from ionic_usd import __version__
 from ionic_usd.blueprint.column_asset import FINISHES, ColumnAssetOptions
+from ionic_usd.blueprint.hypotheses import HypothesisChanges
 from ionic_usd.blueprint.layers import (
     ASSET_NAME,
     COLONNADE_LAYER,
@@ -137,14 +138,17 @@ def _finish_materials() -> dict[str, str]:
 
 
 def hypothesis_layers(
-    layout: TempleLayout, opts: ColumnAssetOptions | None = None
+    layout: TempleLayout,
+    opts: ColumnAssetOptions | None = None,
+    changes: Mapping[str, HypothesisChanges] | None = None,
 ) -> dict[str, Sdf.Layer | None]:
     """Hypothesis id → the anonymous layer that realises it (None: not realisable).
 
-    Raises :class:`ParameterError` for a change the generator cannot realise.
+    ``changes``: the hypotheses' checked changes (a plan's); without them they are checked
+    here, and a change the generator cannot realise raises :class:`ParameterError`.
     """
     opts = opts or ColumnAssetOptions()
-    changes = check_hypotheses(layout, opts)
+    changes = check_hypotheses(layout, opts) if changes is None else changes
     out = {
         h.id: hypothesis_layer(
             [h],
@@ -348,7 +352,7 @@ def write_temple(plan: TemplePlan, tmp: Path) -> dict[str, Any]:
     hypothesis combination, author the extentsHints; returns the triangles per LOD and the
     combination layers written."""
     layout, geom = plan.layout, plan.geometry
-    hyp_layers = hypothesis_layers(layout, plan.opts)
+    hyp_layers = hypothesis_layers(layout, plan.opts, plan.changes)
     baseline_material = FINISHES[BASELINE_FINISH][0]
     log.info("writing the part, colonnade, detail and hypothesis layers")
     save_layer(_materials_layer(), tmp / MATERIALS_LAYER)
