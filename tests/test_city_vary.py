@@ -7,6 +7,7 @@ built cities are tested in test_city.py (a grid with stoas and ground; slow: the
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 from pathlib import Path
@@ -365,3 +366,22 @@ def test_a_temple_build_key_follows_the_code(monkeypatch):
     edited = TempleSpec("x", text).key
     monkeypatch.setattr(keys, "library_versions", lambda: "numpy 9")
     assert len({before, edited, TempleSpec("x", text).key}) == 3
+
+
+def test_street_column_build_does_not_depend_on_the_code_digest():
+    """The default grid has builds tied at the slenderest module; the street column's build
+    must be the same whatever the keys (they hold the code's digest): a tie broken by key
+    gave the streets another temple's column after any edit of the code."""
+    from ionic_usd.pipeline.city_extras import street_column_spec
+
+    specs = _specs(grid_plan(), rows=5, cols=5).specs
+    slender = min(s.layout().params.columns_lower_diameter for s in specs)
+    tied = [s for s in specs if s.layout().params.columns_lower_diameter == slender]
+    assert len(tied) >= 2  # else this test shows nothing
+    chosen = []
+    for salt in "abcdefgh":
+        for s in specs:  # a new code digest: new keys, in another order
+            s.__dict__["key"] = hashlib.sha256((salt + s.description).encode()).hexdigest()
+        chosen.append(street_column_spec(specs).description)
+        assert street_column_spec(list(reversed(specs))).description == chosen[-1]
+    assert len(set(chosen)) == 1

@@ -46,8 +46,19 @@ class StoaPlan:
 
 def street_column_spec(specs: list[TempleSpec]) -> TempleSpec:
     """The build whose column lines the streets: the slenderest module (a stoa's columns are
-    smaller than a temple's), ties by key; any build if none."""
-    return min(specs, key=lambda s: (s.layout().params.columns_lower_diameter, s.key))
+    smaller than a temple's), ties by name, then description and options: never by the key,
+    which holds the code's digest (a tie broken by it chose another temple's column, with
+    other triangles, after any edit of the code)."""
+    return min(
+        specs,
+        key=lambda s: (
+            s.layout().params.columns_lower_diameter,
+            s.name,
+            s.description,
+            s.texture_size,
+            s.seed,
+        ),
+    )
 
 
 def _bay_polygons(lay: StoaLayout, depth: float) -> list[np.ndarray]:
