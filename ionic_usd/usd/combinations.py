@@ -68,8 +68,8 @@ DetailOf = Callable[[TempleLayout], DetailGeometry]
 def select_variants(stage: Usd.Stage, selections: dict[str, str]) -> None:
     """Variant selections on /Temple in the session layer (cleared first)."""
     session = stage.GetSessionLayer()
-    session.Clear()
-    with Usd.EditContext(stage, session), Sdf.ChangeBlock():
+    with Usd.EditContext(stage, session), Sdf.ChangeBlock():  # one recomposition, not two
+        session.Clear()
         prim = stage.GetPrimAtPath("/Temple")
         for vs, v in selections.items():
             prim.GetVariantSet(vs).SetVariantSelection(v)
