@@ -18,8 +18,8 @@ from ionic_usd.lod import LOD_NAMES
 from ionic_usd.usd.city_prototypes import (
     prototype_purpose_stats,
     prototype_triangles,
+    stage_variant_sets,
     temple_selection,
-    temple_variant_sets,
 )
 
 if TYPE_CHECKING:
@@ -90,12 +90,11 @@ def default_render(lo4: np.ndarray, hi4: np.ndarray) -> tuple[np.ndarray, np.nda
 
 
 def _temple_keys(
-    folder: Path,
     temples: TempleInstances,
     card_dirs: Mapping[tuple[int, tuple], str] | None,
-) -> tuple[dict[tuple, int], np.ndarray, list[dict]]:
+    vsets: list[dict],
+) -> tuple[dict[tuple, int], np.ndarray]:
     """De-duplicate the temples into prototypes: (build, realised selections, lod, cards)."""
-    vsets = [temple_variant_sets(folder / f / "Temple.usda") for f in temples.folders]
     keys: dict[tuple, int] = {}
     proto_of = np.zeros(len(temples), dtype=np.int32)
     for i in range(len(temples)):
@@ -111,7 +110,7 @@ def _temple_keys(
                 "a folder of baked cards for every temple drawn as cards (card_dirs)",
             )
         proto_of[i] = keys.setdefault(key, len(keys))
-    return keys, proto_of, vsets
+    return keys, proto_of
 
 
 def temple_prototypes(
@@ -119,29 +118,50 @@ def temple_prototypes(
     temples: TempleInstances,
     card_dirs: Mapping[tuple[int, tuple], str] | None,
 ) -> TemplePrototypes:
-    """The temples' unique prototypes with their bounds and triangles, from each build's stage."""
-    keys, proto_of, vsets = _temple_keys(folder, temples, card_dirs)
+    """The temples' unique prototypes with their bounds and triangles, from each build's stage
+    (opened once; a selection's triangles are counted once: the as-authored selection of a
+    near temple holds its lod)."""
+    stages = [_open_temple(folder / f / "Temple.usda") for f in temples.folders]
+    vsets = [stage_variant_sets(st, f) for st, f in zip(stages, temples.folders, strict=True)]
+    keys, proto_of = _temple_keys(temples, card_dirs, vsets)
+    authored_lod = [
+        {"lod": st.GetPrimAtPath("/Temple").GetVariantSet("lod").GetVariantSelection()}
+        if "lod" in vs
+        else {}
+        for st, vs in zip(stages, vsets, strict=True)
+    ]
     protos = list(keys)
     tlo, thi = np.zeros((len(protos), 3)), np.zeros((len(protos), 3))
     tlo4, thi4 = np.zeros((len(protos), 4, 3)), np.zeros((len(protos), 4, 3))
     ttri = {s: np.zeros(len(protos), dtype=np.int64) for s in _SETTINGS}
-    stages: dict[int, Usd.Stage] = {}
+    counted: dict[tuple, int] = {}  # (build, sorted selections) -> triangles
     for k, (b, sel, card) in enumerate(protos):
-        stage = stages.get(b) or Usd.Stage.Open(str(folder / temples.folders[b] / "Temple.usda"))
-        stages[b] = stage
         tlo4[k], thi4[k], ttri["as authored"][k] = prototype_purpose_stats(
-            stage, "/Temple", dict(sel)
+            stages[b], "/Temple", dict(sel)
         )
+        # as authored is the authored lod: the lod loop below need not compose it again
+        own = {**dict(sel), **authored_lod[b]}
+        counted[(b, tuple(sorted(own.items())))] = int(ttri["as authored"][k])
         lo, hi = default_render(tlo4[k], thi4[k])
         if card:  # a box of cards stands in for the temple
             ttri["as authored"][k] = CARD_TRIANGLES
         tlo[k], thi[k] = lo, hi
         for lod in LOD_NAMES:
-            if "lod" in vsets[b]:
-                ttri[lod][k] = prototype_triangles(stage, "/Temple", {**dict(sel), "lod": lod})
-            else:  # before the temple has a lod set its columns draw as authored
-                ttri[lod][k] = prototype_triangles(stage, "/Temple", dict(sel))
+            # before the temple has a lod set its columns draw as authored
+            at = {**dict(sel), "lod": lod} if "lod" in vsets[b] else dict(sel)
+            key = (b, tuple(sorted(at.items())))
+            if key not in counted:
+                counted[key] = prototype_triangles(stages[b], "/Temple", at)
+            ttri[lod][k] = counted[key]
     return TemplePrototypes(protos, proto_of, tlo, thi, tlo4, thi4, ttri)
+
+
+def _open_temple(root: Path) -> Usd.Stage:
+    """A temple build's stage, payloads loaded (its triangles are counted)."""
+    stage = Usd.Stage.Open(str(root))
+    if stage is None:
+        raise UsdAuthoringError(f"cannot open {root}")
+    return stage
 
 
 def _column_index(

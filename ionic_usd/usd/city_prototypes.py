@@ -26,6 +26,7 @@ __all__ = [
     "prototype_stats",
     "prototype_triangles",
     "temple_card_bound",
+    "stage_variant_sets",
     "temple_selection",
     "temple_variant_sets",
 ]
@@ -37,9 +38,14 @@ def temple_variant_sets(temple_root: Path) -> dict[str, tuple[str, ...]]:
     stage = Usd.Stage.Open(str(temple_root), Usd.Stage.LoadNone)
     if stage is None:
         raise UsdAuthoringError(f"cannot open {temple_root}")
+    return stage_variant_sets(stage, temple_root)
+
+
+def stage_variant_sets(stage: Usd.Stage, where: object = "") -> dict[str, tuple[str, ...]]:
+    """:func:`temple_variant_sets` of a stage already open (``where`` names it in errors)."""
     prim = stage.GetDefaultPrim()
     if not prim:
-        raise UsdAuthoringError(f"{temple_root} has no default prim")
+        raise UsdAuthoringError(f"{where or stage.GetRootLayer().identifier} has no default prim")
     vsets = prim.GetVariantSets()
     return {name: tuple(vsets.GetVariantSet(name).GetVariantNames()) for name in vsets.GetNames()}
 
