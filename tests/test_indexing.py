@@ -53,6 +53,23 @@ def test_a_key_collision_falls_back_to_comparing_the_rows(monkeypatch):
     assert len(got_v) == 3
 
 
+@pytest.mark.parametrize("columns", [1, 2, 3])
+def test_keys_colliding_in_some_runs_are_told_apart_there(monkeypatch, columns):
+    # three keys for many values: some runs hold several values (sorted out by the rows'
+    # values), the rest one; the result is the brute force's all the same
+    rng = np.random.default_rng(7)
+    values = rng.normal(size=(30, columns))[rng.integers(0, 30, 500)]
+    idx = rng.integers(0, 450, 1500)
+    want = _brute(values, idx)
+    monkeypatch.setattr(
+        indexing,
+        "_keys",
+        lambda r: (r.view(np.uint32)[:, 0] % np.uint32(3)).astype(np.uint64) << np.uint64(50),
+    )
+    got_v, got_i = distinct_values(values, idx)
+    assert got_v.tobytes() == want[0].tobytes() and np.array_equal(got_i, want[1])
+
+
 def test_distinct_values_refuses_what_is_not_a_primvar():
     with pytest.raises(GeometryError, match="shape"):
         distinct_values(np.zeros((4, 5)), None)

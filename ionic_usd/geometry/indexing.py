@@ -29,34 +29,50 @@ _MIX = (np.uint64(0x9E3779B97F4A7C15), np.uint64(0xBF58476D1CE4E5B9), np.uint64(
 
 
 def _keys(rows: np.ndarray) -> np.ndarray:
-    """One uint64 per row of float32 ``rows`` (u, c ≤ 3), equal for rows with equal bits."""
+    """One uint64 per row of float32 ``rows`` (u, c ≤ 3), equal for rows with equal bits;
+    the high bits mixed as well as the low ones (:func:`_groups` sorts by the high bits)."""
     bits = rows.view(np.uint32).astype(np.uint64)
     h = bits[:, 0] * _MIX[0]
     for j in range(1, bits.shape[1]):
         h = (h ^ (h >> np.uint64(29))) * _MIX[j] + bits[:, j]
-    return h ^ (h >> np.uint64(31))
+    h ^= h >> np.uint64(32)  # the finaliser of splitmix64: every bit reaches the high ones
+    h *= _MIX[1]
+    return h ^ (h >> np.uint64(29))
 
 
 def _groups(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(group id per row (u,), the smallest row of each group): rows with equal bits share a
-    group, the ids in no particular order."""
-    keys = _keys(rows)
-    order = np.argsort(keys)
-    srt = keys[order]
-    new = np.empty(len(srt), dtype=bool)
+    group, the ids in no particular order.
+
+    One sort of plain integers: each row's key with its low bits replaced by the row number
+    (so equal keys come out in row order, and the first of a run is its smallest row), then
+    neighbours are compared value for value. Rows whose truncated keys collide but whose
+    values differ are sorted by their values, within their runs only."""
+    n = len(rows)
+    ib = max(1, n.bit_length())
+    mask = np.uint64((1 << ib) - 1)
+    packed = (_keys(rows) & ~mask) | np.arange(n, dtype=np.uint64)
+    packed.sort()
+    order = (packed & mask).astype(np.intp)
+    new = np.empty(n, dtype=bool)
     new[:1] = True
-    np.not_equal(srt[1:], srt[:-1], out=new[1:])
-    group = np.empty(len(rows), dtype=np.int64)
+    high = packed >> np.uint64(ib)
+    np.not_equal(high[1:], high[:-1], out=new[1:])
+    srt = np.take(rows.view(np.uint32), order, axis=0)
+    mixed = ~new[1:] & np.any(srt[1:] != srt[:-1], axis=1)  # one key, other values
+    if mixed.any():
+        run = np.cumsum(new) - 1
+        pos = np.flatnonzero(np.isin(run, run[1:][mixed]))  # those runs, whole
+        sub, r = srt[pos], run[pos]
+        lex = np.lexsort((*sub.T[::-1], r))  # stable: equal rows stay in row order
+        order[pos] = order[pos][lex]
+        sub, r = sub[lex], r[lex]
+        fresh = np.ones(len(pos), dtype=bool)
+        fresh[1:] = np.any(sub[1:] != sub[:-1], axis=1) | (r[1:] != r[:-1])
+        new[pos] = fresh
+    group = np.empty(n, dtype=np.intp)
     group[order] = np.cumsum(new) - 1
-    first = np.minimum.reduceat(order, np.flatnonzero(new)) if len(rows) else order
-    bits = rows.view(np.uint32)
-    if np.array_equal(bits[first[group]], bits):  # equal keys held equal rows
-        return group, first
-    lex = np.lexsort(bits.T[::-1])  # a key collision: sort the rows themselves (stable)
-    new = np.ones(len(rows), dtype=bool)
-    new[1:] = np.any(bits[lex][1:] != bits[lex][:-1], axis=1)
-    group[lex] = np.cumsum(new) - 1
-    return group, lex[new]
+    return group, order[new]
 
 
 def distinct_values(
@@ -83,17 +99,23 @@ def distinct_values(
     idx = np.arange(len(v)) if indices is None else np.asarray(indices).reshape(-1)
     if idx.size and (idx.min() < 0 or idx.max() >= len(v)):
         raise GeometryError(f"distinct_values: an index outside 0..{len(v) - 1}")
-    if indices is None:
-        kept = np.arange(len(v))
-    else:
+    kept = None  # the used rows, in their order (None: all)
+    if indices is not None:
         used = np.zeros(len(v), dtype=bool)
         used[idx] = True
-        kept = np.flatnonzero(used)  # the used rows, in their order
-    group, first = _groups(v[kept])
+        if not used.all():
+            kept = np.flatnonzero(used)
+    rows = v if kept is None else v[kept]
+    group, first = _groups(rows)
     # number the groups by their first row: a group's id counts the groups begun before it
-    starts = np.zeros(len(kept), dtype=bool)
+    starts = np.zeros(len(rows), dtype=bool)
     starts[first] = True
-    rank = np.cumsum(starts) - 1
-    new_id = np.zeros(len(v), dtype=np.int32)
-    new_id[kept] = rank[first[group]]
-    return np.ascontiguousarray(v[kept[starts]]), new_id[idx]
+    rank = (np.cumsum(starts) - 1).astype(np.int32)
+    row_id = rank[first[group]]
+    if kept is None:
+        out = row_id if indices is None else row_id[idx]
+    else:
+        new_id = np.zeros(len(v), dtype=np.int32)
+        new_id[kept] = row_id
+        out = new_id[idx]
+    return np.ascontiguousarray(rows[starts]), out
