@@ -4,7 +4,8 @@
 # `npm ci` in tools/node and Chromium, as tools/check_web.sh sets up). Prints one line per scene:
 # load seconds, the first three frames (geometry upload, shader compile) and then N frames
 # (render + gl.finish; again with a one-pixel readPixels): median, p95, max, draw calls,
-# triangles.
+# triangles; then per view (the default one, and street level: walk mode's eye) the triangles
+# and draw calls, the units (temples, street columns) drawn in full, and the times.
 #
 #   tools/web_frames.sh [FRAMES]      (default 30; 1024 x 640)
 set -euo pipefail
@@ -36,5 +37,17 @@ print(
     + ")"
     + (f"; {len(r['errors'])} console errors" if r["errors"] else "")
 )
+for name, v in (("default view", r), ("street level (walk view)", r.get("street"))):
+    if not v:
+        continue
+    lod = v["lod"]
+    full = ", ".join(k.rsplit("/", 1)[-1] for k in lod["full"]) or "none"
+    print(
+        f"  {name}: {v['triangles']:,} triangles, {v['calls']:,} draw calls; "
+        f"{lod['inView']:,} of {lod['units']:,} units in view, in full (of those with a far "
+        f"level): {full}; with a pixel read back: median {v['readback']['median']:.1f} ms, "
+        f"p95 {v['readback']['p95']:.1f} ms; moving: median {v['moving']['median']:.1f} ms, "
+        f"p95 {v['moving']['p95']:.1f} ms"
+    )
 PYEOF
 done

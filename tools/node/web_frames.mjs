@@ -81,6 +81,23 @@ try {
   out.readback = await timed(false);
   out.moving = await timed(true);
   out.software = await page.evaluate(() => app.software);
+  // level of detail: units drawn in full / far here; then the same at street level (walk
+  // mode's eye height: the unit nearest the camera in full)
+  const lodOf = () =>
+    page.evaluate(() => {
+      const s = app.lod();
+      const full = s.groups.filter((g) => g.inView && g.level && g.proxy < g.full); // two levels
+      return { units: s.groups.length, inView: s.groups.filter((g) => g.inView).length, full: full.map((g) => g.key), budget: s.budget };
+    });
+  out.lod = await lodOf();
+  if (!process.argv.includes("--no-street")) {
+    await page.evaluate(() => app.walkView());
+    const street = await page.evaluate((n) => app.frameTimes(n), Math.min(frames, 3));
+    street.readback = await timed(false);
+    street.moving = await timed(true);
+    street.lod = await lodOf();
+    out.street = street;
+  }
 } finally {
   await browser.close();
   server.close();
