@@ -2,7 +2,7 @@
 import * as THREE from "three";
 import { GLTFLoader } from "three/addons/loaders/GLTFLoader.js";
 import { OrbitControls } from "three/addons/controls/OrbitControls.js";
-import { createLod } from "./lod.js";
+import { createLod, instanceCopies } from "./lod.js";
 
 const data = await (await fetch("data.json")).json();
 const host = document.getElementById("view");
@@ -37,6 +37,7 @@ const controls = new OrbitControls(camera, renderer.domElement);
 const loader = new GLTFLoader();
 const base = (await loader.loadAsync(data.scene)).scene;
 scene.add(base);
+instanceCopies(base, data.lodGroups || []); // a city's merged street copies: GPU instances
 const alts = {};
 for (const h of data.hypotheses) {
   if (!h.glb) continue;
@@ -440,9 +441,22 @@ window.app = {
     controls.update();
     render();
   },
-  walkView: () => {
+  streetView: (key) => {
+    // walk mode, at eye height 0.7 of one unit's radius to the +x and the +z of its centre (a
+    // city temple's lot corner), facing the unit
+    const g = lod.groups.find((x) => x.key === key);
     walk.checked = true;
-    walk.dispatchEvent(new Event("change"));
+    const c = g.sphere.center, r = 0.7 * g.sphere.radius;
+    camera.position.set(c.x + r, box.min.y + 1.7, c.z + r);
+    controls.target.copy(c);
+    controls.update();
+    render();
+  },
+  turn: (a) => {
+    // the camera a little around the orbit target (no render)
+    const v = camera.position.clone().sub(controls.target).applyAxisAngle(new THREE.Vector3(0, 1, 0), a);
+    camera.position.copy(controls.target).add(v);
+    controls.update();
   },
   state: () => ({ view: state.view, hyps: [...state.hyps].sort(), sel: state.sel }),
   setCamera: (c) => {

@@ -92,16 +92,92 @@ function instancesOf(m) {
   return p && Array.isArray(p.userData.instances) && p.children.every((c) => c.isMesh) ? p.userData.instances : null;
 }
 
-export function createLod(root, unitPaths, { budget }) {
-  root.updateMatrixWorld(true);
-  const units = [...unitPaths].sort((a, b) => b.length - a.length); // the longest prefix first
-  const unitOf = (path, fallback) => {
+// the unit of a prim path: the longest of `unitPaths` holding it, else a point instancer's
+// instance (the path to its "]"), else the path itself (`fallback` when there is none)
+function unitFinder(unitPaths) {
+  const units = [...unitPaths].sort((a, b) => b.length - a.length);
+  return (path, fallback) => {
     if (!path) return fallback;
     const u = units.find((p) => path === p || path.startsWith(p + "/") || path.startsWith(p + "["));
     if (u) return u;
     const i = path.indexOf("]");
     return i >= 0 ? path.slice(0, i + 1) : path;
   };
+}
+
+// A merged mesh whose copies belong to several units (a city's street column shafts, its stoa
+// bays) becomes a GPU-instanced mesh of its first copy, so its copies switch level and leave
+// the view one by one without rewriting a large index: copy i's vertices are copy 0's under
+// an affine map (the exporter's relative matrix), recovered here by least squares and kept
+// only where it reproduces every vertex (a mirrored copy keeps the mesh merged).
+export function instanceCopies(root, unitPaths) {
+  const unitOf = unitFinder(unitPaths), found = [];
+  root.traverse((m) => m.isMesh && !m.isInstancedMesh && Array.isArray(m.userData.instances) && found.push(m));
+  for (const m of found) {
+    const inst = m.userData.instances, n = inst.length, g = m.geometry, pos = g.attributes.position;
+    if (n < 2 || new Set(inst.map((x) => unitOf(x.path, ""))).size < 2) continue;
+    if (!g.index || g.index.count % (3 * n) || pos.count % n) continue;
+    if (Object.values(g.attributes).some((a) => a.isInterleavedBufferAttribute)) continue;
+    const nv = pos.count / n, ni = g.index.count / n, P = pos.array;
+    const idx = g.index.array;
+    let ok = true;
+    for (let k = 0; k < ni && ok; k++) ok = idx[k] < nv && idx[(n - 1) * ni + k] === idx[k] + (n - 1) * nv;
+    if (!ok) continue;
+    const centre = (i) => {
+      const c = [0, 0, 0];
+      for (let v = i * nv; v < (i + 1) * nv; v++) for (let j = 0; j < 3; j++) c[j] += P[3 * v + j] / nv;
+      return c;
+    };
+    const c0 = centre(0);
+    const A = new THREE.Matrix3().set(0, 0, 0, 0, 0, 0, 0, 0, 0), a = A.elements;
+    for (let v = 0; v < nv; v++)
+      for (let r = 0; r < 3; r++) for (let c = 0; c < 3; c++) a[3 * c + r] += (P[3 * v + r] - c0[r]) * (P[3 * v + c] - c0[c]);
+    if (Math.abs(A.determinant()) < 1e-12) continue;
+    A.invert();
+    const size = Math.max(...[0, 1, 2].map((j) => Math.abs(pos.array[j]))) + 1;
+    const mats = [];
+    for (let i = 0; i < n && ok; i++) {
+      const ci = centre(i), B = new THREE.Matrix3().set(0, 0, 0, 0, 0, 0, 0, 0, 0), b = B.elements;
+      for (let v = 0; v < nv; v++)
+        for (let r = 0; r < 3; r++)
+          for (let c = 0; c < 3; c++) b[3 * c + r] += (P[3 * v + r] - c0[r]) * (P[3 * (i * nv + v) + c] - ci[c]);
+      const L = new THREE.Matrix3().multiplyMatrices(A, B).elements; // row vectors: x_i = x_0 L + t
+      const l = (r, c) => L[3 * c + r];
+      const t = [0, 1, 2].map((c) => ci[c] - (c0[0] * l(0, c) + c0[1] * l(1, c) + c0[2] * l(2, c)));
+      const M = new THREE.Matrix4().set(
+        l(0, 0), l(1, 0), l(2, 0), t[0], l(0, 1), l(1, 1), l(2, 1), t[1], l(0, 2), l(1, 2), l(2, 2), t[2], 0, 0, 0, 1);
+      ok = M.determinant() > 0;
+      for (let v = 0; v < nv && ok; v++) {
+        const q = new THREE.Vector3(P[3 * v], P[3 * v + 1], P[3 * v + 2]).applyMatrix4(M);
+        const w = 3 * (i * nv + v);
+        ok = Math.abs(q.x - P[w]) + Math.abs(q.y - P[w + 1]) + Math.abs(q.z - P[w + 2]) < 1e-4 * size;
+      }
+      mats.push(M);
+    }
+    if (!ok) continue;
+    const one = new THREE.BufferGeometry();
+    for (const [k, att] of Object.entries(g.attributes))
+      one.setAttribute(k, new THREE.BufferAttribute(att.array.slice(0, nv * att.itemSize), att.itemSize, att.normalized));
+    one.setIndex(new THREE.BufferAttribute(idx.slice(0, ni), 1));
+    const im = new THREE.InstancedMesh(one, m.material, n);
+    mats.forEach((mx, i) => im.setMatrixAt(i, mx));
+    im.name = m.name;
+    im.userData = m.userData;
+    im.position.copy(m.position);
+    im.quaternion.copy(m.quaternion);
+    im.scale.copy(m.scale);
+    const parent = m.parent, at = parent.children.indexOf(m);
+    parent.remove(m);
+    parent.add(im);
+    parent.children.splice(parent.children.indexOf(im), 1);
+    parent.children.splice(at, 0, im);
+  }
+}
+
+export function createLod(root, unitPaths, { budget }) {
+  root.updateMatrixWorld(true);
+  const units = [...unitPaths];
+  const unitOf = unitFinder(unitPaths);
   const groupIndex = new Map(), groups = [];
   const groupOf = (key) => {
     if (!groupIndex.has(key)) {
@@ -225,6 +301,13 @@ export function createLod(root, unitPaths, { budget }) {
       const src = isProxy ? d.proxyIndex : d.fullIndex, dst = o.geometry.index.array;
       let at = 0;
       const firsts = [];
+      const all = list.length === d.n;
+      if (all && o.userData.lodAll) { // as it was: no upload
+        o.userData.lodItems = list;
+        o.visible = true;
+        return;
+      }
+      o.userData.lodAll = all;
       for (const i of list) {
         const a = isProxy ? 3 * d.start[i] : 3 * d.per * i, b = isProxy ? 3 * d.start[i + 1] : 3 * d.per * (i + 1);
         firsts.push(at / 3);
@@ -233,6 +316,8 @@ export function createLod(root, unitPaths, { budget }) {
       }
       o.userData.lodFirsts = firsts;
       o.geometry.setDrawRange(0, at);
+      o.geometry.index.clearUpdateRanges();
+      o.geometry.index.addUpdateRange(0, at);
       o.geometry.index.needsUpdate = true;
       o.visible = at > 0;
     } else o.visible = list.length > 0;
@@ -273,9 +358,12 @@ export function createLod(root, unitPaths, { budget }) {
       const near = [], farList = [];
       for (let i = 0; i < d.n; i++) {
         if (d.hidden[i]) continue;
-        sp.center.fromArray(d.sphere, 4 * i);
-        sp.radius = d.sphere[4 * i + 3];
-        if (!frustum.intersectsSphere(sp)) continue;
+        if (d.kind !== "merged") {
+          // a merged mesh's copies are not culled one by one: that would rewrite its index
+          sp.center.fromArray(d.sphere, 4 * i);
+          sp.radius = d.sphere[4 * i + 3];
+          if (!frustum.intersectsSphere(sp)) continue;
+        }
         (groups[d.group[i]].level || !d.proxy ? near : farList).push(i);
       }
       const same = (a, b) => a && a.length === b.length && a.every((x, j) => x === b[j]);
