@@ -64,7 +64,7 @@ for (const root of [base, ...Object.values(alts)]) {
 }
 // level of detail by distance (lod.js): units (a city's temples, its street columns) far from
 // the camera draw a coarse copy; a triangle budget keeps software GL responsive
-const lod = createLod(base, data.lodGroups || [], { budget: software ? 250000 : 3000000 });
+const lod = createLod(base, data.lodGroups || [], { budget: software ? 200000 : 3000000 });
 scene.add(lod.far);
 
 function extrasOf(obj, instanceId) {

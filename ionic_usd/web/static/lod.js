@@ -9,14 +9,19 @@
 // * A unit is drawn in full when its far level would be off by more than one pixel at its
 //   nearest point (cell × pixels per radian / distance > 1) — named units (a city's temples)
 //   first, the one nearest the camera's `target` (the orbit target; in walk mode the eye)
-//   first among them — while the triangles drawn stay within `budget` (the first such unit
-//   always in full); else its far level.
+//   first among them — while the triangles drawn stay within `budget` (the first in full
+//   whatever the budget when its far level would be off by more than MUST_PX); else its far
+//   level.
 // * Items (an instance of a GPU-instanced mesh, a copy of a merged mesh, a plain mesh) outside
-//   the view are not drawn; the drawn ones are packed at the front of the instance (or index)
-//   buffer, so `resolve` maps a hit's instanceId/faceIndex back to the item.
+//   the view are not drawn (a merged mesh's copies only as a whole); the drawn ones are packed
+//   at the front of the instance (or index) buffer, so `resolve` maps a hit's
+//   instanceId/faceIndex back to the item. A merged mesh whose copies belong to several units
+//   becomes GPU-instanced first (`instanceCopies`).
 import * as THREE from "three";
 
 export const DIVISIONS = 64;
+// the first unit's far level off by more than this (px): drawn in full whatever the budget
+export const MUST_PX = 4;
 
 function trianglesOf(g) {
   return (g.index ? g.index.count : g.attributes.position.count) / 3;
@@ -344,12 +349,13 @@ export function createLod(root, unitPaths, { budget }) {
       if (gr.level) continue;
       gr.distance = Math.max(0, eye.distanceTo(gr.sphere.center) - gr.sphere.radius);
       gr.priority = Math.max(0, target.distanceTo(gr.sphere.center) - gr.sphere.radius);
-      if (cell * pxPerRadian > gr.distance) cands.push(gr); // its far level: off by > 1 px
+      gr.error = (cell * pxPerRadian) / gr.distance; // how far off its far level is (px)
+      if (gr.error > 1) cands.push(gr);
     }
     // named units (a city's temples) before the rest (its street columns, stoa bays)
     cands.sort((a, b) => b.named - a.named || a.priority - b.priority || a.distance - b.distance);
     for (const [k, gr] of cands.entries()) {
-      if (k > 0 && used + gr.full - gr.proxy > budget) continue;
+      if ((k > 0 || gr.error <= MUST_PX) && used + gr.full - gr.proxy > budget) continue;
       gr.level = 1;
       used += gr.full - gr.proxy;
     }
