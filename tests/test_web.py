@@ -163,3 +163,7 @@ def test_city_camera_on_a_temple_draws_it_in_full_and_picks_it(city_lod):
     assert on["unit"]["level"] == 1 and on["unit"]["inView"]
     assert on["triangles"] >= on["unit"]["full"]  # all of its triangles: none culled or coarse
     assert on["picked"].startswith(temple + "/")  # a click on it reaches its part's record
+    rel = on["reliability"]
+    assert rel["changed"] > 10_000 and rel["restored"]  # both levels recoloured, and back
+    street = on["street"]  # at eye height on its lot, facing it: in full too
+    assert street["unit"]["level"] == 1 and street["triangles"] >= street["unit"]["full"] // 2

@@ -1,8 +1,9 @@
 // Level of detail of a site written by `ionic-usd web`, in headless Chromium (playwright-core,
 // SwiftShader): the units, their triangles in full and at the far level and the triangles drawn
 // from the site's own camera; then, for each unit named with --focus, the same with the camera
-// on that unit (app.focus) and what a click at the middle of the view picks. Prints one JSON
-// line "LOD {...}".
+// on that unit (app.focus), what a click at the middle of the view picks and whether the
+// reliability view changes the picture and switches back exactly, and the same unit at street
+// level (app.streetView). Prints one JSON line "LOD {...}".
 //
 //   node web_lod.mjs SITE_DIR [--focus /City/Temples/Temple_0_0 ...]
 import fs from "node:fs";
@@ -45,7 +46,19 @@ try {
       app.focus(k);
       const s = app.lod();
       const rec = app.pick(0, 0);
-      return { triangles: s.triangles, unit: s.groups.find((g) => g.key === k), picked: rec ? rec.path : "" };
+      // the reliability view recolours both levels and switches back exactly
+      app.snapshot("a");
+      app.setView("reliability");
+      app.snapshot("r");
+      app.setView("appearance");
+      app.snapshot("b");
+      const rel = { changed: app.diff("a", "r", null).outside, restored: app.diff("a", "b", null).outside === 0 };
+      app.streetView(k);
+      const st = app.lod();
+      return {
+        triangles: s.triangles, unit: s.groups.find((g) => g.key === k), picked: rec ? rec.path : "", reliability: rel,
+        street: { triangles: st.triangles, unit: st.groups.find((g) => g.key === k) },
+      };
     }, key);
   }
 } finally {
