@@ -99,3 +99,71 @@ def test_frame_times_are_reported(checked):
     ft = res["frameTimes"]
     print("frame times (ms):", ft)
     assert 0 < ft["median"] <= ft["p95"] <= ft["max"] and ft["triangles"] > 0
+
+
+def _glb_triangles(glb: Path) -> int:
+    """Triangles a GLB draws: each mesh node's primitives times its GPU instances."""
+    import struct
+
+    raw = glb.read_bytes()
+    doc = json.loads(raw[20 : 20 + struct.unpack("<I", raw[12:16])[0]])
+    acc = doc["accessors"]
+    total = 0
+    for node in doc["nodes"]:
+        if "mesh" not in node:
+            continue
+        gpu = node.get("extensions", {}).get("EXT_mesh_gpu_instancing")
+        copies = acc[gpu["attributes"]["TRANSLATION"]]["count"] if gpu else 1
+        for p in doc["meshes"][node["mesh"]]["primitives"]:
+            total += copies * acc[p["indices"]]["count"] // 3
+    return total
+
+
+@pytest.fixture(scope="module")
+def city_lod(tmp_path_factory):
+    """A 3 x 3 Portunus city's site, its level of detail at the default view and with the
+    camera on one temple (tools/node/web_lod.mjs)."""
+    from ionic_usd.pipeline.city import CityOptions, build_city
+    from ionic_usd.web import write_site
+
+    out = tmp_path_factory.mktemp("webcity")
+    opts = CityOptions(rows=3, cols=3, texture_size=64, seed=1, temple="portunus")
+    build_city(out / "city", opts)
+    site = out / "site"
+    write_site(out / "city" / "City.usda", site, three=NODE_DIR / "node_modules" / "three")
+    temple = json.loads((site / "data.json").read_text())["lodGroups"][4]  # the middle one
+    proc = subprocess.run(
+        ["node", str(NODE_DIR / "web_lod.mjs"), str(site), "--focus", temple],
+        capture_output=True,
+        text=True,
+        timeout=1200,
+    )
+    line = next((x for x in proc.stdout.splitlines() if x.startswith("LOD ")), None)
+    assert proc.returncode == 0 and line, proc.stderr[-3000:]
+    return json.loads(line[len("LOD ") :]), site, temple
+
+
+def test_city_default_view_draws_far_temples_at_their_far_level(city_lod):
+    res, site, _ = city_lod
+    assert res["errors"] == []
+    home, scene = res["home"], _glb_triangles(site / "scene.glb")
+    # the units account for every triangle of the scene, each temple one unit
+    assert sum(g["full"] for g in home["groups"]) == scene
+    temples = [g for g in home["groups"] if g["key"].startswith("/City/Temples/")]
+    assert len(temples) == 9 and all(g["proxy"] < g["full"] / 20 for g in temples)
+    # drawn: the far levels and at most the budget's worth in full, a fraction of the scene
+    far = sum(g["proxy"] for g in home["groups"])
+    assert home["triangles"] <= max(home["budget"], max(g["full"] for g in temples)) + far
+    assert home["triangles"] < scene / 4
+
+
+def test_city_camera_on_a_temple_draws_it_in_full_and_picks_it(city_lod):
+    res, _, temple = city_lod
+    on = res["focus"][temple]
+    assert on["unit"]["level"] == 1 and on["unit"]["inView"]
+    assert on["triangles"] >= on["unit"]["full"]  # all of its triangles: none culled or coarse
+    assert on["picked"].startswith(temple + "/")  # a click on it reaches its part's record
+    rel = on["reliability"]
+    assert rel["changed"] > 10_000 and rel["restored"]  # both levels recoloured, and back
+    street = on["street"]  # at eye height on its lot, facing it: in full too
+    assert street["unit"]["level"] == 1 and street["triangles"] >= street["unit"]["full"] // 2

@@ -4,7 +4,9 @@
 # `npm ci` in tools/node and Chromium, as tools/check_web.sh sets up). Prints one line per scene:
 # load seconds, the first three frames (geometry upload, shader compile) and then N frames
 # (render + gl.finish; again with a one-pixel readPixels): median, p95, max, draw calls,
-# triangles.
+# triangles; then per view (the default one, and street level: walk mode's eye facing a
+# temple) the triangles and draw calls, the units (temples, street columns, stoa bays) drawn in
+# full, and the times.
 #
 #   tools/web_frames.sh [FRAMES]      (default 30; 1024 x 640)
 set -euo pipefail
@@ -36,5 +38,20 @@ print(
     + ")"
     + (f"; {len(r['errors'])} console errors" if r["errors"] else "")
 )
+for name, v in (("default view", r), ("street level", r.get("street"))):
+    if not v:
+        continue
+    lod = v["lod"]
+    full = ", ".join(
+        k.rsplit("/", 1)[-1] + (f" x{n}" if n > 1 else "") for k, n in lod["full"].items()
+    )
+    print(
+        f"  {name}: {v['triangles']:,} triangles, {v['calls']:,} draw calls; "
+        f"{lod['inView']:,} of {lod['units']:,} units in view, in full (of those with a far "
+        f"level): {full or 'none'}; with a pixel read back: median {v['readback']['median']:.1f} ms, "
+        f"p95 {v['readback']['p95']:.1f} ms; moving: median {v['moving']['median']:.1f} ms, "
+        f"p95 {v['moving']['p95']:.1f} ms; turning: median {v['turning']['median']:.1f} ms, "
+        f"p95 {v['turning']['p95']:.1f} ms"
+    )
 PYEOF
 done

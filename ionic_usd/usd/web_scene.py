@@ -15,9 +15,9 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 
 import numpy as np
-from pxr import Sdf, Usd, UsdGeom, UsdShade
+from pxr import Kind, Sdf, Usd, UsdGeom, UsdShade
 
-__all__ = ["part_centres", "part_signatures", "hypothesis_changes", "subset_layer"]
+__all__ = ["part_centres", "part_signatures", "hypothesis_changes", "lod_groups", "subset_layer"]
 
 
 def _is_part(p: Usd.Prim) -> bool:
@@ -75,6 +75,22 @@ def part_centres(scene: str | os.PathLike, variants: Mapping[str, str]) -> dict[
             c = cache.ComputeWorldBound(p).ComputeAlignedRange().GetMidpoint()
             out[str(p.GetPath())] = [round(float(x), 4) for x in c]
     return out
+
+
+def lod_groups(scene: str | os.PathLike) -> list[str]:
+    """The units the web view switches level of detail by: the outermost ``assembly`` models
+    below the default prim (a city's temples), or the default prim itself (one temple).
+    Instances of a point instancer (``/City/Porticus[3]``) are units of their own."""
+    stage = Usd.Stage.Open(str(scene))
+    root = stage.GetDefaultPrim()
+    out = []
+    it = iter(Usd.PrimRange(root))
+    next(it)  # the root itself
+    for p in it:
+        if Usd.ModelAPI(p).GetKind() == Kind.Tokens.assembly:
+            out.append(str(p.GetPath()))
+            it.PruneChildren()
+    return out or [str(root.GetPath())]
 
 
 def hypothesis_changes(

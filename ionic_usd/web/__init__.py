@@ -21,6 +21,14 @@ JavaScript dependency, installed from npm: ``npm install three`` — CI runs ``n
 Another scene (a city of temples) gets the scene, the reliability view, picking and the
 permalink, with no hypothesis toggles; its ``scene.glb`` draws each repeated mesh as one
 ``EXT_mesh_gpu_instancing`` node (picks map ``instanceId`` to the per-instance ``extras``).
+
+Level of detail (``static/lod.js``): ``data.json``'s ``lodGroups`` names the units the view
+switches by (:func:`ionic_usd.usd.web_scene.lod_groups`: a city's temples, else the temple; a
+point instancer's instances, such as street columns, are units of their own). The page makes a
+far level of each detailed mesh at load (vertex clustering) and, each time the camera moves,
+draws in full the units whose far level would be off by more than a pixel, the one the camera
+orbits (or walks nearest) first, within a triangle budget (lower on software GL); the rest at
+their far level, and nothing outside the view.
 """
 
 from __future__ import annotations
@@ -43,7 +51,7 @@ THREE_FILES = (
     "examples/jsm/controls/OrbitControls.js",
     "LICENSE",
 )
-STATIC = ("index.html", "app.js", "style.css")
+STATIC = ("index.html", "app.js", "lod.js", "style.css")
 
 
 def find_three(given: str | os.PathLike | None = None) -> Path:
@@ -123,7 +131,12 @@ def write_site(
     from ionic_usd.export import export_scene
     from ionic_usd.io import check_output_folder
     from ionic_usd.usd.paradata_scene import read_scene_paradata
-    from ionic_usd.usd.web_scene import hypothesis_changes, part_centres, subset_layer
+    from ionic_usd.usd.web_scene import (
+        hypothesis_changes,
+        lod_groups,
+        part_centres,
+        subset_layer,
+    )
 
     src = Path(scene)
     if not src.is_file():
@@ -145,6 +158,7 @@ def write_site(
         (tmp / "hyp").mkdir()
         data = _data(pd, changes, base)
         data["centres"] = part_centres(src, {"lod": lod})
+        data["lodGroups"] = lod_groups(src)
         for h in data["hypotheses"]:
             if not h["glb"]:
                 continue

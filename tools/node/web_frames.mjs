@@ -59,15 +59,18 @@ try {
   });
   Object.assign(out, await page.evaluate((n) => app.frameTimes(n), frames));
   // the same with a one-pixel readPixels after each frame: the pixels must exist, whatever
-  // gl.finish waits for; at rest, then as while the camera moves (app.interactive)
-  const timed = (moving) =>
+  // gl.finish waits for; at rest, then as while the camera moves (app.interactive), then also
+  // turning the camera 0.01 rad about its target before each frame (the level of detail
+  // follows; SwiftShader takes about twice as long for a frame whose view changed)
+  const timed = (moving, turning = false) =>
     page.evaluate(
-      ([n, mv]) => {
+      ([n, mv, turn]) => {
         const gl = document.querySelector("canvas").getContext("webgl2");
         app.interactive(mv);
         const px = new Uint8Array(4), t = [];
         for (let i = 0; i < n; i++) {
           const t0 = performance.now();
+          if (turn) app.turn(0.01);
           app.render();
           gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, px);
           t.push(performance.now() - t0);
@@ -76,11 +79,35 @@ try {
         t.sort((a, b) => a - b);
         return { median: t[Math.floor(n / 2)], p95: t[Math.floor(n * 0.95)], max: t[n - 1] };
       },
-      [frames, moving],
+      [frames, moving, turning],
     );
   out.readback = await timed(false);
   out.moving = await timed(true);
+  out.turning = await timed(true, true);
   out.software = await page.evaluate(() => app.software);
+  // level of detail: units drawn in full here; then the same at street level (walk mode, eye
+  // height, facing the middle unit of data.json's lodGroups: a temple of the city)
+  const lodOf = () =>
+    page.evaluate(() => {
+      const s = app.lod();
+      const full = s.groups.filter((g) => g.inView && g.level && g.proxy < g.full); // two levels
+      const kinds = {};
+      for (const g of full) {
+        const k = app.data.lodGroups.includes(g.key) ? g.key : g.key.replace(/\[\d+\]$/, "");
+        kinds[k] = (kinds[k] || 0) + 1;
+      }
+      return { units: s.groups.length, inView: s.groups.filter((g) => g.inView).length, full: kinds, budget: s.budget };
+    });
+  out.lod = await lodOf();
+  if (!process.argv.includes("--no-street")) {
+    await page.evaluate(() => app.streetView(app.data.lodGroups[Math.floor(app.data.lodGroups.length / 2)]));
+    const street = await page.evaluate((n) => app.frameTimes(n), Math.min(frames, 3));
+    street.readback = await timed(false);
+    street.moving = await timed(true);
+    street.turning = await timed(true, true);
+    street.lod = await lodOf();
+    out.street = street;
+  }
 } finally {
   await browser.close();
   server.close();

@@ -2,6 +2,7 @@
 import * as THREE from "three";
 import { GLTFLoader } from "three/addons/loaders/GLTFLoader.js";
 import { OrbitControls } from "three/addons/controls/OrbitControls.js";
+import { createLod, instanceCopies } from "./lod.js";
 
 const data = await (await fetch("data.json")).json();
 const host = document.getElementById("view");
@@ -36,6 +37,7 @@ const controls = new OrbitControls(camera, renderer.domElement);
 const loader = new GLTFLoader();
 const base = (await loader.loadAsync(data.scene)).scene;
 scene.add(base);
+instanceCopies(base, data.lodGroups || []); // a city's merged street copies: GPU instances
 const alts = {};
 for (const h of data.hypotheses) {
   if (!h.glb) continue;
@@ -60,6 +62,10 @@ for (const root of [base, ...Object.values(alts)]) {
     meshes.push(o);
   });
 }
+// level of detail by distance (lod.js): units (a city's temples, its street columns) far from
+// the camera draw a coarse copy; a triangle budget keeps software GL responsive
+const lod = createLod(base, data.lodGroups || [], { budget: software ? 200000 : 3000000 });
+scene.add(lod.far);
 
 function extrasOf(obj, instanceId) {
   // the paradata a mesh (or one instance of it) carries: the exporter keeps what copies share
@@ -103,26 +109,35 @@ function apply() {
   for (const [id, root] of Object.entries(alts)) root.visible = state.hyps.has(id);
   for (const m of meshes) {
     const inBase = isIn(m, base);
+    const d = lod.of(m); // the scene's meshes: drawn through lod.js; a hypothesis' own: as they are
     if (m.isInstancedMesh) {
       const inst = m.userData.instances || extrasOf(m)?.instances || [];
-      for (let i = 0; i < m.count; i++) {
+      for (let i = 0; i < m.userData.matrices.length; i++) {
         const p = (inst[i] || {}).path || "";
-        m.setMatrixAt(i, inBase && covers(hidden, p) ? zero : m.userData.matrices[i]);
-        if (state.view === "reliability") {
-          const ev = ((extrasOf(m, i) || {}).paradata || {}).evidence;
-          m.setColorAt(i, emMaterial(ev).color);
-        } else if (m.instanceColor) m.setColorAt(i, new THREE.Color(1, 1, 1));
+        const hide = inBase && covers(hidden, p);
+        if (d) lod.setHidden(m, i, hide);
+        else m.setMatrixAt(i, hide ? zero : m.userData.matrices[i]);
+        const colour = state.view === "reliability"
+          ? emMaterial(((extrasOf(m, i) || {}).paradata || {}).evidence).color
+          : (d ? d.colours : m.instanceColor) && new THREE.Color(1, 1, 1);
+        if (colour && d) lod.setColour(m, i, colour);
+        else if (colour) m.setColorAt(i, colour);
       }
-      m.instanceMatrix.needsUpdate = true;
-      if (m.instanceColor) m.instanceColor.needsUpdate = true;
+      if (!d) {
+        m.instanceMatrix.needsUpdate = true;
+        if (m.instanceColor) m.instanceColor.needsUpdate = true;
+        m.computeBoundingSphere();
+      }
       m.material = state.view === "reliability" ? white : m.userData.appearance;
-      m.computeBoundingSphere();
     } else {
-      m.visible = !(inBase && covers(hidden, pathOf(m)));
+      const hide = inBase && covers(hidden, pathOf(m));
+      if (d) for (let i = 0; i < d.n; i++) lod.setHidden(m, i, hide);
+      else m.visible = !hide;
       const ev = ((extrasOf(m) || {}).paradata || {}).evidence;
       m.material = state.view === "reliability" ? emMaterial(ev) : m.userData.appearance;
     }
   }
+  lod.invalidate();
   writeHash();
   render();
 }
@@ -132,6 +147,7 @@ function isIn(o, root) {
 }
 
 function render() {
+  lod.update(camera, host.clientHeight, walk.checked ? camera.position : controls.target);
   renderer.render(scene, camera);
 }
 function resize() {
@@ -245,10 +261,11 @@ renderer.domElement.addEventListener("pointerup", (e) => {
 });
 function pick(x, y) {
   ray.setFromCamera(new THREE.Vector2(x, y), camera);
-  const hits = ray.intersectObjects([base, ...Object.values(alts)].filter((o) => o.visible), true);
+  const hits = ray.intersectObjects([base, lod.far, ...Object.values(alts)].filter((o) => o.visible), true);
   const hit = hits.find((h) => h.object.visible && isVisible(h.object, h.instanceId));
-  const ex = hit ? extrasOf(hit.object, hit.instanceId) : null;
-  const rec = ex && ex.paradata ? { ...ex.paradata, path: ex.path || pathOf(hit.object) } : null;
+  const at = hit ? lod.resolve(hit) : null; // a far copy, a packed instance: the item it draws
+  const ex = at ? extrasOf(at.object, at.id) : null;
+  const rec = ex && ex.paradata ? { ...ex.paradata, path: ex.path || pathOf(at.object) } : null;
   state.sel = rec ? rec.path : "";
   showPart(rec);
   writeHash();
@@ -342,7 +359,7 @@ function screenBox(id) {
     const inAlt = alts[id] && isIn(m, alts[id]);
     if (m.isInstancedMesh) {
       const inst = m.userData.instances || [];
-      for (let i = 0; i < m.count; i++)
+      for (let i = 0; i < m.userData.matrices.length; i++)
         if (inAlt || (isIn(m, base) && covers(h.changes, (inst[i] || {}).path || ""))) add(m, i);
     } else if (inAlt || (isIn(m, base) && covers(h.changes, pathOf(m)))) add(m);
   }
@@ -414,6 +431,33 @@ apply();
 window.app = {
   data, setView, setHypothesis, select, pick, screenBox, frameTimes, render, snapshot, diff, hash,
   interactive, software,
+  lod: () => ({ ...lod.stats(), triangles: renderer.info.render.triangles, calls: renderer.info.render.calls }),
+  focus: (key) => {
+    // the camera on one unit, framed as the temple site frames its temple
+    const g = lod.groups.find((x) => x.key === key);
+    walk.checked = false;
+    camera.position.copy(g.sphere.center).add(new THREE.Vector3(0.75, 0.5, 1.0).normalize().multiplyScalar(g.sphere.radius * 2 * 1.45));
+    controls.target.copy(g.sphere.center);
+    controls.update();
+    render();
+  },
+  streetView: (key) => {
+    // walk mode, at eye height 0.7 of one unit's radius to the +x and the +z of its centre (a
+    // city temple's lot corner), facing the unit
+    const g = lod.groups.find((x) => x.key === key);
+    walk.checked = true;
+    const c = g.sphere.center, r = 0.7 * g.sphere.radius;
+    camera.position.set(c.x + r, box.min.y + 1.7, c.z + r);
+    controls.target.copy(c);
+    controls.update();
+    render();
+  },
+  turn: (a) => {
+    // the camera a little around the orbit target (no render)
+    const v = camera.position.clone().sub(controls.target).applyAxisAngle(new THREE.Vector3(0, 1, 0), a);
+    camera.position.copy(controls.target).add(v);
+    controls.update();
+  },
   state: () => ({ view: state.view, hyps: [...state.hyps].sort(), sel: state.sel }),
   setCamera: (c) => {
     camera.position.set(c[0], c[1], c[2]);
