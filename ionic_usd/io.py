@@ -532,11 +532,21 @@ def verified_cache(
             sums[rel] = sha256_file(stage / rel)
         atomic_write_bytes(stage / MANIFEST_NAME, json.dumps({"sha256": sums}).encode())
         _fsync_dir(stage)
-        if os.path.lexists(entry):  # a bad entry: move it aside, then delete it
-            aside = _tmp_sibling(entry, _STAGE_TAG)
+        if os.path.lexists(entry):
+            # another process may have finished the entry while this one produced it, and
+            # may be reading it now: a good entry is kept (replacing it deleted the files
+            # under that reader: a city's parallel builds, copying the stone maps)
+            if _cache_ok(entry):
+                return entry
+            aside = _tmp_sibling(entry, _STAGE_TAG)  # a bad entry: move it aside, delete it
             os.replace(entry, aside)
             shutil.rmtree(aside, ignore_errors=True)
-        os.replace(stage, entry)
+        try:
+            os.replace(stage, entry)
+        except OSError:
+            if _cache_ok(entry):  # another process renamed its entry into place first
+                return entry
+            raise
         _fsync_dir(entry.parent)
     finally:
         shutil.rmtree(stage, ignore_errors=True)

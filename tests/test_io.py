@@ -255,6 +255,28 @@ def test_verified_cache_rebuilds_bad_entries(tmp_path):
     assert _entries(entry.parent) == ["key"]
 
 
+def test_verified_cache_keeps_an_entry_another_process_finished_meanwhile(tmp_path):
+    """Two builds produce one entry at once (a city's temples on parallel workers, the stone
+    maps): the one finishing second must not replace the first one's good entry, which its
+    builder may be reading (replacing it deleted the files under that reader: a cold city
+    build failed with FileNotFoundError copying terracotta_roughness.png)."""
+    entry = tmp_path / "cache" / "key"
+
+    def other(folder: Path) -> None:
+        (folder / "a.bin").write_bytes(b"A" * 100)
+
+    seen: list[int] = []
+
+    def produce(folder: Path) -> None:
+        verified_cache(entry, other)  # the other process finishes while this one produces
+        seen.append((entry / "a.bin").stat().st_ino)  # and its builder reads that file
+        (folder / "a.bin").write_bytes(b"A" * 100)
+
+    verified_cache(entry, produce)
+    assert (entry / "a.bin").stat().st_ino == seen[0]  # the other's entry, not replaced
+    assert _entries(entry.parent) == ["key"]
+
+
 def test_verified_cache_failure_leaves_nothing(tmp_path):
     def produce(folder: Path) -> None:
         (folder / "a.bin").write_bytes(b"half")
