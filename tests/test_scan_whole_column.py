@@ -31,8 +31,33 @@ def _fit(seed: int):
     return fit, rms
 
 
+#: the capital's rms (mm) on seeds 0-4: 38.8-41.9 with the volute's size, eyes and placement
+#: free, 5.8-6.4 with its width, bolsters, echinus and abacus free too (issue 36)
+CAPITAL_BEFORE = 38.8
+CAPITAL_BOUND = 8.0
+
+
+def _check_capital(fit, rms: dict[str, float]) -> None:
+    """The capital's rms far below the old model's (not yet the noise: the strict xfail
+    below), and the parts the scan shows measured: the volute faces 680 mm apart (the
+    description's D = 800), the abacus 960 mm square and its top 290 mm above the shaft's."""
+    assert rms["capital"] <= CAPITAL_BOUND < CAPITAL_BEFORE / 4, rms
+    from synth_column import CapitalTruth
+
+    c, v = CapitalTruth(), fit.summary()["parts"]["capital"]["values"]
+    # the model's volutes are not these Archimedean ones: its width comes out 11-13 mm wide
+    # of the faces on seeds 1 and 3 (691, 693 mm), within 3 %
+    assert 1000.0 * v["capital_width"] == pytest.approx(2.0 * c.face, abs=20.0)
+    assert 1000.0 * v["abacus_length"] == pytest.approx(2.0 * c.abacus_half, abs=25.0)
+    assert 1000.0 * v["abacus_width"] == pytest.approx(2.0 * c.abacus_half, abs=25.0)
+    fitted = fit.summary()["parts"]["capital"]
+    assert {"capital_width", "abacus_side", "echinus_height"} <= set(fitted["fitted"])
+    assert "relief_depth" in fitted["kept"]
+
+
 def _check_base_and_shaft(seed: int) -> None:
     fit, rms = _fit(seed)
+    _check_capital(fit, rms)
     s = fit.summary()
     t = Truth()
     assert s["parts_found"] == ["base", "capital", "shaft"]
@@ -50,7 +75,8 @@ def _check_base_and_shaft(seed: int) -> None:
 
 def test_whole_column_base_and_shaft_fit_to_the_noise():
     """Measured (seed 0): base 0.89, shaft 0.88 mm rms (the shaft was 1.45 before its top
-    ring and taper were fitted again at the length the capital sets)."""
+    ring and taper were fitted again at the length the capital sets); the capital 6.1 mm
+    (38.8 before its width, bolsters, echinus and abacus were fitted)."""
     _check_base_and_shaft(0)
 
 
@@ -63,9 +89,10 @@ def test_whole_column_base_and_shaft_fit_to_the_noise_any_scan(seed):
 @pytest.mark.slow
 @pytest.mark.xfail(
     strict=True,
-    reason="the capital model (the project's Vitruvian capital with its volute size, eye "
-    "height and spacing, scale and height free) cannot take this capital's echinus, cushion "
-    "depth, volute relief and abacus: measured 38.7-41.8 mm rms on seeds 0-2 (issue 36)",
+    reason="the capital model (the project's capital with its volute's size, eye height and "
+    "spacing, width, bolster radius, echinus height and projection, abacus side and height, "
+    "scale and height free) cannot take this capital's Archimedean volutes, their relief and "
+    "the rolls centred on their eyes: measured 5.8-6.4 mm rms on seeds 0-4 (issue 36)",
 )
 def test_whole_column_capital_fits_to_the_noise():
     _, rms = _fit(0)

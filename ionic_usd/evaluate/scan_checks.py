@@ -78,7 +78,8 @@ def _part_report(
             rep.update(
                 status="fitted",
                 model=f"generator capital, volute {cap_fit.model}",
-                fitted=["scale", "height", "volute_scale", "eye_height", "eye_spacing"],
+                fitted=cap_fit.fitted,
+                kept=cap_fit.kept,
                 values=cap_fit.values,
                 models=cap_fit.models,
                 bounds_hit=cap_fit.bounds_hit,
