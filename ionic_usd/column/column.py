@@ -438,7 +438,12 @@ def column_params_to_tables(p: ColumnParams) -> dict[str, dict]:
         return out
 
     cap = plain(p.capital)
-    scroll = cap.pop("scroll")
+    cap.pop("scroll", None)  # a parsed grammar (a dataclass) is left out by plain(): as text
+    scroll = p.capital.scroll
+    if not isinstance(scroll, str):
+        from ionic_usd.grammar.scroll import format_scroll
+
+        scroll = format_scroll(scroll)
     column = {"lod": p.lod, "base": p.base, "scroll": scroll}
     if p.base_height is not None:
         column["base_height"] = p.base_height
