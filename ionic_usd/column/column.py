@@ -444,7 +444,7 @@ def column_params_to_tables(p: ColumnParams) -> dict[str, dict]:
         from ionic_usd.grammar.scroll import format_scroll
 
         scroll = format_scroll(scroll)
-    column = {"lod": p.lod, "base": p.base, "scroll": scroll}
+    column: dict[str, Any] = {"lod": p.lod, "base": p.base, "scroll": scroll}
     if p.base_height is not None:
         column["base_height"] = p.base_height
     if p.base_plinth is not None:
