@@ -356,28 +356,20 @@ def fit_scanned_capital(
             surf = build(model, x)
             return np.full(len(q), 10.0 * size) if surf is None else dist(surf, s, ty)
 
-        sol = least_squares(
-            res,
-            x,
-            bounds=(_LO, _HI),
-            loss="soft_l1",
-            f_scale=f_scale,
-            x_scale=_XSCALE,
-            diff_step=3e-2,
-            max_nfev=12,
-        )
-        x = sol.x.copy()
-        x = grid(model, x, s, ty, GRIDDED_AFTER, 13)
-        sol = least_squares(
-            res,
-            x,
-            bounds=(_LO, _HI),
-            loss="soft_l1",
-            f_scale=f_scale,
-            x_scale=_XSCALE,
-            diff_step=3e-2,
-            max_nfev=4,
-        )
+        def solve(x: np.ndarray, nfev: int, res=res):
+            return least_squares(
+                res,
+                x,
+                bounds=(_LO, _HI),
+                loss="soft_l1",
+                f_scale=f_scale,
+                x_scale=_XSCALE,
+                diff_step=3e-2,
+                max_nfev=nfev,
+            )
+
+        x = grid(model, solve(x, 12).x.copy(), s, ty, GRIDDED_AFTER, 13)
+        sol = solve(x, 4)
         c = _proportioned(cap, model, sol.x)
         surf = capital_surface(c, top_radius, outer=True)
         s_m, ty_m, cost = place(surf, s, ty, 0.02 * size)
