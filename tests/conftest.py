@@ -69,7 +69,8 @@ def tiny_city(tiny_temple):
     """A 2 x 2 city of the tiny temple (instanced temples + a PointInstancer of columns)."""
     import numpy as np
 
-    from ionic_usd.usd.city import ColumnInstances, TempleInstances, compose_city
+    from ionic_usd.blueprint.city import ColumnInstances, TempleInstances
+    from ionic_usd.usd.city import compose_city
 
     city = tiny_temple.root.parent.parent
     name = tiny_temple.root.parent.name

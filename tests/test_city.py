@@ -357,7 +357,8 @@ def test_lod_by_distance_selects_the_temple_lod_set(grid_city, tmp_path):
     ``lod`` variant set (which passes it to every column); equal LODs share a prototype."""
     import shutil
 
-    from ionic_usd.usd.city import ColumnInstances, TempleInstances, compose_city
+    from ionic_usd.blueprint.city import ColumnInstances, TempleInstances
+    from ionic_usd.usd.city import compose_city
 
     out, s, _ = grid_city
     src = next((out / "Temples").iterdir())

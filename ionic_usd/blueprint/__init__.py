@@ -18,6 +18,8 @@ worker or the up-to-date check that needs a name or an option loads no USD.
   asset it instances;
 - :mod:`ionic_usd.blueprint.hypotheses`: the hypotheses' variant vocabulary on ``/Temple``, the
   part and column-group prim names, and the checks of what the composer can realise;
+- :mod:`ionic_usd.blueprint.city`: a city's temples and street columns as instance arrays, which
+  :func:`ionic_usd.usd.city.compose_city` authors;
 - :mod:`ionic_usd.blueprint.temple_plan`: the temple's plan (:func:`plan_temple`, validated
   before anything is written) and the ``detail`` vocabulary and kernel values, which
   :func:`ionic_usd.usd.temple.write_temple` authors.

@@ -16,10 +16,13 @@ from ionic_usd.city.layout import distance_from
 from ionic_usd.pipeline.spec import TempleSpec
 
 if TYPE_CHECKING:
-    from ionic_usd.pipeline.city import CityOptions
+    from ionic_usd.pipeline.city_options import CityOptions
 
 __all__ = ["COLUMN_FINISH", "far_cards", "far_column_cards"]
 
+# the LOD cards are baked from: at card resolution (256 px for a 25 m temple, ~10 cm a pixel)
+# low and high columns cover the same pixels (coverage per face equal to 1e-4, measured) and
+# the bake takes 3.2 s instead of 7.6 s
 _CARD_LOD = "low"
 _CARD_BAKE = f"cards-v2-{_CARD_LOD}"  # v2: Hydra's face axes (side faces Z-up)
 #: the street columns' finish variant

@@ -54,20 +54,18 @@ Derived geometry (documented here, tested in ``tests/test_layout.py``):
 
 from __future__ import annotations
 
-import math
 import os
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from importlib import resources
 from pathlib import Path
-from types import MappingProxyType
 from typing import Any
 
 import numpy as np
 
 from ionic_usd.errors import ParameterError
 from ionic_usd.params import load_toml, prim_key
-from ionic_usd.temple.cuboid import Cuboid, Incline
+from ionic_usd.temple.cuboid import Cuboid
 
 # the description's types, re-exported: a layout is read in their terms
 from ionic_usd.temple.description import (
@@ -79,8 +77,15 @@ from ionic_usd.temple.description import (
     Hypothesis,
     Layer,
     TempleParams,
-    enum_value,
     exclusive_clash,
+)
+from ionic_usd.temple.massing import (
+    ROOF_BED,
+    TempleLayout,
+    box,
+    outer_rotation,
+    podium_cuboids,
+    roof_cuboids,
 )
 
 # the TOML readers, re-exported for callers of the layout
@@ -93,6 +98,7 @@ from ionic_usd.temple.tables import (
     load_cuboids_toml,
     params_from_tables,
 )
+from ionic_usd.temple.typed_layout import layout_from_type_mapping
 
 __all__ = [
     "Layer",
@@ -145,107 +151,6 @@ def colonnade_positions(start, end, count: int) -> np.ndarray:
     return a + t * (b - a)
 
 
-@dataclass(frozen=True, eq=False)
-class TempleLayout:
-    """A temple as values for the composer.
-
-    Parameters
-    ----------
-    name : str
-    cuboids : Mapping[Layer, tuple[Cuboid, ...]]
-        Closed solids per layer (build meshes with :func:`~ionic_usd.temple.cuboid_mesh`).
-    columns : tuple[ColumnPlacement, ...]
-    params : TempleParams
-        The dimensions used (after ``applied`` hypotheses).
-    hypotheses : tuple[Hypothesis, ...]
-        All alternatives recorded in the source TOML.
-    applied : tuple[str, ...]
-        Ids of the hypotheses whose temple keys were applied.
-    """
-
-    name: str
-    cuboids: Mapping[Layer, tuple[Cuboid, ...]]
-    columns: tuple[ColumnPlacement, ...]
-    params: TempleParams
-    hypotheses: tuple[Hypothesis, ...] = ()
-    applied: tuple[str, ...] = ()
-    # per-part evidence (ionic_usd.temple.paradata.Paradata); None: stated nowhere
-    paradata: Any = None
-
-    def __post_init__(self) -> None:
-        groups = {
-            enum_value(Layer, k, "layer", self.name): tuple(v) for k, v in self.cuboids.items()
-        }
-        object.__setattr__(self, "cuboids", MappingProxyType(groups))
-        object.__setattr__(self, "columns", tuple(self.columns))
-        object.__setattr__(self, "hypotheses", tuple(self.hypotheses))
-        object.__setattr__(self, "applied", tuple(self.applied))
-
-    def all_cuboids(self) -> tuple[Cuboid, ...]:
-        return tuple(c for cs in self.cuboids.values() for c in cs)
-
-    def columns_of(self, kind: ColumnKind | str) -> tuple[ColumnPlacement, ...]:
-        k = ColumnKind(kind)
-        return tuple(c for c in self.columns if c.kind is k)
-
-    def cuboid(self, name: str) -> Cuboid:
-        for c in self.all_cuboids():
-            if c.name == name:
-                return c
-        raise ParameterError("name", name, "the name of one of the layout's cuboids")
-
-    @property
-    def stylobate_height(self) -> float:
-        return self.params.podium_height
-
-    @property
-    def pitch_deg(self) -> float:
-        return self.params.pitch_deg
-
-    @property
-    def axial_spacing(self) -> float:
-        return self.params.axial_spacing
-
-
-def _box(name, x0, y0, z0, x1, y1, z1, rise=0.0, incline=Incline.SHEAR) -> Cuboid:
-    return Cuboid((x0, y0, z0), (x1, y1, z1), rise, incline, name=name)
-
-
-def _podium(p: TempleParams) -> list[Cuboid]:
-    w2, l2, pr = p.stylobate_width / 2, p.stylobate_length / 2, p.footing_projection
-    fh, h, cw, run = (
-        p.podium_footing_height,
-        p.podium_height,
-        p.podium_cheek_wall_width,
-        p.stair_run,
-    )
-    front = l2 + run
-    out = [
-        _box("footing", -w2 - pr, 0.0, -l2 - pr, w2 + pr, fh, l2),
-        _box("die", -w2, fh, -l2, w2, h, l2),
-    ]
-    for side, sgn in (("left", -1.0), ("right", 1.0)):
-        xs = sorted((sgn * (w2 - cw), sgn * (w2 + pr)))
-        out.append(_box(f"cheek_footing_{side}", xs[0], 0.0, l2, xs[1], fh, front + pr))
-        xs = sorted((sgn * (w2 - cw), sgn * w2))
-        out.append(_box(f"cheek_wall_{side}", xs[0], fh, l2, xs[1], h, front))
-    n = p.steps_count
-    riser, tread = h / n, run / n
-    for i in range(n):
-        out.append(
-            _box(
-                f"step_{i + 1:02d}",
-                -(w2 - cw),
-                i * riser,
-                l2,
-                w2 - cw,
-                (i + 1) * riser,
-                l2 + (n - i) * tread,
-            )
-        )
-    return out
-
-
 def _cella(p: TempleParams) -> list[Cuboid]:
     xa, t, y0 = p.x_axis, p.cella_wall_thickness, p.podium_height
     y1 = y0 + p.columns_height
@@ -253,12 +158,12 @@ def _cella(p: TempleParams) -> list[Cuboid]:
     zf = p.z_front_axis - p.columns_porch_depth * p.axial_spacing
     d2 = p.door_width / 2
     return [
-        _box("wall_left", -xa, y0, zr, -xa + t, y1, zf),
-        _box("wall_right", xa - t, y0, zr, xa, y1, zf),
-        _box("wall_rear", -xa + t, y0, zr, xa - t, y1, zr + t),
-        _box("wall_front_left", -xa + t, y0, zf - t, -d2, y1, zf),
-        _box("wall_front_right", d2, y0, zf - t, xa - t, y1, zf),
-        _box("door_lintel", -d2, y0 + p.door_height, zf - t, d2, y1, zf),
+        box("wall_left", -xa, y0, zr, -xa + t, y1, zf),
+        box("wall_right", xa - t, y0, zr, xa, y1, zf),
+        box("wall_rear", -xa + t, y0, zr, xa - t, y1, zr + t),
+        box("wall_front_left", -xa + t, y0, zf - t, -d2, y1, zf),
+        box("wall_front_right", d2, y0, zf - t, xa - t, y1, zf),
+        box("door_lintel", -d2, y0 + p.door_height, zf - t, d2, y1, zf),
     ]
 
 
@@ -269,42 +174,11 @@ def _entablature(p: TempleParams) -> tuple[list[Cuboid], float, float, float, fl
     proj = c * p.entablature_cornice_projection_ratio
     y = p.podium_height + p.columns_height
     out = [
-        _box("architrave", -xe, y, -ze, xe, y + a, ze),
-        _box("frieze", -xe, y + a, -ze, xe, y + a + f, ze),
-        _box("cornice", -xe - proj, y + a + f, -ze - proj, xe + proj, y + a + f + c, ze + proj),
+        box("architrave", -xe, y, -ze, xe, y + a, ze),
+        box("frieze", -xe, y + a, -ze, xe, y + a + f, ze),
+        box("cornice", -xe - proj, y + a + f, -ze - proj, xe + proj, y + a + f + c, ze + proj),
     ]
     return out, y + a + f + c, xe, ze, proj
-
-
-# (!) assumption: the roof's bed on the cornice at the eaves (mortar and tile bedding), so the
-# gable wedges have an outer face there; 5 cm.
-ROOF_BED = 0.05
-
-
-def _roof(p: TempleParams, y: float, xe: float, ze: float, proj: float) -> list[Cuboid]:
-    tan = 2.0 / p.roof_tympanum_ratio
-    xc, zc = xe + proj, ze + proj
-    h = xc * tan  # the slab soffit's rise from the eaves to the ridge = width / tympanum_ratio
-    s = p.roof_slab_thickness
-    yb = y + ROOF_BED
-    return [
-        _box("roof_left", -xc, yb, -zc, 0.0, yb + s, zc, h),
-        _box("roof_right", 0.0, yb + h, -zc, xc, yb + h + s, zc, -h),
-        _box("pediment_left", -xc, y, -ze, 0.0, yb, ze, h, Incline.WEDGE),
-        _box("pediment_right", 0.0, y, -ze, xc, yb + h, ze, -h, Incline.WEDGE),
-    ]
-
-
-def _outer_rotation(sx: float, sz: float) -> float:
-    """The quarter-turn rotation taking local +Z and +X to the outer sides ``(sx, 0, 0)`` and
-    ``(0, 0, sz)`` (signs ±1) of a corner, in one order or the other."""
-    for deg in (0.0, 90.0, 180.0, -90.0):
-        t = math.radians(deg)
-        facing = (round(math.sin(t)), round(math.cos(t)))  # local +Z as (x, z)
-        xaxis = (round(math.cos(t)), round(-math.sin(t)))  # local +X as (x, z)
-        if {facing, xaxis} == {(int(sx), 0), (0, int(sz))}:
-            return deg
-    raise AssertionError("unreachable: two perpendicular sides have a quarter turn")
 
 
 def _columns(p: TempleParams) -> list[ColumnPlacement]:
@@ -317,7 +191,7 @@ def _columns(p: TempleParams) -> list[ColumnPlacement]:
     front = colonnade_positions((-xa, y, zf), (xa, y, zf), nf)
     rear = colonnade_positions((-xa, y, -zf), (xa, y, -zf), nf)
     for j, pos in enumerate(front):
-        corner = _outer_rotation(np.sign(pos[0]), 1.0) if j in (0, nf - 1) else None
+        corner = outer_rotation(np.sign(pos[0]), 1.0) if j in (0, nf - 1) else None
         out.append(
             ColumnPlacement(
                 tuple(pos), 0.0, ColumnKind.FREE, name=f"front_{j + 1}", angle_rotation_deg=corner
@@ -330,13 +204,13 @@ def _columns(p: TempleParams) -> list[ColumnPlacement]:
             if k < porch:
                 kind = ColumnKind.FREE
             elif k == porch:  # the flank wall starts here, at the cella's front wall
-                kind, rot = ColumnKind.CORNER, _outer_rotation(sgn, 1.0)
+                kind, rot = ColumnKind.CORNER, outer_rotation(sgn, 1.0)
             out.append(ColumnPlacement(tuple(flank[k]), rot, kind, name=f"{side}_{k + 1}"))
     for j, pos in enumerate(rear):
         kind, rot, corner = ColumnKind.ENGAGED, 180.0, None
         if j in (0, nf - 1):
             kind = ColumnKind.CORNER
-            rot = corner = _outer_rotation(np.sign(pos[0]), -1.0)
+            rot = corner = outer_rotation(np.sign(pos[0]), -1.0)
         out.append(
             ColumnPlacement(tuple(pos), rot, kind, name=f"rear_{j + 1}", angle_rotation_deg=corner)
         )
@@ -393,10 +267,10 @@ def build_layout(
         params = replace(params, **changes)
     ent, y_top, xe, ze, proj = _entablature(params)
     groups: dict[Layer, list[Cuboid]] = {
-        Layer.PODIUM: _podium(params),
+        Layer.PODIUM: podium_cuboids(params),
         Layer.CELLA: _cella(params),
         Layer.ENTABLATURE: ent,
-        Layer.ROOF: _roof(params, y_top, xe, ze, proj),
+        Layer.ROOF: roof_cuboids(params, y_top, xe, ze, proj),
     }
     for layer, cs in (extra_cuboids or {}).items():
         groups[Layer(layer)].extend(cs)
@@ -436,8 +310,6 @@ def layout_from_mapping(
     if isinstance(data, Mapping) and "extends" in data:
         data = resolve_extends(data, context=ctx)
     if isinstance(data, Mapping) and "type" in data:  # a temple type (temple.vitruvius)
-        from ionic_usd.temple.typed_layout import layout_from_type_mapping
-
         return layout_from_type_mapping(data, context=ctx, apply=apply)
     check_temple_tables(data, context=ctx)  # types and ranges of every table, at the boundary
     params = params_from_tables(data, context=ctx)

@@ -46,6 +46,7 @@ from ionic_usd.temple.description import (
     Layer,
     TempleParams,
 )
+from ionic_usd.temple.massing import TempleLayout, outer_rotation, podium_cuboids, roof_cuboids
 from ionic_usd.temple.vitruvius import (
     CELLA_INSET,
     PERIPTERAL_FAMILY,
@@ -251,19 +252,13 @@ def _cella(pl: TypePlan, p: TypeParams, w: _Walls) -> list[Cuboid]:
     return out
 
 
-def _outer_rotation(sx: float, sz: float) -> float:
-    from ionic_usd.temple.layout import _outer_rotation as rot
-
-    return rot(sx, sz)
-
-
 def _row(xs, z, y, prefix, rot, corners=False, kind=ColumnKind.FREE) -> list[ColumnPlacement]:
     out = []
     n = len(xs)
     for j, x in enumerate(xs):
         angle = None
         if corners and j in (0, n - 1):
-            angle = _outer_rotation(1.0 if x > 0 else -1.0, 1.0 if z > 0 else -1.0)
+            angle = outer_rotation(1.0 if x > 0 else -1.0, 1.0 if z > 0 else -1.0)
         r = rot if angle is None else angle  # a corner turns its angle capital outward
         out.append(
             ColumnPlacement((x, y, z), r, kind, name=f"{prefix}_{j + 1}", angle_rotation_deg=angle)
@@ -335,7 +330,7 @@ def _pseudo(pl: TypePlan) -> list[ColumnPlacement]:
             if k < porch:
                 kind = ColumnKind.FREE
             elif k == porch:
-                kind, rot = ColumnKind.CORNER, _outer_rotation(sgn, 1.0)
+                kind, rot = ColumnKind.CORNER, outer_rotation(sgn, 1.0)
             out.append(
                 ColumnPlacement(
                     (sgn * pl.x_outer, y, zf - k * s), rot, kind, name=f"{side}_{k + 1}"
@@ -345,7 +340,7 @@ def _pseudo(pl: TypePlan) -> list[ColumnPlacement]:
         kind, rot, angle = ColumnKind.ENGAGED, 180.0, None
         if j in (0, len(pl.xs) - 1):
             kind = ColumnKind.CORNER
-            rot = angle = _outer_rotation(1.0 if x > 0 else -1.0, -1.0)
+            rot = angle = outer_rotation(1.0 if x > 0 else -1.0, -1.0)
         out.append(
             ColumnPlacement((x, y, -zf), rot, kind, name=f"rear_{j + 1}", angle_rotation_deg=angle)
         )
@@ -365,8 +360,6 @@ def type_layout(
 ):
     """The layout of a type (module docstring); ``apply``: ids of hypotheses whose
     ``type.…`` changes to apply."""
-    from ionic_usd.temple.layout import TempleLayout, _podium, _roof
-
     hyps = tuple(hypotheses)
     by_id = {h.id: h for h in hyps}
     applied = tuple(apply)
@@ -386,11 +379,12 @@ def type_layout(
     pl = resolve(t)
     ent, y_top, xe, ze, proj = _entablature(p)
     w = _walls(pl, p)
+    crepidoma = pl.foundation is Foundation.CREPIDOMA
     groups: dict[Layer, list[Cuboid]] = {
-        Layer.PODIUM: _crepidoma(pl) if pl.foundation is Foundation.CREPIDOMA else _podium(p),
+        Layer.PODIUM: _crepidoma(pl) if crepidoma else podium_cuboids(p),
         Layer.CELLA: _cella(pl, p, w),
         Layer.ENTABLATURE: ent,
-        Layer.ROOF: _roof(p, y_top, xe, ze, proj),
+        Layer.ROOF: roof_cuboids(p, y_top, xe, ze, proj),
     }
     for layer, cs in (extra_cuboids or {}).items():
         groups[Layer(layer)].extend(cs)

@@ -23,7 +23,7 @@ from ionic_usd.usd.city_prototypes import (
 )
 
 if TYPE_CHECKING:
-    from ionic_usd.usd.city import ColumnInstances, TempleInstances
+    from ionic_usd.blueprint.city import ColumnInstances, TempleInstances
 
 __all__ = [
     "CARD_TRIANGLES",
