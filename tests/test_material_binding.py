@@ -83,6 +83,9 @@ def test_the_finish_switches_the_columns_material_in_the_library(portunus_temple
     temple.GetVariantSet("hyp_finish_bare_stone").SetVariantSelection("alternative")
     bound = _check_one_library(stage.GetPseudoRoot(), Sdf.Path("/Temple/Materials"))
     assert {p.name for m, p in bound.items() if m.HasPrefix("/Temple/Colonnade")} == {"Travertine"}
+    protos = _prototype_bound(stage)  # the prototypes, read alone, switch too
+    assert len(protos) == 3
+    assert set().union(*protos.values()) == {Sdf.Path("/Temple/Materials/Travertine")}
     stage.GetSessionLayer().Clear()
     # a user's selection on one column: that column only
     one = stage.GetPrimAtPath("/Temple/Colonnade/Free/front_1")
