@@ -87,14 +87,6 @@ class _Rows(dict):
         self[self.n] = row
         self.n += 1
 
-    def array(self) -> np.ndarray:
-        """All rows (appended included) as one array."""
-        out = np.empty((self.n, *self.src.shape[1:]), dtype=self.src.dtype)
-        out[: len(self.src)] = self.src
-        for k, row in self.items():
-            out[k] = row
-        return out
-
 
 class TriangleEditor:
     """A closed, consistently wound triangle mesh under local edits (see the module).
@@ -110,28 +102,46 @@ class TriangleEditor:
         self.P = _Rows(self.pts)  # the points as floats (kept equal to pts)
         self.tri0 = mesh.triangles.astype(np.int64).reshape(-1, 3)
         self.T = _Rows(self.tri0)
-        # per-corner values carried through every edit: the normals (3), st (2) and the st
-        # chart (1: an edit never joins two charts, whose values may meet at a point)
-        parts = []
-        corner_n = corner_normals(mesh)
-        if corner_n is not None:
-            parts.append(np.asarray(corner_n, dtype=np.float64).reshape(-1, 3, 3))
-        if mesh.st is not None and mesh.st_indices is not None:
-            parts.append(np.asarray(mesh.st, dtype=np.float64)[mesh.st_indices].reshape(-1, 3, 2))
-            chart = chart_labels(mesh.st_indices, len(mesh.st)).astype(np.float64)
-            parts.append(np.repeat(chart, 3).reshape(-1, 3, 1))
-        self.cn0 = np.concatenate(parts, axis=2) if parts else None
-        self.n_ch = 0 if self.cn0 is None else self.cn0.shape[2]
+        # T and the live triangles as arrays too (kept equal by _set_tri and _kill; room for
+        # the triangles snaps add), for the vectorised sliver scans and the result
+        self.tri = np.concatenate([self.tri0, np.zeros((len(self.tri0) // 8 + 8, 3), np.int64)])
+        self.alive = np.zeros(len(self.tri), dtype=bool)
+        self.alive[: len(self.tri0)] = True
+        self._corner_values(mesh)
         self.cn: dict[int, np.ndarray] = {}  # the (3, n_ch) corners of each edited or new face
-        self.n_dim = 3 if corner_n is not None else 0
-        self.alive = [True] * len(self.T)
         # vertex → the live triangles using it, made on first use from the input's incidence
         # (every edit goes through faces_of for each vertex it touches, so it stays exact)
         flat = self.tri0.reshape(-1)
         counts = np.bincount(flat, minlength=len(self.pts))
-        self._first_use = np.concatenate([[0], np.cumsum(counts)]).tolist()
-        self._by_vertex = (np.argsort(flat, kind="stable") // 3).tolist()
+        self._first_use = np.concatenate([[0], np.cumsum(counts)])
+        self._by_vertex = np.argsort(flat, kind="stable") // 3
         self._inc: dict[int, set[int]] = {}
+        # edit clock: each edit ticks it and stamps every vertex whose star (its triangles,
+        # their rows, corners and points) it changes; an operation on a triangle reads only
+        # the stars of its three vertices, so one that failed fails again until one is stamped
+        self.clock = 0
+        self.stamp = [0] * len(self.pts)
+
+    def _corner_values(self, mesh: Mesh) -> None:
+        """The per-corner values carried through every edit: the normals (3), st (2) and the
+        st chart (1: an edit never joins two charts, whose values may meet at a point)."""
+        parts = []
+        corner_n = corner_normals(mesh)
+        self.nrm32 = None if corner_n is None else np.asarray(corner_n).astype(np.float32)
+        if corner_n is not None:
+            parts.append(np.asarray(corner_n, dtype=np.float64).reshape(-1, 3, 3))
+        self.st_idx = None
+        if mesh.st is not None and mesh.st_indices is not None:
+            self.st32 = np.asarray(mesh.st).astype(np.float32)
+            self.st_idx = np.asarray(mesh.st_indices, dtype=np.int64)
+            parts.append(np.asarray(mesh.st, dtype=np.float64)[mesh.st_indices].reshape(-1, 3, 2))
+            chart = chart_labels(mesh.st_indices, len(mesh.st)).astype(np.float64)
+            self.chart_of_st = np.zeros(len(self.st32))  # one chart per st value
+            self.chart_of_st[self.st_idx] = np.repeat(chart, 3)
+            parts.append(np.repeat(chart, 3).reshape(-1, 3, 1))
+        self.cn0 = np.concatenate(parts, axis=2) if parts else None
+        self.n_ch = 0 if self.cn0 is None else self.cn0.shape[2]
+        self.n_dim = 3 if corner_n is not None else 0
 
     # ---- queries ----------------------------------------------------------------------------
     def corners_of(self, f: int) -> np.ndarray:
@@ -143,11 +153,17 @@ class TriangleEditor:
         """The live triangles using vertex ``v`` (the set itself: edits keep it exact)."""
         got = self._inc.get(v)
         if got is None:
-            got = self._inc[v] = set(self._by_vertex[self._first_use[v] : self._first_use[v + 1]])
+            lo, hi = self._first_use[v], self._first_use[v + 1]
+            got = self._inc[v] = set(self._by_vertex[lo:hi].tolist())
         return got
 
     def edge_faces(self, a: int, b: int) -> set[int]:
         return self.faces_of(a) & self.faces_of(b)
+
+    def unchanged_since(self, t: int, when: int) -> bool:
+        """No edit after clock ``when`` changed the stars of triangle ``t``'s vertices."""
+        stamp, r = self.stamp, self.T[t]
+        return stamp[r[0]] <= when and stamp[r[1]] <= when and stamp[r[2]] <= when
 
     def angles_of(self, t: int) -> tuple[float, float, float]:
         """Corner angles (degrees) of triangle ``t``, in its corners' order."""
@@ -196,15 +212,27 @@ class TriangleEditor:
 
     # ---- edits ------------------------------------------------------------------------------
     def _set_tri(self, f: int, new: list[int]) -> None:
+        """Triangle ``f`` (an existing one, or the next new one) becomes ``new`` in the
+        incidence and the arrays (the caller sets or appends the row of T)."""
+        stamp, now = self.stamp, self.clock
         if f < len(self.T):
             for v in self.T[f]:
                 self.faces_of(v).discard(f)
+                stamp[v] = now
+        else:
+            if f >= len(self.tri):
+                self.tri = np.concatenate([self.tri, np.zeros_like(self.tri)])
+                self.alive = np.concatenate([self.alive, np.zeros_like(self.alive)])
+            self.alive[f] = True
+        self.tri[f] = new
         for v in new:
             self.faces_of(v).add(f)
+            stamp[v] = now
 
     def _kill(self, f: int) -> None:
         for v in self.T[f]:
             self.faces_of(v).discard(f)
+            self.stamp[v] = self.clock
         self.alive[f] = False
 
     def flip(self, t: int, k: int, tol: float) -> bool:
@@ -243,6 +271,7 @@ class TriangleEditor:
                 return False  # ab is an st seam: the new triangles would span two charts
             self.cn[t] = np.array([ct[ic], ct[ia], co[id_]])
             self.cn[o] = np.array([co[id_], co[ib], ct[ic]])
+        self.clock += 1
         self._set_tri(t, [c, a, d])
         self._set_tri(o, [d, b, c])
         T[t], T[o] = [c, a, d], [d, b, c]
@@ -280,8 +309,12 @@ class TriangleEditor:
         after = min(self.min_angle_of(around, moved), self.min_angle_of(halves, moved))
         if after <= before:
             return False
+        self.clock += 1
         self.pts[c] = fl
         P[c] = fl
+        for r in around:  # c moved: the stars of its neighbours changed
+            for v in r:
+                self.stamp[v] = self.clock
         if self.cn0 is not None:
             ro, co = T[o], self.corners_of(o)
             ia, ib, id_ = ro.index(a), ro.index(b), ro.index(d)
@@ -298,7 +331,6 @@ class TriangleEditor:
         T[o] = halves[0]
         self._set_tri(len(T), halves[1])
         T.append(halves[1])
-        self.alive.append(True)
         self._kill(t)
         return True
 
@@ -328,6 +360,7 @@ class TriangleEditor:
             new = [[keep if v == drop else v for v in T[f]] for f in moved]
             if not self._collapse_keeps_shape(moved, new, min_angle):
                 continue
+            self.clock += 1
             if self.cn0 is not None and (self.n_ch > self.n_dim or not short):
                 self._move_corners(keep, drop, shared, moved, short)
             for f, nr in zip(moved, new, strict=True):
@@ -383,42 +416,65 @@ class TriangleEditor:
             self.cn[f] = c
 
     # ---- result -----------------------------------------------------------------------------
-    def live_rows(self, faces: list[int]) -> np.ndarray:
-        """(len(faces), 3) vertex rows of the given triangles."""
-        T = self.T
-        return np.array([T[f] for f in faces], dtype=np.int64).reshape(-1, 3)
+    def live_near(self, near: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The live triangles with a vertex where the (n,) bool ``near`` is set, ascending,
+        and their (t, 3) vertex rows."""
+        n = len(self.T)
+        faces = np.flatnonzero(self.alive[:n] & near[self.tri[:n]].any(axis=1))
+        return faces, self.tri[faces]
 
     def to_mesh(self) -> Mesh:
         """The live triangles as a mesh (unused points removed; st re-indexed per corner,
         equal values of one point and chart shared, first occurrence first)."""
-        alive = np.array(self.alive, dtype=bool)
-        tri = self.T.array()[alive]
-        used, idx = np.unique(tri, return_inverse=True)
-        n_dim, corners = self.n_dim, None
-        if self.cn0 is not None:
-            full = np.empty((len(self.T), 3, self.n_ch))
-            full[: len(self.cn0)] = self.cn0
+        n = len(self.T)
+        alive = self.alive[:n]
+        tri = self.tri[:n][alive]
+        # the used points in order and each corner's new point index (np.unique's, by counts)
+        used_mask = np.bincount(tri.reshape(-1), minlength=len(self.pts)) > 0
+        used = np.flatnonzero(used_mask)
+        new_index = np.cumsum(used_mask) - 1
+        idx = new_index[tri.reshape(-1)]
+        nrm = st = sti = None
+        if self.nrm32 is not None:
+            nrm3 = np.empty((n, 3, 3), np.float32)
+            nrm3[: len(self.tri0)] = self.nrm32.reshape(-1, 3, 3)
             for f, rows in self.cn.items():
-                full[f] = rows
-            corners = full[alive].reshape(-1, self.n_ch)
-        nrm = None if corners is None or not n_dim else corners[:, :3].astype(np.float32)
-        st = sti = None
-        if corners is not None and corners.shape[1] > n_dim:
-            q = np.round(corners[:, n_dim:] * 1e7).astype(np.int64)
-            q = np.concatenate([idx.reshape(-1, 1), q], axis=1)
-            _, first, inv = unique_rows(q, return_index=True, return_inverse=True)
-            order = np.argsort(first, kind="stable")
-            rank = np.empty_like(order)
-            rank[order] = np.arange(len(order))
-            st = corners[first[order], n_dim : n_dim + 2].astype(np.float32)
-            sti = rank[inv.reshape(-1)].astype(np.int32)
+                nrm3[f] = rows[:, :3]
+            nrm = nrm3[alive].reshape(-1, 3)
+        if self.st_idx is not None:
+            st, sti = self._st_of_corners(alive, idx)
         return Mesh(
             self.pts[used],
             np.full(len(tri), 3, np.int32),
-            idx.reshape(-1),
+            idx,
             nrm,
             "faceVarying",
             st,
             sti,
             name=self.name,
         )
+
+    def _st_of_corners(self, alive: np.ndarray, idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """st values and indices of the live corners (point indices ``idx``): one value per
+        point, st rounded to 1e-7 and chart, first occurrence first."""
+        n, n_dim, n_st = len(alive), self.n_dim, len(self.st32)
+        # the classes of equal (rounded st, chart): of the input's st values and the edits'
+        edited = sorted(self.cn)
+        new = np.array([self.cn[f][:, n_dim:] for f in edited]).reshape(-1, 3)
+        vals = np.concatenate([np.column_stack([self.st32, self.chart_of_st]), new])
+        _, cls = unique_rows(np.round(vals * 1e7).astype(np.int64), return_inverse=True)
+        corner_cls = np.empty((n, 3), np.int64)
+        corner_st = np.empty((n, 3, 2), np.float32)
+        k = len(self.tri0)
+        corner_cls[:k] = cls[self.st_idx].reshape(-1, 3)
+        corner_st[:k] = self.st32[self.st_idx].reshape(-1, 3, 2)
+        if edited:
+            corner_cls[edited] = cls[n_st:].reshape(-1, 3)
+            corner_st[edited] = new[:, :2].reshape(-1, 3, 2)
+        key = idx * (int(cls.max()) + 1) + corner_cls[alive].reshape(-1)
+        _, first, inv = np.unique(key, return_index=True, return_inverse=True)
+        order = np.argsort(first, kind="stable")
+        rank = np.empty_like(order)
+        rank[order] = np.arange(len(order))
+        st = corner_st[alive].reshape(-1, 2)[first[order]]
+        return st, rank[inv.reshape(-1)].astype(np.int32)
