@@ -18,23 +18,37 @@ import math
 
 import numpy as np
 
-from ionic_usd.geometry.mesh import Mesh, chart_labels, corner_normals, unique_rows
+from ionic_usd.geometry.mesh import Mesh, chart_labels, corner_normals
 
 __all__ = ["TriangleEditor"]
 
 
+_DEG = 180.0 / math.pi  # x * _DEG is math.degrees(x), bit for bit
+
+
 def _angles(p: list[float], q: list[float], r: list[float]) -> tuple[float, float, float]:
     """The corner angles (degrees) of the triangle pqr (3 floats each), in plain float math
-    (numpy costs ~1 µs a call on 3-vectors)."""
-    out = []
-    for o, u, w in ((p, q, r), (q, r, p), (r, p, q)):
-        ax, ay, az = u[0] - o[0], u[1] - o[1], u[2] - o[2]
-        bx, by, bz = w[0] - o[0], w[1] - o[1], w[2] - o[2]
-        la = math.sqrt(ax * ax + ay * ay + az * az)
-        lb = math.sqrt(bx * bx + by * by + bz * bz)
-        c = (ax * bx + ay * by + az * bz) / max(la * lb, 1e-300)
-        out.append(math.degrees(math.acos(min(max(c, -1.0), 1.0))))
-    return out[0], out[1], out[2]
+    (numpy costs ~1 µs a call on 3-vectors). Each corner's cosine is (edge · edge) / (length ×
+    length) of its two edges from it; an edge reversed only flips signs, exactly, so the three
+    edges and lengths are computed once."""
+    px, py, pz = p
+    qx, qy, qz = q
+    rx, ry, rz = r
+    ux, uy, uz = qx - px, qy - py, qz - pz  # p → q
+    vx, vy, vz = rx - px, ry - py, rz - pz  # p → r
+    wx, wy, wz = rx - qx, ry - qy, rz - qz  # q → r
+    lu = math.sqrt(ux * ux + uy * uy + uz * uz)
+    lv = math.sqrt(vx * vx + vy * vy + vz * vz)
+    lw = math.sqrt(wx * wx + wy * wy + wz * wz)
+    cp = (ux * vx + uy * vy + uz * vz) / max(lu * lv, 1e-300)
+    cq = -(wx * ux + wy * uy + wz * uz) / max(lw * lu, 1e-300)
+    cr = (vx * wx + vy * wy + vz * wz) / max(lv * lw, 1e-300)
+    acos = math.acos
+    return (
+        acos(min(max(cp, -1.0), 1.0)) * _DEG,
+        acos(min(max(cq, -1.0), 1.0)) * _DEG,
+        acos(min(max(cr, -1.0), 1.0)) * _DEG,
+    )
 
 
 def _normal(p: list[float], q: list[float], r: list[float]) -> tuple[float, float, float]:
@@ -64,6 +78,31 @@ def _tet_height(a: list[float], b: list[float], c: list[float], d: list[float]) 
     v = abs(n[0] * (d[0] - a[0]) + n[1] * (d[1] - a[1]) + n[2] * (d[2] - a[2]))
     areas = [math.sqrt(_dot(x, x)) for x in (n, _cross(a, b, d), _cross(a, c, d), _cross(b, c, d))]
     return v / max(max(areas), 1e-300)
+
+
+def _stable_argsort(key: np.ndarray) -> np.ndarray:
+    """``np.argsort(key, kind="stable")`` of a 1-D array of non-negative ints under 2**31, by
+    numpy's faster unstable sort of distinct keys (key × n + position)."""
+    n = len(key)
+    return np.argsort(key.astype(np.int64) * n + np.arange(n))
+
+
+def _first_ranks(key: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Groups of equal ``key`` (1-D, non-negative ints under 2**31) numbered by first
+    occurrence: the position of each group's first element, in group order, and the (n,)
+    group number of every element."""
+    order = _stable_argsort(key)
+    srt = key[order]
+    new = np.empty(len(srt), dtype=bool)
+    new[:1] = True
+    np.not_equal(srt[1:], srt[:-1], out=new[1:])
+    first = order[new]  # first occurrence of each group, the groups in key order
+    group = np.empty(len(srt), dtype=np.int64)
+    group[order] = np.cumsum(new) - 1
+    by_first = np.argsort(first)  # distinct positions: any sort is stable
+    rank = np.empty_like(by_first)
+    rank[by_first] = np.arange(len(by_first))
+    return first[by_first], rank[group]
 
 
 class _Rows(dict):
@@ -114,7 +153,7 @@ class TriangleEditor:
         flat = self.tri0.reshape(-1)
         counts = np.bincount(flat, minlength=len(self.pts))
         self._first_use = np.concatenate([[0], np.cumsum(counts)])
-        self._by_vertex = np.argsort(flat, kind="stable") // 3
+        self._by_vertex = _stable_argsort(flat) // 3
         self._inc: dict[int, set[int]] = {}
         # edit clock: each edit ticks it and stamps every vertex whose star (its triangles,
         # their rows, corners and points) it changes; an operation on a triangle reads only
@@ -462,7 +501,7 @@ class TriangleEditor:
         edited = sorted(self.cn)
         new = np.array([self.cn[f][:, n_dim:] for f in edited]).reshape(-1, 3)
         vals = np.concatenate([np.column_stack([self.st32, self.chart_of_st]), new])
-        _, cls = unique_rows(np.round(vals * 1e7).astype(np.int64), return_inverse=True)
+        cls = _row_classes(np.round(vals * 1e7).astype(np.int64))
         corner_cls = np.empty((n, 3), np.int64)
         corner_st = np.empty((n, 3, 2), np.float32)
         k = len(self.tri0)
@@ -471,10 +510,15 @@ class TriangleEditor:
         if edited:
             corner_cls[edited] = cls[n_st:].reshape(-1, 3)
             corner_st[edited] = new[:, :2].reshape(-1, 3, 2)
-        key = idx * (int(cls.max()) + 1) + corner_cls[alive].reshape(-1)
-        _, first, inv = np.unique(key, return_index=True, return_inverse=True)
-        order = np.argsort(first, kind="stable")
-        rank = np.empty_like(order)
-        rank[order] = np.arange(len(order))
-        st = corner_st[alive].reshape(-1, 2)[first[order]]
-        return st, rank[inv.reshape(-1)].astype(np.int32)
+        first, rank = _first_ranks(idx * (int(cls.max()) + 1) + corner_cls[alive].reshape(-1))
+        return corner_st[alive].reshape(-1, 2)[first], rank.astype(np.int32)
+
+
+def _row_classes(a: np.ndarray) -> np.ndarray:
+    """(n,) class of every row of the (n, k) int array ``a``: equal rows, equal classes
+    (0 .. classes - 1)."""
+    cls = np.zeros(len(a), dtype=np.int64)
+    for col in a.T:
+        _, r = np.unique(col, return_inverse=True)
+        _, cls = np.unique(cls * (int(r.max(initial=0)) + 1) + r.reshape(-1), return_inverse=True)
+    return cls.reshape(-1)
