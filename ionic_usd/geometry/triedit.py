@@ -501,7 +501,9 @@ class TriangleEditor:
         edited = sorted(self.cn)
         new = np.array([self.cn[f][:, n_dim:] for f in edited]).reshape(-1, 3)
         vals = np.concatenate([np.column_stack([self.st32, self.chart_of_st]), new])
-        cls = _row_classes(np.round(vals * 1e7).astype(np.int64))
+        q = np.round(vals * 1e7).astype(np.int64)  # st to 1e-7; the chart (an int) as it is
+        q[:, 2] = vals[:, 2]
+        cls = _row_classes(q)
         corner_cls = np.empty((n, 3), np.int64)
         corner_st = np.empty((n, 3, 2), np.float32)
         k = len(self.tri0)
@@ -516,7 +518,16 @@ class TriangleEditor:
 
 def _row_classes(a: np.ndarray) -> np.ndarray:
     """(n,) class of every row of the (n, k) int array ``a``: equal rows, equal classes
-    (0 .. classes - 1)."""
+    (0 .. classes - 1); one int key per row where the columns' spans allow."""
+    if not len(a):
+        return np.zeros(0, dtype=np.int64)
+    lo = a.min(axis=0)
+    span = a.max(axis=0) - lo + 1
+    if math.prod(float(x) for x in span) < 2.0**62:
+        key = np.zeros(len(a), dtype=np.int64)
+        for col, c0, n in zip(a.T, lo.tolist(), span.tolist(), strict=True):
+            key = key * n + (col - c0)
+        return np.unique(key, return_inverse=True)[1].reshape(-1)
     cls = np.zeros(len(a), dtype=np.int64)
     for col in a.T:
         _, r = np.unique(col, return_inverse=True)
