@@ -304,8 +304,8 @@ class TriangleEditor:
             ct, co = self.corners_of(t), self.corners_of(o)
             ic, ia, id_, ib = row.index(c), row.index(a), ro.index(d), ro.index(b)
             if self.n_ch > n_dim and not (
-                np.array_equal(ct[ia, n_dim:], co[ro.index(a), n_dim:])
-                and np.array_equal(ct[row.index(b), n_dim:], co[ib, n_dim:])
+                ct[ia, n_dim:].tolist() == co[ro.index(a), n_dim:].tolist()
+                and ct[row.index(b), n_dim:].tolist() == co[ib, n_dim:].tolist()
             ):
                 return False  # ab is an st seam: the new triangles would span two charts
             self.cn[t] = np.array([ct[ic], ct[ia], co[id_]])
