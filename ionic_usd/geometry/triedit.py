@@ -521,11 +521,11 @@ def _row_classes(a: np.ndarray) -> np.ndarray:
     (0 .. classes - 1); one int key per row where the columns' spans allow."""
     if not len(a):
         return np.zeros(0, dtype=np.int64)
-    lo = a.min(axis=0)
-    span = a.max(axis=0) - lo + 1
-    if math.prod(float(x) for x in span) < 2.0**62:
+    lo, hi = a.min(axis=0).tolist(), a.max(axis=0).tolist()
+    span = [h - c + 1 for c, h in zip(lo, hi, strict=True)]  # Python ints: no overflow
+    if math.prod(span) < 2**62:
         key = np.zeros(len(a), dtype=np.int64)
-        for col, c0, n in zip(a.T, lo.tolist(), span.tolist(), strict=True):
+        for col, c0, n in zip(a.T, lo, span, strict=True):
             key = key * n + (col - c0)
         return np.unique(key, return_inverse=True)[1].reshape(-1)
     cls = np.zeros(len(a), dtype=np.int64)
