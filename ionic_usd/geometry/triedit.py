@@ -164,23 +164,27 @@ class TriangleEditor:
     def _corner_values(self, mesh: Mesh) -> None:
         """The per-corner values carried through every edit: the normals (3), st (2) and the
         st chart (1: an edit never joins two charts, whose values may meet at a point)."""
-        parts = []
         corner_n = corner_normals(mesh)
-        self.nrm32 = None if corner_n is None else np.asarray(corner_n).astype(np.float32)
-        if corner_n is not None:
-            parts.append(np.asarray(corner_n, dtype=np.float64).reshape(-1, 3, 3))
+        has_st = mesh.st is not None and mesh.st_indices is not None
+        self.n_dim = n_dim = 3 if corner_n is not None else 0
+        self.n_ch = n_dim + (3 if has_st else 0)
+        self.nrm32 = None if corner_n is None else np.asarray(corner_n, dtype=np.float32)
         self.st_idx = None
-        if mesh.st is not None and mesh.st_indices is not None:
-            self.st32 = np.asarray(mesh.st).astype(np.float32)
+        self.cn0 = None
+        if not self.n_ch:
+            return
+        cn0 = np.empty((len(self.tri0), 3, self.n_ch))  # float64, filled in place
+        if self.nrm32 is not None:
+            cn0[:, :, :3] = self.nrm32.reshape(-1, 3, 3)
+        if has_st:
+            self.st32 = np.asarray(mesh.st, dtype=np.float32)
             self.st_idx = np.asarray(mesh.st_indices, dtype=np.int64)
-            parts.append(np.asarray(mesh.st, dtype=np.float64)[mesh.st_indices].reshape(-1, 3, 2))
-            chart = chart_labels(mesh.st_indices, len(mesh.st)).astype(np.float64)
+            chart = chart_labels(self.st_idx, len(self.st32)).astype(np.float64)
             self.chart_of_st = np.zeros(len(self.st32))  # one chart per st value
             self.chart_of_st[self.st_idx] = np.repeat(chart, 3)
-            parts.append(np.repeat(chart, 3).reshape(-1, 3, 1))
-        self.cn0 = np.concatenate(parts, axis=2) if parts else None
-        self.n_ch = 0 if self.cn0 is None else self.cn0.shape[2]
-        self.n_dim = 3 if corner_n is not None else 0
+            cn0[:, :, n_dim : n_dim + 2] = self.st32[self.st_idx].reshape(-1, 3, 2)
+            cn0[:, :, n_dim + 2] = chart[:, None]
+        self.cn0 = cn0
 
     # ---- queries ----------------------------------------------------------------------------
     def corners_of(self, f: int) -> np.ndarray:
@@ -467,7 +471,8 @@ class TriangleEditor:
         equal values of one point and chart shared, first occurrence first)."""
         n = len(self.T)
         alive = self.alive[:n]
-        tri = self.tri[:n][alive]
+        live: slice | np.ndarray = slice(None) if alive.all() else alive  # no copy: all live
+        tri = self.tri[:n][live]
         # the used points in order and each corner's new point index (np.unique's, by counts)
         used_mask = np.bincount(tri.reshape(-1), minlength=len(self.pts)) > 0
         used = np.flatnonzero(used_mask)
@@ -479,9 +484,9 @@ class TriangleEditor:
             nrm3[: len(self.tri0)] = self.nrm32.reshape(-1, 3, 3)
             for f, rows in self.cn.items():
                 nrm3[f] = rows[:, :3]
-            nrm = nrm3[alive].reshape(-1, 3)
+            nrm = nrm3[live].reshape(-1, 3)
         if self.st_idx is not None:
-            st, sti = self._st_of_corners(alive, idx)
+            st, sti = self._st_of_corners(n, live, idx)
         return Mesh(
             self.pts[used],
             np.full(len(tri), 3, np.int32),
@@ -493,10 +498,13 @@ class TriangleEditor:
             name=self.name,
         )
 
-    def _st_of_corners(self, alive: np.ndarray, idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """st values and indices of the live corners (point indices ``idx``): one value per
-        point, st rounded to 1e-7 and chart, first occurrence first."""
-        n, n_dim, n_st = len(alive), self.n_dim, len(self.st32)
+    def _st_of_corners(
+        self, n: int, live: slice | np.ndarray, idx: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """st values and indices of the corners of the live triangles ``live`` of the first
+        ``n`` (point indices ``idx``): one value per point, st rounded to 1e-7 and chart,
+        first occurrence first."""
+        n_dim, n_st = self.n_dim, len(self.st32)
         # the classes of equal (rounded st, chart): of the input's st values and the edits'
         edited = sorted(self.cn)
         new = np.array([self.cn[f][:, n_dim:] for f in edited]).reshape(-1, 3)
@@ -512,8 +520,8 @@ class TriangleEditor:
         if edited:
             corner_cls[edited] = cls[n_st:].reshape(-1, 3)
             corner_st[edited] = new[:, :2].reshape(-1, 3, 2)
-        first, rank = _first_ranks(idx * (int(cls.max()) + 1) + corner_cls[alive].reshape(-1))
-        return corner_st[alive].reshape(-1, 2)[first], rank.astype(np.int32)
+        first, rank = _first_ranks(idx * (int(cls.max()) + 1) + corner_cls[live].reshape(-1))
+        return corner_st[live].reshape(-1, 2)[first], rank.astype(np.int32)
 
 
 def _row_classes(a: np.ndarray) -> np.ndarray:
