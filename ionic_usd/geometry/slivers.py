@@ -65,7 +65,9 @@ def remove_slivers(
     Slivers neither can mend within ``tol`` are left (they are real, thin features).
 
     The edits are :class:`~ionic_usd.geometry.triedit.TriangleEditor`'s operations (Python
-    lists and plain float math); only the per-pass sliver scan and the output are numpy.
+    lists and plain float math); only the per-pass sliver scan and the output are numpy. A
+    sliver all three failed on is not tried again until an edit changes a triangle round one
+    of its vertices (the operations read nothing else, so they would fail the same way).
 
     Parameters
     ----------

@@ -9,7 +9,10 @@ and :meth:`~TriangleEditor.collapse` an edge. Each checks first that it moves th
 at most ``tol``, keeps the shell a closed 2-manifold, turns no triangle over and makes the
 worst angle better, and does nothing (returns False) otherwise. Rows are made Python lists on
 first read: an edit touches a few hundred of a mesh's rows, and plain float math on lists is
-~10x faster than numpy on 3-vectors. :meth:`~TriangleEditor.to_mesh` gives the result back.
+~10x faster than numpy on 3-vectors. The triangles and which are live are kept as arrays too
+(the clean-up's per-pass scans), and an edit clock stamps the vertices round each edit
+(:meth:`~TriangleEditor.unchanged_since`: a failed operation need not be tried again until
+one is stamped). :meth:`~TriangleEditor.to_mesh` gives the result back.
 """
 
 from __future__ import annotations
