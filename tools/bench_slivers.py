@@ -4,13 +4,14 @@ side with a baseline revision's, on every clean-up the column asset's capitals m
 Usage: python tools/bench_slivers.py --baseline DIR [--repeat N]
 
 ``DIR`` is another checkout of this project (``git worktree add /tmp/base <commit>``): its
-``ionic_usd/geometry/slivers.py`` is loaded as the baseline (against this checkout's
-``geometry.mesh``). Builds ``column_asset_meshes(ColumnAssetOptions(lods=("low", "medium",
-"high"), bases=("G1",), flutes=("f24",)), workers=1)`` once in a fresh cache, recording every
-``remove_slivers`` input (the unions' and the form cuts'); then runs baseline and current on
-each input (best of N, taking turns), prints the time per kind of call and the ratio, and
-counts the calls whose outputs differ bit for bit (points, face indices, normals, st, st
-indices): 0 when the change is a pure speed-up.
+``ionic_usd/geometry/slivers.py`` and the ``triedit.py`` beside it (the edit operations, if it
+has one) are loaded as the baseline (against this checkout's ``geometry.mesh``). Builds
+``column_asset_meshes(ColumnAssetOptions(lods=("low", "medium", "high"), bases=("G1",),
+flutes=("f24",)), workers=1)`` once in a fresh cache, recording every ``remove_slivers``
+input (the unions' and the form cuts'); then runs baseline and current on each input (best of
+N, taking turns), prints the time per kind of call and the ratio, and counts the calls whose
+outputs differ bit for bit (points, face indices, normals, st, st indices): 0 when the change
+is a pure speed-up.
 """
 
 from __future__ import annotations
@@ -30,15 +31,31 @@ from ionic_usd.geometry import boolean, slivers
 from ionic_usd.geometry.mesh import Mesh
 
 
-def _load_baseline(folder: Path):
-    path = folder / "ionic_usd" / "geometry" / "slivers.py"
-    if not path.is_file():
-        sys.exit(f"bench_slivers: {path} does not exist (--baseline is a checkout)")
-    spec = importlib.util.spec_from_file_location("baseline_slivers", path)
+def _exec(path: Path, name: str):
+    spec = importlib.util.spec_from_file_location(name, path)
     assert spec is not None and spec.loader is not None
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
-    return mod.remove_slivers
+    return mod
+
+
+def _load_baseline(folder: Path):
+    geo = folder / "ionic_usd" / "geometry"
+    if not (geo / "slivers.py").is_file():
+        sys.exit(f"bench_slivers: {geo / 'slivers.py'} does not exist (--baseline is a checkout)")
+    # the baseline's slivers.py imports TriangleEditor from ionic_usd.geometry.triedit: give
+    # it the baseline's own triedit.py (if it has one) while it loads
+    key = "ionic_usd.geometry.triedit"
+    saved = sys.modules.get(key)
+    try:
+        if (geo / "triedit.py").is_file():
+            sys.modules[key] = _exec(geo / "triedit.py", "baseline_triedit")
+        return _exec(geo / "slivers.py", "baseline_slivers").remove_slivers
+    finally:
+        if saved is None:
+            sys.modules.pop(key, None)
+        else:
+            sys.modules[key] = saved
 
 
 def _arrays(m: Mesh) -> list[np.ndarray | None]:

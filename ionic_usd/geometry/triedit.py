@@ -9,7 +9,10 @@ and :meth:`~TriangleEditor.collapse` an edge. Each checks first that it moves th
 at most ``tol``, keeps the shell a closed 2-manifold, turns no triangle over and makes the
 worst angle better, and does nothing (returns False) otherwise. Rows are made Python lists on
 first read: an edit touches a few hundred of a mesh's rows, and plain float math on lists is
-~10x faster than numpy on 3-vectors. :meth:`~TriangleEditor.to_mesh` gives the result back.
+~10x faster than numpy on 3-vectors. The triangles and which are live are kept as arrays too
+(the clean-up's per-pass scans), and an edit clock stamps the vertices round each edit
+(:meth:`~TriangleEditor.unchanged_since`: a failed operation need not be tried again until
+one is stamped). :meth:`~TriangleEditor.to_mesh` gives the result back.
 """
 
 from __future__ import annotations
@@ -18,23 +21,37 @@ import math
 
 import numpy as np
 
-from ionic_usd.geometry.mesh import Mesh, chart_labels, corner_normals, unique_rows
+from ionic_usd.geometry.mesh import Mesh, chart_labels, corner_normals
 
 __all__ = ["TriangleEditor"]
 
 
+_DEG = 180.0 / math.pi  # x * _DEG is math.degrees(x), bit for bit
+
+
 def _angles(p: list[float], q: list[float], r: list[float]) -> tuple[float, float, float]:
     """The corner angles (degrees) of the triangle pqr (3 floats each), in plain float math
-    (numpy costs ~1 µs a call on 3-vectors)."""
-    out = []
-    for o, u, w in ((p, q, r), (q, r, p), (r, p, q)):
-        ax, ay, az = u[0] - o[0], u[1] - o[1], u[2] - o[2]
-        bx, by, bz = w[0] - o[0], w[1] - o[1], w[2] - o[2]
-        la = math.sqrt(ax * ax + ay * ay + az * az)
-        lb = math.sqrt(bx * bx + by * by + bz * bz)
-        c = (ax * bx + ay * by + az * bz) / max(la * lb, 1e-300)
-        out.append(math.degrees(math.acos(min(max(c, -1.0), 1.0))))
-    return out[0], out[1], out[2]
+    (numpy costs ~1 µs a call on 3-vectors). Each corner's cosine is (edge · edge) / (length ×
+    length) of its two edges from it; an edge reversed only flips signs, exactly, so the three
+    edges and lengths are computed once."""
+    px, py, pz = p
+    qx, qy, qz = q
+    rx, ry, rz = r
+    ux, uy, uz = qx - px, qy - py, qz - pz  # p → q
+    vx, vy, vz = rx - px, ry - py, rz - pz  # p → r
+    wx, wy, wz = rx - qx, ry - qy, rz - qz  # q → r
+    lu = math.sqrt(ux * ux + uy * uy + uz * uz)
+    lv = math.sqrt(vx * vx + vy * vy + vz * vz)
+    lw = math.sqrt(wx * wx + wy * wy + wz * wz)
+    cp = (ux * vx + uy * vy + uz * vz) / max(lu * lv, 1e-300)
+    cq = -(wx * ux + wy * uy + wz * uz) / max(lw * lu, 1e-300)
+    cr = (vx * wx + vy * wy + vz * wz) / max(lv * lw, 1e-300)
+    acos = math.acos
+    return (
+        acos(min(max(cp, -1.0), 1.0)) * _DEG,
+        acos(min(max(cq, -1.0), 1.0)) * _DEG,
+        acos(min(max(cr, -1.0), 1.0)) * _DEG,
+    )
 
 
 def _normal(p: list[float], q: list[float], r: list[float]) -> tuple[float, float, float]:
@@ -66,6 +83,34 @@ def _tet_height(a: list[float], b: list[float], c: list[float], d: list[float]) 
     return v / max(max(areas), 1e-300)
 
 
+def _stable_argsort(key: np.ndarray) -> np.ndarray:
+    """``np.argsort(key, kind="stable")`` of a 1-D array of non-negative ints, by numpy's fast
+    sort of the distinct keys key × n + position (the position is the remainder): its stable
+    argsort is ~10x slower (used where those keys fit 62 bits)."""
+    n = len(key)
+    if not n or int(key.max()) * n >= 2**62:
+        return np.argsort(key, kind="stable")
+    return np.sort(key.astype(np.int64) * n + np.arange(n)) % n
+
+
+def _first_ranks(key: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Groups of equal ``key`` (1-D, non-negative ints) numbered by first
+    occurrence: the position of each group's first element, in group order, and the (n,)
+    group number of every element."""
+    order = _stable_argsort(key)
+    srt = key[order]
+    new = np.empty(len(srt), dtype=bool)
+    new[:1] = True
+    np.not_equal(srt[1:], srt[:-1], out=new[1:])
+    first = order[new]  # first occurrence of each group, the groups in key order
+    group = np.empty(len(srt), dtype=np.int64)
+    group[order] = np.cumsum(new) - 1
+    by_first = _stable_argsort(first)
+    rank = np.empty_like(by_first)
+    rank[by_first] = np.arange(len(by_first))
+    return first[by_first], rank[group]
+
+
 class _Rows(dict):
     """Rows of a numpy array as Python lists, made on first read (an edit touches a few
     hundred of a mesh's rows: converting them all costs more than the edits); rows set or
@@ -87,14 +132,6 @@ class _Rows(dict):
         self[self.n] = row
         self.n += 1
 
-    def array(self) -> np.ndarray:
-        """All rows (appended included) as one array."""
-        out = np.empty((self.n, *self.src.shape[1:]), dtype=self.src.dtype)
-        out[: len(self.src)] = self.src
-        for k, row in self.items():
-            out[k] = row
-        return out
-
 
 class TriangleEditor:
     """A closed, consistently wound triangle mesh under local edits (see the module).
@@ -110,28 +147,50 @@ class TriangleEditor:
         self.P = _Rows(self.pts)  # the points as floats (kept equal to pts)
         self.tri0 = mesh.triangles.astype(np.int64).reshape(-1, 3)
         self.T = _Rows(self.tri0)
-        # per-corner values carried through every edit: the normals (3), st (2) and the st
-        # chart (1: an edit never joins two charts, whose values may meet at a point)
-        parts = []
-        corner_n = corner_normals(mesh)
-        if corner_n is not None:
-            parts.append(np.asarray(corner_n, dtype=np.float64).reshape(-1, 3, 3))
-        if mesh.st is not None and mesh.st_indices is not None:
-            parts.append(np.asarray(mesh.st, dtype=np.float64)[mesh.st_indices].reshape(-1, 3, 2))
-            chart = chart_labels(mesh.st_indices, len(mesh.st)).astype(np.float64)
-            parts.append(np.repeat(chart, 3).reshape(-1, 3, 1))
-        self.cn0 = np.concatenate(parts, axis=2) if parts else None
-        self.n_ch = 0 if self.cn0 is None else self.cn0.shape[2]
+        # T and the live triangles as arrays too (kept equal by _set_tri and _kill; room for
+        # the triangles snaps add), for the vectorised sliver scans and the result
+        self.tri = np.concatenate([self.tri0, np.zeros((len(self.tri0) // 8 + 8, 3), np.int64)])
+        self.alive = np.zeros(len(self.tri), dtype=bool)
+        self.alive[: len(self.tri0)] = True
+        self._corner_values(mesh)
         self.cn: dict[int, np.ndarray] = {}  # the (3, n_ch) corners of each edited or new face
-        self.n_dim = 3 if corner_n is not None else 0
-        self.alive = [True] * len(self.T)
         # vertex → the live triangles using it, made on first use from the input's incidence
         # (every edit goes through faces_of for each vertex it touches, so it stays exact)
         flat = self.tri0.reshape(-1)
         counts = np.bincount(flat, minlength=len(self.pts))
-        self._first_use = np.concatenate([[0], np.cumsum(counts)]).tolist()
-        self._by_vertex = (np.argsort(flat, kind="stable") // 3).tolist()
+        self._first_use = np.concatenate([[0], np.cumsum(counts)])
+        self._by_vertex = _stable_argsort(flat) // 3
         self._inc: dict[int, set[int]] = {}
+        # edit clock: each edit ticks it and stamps every vertex whose star (its triangles,
+        # their rows, corners and points) it changes; an operation on a triangle reads only
+        # the stars of its three vertices, so one that failed fails again until one is stamped
+        self.clock = 0
+        self.stamp = [0] * len(self.pts)
+
+    def _corner_values(self, mesh: Mesh) -> None:
+        """The per-corner values carried through every edit: the normals (3), st (2) and the
+        st chart (1: an edit never joins two charts, whose values may meet at a point)."""
+        corner_n = corner_normals(mesh)
+        has_st = mesh.st is not None and mesh.st_indices is not None
+        self.n_dim = n_dim = 3 if corner_n is not None else 0
+        self.n_ch = n_dim + (3 if has_st else 0)
+        self.nrm32 = None if corner_n is None else np.asarray(corner_n, dtype=np.float32)
+        self.st_idx = None
+        self.cn0 = None
+        if not self.n_ch:
+            return
+        cn0 = np.empty((len(self.tri0), 3, self.n_ch))  # float64, filled in place
+        if self.nrm32 is not None:
+            cn0[:, :, :3] = self.nrm32.reshape(-1, 3, 3)
+        if has_st:
+            self.st32 = np.asarray(mesh.st, dtype=np.float32)
+            self.st_idx = np.asarray(mesh.st_indices, dtype=np.int64)
+            chart = chart_labels(self.st_idx, len(self.st32)).astype(np.float64)
+            self.chart_of_st = np.zeros(len(self.st32))  # one chart per st value
+            self.chart_of_st[self.st_idx] = np.repeat(chart, 3)
+            cn0[:, :, n_dim : n_dim + 2] = self.st32[self.st_idx].reshape(-1, 3, 2)
+            cn0[:, :, n_dim + 2] = chart[:, None]
+        self.cn0 = cn0
 
     # ---- queries ----------------------------------------------------------------------------
     def corners_of(self, f: int) -> np.ndarray:
@@ -143,11 +202,17 @@ class TriangleEditor:
         """The live triangles using vertex ``v`` (the set itself: edits keep it exact)."""
         got = self._inc.get(v)
         if got is None:
-            got = self._inc[v] = set(self._by_vertex[self._first_use[v] : self._first_use[v + 1]])
+            lo, hi = self._first_use[v], self._first_use[v + 1]
+            got = self._inc[v] = set(self._by_vertex[lo:hi].tolist())
         return got
 
     def edge_faces(self, a: int, b: int) -> set[int]:
         return self.faces_of(a) & self.faces_of(b)
+
+    def unchanged_since(self, t: int, when: int) -> bool:
+        """No edit after clock ``when`` changed the stars of triangle ``t``'s vertices."""
+        stamp, r = self.stamp, self.T[t]
+        return stamp[r[0]] <= when and stamp[r[1]] <= when and stamp[r[2]] <= when
 
     def angles_of(self, t: int) -> tuple[float, float, float]:
         """Corner angles (degrees) of triangle ``t``, in its corners' order."""
@@ -196,15 +261,27 @@ class TriangleEditor:
 
     # ---- edits ------------------------------------------------------------------------------
     def _set_tri(self, f: int, new: list[int]) -> None:
+        """Triangle ``f`` (an existing one, or the next new one) becomes ``new`` in the
+        incidence and the arrays (the caller sets or appends the row of T)."""
+        stamp, now = self.stamp, self.clock
         if f < len(self.T):
             for v in self.T[f]:
                 self.faces_of(v).discard(f)
+                stamp[v] = now
+        else:
+            if f >= len(self.tri):
+                self.tri = np.concatenate([self.tri, np.zeros_like(self.tri)])
+                self.alive = np.concatenate([self.alive, np.zeros_like(self.alive)])
+            self.alive[f] = True
+        self.tri[f] = new
         for v in new:
             self.faces_of(v).add(f)
+            stamp[v] = now
 
     def _kill(self, f: int) -> None:
         for v in self.T[f]:
             self.faces_of(v).discard(f)
+            self.stamp[v] = self.clock
         self.alive[f] = False
 
     def flip(self, t: int, k: int, tol: float) -> bool:
@@ -237,12 +314,13 @@ class TriangleEditor:
             ct, co = self.corners_of(t), self.corners_of(o)
             ic, ia, id_, ib = row.index(c), row.index(a), ro.index(d), ro.index(b)
             if self.n_ch > n_dim and not (
-                np.array_equal(ct[ia, n_dim:], co[ro.index(a), n_dim:])
-                and np.array_equal(ct[row.index(b), n_dim:], co[ib, n_dim:])
+                ct[ia, n_dim:].tolist() == co[ro.index(a), n_dim:].tolist()
+                and ct[row.index(b), n_dim:].tolist() == co[ib, n_dim:].tolist()
             ):
                 return False  # ab is an st seam: the new triangles would span two charts
             self.cn[t] = np.array([ct[ic], ct[ia], co[id_]])
             self.cn[o] = np.array([co[id_], co[ib], ct[ic]])
+        self.clock += 1
         self._set_tri(t, [c, a, d])
         self._set_tri(o, [d, b, c])
         T[t], T[o] = [c, a, d], [d, b, c]
@@ -280,8 +358,12 @@ class TriangleEditor:
         after = min(self.min_angle_of(around, moved), self.min_angle_of(halves, moved))
         if after <= before:
             return False
+        self.clock += 1
         self.pts[c] = fl
         P[c] = fl
+        for r in around:  # c moved: the stars of its neighbours changed
+            for v in r:
+                self.stamp[v] = self.clock
         if self.cn0 is not None:
             ro, co = T[o], self.corners_of(o)
             ia, ib, id_ = ro.index(a), ro.index(b), ro.index(d)
@@ -298,7 +380,6 @@ class TriangleEditor:
         T[o] = halves[0]
         self._set_tri(len(T), halves[1])
         T.append(halves[1])
-        self.alive.append(True)
         self._kill(t)
         return True
 
@@ -328,6 +409,7 @@ class TriangleEditor:
             new = [[keep if v == drop else v for v in T[f]] for f in moved]
             if not self._collapse_keeps_shape(moved, new, min_angle):
                 continue
+            self.clock += 1
             if self.cn0 is not None and (self.n_ch > self.n_dim or not short):
                 self._move_corners(keep, drop, shared, moved, short)
             for f, nr in zip(moved, new, strict=True):
@@ -383,42 +465,85 @@ class TriangleEditor:
             self.cn[f] = c
 
     # ---- result -----------------------------------------------------------------------------
-    def live_rows(self, faces: list[int]) -> np.ndarray:
-        """(len(faces), 3) vertex rows of the given triangles."""
-        T = self.T
-        return np.array([T[f] for f in faces], dtype=np.int64).reshape(-1, 3)
+    def live_near(self, near: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The live triangles with a vertex where the (n,) bool ``near`` is set, ascending,
+        and their (t, 3) vertex rows."""
+        n = len(self.T)
+        faces = np.flatnonzero(self.alive[:n] & near[self.tri[:n]].any(axis=1))
+        return faces, self.tri[faces]
 
     def to_mesh(self) -> Mesh:
         """The live triangles as a mesh (unused points removed; st re-indexed per corner,
         equal values of one point and chart shared, first occurrence first)."""
-        alive = np.array(self.alive, dtype=bool)
-        tri = self.T.array()[alive]
-        used, idx = np.unique(tri, return_inverse=True)
-        n_dim, corners = self.n_dim, None
-        if self.cn0 is not None:
-            full = np.empty((len(self.T), 3, self.n_ch))
-            full[: len(self.cn0)] = self.cn0
+        n = len(self.T)
+        alive = self.alive[:n]
+        live: slice | np.ndarray = slice(None) if alive.all() else alive  # no copy: all live
+        tri = self.tri[:n][live]
+        # the used points in order and each corner's new point index (np.unique's, by counts)
+        used_mask = np.bincount(tri.reshape(-1), minlength=len(self.pts)) > 0
+        used = np.flatnonzero(used_mask)
+        new_index = np.cumsum(used_mask) - 1
+        idx = new_index[tri.reshape(-1)]
+        nrm = st = sti = None
+        if self.nrm32 is not None:
+            nrm3 = np.empty((n, 3, 3), np.float32)
+            nrm3[: len(self.tri0)] = self.nrm32.reshape(-1, 3, 3)
             for f, rows in self.cn.items():
-                full[f] = rows
-            corners = full[alive].reshape(-1, self.n_ch)
-        nrm = None if corners is None or not n_dim else corners[:, :3].astype(np.float32)
-        st = sti = None
-        if corners is not None and corners.shape[1] > n_dim:
-            q = np.round(corners[:, n_dim:] * 1e7).astype(np.int64)
-            q = np.concatenate([idx.reshape(-1, 1), q], axis=1)
-            _, first, inv = unique_rows(q, return_index=True, return_inverse=True)
-            order = np.argsort(first, kind="stable")
-            rank = np.empty_like(order)
-            rank[order] = np.arange(len(order))
-            st = corners[first[order], n_dim : n_dim + 2].astype(np.float32)
-            sti = rank[inv.reshape(-1)].astype(np.int32)
+                nrm3[f] = rows[:, :3]
+            nrm = nrm3[live].reshape(-1, 3)
+        if self.st_idx is not None:
+            st, sti = self._st_of_corners(n, live, idx)
         return Mesh(
             self.pts[used],
             np.full(len(tri), 3, np.int32),
-            idx.reshape(-1),
+            idx,
             nrm,
             "faceVarying",
             st,
             sti,
             name=self.name,
         )
+
+    def _st_of_corners(
+        self, n: int, live: slice | np.ndarray, idx: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """st values and indices of the corners of the live triangles ``live`` of the first
+        ``n`` (point indices ``idx``): one value per point, st rounded to 1e-7 and chart,
+        first occurrence first."""
+        n_dim, n_st = self.n_dim, len(self.st32)
+        # the classes of equal (rounded st, chart): of the input's st values and the edits'
+        edited = sorted(self.cn)
+        new = np.array([self.cn[f][:, n_dim:] for f in edited]).reshape(-1, 3)
+        vals = np.concatenate([np.column_stack([self.st32, self.chart_of_st]), new])
+        q = np.round(vals * 1e7).astype(np.int64)  # st to 1e-7; the chart (an int) as it is
+        q[:, 2] = vals[:, 2]
+        cls = _row_classes(q)
+        corner_cls = np.empty((n, 3), np.int64)
+        corner_st = np.empty((n, 3, 2), np.float32)
+        k = len(self.tri0)
+        corner_cls[:k] = cls[self.st_idx].reshape(-1, 3)
+        corner_st[:k] = self.st32[self.st_idx].reshape(-1, 3, 2)
+        if edited:
+            corner_cls[edited] = cls[n_st:].reshape(-1, 3)
+            corner_st[edited] = new[:, :2].reshape(-1, 3, 2)
+        first, rank = _first_ranks(idx * (int(cls.max()) + 1) + corner_cls[live].reshape(-1))
+        return corner_st[live].reshape(-1, 2)[first], rank.astype(np.int32)
+
+
+def _row_classes(a: np.ndarray) -> np.ndarray:
+    """(n,) class of every row of the (n, k) int array ``a``: equal rows, equal classes
+    (0 .. classes - 1); one int key per row where the columns' spans allow."""
+    if not len(a):
+        return np.zeros(0, dtype=np.int64)
+    lo, hi = a.min(axis=0).tolist(), a.max(axis=0).tolist()
+    span = [h - c + 1 for c, h in zip(lo, hi, strict=True)]  # Python ints: no overflow
+    if math.prod(span) < 2**62:
+        key = np.zeros(len(a), dtype=np.int64)
+        for col, c0, n in zip(a.T, lo, span, strict=True):
+            key = key * n + (col - c0)
+        return np.unique(key, return_inverse=True)[1].reshape(-1)
+    cls = np.zeros(len(a), dtype=np.int64)
+    for col in a.T:
+        _, r = np.unique(col, return_inverse=True)
+        _, cls = np.unique(cls * (int(r.max(initial=0)) + 1) + r.reshape(-1), return_inverse=True)
+    return cls.reshape(-1)
