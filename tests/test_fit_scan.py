@@ -276,6 +276,7 @@ def test_base_top_at_the_joint_from_the_flutes_start(diameter):
     assert base_top(np.where(plain, r, 0.5), h, 0.6 * bh, diameter, build_shaft(p.shaft)) is None
 
 
+@pytest.mark.slow  # 30-37 s: a capital fit (the default suite fits one in the whole column)
 def test_capital_fitted_to_its_points_beats_the_rebuilt_one():
     """The generator's capital of a column 2 % wider than the shaft's estimate, 2 cm higher:
     the fit recovers its volute (R, eye height and spacing within 1 %) and its deviation
@@ -316,6 +317,7 @@ def test_capital_fitted_to_its_points_beats_the_rebuilt_one():
     assert fit.models["centred_arcs"]["cost"] >= fit.models["log_spiral"]["cost"]
 
 
+@pytest.mark.slow  # 30-37 s: a capital fit (the default suite fits one in the whole column)
 def test_fit_a_capital_scanned_alone():
     """A capital alone (random pose, noise, holes, a 60° missing sector): no fluted shaft is
     found, so the capital sets the axis and the size — measured axis 0.01–0.03°, D within
