@@ -24,7 +24,8 @@ Stages, in column coordinates (y up the axis, the capital's front facing ±z):
    thickness, the log spiral's growth (its radius ratio over half a turn, the top and the
    eye kept: :func:`with_growth`), the bolsters' belt (the middle rings' swell over the
    end rings'), the eye's offset from the spiral's origin (the eye and the bolsters on its
-   axis move, the spiral stays) and the band's relief — each evaluation building the
+   axis move, the spiral stays), the band's relief, the spiral's turns and the band's
+   width (one factor) and its start's share of it — each evaluation building the
    model again (about 0.04 s); the width is scanned over its range first and the abacus'
    side after (:data:`GRIDDED_BEFORE`, :data:`GRIDDED_AFTER`: their costs have flats and
    several minima; the side then again on a finer step), then polished. Before the least
@@ -75,12 +76,20 @@ PROPORTIONS = (
     "eye_offset_x",
     "eye_offset_y",
     "relief_depth",
+    "volute_turns",
+    "band_width",
+    "band_start",
 )
-_LO = np.array([0.45, -4.0, -4.0, 0.6, 0.4, 0.4, 0.0, 0.8, 0.5, 0.72, 0.0, -0.4, -0.4, 0.3])
-_HI = np.array([1.25, 4.0, 4.0, 1.3, 2.0, 2.0, 2.5, 1.4, 1.6, 0.98, 2.0, 0.4, 0.4, 2.0])
+_LO = np.array(
+    [0.45, -4.0, -4.0, 0.6, 0.4, 0.4, 0.0, 0.8, 0.5, 0.72, 0.0, -0.4, -0.4, 0.3, 2.4, 0.4, 0.1]
+)
+_HI = np.array(
+    [1.25, 4.0, 4.0, 1.3, 2.0, 2.0, 2.5, 1.4, 1.6, 0.98, 2.0, 0.4, 0.4, 2.0, 3.6, 1.6, 1.0]
+)
 #: what the fit keeps from the description (the scale and the factors above aside)
 KEPT = (
-    "volute shape (model's angles, turns, band thickness; the centred arcs' construction)",
+    "volute's start angle and the band's growth angle (increasing_max); the centred arcs' "
+    "construction (arc_square, arc_ratio)",
     "scroll ring positions",
     "spiral_margin",
     "slab_depth",
@@ -93,8 +102,12 @@ KEPT = (
 _THR = 0.01
 GRIDDED_BEFORE = (3,)
 GRIDDED_AFTER = (7,)
-_X0 = np.array([1.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, np.nan, 1.0, 0.0, 0.0, 1.0])
-_XSCALE = np.array([0.05, 0.5, 0.5, 0.05, 0.1, 0.1, 0.2, 0.05, 0.1, 0.05, 0.2, 0.05, 0.05, 0.1])
+_X0 = np.array(
+    [1.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, np.nan, 1.0, 0.0, 0.0, 1.0, np.nan, 1.0, np.nan]
+)
+_XSCALE = np.array(
+    [0.05, 0.5, 0.5, 0.05, 0.1, 0.1, 0.2, 0.05, 0.1, 0.05, 0.2, 0.05, 0.05, 0.1, 0.1, 0.1, 0.1]
+)
 #: the volute's growth is the log spiral's (the centred arcs have their own construction)
 _ACTIVE = {
     "log_spiral": np.arange(len(PROPORTIONS)),
@@ -108,18 +121,23 @@ def spiral_growth(v: VoluteParams) -> float:
     return float(np.exp(v.c * np.pi))
 
 
-def with_growth(v: VoluteParams, q: float) -> VoluteParams:
+def with_growth(v: VoluteParams, q: float, turns: float | None = None) -> VoluteParams:
     """``v``'s log spiral with the half-turn ratio ``q``, its top end (r = 1) and its eye's
     radius ratio (``capital_circle_radius / capital_spiral_radius``) kept: with ``n`` half
     turns from the eye to the top, ``E(1 - q^n) = 1 - e`` and ``r = E q^j - d`` (b = 1), the
     Vitruvian construction (:func:`~ionic_usd.column.volute.vitruvian_coefficients`) with
     another ratio between its turns. ``q`` towards 1 is the Archimedean limit (turns evenly
-    spaced)."""
+    spaced). ``turns``: the spiral's circuits instead of ``v``'s."""
+    from ionic_usd.column.volute import spiral_limit
+
+    turns = v.spiral_circuits if turns is None else turns
+    end = spiral_limit(turns)
     e = v.capital_circle_radius / v.capital_spiral_radius
-    n = (v.theta_end - v.theta_start) / np.pi
+    n = (end - v.theta_start) / np.pi
     big = (1.0 - e) / (1.0 - q**n)
     c = float(np.log(q) / np.pi)
-    return v.with_(a=big * float(np.exp(c * v.theta_end)), b=1.0, c=c, d=big - 1.0)
+    a = big * float(np.exp(c * end))
+    return v.with_(a=a, b=1.0, c=c, d=big - 1.0, spiral_circuits=turns)
 
 
 @dataclass(frozen=True)
@@ -248,8 +266,15 @@ def _proportioned(cap: CapitalParams, model: str, x: np.ndarray) -> CapitalParam
 
     part = cap.capital_width / 18.0  # the capital's width is D: a part is D/18
     vol = cap.volute.scaled(float(x[0])).with_(volute_model=model)
+    turns = float(x[14]) if np.isfinite(x[14]) else vol.spiral_circuits
     if model == "log_spiral" and np.isfinite(x[9]):
-        vol = with_growth(vol, float(x[9]))
+        vol = with_growth(vol, float(x[9]), turns)
+    elif turns != vol.spiral_circuits:
+        vol = vol.with_(spiral_circuits=turns)
+    if x[15] != 1.0 or np.isfinite(x[16]):  # the band's width and its start's share of it
+        w = vol.thickness * float(x[15])
+        share = float(x[16]) if np.isfinite(x[16]) else vol.min_thickness / vol.thickness
+        vol = vol.with_(thickness=w, min_thickness=w * share)
     r = vol.capital_spiral_radius
     if x[11] != 0.0 or x[12] != 0.0:  # the eye (and the bolster's axis) off the spiral's origin
         vol = vol.with_(
@@ -477,6 +502,8 @@ def fit_scanned_capital(
             x0 = _X0.copy()
             x0[0], x0[1] = vs, _level_eye(cap, model, vs)
             x0[9] = spiral_growth(cap.volute)
+            x0[14] = cap.volute.spiral_circuits
+            x0[16] = cap.volute.min_thickness / cap.volute.thickness
             surf0 = build(model, x0)
             if surf0 is None:
                 continue
