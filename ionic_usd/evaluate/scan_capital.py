@@ -21,16 +21,26 @@ Stages, in column coordinates (y up the axis, the capital's front facing ±z):
    (``capital_length``), the volute faces' distance (``capital_width``), the bolster rings'
    radii (one factor: the description's ring positions and relative radii kept), the
    echinus' height and projection, the abacus' side (one factor on length and width) and
-   thickness — each evaluation building the model again (about 0.04 s); the width is
-   scanned over its range first and the abacus' side after (:data:`GRIDDED_BEFORE`,
-   :data:`GRIDDED_AFTER`: their costs have flats and several minima), then polished;
+   thickness, the log spiral's growth (its radius ratio over half a turn, the top and the
+   eye kept: :func:`with_growth`), the bolsters' belt (the middle rings' swell over the
+   end rings'), the eye's offset from the spiral's origin (the eye and the bolsters on its
+   axis move, the spiral stays), the band's relief, the spiral's turns and the band's
+   width (one factor) and its start's share of it — each evaluation building the
+   model again (about 0.04 s); the width is scanned over its range first and the abacus'
+   side after (:data:`GRIDDED_BEFORE`, :data:`GRIDDED_AFTER`: their costs have flats and
+   several minima; the side then again on a finer step), then polished. Before the least
+   squares the volute is moved onto the rolls' circle (:func:`_roll_circle`: the points
+   between the faces seen from the side, a trimmed robust circle fit) — its eye on the
+   circle's centre, its top radius and the bolsters' radius the circle's — when that is
+   nearer the points: the faces' spirals alone held the eye 20 mm off the rolls' axis
+   (a local minimum the least squares did not leave);
 3. placement again at the fitted shape. The model with the smaller robust cost wins; both
    are reported, with what was fitted and what kept from the description (:data:`KEPT`).
 
 On the tests' independent whole column (tests/synth_column.py: Archimedean volutes on a
 cushion, a quarter-ellipse echinus, a square abacus; 0.8 mm noise) the capital's rms went
 from 38.8-41.9 mm (size, eyes and placement only) to the figures in
-tests/test_scan_whole_column.py.
+tests/test_scan_whole_column.py; tools/capital_surfaces.py prints them surface by surface.
 """
 
 from __future__ import annotations
@@ -42,6 +52,7 @@ from typing import Any
 import numpy as np
 
 from ionic_usd.column.capital import CapitalParams, build_capital
+from ionic_usd.column.volute import VoluteParams
 from ionic_usd.errors import GeometryError, ParameterError
 
 __all__ = ["CapitalFit", "CapitalSurface", "capital_surface", "fit_scanned_capital"]
@@ -60,15 +71,27 @@ PROPORTIONS = (
     "echinus_projection",
     "abacus_side",
     "abacus_height",
+    "volute_growth",
+    "bolster_belt",
+    "eye_offset_x",
+    "eye_offset_y",
+    "relief_depth",
+    "volute_turns",
+    "band_width",
+    "band_start",
 )
-_LO = np.array([0.45, -4.0, -4.0, 0.6, 0.4, 0.4, 0.0, 0.8, 0.5])
-_HI = np.array([1.25, 4.0, 4.0, 1.3, 2.0, 2.0, 2.5, 1.4, 1.6])
+_LO = np.array(
+    [0.45, -4.0, -4.0, 0.6, 0.4, 0.4, 0.0, 0.8, 0.5, 0.72, 0.0, -0.4, -0.4, 0.3, 2.4, 0.4, 0.1]
+)
+_HI = np.array(
+    [1.25, 4.0, 4.0, 1.3, 2.0, 2.0, 2.5, 1.4, 1.6, 0.98, 2.0, 0.4, 0.4, 2.0, 3.6, 1.6, 1.0]
+)
 #: what the fit keeps from the description (the scale and the factors above aside)
 KEPT = (
-    "volute shape (model's angles, turns, band thickness)",
-    "scroll ring positions and relative radii",
+    "volute's start angle and the band's growth angle (increasing_max); the centred arcs' "
+    "construction (arc_square, arc_ratio)",
+    "scroll ring positions",
     "spiral_margin",
-    "relief_depth",
     "slab_depth",
 )
 #: parameters whose cost has flats or several minima (indices into :data:`PROPORTIONS`),
@@ -79,8 +102,42 @@ KEPT = (
 _THR = 0.01
 GRIDDED_BEFORE = (3,)
 GRIDDED_AFTER = (7,)
-_X0 = np.array([1.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0])
-_XSCALE = np.array([0.05, 0.5, 0.5, 0.05, 0.1, 0.1, 0.2, 0.05, 0.1])
+_X0 = np.array(
+    [1.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, np.nan, 1.0, 0.0, 0.0, 1.0, np.nan, 1.0, np.nan]
+)
+_XSCALE = np.array(
+    [0.05, 0.5, 0.5, 0.05, 0.1, 0.1, 0.2, 0.05, 0.1, 0.05, 0.2, 0.05, 0.05, 0.1, 0.1, 0.1, 0.1]
+)
+#: the volute's growth is the log spiral's (the centred arcs have their own construction)
+_ACTIVE = {
+    "log_spiral": np.arange(len(PROPORTIONS)),
+    "centred_arcs": np.array([k for k in range(len(PROPORTIONS)) if k != 9]),
+}
+
+
+def spiral_growth(v: VoluteParams) -> float:
+    """The log spiral's radius ratio over half a turn, ``q = e^{cπ}`` (< 1: r grows
+    outwards; the Vitruvian volute's 0.70)."""
+    return float(np.exp(v.c * np.pi))
+
+
+def with_growth(v: VoluteParams, q: float, turns: float | None = None) -> VoluteParams:
+    """``v``'s log spiral with the half-turn ratio ``q``, its top end (r = 1) and its eye's
+    radius ratio (``capital_circle_radius / capital_spiral_radius``) kept: with ``n`` half
+    turns from the eye to the top, ``E(1 - q^n) = 1 - e`` and ``r = E q^j - d`` (b = 1), the
+    Vitruvian construction (:func:`~ionic_usd.column.volute.vitruvian_coefficients`) with
+    another ratio between its turns. ``q`` towards 1 is the Archimedean limit (turns evenly
+    spaced). ``turns``: the spiral's circuits instead of ``v``'s."""
+    from ionic_usd.column.volute import spiral_limit
+
+    turns = v.spiral_circuits if turns is None else turns
+    end = spiral_limit(turns)
+    e = v.capital_circle_radius / v.capital_spiral_radius
+    n = (end - v.theta_start) / np.pi
+    big = (1.0 - e) / (1.0 - q**n)
+    c = float(np.log(q) / np.pi)
+    a = big * float(np.exp(c * end))
+    return v.with_(a=a, b=1.0, c=c, d=big - 1.0, spiral_circuits=turns)
 
 
 @dataclass(frozen=True)
@@ -209,14 +266,31 @@ def _proportioned(cap: CapitalParams, model: str, x: np.ndarray) -> CapitalParam
 
     part = cap.capital_width / 18.0  # the capital's width is D: a part is D/18
     vol = cap.volute.scaled(float(x[0])).with_(volute_model=model)
+    turns = float(x[14]) if np.isfinite(x[14]) else vol.spiral_circuits
+    if model == "log_spiral" and np.isfinite(x[9]):
+        vol = with_growth(vol, float(x[9]), turns)
+    elif turns != vol.spiral_circuits:
+        vol = vol.with_(spiral_circuits=turns)
+    if x[15] != 1.0 or np.isfinite(x[16]):  # the band's width and its start's share of it
+        w = vol.thickness * float(x[15])
+        share = float(x[16]) if np.isfinite(x[16]) else vol.min_thickness / vol.thickness
+        vol = vol.with_(thickness=w, min_thickness=w * share)
+    r = vol.capital_spiral_radius
+    if x[11] != 0.0 or x[12] != 0.0:  # the eye (and the bolster's axis) off the spiral's origin
+        vol = vol.with_(
+            offset_x=vol.offset_x + float(x[11]) * r, offset_y=vol.offset_y + float(x[12]) * r
+        )
+    r0 = cap.scroll_grammar.rings[0].radius
     rings = tuple(
-        ScrollRing(min(r.radius * float(x[4]), 2.0), r.position) for r in cap.scroll_grammar.rings
+        ScrollRing(min((r0 + (g.radius - r0) * float(x[10])) * float(x[4]), 2.0), g.position)
+        for g in cap.scroll_grammar.rings
     )
     side = float(x[7])
     return cap.with_(
         volute=vol,
-        scroll=ScrollGrammar(rings) if x[4] != 1.0 else cap.scroll,
-        scroll_position_y=cap.scroll_position_y + float(x[1]) * part,
+        scroll=ScrollGrammar(rings) if x[4] != 1.0 or x[10] != 1.0 else cap.scroll,
+        # the eye's offset moves the eye (and the bolsters on its axis), not the spiral
+        scroll_position_y=cap.scroll_position_y + float(x[1]) * part + float(x[12]) * r,
         capital_length=cap.capital_length + 2.0 * float(x[2]) * part,
         capital_width=cap.capital_width * float(x[3]),
         echinus_height=cap.echinus_height * float(x[5]),
@@ -224,7 +298,83 @@ def _proportioned(cap: CapitalParams, model: str, x: np.ndarray) -> CapitalParam
         abacus_length=cap.abacus_length * side,
         abacus_width=cap.abacus_width * side,
         abacus_height=cap.abacus_height * float(x[8]),
+        relief_depth=cap.relief_depth * float(x[13]),
     )
+
+
+def _roll_circle(
+    qm: np.ndarray, cap: CapitalParams, f_scale: float
+) -> tuple[float, float, float] | None:
+    """(x, y, radius) of the circle the rolls' points lie on, seen from the side (``|x|``,
+    ``y``; capital frame): the points between the volute faces within half to one and a half
+    volute radii of ``cap``'s eye, a robust circle fit. None when too few."""
+    from scipy.optimize import least_squares
+
+    from ionic_usd.column.capital_body import capital_layout
+
+    lay = capital_layout(cap)
+    ey = lay.eye_y + cap.capital_position_y
+    big = lay.total_radius
+    u, y = np.abs(qm[:, 0]), qm[:, 1]
+    rho = np.hypot(u - lay.eye_x, y - ey)
+    sel = (np.abs(qm[:, 2]) < 0.85 * lay.back_z) & (rho > 0.5 * big) & (rho < 1.5 * big)
+    sel &= y < lay.abacus_y + cap.capital_position_y - 0.05 * big
+    if sel.sum() < 30:
+        return None
+    uv = np.c_[u[sel], y[sel]]
+    c = np.array([lay.eye_x, ey, big])
+    for trim in (np.inf, 8.0, 4.0, 3.0):  # robust, then the points near the circle only
+        res = np.abs(np.hypot(uv[:, 0] - c[0], uv[:, 1] - c[1]) - c[2])
+        near = uv[res < trim * f_scale]
+        if len(near) < 30:
+            return None
+        c = least_squares(
+            lambda c, p=near: np.hypot(p[:, 0] - c[0], p[:, 1] - c[1]) - c[2],
+            c,
+            loss="soft_l1",
+            f_scale=f_scale,
+        ).x
+    return float(c[0]), float(c[1]), float(abs(c[2]))
+
+
+def _eye_on_rolls(
+    cap: CapitalParams, model: str, x: np.ndarray, qm: np.ndarray, f_scale: float
+) -> np.ndarray:
+    """``x`` with the volute's eye on the rolls' axis (:func:`_roll_circle`), its top
+    radius and the bolsters' radius the rolls' (the volute's outer turn and the bolster
+    roll together); ``x`` when the rolls are not seen or the move leaves the bounds."""
+    from ionic_usd.column.capital_body import capital_layout
+    from ionic_usd.column.volute import volute_extent, volute_total_radius
+
+    try:
+        c = _proportioned(cap, model, x)
+    except (ParameterError, GeometryError):
+        return x
+    got = _roll_circle(qm, c, f_scale)
+    if got is None:
+        return x
+    part = cap.capital_width / 18.0
+    y = x.copy()
+    y[0] *= got[2] / c.volute.capital_spiral_radius
+    y[11:13] = 0.0
+    try:
+        c = _proportioned(cap, model, y)
+        ext = volute_extent(c.volute, c.spiral_samples, c.ring_segments)
+    except (ParameterError, GeometryError):
+        return x
+    y[2] += (got[0] + float(ext[1, 0]) - 0.5 * c.capital_length) / part
+    y[1] += (got[1] - c.scroll_position_y - c.capital_position_y) / part
+    if not np.all((y > _LO) & (y < _HI)):
+        return x
+    try:
+        moved = _proportioned(cap, model, y)
+        lay = capital_layout(moved)
+    except (ParameterError, GeometryError):
+        return x
+    ring = max(g.radius for g in moved.scroll_grammar.rings)
+    y[4] *= got[2] / (ring * volute_total_radius(moved.volute))
+    del lay
+    return np.clip(y, _LO, _HI)
 
 
 def _level_eye(cap: CapitalParams, model: str, vs: float) -> float:
@@ -265,6 +415,9 @@ def fit_scanned_capital(
     CapitalFit
     """
     from scipy.optimize import least_squares
+
+    from ionic_usd.column.capital_body import capital_layout
+    from ionic_usd.column.volute import volute_total_radius
 
     t0 = time.perf_counter()
     rng = np.random.default_rng(seed)
@@ -314,13 +467,20 @@ def fit_scanned_capital(
             return None
 
     def grid(
-        model: str, x: np.ndarray, s: float, ty: float, which: tuple[int, ...], n: int
+        model: str,
+        x: np.ndarray,
+        s: float,
+        ty: float,
+        which: tuple[int, ...],
+        n: int,
+        span: float | None = None,
     ) -> np.ndarray:
         """``x`` with each parameter of ``which`` in turn set to the best of ``n`` values
-        over its range (the others and the placement held)."""
+        over its range, or over ``x ± span`` within it (the others and the placement held)."""
         x = x.copy()
         for k in which:
-            vals = np.linspace(_LO[k], _HI[k], n)
+            lo, hi = (_LO[k], _HI[k]) if span is None else (x[k] - span, x[k] + span)
+            vals = np.linspace(max(lo, _LO[k]), min(hi, _HI[k]), n)
             costs = []
             for v in vals:
                 xk = x.copy()
@@ -341,6 +501,9 @@ def fit_scanned_capital(
         for vs in (0.5, 0.6, 0.72, 0.86, 1.0, 1.16):
             x0 = _X0.copy()
             x0[0], x0[1] = vs, _level_eye(cap, model, vs)
+            x0[9] = spiral_growth(cap.volute)
+            x0[14] = cap.volute.spiral_circuits
+            x0[16] = cap.volute.min_thickness / cap.volute.thickness
             surf0 = build(model, x0)
             if surf0 is None:
                 continue
@@ -351,35 +514,61 @@ def fit_scanned_capital(
             continue
         _, x, s, ty = best_c
         x = grid(model, np.clip(x, _LO, _HI), s, ty, GRIDDED_BEFORE, 29)
+        # the volute on the rolls' circle, where that is nearer the points (a start: the
+        # faces' spirals and the rolls pull the eye apart when the volute's outline is not
+        # the rolls' circle)
+        xr = _eye_on_rolls(cap, model, x, (q - np.array([0.0, y_top + ty, 0.0])) / s, f_scale)
+        if xr is not x:
+            costs = [build(model, xi) for xi in (x, xr)]
+            if costs[1] is not None and (
+                costs[0] is None or robust(dist(costs[1], s, ty)) < robust(dist(costs[0], s, ty))
+            ):
+                x = xr
 
-        def res(x: np.ndarray, model: str = model, s: float = s, ty: float = ty) -> np.ndarray:
-            surf = build(model, x)
+        act = _ACTIVE[model]
+
+        def res(
+            xa: np.ndarray,
+            x: np.ndarray,
+            model: str = model,
+            s: float = s,
+            ty: float = ty,
+            act: np.ndarray = act,
+        ) -> np.ndarray:
+            xf = x.copy()
+            xf[act] = xa
+            surf = build(model, xf)
             return np.full(len(q), 10.0 * size) if surf is None else dist(surf, s, ty)
 
-        def solve(x: np.ndarray, nfev: int, res=res):
-            return least_squares(
+        def solve(x: np.ndarray, nfev: int, res=res, act=act) -> np.ndarray:
+            sol = least_squares(
                 res,
-                x,
-                bounds=(_LO, _HI),
+                np.clip(x[act], _LO[act], _HI[act]),
+                bounds=(_LO[act], _HI[act]),
                 loss="soft_l1",
                 f_scale=f_scale,
-                x_scale=_XSCALE,
+                x_scale=_XSCALE[act],
                 diff_step=3e-2,
                 max_nfev=nfev,
+                args=(x,),
             )
+            out = x.copy()
+            out[act] = sol.x
+            return out
 
-        x = grid(model, solve(x, 12).x.copy(), s, ty, GRIDDED_AFTER, 13)
-        sol = solve(x, 4)
-        c = _proportioned(cap, model, sol.x)
+        x = grid(model, solve(x, 12), s, ty, GRIDDED_AFTER, 13)
+        x = grid(model, x, s, ty, GRIDDED_AFTER, 9, span=0.5 * (_HI[7] - _LO[7]) / 12)
+        xs = solve(x, 4)
+        c = _proportioned(cap, model, xs)
         surf = capital_surface(c, top_radius, outer=True)
         s_m, ty_m, cost = place(surf, s, ty, 0.02 * size)
         d = dist(surf, s_m, ty_m)
-        u = (sol.x - _LO) / (_HI - _LO)
+        u = (xs - _LO) / (_HI - _LO)
         models[model] = {
             "cost": cost,
             "rms": float(np.sqrt(np.mean(d**2))),
             "p95": float(np.percentile(d, 95)),
-            "proportions": dict(zip(PROPORTIONS, (float(v) for v in sol.x), strict=True)),
+            "proportions": dict(zip(PROPORTIONS, (float(v) for v in xs), strict=True)),
             "scale": s_m,
             "ty": ty_m,
             "bounds_hit": [
@@ -397,6 +586,13 @@ def fit_scanned_capital(
         "capital_spiral_radius": fitted.volute.capital_spiral_radius,
         "capital_circle_radius": fitted.volute.capital_circle_radius,
         "scroll_position_y": fitted.scroll_position_y,
+        "eye_x": float(capital_layout(fitted).eye_x),
+        "eye_offset_x": fitted.volute.offset_x,
+        "eye_offset_y": fitted.volute.offset_y,
+        "bolster_radius": float(
+            max(g.radius for g in fitted.scroll_grammar.rings) * volute_total_radius(fitted.volute)
+        ),
+        "relief_depth": fitted.relief_depth,
         "capital_length": fitted.capital_length,
         "capital_width": fitted.capital_width,
         "echinus_height": fitted.echinus_height,
