@@ -120,4 +120,6 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    import bench_md
+
+    raise SystemExit(bench_md.run(main))
