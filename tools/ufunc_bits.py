@@ -2,7 +2,8 @@
 
 Run:  python tools/ufunc_bits.py
 
-Evaluates each function on 200,000 seeded arguments in this process and in a child process
+Evaluates each function (and the kernel's sums that are no ufunc call: einsum, add.reduce,
+linalg.norm) on 200,000 seeded arguments in this process and in a child process
 with every SIMD extension numpy found disabled (``NPY_DISABLE_CPU_FEATURES``), and prints, per
 function, whether the two results are bit for bit equal. The functions that differ are the
 ones ruff's banned-api rule (pyproject.toml, TID251) keeps out of the generators; use
@@ -44,6 +45,19 @@ def digests() -> dict[str, str]:
         else:
             r = f(x)
         out[name] = hashlib.sha256(r.tobytes()).hexdigest()
+    # the kernel's sums that are not ufunc calls: einsum's row dots and matrix products (its
+    # kernels are compiled for numpy's baseline, the order of a sum set by the operands'
+    # layout), the reductions behind norm and sum
+    a, b = np.stack([x, y, u], 1), np.stack([y, u, x], 1)
+    m = a[:3000].reshape(-1, 3, 3)
+    for name, r in (
+        ("einsum ij,ij->i", np.einsum("ij,ij->i", a, b)),
+        ("einsum vj,njk->nvk", np.einsum("vj,njk->nvk", a[:500], m[:40])),
+        ("einsum nij,cj->nci", np.einsum("nij,cj->nci", m, b[:8])),
+        ("add.reduce axis 1", np.add.reduce(a * b, axis=1)),
+        ("linalg.norm axis 1", np.linalg.norm(a, axis=1)),
+    ):
+        out[name] = hashlib.sha256(r.tobytes()).hexdigest()
     return out
 
 
@@ -66,8 +80,8 @@ def main() -> int:
     other = json.loads(child.stdout.strip().splitlines()[-1])
     here = digests()
     print(f"numpy {np.__version__}; SIMD switched off in the child: {' '.join(found)}")
-    for name in FUNCS:
-        print(f"{name:8s} {'same' if here[name] == other[name] else 'DIFFERS'}")
+    for name in here:
+        print(f"{name:18s} {'same' if here[name] == other[name] else 'DIFFERS'}")
     return 0
 
 
