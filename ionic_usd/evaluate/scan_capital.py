@@ -29,8 +29,9 @@ Stages, in column coordinates (y up the axis, the capital's front facing ±z):
    model again (about 0.04 s); the width is scanned over its range first and the abacus'
    side after (:data:`GRIDDED_BEFORE`, :data:`GRIDDED_AFTER`: their costs have flats and
    several minima; the side then again on a finer step), then polished. Before the least
-   squares the volute is moved onto the rolls' circle (:func:`_roll_circle`: the points
-   between the faces seen from the side, a trimmed robust circle fit) — its eye on the
+   squares the volute is moved onto the rolls' circle
+   (:func:`~ionic_usd.evaluate.scan_volute.roll_circle`: the points between the faces seen
+   from the side, a trimmed robust circle fit) — its eye on the
    circle's centre, its top radius and the bolsters' radius the circle's — when that is
    nearer the points: the faces' spirals alone held the eye 20 mm off the rolls' axis
    (a local minimum the least squares did not leave);
@@ -52,8 +53,8 @@ from typing import Any
 import numpy as np
 
 from ionic_usd.column.capital import CapitalParams, build_capital
-from ionic_usd.column.volute import VoluteParams
 from ionic_usd.errors import GeometryError, ParameterError
+from ionic_usd.evaluate.scan_volute import roll_circle, spiral_growth, with_growth
 
 __all__ = ["CapitalFit", "CapitalSurface", "capital_surface", "fit_scanned_capital"]
 
@@ -113,31 +114,6 @@ _ACTIVE = {
     "log_spiral": np.arange(len(PROPORTIONS)),
     "centred_arcs": np.array([k for k in range(len(PROPORTIONS)) if k != 9]),
 }
-
-
-def spiral_growth(v: VoluteParams) -> float:
-    """The log spiral's radius ratio over half a turn, ``q = e^{cπ}`` (< 1: r grows
-    outwards; the Vitruvian volute's 0.70)."""
-    return float(np.exp(v.c * np.pi))
-
-
-def with_growth(v: VoluteParams, q: float, turns: float | None = None) -> VoluteParams:
-    """``v``'s log spiral with the half-turn ratio ``q``, its top end (r = 1) and its eye's
-    radius ratio (``capital_circle_radius / capital_spiral_radius``) kept: with ``n`` half
-    turns from the eye to the top, ``E(1 - q^n) = 1 - e`` and ``r = E q^j - d`` (b = 1), the
-    Vitruvian construction (:func:`~ionic_usd.column.volute.vitruvian_coefficients`) with
-    another ratio between its turns. ``q`` towards 1 is the Archimedean limit (turns evenly
-    spaced). ``turns``: the spiral's circuits instead of ``v``'s."""
-    from ionic_usd.column.volute import spiral_limit
-
-    turns = v.spiral_circuits if turns is None else turns
-    end = spiral_limit(turns)
-    e = v.capital_circle_radius / v.capital_spiral_radius
-    n = (end - v.theta_start) / np.pi
-    big = (1.0 - e) / (1.0 - q**n)
-    c = float(np.log(q) / np.pi)
-    a = big * float(np.exp(c * end))
-    return v.with_(a=a, b=1.0, c=c, d=big - 1.0, spiral_circuits=turns)
 
 
 @dataclass(frozen=True)
@@ -302,46 +278,12 @@ def _proportioned(cap: CapitalParams, model: str, x: np.ndarray) -> CapitalParam
     )
 
 
-def _roll_circle(
-    qm: np.ndarray, cap: CapitalParams, f_scale: float
-) -> tuple[float, float, float] | None:
-    """(x, y, radius) of the circle the rolls' points lie on, seen from the side (``|x|``,
-    ``y``; capital frame): the points between the volute faces within half to one and a half
-    volute radii of ``cap``'s eye, a robust circle fit. None when too few."""
-    from scipy.optimize import least_squares
-
-    from ionic_usd.column.capital_body import capital_layout
-
-    lay = capital_layout(cap)
-    ey = lay.eye_y + cap.capital_position_y
-    big = lay.total_radius
-    u, y = np.abs(qm[:, 0]), qm[:, 1]
-    rho = np.hypot(u - lay.eye_x, y - ey)
-    sel = (np.abs(qm[:, 2]) < 0.85 * lay.back_z) & (rho > 0.5 * big) & (rho < 1.5 * big)
-    sel &= y < lay.abacus_y + cap.capital_position_y - 0.05 * big
-    if sel.sum() < 30:
-        return None
-    uv = np.c_[u[sel], y[sel]]
-    c = np.array([lay.eye_x, ey, big])
-    for trim in (np.inf, 8.0, 4.0, 3.0):  # robust, then the points near the circle only
-        res = np.abs(np.hypot(uv[:, 0] - c[0], uv[:, 1] - c[1]) - c[2])
-        near = uv[res < trim * f_scale]
-        if len(near) < 30:
-            return None
-        c = least_squares(
-            lambda c, p=near: np.hypot(p[:, 0] - c[0], p[:, 1] - c[1]) - c[2],
-            c,
-            loss="soft_l1",
-            f_scale=f_scale,
-        ).x
-    return float(c[0]), float(c[1]), float(abs(c[2]))
-
-
 def _eye_on_rolls(
     cap: CapitalParams, model: str, x: np.ndarray, qm: np.ndarray, f_scale: float
 ) -> np.ndarray:
-    """``x`` with the volute's eye on the rolls' axis (:func:`_roll_circle`), its top
-    radius and the bolsters' radius the rolls' (the volute's outer turn and the bolster
+    """``x`` with the volute's eye on the rolls' axis
+    (:func:`~ionic_usd.evaluate.scan_volute.roll_circle`), its top radius and the bolsters'
+    radius the rolls' (the volute's outer turn and the bolster
     roll together); ``x`` when the rolls are not seen or the move leaves the bounds."""
     from ionic_usd.column.capital_body import capital_layout
     from ionic_usd.column.volute import volute_extent, volute_total_radius
@@ -350,7 +292,7 @@ def _eye_on_rolls(
         c = _proportioned(cap, model, x)
     except (ParameterError, GeometryError):
         return x
-    got = _roll_circle(qm, c, f_scale)
+    got = roll_circle(qm, c, f_scale)
     if got is None:
         return x
     part = cap.capital_width / 18.0
