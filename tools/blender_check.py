@@ -204,7 +204,7 @@ def main() -> int:
             f"materials {m['materials']}"
         )
     mats = ", ".join(f"{k} ({len(v)} images)" for k, v in rep["materials"].items())
-    print(f"  materials ({len(rep['materials'])}): {mats}")
+    print(f"  materials: {mats}")
     print(
         f"  mesh datablocks with a 'normals' attribute beside custom_normal (primvars:normals "
         f"read twice): {len(dn)} of {rep['meshes']}"

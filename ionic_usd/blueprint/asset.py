@@ -20,7 +20,7 @@ from ionic_usd.geometry.mesh import Mesh
 if TYPE_CHECKING:  # the ornament module is imported only when an asset has instancers
     from ionic_usd.column.ornament import Instances
 
-__all__ = ["AssetInstancer", "AssetMesh", "AssetSpec", "material_scopes"]
+__all__ = ["AssetInstancer", "AssetMesh", "AssetSpec"]
 
 
 @dataclass(frozen=True)
@@ -42,12 +42,6 @@ class AssetInstancer:
     name: str
     instances: Instances
     tags: Mapping[str, str]
-
-
-def material_scopes(proxy_lod: str | None) -> tuple[str, ...]:
-    """The prims an asset binds its material on: ``Geom`` (every render mesh is below it) and,
-    when it has a proxy LOD, ``Proxy``. Their paths hold under every variant selection."""
-    return ("Geom", "Proxy") if proxy_lod is not None else ("Geom",)
 
 
 @dataclass(frozen=True)
@@ -97,11 +91,6 @@ class AssetSpec:
                 raise ParameterError(
                     f"finishes[{fin!r}]", mat, f"one of {', '.join(self.materials)}"
                 )
-
-    @property
-    def material_scopes(self) -> tuple[str, ...]:
-        """The prims the asset binds its material on (:func:`material_scopes`)."""
-        return material_scopes(self.proxy_lod)
 
     def tagged(self) -> tuple[AssetMesh | AssetInstancer, ...]:
         """Every mesh and instancer of the asset (what variant tags switch)."""

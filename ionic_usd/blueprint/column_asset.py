@@ -81,7 +81,6 @@ from ionic_usd.lod import LOD_NAMES
 __all__ = [
     "ColumnAssetOptions",
     "column_asset_spec",
-    "column_proxy_lod",
     "volute_variant_params",
     "column_ornament",
     "ASSET_NAME",
@@ -294,14 +293,9 @@ def column_asset_spec(
         "after Konečný, Syllaiou & Liarokapis 2016; variant sets: "
         f"{', '.join(variant_sets)}.",
         st_scale=UV_SPAN / TILE_METRES,
-        proxy_lod=column_proxy_lod(opts),
+        proxy_lod="low" if "low" in opts.lods and len(opts.lods) > 1 else None,
         instancers=tuple(instancers),
     )
-
-
-def column_proxy_lod(opts: ColumnAssetOptions) -> str | None:
-    """The column asset's proxy LOD: ``low``, when the asset has it and another LOD."""
-    return "low" if "low" in opts.lods and len(opts.lods) > 1 else None
 
 
 def _flatten(tables: dict[str, dict]) -> dict[str, object]:

@@ -87,9 +87,11 @@ def _materials_layer(spec: AssetSpec) -> Sdf.Layer:
         author_preview_material(
             stage, f"/{spec.name}/Materials/{mat_name}", tex, st_scale=spec.st_scale
         )
-    for scope in spec.material_scopes:
-        prim = stage.DefinePrim(f"/{spec.name}/{scope}", "Scope")
-        bind_material(prim, f"/{spec.name}/Materials/{spec.default_material}")
+    geom = stage.DefinePrim(f"/{spec.name}/Geom", "Scope")
+    bind_material(geom, f"/{spec.name}/Materials/{spec.default_material}")
+    if spec.proxy_lod is not None:
+        proxy = stage.DefinePrim(f"/{spec.name}/Proxy", "Scope")
+        bind_material(proxy, f"/{spec.name}/Materials/{spec.default_material}")
     return layer
 
 
@@ -134,7 +136,8 @@ def _interface_layer(spec: AssetSpec) -> Sdf.Layer:
                 var = Sdf.VariantSpec(vs_spec, v)
                 vprim = var.primSpec
                 if vset == "finish" and v in spec.finishes:
-                    for scope in spec.material_scopes:
+                    scopes = ["Geom"] + (["Proxy"] if spec.proxy_lod is not None else [])
+                    for scope in scopes:
                         bind_material_spec(
                             _over(vprim, scope), f"/{name}/Materials/{spec.finishes[v]}"
                         )

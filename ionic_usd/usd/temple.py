@@ -42,7 +42,7 @@ realise yet are listed with ``realised = false`` and get no layer.
 ``class`` prims: /_class_Temple (inherited by /Temple) and /_class_IonicColumn (inherited by
 every column through the asset): an opinion authored on a class in ``overrides.usda`` changes
 every temple or column of the scene at once. The column class carries the binding of every
-column's meshes into the temple's library, per ``finish`` (:func:`_bind_finishes`).
+column into the temple's library, per ``finish`` (:func:`_bind_finishes`).
 """
 
 from __future__ import annotations
@@ -56,8 +56,7 @@ from typing import Any
 from pxr import Sdf, Usd
 
 from ionic_usd import __version__
-from ionic_usd.blueprint.asset import material_scopes
-from ionic_usd.blueprint.column_asset import FINISHES, ColumnAssetOptions, column_proxy_lod
+from ionic_usd.blueprint.column_asset import FINISHES, ColumnAssetOptions
 from ionic_usd.blueprint.hypotheses import HypothesisChanges
 from ionic_usd.blueprint.layers import (
     ASSET_NAME,
@@ -205,36 +204,24 @@ def _part_layer(layer: Layer, meshes: dict, material: str) -> Sdf.Layer:
     return lay
 
 
-def _bind_finishes(spec: Sdf.PrimSpec, scopes: Sequence[str]) -> None:
+def _bind_finishes(spec: Sdf.PrimSpec) -> None:
     """Bind every column to the temple's one library, per finish: on the column class
     ``spec`` (``/_class_IonicColumn``, inherited by every column), each value of the asset's
-    ``finish`` set binds to ``/Temple/Materials/<material>`` the column's root
-    (``strongerThanDescendants``) and its ``scopes``, the prims the asset binds its own
-    library on (``Geom``, ``Proxy``: stable paths under every variant). The set has the
-    asset's name, so a column's one selection switches all of them; and on the class, not on
-    each column, so the columns still share their prototypes (a variant on an instance's own
-    root would make it unique).
+    ``finish`` set binds the column's root ``strongerThanDescendants`` to
+    ``/Temple/Materials/<material>``. The set has the asset's name, so a column's one
+    selection switches both; and on the class, not on each column, so the columns still
+    share their prototypes (a variant on an instance's own root would make it unique).
 
-    The root binding is the instance's own: UsdShade resolves every mesh of every column,
-    through its instance, to its own temple's library (in a city, each temple's). The scopes'
-    bindings compose into the column's prototype (through the asset's inherit, stronger than
-    the asset's own bindings; the target outside the instance maps through as the prototype's
-    source instance sees it): a client that reads a prototype alone and ignores the binding
-    on an instance's root, such as Blender's importer, finds the library too and makes each
-    of its materials once. In a city, where the temples of one build share their column
-    prototypes, that is the library of the temple the prototype was composed from (the same
-    materials). The asset keeps its own library and bindings: it opens and renders alone."""
+    UsdShade resolves every mesh of every column to the temple's library. The asset keeps its
+    own library and bindings (it opens alone, Kitchen_set style), which a client that reads
+    an instance's prototype alone, such as Blender, still uses: such a client cannot see a
+    binding on the instance."""
     vs = spec.variantSets.get("finish") or Sdf.VariantSetSpec(spec, "finish")
     if "finish" not in spec.variantSetNameList.prependedItems:
         spec.variantSetNameList.Prepend("finish")
     for finish, material in _finish_materials().items():
         var = vs.variants.get(finish) or Sdf.VariantSpec(vs, finish)
         bind_material_spec(var.primSpec, f"/Temple/Materials/{material}", stronger=True)
-        for scope in scopes:
-            child = var.primSpec.nameChildren.get(scope) or Sdf.PrimSpec(
-                var.primSpec, scope, Sdf.SpecifierOver
-            )
-            bind_material_spec(child, f"/Temple/Materials/{material}")
 
 
 def _colonnade_layer(layout: TempleLayout) -> Sdf.Layer:
@@ -289,10 +276,7 @@ def _user_overrides_layer() -> Sdf.Layer:
 
 
 def _generated_layer(
-    layout: TempleLayout,
-    hyp_layers: dict[str, Sdf.Layer | None],
-    lods: Sequence[str],
-    scopes: Sequence[str],
+    layout: TempleLayout, hyp_layers: dict[str, Sdf.Layer | None], lods: Sequence[str]
 ) -> Sdf.Layer:
     lay = new_layer(
         "Temple",
@@ -311,7 +295,7 @@ def _generated_layer(
     spec.inheritPathList.Prepend(Sdf.Path(TEMPLE_CLASS))
     col_cls = Sdf.CreatePrimInLayer(lay, class_path(ASSET_NAME))
     col_cls.specifier = Sdf.SpecifierClass
-    _bind_finishes(col_cls, scopes)  # the prims the asset binds its library on
+    _bind_finishes(col_cls)
     for ref in [
         f"./{MATERIALS_LAYER}",
         *(f"./{PART_LAYERS[la]}" for la in layout.cuboids),
@@ -379,8 +363,7 @@ def write_temple(plan: TemplePlan, tmp: Path) -> dict[str, Any]:
     for hid, lay in hyp_layers.items():
         if lay is not None:
             save_layer(lay, tmp / "layers" / f"{hid}.usda")
-    scopes = material_scopes(column_proxy_lod(plan.opts))
-    gen_layer = _generated_layer(layout, hyp_layers, plan.lods, scopes)
+    gen_layer = _generated_layer(layout, hyp_layers, plan.lods)
     spec = gen_layer.GetPrimAtPath("/Temple")
     author_detail_variants(spec, geom, plan.detail)
     frieze = write_frieze_hypotheses(tmp, spec, layout, geom)
