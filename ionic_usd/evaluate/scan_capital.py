@@ -310,12 +310,11 @@ def _eye_on_rolls(
         return x
     try:
         moved = _proportioned(cap, model, y)
-        lay = capital_layout(moved)
+        capital_layout(moved)  # raises when the moved capital cannot be laid out
     except (ParameterError, GeometryError):
         return x
     ring = max(g.radius for g in moved.scroll_grammar.rings)
     y[4] *= got[2] / (ring * volute_total_radius(moved.volute))
-    del lay
     return np.clip(y, _LO, _HI)
 
 
@@ -461,9 +460,9 @@ def fit_scanned_capital(
         # the rolls' circle)
         xr = _eye_on_rolls(cap, model, x, (q - np.array([0.0, y_top + ty, 0.0])) / s, f_scale)
         if xr is not x:
-            costs = [build(model, xi) for xi in (x, xr)]
-            if costs[1] is not None and (
-                costs[0] is None or robust(dist(costs[1], s, ty)) < robust(dist(costs[0], s, ty))
+            surfs = [build(model, xi) for xi in (x, xr)]
+            if surfs[1] is not None and (
+                surfs[0] is None or robust(dist(surfs[1], s, ty)) < robust(dist(surfs[0], s, ty))
             ):
                 x = xr
 
