@@ -50,6 +50,11 @@ TIME = r"""
 import hashlib, json, pickle, sys, time
 from pathlib import Path
 import numpy as np
+try:  # the instance arrays: ionic_usd.blueprint.city (older checkouts: ionic_usd.usd.city)
+    import ionic_usd.blueprint.city
+except ModuleNotFoundError:  # an older baseline: unpickle them as its usd.city's classes
+    import ionic_usd.usd.city
+    sys.modules["ionic_usd.blueprint.city"] = ionic_usd.usd.city
 from ionic_usd.usd.city_instances import column_prototypes, temple_prototypes
 
 args = {}
