@@ -35,6 +35,39 @@ def _tri_cosines(p: np.ndarray) -> np.ndarray:
     return np.clip(np.einsum("tij,tij->ti", a, b) / np.maximum(la * lb, 1e-300), -1.0, 1.0)
 
 
+def _maybe_slivers(pts: np.ndarray, tri: np.ndarray, cos_lo: float) -> np.ndarray:
+    """(t,) bool over the triangles ``tri`` (rows into the (n, 3) ``pts``): a superset of
+    those :func:`_tri_cosines` gives a corner cosine over ``cos_lo`` (> 0). A corner between
+    edges u, v has u · v > cos_lo |u| |v| only if u · v > 0 and (u · v)² >= k |u|² |v|² with
+    k = (cos_lo − 3e-12)²: no square roots or divisions, on (t,) coordinate arrays (~5x
+    faster than the exact cosines, which are then computed for these few rows only)."""
+    k = (cos_lo - 3e-12) ** 2
+    x, y, z = pts[:, 0], pts[:, 1], pts[:, 2]
+    i, j, m = tri[:, 0], tri[:, 1], tri[:, 2]
+    xi, yi, zi = x[i], y[i], z[i]
+    xj, yj, zj = x[j], y[j], z[j]
+    xm, ym, zm = x[m], y[m], z[m]
+    ax, ay, az = xj - xi, yj - yi, zj - zi  # i → j
+    bx, by, bz = xm - xj, ym - yj, zm - zj  # j → m
+    cx, cy, cz = xi - xm, yi - ym, zi - zm  # m → i
+    la, lb, lc = (
+        ax * ax + ay * ay + az * az,
+        bx * bx + by * by + bz * bz,
+        cx * cx + cy * cy + cz * cz,
+    )
+    # minus the cosine numerators at i, j, m (the edges into and out of each corner)
+    di, dj, dm = (
+        ax * cx + ay * cy + az * cz,
+        bx * ax + by * ay + bz * az,
+        cx * bx + cy * by + cz * bz,
+    )
+    return (
+        ((di < 0) & (di * di >= k * (la * lc)))
+        | ((dj < 0) & (dj * dj >= k * (lb * la)))
+        | ((dm < 0) & (dm * dm >= k * (lc * lb)))
+    )
+
+
 def _tri_angles(p: np.ndarray) -> np.ndarray:
     """(t, 3, 3) corner points → (t, 3) corner angles in degrees (for reports: numpy's arccos
     differs in the last bits by CPU, so the clean-up itself orders by :func:`_tri_cosines`)."""
@@ -123,9 +156,10 @@ def _mend_pass(
     # the smallest angle is the largest cosine: candidates and their order from + - * / and
     # sqrt only (arccos is CPU-dependent); a margin of 1e-12 keeps every triangle under
     # min_angle a candidate, and angles_of decides each exactly
-    worst = _tri_cosines(ed.pts[tri]).max(axis=1)
+    maybe = _maybe_slivers(ed.pts, tri, cos_min - 1e-12)
+    worst = _tri_cosines(ed.pts[tri[maybe]]).max(axis=1)
     low = worst > cos_min - 1e-12
-    bad, worst = cand[low], worst[low]
+    bad, worst = cand[maybe][low], worst[low]
     touched: set[int] = set()
     for t in bad[np.argsort(-worst, kind="stable")].tolist():
         if not ed.alive[t] or (t in failed and ed.unchanged_since(t, failed[t])):

@@ -332,17 +332,19 @@ class TriangleEditor:
         P, T = self.P, self.T
         row = T[t]
         c, a, b = row[k], row[(k + 1) % 3], row[(k + 2) % 3]
-        od = self.across(t, a, b)
-        if od is None:
-            return False
-        o, d = od
         pa, pb, pc = P[a], P[b], P[c]
         ab = (pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2])
         ac = (pc[0] - pa[0], pc[1] - pa[1], pc[2] - pa[2])
         u = min(max(_dot(ac, ab) / max(_dot(ab, ab), 1e-300), 0.0), 1.0)
         fl = [pa[0] + u * ab[0], pa[1] + u * ab[1], pa[2] + u * ab[2]]  # the foot on ab
         off = (fl[0] - pc[0], fl[1] - pc[1], fl[2] - pc[2])
-        if math.sqrt(_dot(off, off)) > tol or self.edge_faces(c, d):
+        if math.sqrt(_dot(off, off)) > tol:
+            return False  # first: the cheapest test, and most snaps fail it
+        od = self.across(t, a, b)
+        if od is None:
+            return False
+        o, d = od
+        if self.edge_faces(c, d):
             return False
         around = [T[f] for f in sorted(self.faces_of(c)) if f != t]
         moved = {v: P[v] for r in around for v in r}
