@@ -29,11 +29,13 @@ __all__ = ["TriangleEditor"]
 _DEG = 180.0 / math.pi  # x * _DEG is math.degrees(x), bit for bit
 
 
-def _angles(p: list[float], q: list[float], r: list[float]) -> tuple[float, float, float]:
-    """The corner angles (degrees) of the triangle pqr (3 floats each), in plain float math
-    (numpy costs ~1 µs a call on 3-vectors). Each corner's cosine is (edge · edge) / (length ×
-    length) of its two edges from it; an edge reversed only flips signs, exactly, so the three
-    edges and lengths are computed once."""
+def _cosines(p: list[float], q: list[float], r: list[float]) -> tuple[float, float, float]:
+    """The corner cosines of the triangle pqr (3 floats each), clamped to [-1, 1], in plain
+    float math (numpy costs ~1 µs a call on 3-vectors). Each corner's cosine is (edge · edge) /
+    (length × length) of its two edges from it; an edge reversed only flips signs, exactly, so
+    the three edges and lengths are computed once. The clamps are written out as the
+    comparisons ``max(x, 1e-300)`` and ``min(max(c, -1.0), 1.0)`` make (the same results, NaN
+    included, without the builtins' call overhead)."""
     px, py, pz = p
     qx, qy, qz = q
     rx, ry, rz = r
@@ -43,15 +45,32 @@ def _angles(p: list[float], q: list[float], r: list[float]) -> tuple[float, floa
     lu = math.sqrt(ux * ux + uy * uy + uz * uz)
     lv = math.sqrt(vx * vx + vy * vy + vz * vz)
     lw = math.sqrt(wx * wx + wy * wy + wz * wz)
-    cp = (ux * vx + uy * vy + uz * vz) / max(lu * lv, 1e-300)
-    cq = -(wx * ux + wy * uy + wz * uz) / max(lw * lu, 1e-300)
-    cr = (vx * wx + vy * wy + vz * wz) / max(lv * lw, 1e-300)
+    d = lu * lv
+    cp = (ux * vx + uy * vy + uz * vz) / (1e-300 if 1e-300 > d else d)
+    d = lw * lu
+    cq = -(wx * ux + wy * uy + wz * uz) / (1e-300 if 1e-300 > d else d)
+    d = lv * lw
+    cr = (vx * wx + vy * wy + vz * wz) / (1e-300 if 1e-300 > d else d)
+    cp = -1.0 if -1.0 > cp else cp
+    cq = -1.0 if -1.0 > cq else cq
+    cr = -1.0 if -1.0 > cr else cr
+    return (1.0 if 1.0 < cp else cp), (1.0 if 1.0 < cq else cq), (1.0 if 1.0 < cr else cr)
+
+
+def _angles(p: list[float], q: list[float], r: list[float]) -> tuple[float, float, float]:
+    """The corner angles (degrees) of the triangle pqr (3 floats each): see :func:`_cosines`."""
+    cp, cq, cr = _cosines(p, q, r)
     acos = math.acos
-    return (
-        acos(min(max(cp, -1.0), 1.0)) * _DEG,
-        acos(min(max(cq, -1.0), 1.0)) * _DEG,
-        acos(min(max(cr, -1.0), 1.0)) * _DEG,
-    )
+    return acos(cp) * _DEG, acos(cq) * _DEG, acos(cr) * _DEG
+
+
+def _min_angle(p: list[float], q: list[float], r: list[float]) -> float:
+    """``min(_angles(p, q, r))``, without the tuple and the builtin."""
+    cp, cq, cr = _cosines(p, q, r)
+    acos = math.acos
+    a, b, c = acos(cp) * _DEG, acos(cq) * _DEG, acos(cr) * _DEG
+    a = b if b < a else a
+    return c if c < a else a
 
 
 def _normal(p: list[float], q: list[float], r: list[float]) -> tuple[float, float, float]:
@@ -59,7 +78,8 @@ def _normal(p: list[float], q: list[float], r: list[float]) -> tuple[float, floa
     ux, uy, uz = q[0] - p[0], q[1] - p[1], q[2] - p[2]
     vx, vy, vz = r[0] - p[0], r[1] - p[1], r[2] - p[2]
     nx, ny, nz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
-    ln = max(math.sqrt(nx * nx + ny * ny + nz * nz), 1e-300)
+    ln = math.sqrt(nx * nx + ny * ny + nz * nz)
+    ln = 1e-300 if 1e-300 > ln else ln  # max(ln, 1e-300)
     return nx / ln, ny / ln, nz / ln
 
 
@@ -79,8 +99,12 @@ def _tet_height(a: list[float], b: list[float], c: list[float], d: list[float]) 
     → acd, bcd) moves the surface."""
     n = _cross(a, b, c)
     v = abs(n[0] * (d[0] - a[0]) + n[1] * (d[1] - a[1]) + n[2] * (d[2] - a[2]))
-    areas = [math.sqrt(_dot(x, x)) for x in (n, _cross(a, b, d), _cross(a, c, d), _cross(b, c, d))]
-    return v / max(max(areas), 1e-300)
+    big = math.sqrt(_dot(n, n))  # the largest face area (x 2), as max() takes it
+    for x in (_cross(a, b, d), _cross(a, c, d), _cross(b, c, d)):
+        ar = math.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2])
+        if ar > big:
+            big = ar
+    return v / (1e-300 if 1e-300 > big else big)
 
 
 def _stable_argsort(key: np.ndarray) -> np.ndarray:
@@ -224,7 +248,13 @@ class TriangleEditor:
     ) -> float:
         """Smallest angle of the triangles ``rows`` (vertex triples), at the points ``at``."""
         at = self.P if at is None else at
-        return min(min(_angles(at[r[0]], at[r[1]], at[r[2]])) for r in rows)
+        r = rows[0]
+        lo = _min_angle(at[r[0]], at[r[1]], at[r[2]])
+        for r in rows[1:]:  # min()'s order: the first, then each smaller one
+            a = _min_angle(at[r[0]], at[r[1]], at[r[2]])
+            if a < lo:
+                lo = a
+        return lo
 
     def across(self, t: int, a: int, b: int) -> tuple[int, int] | None:
         """The one other triangle on edge ab and its vertex off that edge."""
@@ -307,7 +337,7 @@ class TriangleEditor:
         if _dot(n0, ref) <= 0 or _dot(n1, ref) <= 0 or _dot(n0, n1) <= 0:
             return False
         before = self.min_angle_of([row, ro])
-        if min(min(_angles(pc, pa, pd)), min(_angles(pd, pb, pc))) <= before:
+        if min(_min_angle(pc, pa, pd), _min_angle(pd, pb, pc)) <= before:
             return False
         if self.cn0 is not None:
             n_dim = self.n_dim
