@@ -187,10 +187,43 @@ def normals_with_winding(mesh: Mesh) -> Mesh:
         return mesh
     corner = corner_normals(mesh)
     assert corner is not None
-    fn, _ = face_normals(mesh.points, mesh.triangles)
-    cn3 = np.array(corner, dtype=np.float32).reshape(-1, 3, 3)
-    against = np.einsum("ikj,ij->ik", cn3, fn) < 0
-    if not against.any():
+    tri = mesh.triangles
+    cn3 = np.asarray(corner, dtype=np.float32).reshape(-1, 3, 3)
+    against = _against(mesh.points, tri, cn3)
+    rows = np.flatnonzero(against.any(axis=1))
+    if not len(rows):
         return mesh
-    cn3[against] = np.broadcast_to(fn[:, None, :], cn3.shape)[against]
+    fn, _ = face_normals(mesh.points, tri[rows])
+    cn3 = cn3.copy()
+    sub = cn3[rows]
+    sub[against[rows]] = np.broadcast_to(fn[:, None, :], sub.shape)[against[rows]]
+    cn3[rows] = sub
     return mesh.with_(normals=cn3.reshape(-1, 3), normals_indices=None)
+
+
+def _against(points: np.ndarray, tri: np.ndarray, cn3: np.ndarray) -> np.ndarray:
+    """(t, 3) bool: ``einsum("ikj,ij->ik", cn3, face_normals(points, tri)[0]) < 0``, the
+    corners whose (t, 3, 3) normals point against their face's winding, exactly, ~3x faster:
+    the signs of the corner normals' dot products with the unnormalised face normal (the same
+    cross products as ``face_normals``') on (t,) coordinate arrays, where they are clear (over
+    1e-13 of a bound on the sum of the terms' magnitudes: rounding moves either sum by ~4e-16
+    of it), and by the exact computation on the few faces where they are not (and faces too
+    small or large for that bound: lengths under 1e-50 or over 1e50)."""
+    x, y, z = points[:, 0], points[:, 1], points[:, 2]
+    i, j, k = tri[:, 0], tri[:, 1], tri[:, 2]
+    xi, yi, zi = x[i], y[i], z[i]
+    ux, uy, uz = x[j] - xi, y[j] - yi, z[j] - zi
+    vx, vy, vz = x[k] - xi, y[k] - yi, z[k] - zi
+    cx, cy, cz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+    size = np.abs(cx) + np.abs(cy) + np.abs(cz)
+    bound = size * (1e-13 * float(np.abs(cn3).max(initial=0.0)))
+    s = np.empty(cn3.shape[:2])
+    for c in range(3):
+        s[:, c] = cn3[:, c, 0] * cx + cn3[:, c, 1] * cy + cn3[:, c, 2] * cz
+    neg = s < 0
+    odd = ~((size > 1e-100) & (size < 1e100))  # also NaN
+    unsure = np.flatnonzero((np.abs(s) <= bound[:, None]).any(axis=1) | odd)
+    if len(unsure):
+        fn, _ = face_normals(points, tri[unsure])
+        neg[unsure] = np.einsum("ikj,ij->ik", cn3[unsure], fn) < 0
+    return neg
