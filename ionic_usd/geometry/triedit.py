@@ -256,13 +256,23 @@ class TriangleEditor:
                 lo = a
         return lo
 
+    def shares_edge(self, a: int, b: int) -> bool:
+        """Some live triangle has the edge ab (``bool(edge_faces(a, b))``, no new set)."""
+        return not self.faces_of(a).isdisjoint(self.faces_of(b))
+
     def across(self, t: int, a: int, b: int) -> tuple[int, int] | None:
         """The one other triangle on edge ab and its vertex off that edge."""
-        other = self.edge_faces(a, b) - {t}
-        if len(other) != 1:
+        fb = self.faces_of(b)
+        o = -1
+        for f in self.faces_of(a):  # edge_faces(a, b) - {t}, which must be one triangle
+            if f != t and f in fb:
+                if o >= 0:
+                    return None
+                o = f
+        if o < 0:
             return None
-        (o,) = other
-        d = next(v for v in self.T[o] if v != a and v != b)
+        r = self.T[o]  # its first vertex off ab
+        d = r[0] if r[0] != a and r[0] != b else (r[1] if r[1] != a and r[1] != b else r[2])
         return o, d
 
     def flat_fan(self, v: int) -> bool:
@@ -325,7 +335,7 @@ class TriangleEditor:
         if od is None:
             return False
         o, d = od
-        if self.edge_faces(c, d):
+        if self.shares_edge(c, d):
             return False  # the new edge exists already
         pa, pb, pc, pd = P[a], P[b], P[c], P[d]
         if _tet_height(pa, pb, pc, pd) > tol:
@@ -336,7 +346,9 @@ class TriangleEditor:
         n0, n1 = _normal(pc, pa, pd), _normal(pd, pb, pc)
         if _dot(n0, ref) <= 0 or _dot(n1, ref) <= 0 or _dot(n0, n1) <= 0:
             return False
-        before = self.min_angle_of([row, ro])
+        before = _min_angle(P[row[0]], P[row[1]], P[row[2]])  # min_angle_of([row, ro])
+        lo = _min_angle(P[ro[0]], P[ro[1]], P[ro[2]])
+        before = lo if lo < before else before
         if min(_min_angle(pc, pa, pd), _min_angle(pd, pb, pc)) <= before:
             return False
         if self.cn0 is not None:
@@ -374,7 +386,7 @@ class TriangleEditor:
         if od is None:
             return False
         o, d = od
-        if self.edge_faces(c, d):
+        if self.shares_edge(c, d):
             return False
         around = [T[f] for f in sorted(self.faces_of(c)) if f != t]
         moved = {v: P[v] for r in around for v in r}
@@ -551,15 +563,25 @@ class TriangleEditor:
         q[:, 2] = vals[:, 2]
         cls = _row_classes(q)
         corner_cls = np.empty((n, 3), np.int64)
-        corner_st = np.empty((n, 3, 2), np.float32)
         k = len(self.tri0)
         corner_cls[:k] = cls[self.st_idx].reshape(-1, 3)
-        corner_st[:k] = self.st32[self.st_idx].reshape(-1, 3, 2)
         if edited:
             corner_cls[edited] = cls[n_st:].reshape(-1, 3)
-            corner_st[edited] = new[:, :2].reshape(-1, 3, 2)
         first, rank = _first_ranks(idx * (int(cls.max()) + 1) + corner_cls[live].reshape(-1))
-        return corner_st[live].reshape(-1, 2)[first], rank.astype(np.int32)
+        # the st of each first occurrence only: its face and corner, from the input's st or
+        # the edits' values (float64 cast to float32, as a float32 array of them would be)
+        face = first // 3 if isinstance(live, slice) else np.flatnonzero(live)[first // 3]
+        corner = first % 3
+        st = np.empty((len(first), 2), np.float32)
+        inp = face < k
+        st[inp] = self.st32[self.st_idx[face[inp] * 3 + corner[inp]]]
+        if edited:
+            row = np.full(n, -1)
+            row[edited] = np.arange(len(edited))
+            er = row[face]
+            at = er >= 0
+            st[at] = new[er[at] * 3 + corner[at], :2]
+        return st, rank.astype(np.int32)
 
 
 def _row_classes(a: np.ndarray) -> np.ndarray:
