@@ -529,14 +529,16 @@ class TriangleEditor:
         new_index = np.cumsum(used_mask) - 1
         idx = new_index[tri.reshape(-1)]
         nrm = st = sti = None
+        # the edited faces and their corner values, stacked once: (m, 3, n_ch)
+        edited = sorted(self.cn)
+        corners = np.array([self.cn[f] for f in edited]).reshape(len(edited), 3, self.n_ch)
         if self.nrm32 is not None:
             nrm3 = np.empty((n, 3, 3), np.float32)
             nrm3[: len(self.tri0)] = self.nrm32.reshape(-1, 3, 3)
-            for f, rows in self.cn.items():
-                nrm3[f] = rows[:, :3]
+            nrm3[edited] = corners[:, :, :3]
             nrm = nrm3[live].reshape(-1, 3)
         if self.st_idx is not None:
-            st, sti = self._st_of_corners(n, live, idx)
+            st, sti = self._st_of_corners(n, live, idx, edited, corners)
         return Mesh(
             self.pts[used],
             np.full(len(tri), 3, np.int32),
@@ -549,15 +551,19 @@ class TriangleEditor:
         )
 
     def _st_of_corners(
-        self, n: int, live: slice | np.ndarray, idx: np.ndarray
+        self,
+        n: int,
+        live: slice | np.ndarray,
+        idx: np.ndarray,
+        edited: list[int],
+        corners: np.ndarray,
     ) -> tuple[np.ndarray, np.ndarray]:
         """st values and indices of the corners of the live triangles ``live`` of the first
         ``n`` (point indices ``idx``): one value per point, st rounded to 1e-7 and chart,
-        first occurrence first."""
+        first occurrence first. ``corners``: the (m, 3, n_ch) values of the ``edited`` faces."""
         n_dim, n_st = self.n_dim, len(self.st32)
         # the classes of equal (rounded st, chart): of the input's st values and the edits'
-        edited = sorted(self.cn)
-        new = np.array([self.cn[f][:, n_dim:] for f in edited]).reshape(-1, 3)
+        new = corners[:, :, n_dim:].reshape(-1, 3)
         vals = np.concatenate([np.column_stack([self.st32, self.chart_of_st]), new])
         q = np.round(vals * 1e7).astype(np.int64)  # st to 1e-7; the chart (an int) as it is
         q[:, 2] = vals[:, 2]
