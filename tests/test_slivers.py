@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ionic_usd.geometry.mesh import Mesh, face_normals
+from ionic_usd.geometry.mesh import Mesh, chart_labels, face_normals
 from ionic_usd.geometry.slivers import _against, _maybe_slivers, _tri_cosines, normals_with_winding
 
 
@@ -86,3 +86,29 @@ def test_maybe_slivers_holds_every_sliver_corner():
         assert not (exact & ~maybe).any()  # a superset
         clear = _tri_cosines(pts[tri]).max(axis=1) < cos_lo - 1e-10
         assert clear.sum() > 3000 and not (maybe & clear).any()  # none clearly not one
+
+
+def _coo_chart_labels(st_indices: np.ndarray, n_values: int) -> np.ndarray:
+    """chart_labels as it was: the graph as a COO matrix, the used components by np.unique."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    tri = np.asarray(st_indices, dtype=np.int64).reshape(-1, 3)
+    rows = np.concatenate([tri[:, 0], tri[:, 1]])
+    cols = np.concatenate([tri[:, 1], tri[:, 2]])
+    graph = coo_matrix((np.ones(len(rows), np.int8), (rows, cols)), shape=(n_values, n_values))
+    _, label = connected_components(graph, directed=False)
+    return np.unique(label[tri[:, 0]], return_inverse=True)[1].reshape(-1).astype(np.int64)
+
+
+def test_chart_labels_are_the_coo_versions():
+    rng = np.random.default_rng(7)
+    for _ in range(30):
+        n = int(rng.integers(3, 3000))
+        # sparse draws: many charts, values no triangle uses, repeated edges
+        idx = rng.integers(0, n, 3 * int(rng.integers(1, n // 2 + 2)))
+        ref = _coo_chart_labels(idx, n + 3)
+        got = chart_labels(idx.astype(np.int32), n + 3)
+        assert got.dtype == ref.dtype == np.int64
+        np.testing.assert_array_equal(got, ref)
+    assert ref.max() > 10  # many charts
