@@ -592,20 +592,9 @@ def chart_labels(st_indices: np.ndarray, n_values: int) -> np.ndarray:
     from scipy.sparse.csgraph import connected_components
 
     tri = np.asarray(st_indices, dtype=np.int64).reshape(-1, 3)
-    rows = np.concatenate([tri[:, 0], tri[:, 1]])
-    cols = np.concatenate([tri[:, 1], tri[:, 2]])
-    # the float64 CSR matrix connected_components works on, made directly (from a COO matrix
-    # its conversions cost ~3x the search); the order within a row does not matter: each
-    # component is numbered by its smallest value
-    indptr = np.zeros(n_values + 1, dtype=np.int64)
-    np.cumsum(np.bincount(rows, minlength=n_values), out=indptr[1:])
-    graph = csr_matrix(
-        (np.ones(len(rows)), cols[np.argsort(rows)], indptr), shape=(n_values, n_values)
-    )
-    _, label = connected_components(graph, directed=False)
-    # values no triangle uses are components of their own: number only the used ones (in
-    # order: np.unique's inverse, without its sort)
-    lab = label[tri[:, 0]]
-    used = np.zeros(int(label.max(initial=-1)) + 1, dtype=bool)
-    used[lab] = True
-    return (np.cumsum(used) - 1)[lab].astype(np.int64)
+    rows, cols = tri[:, :2].T.reshape(-1), tri[:, 1:].T.reshape(-1)
+    ptr = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=n_values))])
+    # CSR made directly (from COO, scipy's conversions cost ~3x the search)
+    graph = csr_matrix((np.ones(len(rows)), cols[np.argsort(rows)], ptr), shape=(n_values,) * 2)
+    lab = connected_components(graph, directed=False)[1][tri[:, 0]]  # by smallest value
+    return (np.cumsum(np.bincount(lab) > 0) - 1)[lab].astype(np.int64)  # the used ones
