@@ -588,13 +588,13 @@ def chart_labels(st_indices: np.ndarray, n_values: int) -> np.ndarray:
     -------
     (t,) int64 chart label, 0 .. charts - 1
     """
-    from scipy.sparse import coo_matrix
+    from scipy.sparse import csr_matrix
     from scipy.sparse.csgraph import connected_components
 
     tri = np.asarray(st_indices, dtype=np.int64).reshape(-1, 3)
-    rows = np.concatenate([tri[:, 0], tri[:, 1]])
-    cols = np.concatenate([tri[:, 1], tri[:, 2]])
-    graph = coo_matrix((np.ones(len(rows), np.int8), (rows, cols)), shape=(n_values, n_values))
-    _, label = connected_components(graph, directed=False)
-    # values no triangle uses are components of their own: number only the used ones
-    return np.unique(label[tri[:, 0]], return_inverse=True)[1].reshape(-1).astype(np.int64)
+    rows, cols = tri[:, :2].T.reshape(-1), tri[:, 1:].T.reshape(-1)
+    ptr = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=n_values))])
+    # CSR made directly (from COO, scipy's conversions cost ~3x the search)
+    graph = csr_matrix((np.ones(len(rows)), cols[np.argsort(rows)], ptr), shape=(n_values,) * 2)
+    lab = connected_components(graph, directed=False)[1][tri[:, 0]]  # by smallest value
+    return (np.cumsum(np.bincount(lab) > 0) - 1)[lab].astype(np.int64)  # the used ones

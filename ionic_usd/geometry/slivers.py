@@ -35,6 +35,39 @@ def _tri_cosines(p: np.ndarray) -> np.ndarray:
     return np.clip(np.einsum("tij,tij->ti", a, b) / np.maximum(la * lb, 1e-300), -1.0, 1.0)
 
 
+def _maybe_slivers(pts: np.ndarray, tri: np.ndarray, cos_lo: float) -> np.ndarray:
+    """(t,) bool over the triangles ``tri`` (rows into the (n, 3) ``pts``): a superset of
+    those :func:`_tri_cosines` gives a corner cosine over ``cos_lo`` (> 0). A corner between
+    edges u, v has u · v > cos_lo |u| |v| only if u · v > 0 and (u · v)² >= k |u|² |v|² with
+    k = (cos_lo − 3e-12)²: no square roots or divisions, on (t,) coordinate arrays (~5x
+    faster than the exact cosines, which are then computed for these few rows only)."""
+    k = (cos_lo - 3e-12) ** 2
+    x, y, z = pts[:, 0], pts[:, 1], pts[:, 2]
+    i, j, m = tri[:, 0], tri[:, 1], tri[:, 2]
+    xi, yi, zi = x[i], y[i], z[i]
+    xj, yj, zj = x[j], y[j], z[j]
+    xm, ym, zm = x[m], y[m], z[m]
+    ax, ay, az = xj - xi, yj - yi, zj - zi  # i → j
+    bx, by, bz = xm - xj, ym - yj, zm - zj  # j → m
+    cx, cy, cz = xi - xm, yi - ym, zi - zm  # m → i
+    la, lb, lc = (
+        ax * ax + ay * ay + az * az,
+        bx * bx + by * by + bz * bz,
+        cx * cx + cy * cy + cz * cz,
+    )
+    # minus the cosine numerators at i, j, m (the edges into and out of each corner)
+    di, dj, dm = (
+        ax * cx + ay * cy + az * cz,
+        bx * ax + by * ay + bz * az,
+        cx * bx + cy * by + cz * bz,
+    )
+    return (
+        ((di < 0) & (di * di >= k * (la * lc)))
+        | ((dj < 0) & (dj * dj >= k * (lb * la)))
+        | ((dm < 0) & (dm * dm >= k * (lc * lb)))
+    )
+
+
 def _tri_angles(p: np.ndarray) -> np.ndarray:
     """(t, 3, 3) corner points → (t, 3) corner angles in degrees (for reports: numpy's arccos
     differs in the last bits by CPU, so the clean-up itself orders by :func:`_tri_cosines`)."""
@@ -123,9 +156,10 @@ def _mend_pass(
     # the smallest angle is the largest cosine: candidates and their order from + - * / and
     # sqrt only (arccos is CPU-dependent); a margin of 1e-12 keeps every triangle under
     # min_angle a candidate, and angles_of decides each exactly
-    worst = _tri_cosines(ed.pts[tri]).max(axis=1)
+    maybe = _maybe_slivers(ed.pts, tri, cos_min - 1e-12)
+    worst = _tri_cosines(ed.pts[tri[maybe]]).max(axis=1)
     low = worst > cos_min - 1e-12
-    bad, worst = cand[low], worst[low]
+    bad, worst = cand[maybe][low], worst[low]
     touched: set[int] = set()
     for t in bad[np.argsort(-worst, kind="stable")].tolist():
         if not ed.alive[t] or (t in failed and ed.unchanged_since(t, failed[t])):
@@ -153,10 +187,43 @@ def normals_with_winding(mesh: Mesh) -> Mesh:
         return mesh
     corner = corner_normals(mesh)
     assert corner is not None
-    fn, _ = face_normals(mesh.points, mesh.triangles)
-    cn3 = np.array(corner, dtype=np.float32).reshape(-1, 3, 3)
-    against = np.einsum("ikj,ij->ik", cn3, fn) < 0
-    if not against.any():
+    tri = mesh.triangles
+    cn3 = np.asarray(corner, dtype=np.float32).reshape(-1, 3, 3)
+    against = _against(mesh.points, tri, cn3)
+    rows = np.flatnonzero(against.any(axis=1))
+    if not len(rows):
         return mesh
-    cn3[against] = np.broadcast_to(fn[:, None, :], cn3.shape)[against]
+    fn, _ = face_normals(mesh.points, tri[rows])
+    cn3 = cn3.copy()
+    sub = cn3[rows]
+    sub[against[rows]] = np.broadcast_to(fn[:, None, :], sub.shape)[against[rows]]
+    cn3[rows] = sub
     return mesh.with_(normals=cn3.reshape(-1, 3), normals_indices=None)
+
+
+def _against(points: np.ndarray, tri: np.ndarray, cn3: np.ndarray) -> np.ndarray:
+    """(t, 3) bool: ``einsum("ikj,ij->ik", cn3, face_normals(points, tri)[0]) < 0``, the
+    corners whose (t, 3, 3) normals point against their face's winding, exactly, ~3x faster:
+    the signs of the corner normals' dot products with the unnormalised face normal (the same
+    cross products as ``face_normals``') on (t,) coordinate arrays, where they are clear (over
+    1e-13 of a bound on the sum of the terms' magnitudes: rounding moves either sum by ~4e-16
+    of it), and by the exact computation on the few faces where they are not (and faces too
+    small or large for that bound: lengths under 1e-50 or over 1e50)."""
+    x, y, z = points[:, 0], points[:, 1], points[:, 2]
+    i, j, k = tri[:, 0], tri[:, 1], tri[:, 2]
+    xi, yi, zi = x[i], y[i], z[i]
+    ux, uy, uz = x[j] - xi, y[j] - yi, z[j] - zi
+    vx, vy, vz = x[k] - xi, y[k] - yi, z[k] - zi
+    cx, cy, cz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+    size = np.abs(cx) + np.abs(cy) + np.abs(cz)
+    bound = size * (1e-13 * float(np.abs(cn3).max(initial=0.0)))
+    s = np.empty(cn3.shape[:2])
+    for c in range(3):
+        s[:, c] = cn3[:, c, 0] * cx + cn3[:, c, 1] * cy + cn3[:, c, 2] * cz
+    neg = s < 0
+    odd = ~((size > 1e-100) & (size < 1e100))  # also NaN
+    unsure = np.flatnonzero((np.abs(s) <= bound[:, None]).any(axis=1) | odd)
+    if len(unsure):
+        fn, _ = face_normals(points, tri[unsure])
+        neg[unsure] = np.einsum("ikj,ij->ik", cn3[unsure], fn) < 0
+    return neg

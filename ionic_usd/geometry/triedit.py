@@ -8,11 +8,12 @@ edge, :meth:`~TriangleEditor.snap` a vertex onto the opposite edge (splitting th
 and :meth:`~TriangleEditor.collapse` an edge. Each checks first that it moves the surface by
 at most ``tol``, keeps the shell a closed 2-manifold, turns no triangle over and makes the
 worst angle better, and does nothing (returns False) otherwise. Rows are made Python lists on
-first read: an edit touches a few hundred of a mesh's rows, and plain float math on lists is
-~10x faster than numpy on 3-vectors. The triangles and which are live are kept as arrays too
-(the clean-up's per-pass scans), and an edit clock stamps the vertices round each edit
-(:meth:`~TriangleEditor.unchanged_since`: a failed operation need not be tried again until
-one is stamped). :meth:`~TriangleEditor.to_mesh` gives the result back.
+first read: an edit touches a few hundred of a mesh's rows, and plain float math on lists
+(:mod:`ionic_usd.geometry.trimath`) is ~10x faster than numpy on 3-vectors. The triangles
+and which are live are kept as arrays too (the clean-up's per-pass scans), and an edit clock
+stamps the vertices round each edit (:meth:`~TriangleEditor.unchanged_since`: a failed
+operation need not be tried again until one is stamped). :meth:`~TriangleEditor.to_mesh`
+gives the result back.
 """
 
 from __future__ import annotations
@@ -22,65 +23,16 @@ import math
 import numpy as np
 
 from ionic_usd.geometry.mesh import Mesh, chart_labels, corner_normals
+from ionic_usd.geometry.trimath import (
+    corner_angles,
+    cross3,
+    dot3,
+    smallest_angle,
+    tet_height,
+    unit_normal,
+)
 
 __all__ = ["TriangleEditor"]
-
-
-_DEG = 180.0 / math.pi  # x * _DEG is math.degrees(x), bit for bit
-
-
-def _angles(p: list[float], q: list[float], r: list[float]) -> tuple[float, float, float]:
-    """The corner angles (degrees) of the triangle pqr (3 floats each), in plain float math
-    (numpy costs ~1 µs a call on 3-vectors). Each corner's cosine is (edge · edge) / (length ×
-    length) of its two edges from it; an edge reversed only flips signs, exactly, so the three
-    edges and lengths are computed once."""
-    px, py, pz = p
-    qx, qy, qz = q
-    rx, ry, rz = r
-    ux, uy, uz = qx - px, qy - py, qz - pz  # p → q
-    vx, vy, vz = rx - px, ry - py, rz - pz  # p → r
-    wx, wy, wz = rx - qx, ry - qy, rz - qz  # q → r
-    lu = math.sqrt(ux * ux + uy * uy + uz * uz)
-    lv = math.sqrt(vx * vx + vy * vy + vz * vz)
-    lw = math.sqrt(wx * wx + wy * wy + wz * wz)
-    cp = (ux * vx + uy * vy + uz * vz) / max(lu * lv, 1e-300)
-    cq = -(wx * ux + wy * uy + wz * uz) / max(lw * lu, 1e-300)
-    cr = (vx * wx + vy * wy + vz * wz) / max(lv * lw, 1e-300)
-    acos = math.acos
-    return (
-        acos(min(max(cp, -1.0), 1.0)) * _DEG,
-        acos(min(max(cq, -1.0), 1.0)) * _DEG,
-        acos(min(max(cr, -1.0), 1.0)) * _DEG,
-    )
-
-
-def _normal(p: list[float], q: list[float], r: list[float]) -> tuple[float, float, float]:
-    """The unit normal of the triangle pqr (zero for a degenerate one)."""
-    ux, uy, uz = q[0] - p[0], q[1] - p[1], q[2] - p[2]
-    vx, vy, vz = r[0] - p[0], r[1] - p[1], r[2] - p[2]
-    nx, ny, nz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
-    ln = max(math.sqrt(nx * nx + ny * ny + nz * nz), 1e-300)
-    return nx / ln, ny / ln, nz / ln
-
-
-def _cross(p: list[float], q: list[float], r: list[float]) -> tuple[float, float, float]:
-    """(q − p) × (r − p): twice the vector area of the triangle pqr."""
-    ux, uy, uz = q[0] - p[0], q[1] - p[1], q[2] - p[2]
-    vx, vy, vz = r[0] - p[0], r[1] - p[1], r[2] - p[2]
-    return uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
-
-
-def _dot(u, v) -> float:
-    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
-
-
-def _tet_height(a: list[float], b: list[float], c: list[float], d: list[float]) -> float:
-    """Smallest height of the tetrahedron abcd: how far a flip of edge ab (triangles abc, abd
-    → acd, bcd) moves the surface."""
-    n = _cross(a, b, c)
-    v = abs(n[0] * (d[0] - a[0]) + n[1] * (d[1] - a[1]) + n[2] * (d[2] - a[2]))
-    areas = [math.sqrt(_dot(x, x)) for x in (n, _cross(a, b, d), _cross(a, c, d), _cross(b, c, d))]
-    return v / max(max(areas), 1e-300)
 
 
 def _stable_argsort(key: np.ndarray) -> np.ndarray:
@@ -217,22 +169,38 @@ class TriangleEditor:
     def angles_of(self, t: int) -> tuple[float, float, float]:
         """Corner angles (degrees) of triangle ``t``, in its corners' order."""
         P, r = self.P, self.T[t]
-        return _angles(P[r[0]], P[r[1]], P[r[2]])
+        return corner_angles(P[r[0]], P[r[1]], P[r[2]])
 
     def min_angle_of(
         self, rows: list[list[int]], at: dict[int, list[float]] | _Rows | None = None
     ) -> float:
         """Smallest angle of the triangles ``rows`` (vertex triples), at the points ``at``."""
         at = self.P if at is None else at
-        return min(min(_angles(at[r[0]], at[r[1]], at[r[2]])) for r in rows)
+        r = rows[0]
+        lo = smallest_angle(at[r[0]], at[r[1]], at[r[2]])
+        for r in rows[1:]:  # min()'s order: the first, then each smaller one
+            a = smallest_angle(at[r[0]], at[r[1]], at[r[2]])
+            if a < lo:
+                lo = a
+        return lo
+
+    def shares_edge(self, a: int, b: int) -> bool:
+        """Some live triangle has the edge ab (``bool(edge_faces(a, b))``, no new set)."""
+        return not self.faces_of(a).isdisjoint(self.faces_of(b))
 
     def across(self, t: int, a: int, b: int) -> tuple[int, int] | None:
         """The one other triangle on edge ab and its vertex off that edge."""
-        other = self.edge_faces(a, b) - {t}
-        if len(other) != 1:
+        fb = self.faces_of(b)
+        o = -1
+        for f in self.faces_of(a):  # edge_faces(a, b) - {t}, which must be one triangle
+            if f != t and f in fb:
+                if o >= 0:
+                    return None
+                o = f
+        if o < 0:
             return None
-        (o,) = other
-        d = next(v for v in self.T[o] if v != a and v != b)
+        r = self.T[o]  # its first vertex off ab
+        d = r[0] if r[0] != a and r[0] != b else (r[1] if r[1] != a and r[1] != b else r[2])
         return o, d
 
     def flat_fan(self, v: int) -> bool:
@@ -246,16 +214,16 @@ class TriangleEditor:
             for f in fs[1:]:
                 if self.corners_of(f)[T[f].index(v)].tolist() != ref:
                     return False
-        vec = [_cross(*(P[i] for i in T[f])) for f in fs]
-        big = max(range(len(fs)), key=lambda i: _dot(vec[i], vec[i]))
-        n0 = _normal(*(P[i] for i in T[fs[big]]))
+        vec = [cross3(*(P[i] for i in T[f])) for f in fs]
+        big = max(range(len(fs)), key=lambda i: dot3(vec[i], vec[i]))
+        n0 = unit_normal(*(P[i] for i in T[fs[big]]))
         p0 = P[v]
         for f, w in zip(fs, vec, strict=True):
-            if _dot(w, n0) < 0:
+            if dot3(w, n0) < 0:
                 return False  # a fold
             for i in T[f]:
                 q = P[i]
-                if abs(_dot(n0, (q[0] - p0[0], q[1] - p0[1], q[2] - p0[2]))) > 1e-12:
+                if abs(dot3(n0, (q[0] - p0[0], q[1] - p0[1], q[2] - p0[2]))) > 1e-12:
                     return False  # off the plane by more than rounding (1e-12 m)
         return True
 
@@ -295,19 +263,21 @@ class TriangleEditor:
         if od is None:
             return False
         o, d = od
-        if self.edge_faces(c, d):
+        if self.shares_edge(c, d):
             return False  # the new edge exists already
         pa, pb, pc, pd = P[a], P[b], P[c], P[d]
-        if _tet_height(pa, pb, pc, pd) > tol:
+        if tet_height(pa, pb, pc, pd) > tol:
             return False
         ro = T[o]
-        r1, r2 = _cross(P[row[0]], P[row[1]], P[row[2]]), _cross(P[ro[0]], P[ro[1]], P[ro[2]])
+        r1, r2 = cross3(P[row[0]], P[row[1]], P[row[2]]), cross3(P[ro[0]], P[ro[1]], P[ro[2]])
         ref = (r1[0] + r2[0], r1[1] + r2[1], r1[2] + r2[2])  # vector area
-        n0, n1 = _normal(pc, pa, pd), _normal(pd, pb, pc)
-        if _dot(n0, ref) <= 0 or _dot(n1, ref) <= 0 or _dot(n0, n1) <= 0:
+        n0, n1 = unit_normal(pc, pa, pd), unit_normal(pd, pb, pc)
+        if dot3(n0, ref) <= 0 or dot3(n1, ref) <= 0 or dot3(n0, n1) <= 0:
             return False
-        before = self.min_angle_of([row, ro])
-        if min(min(_angles(pc, pa, pd)), min(_angles(pd, pb, pc))) <= before:
+        before = smallest_angle(P[row[0]], P[row[1]], P[row[2]])  # min_angle_of([row, ro])
+        lo = smallest_angle(P[ro[0]], P[ro[1]], P[ro[2]])
+        before = lo if lo < before else before
+        if min(smallest_angle(pc, pa, pd), smallest_angle(pd, pb, pc)) <= before:
             return False
         if self.cn0 is not None:
             n_dim = self.n_dim
@@ -332,25 +302,27 @@ class TriangleEditor:
         P, T = self.P, self.T
         row = T[t]
         c, a, b = row[k], row[(k + 1) % 3], row[(k + 2) % 3]
+        pa, pb, pc = P[a], P[b], P[c]
+        ab = (pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2])
+        ac = (pc[0] - pa[0], pc[1] - pa[1], pc[2] - pa[2])
+        u = min(max(dot3(ac, ab) / max(dot3(ab, ab), 1e-300), 0.0), 1.0)
+        fl = [pa[0] + u * ab[0], pa[1] + u * ab[1], pa[2] + u * ab[2]]  # the foot on ab
+        off = (fl[0] - pc[0], fl[1] - pc[1], fl[2] - pc[2])
+        if math.sqrt(dot3(off, off)) > tol:
+            return False  # first: the cheapest test, and most snaps fail it
         od = self.across(t, a, b)
         if od is None:
             return False
         o, d = od
-        pa, pb, pc = P[a], P[b], P[c]
-        ab = (pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2])
-        ac = (pc[0] - pa[0], pc[1] - pa[1], pc[2] - pa[2])
-        u = min(max(_dot(ac, ab) / max(_dot(ab, ab), 1e-300), 0.0), 1.0)
-        fl = [pa[0] + u * ab[0], pa[1] + u * ab[1], pa[2] + u * ab[2]]  # the foot on ab
-        off = (fl[0] - pc[0], fl[1] - pc[1], fl[2] - pc[2])
-        if math.sqrt(_dot(off, off)) > tol or self.edge_faces(c, d):
+        if self.shares_edge(c, d):
             return False
         around = [T[f] for f in sorted(self.faces_of(c)) if f != t]
         moved = {v: P[v] for r in around for v in r}
         moved[c] = fl
         for r in around:
-            n_old = _normal(P[r[0]], P[r[1]], P[r[2]])
-            n_new = _normal(moved[r[0]], moved[r[1]], moved[r[2]])
-            if _dot(n_old, n_new) < 0.5:
+            n_old = unit_normal(P[r[0]], P[r[1]], P[r[2]])
+            n_new = unit_normal(moved[r[0]], moved[r[1]], moved[r[2]])
+            if dot3(n_old, n_new) < 0.5:
                 return False
         halves = [[b, c, d], [c, a, d]]
         moved.update({a: P[a], b: P[b], d: P[d]})
@@ -393,7 +365,7 @@ class TriangleEditor:
         a, b = row[(k + 1) % 3], row[(k + 2) % 3]
         pa, pb = self.P[a], self.P[b]
         ab = (pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2])
-        short = math.sqrt(_dot(ab, ab)) <= tol
+        short = math.sqrt(dot3(ab, ab)) <= tol
         flat = {} if short else {a: self.flat_fan(a), b: self.flat_fan(b)}
         if not short and not (flat[a] or flat[b]):
             return False
@@ -435,7 +407,8 @@ class TriangleEditor:
         P, T = self.P, self.T
         old = [T[f] for f in moved]
         if any(
-            _dot(_normal(P[r[0]], P[r[1]], P[r[2]]), _normal(P[s[0]], P[s[1]], P[s[2]])) < 0.5
+            dot3(unit_normal(P[r[0]], P[r[1]], P[r[2]]), unit_normal(P[s[0]], P[s[1]], P[s[2]]))
+            < 0.5
             for r, s in zip(old, new, strict=True)
         ):
             return False
@@ -485,14 +458,16 @@ class TriangleEditor:
         new_index = np.cumsum(used_mask) - 1
         idx = new_index[tri.reshape(-1)]
         nrm = st = sti = None
+        # the edited faces and their corner values, stacked once: (m, 3, n_ch)
+        edited = sorted(self.cn)
+        corners = np.array([self.cn[f] for f in edited]).reshape(len(edited), 3, self.n_ch)
         if self.nrm32 is not None:
             nrm3 = np.empty((n, 3, 3), np.float32)
             nrm3[: len(self.tri0)] = self.nrm32.reshape(-1, 3, 3)
-            for f, rows in self.cn.items():
-                nrm3[f] = rows[:, :3]
+            nrm3[edited] = corners[:, :, :3]
             nrm = nrm3[live].reshape(-1, 3)
         if self.st_idx is not None:
-            st, sti = self._st_of_corners(n, live, idx)
+            st, sti = self._st_of_corners(n, live, idx, edited, corners)
         return Mesh(
             self.pts[used],
             np.full(len(tri), 3, np.int32),
@@ -505,29 +480,44 @@ class TriangleEditor:
         )
 
     def _st_of_corners(
-        self, n: int, live: slice | np.ndarray, idx: np.ndarray
+        self,
+        n: int,
+        live: slice | np.ndarray,
+        idx: np.ndarray,
+        edited: list[int],
+        corners: np.ndarray,
     ) -> tuple[np.ndarray, np.ndarray]:
         """st values and indices of the corners of the live triangles ``live`` of the first
         ``n`` (point indices ``idx``): one value per point, st rounded to 1e-7 and chart,
-        first occurrence first."""
-        n_dim, n_st = self.n_dim, len(self.st32)
+        first occurrence first. ``corners``: the (m, 3, n_ch) values of the ``edited`` faces."""
+        n_dim, n_st, st_idx = self.n_dim, len(self.st32), self.st_idx
+        assert st_idx is not None
         # the classes of equal (rounded st, chart): of the input's st values and the edits'
-        edited = sorted(self.cn)
-        new = np.array([self.cn[f][:, n_dim:] for f in edited]).reshape(-1, 3)
+        new = corners[:, :, n_dim:].reshape(-1, 3)
         vals = np.concatenate([np.column_stack([self.st32, self.chart_of_st]), new])
         q = np.round(vals * 1e7).astype(np.int64)  # st to 1e-7; the chart (an int) as it is
         q[:, 2] = vals[:, 2]
         cls = _row_classes(q)
         corner_cls = np.empty((n, 3), np.int64)
-        corner_st = np.empty((n, 3, 2), np.float32)
         k = len(self.tri0)
-        corner_cls[:k] = cls[self.st_idx].reshape(-1, 3)
-        corner_st[:k] = self.st32[self.st_idx].reshape(-1, 3, 2)
+        corner_cls[:k] = cls[st_idx].reshape(-1, 3)
         if edited:
             corner_cls[edited] = cls[n_st:].reshape(-1, 3)
-            corner_st[edited] = new[:, :2].reshape(-1, 3, 2)
         first, rank = _first_ranks(idx * (int(cls.max()) + 1) + corner_cls[live].reshape(-1))
-        return corner_st[live].reshape(-1, 2)[first], rank.astype(np.int32)
+        # the st of each first occurrence only: its face and corner, from the input's st or
+        # the edits' values (float64 cast to float32, as a float32 array of them would be)
+        face = first // 3 if isinstance(live, slice) else np.flatnonzero(live)[first // 3]
+        corner = first % 3
+        st = np.empty((len(first), 2), np.float32)
+        inp = face < k
+        st[inp] = self.st32[st_idx[face[inp] * 3 + corner[inp]]]
+        if edited:
+            row = np.full(n, -1)
+            row[edited] = np.arange(len(edited))
+            er = row[face]
+            at = er >= 0
+            st[at] = new[er[at] * 3 + corner[at], :2]
+        return st, rank.astype(np.int32)
 
 
 def _row_classes(a: np.ndarray) -> np.ndarray:
