@@ -301,7 +301,7 @@ def _corner_stack(hints: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     for i, x in enumerate(hints):
         x = np.asarray(x, dtype=np.float64).reshape(-1, 2, 3)
         h[i, : len(x)] = x
-    ok = (h[:, :, 0] <= h[:, :, 1]).all(axis=2)[..., None]  # an empty purpose is inverted
+    ok = np.all(h[:, :, 0] <= h[:, :, 1], axis=2, keepdims=True)  # an empty one is inverted
     return np.where(ok, h[:, :, 0], np.inf), np.where(ok, h[:, :, 1], -np.inf)
 
 
