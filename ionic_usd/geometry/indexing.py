@@ -41,14 +41,26 @@ def _keys(rows: np.ndarray) -> np.ndarray:
     return h ^ (h >> np.uint64(29))
 
 
-def _groups(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(group id per row (u,), the smallest row of each group): rows with equal bits share a
-    group, the ids in no particular order.
+def _differ(bits: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(m,) bool: whether rows ``a`` and ``b`` (m,) of ``bits`` (u, c) differ, column by
+    column (numpy's ``any`` along a short last axis costs several times the comparisons)."""
+    ra, rb = np.take(bits, a, axis=0), np.take(bits, b, axis=0)
+    out = ra[:, 0] != rb[:, 0]
+    for j in range(1, bits.shape[1]):
+        out |= ra[:, j] != rb[:, j]
+    return out
+
+
+def _groups(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(order, new, first): the rows in an order where rows with equal bits are neighbours
+    (``order``, (u,) int), where each group of equal rows starts in it (``new``, (u,) bool),
+    and the smallest row of each group (``first``, the groups in ``order``'s order).
 
     One sort of plain integers: each row's key with its low bits replaced by the row number
     (so equal keys come out in row order, and the first of a run is its smallest row), then
-    neighbours are compared value for value. Rows whose truncated keys collide but whose
-    values differ are sorted by their values, within their runs only."""
+    the neighbours with equal keys (a few: the keys of different rows rarely collide) are
+    compared value for value. Rows whose truncated keys collide but whose values differ are
+    sorted by their values, within their runs only."""
     n = len(rows)
     ib = max(1, n.bit_length())
     mask = np.uint64((1 << ib) - 1)
@@ -59,21 +71,20 @@ def _groups(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     new[:1] = True
     high = packed >> np.uint64(ib)
     np.not_equal(high[1:], high[:-1], out=new[1:])
-    srt = np.take(rows.view(np.uint32), order, axis=0)
-    mixed = ~new[1:] & np.any(srt[1:] != srt[:-1], axis=1)  # one key, other values
-    if mixed.any():
+    bits = rows.view(np.uint32)
+    same_key = np.flatnonzero(~new[1:])  # i: sorted rows i and i + 1 share a key
+    other = _differ(bits, order[same_key + 1], order[same_key])
+    if other.any():  # one key, other values
         run = np.cumsum(new) - 1
-        pos = np.flatnonzero(np.isin(run, run[1:][mixed]))  # those runs, whole
-        sub, r = srt[pos], run[pos]
+        pos = np.flatnonzero(np.isin(run, run[same_key[other] + 1]))  # those runs, whole
+        sub, r = bits[order[pos]], run[pos]
         lex = np.lexsort((*sub.T[::-1], r))  # stable: equal rows stay in row order
         order[pos] = order[pos][lex]
         sub, r = sub[lex], r[lex]
         fresh = np.ones(len(pos), dtype=bool)
         fresh[1:] = np.any(sub[1:] != sub[:-1], axis=1) | (r[1:] != r[:-1])
         new[pos] = fresh
-    group = np.empty(n, dtype=np.intp)
-    group[order] = np.cumsum(new) - 1
-    return group, order[new]
+    return order, new, order[new]
 
 
 def distinct_values(
@@ -97,26 +108,30 @@ def distinct_values(
     v = np.ascontiguousarray(values, dtype=np.float32) + np.float32(0.0)
     if v.ndim != 2 or not 1 <= v.shape[1] <= 3:
         raise GeometryError(f"distinct_values: values of shape {v.shape}, expected (u, 1..3)")
-    idx = np.arange(len(v)) if indices is None else np.asarray(indices).reshape(-1)
-    if idx.size and (idx.min() < 0 or idx.max() >= len(v)):
+    # intp once: numpy converts narrower index arrays on every fancy index
+    idx = None if indices is None else np.asarray(indices).reshape(-1)
+    if idx is not None and idx.dtype.kind in "iu":
+        idx = idx.astype(np.intp, copy=False)
+    if idx is not None and idx.size and (idx.min() < 0 or idx.max() >= len(v)):
         raise GeometryError(f"distinct_values: an index outside 0..{len(v) - 1}")
     kept = None  # the used rows, in their order (None: all)
-    if indices is not None:
+    if idx is not None:
         used = np.zeros(len(v), dtype=bool)
         used[idx] = True
         if not used.all():
             kept = np.flatnonzero(used)
     rows = v if kept is None else v[kept]
-    group, first = _groups(rows)
+    order, new, first = _groups(rows)
     # number the groups by their first row: a group's id counts the groups begun before it
     starts = np.zeros(len(rows), dtype=bool)
     starts[first] = True
     rank = (np.cumsum(starts) - 1).astype(np.int32)
-    row_id = rank[first[group]]
+    row_id = np.empty(len(rows), dtype=np.int32)
+    row_id[order] = rank[first][np.cumsum(new) - 1]  # each sorted row: its group's number
     if kept is None:
-        out = row_id if indices is None else row_id[idx]
+        out = row_id if idx is None else row_id[idx]
     else:
         new_id = np.zeros(len(v), dtype=np.int32)
         new_id[kept] = row_id
         out = new_id[idx]
-    return np.ascontiguousarray(rows[starts]), out
+    return np.take(rows, np.flatnonzero(starts), axis=0), out

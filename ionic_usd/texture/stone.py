@@ -230,9 +230,20 @@ def height_to_normal(height: np.ndarray, depth: float) -> np.ndarray:
     # Per-pixel differences rescaled to per-tile-width units: u = col / n_cols, v = -row / n_rows.
     dh_du = (np.roll(h, -1, axis=1) - np.roll(h, 1, axis=1)) * (0.5 * n_cols * depth)
     dh_dv = -(np.roll(h, -1, axis=0) - np.roll(h, 1, axis=0)) * (0.5 * n_rows * depth)
-    n = np.stack([-dh_du, -dh_dv, np.ones_like(h)], axis=-1)
-    n /= np.linalg.norm(n, axis=-1, keepdims=True)
-    return n.astype(np.float32)
+    np.negative(dh_du, out=dh_du)
+    np.negative(dh_dv, out=dh_dv)
+    # |(x, y, 1)| as np.linalg.norm sums the squares along the axis, (x² + y²) + 1, on planes
+    # (the same float32 operations in the same order: the same bits, without the (n, m, 3)
+    # temporaries and the reduction along a 3-wide axis)
+    norm = np.square(dh_du)
+    norm += np.square(dh_dv)
+    norm += np.float32(1.0)
+    np.sqrt(norm, out=norm)
+    n = np.empty((n_rows, n_cols, 3), dtype=np.float32)
+    np.divide(dh_du, norm, out=n[..., 0])
+    np.divide(dh_dv, norm, out=n[..., 1])
+    np.divide(np.float32(1.0), norm, out=n[..., 2])
+    return n
 
 
 def _check_size(size: object) -> int:

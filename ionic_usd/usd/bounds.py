@@ -215,27 +215,55 @@ def _same(a: dict[str, np.ndarray], b: dict[str, np.ndarray], tol: float) -> boo
     return all(a[k].shape == b[k].shape and np.allclose(a[k], b[k], atol=tol, rtol=0) for k in a)
 
 
+def _codes(combos: Sequence[Combo]) -> np.ndarray:
+    """(c, s) int64: each combination's variants numbered per set (in order of appearance)."""
+    numbering: list[dict[str, int]] = [{} for _ in combos[0]] if combos else []
+    return np.array(
+        [[d.setdefault(v, len(d)) for d, v in zip(numbering, c, strict=True)] for c in combos],
+        dtype=np.int64,
+    ).reshape(len(combos), len(numbering))
+
+
+def _flat(values: Sequence[Sequence[np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
+    """Each combination's arrays as one zero-padded float64 row (c, l), and (c,) the id of
+    its shapes: two combinations are :func:`_same` where their ids are equal and their rows
+    close (the padding then sits in the same places)."""
+    shapes: dict[tuple, int] = {}
+    sig = np.array([shapes.setdefault(tuple(a.shape for a in v), len(shapes)) for v in values])
+    rows = [np.concatenate([np.ravel(a) for a in v]) if v else np.zeros(0) for v in values]
+    flat = np.zeros((len(rows), max((len(r) for r in rows), default=0)))
+    for i, r in enumerate(rows):
+        flat[i, : len(r)] = r
+    return flat, sig
+
+
+def _relevant(codes: np.ndarray, flat: np.ndarray, sig: np.ndarray, tol: float) -> list[int]:
+    """:func:`relevant_sets` on :func:`_codes` and :func:`_flat`: a set is dropped if, grouped
+    by the remaining sets, every combination is :func:`_same` as the first of its group."""
+    keep = list(range(codes.shape[1]))
+    radix = codes.max(axis=0, initial=0) + 1 if len(codes) else np.ones(codes.shape[1], int)
+    for i in range(codes.shape[1]):
+        trial = [k for k in keep if k != i]
+        key = np.zeros(len(codes), dtype=np.int64)
+        for k in trial:  # mixed radix: one integer per combination of the remaining sets
+            key = key * radix[k] + codes[:, k]
+        _, first, inv = np.unique(key, return_index=True, return_inverse=True)
+        ref = first[inv.reshape(-1)]
+        close = np.isclose(flat, flat[ref], rtol=0, atol=tol).all(axis=1)
+        if bool(np.all((sig == sig[ref]) & close)):
+            keep = trial
+    return keep
+
+
 def relevant_sets(
     hints: Mapping[Combo, dict[str, np.ndarray]], names: Sequence[str], *, tol: float = 1e-6
 ) -> list[str]:
     """The sets whose selection changes some hint (the others are dropped one by one, each
     only if the hints stay a function of the remaining sets)."""
-    keep = list(range(len(names)))
-    for i in range(len(names)):
-        trial = [k for k in keep if k != i]
-        groups: dict[Combo, dict[str, np.ndarray]] = {}
-        ok = True
-        for combo, h in hints.items():
-            key = tuple(combo[k] for k in trial)
-            if key in groups:
-                if not _same(groups[key], h, tol):
-                    ok = False
-                    break
-            else:
-                groups[key] = h
-        if ok:
-            keep = trial
-    return [names[k] for k in keep]
+    combos = list(hints)
+    flat, sig = _flat([list(h.values()) for h in hints.values()])
+    codes = _codes(combos) if combos else np.zeros((0, len(names)), dtype=np.int64)
+    return [names[k] for k in _relevant(codes, flat, sig, tol)]
 
 
 def _variant_prim(spec: Sdf.PrimSpec, vset: str, variant: str) -> Sdf.PrimSpec:
@@ -264,21 +292,21 @@ def _author_hint(spec: Sdf.PrimSpec, rel: Sdf.Path, hint: np.ndarray) -> None:
     attr.default = Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(hint, dtype=np.float32))
 
 
-def _corners(hint: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """(n, 3) min and max corners of a hint's purposes, padded with empty (+inf, -inf) ones."""
-    lo = np.full((n, 3), np.inf)
-    hi = np.full((n, 3), -np.inf)
-    h = np.asarray(hint, dtype=np.float64).reshape(-1, 2, 3)
-    ok = (h[:, 0] <= h[:, 1]).all(axis=1)  # an empty purpose is an inverted box
-    lo[: len(h)][ok], hi[: len(h)][ok] = h[ok, 0], h[ok, 1]
-    return lo, hi
-
-
-def union_hint(hints: Sequence[np.ndarray]) -> np.ndarray:
-    """The hint bounding every hint of ``hints``: per purpose, the union of their ranges."""
+def _corner_stack(hints: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """(k, n, 3) min and max corners of the n purposes of each of k hints, an empty (or
+    absent) purpose as (+inf, -inf)."""
     n = len(UsdGeom.Imageable.GetOrderedPurposeTokens())
-    los, his = zip(*(_corners(h, n) for h in hints), strict=True)
-    lo, hi = np.min(los, axis=0), np.max(his, axis=0)
+    h = np.empty((len(hints), n, 2, 3))
+    h[:, :, 0], h[:, :, 1] = 1.0, 0.0  # absent purposes: inverted boxes, i.e. empty
+    for i, x in enumerate(hints):
+        x = np.asarray(x, dtype=np.float64).reshape(-1, 2, 3)
+        h[i, : len(x)] = x
+    ok = np.all(h[:, :, 0] <= h[:, :, 1], axis=2, keepdims=True)  # an empty one is inverted
+    return np.where(ok, h[:, :, 0], np.inf), np.where(ok, h[:, :, 1], -np.inf)
+
+
+def _hint_of(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """The hint of (n, 3) min and max corners, one pair per purpose."""
     ranges = [
         Gf.Range3d() if np.any(a > b) else Gf.Range3d(Gf.Vec3d(*a), Gf.Vec3d(*b))
         for a, b in zip(lo.tolist(), hi.tolist(), strict=True)
@@ -286,13 +314,10 @@ def union_hint(hints: Sequence[np.ndarray]) -> np.ndarray:
     return _hint(ranges)
 
 
-def _excess(hint: np.ndarray, union: np.ndarray) -> float:
-    """How far ``union`` reaches past ``hint`` (the largest gap of a face, metres)."""
-    n = len(UsdGeom.Imageable.GetOrderedPurposeTokens())
-    (lo, hi), (ulo, uhi) = _corners(hint, n), _corners(union, n)
-    finite = np.isfinite(lo) & np.isfinite(ulo)
-    gaps = np.concatenate([lo[finite] - ulo[finite], uhi[finite] - hi[finite]])
-    return float(gaps.max(initial=0.0))
+def union_hint(hints: Sequence[np.ndarray]) -> np.ndarray:
+    """The hint bounding every hint of ``hints``: per purpose, the union of their ranges."""
+    lo, hi = _corner_stack(hints)
+    return _hint_of(lo.min(axis=0), hi.max(axis=0))
 
 
 def split_hints(
@@ -301,20 +326,34 @@ def split_hints(
     """One prim's hints per combination as at most one hint per variant of ONE set: the set
     (of those that change the hint) whose variants, each bounding the union of its
     combinations, overshoot the least (summed over the combinations). Returns that set (None:
-    the hint depends on no set) and variant → hint (``""`` → the one hint if None)."""
-    rel = relevant_sets({c: {"": h} for c, h in per_combo.items()}, names, tol=tol)
+    the hint depends on no set) and variant → hint (``""`` → the one hint if None).
+
+    The overshoot of a combination is how far its variant's union reaches past its own hint
+    (the largest gap of a face, metres); the combinations are handled as arrays at once."""
+    combos, hints = list(per_combo), list(per_combo.values())
+    codes = _codes(combos)
+    flat, sig = _flat([[h] for h in hints])
+    rel = _relevant(codes, flat, sig, tol)
+    lo, hi = _corner_stack(hints)
     if not rel:
-        return None, {"": union_hint(list(per_combo.values()))}
+        return None, {"": _hint_of(lo.min(axis=0), hi.max(axis=0))}
     best: tuple[float, str, dict[str, np.ndarray]] | None = None
-    for name in rel:
-        k = list(names).index(name)
-        groups: dict[str, list[np.ndarray]] = {}
-        for combo, h in per_combo.items():
-            groups.setdefault(combo[k], []).append(h)
-        unions = {v: union_hint(hs) for v, hs in groups.items()}
-        cost = sum(_excess(h, unions[c[k]]) for c, h in per_combo.items())
+    for k in rel:
+        group = codes[:, k]  # the variants numbered in order of appearance, as dicts keep them
+        ulo = np.array([lo[group == g].min(axis=0) for g in range(group.max() + 1)])
+        uhi = np.array([hi[group == g].max(axis=0) for g in range(group.max() + 1)])
+        ulo, uhi = ulo[group], uhi[group]
+        finite = np.isfinite(lo) & np.isfinite(ulo)
+        with np.errstate(invalid="ignore"):
+            gaps = np.maximum(
+                np.where(finite, lo - ulo, -np.inf), np.where(finite, uhi - hi, -np.inf)
+            )
+        excess = np.maximum(gaps.reshape(len(combos), -1).max(axis=1), 0.0)
+        cost = sum(excess.tolist())  # summed in combination order, as floats add
         if best is None or cost < best[0]:
-            best = (cost, name, unions)
+            firsts = np.unique(group, return_index=True)[1]
+            unions = {combos[i][k]: _hint_of(ulo[i], uhi[i]) for i in sorted(firsts.tolist())}
+            best = (cost, names[k], unions)
     assert best is not None
     return best[1], best[2]
 
