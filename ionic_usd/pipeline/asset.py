@@ -29,7 +29,7 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -57,6 +57,9 @@ from ionic_usd.pipeline.forms import form_cut, form_cuts, outside_walls
 from ionic_usd.pipeline.keys import build_key, file_digests
 from ionic_usd.pipeline.mesh_cache import cached_meshes
 from ionic_usd.texture.uv import UVCache, attach_uvs, unwrap_parts
+
+if TYPE_CHECKING:
+    from concurrent.futures import Future
 
 __all__ = [
     "AssetReport",
@@ -213,6 +216,7 @@ def column_asset_meshes(
     *,
     workers: int | None = None,
     side_jobs: Sequence[tuple[Callable[..., object], tuple]] = (),
+    pending: list[Future] | None = None,
 ) -> list[AssetMesh]:
     """Every mesh of the asset with its variant tags and metric charts (geometry only; every
     part is charted by its generator, the form cuts carry the charts; with ``uv_cache`` a
@@ -224,7 +228,10 @@ def column_asset_meshes(
     result does not depend on how many. ``side_jobs`` (picklable ``(function, args)``, their
     results dropped: cache warm-ups such as :func:`warm_stone_textures`) run in the same pool
     after the high LOD's units, so they overlap the geometry instead of following it; without
-    a pool they are not run.
+    a pool they are not run. With a ``pending`` list they are queued after every unit instead
+    and this returns as soon as the geometry is done, leaving their futures in ``pending``:
+    the pool's workers go on with them while the caller's serial work (caching, UVs, writing
+    the layers) runs, and the caller waits for them before it reads what they make.
 
     Returns
     -------
@@ -247,19 +254,32 @@ def column_asset_meshes(
         order = sorted(units, key=_cost)
         ctx = mp.get_context("fork")
         first = sum(u.kind == "capital" and u.lod == order[0].lod for u in order)  # longest
-        with ProcessPoolExecutor(
+        ex = ProcessPoolExecutor(
             max_workers=n,
             mp_context=ctx,
             initializer=_worker_init,
             initargs=(opts, uv_cache, os.getpid()),
-        ) as ex:
-            futures = {u: ex.submit(_worker_unit, u) for u in order[:first]}
-            side = [ex.submit(fn, *args) for fn, args in side_jobs]
-            futures.update({u: ex.submit(_worker_unit, u) for u in order[first:]})
+        )
+        try:
+            if pending is None:  # the side jobs fill the gaps between the units
+                futures = {u: ex.submit(_worker_unit, u) for u in order[:first]}
+                side = [ex.submit(fn, *args) for fn, args in side_jobs]
+                futures.update({u: ex.submit(_worker_unit, u) for u in order[first:]})
+            else:  # ... or follow them, running on beside the caller's serial work
+                futures = {u: ex.submit(_worker_unit, u) for u in order}
+                side = [ex.submit(fn, *args) for fn, args in side_jobs]
             for u, f in futures.items():
                 results[u] = f.result()
-            for job in side:
-                job.result()
+            if pending is None:
+                for job in side:
+                    job.result()
+            else:
+                pending.extend(side)
+        except BaseException:
+            ex.shutdown(wait=True, cancel_futures=True)
+            raise
+        # the workers exit once the queued side jobs are done; nothing here waits for them
+        ex.shutdown(wait=pending is None)
         if uv_cache is not None:  # the workers' cache use, counted where the report reads it
             uv_cache.misses += sum(r[1][0] for r in results.values())
             uv_cache.hits += sum(r[1][1] for r in results.values())
@@ -420,12 +440,16 @@ def _texture_jobs(opts: ColumnAssetOptions) -> list[tuple[Callable[..., object],
     return [(warm_stone_textures, (s, *args)) for s in dict.fromkeys(styles)]
 
 
-def _textures_writer(opts: ColumnAssetOptions):
-    """``populate(tmp)``: the finishes' maps into ``tmp/Payload/Textures``."""
+def _textures_writer(opts: ColumnAssetOptions, pending: Sequence[Future] = ()):
+    """``populate(tmp)``: the finishes' maps into ``tmp/Payload/Textures``, once the
+    ``pending`` warm-ups that generate them are done."""
     from ionic_usd.texture.stone import copy_user_textures
 
     def populate(tmp: Path) -> None:
         from ionic_usd.progress import progress
+
+        for job in pending:
+            job.result()
 
         tex = tmp / "Payload" / "Textures"
         with progress(len(FINISHES), "stone textures (OpenImageIO)", unit="material") as bar:
@@ -520,11 +544,14 @@ def build_column_asset(
     misses0 = cache.misses
     # the generated meshes (unions, cuts, the capital's charts) are a pure function of the
     # options and the code: a rebuild of unchanged parameters reads them back
+    # the maps are made by the geometry's pool after its units, while this process caches
+    # the meshes, packs their UVs and writes the layers; the textures are copied last
+    pending: list[Future] = []
     generated, _ = cached_meshes(
         "column_asset",
         opts,
         lambda: column_asset_meshes(
-            opts, uv_cache=cache, side_jobs=[*_texture_jobs(opts), *side_jobs]
+            opts, uv_cache=cache, side_jobs=[*_texture_jobs(opts), *side_jobs], pending=pending
         ),
         extra=str(cache.folder),
     )
@@ -538,7 +565,7 @@ def build_column_asset(
         opts,
         meshes,
         column_asset_ornament(opts),
-        populate=_textures_writer(opts),
+        populate=_textures_writer(opts, pending),
         force=force,
         key=key,
         record={"meshes": len(meshes), "triangles_per_lod": triangles},

@@ -223,15 +223,16 @@ def write_asset(
     key: str | None = None,
     record: dict | None = None,
 ) -> Path:
-    """Write an asset folder atomically; ``populate(tmp_folder)`` adds textures first; ``key``
-    and ``record`` are kept in its manifest (:func:`ionic_usd.io.replace_folder`)."""
+    """Write an asset folder atomically; ``populate(tmp_folder)`` adds the textures after the
+    layers (which only name them: maps still being generated elsewhere get the layers' time);
+    ``key`` and ``record`` are kept in its manifest (:func:`ionic_usd.io.replace_folder`)."""
     dest = Path(folder)
 
     def build(tmp: Path):
         (tmp / "Payload" / "Textures").mkdir(parents=True, exist_ok=True)
+        write_asset_layers(spec, tmp)
         if populate is not None:
             populate(tmp)
-        write_asset_layers(spec, tmp)
 
     replace_folder(
         build,

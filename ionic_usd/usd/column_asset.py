@@ -66,8 +66,9 @@ def author_column_asset(
     record: dict | None = None,
 ) -> Path:
     """Author the asset folder from kernel values (see :func:`column_asset_spec`);
-    ``populate(tmp)`` puts the textures in first; ``key`` and ``record`` go to the folder's
-    manifest (:func:`ionic_usd.io.replace_folder`). Returns the interface layer's path."""
+    ``populate(tmp)`` puts the textures in after the layers; ``key`` and ``record`` go to the
+    folder's manifest (:func:`ionic_usd.io.replace_folder`). Returns the interface layer's
+    path."""
     return write_asset(
         column_asset_spec(opts, meshes, instancers),
         folder,
