@@ -461,6 +461,35 @@ def test_analytic_charts_are_packed_without_xatlas_at_the_density(cache):
         assert np.all(np.isfinite(m.st)) and m.st.min() >= 0.0 and m.st.max() <= 1.0
 
 
+def test_an_analytic_atlas_is_kept_with_its_mesh_and_travels_with_it():
+    """The packing is derived data of the mesh: made once per (density, padding, cap), carried
+    through pickling (a pool worker packs, the parent reuses), never carried to a new mesh."""
+    import pickle
+
+    from ionic_usd.column.shaft import ShaftParams, build_shaft
+    from ionic_usd.texture.atlas import analytic_atlas
+
+    mesh = build_shaft(ShaftParams(flute_slices=3))
+    a = analytic_atlas(mesh, texels_per_metre=64)
+    assert analytic_atlas(mesh, texels_per_metre=64) is a
+    b = analytic_atlas(mesh, texels_per_metre=32)
+    assert b is not a and b.texels_per_metre == 32 and b.width < a.width
+    assert analytic_atlas(mesh, texels_per_metre=64, padding=0) is not a
+    travelled = pickle.loads(pickle.dumps(mesh))
+    fresh = mesh.with_(name=mesh.name)  # a new value: no derived data
+    for other in (
+        analytic_atlas(travelled, texels_per_metre=64),
+        analytic_atlas(fresh, texels_per_metre=64),
+    ):
+        assert other is not a
+        assert_array_equal(other.st_px, a.st_px)
+        assert_array_equal(other.st_indices, a.st_indices)
+        assert (other.width, other.height, other.chart_count) == (a.width, a.height, a.chart_count)
+    # a mesh edited after packing is a new value and is packed again
+    moved = mesh.with_(st=mesh.st * 2, st_indices=mesh.st_indices)
+    assert analytic_atlas(moved, texels_per_metre=64).width > a.width
+
+
 def test_metric_charts_let_cuts_reuse_one_unwrap(cache):
     from ionic_usd.geometry.clip import clip_mesh
     from ionic_usd.texture.uv import metric_charts

@@ -180,7 +180,15 @@ def _worker_init(opts: ColumnAssetOptions, uv_cache: UVCache | None, parent: int
 
 def _worker_unit(unit: _Unit) -> tuple[list[AssetMesh], tuple[int, int]]:
     opts, uv_cache = _WORKER_STATE["args"]
-    return _unit_meshes(opts, unit, uv_cache, workers=1)
+    meshes, counts = _unit_meshes(opts, unit, uv_cache, workers=1)
+    # the charts' packing at the asset's density, made here in parallel: it travels back with
+    # each mesh's derived values and _with_uvs finds it there
+    from ionic_usd.texture.atlas import analytic_atlas
+
+    for m in meshes:
+        if m.mesh.st is not None and np.all(m.mesh.face_vertex_counts == 3):
+            analytic_atlas(m.mesh, texels_per_metre=level(m.tags["lod"]).asset_texels_per_metre)
+    return meshes, counts
 
 
 def _preload() -> None:
@@ -542,20 +550,22 @@ def build_column_asset(
             pass  # a record of another shape: build
     cache = cache if cache is not None else default_cache()
     misses0 = cache.misses
-    # the generated meshes (unions, cuts, the capital's charts) are a pure function of the
-    # options and the code: a rebuild of unchanged parameters reads them back
-    # the maps are made by the geometry's pool after its units, while this process caches
-    # the meshes, packs their UVs and writes the layers; the textures are copied last
+    # the generated meshes (unions, cuts, the capital's charts) with their packed UVs are a
+    # pure function of the options and the code: a rebuild of unchanged parameters reads them
+    # back. The charts are packed in the pool beside the geometry; the stone maps are made
+    # there after it, while this process caches the meshes and writes the layers.
     pending: list[Future] = []
-    generated, _ = cached_meshes(
-        "column_asset",
+    meshes, _ = cached_meshes(
+        "column_asset_uv",
         opts,
-        lambda: column_asset_meshes(
-            opts, uv_cache=cache, side_jobs=[*_texture_jobs(opts), *side_jobs], pending=pending
-        ),
+        lambda: _with_uvs(
+            column_asset_meshes(
+                opts, uv_cache=cache, side_jobs=[*_texture_jobs(opts), *side_jobs], pending=pending
+            ),
+            cache,
+        )[0],
         extra=str(cache.folder),
     )
-    meshes, _ = _with_uvs(generated, cache)
     unwraps = cache.misses - misses0
     triangles = _default_triangles(meshes, opts)
     from ionic_usd.usd.column_asset import author_column_asset  # pxr: only to author

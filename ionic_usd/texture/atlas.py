@@ -224,8 +224,19 @@ def analytic_atlas(
     UVAtlas whose charts keep their shape (translated only, never rotated or mirrored, so
     their winding and tangent frames stay as the generator made them), scaled to
     ``texels_per_metre`` and shelf-packed tallest first with ``padding`` texels around each.
+    The atlas is derived data of the mesh: it is kept with the mesh's other derived values
+    (a mesh computed in a worker process brings its atlas along to the process that packs).
     """
     check_uv_options(texels_per_metre, padding, resolution_cap)
+    memo = ("analytic_atlas", float(texels_per_metre), int(padding), int(resolution_cap))
+    if memo not in mesh._cache:
+        mesh._cache[memo] = _analytic_atlas(mesh, texels_per_metre, padding, resolution_cap)
+    return mesh._cache[memo]
+
+
+def _analytic_atlas(
+    mesh: Mesh, texels_per_metre: float, padding: int, resolution_cap: int
+) -> UVAtlas:
     if mesh.st is None or mesh.st_indices is None:
         raise GeometryError(f"analytic_atlas: mesh {mesh.name!r} has no st")
     if not np.all(mesh.face_vertex_counts == 3):
