@@ -44,6 +44,7 @@ __all__ = [
     "atomic_write_bytes",
     "check_output_file",
     "check_output_folder",
+    "cache_intact",
     "clean_stale_temporaries",
     "generated_files",
     "manifest_record",
@@ -561,6 +562,12 @@ def _files_intact(root: Path, sums: dict[str, str]) -> bool:
         if not _safe_rel(rel) or p.is_symlink() or not p.is_file() or sha256_file(p) != digest:
             return False
     return True
+
+
+def cache_intact(entry: str | os.PathLike) -> bool:
+    """Whether a :func:`verified_cache` entry is complete and every file matches its manifest
+    (what :func:`verified_cache` checks before it returns an entry without producing it)."""
+    return _cache_ok(Path(entry))
 
 
 def _cache_ok(entry: Path) -> bool:

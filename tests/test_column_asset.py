@@ -581,6 +581,43 @@ def test_generated_meshes_are_cached_by_content(tmp_path, monkeypatch):
     assert len(calls) == 3 and len(list(mesh_cache_folder().iterdir())) == 2
 
 
+def test_a_mesh_cache_that_cannot_be_written_costs_nothing_but_the_cache(tmp_path, monkeypatch):
+    """The cache entry is written by a background thread: a full disk there (or any failure)
+    leaves no entry, no staging folder and no error, and the asset is the same."""
+    import errno
+    import hashlib
+
+    from ionic_usd.pipeline import mesh_cache
+    from ionic_usd.texture.uv import UVCache
+
+    monkeypatch.setenv("IONIC_USD_CACHE", str(tmp_path / "cache"))
+    opts = ColumnAssetOptions(
+        lods=("low",), bases=("G1",), scrolls=("S1",), flutes=("f24",), texture_size=16
+    )
+
+    def full(folder, meshes):
+        (folder / "meshes.npz").write_bytes(b"partial")
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(mesh_cache, "_write", full)
+    build_column_asset(tmp_path / "a" / "IonicColumn", opts, cache=UVCache(tmp_path / "uv"))
+    assert not mesh_cache._WRITERS
+    assert list(mesh_cache.mesh_cache_folder().iterdir()) == []
+    monkeypatch.undo()
+    monkeypatch.setenv("IONIC_USD_CACHE", str(tmp_path / "cache"))
+    build_column_asset(tmp_path / "b" / "IonicColumn", opts, cache=UVCache(tmp_path / "uv"))
+    assert len(list(mesh_cache.mesh_cache_folder().iterdir())) == 1
+
+    def digest(root):
+        return {
+            p.relative_to(root): hashlib.sha256(p.read_bytes()).hexdigest()
+            for p in sorted(root.rglob("*"))
+            if p.is_file() and "manifest" not in p.name
+        }
+
+    assert digest(tmp_path / "a") == digest(tmp_path / "b")
+
+
 def test_generation_in_parallel_processes_gives_the_serial_meshes(tmp_path, monkeypatch):
     """The asset's units of work run in a process pool: the meshes (geometry, charts, tags,
     order) must not depend on how many processes ran them. The stone maps made in the same

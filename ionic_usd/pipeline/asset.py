@@ -55,7 +55,7 @@ from ionic_usd.io import up_to_date
 from ionic_usd.lod import level, lod_rank
 from ionic_usd.pipeline.forms import form_cut, form_cuts, outside_walls
 from ionic_usd.pipeline.keys import build_key, file_digests
-from ionic_usd.pipeline.mesh_cache import cached_meshes
+from ionic_usd.pipeline.mesh_cache import cached_meshes, wait_for_writes
 from ionic_usd.texture.uv import UVCache, attach_uvs, unwrap_parts
 
 if TYPE_CHECKING:
@@ -570,16 +570,19 @@ def build_column_asset(
     triangles = _default_triangles(meshes, opts)
     from ionic_usd.usd.column_asset import author_column_asset  # pxr: only to author
 
-    path = author_column_asset(
-        dest,
-        opts,
-        meshes,
-        column_asset_ornament(opts),
-        populate=_textures_writer(opts, pending),
-        force=force,
-        key=key,
-        record={"meshes": len(meshes), "triangles_per_lod": triangles},
-    )
+    try:
+        path = author_column_asset(
+            dest,
+            opts,
+            meshes,
+            column_asset_ornament(opts),
+            populate=_textures_writer(opts, pending),
+            force=force,
+            key=key,
+            record={"meshes": len(meshes), "triangles_per_lod": triangles},
+        )
+    finally:
+        wait_for_writes()  # the mesh cache entry, written while the layers were
     size = sum(f.stat().st_size for f in dest.rglob("*") if f.is_file())
     return AssetReport(path, len(meshes), triangles, unwraps, time.perf_counter() - t0, size)
 

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import json
 import logging
+import threading
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -28,7 +29,7 @@ from ionic_usd.blueprint.asset import AssetMesh
 from ionic_usd.geometry.mesh import Mesh
 from ionic_usd.pipeline.keys import build_key
 
-__all__ = ["cached_meshes", "mesh_cache_folder"]
+__all__ = ["cached_meshes", "mesh_cache_folder", "wait_for_writes"]
 
 log = logging.getLogger(__name__)
 
@@ -103,27 +104,42 @@ def cached_meshes(
 ) -> tuple[list[AssetMesh], bool]:
     """``produce()``'s meshes, from the cache when ``(tag, opts, extra)`` and the code match.
 
-    Returns the meshes and whether they came from the cache. A cache that cannot be written
-    (read-only or full disk) is no error: the meshes are produced and returned.
+    Returns the meshes and whether they came from the cache. Produced meshes are returned at
+    once and written to the cache by a background thread (the arrays' writes, CRCs, SHA-256
+    and fsync release the GIL: it overlaps the caller's authoring); :func:`wait_for_writes`
+    joins it. A cache that cannot be written (read-only or full disk) is no error: the meshes
+    are returned all the same.
     """
-    from ionic_usd.io import verified_cache
+    from ionic_usd.io import cache_intact
 
     entry = mesh_cache_folder() / _key(tag, opts, extra)
-    produced: list[list[AssetMesh]] = []
+    if cache_intact(entry):
+        try:
+            return _read(entry), True
+        except (OSError, ValueError, KeyError) as exc:  # unreadable despite its manifest
+            log.info("mesh cache entry %s unreadable (%s); rebuilding", entry, exc)
+    meshes = produce()
+    writer = threading.Thread(target=_store, args=(entry, meshes), name="ionic_usd mesh cache")
+    _WRITERS.append(writer)
+    writer.start()
+    return meshes, False
 
-    def write(tmp: Path) -> None:
-        produced.append(produce())
-        _write(tmp, produced[0])
+
+# cache writes still running (each joined by wait_for_writes; non-daemon: the interpreter
+# also waits for them at exit, so an entry is never cut short by a normal exit)
+_WRITERS: list[threading.Thread] = []
+
+
+def _store(entry: Path, meshes: list[AssetMesh]) -> None:
+    from ionic_usd.io import verified_cache
 
     try:
-        store = verified_cache(entry, write)
-    except OSError as exc:
-        log.info("mesh cache not written (%s); building without it", exc)
-        return (produced[0] if produced else produce()), False
-    if produced:
-        return produced[0], False
-    try:
-        return _read(store), True
-    except (OSError, ValueError, KeyError) as exc:  # unreadable despite its manifest
-        log.info("mesh cache entry %s unreadable (%s); rebuilding", store, exc)
-        return produce(), False
+        verified_cache(entry, lambda tmp: _write(tmp, meshes))
+    except Exception as exc:  # noqa: BLE001 (an optional cache: the build goes on without it)
+        log.info("mesh cache not written (%s: %s); building without it", type(exc).__name__, exc)
+
+
+def wait_for_writes() -> None:
+    """Wait until every mesh cache entry this process started writing is in place."""
+    while _WRITERS:
+        _WRITERS.pop().join()
