@@ -26,7 +26,7 @@ import numpy as np
 
 from ionic_usd.errors import GeometryError
 from ionic_usd.geometry import libm
-from ionic_usd.geometry.mesh import Mesh
+from ionic_usd.geometry.mesh import CornerValues, Mesh
 
 __all__ = ["sweep", "side_normals", "mitre_vectors", "polygon_area"]
 
@@ -226,10 +226,8 @@ def sweep(
         points,
         np.concatenate(counts),
         np.concatenate(indices),
-        normals.astype(np.float32),
-        "faceVarying",
-        st,
-        np.arange(len(st), dtype=np.int32),
+        CornerValues.per_corner(normals.astype(np.float32)),
+        CornerValues(st, np.arange(len(st), dtype=np.int32)),
         name=name,
     )
 
