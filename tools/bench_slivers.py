@@ -37,6 +37,7 @@ def _exec(path: Path, name: str):
     spec = importlib.util.spec_from_file_location(name, path)
     assert spec is not None and spec.loader is not None
     mod = importlib.util.module_from_spec(spec)
+    sys.modules[name] = mod  # dataclasses look their module up while they are made
     spec.loader.exec_module(mod)
     return mod
 
