@@ -20,7 +20,7 @@ Profile. Modules stack upward from y = 0; within a module:
   ``profile_slices`` + 1 uniform parameters; a 2-point module is a straight segment with
   exactly 2 rows. The module's top (next module's bottom) is its last control point's h.
 
-Joints and normals. Normals are indexed faceVarying from
+Joints and normals. Normals are indexed per corner from
 :func:`~ionic_usd.geometry.smooth_normals` with one smoothing group per module (the floors of a
 v1 module are welded, as in the paper), so every joint between modules is a crisp edge. A v2
 module flagged C1 drops its first row and its second row joins the previous module's last row;

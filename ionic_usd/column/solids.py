@@ -24,7 +24,7 @@ __all__ = ["box_mesh", "lathe", "rigid", "rot_y", "MIRROR_X", "MIRROR_Z", "SWAP_
 
 
 def box_mesh(lo, hi, name: str) -> Mesh:
-    """Axis-aligned box, outward-wound, crisp faceVarying normals, one exact planar ``st``
+    """Axis-aligned box, outward-wound, crisp per-corner normals, one exact planar ``st``
     chart per face (:func:`~ionic_usd.geometry.mesh.box_st`)."""
     (x0, y0, z0), (x1, y1, z1) = lo, hi
     pts = np.array(

@@ -74,7 +74,7 @@ def prism(
 
     Returns
     -------
-    Closed triangle Mesh with faceVarying normals (flat caps, walls smooth between creases)
+    Closed triangle Mesh with per-corner normals (flat caps, walls smooth between creases)
     and three exact metric ``st`` charts: the front cap (x, y), the back cap (−x, y) and the
     walls unrolled (arc length along the loop, z), each winding counter-clockwise like its
     faces seen from outside.

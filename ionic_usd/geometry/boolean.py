@@ -45,7 +45,7 @@ __all__ = [
 
 
 def _as_triangles(mesh: Mesh) -> Mesh:
-    """Fan-triangulate polygons, carrying faceVarying normals corner by corner."""
+    """Fan-triangulate polygons, carrying per-corner normals corner by corner."""
     if np.all(mesh.face_vertex_counts == 3):
         return mesh
     corners = triangulate_fan(
@@ -111,7 +111,7 @@ def _corner_normals(mesh: Mesh) -> np.ndarray | None:
     if mesh.normals.by_point:
         return mesh.normals.values[mesh.triangles.reshape(-1)]
     if not np.all(mesh.face_vertex_counts == 3):
-        raise GeometryError("union: faceVarying normals need a triangle mesh")
+        raise GeometryError("union: per-corner normals need a triangle mesh")
     return corner_normals(mesh)
 
 
@@ -184,7 +184,7 @@ def union(meshes: list[Mesh], name: str = "mesh") -> Mesh:
 
     Returns
     -------
-    Mesh : the union's surface, faceVarying normals carried from the inputs (interpolated at
+    Mesh : the union's surface, per-corner normals carried from the inputs (interpolated at
         new vertices); when every input has ``st`` (metric charts) so has the union, each
         input chart's visible part a chart of its own (the values carried through the boolean
         like the normals, so a cut through a chart keeps its parametrisation exactly).

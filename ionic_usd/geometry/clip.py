@@ -67,7 +67,7 @@ def clip_mesh(
     Returns
     -------
     Mesh
-        Triangles, faceVarying normals when the input has normals (interpolated along cut
+        Triangles, per-corner normals when the input has normals (interpolated along cut
         edges, ``−plane_normal`` on the cap); the input's ``st`` likewise, with planar
         (box-mapped, metric) ``st`` on the cap.
         When the plane does not cut the mesh (everything is kept), the input is returned

@@ -3,11 +3,12 @@
 A mesh is geometry and per-corner values: ``points``, faces (``face_vertex_counts``,
 ``face_vertex_indices``, the names ``UsdGeom.Mesh`` uses) and two optional attributes,
 ``normals`` and ``st``, each a :class:`~ionic_usd.geometry.corners.CornerValues` (values per
-point, or distinct values indexed per corner). How they are encoded in a file is chosen when
-writing, not here: :mod:`ionic_usd.usd.mesh` writes point normals as the ``normals``
-attribute (vertex interpolation) and other normals and all st as indexed faceVarying primvars
-(``primvars:normals``, ``primvars:st``; de-duplicated unless the st promise ``distinct``);
-:mod:`ionic_usd.pipeline.mesh_cache` stores them in a layout of its own.
+point, or values with an index per corner). Every operation here treats both alike. How they
+are encoded in a file is chosen when writing, not here: :mod:`ionic_usd.usd.mesh` writes
+point normals as the ``normals`` attribute (vertex interpolation) and other normals and all
+st as indexed faceVarying primvars (``primvars:normals``, ``primvars:st``; de-duplicated
+unless ``st.distinct`` promises they need not be); :mod:`ionic_usd.pipeline.mesh_cache`
+stores them in a layout of its own.
 Winding is counter-clockwise seen from outside (USD's default ``orientation = rightHanded``).
 """
 
@@ -247,7 +248,7 @@ def smooth_normals(mesh: Mesh, groups: np.ndarray | None = None, *, indexed: boo
     mesh : triangle mesh
     groups : (t,) int or None
         Smoothing group per triangle. ``None`` gives per-vertex normals smooth everywhere;
-        otherwise faceVarying normals where a corner averages only the triangles of its own
+        otherwise per-corner normals where a corner averages only the triangles of its own
         group around its vertex (so an edge between two groups is crisp).
     indexed : bool
         With ``groups``: return indexed normals (``normals.indices``): the

@@ -203,7 +203,7 @@ def cut_quadrant(
 
     Returns
     -------
-    Mesh : triangles; faceVarying normals carried (``+x``/``+z`` against the caps' solid: the
+    Mesh : triangles; per-corner normals carried (``+x``/``+z`` against the caps' solid: the
     caps face ``−x`` and ``−z``), the input's ``st`` likewise with planar ``st`` on each cap
     (one chart per cap outline). The input itself when the quadrant holds none of it.
 

@@ -104,7 +104,7 @@ def remove_slivers(
 
     Parameters
     ----------
-    mesh : closed, consistently wound triangle mesh with faceVarying normals (or none)
+    mesh : closed, consistently wound triangle mesh with normals (or none)
     tol : largest allowed movement of the surface (m)
     min_angle : degrees
     changed : (n,) bool over the points, or None (all). Only the slivers with a vertex on a
@@ -180,7 +180,7 @@ def _mend_pass(
 
 
 def normals_with_winding(mesh: Mesh) -> Mesh:
-    """``mesh`` with every faceVarying corner normal that points against its face's winding
+    """``mesh`` with every per-corner normal that points against its face's winding
     (dot < 0: a flip or snap of the sliver clean-up across a crease) replaced by the face
     normal, so authored normals agree with the winding on every face. Triangles only."""
     if mesh.normals is None or mesh.normals.by_point or not mesh.n_faces:

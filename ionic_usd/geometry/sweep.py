@@ -192,7 +192,7 @@ def sweep(
     -------
     Mesh
         Points ``(m·k, 3)`` shared by all faces (watertight); ``m_s·k`` quads (+ cap triangles
-        for open paths); faceVarying normals; ``st = uv_scale · (arc length along the row,
+        for open paths); per-corner normals; ``st = uv_scale · (arc length along the row,
         length along the section)``.
     """
     prof, pts, ax = _check(profile, path, axis, closed)

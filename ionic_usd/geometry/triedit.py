@@ -90,7 +90,7 @@ class TriangleEditor:
 
     Parameters
     ----------
-    mesh : triangle mesh with faceVarying normals (or none) and indexed st (or none)
+    mesh : triangle mesh with normals (or none) and st (or none), any layout
     """
 
     def __init__(self, mesh: Mesh) -> None:

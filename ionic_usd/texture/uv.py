@@ -374,7 +374,7 @@ def apply_uvs(
 
     Returns
     -------
-    {name: Mesh} in the input order, each with faceVarying indexed ``st`` in [0, 1]; points,
+    {name: Mesh} in the input order, each with indexed per-corner ``st`` in [0, 1]; points,
     faces and normals unchanged. A texture of ``S × S`` texels then has the requested
     density on every part.
     """
