@@ -11,7 +11,8 @@ Build and save
     :func:`portunus_column` (the Temple of Portunus column), :func:`column` (from any
     :class:`ColumnParams`), :class:`Column` (its parts; ``.save(path)``), :class:`Temple`
     (``Temple.portunus()``, ``Temple.from_toml(path)``; ``.save(folder)``),
-    :func:`portunus_column_params`, :class:`Mesh` (the kernel's immutable mesh),
+    :func:`portunus_column_params`, :class:`Mesh` (the kernel's immutable mesh) with
+    :class:`CornerValues` (its normals and ``st``: per point or indexed per corner),
     :func:`build_city` with :class:`CityOptions` (a city of temples), :func:`export_scene`
     (glTF/GLB, usdz, STL, 3MF from any scene written here).
 Compare with references (paper §VII)
@@ -44,6 +45,7 @@ _API = {
     "ColumnParams": "ionic_usd.column.column",
     "portunus_column_params": "ionic_usd.column.column",
     "Mesh": "ionic_usd.geometry.mesh",
+    "CornerValues": "ionic_usd.geometry.corners",
     "CityOptions": "ionic_usd.pipeline.city",
     "build_city": "ionic_usd.pipeline.city",
     "export_scene": "ionic_usd.export",

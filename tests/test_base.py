@@ -412,8 +412,8 @@ def test_analytic_st_is_finite_wound_and_bounded(name):
     from ionic_usd.texture.atlas import chart_labels
 
     m = build_base(load_base_preset(name))
-    assert m.st is not None and np.all(np.isfinite(m.st))
-    st = m.st[m.st_indices].reshape(-1, 3, 2).astype(np.float64)
+    assert m.st is not None and np.all(np.isfinite(m.st.values))
+    st = m.st.at_corners(m.face_vertex_indices).reshape(-1, 3, 2).astype(np.float64)
     e1, e2 = st[:, 1] - st[:, 0], st[:, 2] - st[:, 0]
     a_st = 0.5 * (e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
     _, a3 = face_normals(m.points, m.triangles)
@@ -426,7 +426,7 @@ def test_analytic_st_is_finite_wound_and_bounded(name):
     lo = min(np.cos(np.radians(FLAT_SLOPE_DEG)), 1 / np.sqrt(SIDE_RADIUS_SPREAD)) * 0.97
     hi = np.sqrt(SIDE_RADIUS_SPREAD) * 1.03
     assert lo < ratio.min() and ratio.max() < hi
-    charts = chart_labels(m.st_indices, len(m.st))
+    charts = chart_labels(m.st.indices, len(m.st.values))
     assert 3 <= charts.max() + 1 < 40
 
 
@@ -441,7 +441,7 @@ def test_wall_cuts_carry_the_analytic_st():
     corner = difference(m, [block])
     for cut in (half, corner):
         assert cut.st is not None and inspect_mesh(cut).watertight
-        st = cut.st[cut.st_indices].reshape(-1, 3, 2).astype(np.float64)
+        st = cut.st.at_corners(cut.face_vertex_indices).reshape(-1, 3, 2).astype(np.float64)
         e1, e2 = st[:, 1] - st[:, 0], st[:, 2] - st[:, 0]
         a_st = 0.5 * (e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
         big = a_st > 1e-10
@@ -465,7 +465,7 @@ def test_differences_share_the_operand_and_match_one_difference_each(with_st):
 
     m = build_base(load_base_preset("G2", segments=48))
     if not with_st:
-        m = m.with_(st=None, st_indices=None)
+        m = m.with_(st=None)
     half = cuboid_mesh(Cuboid((-2.0, -1.0, -2.0), (2.0, 2.0, -0.05), name="wall"))
     quad = cuboid_mesh(Cuboid((-2.0, -1.0, -2.0), (-0.05, 2.0, -0.05), name="wall"))
     got = differences(m, [[half], [quad]], simplify=True)
@@ -474,7 +474,8 @@ def test_differences_share_the_operand_and_match_one_difference_each(with_st):
         assert np.array_equal(cut.points, one.points)
         assert np.array_equal(cut.face_vertex_indices, one.face_vertex_indices)
         if with_st:
-            assert np.array_equal(cut.st, one.st) and np.array_equal(cut.st_indices, one.st_indices)
+            assert np.array_equal(cut.st.values, one.st.values)
+            assert np.array_equal(cut.st.indices, one.st.indices)
         assert inspect_mesh(cut).watertight
     assert len(got[0].points) != len(got[1].points)  # two different cuts, not one twice
     everything = cuboid_mesh(Cuboid((-5.0, -5.0, -5.0), (5.0, 5.0, 5.0), name="all"))

@@ -80,7 +80,7 @@ def test_every_part_is_watertight(parts, name):
         assert vol > 0
     # corner normals: unit length and on the outer side of their face
     fn, _ = face_normals(m.points, m.triangles)
-    cn = m.normals.reshape(-1, 3, 3)
+    cn = m.corner_normals().reshape(-1, 3, 3)
     assert_allclose(np.linalg.norm(cn, axis=2), 1.0, atol=1e-5)
     assert np.all(np.einsum("ij,ikj->ik", fn, cn) > 0.2)
 

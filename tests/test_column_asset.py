@@ -13,7 +13,7 @@ import pytest
 from pxr import Sdf, Usd, UsdGeom, UsdShade
 
 from ionic_usd.errors import OutputExistsError, ParameterError
-from ionic_usd.geometry import Mesh, inspect_mesh
+from ionic_usd.geometry import CornerValues, Mesh, inspect_mesh
 from ionic_usd.pipeline.asset import build_column_asset, column_asset_meshes
 from ionic_usd.texture.stone import TextureError
 from ionic_usd.usd import validate_stage
@@ -122,8 +122,7 @@ def mesh_value(prim) -> Mesh:
         np.array(g.GetPointsAttr().Get()),
         np.array(g.GetFaceVertexCountsAttr().Get()),
         np.array(g.GetFaceVertexIndicesAttr().Get()),
-        st=np.array(st.Get()),
-        st_indices=np.array(st.GetIndices()),
+        st=CornerValues(np.array(st.Get()), np.array(st.GetIndices())),
     )
 
 
@@ -196,7 +195,7 @@ def test_every_mesh_closed_with_uvs_in_unit_square(column_asset):
         m = mesh_value(prim)
         r = inspect_mesh(m)
         assert r.closed and r.consistent and r.signed_volume > 0, prim.GetPath()
-        assert m.st.min() >= 0.0 and m.st.max() <= 1.0, prim.GetPath()
+        assert m.st.values.min() >= 0.0 and m.st.values.max() <= 1.0, prim.GetPath()
         assert UsdGeom.PrimvarsAPI(prim).GetPrimvar("st").GetInterpolation() == "faceVarying"
         assert UsdGeom.PrimvarsAPI(prim).GetPrimvar("st").GetTypeName() == "texCoord2f[]"
 
@@ -221,13 +220,13 @@ def test_charts_do_not_overlap_in_any_mesh(column_asset):
         ):
             continue
         m = mesh_value(prim)
-        charts = uv_charts(m.st_indices, len(m.st))
-        cover, _ = rasterise(m.st * 2048, m.st_indices, 2048, 2048, charts)
+        charts = uv_charts(m.st.indices, len(m.st.values))
+        cover, _ = rasterise(m.st.values * 2048, m.st.indices, 2048, 2048, charts)
         assert cover.max() == 1, prim.GetPath()
         # finer: no overlap either, and no two charts within the padding the atlas keeps
         # around every chart (DEFAULT_PADDING texels of this LOD's S = density × UV_SPAN)
         res = 4096
-        cover, label = rasterise(m.st * res, m.st_indices, res, res, charts)
+        cover, label = rasterise(m.st.values * res, m.st.indices, res, res, charts)
         assert cover.max() == 1, prim.GetPath()
         lod = next(k for k in LOD_NAMES if f"_{k}" in prim.GetName())
         r = DEFAULT_PADDING * res // int(level(lod).asset_texels_per_metre * UV_SPAN)
@@ -650,16 +649,14 @@ def test_generation_in_parallel_processes_gives_the_serial_meshes(tmp_path, monk
         (m.part, m.name, m.tags) for m in serial
     ]
     for a, b in zip(serial, parallel, strict=True):
-        for f in (
-            "points",
-            "face_vertex_indices",
-            "normals",
-            "normals_indices",
-            "st",
-            "st_indices",
-        ):
+        for f in ("points", "face_vertex_indices", "normals", "st"):
             x, y = getattr(a.mesh, f), getattr(b.mesh, f)
             assert (x is None) == (y is None), (a.name, f)
+            if isinstance(x, CornerValues):
+                assert x.distinct == y.distinct and x.by_point == y.by_point, (a.name, f)
+                np.testing.assert_array_equal(x.values, y.values, err_msg=f"{a.name}.{f}")
+                x, y = x.indices, y.indices
+                assert (x is None) == (y is None), (a.name, f)
             if x is not None:
                 np.testing.assert_array_equal(x, y, err_msg=f"{a.name}.{f}")
 

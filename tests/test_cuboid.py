@@ -69,8 +69,8 @@ def test_inclined_vertex_heights(incline):
 @pytest.mark.parametrize("lo,hi,rise,incline", BOXES)
 def test_normals_flat_unit_outward(lo, hi, rise, incline):
     m = cuboid_mesh(Cuboid(lo, hi, rise, incline))
-    assert m.normals_interpolation == "faceVarying"
-    n = m.normals.reshape(6, 4, 3).astype(np.float64)
+    assert not m.normals.by_point
+    n = m.corner_normals().reshape(6, 4, 3).astype(np.float64)
     assert_allclose(np.linalg.norm(n, axis=2), 1.0, rtol=1e-6)
     assert_allclose(n, np.repeat(n[:, :1], 4, axis=1))  # crisp: one normal per face
     q = m.points[m.face_vertex_indices].reshape(6, 4, 3)
@@ -86,7 +86,7 @@ def test_sloped_normal_follows_pitch():
     phi = math.atan(2 / 9)
     c = Cuboid((-4.5, 10, -1), (0, 10.3, 1), 4.5 * 2 / 9, "shear")
     m = cuboid_mesh(c)
-    n = m.normals.reshape(6, 4, 3)[:, 0]
+    n = m.corner_normals().reshape(6, 4, 3)[:, 0]
     expect = np.array([-math.sin(phi), math.cos(phi), 0.0])
     assert np.any(np.all(np.abs(n - expect) < 1e-6, axis=1))  # top
     assert np.any(np.all(np.abs(n + expect) < 1e-6, axis=1))  # soffit (sheared bottom)
@@ -96,9 +96,9 @@ def test_sloped_normal_follows_pitch():
 @pytest.mark.parametrize("lo,hi,rise,incline", BOXES)
 def test_uvs_are_metres_times_scale(lo, hi, rise, incline, uv_scale):
     m = cuboid_mesh(Cuboid(lo, hi, rise, incline), uv_scale=uv_scale)
-    assert m.st.shape == (24, 2) and m.st_indices.shape == (24,)
+    assert m.st.values.shape == (24, 2) and m.st.indices.shape == (24,)
     q = m.points[m.face_vertex_indices].reshape(6, 4, 3)
-    uv = m.st[m.st_indices].astype(np.float64).reshape(6, 4, 2)
+    uv = m.st.at_corners(m.face_vertex_indices).astype(np.float64).reshape(6, 4, 2)
     for f in range(6):  # every pair of a face's corners: UV distance = scale x metres
         d3 = np.linalg.norm(q[f][:, None] - q[f][None], axis=2)
         d2 = np.linalg.norm(uv[f][:, None] - uv[f][None], axis=2)
@@ -117,8 +117,8 @@ def test_box_projection_world_anchored():
     b = cuboid_mesh(Cuboid((2, 0, -3), (5, 1, 1)))
     for m in (a, b):
         q = m.points[m.face_vertex_indices].reshape(6, 4, 3)
-        uv = m.st[m.st_indices].reshape(6, 4, 2)
-        f = int(np.argmax(m.normals.reshape(6, 4, 3)[:, 0, 2]))
+        uv = m.st.at_corners(m.face_vertex_indices).reshape(6, 4, 2)
+        f = int(np.argmax(m.corner_normals().reshape(6, 4, 3)[:, 0, 2]))
         assert_allclose(uv[f], 0.25 * q[f][:, :2], atol=1e-6)
 
 

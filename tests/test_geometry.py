@@ -11,6 +11,7 @@ from numpy.testing import assert_allclose
 
 from ionic_usd.errors import GeometryError, ParameterError
 from ionic_usd.geometry import (
+    CornerValues,
     Mesh,
     bezier,
     inspect_mesh,
@@ -73,7 +74,8 @@ def test_transform_mirror_keeps_outward_winding():
     mirror = np.diag([-1.0, 1.0, 1.0, 1.0])
     t = transform(m, mirror)
     assert inspect_mesh(t).signed_volume == pytest.approx(1.0)
-    assert_allclose(t.normals[:, 0], -m.normals[:, 0], atol=1e-6)
+    assert t.normals.by_point  # a point attribute stays one: the corners only permute
+    assert_allclose(t.normals.values[:, 0], -m.normals.values[:, 0], atol=1e-6)
     scale = np.diag([2.0, 3.0, 4.0, 1.0])
     assert inspect_mesh(transform(m, scale)).signed_volume == pytest.approx(24.0)
 
@@ -95,15 +97,17 @@ def test_smooth_normals_groups_crisp_and_smooth():
     smooth = smooth_normals(tri)
     # per-vertex normal of a cube corner points along the diagonal
     d = tri.points - 0.5
-    assert_allclose(smooth.normals, d / np.linalg.norm(d, axis=1, keepdims=True), atol=1e-6)
-    # one group per face side -> faceVarying normals equal the face normals
+    assert smooth.normals.by_point
+    unit = d / np.linalg.norm(d, axis=1, keepdims=True)
+    assert_allclose(smooth.normals.values, unit, atol=1e-6)
+    # one group per face side -> per-corner normals equal the face normals
     groups = np.repeat(np.arange(6), 2)
     crisp = smooth_normals(tri, groups)
-    assert crisp.normals_interpolation == "faceVarying"
+    assert not crisp.normals.by_point and crisp.normals.one_per_corner
     p = tri.points[tri.triangles]
     fn = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
     fn /= np.linalg.norm(fn, axis=1, keepdims=True)
-    assert_allclose(crisp.normals, np.repeat(fn, 3, axis=0), atol=1e-6)
+    assert_allclose(crisp.normals.values, np.repeat(fn, 3, axis=0), atol=1e-6)
 
 
 def test_resample_polyline_constant_spacing(rng):
@@ -177,14 +181,15 @@ def test_indexed_smooth_normals_expand_to_the_per_corner_ones():
     m, groups = _lathe_with_groups()
     flat = smooth_normals(m, groups)
     idx = smooth_normals(m, groups, indexed=True)
-    assert flat.normals_indices is None and idx.normals_indices is not None
-    assert_allclose(idx.corner_normals(), flat.normals, atol=1e-6)
+    assert flat.normals.one_per_corner and not idx.normals.one_per_corner
+    assert idx.normals.indices is not None
+    assert_allclose(idx.corner_normals(), flat.normals.values, atol=1e-6)
     # one value per point plus one per (point, group) pair of a point on a crease
     pairs = np.unique(m.triangles.reshape(-1) * 10 + np.repeat(groups, 3))
     per_point = np.bincount(pairs // 10, minlength=m.n_points)
-    assert len(idx.normals) == m.n_points + per_point[per_point > 1].sum()
+    assert len(idx.normals.values) == m.n_points + per_point[per_point > 1].sum()
     # first-occurrence numbering of the crease values: they first appear in increasing order
-    crease = idx.normals_indices[idx.normals_indices >= m.n_points]
+    crease = idx.normals.indices[idx.normals.indices >= m.n_points]
     _, first = np.unique(crease, return_index=True)
     assert np.all(np.diff(crease[np.sort(first)]) == 1)
 
@@ -195,7 +200,7 @@ def test_indexed_normals_survive_merge_transform_weld():
     b = transform(smooth_normals(m), np.diag([1.0, 1.0, 1.0, 1.0]) + np.eye(4, k=3) * 3)
     c = smooth_normals(m, groups)  # faceVarying, not indexed
     ab = merge([a, b, c])
-    assert ab.normals_indices is not None
+    assert ab.normals.indices is not None and not ab.normals.one_per_corner
     assert_allclose(
         ab.corner_normals(),
         np.concatenate([a.corner_normals(), b.corner_normals(), c.corner_normals()]),
@@ -203,21 +208,28 @@ def test_indexed_normals_survive_merge_transform_weld():
     )
     mirror = np.diag([-1.0, 1.0, 1.0, 1.0])
     t = transform(a, mirror)
-    assert t.normals_indices is not None
+    assert t.normals.indices is not None and not t.normals.one_per_corner
     expected = transform(c, mirror)  # the same mirror on per-corner storage
-    assert_allclose(t.corner_normals(), expected.normals, atol=1e-6)
+    assert_allclose(t.corner_normals(), expected.normals.values, atol=1e-6)
     w = weld(a)
-    assert w.normals_indices is not None
+    assert w.normals.indices is not None and not w.normals.one_per_corner
     assert_allclose(w.corner_normals(), a.corner_normals(), atol=0)
 
 
 def test_indexed_normals_are_validated_and_extent_is_cached():
     m, groups = _lathe_with_groups()
     a = smooth_normals(m, groups, indexed=True)
-    with pytest.raises(GeometryError, match="normals_indices"):
-        a.with_(normals_indices=a.normals_indices[:-3])
-    with pytest.raises(GeometryError, match="faceVarying"):
-        a.with_(normals_interpolation="vertex")
+    nrm = a.normals
+    with pytest.raises(GeometryError, match="normals indices"):
+        a.with_(normals=CornerValues(nrm.values, nrm.indices[:-3]))
+    with pytest.raises(GeometryError, match="normals per point"):
+        a.with_(normals=CornerValues(nrm.values))  # more values than points
+    with pytest.raises(GeometryError, match="outside"):
+        CornerValues(nrm.values[:3], nrm.indices)
+    with pytest.raises(GeometryError, match="must be CornerValues"):
+        a.with_(normals=nrm.values)
+    with pytest.raises(GeometryError, match="must be CornerValues"):
+        a.with_(st=nrm)  # st has two components
     assert_allclose(a.extent, [a.points.min(axis=0), a.points.max(axis=0)])
     assert a.extent is a.extent and not a.extent.flags.writeable
 
@@ -259,3 +271,41 @@ def test_pchip_is_scipys_pchip_interpolator():
         want = PchipInterpolator(x, y)(t)
         np.testing.assert_allclose(pchip(x, y, t), want, rtol=0, atol=1e-12 * (1 + np.abs(y).max()))
         np.testing.assert_allclose(pchip(x, y, x), y, atol=1e-14 * (1 + np.abs(y).max()))
+
+
+def test_corner_values_one_path_for_every_layout():
+    """Point, per-corner and indexed values go through merge, mirror and weld alike: the
+    expanded per-corner values are carried exactly, and the layout is the documented one."""
+    m, groups = _lathe_with_groups()
+    by_point = smooth_normals(m)
+    per_corner = smooth_normals(m, groups)
+    indexed = smooth_normals(m, groups, indexed=True)
+    assert by_point.normals.by_point and per_corner.normals.one_per_corner
+    assert indexed.normals.indices is not None and not indexed.normals.one_per_corner
+    parts = [by_point, per_corner, indexed]
+    expanded = np.concatenate([p.corner_normals() for p in parts])
+    # all point values: still point values; point + per-corner: per corner; any indexed: indexed
+    assert merge([by_point, by_point]).normals.by_point
+    pc = merge([by_point, per_corner]).normals
+    assert pc.one_per_corner and len(pc.values) == 2 * m.face_vertex_indices.size
+    mixed = merge(parts)
+    assert not mixed.normals.by_point and not mixed.normals.one_per_corner
+    assert_allclose(mixed.corner_normals(), expanded, atol=0)
+    mirror = np.diag([-1.0, 1.0, 1.0, 1.0])
+    for p in parts:
+        t = transform(p, mirror)
+        assert t.normals.by_point == p.normals.by_point
+        assert t.normals.one_per_corner == p.normals.one_per_corner
+        # the mirror reverses each face and negates x: corner c of a face is old corner -c
+        perm = np.arange(m.face_vertex_indices.size).reshape(-1, 3)[:, [0, 2, 1]].reshape(-1)
+        assert_allclose(t.corner_normals(), p.corner_normals()[perm] * [-1, 1, 1], atol=1e-6)
+        w = weld(p)  # a weld moves points: point values become per corner
+        assert not w.normals.by_point
+        assert_allclose(w.corner_normals(), p.corner_normals(), atol=0)
+    # st rides through the same code: indexed st of the per-corner part survives the merge
+    st = CornerValues(np.arange(2 * m.n_points, dtype=np.float32).reshape(-1, 2))
+    with_st = [p.with_(st=st) for p in parts]
+    got = merge(with_st).st
+    assert got is not None and got.indices is None  # every part's st is per point
+    assert_allclose(got.values, np.concatenate([st.values] * 3))
+    assert merge([with_st[0], parts[1]]).st is None  # kept only when every part has it

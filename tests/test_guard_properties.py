@@ -95,7 +95,7 @@ def scroll(draw) -> str:
 def assert_solid(m: Mesh) -> None:
     assert np.isfinite(m.points).all()
     if m.normals is not None:
-        assert np.isfinite(m.normals).all()
+        assert np.isfinite(m.normals.values).all()
     rep = inspect_mesh(m)
     assert rep.closed and rep.consistent, rep
     assert rep.signed_volume > 0, rep

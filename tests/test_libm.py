@@ -130,13 +130,16 @@ import numpy as np
 from ionic_usd.column.column import build_column, portunus_column_params
 from ionic_usd.pipeline.asset import ColumnAssetOptions, column_asset_meshes
 
-FIELDS = ("points", "face_vertex_indices", "normals", "normals_indices", "st", "st_indices")
+FIELDS = ("points", "face_vertex_indices", "normals", "st")
 out = {}
 def put(name, mesh):
     for f in FIELDS:
         a = getattr(mesh, f, None)
-        if a is not None:
-            out[f"{name}/{f}"] = hashlib.sha256(np.ascontiguousarray(a).tobytes()).hexdigest()
+        arrays = {f: a} if a is None or isinstance(a, np.ndarray) else {
+            f: a.values, f"{f}_indices": a.indices}
+        for k, v in arrays.items():
+            if v is not None:
+                out[f"{name}/{k}"] = hashlib.sha256(np.ascontiguousarray(v).tobytes()).hexdigest()
 for lod in ("high", "medium", "low"):
     for part, mesh in build_column(portunus_column_params(lod=lod)).parts().items():
         put(f"column_{lod}/{part}", mesh)

@@ -47,7 +47,7 @@ def test_every_member_is_a_closed_outward_solid(members):
         )
         assert str(man.status()) == "Error.NoError", m.name
         assert man.volume() > 0, m.name
-        assert np.all(np.isfinite(m.mesh.st)) and m.mesh.normals is not None
+        assert np.all(np.isfinite(m.mesh.st.values)) and m.mesh.normals is not None
 
 
 def _centroid_u(sec: np.ndarray) -> tuple[float, float]:

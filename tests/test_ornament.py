@@ -222,13 +222,14 @@ def test_every_prototype_has_outward_normals(layout, capital):
     sets = [dentils(layout), roof_tiles(layout), frieze_garlands(layout), *capital]
     for p in (p for s in sets for p in s.prototypes):
         assert p.normals is not None, p.name
-        n = np.asarray(p.normals, dtype=np.float64)
+        n = np.asarray(p.normals.values, dtype=np.float64)
         assert_allclose(np.linalg.norm(n, axis=1), 1.0, atol=1e-3, err_msg=p.name)
         tri = p.triangles
         a, b, c = (p.points[tri[:, k]] for k in range(3))
         face = np.cross(b - a, c - a)
         face /= np.linalg.norm(face, axis=1, keepdims=True)
-        if p.normals_interpolation == "faceVarying":
+        if not p.normals.by_point:
+            n = np.asarray(p.corner_normals(), dtype=np.float64)
             # fan triangulation: triangle t of face f uses corners 0, k, k+1 of that face
             counts = p.face_vertex_counts
             starts = np.concatenate([[0], np.cumsum(counts)[:-1]])

@@ -212,7 +212,7 @@ def test_budget_refused_with_estimate():
 
 def _st_ratio(m):
     """Per triangle: signed st area / 3D area, and the 3D areas."""
-    st = m.st[m.st_indices].reshape(-1, 3, 2).astype(np.float64)
+    st = m.st.at_corners(m.face_vertex_indices).reshape(-1, 3, 2).astype(np.float64)
     e1, e2 = st[:, 1] - st[:, 0], st[:, 2] - st[:, 0]
     a_st = 0.5 * (e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
     _, a3 = face_normals(m.points, m.triangles)
@@ -231,12 +231,12 @@ def test_indexed_normals_compact_and_consistent(params):
     from ionic_usd.geometry.check import normals_against_winding
 
     m = build_shaft(params)
-    assert m.normals_indices is not None and m.normals_interpolation == "faceVarying"
+    assert m.normals.indices is not None and not m.normals.one_per_corner
     corner = m.corner_normals()
     assert corner.shape == (m.face_vertex_indices.size, 3)
     assert_allclose(np.linalg.norm(corner, axis=1), 1.0, atol=1e-5)
     # about one value per point (two on a flute edge): a third of the per-corner storage
-    assert len(m.normals) < 0.5 * len(corner)
+    assert len(m.normals.values) < 0.5 * len(corner)
     if params.ring_bottom > 0:
         assert normals_against_winding(m) == 0
     # equal indices mean equal normals, and no two values are equal at one point across a
@@ -257,7 +257,7 @@ def test_analytic_st_is_finite_wound_and_nearly_isometric(params):
     from ionic_usd.texture.atlas import chart_labels
 
     m = build_shaft(params)
-    assert m.st is not None and np.all(np.isfinite(m.st))
+    assert m.st is not None and np.all(np.isfinite(m.st.values))
     ratio, area = _st_ratio(m)
     assert np.all(ratio > 0), "a triangle is folded or mirrored in st"
     # tolerance: the side is unrolled at the arc length of the mid-height full-flute row, so
@@ -268,7 +268,7 @@ def test_analytic_st_is_finite_wound_and_nearly_isometric(params):
     assert ratio.max() < 1.2 * ring_stretch
     body = (ratio > 1 / 1.25) & (ratio < 1.25)
     assert area[body].sum() > 0.97 * area.sum()
-    charts = chart_labels(m.st_indices, len(m.st))
+    charts = chart_labels(m.st.indices, len(m.st.values))
     assert charts.max() + 1 == 3  # the side (one seam) and two caps
     for c in range(3):
         sel = charts == c

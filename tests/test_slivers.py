@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ionic_usd.geometry.mesh import Mesh, chart_labels, face_normals
+from ionic_usd.geometry.mesh import CornerValues, Mesh, chart_labels, face_normals
 from ionic_usd.geometry.slivers import _against, _maybe_slivers, _tri_cosines, normals_with_winding
 
 
@@ -53,15 +53,17 @@ def test_against_is_the_einsum_sign_exactly():
 
 def test_normals_with_winding_replaces_the_corners_against_the_winding():
     pts, tri, cn3 = _hard_mesh(5, 400)
-    mesh = Mesh(pts, np.full(len(tri), 3), tri.reshape(-1), cn3.reshape(-1, 3), "faceVarying")
+    mesh = Mesh(
+        pts, np.full(len(tri), 3), tri.reshape(-1), CornerValues.per_corner(cn3.reshape(-1, 3))
+    )
     fn, _ = face_normals(pts, tri)
     ref = cn3.copy()  # the plain version: every face normal broadcast, the corners against it
     against = np.einsum("ikj,ij->ik", cn3, fn) < 0
     ref[against] = np.broadcast_to(fn[:, None, :], ref.shape)[against]
     out = normals_with_winding(mesh)
-    assert out.normals is not None and out.normals.dtype == np.float32
+    assert out.normals is not None and out.normals.values.dtype == np.float32
     assert against.sum() > 100
-    np.testing.assert_array_equal(out.normals, ref.reshape(-1, 3))
+    np.testing.assert_array_equal(out.corner_normals(), ref.reshape(-1, 3))
 
 
 def test_maybe_slivers_holds_every_sliver_corner():

@@ -20,7 +20,7 @@ from ionic_usd.geometry.check import (
     solid_report,
     winding_numbers,
 )
-from ionic_usd.geometry.mesh import Mesh, merge, smooth_normals, weld
+from ionic_usd.geometry.mesh import CornerValues, Mesh, merge, smooth_normals, weld
 from ionic_usd.pipeline.asset import column_asset_meshes, form_cut
 from ionic_usd.temple.layout import ColumnKind, Layer, portunus_layout
 from ionic_usd.usd.column_asset import (
@@ -57,7 +57,7 @@ def test_checks_see_each_defect():
     apart = solid_report(merge([cube(), cube((1.0, 0.0, 0.0))]))  # touching, not welded
     assert apart.colocated_points == 8 and apart.self_intersections == 0
     c = cube()
-    flipped = c.with_(normals=-c.normals)
+    flipped = c.with_(normals=c.normals.with_values(-c.normals.values))
     assert solid_report(flipped).against_normals == 12
     opened = Mesh(c.points, c.face_vertex_counts[:-1], c.face_vertex_indices[:-3])
     o = solid_report(opened)
@@ -355,10 +355,10 @@ def test_remove_slivers_carries_st_with_every_corner(offset):
 
     m = _cube_with_cap(offset)
     fn = np.repeat(face_normals(m.points, m.triangles)[0], 3, axis=0)
-    m = m.with_(st=box_st(m.points[m.triangles.reshape(-1)], fn), st_indices=np.arange(len(fn)))
+    m = m.with_(st=CornerValues.per_corner(box_st(m.points[m.triangles.reshape(-1)], fn)))
     out = remove_slivers(m, 1e-6)
     assert solid_report(out).min_angle > 10.0
-    got = out.st[out.st_indices]
+    got = out.st.at_corners(out.face_vertex_indices)
     fn = np.repeat(face_normals(out.points, out.triangles)[0], 3, axis=0)
     np.testing.assert_allclose(got, box_st(out.points[out.triangles.reshape(-1)], fn), atol=1e-6)
 
@@ -394,11 +394,12 @@ def test_normals_with_winding_repairs_only_the_corners_against_the_winding():
     fn, _ = face_normals(pts, tri)
     corners = np.repeat(fn, 3, axis=0).astype(np.float32)
     corners[4] = -corners[4]  # one corner of face 1 against its winding
-    mesh = Mesh(pts, np.full(4, 3, np.int32), tri.reshape(-1), corners, "faceVarying")
+    mesh = Mesh(pts, np.full(4, 3, np.int32), tri.reshape(-1), CornerValues.per_corner(corners))
     assert normals_against_winding(mesh) == 1
     fixed = normals_with_winding(mesh)
     assert normals_against_winding(fixed) == 0
-    np.testing.assert_allclose(fixed.normals[4], fn[1], atol=1e-6)
+    fixed_n = fixed.corner_normals()
+    np.testing.assert_allclose(fixed_n[4], fn[1], atol=1e-6)
     keep = np.ones(12, bool)
     keep[4] = False
-    np.testing.assert_array_equal(fixed.normals[keep], corners[keep])
+    np.testing.assert_array_equal(fixed_n[keep], corners[keep])

@@ -78,9 +78,9 @@ def test_uvs_are_metres_along_rows_and_section():
     sec = np.array([[0.0, 0.0], [0.2, 0.0], [0.2, 0.3], [0.0, 0.3]])
     m = sweep(sec, RECT, uv_scale=2.0)
     # the row at u = 0.2 runs round the rectangle grown by 0.2: perimeter 2·(4.4 + 6.4)
-    assert_allclose(m.st[:, 0].max(), 2.0 * 2 * (4.4 + 6.4), rtol=1e-6)
-    assert_allclose(m.st[:, 1].max(), 2.0 * 1.0, rtol=1e-6)  # section perimeter 1.0 m
-    assert_allclose(np.linalg.norm(m.normals, axis=1), 1.0, atol=1e-6)
+    assert_allclose(m.st.values[:, 0].max(), 2.0 * 2 * (4.4 + 6.4), rtol=1e-6)
+    assert_allclose(m.st.values[:, 1].max(), 2.0 * 1.0, rtol=1e-6)  # section perimeter 1.0 m
+    assert_allclose(np.linalg.norm(m.corner_normals(), axis=1), 1.0, atol=1e-6)
 
 
 def test_box_normals_are_crisp_and_outward():
@@ -91,7 +91,7 @@ def test_box_normals_are_crisp_and_outward():
     fn = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
     fn /= np.linalg.norm(fn, axis=1, keepdims=True)
     # each quad's corner normals equal its face normal (all section corners are 90°)
-    corner = m.normals.reshape(-1, 4, 3)
+    corner = m.corner_normals().reshape(-1, 4, 3)
     quad_n = fn[0::2][: len(corner)]  # fan: two triangles per quad, the first one
     assert np.all(np.einsum("qkj,qj->qk", corner, quad_n) > 0.999)
 
@@ -103,7 +103,8 @@ def test_curved_section_is_smooth():
     m = sweep(sec, RECT)
     # at an interior arc vertex the two quads share one normal: fewer distinct normals
     # than corners
-    assert len(np.unique(m.normals.round(5), axis=0)) < len(m.normals) / 3
+    cn = m.corner_normals()
+    assert len(np.unique(cn.round(5), axis=0)) < len(cn) / 3
 
 
 @pytest.mark.parametrize(

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ionic_usd.geometry.mesh import Mesh, unique_rows
+from ionic_usd.geometry.mesh import CornerValues, Mesh, unique_rows
 from ionic_usd.geometry.triedit import (
     TriangleEditor,
     _first_ranks,
@@ -69,7 +69,7 @@ def test_to_mesh_st_as_the_lexsort_gave_it():
     st_vals = np.concatenate([pts[:, :2], pts[:, :2]]).astype(np.float32)
     st_vals = np.vstack([st_vals, st_vals[tri[0, 0]]])  # a duplicate of one value, chart 1
     sti[0] = len(st_vals) - 1
-    mesh = Mesh(pts, np.full(len(tri), 3), tri.reshape(-1), None, "faceVarying", st_vals, sti)
+    mesh = Mesh(pts, np.full(len(tri), 3), tri.reshape(-1), None, CornerValues(st_vals, sti))
     ed = TriangleEditor(mesh)
     assert ed.cn0 is not None
     edited = ed.cn0[4].copy()
@@ -79,7 +79,7 @@ def test_to_mesh_st_as_the_lexsort_gave_it():
     corners = ed.cn0.copy()
     corners[4] = edited
     ref_st, ref_sti = _old_st(corners.reshape(-1, ed.n_ch), out.face_vertex_indices)
-    np.testing.assert_array_equal(out.st, ref_st)
-    np.testing.assert_array_equal(out.st_indices, ref_sti)
+    np.testing.assert_array_equal(out.st.values, ref_st)
+    np.testing.assert_array_equal(out.st.indices, ref_sti)
     # one value per point and chart, plus the edited corner's
-    assert len(out.st) == len(pts) + 2 + 1
+    assert len(out.st.values) == len(pts) + 2 + 1

@@ -9,6 +9,7 @@ from pxr import Sdf, Usd, UsdGeom
 
 from ionic_usd.column.shaft import ShaftParams, build_shaft
 from ionic_usd.errors import OutputExistsError, ParameterError
+from ionic_usd.geometry.corners import CornerValues
 from ionic_usd.usd import new_layer, save_layer, validate_stage, write_meshes
 
 
@@ -32,7 +33,7 @@ def test_shaft_roundtrip_and_validates(tmp_path, ext):
     pv = UsdGeom.PrimvarsAPI(prim).GetPrimvar("normals")
     assert pv.IsIndexed() and pv.GetInterpolation() == UsdGeom.Tokens.faceVarying
     values, indices = np.array(pv.Get()), np.array(pv.GetIndices())
-    assert len(values) <= len(mesh.normals) < mesh.face_vertex_indices.size / 2
+    assert len(values) <= len(mesh.normals.values) < mesh.face_vertex_indices.size / 2
     # each value once and every value used (NVIDIA's IndexedPrimvar and UnusedPrimvar rules)
     assert len(np.unique(values, axis=0)) == len(values) == np.unique(indices).size
     flat = np.array(pv.ComputeFlattened())
@@ -54,7 +55,7 @@ def test_st_is_an_indexed_primvar_of_distinct_values(tmp_path):
 
     # a cuboid: 24 corners, coplanar faces sharing st values along their common edges
     mesh = cuboid_mesh(Cuboid((0, 0, 0), (2, 1, 3)), uv_scale=0.5)
-    assert mesh.st is not None and len(mesh.st) == 24
+    assert mesh.st is not None and len(mesh.st.values) == 24
     path = write_meshes(tmp_path / "box.usda", {"Box": mesh}, root="Box")
     stage = Usd.Stage.Open(str(path))
     prim = stage.GetPrimAtPath("/Box/Geom/Box")
@@ -62,7 +63,8 @@ def test_st_is_an_indexed_primvar_of_distinct_values(tmp_path):
     assert st.IsIndexed() and st.GetInterpolation() == UsdGeom.Tokens.faceVarying
     values = np.array(st.Get())
     assert len(np.unique(values, axis=0)) == len(values) < len(st.GetIndices()) == 24
-    assert_allclose(np.array(st.ComputeFlattened()), mesh.st[mesh.st_indices], atol=1e-6)
+    corner_st = mesh.st.at_corners(mesh.face_vertex_indices)
+    assert_allclose(np.array(st.ComputeFlattened()), corner_st, atol=1e-6)
 
 
 def test_validator_catches_missing_metadata(tmp_path):
@@ -106,15 +108,16 @@ def test_authored_shaft_st_is_the_generators_indexing(tmp_path, params, kw):
     from ionic_usd.texture.atlas import chart_labels
 
     m = build_shaft(params, **kw)
-    assert m.st_distinct  # the generator indexed st itself: authoring skips the sort
+    assert m.st is not None and m.st.distinct  # the generator indexed st itself: no sort
     fast = write_meshes(tmp_path / "fast.usdc", {"Shaft": m}, root="Shaft")
     # the same mesh without the promise: de-duplicated at authoring, as before
-    slow = write_meshes(tmp_path / "slow.usdc", {"Shaft": m.with_(st_distinct=False)}, root="Shaft")
+    plain = CornerValues(m.st.values, m.st.indices)
+    slow = write_meshes(tmp_path / "slow.usdc", {"Shaft": m.with_(st=plain)}, root="Shaft")
     values, idx = _primvar_arrays(fast, "/Shaft/Geom/Shaft", "st")
     # expanded, exactly the generator's per-corner st, and exactly the de-duplicated file's
-    corner_st = m.st[m.st_indices]
+    corner_st = m.st.at_corners(m.face_vertex_indices)
     np.testing.assert_array_equal(values[idx], corner_st)
-    np.testing.assert_array_equal(values, m.st)  # written as the generator indexed it
+    np.testing.assert_array_equal(values, m.st.values)  # written as the generator indexed it
     v_slow, i_slow = _primvar_arrays(slow, "/Shaft/Geom/Shaft", "st")
     np.testing.assert_array_equal(v_slow[i_slow], corner_st)
     # every value is used, and within a chart no two values are equal
@@ -139,21 +142,23 @@ def test_st_distinct_promise_follows_the_values():
     from ionic_usd.texture.atlas import analytic_atlas, attach_uvs
 
     m = build_shaft(ShaftParams(flute_slices=3))
-    assert m.st_distinct
+    st, fvi = m.st, m.face_vertex_indices
+    assert st is not None and st.distinct
     # new values or indices drop the promise unless it is given again
-    assert not m.with_(st=m.st * 2, st_indices=m.st_indices).st_distinct
-    assert not m.with_(st_indices=m.st_indices[::-1]).st_distinct
-    assert m.with_(st=m.st * 2, st_distinct=True).st_distinct
-    assert m.with_(points=m.points * 2).st_distinct
+    assert not st.with_values(st.values * 2).distinct
+    assert not st.take(np.arange(fvi.size)[::-1], fvi).distinct
+    assert CornerValues(st.values * 2, st.indices, distinct=True).distinct
+    assert m.with_(points=m.points * 2).st.distinct
     # a mirror permutes each face's corners: the same values, still all used
     mirrored = transform(m, np.diag([-1.0, 1.0, 1.0, 1.0]))
-    assert mirrored.st_distinct and not np.array_equal(mirrored.st_indices, m.st_indices)
-    assert not merge([m, m]).st_distinct  # two parts' charts may coincide
-    with pytest.raises(GeometryError, match="st_distinct"):
-        Mesh(m.points, m.face_vertex_counts, m.face_vertex_indices, st_distinct=True)
+    assert mirrored.st.distinct and not np.array_equal(mirrored.st.indices, st.indices)
+    assert not merge([m, m]).st.distinct  # two parts' charts may coincide
+    # the promise lives on the values: they must fit the mesh's corners
+    with pytest.raises(GeometryError, match="st indices"):
+        Mesh(m.points, m.face_vertex_counts, fvi, st=CornerValues(st.values, st.indices[:-3], True))
     # packing moves whole charts apart: the atlas keeps the promise, and after packing all
     # values are distinct (the charts no longer overlap)
     atlas = analytic_atlas(m, texels_per_metre=64)
     packed = attach_uvs(m, atlas)
-    assert atlas.st_distinct and packed.st_distinct
-    assert len(np.unique(packed.st, axis=0)) == len(packed.st)
+    assert atlas.st_distinct and packed.st.distinct
+    assert len(np.unique(packed.st.values, axis=0)) == len(packed.st.values)

@@ -234,9 +234,9 @@ def test_apply_uvs_consistent_texel_density(cache):
     assert s & (s - 1) == 0 and s >= max(a.size for a in atlases.values()) > s // 2
     density = {}
     for k, m in out.items():
-        assert m.st.min() >= 0 and m.st.max() <= 1
+        assert m.st.values.min() >= 0 and m.st.values.max() <= 1
         surface = face_normals(m.points, m.triangles)[1].sum()
-        density[k] = np.abs(uv_areas(m.st, m.st_indices)).sum() / surface
+        density[k] = np.abs(uv_areas(m.st.values, m.st.indices)).sum() / surface
     # the same fraction of an S×S texture per square metre on every part, namely (TPM / S)²
     for k in density:
         assert_allclose(density[k], (TPM / s) ** 2, rtol=0.15, err_msg=k)
@@ -249,16 +249,16 @@ def test_apply_uvs_keeps_geometry(cache):
         mesh.points.copy(),
         mesh.face_vertex_counts.copy(),
         mesh.face_vertex_indices.copy(),
-        mesh.normals.copy(),
+        mesh.normals.values.copy(),
     )
     out = apply_uvs({"c": mesh}, texels_per_metre=TPM, cache=cache)["c"]
     assert_array_equal(out.points, before[0])
     assert_array_equal(out.face_vertex_counts, before[1])
     assert_array_equal(out.face_vertex_indices, before[2])
-    assert_array_equal(out.normals, before[3])
-    assert out.normals_interpolation == mesh.normals_interpolation
+    assert_array_equal(out.normals.values, before[3])
+    assert out.normals.by_point == mesh.normals.by_point
     assert len(boundary_edges(out)) == 0  # still watertight
-    assert out.st.shape[1] == 2 and out.st_indices.shape == out.face_vertex_indices.shape
+    assert out.st.dim == 2 and out.st.indices.shape == out.face_vertex_indices.shape
     assert mesh.st is None  # the input is not modified
 
 
@@ -267,8 +267,8 @@ def test_explicit_atlas_size_scales_uvs(cache):
     base = apply_uvs(parts, texels_per_metre=TPM, cache=cache)["a"]
     s = common_atlas_size(unwrap_parts(parts, texels_per_metre=TPM, cache=cache).values())
     double = apply_uvs(parts, texels_per_metre=TPM, cache=cache, atlas_size=2 * s)["a"]
-    assert_allclose(double.st, base.st / 2, rtol=1e-6)
-    assert_array_equal(double.st_indices, base.st_indices)
+    assert_allclose(double.st.values, base.st.values / 2, rtol=1e-6)
+    assert_array_equal(double.st.indices, base.st.indices)
     atlas = unwrap(cube(1.0), texels_per_metre=TPM, cache=cache)
     with pytest.raises(ParameterError, match="atlas_size"):
         apply_uvs(parts, texels_per_metre=TPM, cache=cache, atlas_size=atlas.size - 1)
@@ -281,7 +281,7 @@ def test_variant_alternatives_share_scale(cache):
     narrow = apply_uvs({"b": alts["narrow"]}, texels_per_metre=TPM, cache=cache, atlas_size=s)
     wide = apply_uvs({"b": alts["wide"]}, texels_per_metre=TPM, cache=cache, atlas_size=s)
     d = [
-        np.abs(uv_areas(m["b"].st, m["b"].st_indices)).sum()
+        np.abs(uv_areas(m["b"].st.values, m["b"].st.indices)).sum()
         / face_normals(m["b"].points, m["b"].triangles)[1].sum()
         for m in (narrow, wide)
     ]
@@ -297,7 +297,8 @@ def test_resolution_cap_lowers_density_for_all_parts(cache):
     assert atlases["small"].texels_per_metre == big.texels_per_metre
     out = apply_uvs(parts, texels_per_metre=64.0, resolution_cap=cap, cache=cache)
     d = {
-        k: np.abs(uv_areas(m.st, m.st_indices)).sum() / face_normals(m.points, m.triangles)[1].sum()
+        k: np.abs(uv_areas(m.st.values, m.st.indices)).sum()
+        / face_normals(m.points, m.triangles)[1].sum()
         for k, m in out.items()
     }
     assert_allclose(d["small"], d["big"], rtol=0.15)
@@ -452,13 +453,14 @@ def test_analytic_charts_are_packed_without_xatlas_at_the_density(cache):
         # charts are only translated: pixel area = metric st area × density²
         assert_allclose(
             uv_areas(a.st_px, a.st_indices).sum(),
-            uv_areas(m.st, m.st_indices).sum() * TPM**2,
+            uv_areas(m.st.values, m.st.indices).sum() * TPM**2,
             rtol=1e-4,
         )
         assert 0.2 < a.utilisation <= 1.0
     out = apply_uvs(parts, texels_per_metre=TPM, cache=cache)
     for m in out.values():
-        assert np.all(np.isfinite(m.st)) and m.st.min() >= 0.0 and m.st.max() <= 1.0
+        v = m.st.values
+        assert np.all(np.isfinite(v)) and v.min() >= 0.0 and v.max() <= 1.0
 
 
 def test_an_analytic_atlas_is_kept_with_its_mesh_and_travels_with_it():
@@ -486,7 +488,7 @@ def test_an_analytic_atlas_is_kept_with_its_mesh_and_travels_with_it():
         assert_array_equal(other.st_indices, a.st_indices)
         assert (other.width, other.height, other.chart_count) == (a.width, a.height, a.chart_count)
     # a mesh edited after packing is a new value and is packed again
-    moved = mesh.with_(st=mesh.st * 2, st_indices=mesh.st_indices)
+    moved = mesh.with_(st=mesh.st.with_values(mesh.st.values * 2))
     assert analytic_atlas(moved, texels_per_metre=64).width > a.width
 
 

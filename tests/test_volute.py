@@ -220,7 +220,7 @@ def _shell_ok(m, expected_volume=None, rel=None):
         assert r.signed_volume == pytest.approx(expected_volume, rel=rel)
     # corner normals agree with the faces they belong to
     fn, _ = face_normals(m.points, m.triangles)
-    cn = m.normals.reshape(-1, 3, 3)
+    cn = m.corner_normals().reshape(-1, 3, 3)
     assert np.all(np.einsum("ij,ikj->ik", fn, cn) > 0.2)
     return r
 

@@ -91,7 +91,7 @@ def main() -> None:
                         .as_dict()
                         .values()
                     )
-                    bare = [m.with_(st=None, st_indices=None) for m in parts]
+                    bare = [m.with_(st=None) for m in parts]
                     ta, ma = _best(lambda parts=parts: union(parts, "capital"), args.repeat)
 
                     def charted(bare=bare, tpm=tpm):

@@ -95,14 +95,14 @@ def main() -> None:
             pv = UsdGeom.PrimvarsAPI(m).CreatePrimvar(
                 "normals", Sdf.ValueTypeNames.Normal3fArray, UsdGeom.Tokens.faceVarying
             )
-            pv.Set(Vt.Vec3fArray.FromNumpy(mesh.normals))
-            pv.SetIndices(Vt.IntArray.FromNumpy(mesh.normals_indices))
+            pv.Set(Vt.Vec3fArray.FromNumpy(mesh.normals.values))
+            pv.SetIndices(Vt.IntArray.FromNumpy(mesh.normals.indices))
             if mesh.st is not None:  # the analytic st as the generator indexed it
                 sv = UsdGeom.PrimvarsAPI(m).CreatePrimvar(
                     "st", Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.faceVarying
                 )
-                sv.Set(Vt.Vec2fArray.FromNumpy(mesh.st))
-                sv.SetIndices(Vt.IntArray.FromNumpy(mesh.st_indices))
+                sv.Set(Vt.Vec2fArray.FromNumpy(mesh.st.values))
+                sv.SetIndices(Vt.IntArray.FromNumpy(mesh.st.indices))
         if layout == "fv":
             lo, hi = mesh.points.min(axis=0), mesh.points.max(axis=0)
             m.CreateNormalsAttr(

@@ -5,7 +5,9 @@ Usage: python tools/bench_slivers.py --baseline DIR [--repeat N]
 
 ``DIR`` is another checkout of this project (``git worktree add /tmp/base <commit>``): its
 ``ionic_usd/geometry/slivers.py`` and the ``triedit.py`` beside it (the edit operations, if it
-has one) are loaded as the baseline (against this checkout's ``geometry.mesh``). Builds
+has one) are loaded as the baseline (against this checkout's ``geometry.mesh``; against its own
+``mesh.py`` if that predates :class:`~ionic_usd.geometry.corners.CornerValues`, the inputs
+converted to its ``Mesh`` before timing and its outputs back for the comparison). Builds
 ``column_asset_meshes(ColumnAssetOptions(lods=("low", "medium", "high"), bases=("G1",),
 flutes=("f24",)), workers=1)`` once in a fresh cache, recording every ``remove_slivers``
 input (the unions' and the form cuts'); then runs baseline and current on each input (best of
@@ -28,38 +30,84 @@ from pathlib import Path
 import numpy as np
 
 from ionic_usd.geometry import boolean, slivers
-from ionic_usd.geometry.mesh import Mesh
+from ionic_usd.geometry.mesh import CornerValues, Mesh
 
 
 def _exec(path: Path, name: str):
     spec = importlib.util.spec_from_file_location(name, path)
     assert spec is not None and spec.loader is not None
     mod = importlib.util.module_from_spec(spec)
+    sys.modules[name] = mod  # dataclasses look their module up while they are made
     spec.loader.exec_module(mod)
     return mod
 
 
 def _load_baseline(folder: Path):
+    """(remove_slivers, input converter, output converter) of the baseline checkout."""
     geo = folder / "ionic_usd" / "geometry"
     if not (geo / "slivers.py").is_file():
         sys.exit(f"bench_slivers: {geo / 'slivers.py'} does not exist (--baseline is a checkout)")
+    old_mesh = (
+        "class CornerValues" not in (geo / "mesh.py").read_text()
+        and not (geo / "corners.py").is_file()
+    )
     # the baseline's slivers.py imports TriangleEditor from ionic_usd.geometry.triedit: give
-    # it the baseline's own triedit.py (if it has one) while it loads
-    key = "ionic_usd.geometry.triedit"
-    saved = sys.modules.get(key)
+    # it the baseline's own triedit.py (if it has one), and its own mesh.py if the Mesh
+    # value changed since, while it loads
+    keys = ["ionic_usd.geometry.triedit"] + ["ionic_usd.geometry.mesh"] * old_mesh
+    saved = {k: sys.modules.get(k) for k in keys}
     try:
+        base_mesh = None
+        if old_mesh:
+            base_mesh = sys.modules[keys[1]] = _exec(geo / "mesh.py", "baseline_mesh")
         if (geo / "triedit.py").is_file():
-            sys.modules[key] = _exec(geo / "triedit.py", "baseline_triedit")
-        return _exec(geo / "slivers.py", "baseline_slivers").remove_slivers
+            sys.modules[keys[0]] = _exec(geo / "triedit.py", "baseline_triedit")
+        fn = _exec(geo / "slivers.py", "baseline_slivers").remove_slivers
     finally:
-        if saved is None:
-            sys.modules.pop(key, None)
+        for k, v in saved.items():
+            if v is None:
+                sys.modules.pop(k, None)
+            else:
+                sys.modules[k] = v
+    if base_mesh is None:
+        return fn, lambda m: m, lambda m: m
+    return fn, lambda m: _to_old(base_mesh, m), _from_old
+
+
+def _to_old(mod, m: Mesh):
+    """``m`` as the ``Mesh`` of a mesh.py with USD's encodings as fields."""
+    n, kw = m.normals, {}
+    if n is not None:
+        kw["normals"] = n.values
+        kw["normals_interpolation"] = "vertex" if n.by_point else "faceVarying"
+        if not n.by_point and not n.one_per_corner:
+            kw["normals_indices"] = n.indices
+    if m.st is not None:
+        kw.update(st=m.st.values, st_indices=m.st.corner_indices(m.face_vertex_indices))
+        kw["st_distinct"] = m.st.distinct
+    return mod.Mesh(m.points, m.face_vertex_counts, m.face_vertex_indices, name=m.name, **kw)
+
+
+def _from_old(o) -> Mesh:
+    normals = st = None
+    if o.normals is not None:
+        if o.normals_interpolation == "vertex":
+            normals = CornerValues(o.normals)
+        elif o.normals_indices is None:
+            normals = CornerValues.per_corner(o.normals)
         else:
-            sys.modules[key] = saved
+            normals = CornerValues(o.normals, o.normals_indices)
+    if o.st is not None:
+        st = CornerValues(o.st, o.st_indices, o.st_distinct)
+    return Mesh(o.points, o.face_vertex_counts, o.face_vertex_indices, normals, st, name=o.name)
 
 
 def _arrays(m: Mesh) -> list[np.ndarray | None]:
-    return [m.points, m.face_vertex_counts, m.face_vertex_indices, m.normals, m.st, m.st_indices]
+    out = [m.points, m.face_vertex_counts, m.face_vertex_indices]
+    for a in (m.normals, m.st):
+        flat = a is None or a.by_point or a.one_per_corner
+        out += [None if a is None else a.values, None if flat else a.indices]  # type: ignore[union-attr]
+    return out
 
 
 def _same(x: Mesh, y: Mesh) -> bool:
@@ -78,7 +126,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--baseline", type=Path, required=True, help="another checkout")
     ap.add_argument("--repeat", type=int, default=3)
     args = ap.parse_args(argv)
-    base_fn = _load_baseline(args.baseline)
+    base_fn, to_base, from_base = _load_baseline(args.baseline)
     os.environ["IONIC_USD_CACHE"] = tempfile.mkdtemp(prefix="bench_slivers_")
     from ionic_usd.pipeline import forms
     from ionic_usd.pipeline.asset import column_asset_meshes
@@ -104,11 +152,13 @@ def main(argv: list[str] | None = None) -> int:
     for mesh, tol, kw in calls:
         t = {"base": float("inf"), "new": float("inf")}
         out = {}
+        inp = {"base": to_base(mesh), "new": mesh}
         for _ in range(args.repeat):  # taking turns: drifting load hits both alike
             for name, fn in (("base", base_fn), ("new", new_fn)):
                 t0 = time.perf_counter()
-                out[name] = fn(mesh, tol, **kw)
+                out[name] = fn(inp[name], tol, **kw)
                 t[name] = min(t[name], time.perf_counter() - t0)
+        out["base"] = from_base(out["base"])
         k = kinds["form cut (round the cut)" if kw.get("changed") is not None else "union"]
         k[0] += t["base"]
         k[1] += t["new"]

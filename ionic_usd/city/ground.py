@@ -18,7 +18,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ionic_usd.geometry.mesh import Mesh
+from ionic_usd.geometry.mesh import CornerValues, Mesh
 
 __all__ = ["ground_meshes", "GROUND_MARGIN"]
 
@@ -51,9 +51,8 @@ def _mesh(tris: np.ndarray, name: str, tile: float) -> Mesh:
         pts,
         np.full(len(idx), 3, dtype=np.int32),
         idx.ravel(),
-        normals=normals,
-        st=st,
-        st_indices=idx.ravel().copy(),
+        normals=CornerValues(normals),
+        st=CornerValues(st, idx.ravel().copy()),
         name=name,
     )
 

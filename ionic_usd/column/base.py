@@ -20,7 +20,7 @@ Profile. Modules stack upward from y = 0; within a module:
   ``profile_slices`` + 1 uniform parameters; a 2-point module is a straight segment with
   exactly 2 rows. The module's top (next module's bottom) is its last control point's h.
 
-Joints and normals. Normals are indexed faceVarying from
+Joints and normals. Normals are indexed per corner from
 :func:`~ionic_usd.geometry.smooth_normals` with one smoothing group per module (the floors of a
 v1 module are welded, as in the paper), so every joint between modules is a crisp edge. A v2
 module flagged C1 drops its first row and its second row joins the previous module's last row;
@@ -56,7 +56,7 @@ from ionic_usd.checks import check_fields
 from ionic_usd.column.charts import revolved_st
 from ionic_usd.errors import GeometryError, GrammarError, ParameterError
 from ionic_usd.geometry.curves import bezier, revolve
-from ionic_usd.geometry.mesh import Mesh, box_st, face_normals, smooth_normals
+from ionic_usd.geometry.mesh import CornerValues, Mesh, box_st, face_normals, smooth_normals
 from ionic_usd.grammar.base import (
     BaseGrammar,
     BezierBase,
@@ -448,7 +448,7 @@ def build_base(
 
     Returns
     -------
-    Mesh with indexed faceVarying normals (``normals_indices``): smooth within a module (and
+    Mesh with indexed normals (``normals.indices``): smooth within a module (and
     across C1 joints), crisp between modules and at the caps; and analytic ``st`` in metres
     of surface (:func:`ionic_usd.column.charts.revolved_st`; the plinth box-mapped).
     """
@@ -465,7 +465,7 @@ def build_base(
     st, st_idx = revolved_st(
         nodes, rows, mesh.points, mesh.triangles, np.repeat(np.arange(len(per_band)), per_band)
     )
-    mesh = mesh.with_(st=st, st_indices=st_idx)
+    mesh = mesh.with_(st=CornerValues(st, st_idx))
     if p.plinth_modules:
         mesh = _with_plinth(mesh, rows[0], half, ptop, cap_bottom, name)
     if y_offset:
@@ -491,14 +491,17 @@ def _with_plinth(
     flip = out < 0
     tri[flip] = tri[flip][:, [0, 2, 1]]
     fn[flip] = -fn[flip]
-    assert mesh.normals is not None and mesh.normals_indices is not None
-    normals = np.concatenate([mesh.normals, fn.astype(np.float32)])
-    nidx = np.concatenate(
-        [mesh.normals_indices, len(mesh.normals) + np.repeat(np.arange(len(tri)), 3)]
+    assert mesh.normals is not None and mesh.normals.indices is not None
+    normals = CornerValues(
+        np.concatenate([mesh.normals.values, fn.astype(np.float32)]),
+        np.concatenate(
+            [mesh.normals.indices, len(mesh.normals.values) + np.repeat(np.arange(len(tri)), 3)]
+        ),
     )
     idx = np.concatenate([mesh.face_vertex_indices, tri.reshape(-1)])
-    st, sti = mesh.st, mesh.st_indices
-    if st is not None and sti is not None:
+    st_cv = mesh.st
+    if st_cv is not None:
+        st, sti = st_cv.values, st_cv.corner_indices(mesh.face_vertex_indices)
         # the slab's faces are planar: one chart per face plane (by outward normal), box-mapped
         corners = tri.reshape(-1)
         axis = np.argmax(np.abs(fn), axis=1)
@@ -508,18 +511,8 @@ def _with_plinth(
         )
         slab = box_st(points[uniq % len(points)], np.repeat(fn, 3, axis=0)[first])
         sti = np.concatenate([sti, len(st) + inv.reshape(-1)])
-        st = np.concatenate([st, slab.astype(np.float32)])
-    return Mesh(
-        points,
-        np.full(len(idx) // 3, 3, np.int32),
-        idx,
-        normals,
-        "faceVarying",
-        st,
-        sti,
-        name=name,
-        normals_indices=nidx,
-    )
+        st_cv = CornerValues(np.concatenate([st, slab.astype(np.float32)]), sti)
+    return Mesh(points, np.full(len(idx) // 3, 3, np.int32), idx, normals, st_cv, name=name)
 
 
 # the parsed grammars are frozen values: a text parsed once serves every BaseParams of it

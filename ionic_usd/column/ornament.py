@@ -20,7 +20,7 @@ import numpy as np
 
 from ionic_usd.errors import GeometryError, ParameterError
 from ionic_usd.geometry.analysis import signed_volume
-from ionic_usd.geometry.mesh import Mesh, smooth_normals
+from ionic_usd.geometry.mesh import CornerValues, Mesh, smooth_normals
 from ionic_usd.geometry.sweep import sweep
 
 __all__ = [
@@ -275,8 +275,7 @@ def lathe_closed(
         np.full(len(tri), 3, np.int32),
         tri.reshape(-1),
         name=name,
-        st=st.astype(np.float32),
-        st_indices=np.arange(len(st), dtype=np.int32),
+        st=CornerValues(st.astype(np.float32), np.arange(len(st), dtype=np.int32)),
     )
     return smooth_normals(m)
 

@@ -43,7 +43,7 @@ import numpy as np
 from ionic_usd.checks import check_fields
 from ionic_usd.errors import BudgetError, ParameterError
 from ionic_usd.geometry import libm
-from ionic_usd.geometry.mesh import Mesh, smooth_normals
+from ionic_usd.geometry.mesh import CornerValues, Mesh, smooth_normals
 from ionic_usd.geometry.stitch import auto_sequence, stitch
 
 from .shaft_surface import grid_normals, shaft_st
@@ -341,11 +341,11 @@ def build_shaft(
 
     Returns
     -------
-    Mesh with indexed faceVarying normals (``normals_indices``): smooth inside each flute
+    Mesh with indexed normals (``normals.indices``): smooth inside each flute
     and over fillets and rings, crisp at every flute/fillet edge and at the caps; and analytic
     ``st`` in metres of surface (the unrolled side, seam on the fillet at +X, and two flat
     caps; see :func:`ionic_usd.column.shaft_surface.shaft_st`), indexed by the generator
-    itself (``st_distinct``: authoring writes it without de-duplicating), which
+    itself (``st.distinct``: authoring writes it without de-duplicating), which
     :func:`ionic_usd.texture.uv.unwrap` packs without xatlas.
     """
     p = p or ShaftParams()
@@ -376,9 +376,9 @@ def build_shaft(
     st, st_idx = shaft_st(
         points, tri, n_lateral, len(grid_tri), e, p.flute_slices, _reference_perimeter(p), starts
     )
-    normals = np.concatenate([grid_nrm, rest_mesh.normals])
-    assert rest_mesh.normals is not None and rest_mesh.normals_indices is not None
-    nidx = np.concatenate([grid_nidx, rest_mesh.normals_indices + len(grid_nrm)])
+    assert rest_mesh.normals is not None and rest_mesh.normals.indices is not None
+    normals = np.concatenate([grid_nrm, rest_mesh.normals.values])
+    nidx = np.concatenate([grid_nidx, rest_mesh.normals.indices + len(grid_nrm)])
     # drop points no triangle uses (cap centres of an open shaft, collapsed ring rows)
     keep = _used_points(len(points), p, plain, (c_bot, c_top), cap_bottom, cap_top)
     if not keep.all():
@@ -389,13 +389,9 @@ def build_shaft(
         points,
         np.full(len(tri), 3, np.int32),
         tri.reshape(-1),
-        normals,
-        "faceVarying",
-        st,
-        st_idx,
+        CornerValues(normals, nidx),
+        CornerValues(st, st_idx, distinct=True),
         name=name,
-        normals_indices=nidx,
-        st_distinct=True,
     )
 
 
@@ -547,7 +543,7 @@ def _drop_unused(points, tri, st, st_idx, keep, c_bot: int, n_lateral: int):
         tri[n_lateral:] = remap[tri[n_lateral:]]
     else:
         tri = remap[tri]
-        # the side values of the dropped rows are unused: drop them too (st_distinct)
+        # the side values of the dropped rows are unused: drop them too (st.distinct)
         keep_st = np.ones(len(st), dtype=bool)
         keep_st[:c_bot] = keep[:c_bot]
         st_idx = (np.cumsum(keep_st, dtype=np.int32) - 1)[st_idx]

@@ -58,7 +58,7 @@ def shaft_st(
     -------
     st : (w, 2) float32 metres, one value per chart vertex: every value is used (or belongs
         to a point no triangle uses) and no two of one chart are equal
-        (:attr:`ionic_usd.geometry.mesh.Mesh.st_distinct`)
+        (:attr:`ionic_usd.geometry.corners.CornerValues.distinct`)
     st_indices : (3 t,) int32
     """
     n_side = len(points) - 2  # the cap centres are on no side triangle: no side value

@@ -18,13 +18,13 @@ import numpy as np
 
 from ionic_usd.column.charts import revolved_st
 from ionic_usd.geometry import libm
-from ionic_usd.geometry.mesh import Mesh, box_st, smooth_normals
+from ionic_usd.geometry.mesh import CornerValues, Mesh, box_st, smooth_normals
 
 __all__ = ["box_mesh", "lathe", "rigid", "rot_y", "MIRROR_X", "MIRROR_Z", "SWAP_XZ"]
 
 
 def box_mesh(lo, hi, name: str) -> Mesh:
-    """Axis-aligned box, outward-wound, crisp faceVarying normals, one exact planar ``st``
+    """Axis-aligned box, outward-wound, crisp per-corner normals, one exact planar ``st``
     chart per face (:func:`~ionic_usd.geometry.mesh.box_st`)."""
     (x0, y0, z0), (x1, y1, z1) = lo, hi
     pts = np.array(
@@ -50,7 +50,7 @@ def box_mesh(lo, hi, name: str) -> Mesh:
     st = box_st(pts[quads.reshape(-1)], np.repeat(face_n, 4, axis=0))
     local = np.concatenate([np.tile([0, 1, 2], (6, 1)), np.tile([0, 2, 3], (6, 1))])
     sti = (4 * groups[:, None] + local).reshape(-1)
-    return smooth_normals(m, groups).with_(st=st.astype(np.float32), st_indices=sti)
+    return smooth_normals(m, groups).with_(st=CornerValues(st.astype(np.float32), sti))
 
 
 def lathe(profile: np.ndarray, segments: int, name: str, crease_deg: float = 40.0) -> Mesh:
@@ -85,10 +85,8 @@ def lathe(profile: np.ndarray, segments: int, name: str, crease_deg: float = 40.
         points,
         np.full(len(tri), 3, np.int32),
         tri.reshape(-1),
-        normals,
-        "faceVarying",
-        st,
-        sti,
+        CornerValues.per_corner(normals),
+        CornerValues(st, sti),
         name=name,
     )
 
@@ -182,25 +180,17 @@ def rigid(mesh: Mesh, lin: np.ndarray, t=(0.0, 0.0, 0.0), name: str | None = Non
     """
     lin = np.asarray(lin, dtype=np.float64)
     pts = libm.linear(mesh.points, lin) + np.asarray(t, dtype=np.float64)
-    normals = None if mesh.normals is None else libm.linear(mesh.normals, lin.astype(np.float32))
-    idx, st, sti = mesh.face_vertex_indices, mesh.st, mesh.st_indices
+    normals = mesh.normals
+    if normals is not None:
+        normals = normals.with_values(libm.linear(normals.values, lin.astype(np.float32)))
+    idx, st = mesh.face_vertex_indices, mesh.st
     if np.linalg.det(lin) < 0:
-        idx = idx.reshape(-1, 3)[:, [0, 2, 1]].reshape(-1)
-        if normals is not None and mesh.normals_interpolation == "faceVarying":
-            normals = normals.reshape(-1, 3, 3)[:, [0, 2, 1]].reshape(-1, 3)
-        if st is not None and sti is not None:
-            st = st * np.array([-1.0, 1.0], dtype=st.dtype)
-            sti = sti.reshape(-1, 3)[:, [0, 2, 1]].reshape(-1)
-    return Mesh(
-        pts,
-        mesh.face_vertex_counts,
-        idx,
-        normals,
-        mesh.normals_interpolation,
-        st,
-        sti,
-        name=name or mesh.name,
-    )
+        perm = np.arange(idx.size).reshape(-1, 3)[:, [0, 2, 1]].reshape(-1)
+        idx = idx[perm]
+        normals = None if normals is None else normals.reorder(perm)
+        if st is not None:
+            st = st.with_values(st.values * np.array([-1.0, 1.0], dtype=np.float32)).reorder(perm)
+    return Mesh(pts, mesh.face_vertex_counts, idx, normals, st, name=name or mesh.name)
 
 
 MIRROR_X = np.diag([-1.0, 1.0, 1.0])

@@ -17,7 +17,7 @@ from ionic_usd.column.volute import (
     volute_theta,
 )
 from ionic_usd.errors import GeometryError, ParameterError
-from ionic_usd.geometry.mesh import Mesh, merge
+from ionic_usd.geometry.mesh import CornerValues, Mesh, merge
 from ionic_usd.geometry.stitch import stitch
 
 __all__ = [
@@ -74,7 +74,7 @@ def prism(
 
     Returns
     -------
-    Closed triangle Mesh with faceVarying normals (flat caps, walls smooth between creases)
+    Closed triangle Mesh with per-corner normals (flat caps, walls smooth between creases)
     and three exact metric ``st`` charts: the front cap (x, y), the back cap (−x, y) and the
     walls unrolled (arc length along the loop, z), each winding counter-clockwise like its
     faces seen from outside.
@@ -111,10 +111,8 @@ def prism(
         points,
         np.full(len(faces), 3, np.int32),
         faces.reshape(-1),
-        normals.reshape(-1, 3),
-        "faceVarying",
-        st.astype(np.float32),
-        sti.reshape(-1),
+        CornerValues.per_corner(normals.reshape(-1, 3)),
+        CornerValues(st.astype(np.float32), sti.reshape(-1)),
         name=name,
     )
 

@@ -13,6 +13,7 @@ from ionic_usd.geometry.curves import (
     ring_angles,
 )
 from ionic_usd.geometry.mesh import (
+    CornerValues,
     Mesh,
     face_normals,
     merge,
@@ -27,6 +28,7 @@ from ionic_usd.geometry.sweep import sweep
 
 __all__ = [
     "polygon_triangles",
+    "CornerValues",
     "Mesh",
     "MeshReport",
     "auto_sequence",

@@ -15,6 +15,7 @@ import numpy as np
 
 from ionic_usd.errors import GeometryError
 from ionic_usd.geometry.mesh import (
+    CornerValues,
     Mesh,
     box_st,
     chart_labels,
@@ -44,22 +45,20 @@ __all__ = [
 
 
 def _as_triangles(mesh: Mesh) -> Mesh:
-    """Fan-triangulate polygons, carrying faceVarying normals corner by corner."""
+    """Fan-triangulate polygons, carrying per-corner normals corner by corner."""
     if np.all(mesh.face_vertex_counts == 3):
         return mesh
     corners = triangulate_fan(
         mesh.face_vertex_counts, np.arange(len(mesh.face_vertex_indices))
     ).reshape(-1)
-    nrm, interp = mesh.normals, mesh.normals_interpolation
-    cn = corner_normals(mesh) if interp == "faceVarying" else None  # None without normals
-    if cn is not None:
-        nrm = cn[corners]
+    nrm = mesh.normals
+    if nrm is not None and not nrm.by_point:
+        nrm = CornerValues.per_corner(nrm.at_corners(mesh.face_vertex_indices)[corners])
     return Mesh(
         mesh.points,
         np.full(len(corners) // 3, 3, np.int32),
         mesh.face_vertex_indices[corners],
         nrm,
-        interp,
         name=mesh.name,
     )
 
@@ -84,20 +83,21 @@ def split_shells(mesh: Mesh) -> list[Mesh]:
     for c in np.unique(face_lab):
         sel = np.flatnonzero(face_lab == c)
         used, local = np.unique(tri[sel], return_inverse=True)
-        nrm = None if fv is None else fv.reshape(-1, 3, 3)[sel].reshape(-1, 3)
-        st = sti = None
-        if mesh.st is not None and mesh.st_indices is not None:
-            st_used, sti = np.unique(mesh.st_indices.reshape(-1, 3)[sel], return_inverse=True)
-            st = mesh.st[st_used]
+        nrm = None
+        if fv is not None:
+            nrm = CornerValues.per_corner(fv.reshape(-1, 3, 3)[sel].reshape(-1, 3))
+        st = None
+        if mesh.st is not None:
+            ids = mesh.st.corner_indices(mesh.face_vertex_indices).reshape(-1, 3)[sel]
+            st_used, sti = np.unique(ids, return_inverse=True)
+            st = CornerValues(mesh.st.values[st_used], sti.reshape(-1))
         out.append(
             Mesh(
                 mesh.points[used],
                 np.full(len(sel), 3, np.int32),
                 local.reshape(-1),
                 nrm,
-                "faceVarying",
                 st,
-                None if sti is None else sti.reshape(-1),
                 name=mesh.name,
             )
         )
@@ -108,10 +108,10 @@ def _corner_normals(mesh: Mesh) -> np.ndarray | None:
     """(3t, 3) float32 normals per triangle corner, or None."""
     if mesh.normals is None:
         return None
-    if mesh.normals_interpolation == "vertex":
-        return mesh.normals[mesh.triangles.reshape(-1)]
+    if mesh.normals.by_point:
+        return mesh.normals.values[mesh.triangles.reshape(-1)]
     if not np.all(mesh.face_vertex_counts == 3):
-        raise GeometryError("union: faceVarying normals need a triangle mesh")
+        raise GeometryError("union: per-corner normals need a triangle mesh")
     return corner_normals(mesh)
 
 
@@ -184,7 +184,7 @@ def union(meshes: list[Mesh], name: str = "mesh") -> Mesh:
 
     Returns
     -------
-    Mesh : the union's surface, faceVarying normals carried from the inputs (interpolated at
+    Mesh : the union's surface, per-corner normals carried from the inputs (interpolated at
         new vertices); when every input has ``st`` (metric charts) so has the union, each
         input chart's visible part a chart of its own (the values carried through the boolean
         like the normals, so a cut through a chart keeps its parametrisation exactly).
@@ -196,7 +196,7 @@ def union(meshes: list[Mesh], name: str = "mesh") -> Mesh:
     import manifold3d
 
     shells = [s for m in meshes for s in split_shells(m)]
-    if all(s.st is not None and s.st_indices is not None for s in shells):
+    if all(s.st is not None for s in shells):
         ops = [
             _to_manifold(s, st=st, chart=np.repeat(chart, 3), faces=chart)
             for s, (st, chart) in zip(shells, _union_charts(shells), strict=True)
@@ -223,11 +223,12 @@ def _union_charts(shells: list[Mesh]) -> list[tuple[np.ndarray, np.ndarray]]:
     out = []
     offset = 0
     for s in shells:
-        assert s.st is not None and s.st_indices is not None
+        assert s.st is not None
         tri = s.triangles
-        chart = chart_labels(s.st_indices, len(s.st)) + offset
+        chart = chart_labels(s.st.corner_indices(s.face_vertex_indices), len(s.st.values))
+        chart += offset
         offset = int(chart.max()) + 1
-        cst = s.st[s.st_indices].astype(np.float64)
+        cst = s.st.at_corners(s.face_vertex_indices).astype(np.float64)
         fn, _ = face_normals(s.points, tri)
         cn = _corner_normals(s)
         if cn is not None:
@@ -291,20 +292,21 @@ def differences(
     import manifold3d
 
     name = mesh.name if name is None else name
-    if mesh.st is not None and mesh.st_indices is not None:
+    if mesh.st is not None:
         # carry the mesh's own (analytic) st through the cut; the cap faces a cutter leaves
         # get planar st (box-mapped, wound like the caps, which face against the cutter).
         # Every corner carries its chart too (the mesh's charts 0.., each cutter plane's
         # below 0), so charts whose values meet at a point are not joined by the cut
-        chart = np.repeat(chart_labels(mesh.st_indices, len(mesh.st)), 3)
-        cst = mesh.st[mesh.st_indices].astype(np.float64)
+        sti = mesh.st.corner_indices(mesh.face_vertex_indices)
+        chart = np.repeat(chart_labels(sti, len(mesh.st.values)), 3)
+        cst = mesh.st.values[sti].astype(np.float64)
         base = _to_manifold(mesh, keep_faces=True, st=cst, chart=chart)
     else:
         ops = [_to_manifold(s, keep_faces=True) for s in split_shells(mesh)]
         base = manifold3d.Manifold.batch_boolean(ops, manifold3d.OpType.Add)
     out = []
     for cutters in cutter_sets:
-        if mesh.st is not None and mesh.st_indices is not None:
+        if mesh.st is not None:
             cut = []
             for k, m in enumerate(map(_as_triangles, cutters)):
                 fn, _ = face_normals(m.points, m.triangles)
@@ -383,10 +385,8 @@ def _from_manifold(res, name: str, simplify: bool = True, before: np.ndarray | N
         points,
         np.full(len(idx), 3, np.int32),
         idx.reshape(-1),
-        nrm.astype(np.float32),
-        "faceVarying",
-        st,
-        sti,
+        CornerValues.per_corner(nrm.astype(np.float32)),
+        None if st is None else CornerValues(st, sti),
         name=name,
     )
     if not simplify:

@@ -143,8 +143,8 @@ def normals_against_winding(mesh: Mesh) -> int:
         return 0
     tri = mesh.triangles
     fn, area = face_normals(mesh.points, tri)
-    if mesh.normals_interpolation == "vertex":
-        cn = mesh.normals[tri].astype(np.float64)
+    if mesh.normals.by_point:
+        cn = mesh.normals.values[tri].astype(np.float64)
     else:  # corners of the fan triangles, in the order ``triangles`` uses
         corners = triangulate_fan(mesh.face_vertex_counts, np.arange(len(mesh.face_vertex_indices)))
         full = corner_normals(mesh)

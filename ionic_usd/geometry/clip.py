@@ -14,7 +14,14 @@ import numpy as np
 from ionic_usd.errors import GeometryError
 from ionic_usd.geometry import libm
 from ionic_usd.geometry.caps import cap_outline
-from ionic_usd.geometry.mesh import Mesh, box_st, corner_normals, triangulate_fan, unique_rows
+from ionic_usd.geometry.mesh import (
+    CornerValues,
+    Mesh,
+    box_st,
+    corner_normals,
+    triangulate_fan,
+    unique_rows,
+)
 
 __all__ = ["clip_mesh"]
 
@@ -60,7 +67,7 @@ def clip_mesh(
     Returns
     -------
     Mesh
-        Triangles, faceVarying normals when the input has normals (interpolated along cut
+        Triangles, per-corner normals when the input has normals (interpolated along cut
         edges, ``−plane_normal`` on the cap); the input's ``st`` likewise, with planar
         (box-mapped, metric) ``st`` on the cap.
         When the plane does not cut the mesh (everything is kept), the input is returned
@@ -173,14 +180,15 @@ def _corner_values(mesh: Mesh, corner: np.ndarray) -> tuple[np.ndarray | None, n
     if cn0 is not None:
         fv = cn0.astype(np.float64)
     sid = None
-    if mesh.st is not None and mesh.st_indices is not None:
+    if mesh.st is not None:
         # st rides along with the normals (3 more columns, interpolated the same way)
-        cst = mesh.st[mesh.st_indices].astype(np.float64)
+        st_ids = mesh.st.corner_indices(mesh.face_vertex_indices)
+        cst = mesh.st.values[st_ids].astype(np.float64)
         fv = np.concatenate([fv if fv is not None else np.zeros((len(cst), 3)), cst], axis=1)
         # which st value each corner is: (input st index, -1) for a kept corner, the pair of
         # its edge's end indices for a cut corner; never the value itself, so two charts
         # whose values meet at a shared point (mirrored planar maps on an axis) stay apart
-        sid = np.asarray(mesh.st_indices, dtype=np.int64)[corner]
+        sid = np.asarray(st_ids, dtype=np.int64)[corner]
     return fv, sid
 
 
@@ -263,9 +271,7 @@ def _assemble(all_pts, faces, values, ids, has_normals: bool, n, name) -> Mesh:
         all_pts[used],
         np.full(len(faces_all), 3, dtype=np.int32),
         remap.reshape(-1).astype(np.int32),
-        out_nrm,
-        "faceVarying",
-        st,
-        sti,
+        None if out_nrm is None else CornerValues.per_corner(out_nrm),
+        None if st is None else CornerValues(st, sti),
         name=name,
     )

@@ -38,7 +38,8 @@ def solid_problem(mesh: Mesh) -> str | None:
     if ext > MAX_EXTENT:
         return f"it reaches {ext:.3g} m from the origin (limit {MAX_EXTENT:g} m)"
     for name in ("normals", "st"):
-        arr = getattr(mesh, name, None)
+        cv = getattr(mesh, name, None)
+        arr = None if cv is None else cv.values
         if arr is not None and not np.isfinite(np.asarray(arr)).all():
             return f"its {name} are not finite (degenerate faces)"
     tri = mesh.triangles

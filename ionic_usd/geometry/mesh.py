@@ -1,25 +1,30 @@
 """The immutable :class:`Mesh` value and the operations on it (merge, transform, weld, normals).
 
-Fields map 1:1 to ``UsdGeom.Mesh``: ``points`` → ``points``, ``face_vertex_counts`` →
-``faceVertexCounts``, ``face_vertex_indices`` → ``faceVertexIndices``, ``normals`` → ``normals``
-(with ``normals_interpolation``) or, with ``normals_indices``, the indexed primvar
-``primvars:normals`` (the ``normals`` attribute cannot be indexed; a renderer reads the primvar
-first), ``st`` / ``st_indices`` → the indexed primvar ``primvars:st`` (written as it is when
-``st_distinct``, else de-duplicated at authoring).
+A mesh is geometry and per-corner values: ``points``, faces (``face_vertex_counts``,
+``face_vertex_indices``, the names ``UsdGeom.Mesh`` uses) and two optional attributes,
+``normals`` and ``st``, each a :class:`~ionic_usd.geometry.corners.CornerValues` (values per
+point, or values with an index per corner). Every operation here treats both alike. How they
+are encoded in a file is chosen when writing, not here: :mod:`ionic_usd.usd.mesh` writes
+point normals as the ``normals`` attribute (vertex interpolation) and other normals and all
+st as indexed faceVarying primvars (``primvars:normals``, ``primvars:st``; de-duplicated
+unless ``st.distinct`` promises they need not be); :mod:`ionic_usd.pipeline.mesh_cache`
+stores them in a layout of its own.
 Winding is counter-clockwise seen from outside (USD's default ``orientation = rightHanded``).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 
 from ionic_usd.errors import GeometryError
 from ionic_usd.geometry import libm
+from ionic_usd.geometry.corners import CornerValues, concat_corner_values
 
 __all__ = [
+    "CornerValues",
     "Mesh",
     "merge",
     "transform",
@@ -32,8 +37,6 @@ __all__ = [
     "box_st",
     "chart_labels",
 ]
-
-Interpolation = Literal["vertex", "faceVarying"]
 
 
 def frozen_array(a: np.ndarray) -> np.ndarray:
@@ -55,41 +58,23 @@ class Mesh:
     points : (n, 3) float64
     face_vertex_counts : (f,) int32
     face_vertex_indices : (k,) int32, ``k == face_vertex_counts.sum()``
-    normals : (n, 3), (k, 3) or (w, 3) float32 or None
-        Unit normals per vertex (``normals_interpolation == "vertex"``) or per face corner
-        (``"faceVarying"``, which allows crisp edges on a watertight point set); with
-        ``normals_indices`` the distinct values of faceVarying normals.
-    st : (u, 2) float32 or None
-        Texture coordinates, indexed per face corner by ``st_indices`` (faceVarying, indexed).
-    st_indices : (k,) int32 or None
+    normals : CornerValues (d = 3) or None
+        Unit normals per point (shared by the corners there: smooth) or per corner (which
+        allows crisp edges on a watertight point set; indexed, a crisp-edged solid needs
+        about one value per point instead of one per corner).
+    st : CornerValues (d = 2) or None
+        Texture coordinates, usually per corner (seams split charts); ``st.distinct`` is the
+        generator's promise that they need no de-duplication.
     name : str
         A prim name for authoring.
-    normals_indices : (k,) int32 or None
-        Indexed faceVarying normals: corner c has normal ``normals[normals_indices[c]]``
-        (:meth:`corner_normals` expands them). A crisp-edged solid needs about one value per
-        point instead of one per corner: a third of the data to author and store.
-    st_distinct : bool
-        The producer's promise that ``st`` is already indexed: every value is used by a corner
-        and no two values of one chart (triangles joined through shared values) are equal, as
-        a generator emits one value per seam-split chart vertex. Authoring then writes
-        ``st`` / ``st_indices`` as they are instead of de-duplicating them (a sort of every
-        value). Values of different charts may coincide (metric charts overlap until packed);
-        they stay apart, which keeps the charts apart for a reader. A broken promise costs
-        only a larger file: the expanded ``st[st_indices]`` is authored exactly either way.
-        Replacing ``st`` or ``st_indices`` with :meth:`with_` drops the promise unless it is
-        given again.
     """
 
     points: np.ndarray
     face_vertex_counts: np.ndarray
     face_vertex_indices: np.ndarray
-    normals: np.ndarray | None = None
-    normals_interpolation: Interpolation = "vertex"
-    st: np.ndarray | None = None
-    st_indices: np.ndarray | None = None
+    normals: CornerValues | None = None
+    st: CornerValues | None = None
     name: str = "mesh"
-    normals_indices: np.ndarray | None = None
-    st_distinct: bool = False
     # derived data (the fan triangulation): not an init field, so dataclasses.replace() and
     # with_() always start a fresh cache and can never carry stale triangles over
     _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
@@ -112,41 +97,13 @@ class Mesh:
         object.__setattr__(self, "points", _frozen(pts))
         object.__setattr__(self, "face_vertex_counts", _frozen(counts))
         object.__setattr__(self, "face_vertex_indices", _frozen(idx))
-        if self.normals_indices is not None:
-            if self.normals is None or self.normals_interpolation != "faceVarying":
-                raise GeometryError(f"mesh {self.name!r}: normals_indices need faceVarying normals")
-            ni = np.asarray(self.normals_indices, dtype=np.int32).reshape(-1)
-            nv = len(np.asarray(self.normals).reshape(-1, 3))
-            if ni.size != idx.size or (ni.size and (ni.min() < 0 or ni.max() >= nv)):
-                raise GeometryError(
-                    f"mesh {self.name!r}: normals_indices do not match the faces and normals"
-                )
-            object.__setattr__(self, "normals_indices", _frozen(ni))
-        if self.normals is not None:
-            nrm = np.asarray(self.normals, dtype=np.float32).reshape(-1, 3)
-            want = len(pts) if self.normals_interpolation == "vertex" else idx.size
-            if self.normals_interpolation not in ("vertex", "faceVarying"):
-                raise GeometryError(f"unknown normals interpolation {self.normals_interpolation!r}")
-            if self.normals_indices is not None:
-                want = len(nrm)
-            if len(nrm) != want:
-                raise GeometryError(
-                    f"mesh {self.name!r}: {len(nrm)} normals for "
-                    f"{self.normals_interpolation} interpolation, expected {want}"
-                )
-            object.__setattr__(self, "normals", _frozen(nrm))
-        if (self.st is None) != (self.st_indices is None):
-            raise GeometryError(f"mesh {self.name!r}: st and st_indices go together")
-        if self.st_distinct and self.st is None:
-            raise GeometryError(f"mesh {self.name!r}: st_distinct without st")
-        object.__setattr__(self, "st_distinct", bool(self.st_distinct))
-        if self.st is not None:
-            st = np.asarray(self.st, dtype=np.float32).reshape(-1, 2)
-            sti = np.asarray(self.st_indices, dtype=np.int32).reshape(-1)
-            if sti.size != idx.size or (sti.size and (sti.min() < 0 or sti.max() >= len(st))):
-                raise GeometryError(f"mesh {self.name!r}: st_indices do not match the faces")
-            object.__setattr__(self, "st", _frozen(st))
-            object.__setattr__(self, "st_indices", _frozen(sti))
+        for what in ("normals", "st"):
+            cv = getattr(self, what)
+            if cv is None:
+                continue
+            if not isinstance(cv, CornerValues) or cv.dim != (3 if what == "normals" else 2):
+                raise GeometryError(f"mesh {self.name!r}: {what} must be CornerValues")
+            cv.check(len(pts), idx.size, what, self.name)
 
     # -- derived views -------------------------------------------------------------------
     @property
@@ -189,28 +146,19 @@ class Mesh:
         return corner_normals(self)
 
     def with_(self, **changes) -> Mesh:
-        """A copy with some fields replaced (the cache is not carried over).
-
-        New ``st`` or ``st_indices`` drop the ``st_distinct`` promise unless it is given again.
-        """
-        if "st" in changes or "st_indices" in changes:
-            changes.setdefault("st_distinct", False)
+        """A copy with some fields replaced (the cache is not carried over)."""
         return replace(self, **changes)
 
 
 def corner_normals(mesh: Mesh) -> np.ndarray | None:
     """(k, 3) float32 normal of every face corner, in ``face_vertex_indices`` order, or None.
 
-    The one place that expands per-vertex and indexed faceVarying normals for consumers that
-    need one normal per corner (clipping, booleans, checks, exporters).
+    The one place that expands normals for consumers that need one normal per corner
+    (clipping, booleans, checks, exporters).
     """
     if mesh.normals is None:
         return None
-    if mesh.normals_interpolation == "vertex":
-        return mesh.normals[mesh.face_vertex_indices]
-    if mesh.normals_indices is not None:
-        return mesh.normals[mesh.normals_indices]
-    return mesh.normals
+    return mesh.normals.at_corners(mesh.face_vertex_indices)
 
 
 def triangulate_fan(counts: np.ndarray, indices: np.ndarray) -> np.ndarray:
@@ -300,10 +248,10 @@ def smooth_normals(mesh: Mesh, groups: np.ndarray | None = None, *, indexed: boo
     mesh : triangle mesh
     groups : (t,) int or None
         Smoothing group per triangle. ``None`` gives per-vertex normals smooth everywhere;
-        otherwise faceVarying normals where a corner averages only the triangles of its own
+        otherwise per-corner normals where a corner averages only the triangles of its own
         group around its vertex (so an edge between two groups is crisp).
     indexed : bool
-        With ``groups``: return indexed faceVarying normals (``normals_indices``): the
+        With ``groups``: return indexed normals (``normals.indices``): the
         n per-vertex values first (a vertex inside one group uses its own), then one value
         per (vertex, group) pair on a crease, numbered by first occurrence.
     """
@@ -320,11 +268,7 @@ def smooth_normals(mesh: Mesh, groups: np.ndarray | None = None, *, indexed: boo
         )
     )
     if groups is None:
-        return mesh.with_(
-            normals=per_vertex.astype(np.float32),
-            normals_interpolation="vertex",
-            normals_indices=None,
-        )
+        return mesh.with_(normals=CornerValues(per_vertex.astype(np.float32)))
     groups = np.asarray(groups, dtype=np.int64).reshape(-1)
     if groups.size != len(tri):
         raise GeometryError("smooth_normals: one group per triangle expected")
@@ -333,15 +277,11 @@ def smooth_normals(mesh: Mesh, groups: np.ndarray | None = None, *, indexed: boo
         nidx = corner_vertex.astype(np.int64)
         nidx[multi] = npts + inv
         values = np.concatenate([per_vertex, crease]).astype(np.float32)
-        return mesh.with_(
-            normals=values,
-            normals_interpolation="faceVarying",
-            normals_indices=nidx.astype(np.int32),
-        )
+        return mesh.with_(normals=CornerValues(values, nidx.astype(np.int32)))
     out = per_vertex.astype(np.float32)[corner_vertex]
     if multi.size:
         out[multi] = crease[inv]
-    return mesh.with_(normals=out, normals_interpolation="faceVarying", normals_indices=None)
+    return mesh.with_(normals=CornerValues.per_corner(out))
 
 
 def _face_units_and_angles(pts: np.ndarray, tri: np.ndarray) -> tuple[np.ndarray, list]:
@@ -403,9 +343,8 @@ def _normalise(v: np.ndarray) -> np.ndarray:
 def merge(meshes: list[Mesh] | tuple[Mesh, ...], name: str = "mesh") -> Mesh:
     """Concatenate meshes into one (no welding; see :func:`weld`).
 
-    Normals are kept when every mesh has them: per vertex if all are per vertex, indexed
-    faceVarying if any is indexed (a per-vertex or per-corner part indexes its own values),
-    else faceVarying. Texture coordinates are kept when every mesh has them.
+    Normals (and st) are kept when every mesh has them (see
+    :func:`~ionic_usd.geometry.corners.concat_corner_values`).
     """
     meshes = list(meshes)
     if not meshes:
@@ -414,38 +353,13 @@ def merge(meshes: list[Mesh] | tuple[Mesh, ...], name: str = "mesh") -> Mesh:
     points = np.concatenate([m.points for m in meshes])
     counts = np.concatenate([m.face_vertex_counts for m in meshes])
     idx = np.concatenate([m.face_vertex_indices + o for m, o in zip(meshes, offsets, strict=True)])
-    normals: np.ndarray | None = None
-    nidx: np.ndarray | None = None
-    interp: Interpolation = "vertex"
-    if all(m.normals is not None for m in meshes):
-        if all(m.normals_interpolation == "vertex" for m in meshes):
-            normals = np.concatenate([m.normals for m in meshes])
-        elif any(m.normals_indices is not None for m in meshes):
-            parts = [_indexed_normals(m) for m in meshes]
-            no = np.cumsum([0] + [len(v) for v, _ in parts[:-1]])
-            normals = np.concatenate([v for v, _ in parts])
-            nidx = np.concatenate([i + o for (_, i), o in zip(parts, no, strict=True)])
-            interp = "faceVarying"
-        else:
-            normals = np.concatenate([m.corner_normals() for m in meshes])
-            interp = "faceVarying"
-    st = sti = None
-    sts = [(m.st, m.st_indices) for m in meshes if m.st is not None and m.st_indices is not None]
-    if len(sts) == len(meshes):
-        so = np.cumsum([0] + [len(v) for v, _ in sts[:-1]])
-        st = np.concatenate([v for v, _ in sts])
-        sti = np.concatenate([i + o for (_, i), o in zip(sts, so, strict=True)])
-    return Mesh(points, counts, idx, normals, interp, st, sti, name=name, normals_indices=nidx)
-
-
-def _indexed_normals(m: Mesh) -> tuple[np.ndarray, np.ndarray]:
-    """(values (w, 3), corner indices (k,)) of a mesh's normals, whatever their layout."""
-    assert m.normals is not None
-    if m.normals_indices is not None:
-        return m.normals, m.normals_indices
-    if m.normals_interpolation == "vertex":
-        return m.normals, m.face_vertex_indices
-    return m.normals, np.arange(len(m.normals), dtype=np.int32)
+    fvis = [m.face_vertex_indices for m in meshes]
+    attrs: dict[str, CornerValues | None] = {}
+    for what in ("normals", "st"):
+        parts = [getattr(m, what) for m in meshes]
+        kept = [p for p in parts if p is not None]
+        attrs[what] = concat_corner_values(kept, fvis) if len(kept) == len(parts) else None
+    return Mesh(points, counts, idx, attrs["normals"], attrs["st"], name=name)
 
 
 def transform(mesh: Mesh, matrix: np.ndarray) -> Mesh:
@@ -465,26 +379,15 @@ def transform(mesh: Mesh, matrix: np.ndarray) -> Mesh:
     normals = mesh.normals
     if normals is not None:
         nm = np.linalg.inv(lin).T
-        normals = _normalise(libm.linear(normals.astype(np.float64), nm)).astype(np.float32)
-    counts, idx, sti = mesh.face_vertex_counts, mesh.face_vertex_indices, mesh.st_indices
-    nidx = mesh.normals_indices
+        v = _normalise(libm.linear(normals.values.astype(np.float64), nm)).astype(np.float32)
+        normals = normals.with_values(v)
+    idx, st = mesh.face_vertex_indices, mesh.st
     if det < 0:
-        perm = _reverse_faces_perm(counts)
+        perm = _reverse_faces_perm(mesh.face_vertex_counts)
         idx = idx[perm]
-        if sti is not None:
-            sti = sti[perm]
-        if nidx is not None:
-            nidx = nidx[perm]
-        elif normals is not None and mesh.normals_interpolation == "faceVarying":
-            normals = normals[perm]
-    return mesh.with_(
-        points=pts,
-        face_vertex_indices=idx,
-        normals=normals,
-        st_indices=sti,
-        normals_indices=nidx,
-        st_distinct=mesh.st_distinct,  # a face's corners permuted: the same values, all used
-    )
+        normals = None if normals is None else normals.reorder(perm)
+        st = None if st is None else st.reorder(perm)
+    return mesh.with_(points=pts, face_vertex_indices=idx, normals=normals, st=st)
 
 
 def _reverse_faces_perm(counts: np.ndarray) -> np.ndarray:
@@ -499,41 +402,26 @@ def _reverse_faces_perm(counts: np.ndarray) -> np.ndarray:
 def weld(mesh: Mesh, tol: float = 1e-9) -> Mesh:
     """Merge points closer than ``tol`` (by rounding to a grid) and drop collapsed faces.
 
-    Normals become faceVarying (corner normals are preserved as they were; indexed ones stay
-    indexed).
+    Point normals become per corner (the corner values are preserved as they were; indexed
+    ones stay indexed).
     """
     q = np.round(mesh.points / tol).astype(np.int64)
     _, first, inv = unique_rows(q, return_index=True, return_inverse=True)
     inv = inv.reshape(-1)
     pts = mesh.points[first]
     idx = inv[mesh.face_vertex_indices]
-    normals, nidx = mesh.normals, mesh.normals_indices
-    if normals is not None and nidx is None:
-        normals = corner_normals(mesh)
     # faces that collapsed (two equal consecutive indices) are dropped: only for triangles
     counts = mesh.face_vertex_counts
-    keep_corner = np.ones(idx.size, dtype=bool)
+    keep_corner = np.arange(idx.size)
     keep_face = np.ones(len(counts), dtype=bool)
     if np.all(counts == 3):
         t = idx.reshape(-1, 3)
         bad = (t[:, 0] == t[:, 1]) | (t[:, 1] == t[:, 2]) | (t[:, 0] == t[:, 2])
         keep_face = ~bad
-        keep_corner = np.repeat(keep_face, 3)
-    if nidx is not None:
-        nidx = nidx[keep_corner]
-    elif normals is not None:
-        normals = normals[keep_corner]
-    return Mesh(
-        pts,
-        counts[keep_face],
-        idx[keep_corner],
-        normals,
-        "faceVarying",
-        mesh.st,
-        None if mesh.st_indices is None else mesh.st_indices[keep_corner],
-        name=mesh.name,
-        normals_indices=nidx,
-    )
+        keep_corner = np.flatnonzero(np.repeat(keep_face, 3))
+    fvi = mesh.face_vertex_indices
+    nrm, st = (None if a is None else a.take(keep_corner, fvi) for a in (mesh.normals, mesh.st))
+    return Mesh(pts, counts[keep_face], idx[keep_corner], nrm, st, name=mesh.name)
 
 
 def unique_rows(

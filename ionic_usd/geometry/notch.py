@@ -21,7 +21,14 @@ import numpy as np
 from ionic_usd.errors import GeometryError
 from ionic_usd.geometry import libm
 from ionic_usd.geometry.caps import cap_loops, chain_loops, plane_frame
-from ionic_usd.geometry.mesh import Mesh, box_st, corner_normals, triangulate_fan, unique_rows
+from ionic_usd.geometry.mesh import (
+    CornerValues,
+    Mesh,
+    box_st,
+    corner_normals,
+    triangulate_fan,
+    unique_rows,
+)
 
 __all__ = ["cut_quadrant"]
 
@@ -196,7 +203,7 @@ def cut_quadrant(
 
     Returns
     -------
-    Mesh : triangles; faceVarying normals carried (``+x``/``+z`` against the caps' solid: the
+    Mesh : triangles; per-corner normals carried (``+x``/``+z`` against the caps' solid: the
     caps face ``−x`` and ``−z``), the input's ``st`` likewise with planar ``st`` on each cap
     (one chart per cap outline). The input itself when the quadrant holds none of it.
 
@@ -245,11 +252,11 @@ def _soup(mesh: Mesh, pts: np.ndarray) -> _Corners:
     if cn is not None:
         parts.append(np.asarray(cn, dtype=np.float64)[corner])
     ids = None
-    if mesh.st is not None and mesh.st_indices is not None:
-        sti = np.asarray(mesh.st_indices, dtype=np.int64)[corner]
+    if mesh.st is not None:
+        sti = np.asarray(mesh.st.corner_indices(mesh.face_vertex_indices), dtype=np.int64)[corner]
         if cn is None:
             parts.append(np.zeros((len(tri), 3, 3)))
-        parts.append(np.asarray(mesh.st, dtype=np.float64)[sti])
+        parts.append(np.asarray(mesh.st.values, dtype=np.float64)[sti])
         ids = sti
     values = np.concatenate(parts, axis=2) if parts else None
     return _Corners(pts, tri, values, ids, np.zeros(len(tri), dtype=np.int64))
@@ -284,10 +291,8 @@ def _assemble(soup, inside, cap_tri, cap_plane, cap_id, values, has_normals, nam
         P[used],
         np.full(len(faces), 3, dtype=np.int32),
         remap.reshape(-1).astype(np.int32),
-        nrm,
-        "faceVarying",
-        st,
-        st_idx,
+        None if nrm is None else CornerValues.per_corner(nrm),
+        None if st is None else CornerValues(st, st_idx),
         name=name,
     )
 

@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from ionic_usd.geometry.mesh import Mesh, corner_normals, face_normals
+from ionic_usd.geometry.mesh import CornerValues, Mesh, corner_normals, face_normals
 from ionic_usd.geometry.triedit import TriangleEditor
 
 __all__ = ["SLIVER_ANGLE_DEG", "SLIVER_TOL", "normals_with_winding", "remove_slivers"]
@@ -104,7 +104,7 @@ def remove_slivers(
 
     Parameters
     ----------
-    mesh : closed, consistently wound triangle mesh with faceVarying normals (or none)
+    mesh : closed, consistently wound triangle mesh with normals (or none)
     tol : largest allowed movement of the surface (m)
     min_angle : degrees
     changed : (n,) bool over the points, or None (all). Only the slivers with a vertex on a
@@ -180,10 +180,10 @@ def _mend_pass(
 
 
 def normals_with_winding(mesh: Mesh) -> Mesh:
-    """``mesh`` with every faceVarying corner normal that points against its face's winding
+    """``mesh`` with every per-corner normal that points against its face's winding
     (dot < 0: a flip or snap of the sliver clean-up across a crease) replaced by the face
     normal, so authored normals agree with the winding on every face. Triangles only."""
-    if mesh.normals is None or mesh.normals_interpolation != "faceVarying" or not mesh.n_faces:
+    if mesh.normals is None or mesh.normals.by_point or not mesh.n_faces:
         return mesh
     corner = corner_normals(mesh)
     assert corner is not None
@@ -198,7 +198,7 @@ def normals_with_winding(mesh: Mesh) -> Mesh:
     sub = cn3[rows]
     sub[against[rows]] = np.broadcast_to(fn[:, None, :], sub.shape)[against[rows]]
     cn3[rows] = sub
-    return mesh.with_(normals=cn3.reshape(-1, 3), normals_indices=None)
+    return mesh.with_(normals=CornerValues.per_corner(cn3.reshape(-1, 3)))
 
 
 def _against(points: np.ndarray, tri: np.ndarray, cn3: np.ndarray) -> np.ndarray:

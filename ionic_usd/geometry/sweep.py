@@ -26,7 +26,7 @@ import numpy as np
 
 from ionic_usd.errors import GeometryError
 from ionic_usd.geometry import libm
-from ionic_usd.geometry.mesh import Mesh
+from ionic_usd.geometry.mesh import CornerValues, Mesh
 
 __all__ = ["sweep", "side_normals", "mitre_vectors", "polygon_area"]
 
@@ -192,7 +192,7 @@ def sweep(
     -------
     Mesh
         Points ``(m·k, 3)`` shared by all faces (watertight); ``m_s·k`` quads (+ cap triangles
-        for open paths); faceVarying normals; ``st = uv_scale · (arc length along the row,
+        for open paths); per-corner normals; ``st = uv_scale · (arc length along the row,
         length along the section)``.
     """
     prof, pts, ax = _check(profile, path, axis, closed)
@@ -226,10 +226,8 @@ def sweep(
         points,
         np.concatenate(counts),
         np.concatenate(indices),
-        normals.astype(np.float32),
-        "faceVarying",
-        st,
-        np.arange(len(st), dtype=np.int32),
+        CornerValues.per_corner(normals.astype(np.float32)),
+        CornerValues(st, np.arange(len(st), dtype=np.int32)),
         name=name,
     )
 

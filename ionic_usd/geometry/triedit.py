@@ -22,7 +22,7 @@ import math
 
 import numpy as np
 
-from ionic_usd.geometry.mesh import Mesh, chart_labels, corner_normals
+from ionic_usd.geometry.mesh import CornerValues, Mesh, chart_labels, corner_normals
 from ionic_usd.geometry.trimath import (
     corner_angles,
     cross3,
@@ -90,7 +90,7 @@ class TriangleEditor:
 
     Parameters
     ----------
-    mesh : triangle mesh with faceVarying normals (or none) and indexed st (or none)
+    mesh : triangle mesh with normals (or none) and st (or none), any layout
     """
 
     def __init__(self, mesh: Mesh) -> None:
@@ -123,7 +123,7 @@ class TriangleEditor:
         """The per-corner values carried through every edit: the normals (3), st (2) and the
         st chart (1: an edit never joins two charts, whose values may meet at a point)."""
         corner_n = corner_normals(mesh)
-        has_st = mesh.st is not None and mesh.st_indices is not None
+        has_st = mesh.st is not None
         self.n_dim = n_dim = 3 if corner_n is not None else 0
         self.n_ch = n_dim + (3 if has_st else 0)
         self.nrm32 = None if corner_n is None else np.asarray(corner_n, dtype=np.float32)
@@ -135,8 +135,9 @@ class TriangleEditor:
         if self.nrm32 is not None:
             cn0[:, :, :3] = self.nrm32.reshape(-1, 3, 3)
         if has_st:
-            self.st32 = np.asarray(mesh.st, dtype=np.float32)
-            self.st_idx = np.asarray(mesh.st_indices, dtype=np.int64)
+            assert mesh.st is not None
+            self.st32 = mesh.st.values
+            self.st_idx = mesh.st.corner_indices(mesh.face_vertex_indices).astype(np.int64)
             chart = chart_labels(self.st_idx, len(self.st32)).astype(np.float64)
             self.chart_of_st = np.zeros(len(self.st32))  # one chart per st value
             self.chart_of_st[self.st_idx] = np.repeat(chart, 3)
@@ -472,10 +473,8 @@ class TriangleEditor:
             self.pts[used],
             np.full(len(tri), 3, np.int32),
             idx,
-            nrm,
-            "faceVarying",
-            st,
-            sti,
+            None if nrm is None else CornerValues.per_corner(nrm),
+            None if st is None or sti is None else CornerValues(st, sti),
             name=self.name,
         )
 

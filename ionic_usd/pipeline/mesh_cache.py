@@ -26,22 +26,17 @@ from typing import Any
 import numpy as np
 
 from ionic_usd.blueprint.asset import AssetMesh
-from ionic_usd.geometry.mesh import Mesh
+from ionic_usd.geometry.mesh import CornerValues, Mesh
 from ionic_usd.pipeline.keys import build_key
 
 __all__ = ["cached_meshes", "mesh_cache_folder", "wait_for_writes"]
 
 log = logging.getLogger(__name__)
 
-_FIELDS = (
-    "points",
-    "face_vertex_counts",
-    "face_vertex_indices",
-    "normals",
-    "st",
-    "st_indices",
-    "normals_indices",
-)
+_FIELDS = ("points", "face_vertex_counts", "face_vertex_indices")
+_ATTRS = ("normals", "st")  # CornerValues: values, indices (unless per point or per corner)
+#: the entry layout, in the key: 2 = the attributes as CornerValues (1: USD's encodings)
+_FORMAT = 2
 _INDEX = "meshes.json"
 _ARRAYS = "meshes.npz"
 
@@ -54,7 +49,7 @@ def mesh_cache_folder() -> Path:
 
 
 def _key(tag: str, opts: object, extra: str) -> str:
-    return build_key(tag, opts, extra)
+    return build_key(tag, opts, f"{extra}|mesh-format-{_FORMAT}")
 
 
 def _write(folder: Path, meshes: list[AssetMesh]) -> None:
@@ -62,21 +57,26 @@ def _write(folder: Path, meshes: list[AssetMesh]) -> None:
     arrays: dict[str, Any] = {}  # (numpy types savez's keywords as its flags)
     for i, am in enumerate(meshes):
         m = am.mesh
-        present = []
         for f in _FIELDS:
-            v = getattr(m, f)
-            if v is not None:
-                arrays[f"{i}.{f}"] = np.asarray(v)
-                present.append(f)
+            arrays[f"{i}.{f}"] = np.asarray(getattr(m, f))
+        attrs = {}
+        for a in _ATTRS:
+            cv: CornerValues | None = getattr(m, a)
+            if cv is None:
+                continue
+            arrays[f"{i}.{a}"] = cv.values
+            layout = "point" if cv.by_point else "corner" if cv.one_per_corner else "indexed"
+            if layout == "indexed":
+                arrays[f"{i}.{a}.indices"] = cv.indices
+            # distinct: authoring writes such st without sorting
+            attrs[a] = {"layout": layout, "distinct": cv.distinct}
         index.append(
             {
                 "part": am.part,
                 "name": am.name,
                 "tags": dict(am.tags),
                 "mesh_name": m.name,
-                "interpolation": m.normals_interpolation,
-                "st_distinct": m.st_distinct,  # authoring writes such st without sorting
-                "fields": present,
+                "attrs": attrs,
             }
         )
     np.savez(folder / _ARRAYS, **arrays)
@@ -88,13 +88,16 @@ def _read(folder: Path) -> list[AssetMesh]:
     out = []
     with np.load(folder / _ARRAYS, allow_pickle=False) as z:
         for i, e in enumerate(index):
-            kw = {f: z[f"{i}.{f}"] for f in e["fields"]}
-            mesh = Mesh(
-                normals_interpolation=e["interpolation"],
-                name=e["mesh_name"],
-                st_distinct=bool(e.get("st_distinct", False)),
-                **kw,
-            )
+            kw: dict[str, Any] = {f: z[f"{i}.{f}"] for f in _FIELDS}
+            for a, spec in e["attrs"].items():
+                values, distinct = z[f"{i}.{a}"], bool(spec["distinct"])
+                if spec["layout"] == "corner":
+                    kw[a] = CornerValues.per_corner(values, distinct)
+                elif spec["layout"] == "point":
+                    kw[a] = CornerValues(values, None, distinct)
+                else:
+                    kw[a] = CornerValues(values, z[f"{i}.{a}.indices"], distinct)
+            mesh = Mesh(name=e["mesh_name"], **kw)
             out.append(AssetMesh(e["part"], e["name"], mesh, e["tags"]))
     return out
 

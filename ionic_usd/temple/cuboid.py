@@ -35,7 +35,7 @@ import math
 import numpy as np
 
 from ionic_usd.errors import ParameterError
-from ionic_usd.geometry.mesh import Mesh
+from ionic_usd.geometry.mesh import CornerValues, Mesh
 
 # the value types sit below their users (the cuboid grammar parses them); re-exported here
 from ionic_usd.grammar.cuboid import Cuboid, Incline
@@ -134,7 +134,7 @@ def cuboid_mesh(c: Cuboid, *, uv_scale: float = DEFAULT_UV_SCALE, name: str | No
     -------
     Mesh
         ``points (8, 3)``, 6 quads wound counter-clockwise from outside, ``normals (24, 3)``
-        faceVarying (one flat normal per face), ``st (24, 2)`` with ``st_indices = arange(24)``.
+        per corner (one flat normal per face), ``st (24, 2)`` indexed by ``arange(24)``.
     """
     if not (isinstance(uv_scale, int | float) and math.isfinite(uv_scale) and uv_scale > 0):
         raise ParameterError("uv_scale", uv_scale, "a finite number > 0 (uv per metre)")
@@ -159,9 +159,7 @@ def cuboid_mesh(c: Cuboid, *, uv_scale: float = DEFAULT_UV_SCALE, name: str | No
         points=pts,
         face_vertex_counts=np.full(6, 4, dtype=np.int32),
         face_vertex_indices=_FACES.reshape(-1),
-        normals=np.repeat(nrm, 4, axis=0).astype(np.float32),
-        normals_interpolation="faceVarying",
-        st=st.astype(np.float32),
-        st_indices=np.arange(24, dtype=np.int32),
+        normals=CornerValues.per_corner(np.repeat(nrm, 4, axis=0).astype(np.float32)),
+        st=CornerValues(st.astype(np.float32), np.arange(24, dtype=np.int32)),
         name=name if name is not None else c.name,
     )

@@ -133,10 +133,11 @@ def _shear_tile(m: Mesh, rise: float, length: float) -> Mesh:
     pts[:, 1] += rise * (1.0 - np.clip(pts[:, 2] / length, 0.0, 1.0))
     # the shear y += rise·(1 − z/L) is linear on the tile (0 ≤ z ≤ L): normals go through the
     # inverse transpose of its matrix, n' ∝ (n_x, n_y, n_z + rise/L · n_y)
-    n = np.asarray(m.normals, dtype=np.float64).copy()
+    assert m.normals is not None
+    n = np.asarray(m.normals.values, dtype=np.float64).copy()
     n[:, 2] += rise / length * n[:, 1]
     n /= np.linalg.norm(n, axis=1, keepdims=True)
-    return m.with_(points=pts, normals=n.astype(np.float32))
+    return m.with_(points=pts, normals=m.normals.with_values(n.astype(np.float32)))
 
 
 def tegula_prototype(tp: TileParams) -> Mesh:

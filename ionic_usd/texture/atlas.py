@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ionic_usd.errors import GeometryError, ParameterError
-from ionic_usd.geometry.mesh import Mesh, chart_labels, frozen_array
+from ionic_usd.geometry.mesh import CornerValues, Mesh, chart_labels, frozen_array
 from ionic_usd.lod import level
 
 __all__ = [
@@ -189,18 +189,17 @@ def common_atlas_size(atlases: Iterable[UVAtlas]) -> int:
 
 
 def attach_uvs(mesh: Mesh, atlas: UVAtlas, atlas_size: int | None = None) -> Mesh:
-    """``mesh`` with ``st = atlas.st_px / atlas_size`` and ``st_indices`` attached.
+    """``mesh`` with ``st`` = ``atlas.st_px / atlas_size`` indexed by ``atlas.st_indices``.
 
-    Points, faces and normals are untouched; ``st_distinct`` comes from the atlas.
+    Points, faces and normals are untouched; ``st.distinct`` comes from the atlas.
     """
     if atlas.st_indices.size != mesh.face_vertex_indices.size:
         raise GeometryError(
             f"attach_uvs: atlas has {atlas.st_indices.size} corners, mesh {mesh.name!r} has "
             f"{mesh.face_vertex_indices.size}"
         )
-    return mesh.with_(
-        st=atlas.st(atlas_size), st_indices=atlas.st_indices, st_distinct=atlas.st_distinct
-    )
+    st = CornerValues(atlas.st(atlas_size), atlas.st_indices, atlas.st_distinct)
+    return mesh.with_(st=st)
 
 
 def analytic_atlas(
@@ -216,7 +215,7 @@ def analytic_atlas(
     ----------
     mesh : Mesh
         Triangles with ``st`` in metres of surface (an analytic parametrisation from the
-        generator), ``st_indices`` splitting the charts at their seams.
+        generator), indexed per corner so that the charts split at their seams.
     texels_per_metre, padding, resolution_cap : as for :func:`ionic_usd.texture.uv.unwrap`
 
     Returns
@@ -237,12 +236,12 @@ def analytic_atlas(
 def _analytic_atlas(
     mesh: Mesh, texels_per_metre: float, padding: int, resolution_cap: int
 ) -> UVAtlas:
-    if mesh.st is None or mesh.st_indices is None:
+    if mesh.st is None:
         raise GeometryError(f"analytic_atlas: mesh {mesh.name!r} has no st")
     if not np.all(mesh.face_vertex_counts == 3):
         raise GeometryError(f"analytic_atlas: mesh {mesh.name!r} has non-triangle faces")
-    st = mesh.st.astype(np.float64)
-    corner_st = mesh.st_indices
+    st = mesh.st.values.astype(np.float64)
+    corner_st = mesh.st.corner_indices(mesh.face_vertex_indices)
     chart = chart_labels(corner_st, len(st))
     # every st value belongs to the chart of a triangle using it (values no corner uses
     # stay where they are and are clipped into the atlas)
@@ -278,7 +277,7 @@ def _analytic_atlas(
         chart_count=n_charts,
         utilisation=min(1.0, area * tpm * tpm / (width * height)),
         texels_per_metre=tpm,
-        st_distinct=mesh.st_distinct,
+        st_distinct=mesh.st.distinct,
     )
 
 
@@ -317,10 +316,10 @@ def st_distortion(mesh: Mesh, min_area: float = 1e-12) -> tuple[np.ndarray, np.n
     st_area : (k,) signed st area: negative where the chart winds against the face (folded)
     area : (k,) surface area of the same triangles
     """
-    if mesh.st is None or mesh.st_indices is None:
+    if mesh.st is None:
         raise GeometryError(f"st_distortion: mesh {mesh.name!r} has no st")
     p = mesh.points[mesh.triangles]
-    s = mesh.st[mesh.st_indices.reshape(-1, 3)].astype(np.float64)
+    s = mesh.st.at_corners(mesh.face_vertex_indices).reshape(-1, 3, 2).astype(np.float64)
     e1, e2 = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
     n = np.cross(e1, e2)
     area = np.linalg.norm(n, axis=1) / 2

@@ -37,7 +37,7 @@ import numpy as np
 import xatlas
 
 from ionic_usd.errors import GeometryError, ParameterError
-from ionic_usd.geometry.mesh import Mesh, face_normals
+from ionic_usd.geometry.mesh import CornerValues, Mesh, face_normals
 from ionic_usd.texture.atlas import (
     DEFAULT_PADDING,
     DEFAULT_RESOLUTION_CAP,
@@ -374,7 +374,7 @@ def apply_uvs(
 
     Returns
     -------
-    {name: Mesh} in the input order, each with faceVarying indexed ``st`` in [0, 1]; points,
+    {name: Mesh} in the input order, each with indexed per-corner ``st`` in [0, 1]; points,
     faces and normals unchanged. A texture of ``S × S`` texels then has the requested
     density on every part.
     """
@@ -447,5 +447,5 @@ def metric_charts(
         # covers whole texels twice, so such charts are split here (overlaps thinner than a
         # thousandth of a texel, i.e. touching neighbours, do not count)
         st, sti, _ = split_overlapping_charts(a.st_px, a.st_indices, 1e-3)
-        out.append(m.with_(st=st / np.float32(a.texels_per_metre), st_indices=sti))
+        out.append(m.with_(st=CornerValues(st / np.float32(a.texels_per_metre), sti)))
     return out

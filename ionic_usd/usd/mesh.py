@@ -95,12 +95,13 @@ def author_mesh(
     ----------
     layer : the layer to author into
     path : prim path; missing ancestors are created as ``Xform``
-    mesh : the geometry; normals and ``st`` are written when present (per-vertex normals as
-        the ``normals`` attribute, faceVarying ones as the indexed primvar
+    mesh : the geometry; normals and ``st`` are written when present, their encoding chosen
+        here: point normals (``normals.by_point``) as the ``normals`` attribute with vertex
+        interpolation, per-corner ones as the indexed faceVarying primvar
         ``primvars:normals``, its values made distinct and all used by
-        :func:`~ionic_usd.geometry.indexing.distinct_values`; ``st`` as the indexed primvar
-        ``primvars:st``, de-duplicated the same way unless ``mesh.st_distinct`` says the
-        producer indexed it already)
+        :func:`~ionic_usd.geometry.indexing.distinct_values`; ``st`` as the indexed
+        faceVarying primvar ``primvars:st``, de-duplicated the same way unless
+        ``st.distinct`` says the producer indexed it already)
     """
     spec = define_prim(layer, path, "Mesh")
     author_attribute(spec, "points", _T.Point3fArray, _floats(Vt.Vec3fArray, mesh.points))
@@ -110,12 +111,13 @@ def author_mesh(
     author_attribute(spec, "subdivisionScheme", _T.Token, "none", uniform=True)
     author_attribute(spec, "doubleSided", _T.Bool, bool(double_sided), uniform=True)
     if mesh.normals is not None:
-        if mesh.normals_interpolation == "vertex":
+        nrm = mesh.normals
+        if nrm.by_point:
             author_attribute(
                 spec,
                 "normals",
                 _T.Normal3fArray,
-                _floats(Vt.Vec3fArray, mesh.normals),
+                _floats(Vt.Vec3fArray, nrm.values),
                 interpolation="vertex",
             )
         else:
@@ -124,13 +126,16 @@ def author_mesh(
             # be indexed; UsdGeomPointBased: "if 'normals' and 'primvars:normals' are both
             # specified, the latter has precedence" (Hydra, Blender and usdview read the
             # primvar first), so exactly one of the two is authored
-            values, indices = distinct_values(mesh.normals, mesh.normals_indices)
+            values, indices = distinct_values(
+                nrm.values, None if nrm.one_per_corner else nrm.indices
+            )
             _indexed_primvar(spec, "normals", _T.Normal3fArray, Vt.Vec3fArray, values, indices)
     if mesh.st is not None:
-        if mesh.st_distinct and mesh.st_indices is not None:
-            st, st_indices = mesh.st, mesh.st_indices  # the generator's own indexing: as it is
+        sti = mesh.st.corner_indices(mesh.face_vertex_indices)
+        if mesh.st.distinct:
+            st, st_indices = mesh.st.values, sti  # the generator's own indexing: as it is
         else:
-            st, st_indices = distinct_values(mesh.st, mesh.st_indices)
+            st, st_indices = distinct_values(mesh.st.values, sti)
         _indexed_primvar(spec, "st", _T.TexCoord2fArray, Vt.Vec2fArray, st, st_indices)
     return spec
 

@@ -23,7 +23,7 @@ from pxr import Gf, Sdf, Vt
 
 from ionic_usd.city.layout import yaw_quaternions
 from ionic_usd.city.stoa import StoaDims, bay_parts, corner_parts
-from ionic_usd.geometry.mesh import Mesh, box_st, face_normals, triangulate_fan
+from ionic_usd.geometry.mesh import CornerValues, Mesh, box_st, face_normals, triangulate_fan
 from ionic_usd.usd.materials import (
     TILE_METRES,
     MaterialTextures,
@@ -54,7 +54,7 @@ class StoaInstances:
 
 
 def _textured(mesh: Mesh, x_scale: float = 1.0) -> Mesh:
-    """``mesh`` with flat faceVarying normals and box-mapped ``st`` (one repeat per
+    """``mesh`` with flat per-corner normals and box-mapped ``st`` (one repeat per
     :data:`TILE_METRES`; local X stretched by ``x_scale``, the bay's nominal length)."""
     counts = mesh.face_vertex_counts
     tri = triangulate_fan(counts, mesh.face_vertex_indices)
@@ -65,10 +65,8 @@ def _textured(mesh: Mesh, x_scale: float = 1.0) -> Mesh:
     st = (box_st(corners, normals) / TILE_METRES).astype(np.float32)
     k = len(mesh.face_vertex_indices)
     return mesh.with_(
-        normals=normals,
-        normals_interpolation="faceVarying",
-        st=st,
-        st_indices=np.arange(k, dtype=np.int32),
+        normals=CornerValues.per_corner(normals),
+        st=CornerValues(st, np.arange(k, dtype=np.int32)),
     )
 
 
