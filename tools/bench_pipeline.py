@@ -1,10 +1,13 @@
 """Benchmark: whole column per LOD, the column asset and the Portunus temple, cold and warm.
 
-Run: ``python tools/bench_pipeline.py [--cli-only] [--baseline CHECKOUT]``. "Cold" uses an empty
-cache folder (every UV unwrap and texture is computed: what a first run on a new machine costs);
+Run: ``python tools/bench_pipeline.py [--cli-only] [--baseline CHECKOUT [--pairs N]]``. "Cold"
+uses an empty cache folder (every UV unwrap and texture is computed: what a first run on a new
+machine costs);
 "warm" rebuilds the same output with the cache filled: the same command again (the folder is
 verified and left as it is), a temple option edited (the asset's verified files reused) and
-``--rebuild`` (every file regenerated from the warm caches).
+``--rebuild`` (every file regenerated from the warm caches). ``--pairs N`` adds N turns of a
+cold temple and its ``--rebuild`` with the baseline, then with this checkout: the medians of
+each side and of the turn-by-turn ratios.
 Targets: full column ≤ 50 ms at high LOD on one core (issue 4); default temple cold ≤ 2.5 s and
 warm ≤ 0.6 s on the 2-core machine (issue 12), measured as the user runs it: ``ionic-usd temple
 -o X --force`` in a fresh process, wall time and the CPU time of the process and its workers (on
@@ -132,6 +135,45 @@ def cli_temple(baseline: str | None = None) -> None:
     )
 
 
+def paired_cold(baseline: str, pairs: int) -> None:
+    """``pairs`` turns of a cold temple (a new empty cache and output each run) with the
+    baseline checkout, then with this one, and a ``--rebuild`` of each (caches warm): medians
+    of each side and of the turn-by-turn ratios (pairing keeps the ratio meaningful when the
+    machine's load drifts during the runs)."""
+    import statistics
+
+    sides = {"baseline": baseline, "this": None}
+    runs: dict[tuple[str, str], list[tuple[float, float]]] = {}
+    for _ in range(pairs):
+        for side, path in sides.items():
+            env = {**os.environ, "IONIC_USD_CACHE": tempfile.mkdtemp(prefix="ionic_bench_cold_")}
+            if path:
+                env["PYTHONPATH"] = path
+            out = str(Path(tempfile.mkdtemp()) / "t")
+            runs.setdefault((side, "cold"), []).append(_cli(["temple", "-o", out], env))
+            rebuild = ["temple", "-o", out, "--force", "--rebuild"]
+            runs.setdefault((side, "rebuild"), []).append(_cli(rebuild, env))
+    print(
+        f"paired: {pairs} turns of baseline {baseline} then this checkout "
+        f"(load average {os.getloadavg()[0]:.1f} at the end on {os.cpu_count()} cores):"
+    )
+    for what in ("cold", "rebuild"):
+        for side in sides:
+            r = runs[(side, what)]
+            walls, cpus = [w for w, _ in r], [c for _, c in r]
+            print(
+                f"  temple {what:<8} {side:<8} wall median {statistics.median(walls):.2f} s "
+                f"({min(walls):.2f}-{max(walls):.2f})  cpu median {statistics.median(cpus):.2f} s "
+                f"({min(cpus):.2f}-{max(cpus):.2f})"
+            )
+        a, b = runs[("this", what)], runs[("baseline", what)]
+        wall = statistics.median(x[0] / y[0] for x, y in zip(a, b, strict=True))
+        cpu = statistics.median(x[1] / y[1] for x, y in zip(a, b, strict=True))
+        print(
+            f"  temple {what:<8} this/baseline: wall {wall:.3f}x  cpu {cpu:.3f}x (paired medians)"
+        )
+
+
 def _timed(fn) -> float:
     t0 = time.perf_counter()
     fn()
@@ -142,7 +184,10 @@ def _run() -> None:
     if "--cli-only" not in sys.argv:
         main()
     if "--baseline" in sys.argv:
-        cli_temple(sys.argv[sys.argv.index("--baseline") + 1])
+        base = sys.argv[sys.argv.index("--baseline") + 1]
+        if "--pairs" in sys.argv:
+            paired_cold(base, int(sys.argv[sys.argv.index("--pairs") + 1]))
+        cli_temple(base)
     cli_temple()
 
 
