@@ -2,15 +2,19 @@
 
 from __future__ import annotations
 
+import atexit
 import os
+import shutil
 import tempfile
 
 import numpy as np
 import pytest
 
 # the UV/texture caches of a test run live in a fresh folder: tests see cold and warm builds
-# of their own, never a developer's cache
-os.environ["IONIC_USD_CACHE"] = tempfile.mkdtemp(prefix="ionic_usd_test_cache_")
+# of their own, never a developer's cache; removed when the run ends (each run fills ~2 GB)
+_CACHE = tempfile.mkdtemp(prefix="ionic_usd_test_cache_")
+os.environ["IONIC_USD_CACHE"] = _CACHE
+atexit.register(shutil.rmtree, _CACHE, ignore_errors=True)
 
 
 @pytest.fixture

@@ -10,12 +10,15 @@ what a script printed, never typed by hand.
 
 from __future__ import annotations
 
+import atexit
 import io
 import os
 import platform
 import shlex
+import shutil
 import subprocess
 import sys
+import tempfile
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -81,8 +84,22 @@ def page(command: str, output: str, seconds: float) -> str:
     )
 
 
+def scratch_root(prefix: str) -> str:
+    """Route this process's ``tempfile`` folders into one new folder that is removed at exit.
+
+    Benchmarks write caches and whole temples or cities (2.4 GB for the default city) through
+    ``tempfile``; without this every run would leave them behind until the disk fills.
+    """
+    root = tempfile.mkdtemp(prefix=prefix)
+    atexit.register(shutil.rmtree, root, ignore_errors=True)
+    tempfile.tempdir = root
+    return root
+
+
 def run(main: Callable[[], int | None]) -> int | None:
-    """Run a benchmark's ``main``; with ``--markdown PATH`` also write its output there."""
+    """Run a benchmark's ``main`` with its scratch folders under one root removed at exit;
+    with ``--markdown PATH`` also write its output there."""
+    scratch_root(f"{Path(sys.argv[0]).stem}_")
     rest, path = split_markdown_flag(sys.argv[1:])
     if path is None:
         return main()
