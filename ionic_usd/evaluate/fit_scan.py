@@ -34,7 +34,6 @@ import numpy as np
 from ionic_usd.column.column import ColumnParams, build_column, portunus_column_params
 from ionic_usd.errors import GeometryError
 from ionic_usd.evaluate.fit_core import FitResult
-from ionic_usd.evaluate.scan_alone import is_fluted
 from ionic_usd.evaluate.scan_axis import ColumnFrame, estimate_axis, find_parts
 from ionic_usd.evaluate.scan_capital import CapitalFit
 from ionic_usd.evaluate.scan_checks import _check_is_column, _part_report
@@ -52,7 +51,7 @@ from ionic_usd.evaluate.scan_flutes import (
     shaft_top,
 )
 from ionic_usd.evaluate.scan_parts import base_meridian, base_top, has_square_plinth, to_column
-from ionic_usd.evaluate.scan_section import outer_profile, section_at, taper
+from ionic_usd.evaluate.scan_section import outer_profile, shaft_axis_section
 
 __all__ = ["ScanFit", "ScanSummary", "fit_column_scan", "heat_colours", "scan_deviation"]
 
@@ -178,106 +177,100 @@ def fit_column_scan(
     a, c, resid = estimate_axis(sub, seed=seed)
     frame = find_parts(sub, a, c)
     notes = [f"axis: normal lines meet it within {resid * 1000:.3g} mm (median)"]
-    if "shaft" not in frame.parts:
-        notes.append("no narrow band along the axis: no shaft")
+    found = shaft_axis_section(sub, frame, notes)
+    if found is None:
         return _capital_alone(pts, sub, seed, notes, t0)
-    # two sections, a quarter and three quarters up the shaft band: their centres set the
-    # axis far better than the normals (a 1 mm error over 4 m is 0.015°); then the final
-    # section a third of the way up in the corrected frame
-    e = None
-    fracs = (0.25, 0.75)
-    for stage in range(3):  # refine twice: a tilted first axis blurs the first slabs
-        loc = frame.local(sub)
-        s0, s1 = frame.parts["shaft"]
-        ra, rb = taper(loc, s0, s1)
-        if stage == 0:
-            try:
-                found = _lowest_fluted(loc, s0, s1, ra, rb)
-            except GeometryError:
-                notes.append("too few points for a shaft section: no shaft")
-                return _capital_alone(pts, sub, seed, notes, t0)
-            if isinstance(found, str):
-                notes.append(f"no fluted section fits the narrow band ({found}): no shaft")
-                return _capital_alone(pts, sub, seed, notes, t0)
-            first, e = found  # the count its search chose: the loop fits that count only
-            fracs = (first, 0.75 if first < 0.5 else 0.9)
-        if stage < 2:
-            cs = []
-            for frac in fracs:
-                h = s0 + frac * (s1 - s0)
-                e, sec1, slab1, _ = section_at(loc, h, s0, s1, ra, rb, e)
-                cs.append(
-                    frame.origin
-                    + sec1["centre_u"] * frame.u
-                    + sec1["centre_v"] * frame.v
-                    + h * frame.direction
-                )
-            a_new = cs[1] - cs[0]
-            frame = find_parts(sub, a_new / np.linalg.norm(a_new), cs[0])
-            if "shaft" not in frame.parts:
-                raise GeometryError("the shaft band was lost after refining the axis")
-    hs = s0 + (s1 - s0) / 3.0
-    # the flute count is chosen again in the refined frame (a tilted slab blurs flutes)
-    e, sec, slab, half = section_at(loc, hs, s0, s1, ra, rb, None)
-    notes.append(
-        f"axis through the centres of sections {s0 + 0.25 * (s1 - s0):.3f} and "
-        f"{s0 + 0.75 * (s1 - s0):.3f} m up; section from {len(slab)} points within "
-        f"±{half * 1000:.3g} mm of {hs:.3f} m"
-    )
-    # recentre the axis on the fitted section centre
-    shift = sec["centre_u"] * frame.u + sec["centre_v"] * frame.v
-    frame = dataclasses.replace(frame, origin=frame.origin + shift)
+    frame, e, sec, slab, s0 = found
     loc = frame.local(sub)
     noise = section_noise(slab, sec, e)
     notes.append(f"noise {noise * 1000:.3g} mm (1.4826 × the section's median residual)")
     det = shaft_details(loc, frame.parts, sec, e, noise)
-    ring_bottom = None
-    if "base" in frame.parts and math.isfinite(det["tip"]):
-        b0 = frame.parts["base"][0]
-        joint, tip = det["joint"], det["tip"]
-        # no step between the mouldings and the ring: the base may end in a fillet at the
-        # ring's radius; the joint the flutes' start gives (the model's ring below them)
-        # then splits the plain part
-        r0 = det["a"] + det["b"] * joint
-        col0 = portunus_column_params(lower_diameter=2.0 * r0, flutes=e)
-        onset = _joint(frame, loc, col0, r0, sec, []).parts["base"][1]
-        if joint < onset < tip:
-            joint = onset
-        ring_bottom = tip - joint
-        notes.append(
-            f"flutes end {tip - b0:.4f} m up (the tip whose flute ends fit best); the base's "
-            f"mouldings end at {joint - b0:.4f} m: plain ring {ring_bottom * 1000:.3g} mm"
-        )
-        frame = dataclasses.replace(
-            frame,
-            parts=dict(frame.parts, base=(b0, joint), shaft=(joint, frame.parts["shaft"][1])),
-        )
+    frame, ring_bottom = _plain_ring(frame, loc, det, sec, e, notes)
     r_bottom = det["a"] + det["b"] * frame.parts["shaft"][0]
     diameter = 2.0 * r_bottom
     col = portunus_column_params(lower_diameter=diameter, flutes=e)
     if "base" in frame.parts and ring_bottom is None:
         frame = _joint(frame, loc, col, r_bottom, sec, notes)
+    col = _scanned_shaft(col, frame, loc, det, sec, e, ring_bottom, notes)
+    has_base, has_cap = "base" in frame.parts, "capital" in frame.parts
+    bprof = None
+    if has_base:
+        b0, b1 = frame.parts["base"]
+        bprof = outer_profile(loc, b0, b1, max((b1 - b0) / 80, 0.002))
+    else:
+        notes.append("no base in the scan: the column's base is the Vitruvian one")
+    tree = other_parts_tree(col)
+    m, col = _turn_about_axis(sub, rng, frame, col, sec, e, s0, tree, notes)
+    base_fit = None
+    if has_base:  # the turn about the axis is known now: the plinth's faces face ±x, ±z
+        col, base_fit = _fit_scanned_base(
+            to_column(sub, m), col, frame, notes, fit_base_grammar, noise
+        )
+        if base_fit is not None:
+            tree = other_parts_tree(col)
+    cap_fit = None
+    if has_cap:
+        col, m, cap_fit = _fit_capital(sub, col, m, has_base, notes)
+        if has_base:  # its length set by the capital: the taper again, the top ring seen
+            col = shaft_top(
+                to_column(sub, m), frame.local(sub), frame.parts["shaft"], sec, col, noise, notes
+            )
+        tree = other_parts_tree(col)
+    dev = scan_deviation(pts, col, m, tree=tree)
+    fits = _part_report(frame.local(pts)[:, 2], dev, frame, sec, base_fit, col, cap_fit)
+    _check_is_column(fits, diameter, e)
+    secs = time.perf_counter() - t0
+    return ScanFit(col, frame, m, diameter, e, sec, base_fit, dev, secs, slab, bprof, notes, fits)
+
+
+def _plain_ring(
+    frame: ColumnFrame, loc: np.ndarray, det: dict, sec: dict, e: int, notes: list[str]
+) -> tuple[ColumnFrame, float | None]:
+    """Where a base is scanned and the flutes' lower tip found: the frame with the base
+    ending where its mouldings do, and the plain ring's height between them and the tip;
+    else the frame as it is and None."""
+    if "base" not in frame.parts or not math.isfinite(det["tip"]):
+        return frame, None
+    b0 = frame.parts["base"][0]
+    joint, tip = det["joint"], det["tip"]
+    # no step between the mouldings and the ring: the base may end in a fillet at the
+    # ring's radius; the joint the flutes' start gives (the model's ring below them)
+    # then splits the plain part
+    r0 = det["a"] + det["b"] * joint
+    col0 = portunus_column_params(lower_diameter=2.0 * r0, flutes=e)
+    onset = _joint(frame, loc, col0, r0, sec, []).parts["base"][1]
+    if joint < onset < tip:
+        joint = onset
+    notes.append(
+        f"flutes end {tip - b0:.4f} m up (the tip whose flute ends fit best); the base's "
+        f"mouldings end at {joint - b0:.4f} m: plain ring {(tip - joint) * 1000:.3g} mm"
+    )
+    parts = dict(frame.parts, base=(b0, joint), shaft=(joint, frame.parts["shaft"][1]))
+    return dataclasses.replace(frame, parts=parts), tip - joint
+
+
+def _scanned_shaft(
+    col: ColumnParams,
+    frame: ColumnFrame,
+    loc: np.ndarray,
+    det: dict,
+    sec: dict,
+    e: int,
+    ring_bottom: float | None,
+    notes: list[str],
+) -> ColumnParams:
+    """``col`` with the scanned shaft: its plain ring, its length and top radius on a whole
+    column (the capital's volutes hang below the shaft's top: the hang measured on the
+    model), the taper and entasis where the points allow, the flutes' count, angle, depth."""
+    r_bottom = det["a"] + det["b"] * frame.parts["shaft"][0]
     sh = col.shaft
     if ring_bottom is not None:
         sh = dataclasses.replace(sh, ring_bottom=max(ring_bottom, 0.0))
     top_ratio = (r_bottom + det["b"] * sh.length) / r_bottom
-    has_base, has_cap = "base" in frame.parts, "capital" in frame.parts
-    if has_base and has_cap:
-        # the capital's volutes hang below the shaft's top: measure the hang on the model
+    if "base" in frame.parts and "capital" in frame.parts:
         built = build_column(col)
-        hang = (
-            built.base_height
-            + built.shaft_length
-            - float(
-                np.min(
-                    [
-                        m.points[:, 1].min()
-                        for k, m in built.parts().items()
-                        if k.startswith("Capital")
-                    ]
-                )
-            )
-        )
+        low = min(m.points[:, 1].min() for k, m in built.parts().items() if k.startswith("Capital"))
+        hang = built.base_height + built.shaft_length - float(low)
         length = frame.parts["capital"][0] + hang - frame.parts["base"][1]
         r_top = det["a"] + det["b"] * frame.parts["capital"][0]
         top_ratio = r_top / r_bottom
@@ -302,18 +295,26 @@ def fit_column_scan(
         flute_angle=sec["flute_angle"],
         flute_depth=sec["flute_depth"],
     )
-    col = dataclasses.replace(col, shaft=sh)
-    bprof = None
-    if has_base:
-        b0, b1 = frame.parts["base"]
-        bprof = outer_profile(loc, b0, b1, max((b1 - b0) / 80, 0.002))
-    else:
-        notes.append("no base in the scan: the column's base is the Vitruvian one")
-    # column coordinates → scan: y along the axis, x at the flutes' angle 0
+    return dataclasses.replace(col, shaft=sh)
+
+
+def _turn_about_axis(
+    sub: np.ndarray,
+    rng: np.random.Generator,
+    frame: ColumnFrame,
+    col: ColumnParams,
+    sec: dict,
+    e: int,
+    s0: float,
+    tree,
+    notes: list[str],
+) -> tuple[np.ndarray, ColumnParams]:
+    """The column → scan matrix (y along the axis, x at the flutes' angle 0) and the column
+    with its flutes' phase. The flutes fix the turn about the axis up to a flute period; the
+    plinth and the volutes (180° symmetric) choose among the periods: the one nearest the
+    scan wins."""
+    has_base, has_cap = "base" in frame.parts, "capital" in frame.parts
     h_col0 = _column_zero(frame, col, s0)
-    # the flutes fix the turn about the axis up to a flute period; the plinth and the
-    # volutes (180° symmetric) choose among the periods: the one nearest the scan wins
-    tree = other_parts_tree(col)
     probe = sub[rng.choice(len(sub), min(len(sub), 5000), replace=False)]
     plinth = None
     if has_base:
@@ -335,47 +336,7 @@ def fit_column_scan(
         d = scan_deviation(probe, c_j, m, tree=tree)
         turns.append((float(np.sqrt(np.mean(d**2))), m, c_j))
     best = min(turns, key=lambda t: t[0])  # the first of equal scores
-    m, col = best[1], best[2]
-    base_fit = None
-    if has_base:  # the turn about the axis is known now: the plinth's faces face ±x, ±z
-        col, base_fit = _fit_scanned_base(
-            to_column(sub, m), col, frame, notes, fit_base_grammar, noise
-        )
-        if base_fit is not None:
-            tree = other_parts_tree(col)
-    cap_fit = None
-    if has_cap:
-        col, m, cap_fit = _fit_capital(sub, col, m, has_base, notes)
-        if has_base:  # its length set by the capital: the taper again, the top ring seen
-            col = shaft_top(
-                to_column(sub, m), frame.local(sub), frame.parts["shaft"], sec, col, noise, notes
-            )
-        tree = other_parts_tree(col)
-    dev = scan_deviation(pts, col, m, tree=tree)
-    fits = _part_report(frame.local(pts)[:, 2], dev, frame, sec, base_fit, col, cap_fit)
-    _check_is_column(fits, diameter, e)
-    secs = time.perf_counter() - t0
-    return ScanFit(col, frame, m, diameter, e, sec, base_fit, dev, secs, slab, bprof, notes, fits)
-
-
-#: where the first fluted section is sought, as fractions of the narrow band: its lower part
-#: can still be the base's top (a short fragment's band starts at the upper torus)
-FIRST_SECTIONS = (0.25, 0.4, 0.55)
-
-
-def _lowest_fluted(
-    loc: np.ndarray, s0: float, s1: float, ra: float, rb: float
-) -> tuple[float, int] | str:
-    """The lowest of :data:`FIRST_SECTIONS` whose section is fluted and its flute count, or
-    what was tried."""
-    tried = []
-    for frac in FIRST_SECTIONS:
-        h = s0 + frac * (s1 - s0)
-        e, sec, slab, _ = section_at(loc, h, s0, s1, ra, rb, None)
-        if is_fluted(slab, sec):
-            return frac, e
-        tried.append(f"{e} flutes at {h:.3f} m")
-    return ", ".join(tried) + " tried"
+    return best[1], best[2]
 
 
 def _capital_alone(

@@ -330,6 +330,187 @@ def _level_eye(cap: CapitalParams, model: str, vs: float) -> float:
     return (top - top_vs) / part
 
 
+@dataclass
+class _Problem:
+    """What every stage of the capital's fit shares: the points (column coordinates), their
+    distance to the rest of the column, the starting capital and the robust cost's scale."""
+
+    q: np.ndarray
+    far: np.ndarray
+    cap: CapitalParams
+    top_radius: float
+    y_top: float
+
+    def __post_init__(self) -> None:
+        self.size = self.cap.capital_width
+        self.f_scale = 0.002 * self.size / 0.95  # 2 mm at the Portunus size
+        self.few = slice(0, min(len(self.q), 600))  # the coarse scans' points
+
+    def dist(
+        self, surf: CapitalSurface, s: float, ty: float, sel: slice = slice(None)
+    ) -> np.ndarray:
+        """The points' distances to ``surf`` scaled by ``s`` and raised by ``ty``."""
+        qm = (self.q[sel] - np.array([0.0, self.y_top + ty, 0.0])) / s
+        return np.minimum(surf.distance(qm) * s, self.far[sel])
+
+    def robust(self, d: np.ndarray) -> float:
+        """The ``soft_l1`` cost of distances ``d`` (as least_squares sums it, halved)."""
+        z = (d / self.f_scale) ** 2
+        return float(np.sum(2.0 * (np.sqrt(1.0 + z) - 1.0)))
+
+    def place(
+        self, surf: CapitalSurface, s0: float, ty0: float, span: float, sel: slice = slice(None)
+    ) -> tuple[float, float, float]:
+        """(s, ty, cost): a scan of ty over ±span at s0 (a few points), then both polished."""
+        from scipy.optimize import least_squares
+
+        grid = ty0 + np.linspace(-span, span, 25)
+        ty1 = float(
+            grid[int(np.argmin([self.robust(self.dist(surf, s0, t, self.few)) for t in grid]))]
+        )
+        lim = 0.25 * self.size
+        sol = least_squares(
+            lambda x: self.dist(surf, x[0], x[1], sel),
+            np.array([s0, ty1]),
+            bounds=([0.85, ty1 - lim], [1.15, ty1 + lim]),
+            loss="soft_l1",
+            f_scale=self.f_scale,
+            x_scale=[0.05, 0.02 * self.size],
+            diff_step=1e-4,
+            max_nfev=25,
+        )
+        return float(sol.x[0]), float(sol.x[1]), float(sol.cost)
+
+    def build(self, model: str, x: np.ndarray, count: int = 60_000) -> CapitalSurface | None:
+        """The surface of the capital with proportions ``x``, or None where it cannot be."""
+        try:
+            return capital_surface(
+                _proportioned(self.cap, model, x), self.top_radius, count=count, outer=True
+            )
+        except (ParameterError, GeometryError):
+            return None
+
+    def grid(
+        self,
+        model: str,
+        x: np.ndarray,
+        s: float,
+        ty: float,
+        which: tuple[int, ...],
+        n: int,
+        span: float | None = None,
+    ) -> np.ndarray:
+        """``x`` with each parameter of ``which`` in turn set to the best of ``n`` values
+        over its range, or over ``x ± span`` within it (the others and the placement held)."""
+        x = x.copy()
+        for k in which:
+            lo, hi = (_LO[k], _HI[k]) if span is None else (x[k] - span, x[k] + span)
+            vals = np.linspace(max(lo, _LO[k]), min(hi, _HI[k]), n)
+            costs = []
+            for v in vals:
+                xk = x.copy()
+                xk[k] = v
+                surf_k = self.build(model, xk)
+                costs.append(np.inf if surf_k is None else self.robust(self.dist(surf_k, s, ty)))
+            x[k] = vals[int(np.argmin(costs))]
+        return x
+
+    def residuals(
+        self, xa: np.ndarray, x: np.ndarray, model: str, s: float, ty: float
+    ) -> np.ndarray:
+        """The distances with the model's active parameters set to ``xa`` (the rest ``x``)."""
+        xf = x.copy()
+        xf[_ACTIVE[model]] = xa
+        surf = self.build(model, xf)
+        return np.full(len(self.q), 10.0 * self.size) if surf is None else self.dist(surf, s, ty)
+
+    def solve(self, model: str, x: np.ndarray, s: float, ty: float, nfev: int) -> np.ndarray:
+        """``x`` with the model's active parameters polished by bounded robust least squares."""
+        from scipy.optimize import least_squares
+
+        act = _ACTIVE[model]
+        sol = least_squares(
+            self.residuals,
+            np.clip(x[act], _LO[act], _HI[act]),
+            bounds=(_LO[act], _HI[act]),
+            loss="soft_l1",
+            f_scale=self.f_scale,
+            x_scale=_XSCALE[act],
+            diff_step=3e-2,
+            max_nfev=nfev,
+            args=(x, model, s, ty),
+        )
+        out = x.copy()
+        out[act] = sol.x
+        return out
+
+    def sized(self, model: str, s0: float, ty0: float) -> tuple[np.ndarray, float, float] | None:
+        """The best of a coarse scan of the volute's size, each placed: (x, s, ty), or None.
+
+        The volute's size moves the abacus (it rests on the volutes' top): scanning it first
+        keeps a wrong size from being traded for a wrong height."""
+        cap, best = self.cap, None
+        for vs in (0.5, 0.6, 0.72, 0.86, 1.0, 1.16):
+            x0 = _X0.copy()
+            x0[0], x0[1] = vs, _level_eye(cap, model, vs)
+            x0[9] = spiral_growth(cap.volute)
+            x0[14] = cap.volute.spiral_circuits
+            x0[16] = cap.volute.min_thickness / cap.volute.thickness
+            surf0 = self.build(model, x0)
+            if surf0 is None:
+                continue
+            s_i, ty_i, c_i = self.place(surf0, s0, ty0, 0.06 * self.size, self.few)
+            if best is None or c_i < best[0]:
+                best = (c_i, x0, s_i, ty_i)
+        return None if best is None else best[1:]
+
+    def on_rolls(self, model: str, x: np.ndarray, s: float, ty: float) -> np.ndarray:
+        """``x``, or the volute moved onto the rolls' circle where that is nearer the points
+        (the faces' spirals and the rolls pull the eye apart when the volute's outline is
+        not the rolls' circle)."""
+        qm = (self.q - np.array([0.0, self.y_top + ty, 0.0])) / s
+        xr = _eye_on_rolls(self.cap, model, x, qm, self.f_scale)
+        if xr is x:
+            return x
+        surfs = [self.build(model, xi) for xi in (x, xr)]
+        if surfs[1] is not None and (
+            surfs[0] is None
+            or self.robust(self.dist(surfs[1], s, ty)) < self.robust(self.dist(surfs[0], s, ty))
+        ):
+            return xr
+        return x
+
+    def fit_model(self, model: str, s0: float, ty0: float) -> dict[str, Any] | None:
+        """Stages 2 and 3 of the module docstring for one volute model: its report entry
+        (with the fitted capital under ``_capital``), or None if no size could be built."""
+        start = self.sized(model, s0, ty0)
+        if start is None:
+            return None
+        x, s, ty = start
+        x = self.grid(model, np.clip(x, _LO, _HI), s, ty, GRIDDED_BEFORE, 29)
+        x = self.on_rolls(model, x, s, ty)
+        x = self.grid(model, self.solve(model, x, s, ty, 12), s, ty, GRIDDED_AFTER, 13)
+        x = self.grid(model, x, s, ty, GRIDDED_AFTER, 9, span=0.5 * (_HI[7] - _LO[7]) / 12)
+        xs = self.solve(model, x, s, ty, 4)
+        c = _proportioned(self.cap, model, xs)
+        surf = capital_surface(c, self.top_radius, outer=True)
+        s_m, ty_m, cost = self.place(surf, s, ty, 0.02 * self.size)
+        d = self.dist(surf, s_m, ty_m)
+        u = (xs - _LO) / (_HI - _LO)
+        return {
+            "cost": cost,
+            "rms": float(np.sqrt(np.mean(d**2))),
+            "p95": float(np.percentile(d, 95)),
+            "proportions": dict(zip(PROPORTIONS, (float(v) for v in xs), strict=True)),
+            "scale": s_m,
+            "ty": ty_m,
+            "bounds_hit": [
+                n for n, ui in zip(PROPORTIONS, u, strict=True) if min(ui, 1 - ui) < 1e-3
+            ],
+            "_capital": c.scaled(s_m),
+        }
+
+
 def fit_scanned_capital(
     col_pts: np.ndarray,
     cap: CapitalParams,
@@ -355,11 +536,6 @@ def fit_scanned_capital(
     -------
     CapitalFit
     """
-    from scipy.optimize import least_squares
-
-    from ionic_usd.column.capital_body import capital_layout
-    from ionic_usd.column.volute import volute_total_radius
-
     t0 = time.perf_counter()
     rng = np.random.default_rng(seed)
     keep = rng.permutation(len(col_pts))[:max_points]
@@ -367,163 +543,41 @@ def fit_scanned_capital(
     far = np.full(len(q), np.inf) if other is None else np.asarray(other)[keep]
     if len(q) < 100:
         raise GeometryError(f"too few capital points ({len(q)}) to fit the capital")
-    size = cap.capital_width
-    f_scale = 0.002 * size / 0.95  # 2 mm at the Portunus size
-
-    few = slice(0, min(len(q), 600))  # the coarse scans' points
-
-    def dist(surf: CapitalSurface, s: float, ty: float, sel: slice = slice(None)) -> np.ndarray:
-        qm = (q[sel] - np.array([0.0, y_top + ty, 0.0])) / s
-        return np.minimum(surf.distance(qm) * s, far[sel])
-
-    def robust(d: np.ndarray) -> float:
-        z = (d / f_scale) ** 2
-        return float(np.sum(2.0 * (np.sqrt(1.0 + z) - 1.0)))
-
-    def place(
-        surf: CapitalSurface, s0: float, ty0: float, span: float, sel: slice = slice(None)
-    ) -> tuple[float, float, float]:
-        """(s, ty, cost): a scan of ty over ±span at s0 (a few points), then both polished."""
-        grid = ty0 + np.linspace(-span, span, 25)
-        ty1 = float(grid[int(np.argmin([robust(dist(surf, s0, t, few)) for t in grid]))])
-        lim = 0.25 * size
-        sol = least_squares(
-            lambda x: dist(surf, x[0], x[1], sel),
-            np.array([s0, ty1]),
-            bounds=([0.85, ty1 - lim], [1.15, ty1 + lim]),
-            loss="soft_l1",
-            f_scale=f_scale,
-            x_scale=[0.05, 0.02 * size],
-            diff_step=1e-4,
-            max_nfev=25,
-        )
-        return float(sol.x[0]), float(sol.x[1]), float(sol.cost)
-
-    def build(model: str, x: np.ndarray, count: int = 60_000) -> CapitalSurface | None:
-        try:
-            return capital_surface(
-                _proportioned(cap, model, x), top_radius, count=count, outer=True
-            )
-        except (ParameterError, GeometryError):
-            return None
-
-    def grid(
-        model: str,
-        x: np.ndarray,
-        s: float,
-        ty: float,
-        which: tuple[int, ...],
-        n: int,
-        span: float | None = None,
-    ) -> np.ndarray:
-        """``x`` with each parameter of ``which`` in turn set to the best of ``n`` values
-        over its range, or over ``x ± span`` within it (the others and the placement held)."""
-        x = x.copy()
-        for k in which:
-            lo, hi = (_LO[k], _HI[k]) if span is None else (x[k] - span, x[k] + span)
-            vals = np.linspace(max(lo, _LO[k]), min(hi, _HI[k]), n)
-            costs = []
-            for v in vals:
-                xk = x.copy()
-                xk[k] = v
-                surf_k = build(model, xk)
-                costs.append(np.inf if surf_k is None else robust(dist(surf_k, s, ty)))
-            x[k] = vals[int(np.argmin(costs))]
-        return x
-
+    pb = _Problem(q, far, cap, top_radius, y_top)
     start = capital_surface(cap, top_radius, outer=True)
-    rms_start = float(np.sqrt(np.mean(dist(start, 1.0, 0.0) ** 2)))
-    s0, ty0, _ = place(start, 1.0, 0.0, 0.15 * size)
+    rms_start = float(np.sqrt(np.mean(pb.dist(start, 1.0, 0.0) ** 2)))
+    s0, ty0, _ = pb.place(start, 1.0, 0.0, 0.15 * pb.size)
     models: dict[str, dict[str, Any]] = {}
     for model in ("log_spiral", "centred_arcs"):
-        # the volute's size moves the abacus (it rests on the volutes' top): a coarse scan
-        # of the size, each placed, keeps a wrong size from being traded for a wrong height
-        best_c = None
-        for vs in (0.5, 0.6, 0.72, 0.86, 1.0, 1.16):
-            x0 = _X0.copy()
-            x0[0], x0[1] = vs, _level_eye(cap, model, vs)
-            x0[9] = spiral_growth(cap.volute)
-            x0[14] = cap.volute.spiral_circuits
-            x0[16] = cap.volute.min_thickness / cap.volute.thickness
-            surf0 = build(model, x0)
-            if surf0 is None:
-                continue
-            s_i, ty_i, c_i = place(surf0, s0, ty0, 0.06 * size, few)
-            if best_c is None or c_i < best_c[0]:
-                best_c = (c_i, x0, s_i, ty_i)
-        if best_c is None:
-            continue
-        _, x, s, ty = best_c
-        x = grid(model, np.clip(x, _LO, _HI), s, ty, GRIDDED_BEFORE, 29)
-        # the volute on the rolls' circle, where that is nearer the points (a start: the
-        # faces' spirals and the rolls pull the eye apart when the volute's outline is not
-        # the rolls' circle)
-        xr = _eye_on_rolls(cap, model, x, (q - np.array([0.0, y_top + ty, 0.0])) / s, f_scale)
-        if xr is not x:
-            surfs = [build(model, xi) for xi in (x, xr)]
-            if surfs[1] is not None and (
-                surfs[0] is None or robust(dist(surfs[1], s, ty)) < robust(dist(surfs[0], s, ty))
-            ):
-                x = xr
-
-        act = _ACTIVE[model]
-
-        def res(
-            xa: np.ndarray,
-            x: np.ndarray,
-            model: str = model,
-            s: float = s,
-            ty: float = ty,
-            act: np.ndarray = act,
-        ) -> np.ndarray:
-            xf = x.copy()
-            xf[act] = xa
-            surf = build(model, xf)
-            return np.full(len(q), 10.0 * size) if surf is None else dist(surf, s, ty)
-
-        def solve(x: np.ndarray, nfev: int, res=res, act=act) -> np.ndarray:
-            sol = least_squares(
-                res,
-                np.clip(x[act], _LO[act], _HI[act]),
-                bounds=(_LO[act], _HI[act]),
-                loss="soft_l1",
-                f_scale=f_scale,
-                x_scale=_XSCALE[act],
-                diff_step=3e-2,
-                max_nfev=nfev,
-                args=(x,),
-            )
-            out = x.copy()
-            out[act] = sol.x
-            return out
-
-        x = grid(model, solve(x, 12), s, ty, GRIDDED_AFTER, 13)
-        x = grid(model, x, s, ty, GRIDDED_AFTER, 9, span=0.5 * (_HI[7] - _LO[7]) / 12)
-        xs = solve(x, 4)
-        c = _proportioned(cap, model, xs)
-        surf = capital_surface(c, top_radius, outer=True)
-        s_m, ty_m, cost = place(surf, s, ty, 0.02 * size)
-        d = dist(surf, s_m, ty_m)
-        u = (xs - _LO) / (_HI - _LO)
-        models[model] = {
-            "cost": cost,
-            "rms": float(np.sqrt(np.mean(d**2))),
-            "p95": float(np.percentile(d, 95)),
-            "proportions": dict(zip(PROPORTIONS, (float(v) for v in xs), strict=True)),
-            "scale": s_m,
-            "ty": ty_m,
-            "bounds_hit": [
-                n for n, ui in zip(PROPORTIONS, u, strict=True) if min(ui, 1 - ui) < 1e-3
-            ],
-            "_capital": c.scaled(s_m),
-        }
+        entry = pb.fit_model(model, s0, ty0)
+        if entry is not None:
+            models[model] = entry
     best = min(models, key=lambda k: models[k]["cost"])
     win = models[best]
     fitted: CapitalParams = win["_capital"]
     for m in models.values():
         del m["_capital"]
-    values = {
-        "scale": win["scale"],
+    return CapitalFit(
+        fitted,
+        win["ty"],
+        best,
+        _fitted_values(fitted, win["scale"]),
+        models,
+        rms_start,
+        win["rms"],
+        list(win["bounds_hit"]),
+        time.perf_counter() - t0,
+        len(q),
+    )
+
+
+def _fitted_values(fitted: CapitalParams, scale: float) -> dict[str, float]:
+    """The fitted capital's measures, as the report lists them."""
+    from ionic_usd.column.capital_body import capital_layout
+    from ionic_usd.column.volute import volute_total_radius
+
+    return {
+        "scale": scale,
         "capital_spiral_radius": fitted.volute.capital_spiral_radius,
         "capital_circle_radius": fitted.volute.capital_circle_radius,
         "scroll_position_y": fitted.scroll_position_y,
@@ -542,15 +596,3 @@ def fit_scanned_capital(
         "abacus_width": fitted.abacus_width,
         "abacus_height": fitted.abacus_height,
     }
-    return CapitalFit(
-        fitted,
-        win["ty"],
-        best,
-        values,
-        models,
-        rms_start,
-        win["rms"],
-        list(win["bounds_hit"]),
-        time.perf_counter() - t0,
-        len(q),
-    )

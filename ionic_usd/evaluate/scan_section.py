@@ -9,14 +9,17 @@ taper (a robust line).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 
 from ionic_usd.errors import GeometryError
 from ionic_usd.evaluate.polyline import closest_on_polyline
+from ionic_usd.evaluate.scan_alone import is_fluted
+from ionic_usd.evaluate.scan_axis import ColumnFrame, find_parts
 
-__all__ = ["outer_profile", "section_at", "taper"]
+__all__ = ["outer_profile", "section_at", "shaft_axis_section", "taper"]
 
 
 def _flutes_from_points(xy: np.ndarray) -> tuple[int, float]:
@@ -143,3 +146,81 @@ def outer_profile(loc: np.ndarray, h0: float, h1: float, width: float) -> np.nda
         if np.count_nonzero(sel) >= 8:
             out.append((float(np.percentile(r[sel], 95)), 0.5 * (a + b)))
     return np.asarray(out)
+
+
+def shaft_axis_section(
+    sub: np.ndarray, frame: ColumnFrame, notes: list[str]
+) -> tuple[ColumnFrame, int, dict, np.ndarray, float] | None:
+    """The axis through the centres of two shaft sections and the section fitted a third of
+    the way up the shaft in that frame, the axis recentred on it: (frame, flute count,
+    section, its slab of points, the shaft band's bottom), or None (with a note) where the
+    scan has no fluted shaft.
+
+    Two sections, a quarter and three quarters up the shaft band: their centres set the axis
+    far better than the normals (a 1 mm error over 4 m is 0.015°)."""
+    if "shaft" not in frame.parts:
+        notes.append("no narrow band along the axis: no shaft")
+        return None
+    e = None
+    fracs = (0.25, 0.75)
+    for stage in range(3):  # refine twice: a tilted first axis blurs the first slabs
+        loc = frame.local(sub)
+        s0, s1 = frame.parts["shaft"]
+        ra, rb = taper(loc, s0, s1)
+        if stage == 0:
+            try:
+                found = _lowest_fluted(loc, s0, s1, ra, rb)
+            except GeometryError:
+                notes.append("too few points for a shaft section: no shaft")
+                return None
+            if isinstance(found, str):
+                notes.append(f"no fluted section fits the narrow band ({found}): no shaft")
+                return None
+            first, e = found  # the count its search chose: the loop fits that count only
+            fracs = (first, 0.75 if first < 0.5 else 0.9)
+        if stage < 2:
+            cs = []
+            for frac in fracs:
+                h = s0 + frac * (s1 - s0)
+                e, sec1, slab1, _ = section_at(loc, h, s0, s1, ra, rb, e)
+                cs.append(
+                    frame.origin
+                    + sec1["centre_u"] * frame.u
+                    + sec1["centre_v"] * frame.v
+                    + h * frame.direction
+                )
+            a_new = cs[1] - cs[0]
+            frame = find_parts(sub, a_new / np.linalg.norm(a_new), cs[0])
+            if "shaft" not in frame.parts:
+                raise GeometryError("the shaft band was lost after refining the axis")
+    hs = s0 + (s1 - s0) / 3.0
+    # the flute count is chosen again in the refined frame (a tilted slab blurs flutes)
+    e, sec, slab, half = section_at(loc, hs, s0, s1, ra, rb, None)
+    notes.append(
+        f"axis through the centres of sections {s0 + 0.25 * (s1 - s0):.3f} and "
+        f"{s0 + 0.75 * (s1 - s0):.3f} m up; section from {len(slab)} points within "
+        f"±{half * 1000:.3g} mm of {hs:.3f} m"
+    )
+    # recentre the axis on the fitted section centre
+    shift = sec["centre_u"] * frame.u + sec["centre_v"] * frame.v
+    return dataclasses.replace(frame, origin=frame.origin + shift), e, sec, slab, s0
+
+
+#: where the first fluted section is sought, as fractions of the narrow band: its lower part
+#: can still be the base's top (a short fragment's band starts at the upper torus)
+FIRST_SECTIONS = (0.25, 0.4, 0.55)
+
+
+def _lowest_fluted(
+    loc: np.ndarray, s0: float, s1: float, ra: float, rb: float
+) -> tuple[float, int] | str:
+    """The lowest of :data:`FIRST_SECTIONS` whose section is fluted and its flute count, or
+    what was tried."""
+    tried = []
+    for frac in FIRST_SECTIONS:
+        h = s0 + frac * (s1 - s0)
+        e, sec, slab, _ = section_at(loc, h, s0, s1, ra, rb, None)
+        if is_fluted(slab, sec):
+            return frac, e
+        tried.append(f"{e} flutes at {h:.3f} m")
+    return ", ".join(tried) + " tried"
