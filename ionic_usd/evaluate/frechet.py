@@ -159,6 +159,79 @@ def _free_on_segment(x, y, z, j, cx, cy, cz, eps2):  # pragma: no cover - compil
     )
 
 
+@njit(cache=True, inline="always")
+def _first_column(px, py, pz, qx, qy, qz, eps2, llo, lhi, lstamp):  # pragma: no cover - compiled
+    """Column x = 0: the left edges reachable upward from (0, 0) while the free space is
+    unbroken, written into ``llo``, ``lhi``, ``lstamp``; returns their rows (jmin, jmax),
+    -1 where none."""
+    m = qx.size
+    jmin = -1
+    jmax = -1
+    for j in range(m - 1):
+        lo, hi = _free_on_segment(qx, qy, qz, j, px[0], py[0], pz[0], eps2)
+        if lo != 0.0 or lo > hi:
+            break
+        llo[j] = lo
+        lhi[j] = hi
+        lstamp[j] = 0
+        if jmin < 0:
+            jmin = j
+        jmax = j
+        if hi < 1.0:
+            break
+    return jmin, jmax
+
+
+@njit(cache=True, inline="always")
+def _sweep_column(p, q, eps2, i, j, jmax, blo, bhi, left, right):  # pragma: no cover - compiled
+    """One column of cells (i, j) from row ``j`` up: the reachable right edges written into
+    ``right`` (lo, hi, stamp = i + 1) from the reachable left edges ``left`` and the bottom
+    interval (blo, bhi). Returns (the row it stopped at, the last top edge's interval, the
+    lowest and highest reachable right edge, -1 where none). ``p``, ``q``: the curves'
+    coordinate arrays (x, y, z)."""
+    px, py, pz = p
+    qx, qy, qz = q
+    llo, lhi, lstamp = left
+    nlo, nhi, nstamp = right
+    m = qx.size
+    vx = px[i + 1] - px[i]
+    vy = py[i + 1] - py[i]
+    vz = pz[i + 1] - pz[i]
+    new_min = -1
+    new_max = -1
+    while j < m - 1:
+        has_left = lstamp[j] == i
+        has_bottom = blo <= bhi
+        if not has_left and not has_bottom:
+            if j >= jmax:
+                break
+            j += 1
+            continue
+        # Right edge of cell (i, j): free interval on Q_j seen from p_{i+1}.
+        rlo, rhi = _free_on_segment(qx, qy, qz, j, px[i + 1], py[i + 1], pz[i + 1], eps2)
+        if not has_bottom:
+            rlo = max(rlo, llo[j])
+        if rlo <= rhi:
+            nlo[j] = rlo
+            nhi[j] = rhi
+            nstamp[j] = i + 1
+            if new_min < 0:
+                new_min = j
+            new_max = j
+        # Top edge of cell (i, j): free interval on P_i seen from q_{j+1}.
+        tlo, thi = _free_interval(
+            px[i], py[i], pz[i], vx, vy, vz, qx[j + 1], qy[j + 1], qz[j + 1], eps2
+        )
+        if not has_left:
+            tlo = max(tlo, blo)
+        if tlo <= thi:
+            blo, bhi = tlo, thi
+        else:
+            blo, bhi = 1.0, 0.0
+        j += 1
+    return j, blo, bhi, new_min, new_max
+
+
 @njit(cache=True)
 def _frechet_decide(px, py, pz, qx, qy, qz, eps):  # pragma: no cover - compiled
     # Alt-Godau decision "Fréchet(P, Q) <= eps" on the free-space diagram, swept column by
@@ -179,21 +252,8 @@ def _frechet_decide(px, py, pz, qx, qy, qz, eps):  # pragma: no cover - compiled
     nlo = np.empty(m - 1)
     nhi = np.empty(m - 1)
     nstamp = np.full(m - 1, -1)
-    # Column x = 0: reachable upward from (0, 0) while the free space is unbroken.
-    jmin = -1
-    jmax = -1
-    for j in range(m - 1):
-        lo, hi = _free_on_segment(qx, qy, qz, j, px[0], py[0], pz[0], eps2)
-        if lo != 0.0 or lo > hi:
-            break
-        llo[j] = lo
-        lhi[j] = hi
-        lstamp[j] = 0
-        if jmin < 0:
-            jmin = j
-        jmax = j
-        if hi < 1.0:
-            break
+    left, right = (llo, lhi, lstamp), (nlo, nhi, nstamp)
+    jmin, jmax = _first_column(px, py, pz, qx, qy, qz, eps2, llo, lhi, lstamp)
     bottom_ok = True  # corner (i, 0) reachable along y = 0
     for i in range(n - 1):
         vx = px[i + 1] - px[i]
@@ -212,46 +272,15 @@ def _frechet_decide(px, py, pz, qx, qy, qz, eps):  # pragma: no cover - compiled
             j = jmin
         else:
             j = 0
-        new_min = -1
-        new_max = -1
-        while j < m - 1:
-            has_left = lstamp[j] == i
-            has_bottom = blo <= bhi
-            if not has_left and not has_bottom:
-                if j >= jmax:
-                    break
-                j += 1
-                continue
-            # Right edge of cell (i, j): free interval on Q_j seen from p_{i+1}.
-            rlo, rhi = _free_on_segment(qx, qy, qz, j, px[i + 1], py[i + 1], pz[i + 1], eps2)
-            if not has_bottom:
-                rlo = max(rlo, llo[j])
-            if rlo <= rhi:
-                nlo[j] = rlo
-                nhi[j] = rhi
-                nstamp[j] = i + 1
-                if new_min < 0:
-                    new_min = j
-                new_max = j
-            # Top edge of cell (i, j): free interval on P_i seen from q_{j+1}.
-            tlo, thi = _free_interval(
-                px[i], py[i], pz[i], vx, vy, vz, qx[j + 1], qy[j + 1], qz[j + 1], eps2
-            )
-            if not has_left:
-                tlo = max(tlo, blo)
-            if tlo <= thi:
-                blo, bhi = tlo, thi
-            else:
-                blo, bhi = 1.0, 0.0
-            j += 1
+        j, blo, bhi, new_min, new_max = _sweep_column(
+            (px, py, pz), (qx, qy, qz), eps2, i, j, jmax, blo, bhi, left, right
+        )
         if i == n - 2:
             # End corner (n-1, m-1): top of the last cell or right edge of the last cell.
             if j == m - 1 and blo <= bhi and bhi >= 1.0:
                 return True
-            return nstamp[m - 2] == i + 1 and nhi[m - 2] >= 1.0
-        llo, nlo = nlo, llo
-        lhi, nhi = nhi, lhi
-        lstamp, nstamp = nstamp, lstamp
+            return right[2][m - 2] == i + 1 and right[1][m - 2] >= 1.0
+        left, right = right, left
         jmin = new_min
         jmax = new_max
         if jmin < 0 and not bottom_ok:

@@ -296,6 +296,82 @@ def _segment_grid(poly, cs, nx, ny, x0, y0):  # pragma: no cover - compiled
     return start, items
 
 
+@njit(cache=True, inline="always")
+def _grid_box(points, poly):  # pragma: no cover - compiled
+    """(use the grid, cell size, x0, y0, x1, y1) for :func:`closest_on_polyline`: the
+    polyline's box and cells about four segments long; False where every segment is tried
+    instead (small, degenerate or non-finite inputs, long segments listed in too many
+    cells)."""
+    n, m = points.shape[0], poly.shape[0]
+    ns = m - 1
+    finite = True
+    for i in range(n):
+        finite = finite and math.isfinite(points[i, 0]) and math.isfinite(points[i, 1])
+    x0, y0, x1, y1, total = np.inf, np.inf, -np.inf, -np.inf, 0.0
+    for j in range(m):
+        finite = finite and math.isfinite(poly[j, 0]) and math.isfinite(poly[j, 1])
+        x0, x1 = min(x0, poly[j, 0]), max(x1, poly[j, 0])
+        y0, y1 = min(y0, poly[j, 1]), max(y1, poly[j, 1])
+        if j:
+            total += math.hypot(poly[j, 0] - poly[j - 1, 0], poly[j, 1] - poly[j - 1, 1])
+    if not finite or ns < 32 or n * ns < 20_000 or total <= 0.0:
+        return False, 0.0, x0, y0, x1, y1
+    cs = max(4.0 * total / ns, 1e-9 * max(x1 - x0, y1 - y0))
+    cells = (math.floor((x1 - x0) / cs) + 1) * (math.floor((y1 - y0) / cs) + 1)
+    if cells > 4 * ns:  # a sparse curve in a large box: coarser cells
+        cs *= math.sqrt(cells / (4.0 * ns))
+    # listings per segment: its bounding box's cells (long diagonal segments list many)
+    listed = 0.0
+    for j in range(ns):
+        listed += (math.floor(abs(poly[j + 1, 0] - poly[j, 0]) / cs) + 2) * (
+            math.floor(abs(poly[j + 1, 1] - poly[j, 1]) / cs) + 2
+        )
+    return listed <= 64.0 * ns, cs, x0, y0, x1, y1
+
+
+@njit(cache=True, inline="always")
+def _ring_search(i, px, py, fx, fy, poly, grid, stamp, scale):  # pragma: no cover - compiled
+    """(squared distance, segment, t) of point ``i`` at (px, py), cell coordinates (fx, fy):
+    the rings of cells round its own, nearest first, until the closest segment found is
+    nearer than any cell not yet searched (the searched block's edge, less a rounding
+    margin). ``grid``: (start, items, nx, ny, cs), the cells' segments
+    (:func:`_segment_grid`); ``stamp`` marks the segments tried for this point."""
+    start, items, nx, ny, cs = grid
+    m = poly.shape[0]
+    ci, cj = int(math.floor(fx)), int(math.floor(fy))
+    k = max(0, ci - (nx - 1), -ci, cj - (ny - 1), -cj)  # the first ring on the grid
+    best, bj, bt = np.inf, m - 1, 0.0
+    while True:
+        for gj in range(max(cj - k, 0), min(cj + k, ny - 1) + 1):
+            edge_row = gj == cj - k or gj == cj + k
+            gi = max(ci - k, 0)
+            last = min(ci + k, nx - 1)
+            while gi <= last:
+                if edge_row or gi == ci - k or gi == ci + k:
+                    c = gj * nx + gi
+                    for q in range(start[c], start[c + 1]):
+                        j = items[q]
+                        if stamp[j] == i:
+                            continue
+                        stamp[j] = i
+                        d2, t = _segment_d2(px, py, poly, j, m)
+                        if d2 < best or (d2 == best and j < bj):
+                            best, bj, bt = d2, j, t
+                if edge_row or gi >= ci + k:
+                    gi += 1
+                else:
+                    gi = max(gi + 1, ci + k)  # inner rows: the ring's two ends only
+        if ci - k <= 0 and ci + k >= nx - 1 and cj - k <= 0 and cj + k >= ny - 1:
+            break  # every cell searched
+        # any segment not yet tried lies outside the block of rings 0..k round the point
+        lb = min(fx - (ci - k), ci + k + 1 - fx, fy - (cj - k), cj + k + 1 - fy) * cs
+        lb -= 1e-9 * cs + 1e-13 * (scale + abs(px) + abs(py))
+        if lb > 0.0 and best < lb * lb:
+            break
+        k += 1
+    return best, bj, bt
+
+
 @njit(cache=True)
 def closest_on_polyline(points, poly):  # pragma: no cover - compiled
     """Exact closest point of a 2-D polyline ``poly`` (m, 2) for each of ``points`` (n, 2):
@@ -311,33 +387,13 @@ def closest_on_polyline(points, poly):  # pragma: no cover - compiled
     """
     n, m = points.shape[0], poly.shape[0]
     ns = m - 1
-    finite = True
-    for i in range(n):
-        finite = finite and math.isfinite(points[i, 0]) and math.isfinite(points[i, 1])
-    x0, y0, x1, y1, total = np.inf, np.inf, -np.inf, -np.inf, 0.0
-    for j in range(m):
-        finite = finite and math.isfinite(poly[j, 0]) and math.isfinite(poly[j, 1])
-        x0, x1 = min(x0, poly[j, 0]), max(x1, poly[j, 0])
-        y0, y1 = min(y0, poly[j, 1]), max(y1, poly[j, 1])
-        if j:
-            total += math.hypot(poly[j, 0] - poly[j - 1, 0], poly[j, 1] - poly[j - 1, 1])
-    if not finite or ns < 32 or n * ns < 20_000 or total <= 0.0:
+    ok, cs, x0, y0, x1, y1 = _grid_box(points, poly)
+    if not ok:
         return _closest_brute(points, poly)
-    cs = max(4.0 * total / ns, 1e-9 * max(x1 - x0, y1 - y0))
-    cells = (math.floor((x1 - x0) / cs) + 1) * (math.floor((y1 - y0) / cs) + 1)
-    if cells > 4 * ns:  # a sparse curve in a large box: coarser cells
-        cs *= math.sqrt(cells / (4.0 * ns))
     nx = int(math.floor((x1 - x0) / cs)) + 1
     ny = int(math.floor((y1 - y0) / cs)) + 1
-    # listings per segment: its bounding box's cells (long diagonal segments list many)
-    listed = 0.0
-    for j in range(ns):
-        listed += (math.floor(abs(poly[j + 1, 0] - poly[j, 0]) / cs) + 2) * (
-            math.floor(abs(poly[j + 1, 1] - poly[j, 1]) / cs) + 2
-        )
-    if listed > 64.0 * ns:
-        return _closest_brute(points, poly)
     start, items = _segment_grid(poly, cs, nx, ny, x0, y0)
+    grid = (start, items, nx, ny, cs)
     stamp = np.full(ns, -1, dtype=np.int64)
     dist = np.empty(n)
     seg = np.zeros(n, dtype=np.int64)
@@ -352,37 +408,7 @@ def closest_on_polyline(points, poly):  # pragma: no cover - compiled
             d, s, t = _closest_brute(points[i : i + 1], poly)
             dist[i], seg[i], par[i] = d[0], s[0], t[0]
             continue
-        ci, cj = int(math.floor(fx)), int(math.floor(fy))
-        k = max(0, ci - (nx - 1), -ci, cj - (ny - 1), -cj)  # the first ring on the grid
-        best, bj, bt = np.inf, ns, 0.0
-        while True:
-            for gj in range(max(cj - k, 0), min(cj + k, ny - 1) + 1):
-                edge_row = gj == cj - k or gj == cj + k
-                gi = max(ci - k, 0)
-                last = min(ci + k, nx - 1)
-                while gi <= last:
-                    if edge_row or gi == ci - k or gi == ci + k:
-                        c = gj * nx + gi
-                        for q in range(start[c], start[c + 1]):
-                            j = items[q]
-                            if stamp[j] == i:
-                                continue
-                            stamp[j] = i
-                            d2, t = _segment_d2(px, py, poly, j, m)
-                            if d2 < best or (d2 == best and j < bj):
-                                best, bj, bt = d2, j, t
-                    if edge_row or gi >= ci + k:
-                        gi += 1
-                    else:
-                        gi = max(gi + 1, ci + k)  # inner rows: the ring's two ends only
-            if ci - k <= 0 and ci + k >= nx - 1 and cj - k <= 0 and cj + k >= ny - 1:
-                break  # every cell searched
-            # any segment not yet tried lies outside the block of rings 0..k round the point
-            lb = min(fx - (ci - k), ci + k + 1 - fx, fy - (cj - k), cj + k + 1 - fy) * cs
-            lb -= 1e-9 * cs + 1e-13 * (scale + abs(px) + abs(py))
-            if lb > 0.0 and best < lb * lb:
-                break
-            k += 1
+        best, bj, bt = _ring_search(i, px, py, fx, fy, poly, grid, stamp, scale)
         dist[i], seg[i], par[i] = math.sqrt(best), bj, bt
     return dist, seg, par
 
