@@ -28,6 +28,7 @@ import dataclasses
 import math
 import time
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -307,6 +308,42 @@ def fit_volute(
     v0 = initial or column.capital.volute
     if not isinstance(v0, VoluteParams):
         raise ParameterError("initial", v0, "a VoluteParams")
+    names, chains, keep_centred = _models_to_fit(models)
+    e = None
+    if eye is not None:
+        e = np.asarray(eye, dtype=float)
+        if e.shape != (2,) or not np.all(np.isfinite(e)):
+            raise ParameterError("eye", eye, "two finite numbers (x, y)")
+    settings = {
+        "measure": measure,
+        "samples": samples,
+        "seed": seed,
+        "popsize": popsize,
+        "maxiter": maxiter,
+        "polish_evals": polish_evals,
+        "allow_mirror": allow_mirror,
+    }
+    results = []
+    from ionic_usd.progress import progress
+
+    with progress(len(names), "fitting the volute", unit="model") as bar:
+        for name in names:
+            results.append(_fit_model(name, v0, ref, e, column, settings))
+            bar.update(1)
+    from ionic_usd.evaluate.fit_volute_free import add_free_arcs, choose_by_criterion
+
+    results = choose_by_criterion(add_free_arcs(results, chains=chains, keep_centred=keep_centred))
+    best = results[0]
+    return dataclasses.replace(
+        best, alternatives=tuple(results[1:]), seconds=sum(r.seconds for r in results)
+    )
+
+
+def _models_to_fit(
+    models: Sequence[str] | str | None,
+) -> tuple[list[str], tuple[str, ...], bool]:
+    """(the models fitted one by one, in order; the free chains fitted from the centred arcs
+    afterwards; whether the centred arcs were asked for themselves)."""
     if models is None:
         models = FIT_VOLUTE_MODELS
     elif isinstance(models, str):
@@ -316,109 +353,99 @@ def fit_volute(
             raise ParameterError("models", m, f"one of {', '.join(FIT_VOLUTE_MODELS)}")
     chains = tuple(m for m in models if m in ("free_arcs", "free_joints"))
     keep_centred = "centred_arcs" in models
-    models = [m for m in dict.fromkeys(models) if m not in chains]
+    names = [m for m in dict.fromkeys(models) if m not in chains]
     if chains and not keep_centred:
-        models.append("centred_arcs")  # the free arcs start from the centred-arc fit
-    e = None
-    if eye is not None:
-        e = np.asarray(eye, dtype=float)
-        if e.shape != (2,) or not np.all(np.isfinite(e)):
-            raise ParameterError("eye", eye, "two finite numbers (x, y)")
-    results = []
-    from ionic_usd.progress import progress
+        names.append("centred_arcs")  # the free arcs start from the centred-arc fit
+    return list(dict.fromkeys(names)), chains, keep_centred
 
-    with progress(len(dict.fromkeys(models)), "fitting the volute", unit="model") as bar:
-        for name in dict.fromkeys(models):
-            t0 = time.perf_counter()
-            model = _Model(name, v0, ref)
-            fitted, ref_o, hit, values, pose, start, iters, calls = _fit_one(
-                ref,
-                model,
-                measure=measure,
-                samples=samples,
-                seed=seed,
-                popsize=popsize,
-                maxiter=maxiter,
-                polish_evals=polish_evals,
-                allow_mirror=allow_mirror,
-            )
-            notes = []
-            if name == "log_spiral":
-                notes.append(
-                    "a, b held (the curve depends on R·a/b and R·d); R, c, d, start "
-                    "angle, circuits and the pose fitted"
-                )
-            else:
-                notes.append(
-                    "eye radius, centres' square and ratio, start angle, turns and the pose fitted"
-                )
-            notes.append(
-                f"start scaled ×{model.k:.4g} to the reference's size; "
-                f"{model.turns:.3g} turns traced; rotation is the start angle and "
-                "circuits (an exact equivalence)"
-            )
-            fitted, thin = model.finish(fitted)
-            if thin:
-                notes.append(thin)
-            if e is not None:
-                local = _rotate((e - np.asarray(pose.translation))[None, :], -pose.rotation)[0]
-                local[0] *= -1.0 if pose.mirrored else 1.0
-                fitted = fitted.with_(offset_x=float(local[0]), offset_y=float(local[1]))
-                notes.append("offsets from the given eye centre")
-            else:
-                notes.append("offsets kept (they move the eye, not the spiral)")
-            if hit:
-                notes.append("WARNING: ended on a search bound: " + ", ".join(hit))
-            # Vitruvius: the volute is 8/18 D high — measured upright, turned so the spiral ends
-            # at the top (θ ≡ 90°), as carved (the eye's size varies more between constructions)
-            own = _rotate(volute_curve(fitted, 2048), 90.0 - math.degrees(fitted.theta_end))
-            diameter = 18.0 / 8.0 * float(np.ptp(own[:, 1]))
-            notes.append(
-                f"diameter estimate {diameter:.4g} m (Vitruvius: the volute is 8/18 D high)"
-            )
-            col = dataclasses.replace(column, capital=column.capital.with_(volute=fitted))
-            h = core.report_spacing(ref_o)
-            init_al = orient_like(ref_o, start)
-            before = compare(densify(ref_o, h), densify(init_al, h))
-            after, al, fit_al = compare_aligned(
-                ref_o, pose.apply(volute_curve(fitted, samples)), allow_mirror=False, max_segment=h
-            )
-            al = Alignment(
-                tuple(np.add(al.translation, pose.translation)),
-                pose.mirrored,
-                al.hausdorff_before,
-                al.hausdorff_after,
-                pose.rotation,
-            )
-            values.update(mirrored=float(pose.mirrored))
-            results.append(
-                FitResult(
-                    "volute",
-                    fitted,
-                    col,
-                    before,
-                    after,
-                    measure,
-                    iters,
-                    calls,
-                    time.perf_counter() - t0,
-                    ref_o,
-                    fit_al,
-                    init_al,
-                    al,
-                    tuple(notes),
-                    model=name,
-                    bounds_hit=hit,
-                    diameter=diameter,
-                    values=values,
-                    spacing=h,
-                )
-            )
-            bar.update(1)
-    from ionic_usd.evaluate.fit_volute_free import add_free_arcs, choose_by_criterion
 
-    results = choose_by_criterion(add_free_arcs(results, chains=chains, keep_centred=keep_centred))
-    best = results[0]
-    return dataclasses.replace(
-        best, alternatives=tuple(results[1:]), seconds=sum(r.seconds for r in results)
+def _fit_model(
+    name: str,
+    v0: VoluteParams,
+    ref: np.ndarray,
+    e: np.ndarray | None,
+    column: ColumnParams,
+    settings: dict[str, Any],
+) -> FitResult:
+    """One volute model fitted (:func:`_fit_one` with ``settings``), offset to the eye ``e``
+    when given, put into ``column`` and measured against the reference."""
+    t0 = time.perf_counter()
+    model = _Model(name, v0, ref)
+    fitted, ref_o, hit, values, pose, start, iters, calls = _fit_one(ref, model, **settings)
+    fitted, notes = _finished(model, fitted, e, pose)
+    if hit:
+        notes.append("WARNING: ended on a search bound: " + ", ".join(hit))
+    # Vitruvius: the volute is 8/18 D high — measured upright, turned so the spiral ends
+    # at the top (θ ≡ 90°), as carved (the eye's size varies more between constructions)
+    own = _rotate(volute_curve(fitted, 2048), 90.0 - math.degrees(fitted.theta_end))
+    diameter = 18.0 / 8.0 * float(np.ptp(own[:, 1]))
+    notes.append(f"diameter estimate {diameter:.4g} m (Vitruvius: the volute is 8/18 D high)")
+    col = dataclasses.replace(column, capital=column.capital.with_(volute=fitted))
+    h = core.report_spacing(ref_o)
+    init_al = orient_like(ref_o, start)
+    before = compare(densify(ref_o, h), densify(init_al, h))
+    after, al, fit_al = compare_aligned(
+        ref_o,
+        pose.apply(volute_curve(fitted, settings["samples"])),
+        allow_mirror=False,
+        max_segment=h,
     )
+    al = Alignment(
+        tuple(np.add(al.translation, pose.translation)),
+        pose.mirrored,
+        al.hausdorff_before,
+        al.hausdorff_after,
+        pose.rotation,
+    )
+    values.update(mirrored=float(pose.mirrored))
+    return FitResult(
+        "volute",
+        fitted,
+        col,
+        before,
+        after,
+        settings["measure"],
+        iters,
+        calls,
+        time.perf_counter() - t0,
+        ref_o,
+        fit_al,
+        init_al,
+        al,
+        tuple(notes),
+        model=name,
+        bounds_hit=hit,
+        diameter=diameter,
+        values=values,
+        spacing=h,
+    )
+
+
+def _finished(
+    model: _Model, fitted: VoluteParams, e: np.ndarray | None, pose
+) -> tuple[VoluteParams, list[str]]:
+    """The fitted volute made whole (:meth:`_Model.finish`) and offset to the eye ``e`` (in
+    the reference's frame) when given, with the notes that say what was fitted."""
+    if model.name == "log_spiral":
+        notes = [
+            "a, b held (the curve depends on R·a/b and R·d); R, c, d, start "
+            "angle, circuits and the pose fitted"
+        ]
+    else:
+        notes = ["eye radius, centres' square and ratio, start angle, turns and the pose fitted"]
+    notes.append(
+        f"start scaled ×{model.k:.4g} to the reference's size; "
+        f"{model.turns:.3g} turns traced; rotation is the start angle and "
+        "circuits (an exact equivalence)"
+    )
+    fitted, thin = model.finish(fitted)
+    if thin:
+        notes.append(thin)
+    if e is not None:
+        local = _rotate((e - np.asarray(pose.translation))[None, :], -pose.rotation)[0]
+        local[0] *= -1.0 if pose.mirrored else 1.0
+        fitted = fitted.with_(offset_x=float(local[0]), offset_y=float(local[1]))
+        notes.append("offsets from the given eye centre")
+    else:
+        notes.append("offsets kept (they move the eye, not the spiral)")
+    return fitted, notes
