@@ -243,59 +243,81 @@ def fit_base(
     FitResult with ``params`` the grammar string; ``column.base`` is that string and
     ``column.base_height`` its height, so the column rebuilds the fitted base at scale 1.
     """
-    from ionic_usd.evaluate.sections import base_section
-
     t0 = time.perf_counter()
     ref = core.check_fit_inputs(reference, measure, seed)
     if ref[0, 1] > ref[-1, 1]:
         ref = ref[::-1].copy()
-    # Vitruvius (III.5.1–2): the base is half the lower diameter high
-    diameter = 2.0 * float(np.ptp(ref[:, 1]))
-    if initial is None:
-        # the Portunus column scaled to the reference (not shifted to the Portunus radius)
-        column = portunus_column_params(lower_diameter=diameter)
-        if column.lod != portunus_column_params().lod:  # pragma: no cover - defaults agree
-            column = dataclasses.replace(column, lod=portunus_column_params().lod)
-    else:
-        column = initial
+    column, diameter = _starting_column(ref, initial)
     d = column.shaft.bottom_radius
     ax = float(ref[-1, 0] - d) if axis_x is None else float(axis_x)
     shift = np.array([ax, ref[0, 1]])
     ref_c = ref - shift
     p = resample(ref_c, count=400)
-    if modules is None:
-        layout = suggest_base_layout(ref_c, tolerance=tolerance)
-    else:
-        mods = list(modules)
-        if not mods or any(isinstance(m, bool) or int(m) != m or m < 2 for m in mods):
-            raise ParameterError("modules", modules, "control points per module, each >= 2")
-        layout = _layout_for_modules(ref_c, mods)
-    slices = column.base_params().profile_slices
+    layout = _modules_layout(ref_c, modules, tolerance)
     ctrls = [
         _fit_bezier_piece(p[i : j + 1], m)[0]
         for i, j, m in zip(layout.breaks[:-1], layout.breaks[1:], layout.points, strict=True)
     ]
-
-    # parameter vector: the first point's R, then per module its points after the first as
-    # (R, h above the module bottom); bounds keep R > 0 and h >= 0 (the grammar's rules)
+    chain = _Chain(layout.points, column.base_params().profile_slices)
     size = float(np.ptp(ref_c, axis=0).max())
-    xs = [ctrls[0][0, 0]]
-    y_bottom = 0.0
-    for c in ctrls:
-        for r, y in c[1:]:
-            xs += [r, max(y - y_bottom, 0.0)]
-        y_bottom = max(float(c[-1, 1]), y_bottom)
-    x0 = np.asarray(xs)
-    lo = np.where(np.arange(len(x0)) % 2 == 0, 1e-4 * size, 0.0)  # R (even), h (odd)
-    lo = np.minimum(lo, x0)
-    box = core.Box(lo, np.maximum(x0 + 0.5 * size, lo + 1e-6))
-    counts = layout.points
-    ts = {m: np.linspace(0.0, 1.0, 2 if m == 2 else slices + 1) for m in set(counts)}
+    x0, box = chain.start(ctrls, size)
+    best_u, iterations, calls = chain.optimise(
+        x0, box, core.Objective(ref_c, measure), 10.0 * size, seed, polish_evals
+    )
+    grammar = base_grammar_string(chain.controls(box.x(best_u)), d)
+    hit = _bound_hits(box, best_u)
+    notes = [
+        f"{len(layout.points)} modules, points {list(layout.points)}",
+        f"reference shifted by ({-shift[0]:+.6g}, {-shift[1]:+.6g}) m into column "
+        f"coordinates (shaft radius d = {d:g} m)",
+        f"diameter estimate {diameter:.4g} m (Vitruvius: the base is D/2 high)"
+        + ("; the starting column scaled to it" if initial is None else ""),
+    ]
+    if hit:
+        notes.append(f"WARNING: {len(hit)} control-point coordinates ended on a search bound")
+    return _base_result(
+        ref,
+        column,
+        grammar,
+        measure,
+        iterations,
+        calls,
+        t0,
+        notes,
+        hit,
+        diameter,
+        len(layout.points),
+    )
 
-    def controls(x: np.ndarray) -> list[np.ndarray]:
+
+class _Chain:
+    """The base's modules as one parameter vector: the first point's R, then per module its
+    points after the first as (R, h above the module bottom); ``counts`` points per module,
+    each sampled at ``slices`` + 1 parameters (two for a straight module)."""
+
+    def __init__(self, counts: Sequence[int], slices: int) -> None:
+        self.counts = counts
+        self.ts = {m: np.linspace(0.0, 1.0, 2 if m == 2 else slices + 1) for m in set(counts)}
+
+    def start(self, ctrls: list[np.ndarray], size: float) -> tuple[np.ndarray, core.Box]:
+        """The vector of the control points ``ctrls`` and its search box: bounds keep R > 0
+        and h >= 0 (the grammar's rules)."""
+        xs = [ctrls[0][0, 0]]
+        y_bottom = 0.0
+        for c in ctrls:
+            for r, y in c[1:]:
+                xs += [r, max(y - y_bottom, 0.0)]
+            y_bottom = max(float(c[-1, 1]), y_bottom)
+        x0 = np.asarray(xs)
+        lo = np.where(np.arange(len(x0)) % 2 == 0, 1e-4 * size, 0.0)  # R (even), h (odd)
+        lo = np.minimum(lo, x0)
+        return x0, core.Box(lo, np.maximum(x0 + 0.5 * size, lo + 1e-6))
+
+    def controls(self, x: np.ndarray) -> list[np.ndarray]:
+        """Each module's control points (r, y) from the vector ``x``."""
         out, k, y0 = [], 1, 0.0
         start = np.array([x[0], 0.0])
-        for m in counts:
+        for m in self.counts:
             pts = [start]
             for _ in range(m - 1):
                 pts.append(np.array([x[k], y0 + x[k + 1]]))
@@ -306,25 +328,59 @@ def fit_base(
             start = c[-1]
         return out
 
-    def curve_of(x: np.ndarray) -> np.ndarray:
-        cs = controls(x)
-        return np.vstack([cs[0][:1]] + [bezier(c, ts[len(c)])[1:] for c in cs])
+    def optimise(
+        self,
+        x0: np.ndarray,
+        box: core.Box,
+        obj: core.Objective,
+        penalty: float,
+        seed: int,
+        polish_evals: int,
+    ) -> tuple[np.ndarray, int, int]:
+        """(the best point in the box's unit coordinates, iterations, measure calls) of the
+        local stages from ``x0``. The curve is linear in x (Bézier points are linear in the
+        control points, which are linear in x while h >= 0): it is tabulated once, then
+        every evaluation is one matrix product."""
+        g0 = self.curve_of(np.zeros_like(x0))
+        lin = np.stack([self.curve_of(np.eye(len(x0))[i]) - g0 for i in range(len(x0))], axis=-1)
+        dgen = lin * (box.hi - box.lo)
 
-    # the curve is linear in x (Bézier points are linear in the control points, which are
-    # linear in x while h >= 0): tabulate it once, then every evaluation is one matrix product
-    g0 = curve_of(np.zeros_like(x0))
-    lin = np.stack([curve_of(np.eye(len(x0))[i]) - g0 for i in range(len(x0))], axis=-1)
-    dgen = lin * (box.hi - box.lo)
+        def make(u: np.ndarray) -> np.ndarray | None:
+            return g0 + lin @ box.x(u)
 
-    def make(u: np.ndarray) -> np.ndarray | None:
-        return g0 + lin @ box.x(u)
+        stages = core.Stages(make, obj, penalty=penalty, ls_evals=4, dgen=dgen)
+        stages.run(
+            box.u(x0),
+            seed=seed,
+            global_stage=False,
+            popsize=0,
+            maxiter=0,
+            polish_evals=polish_evals,
+        )
+        return stages.best_u, stages.iterations, obj.calls
 
-    obj = core.Objective(ref_c, measure)
-    stages = core.Stages(make, obj, penalty=10.0 * size, ls_evals=4, dgen=dgen)
-    stages.run(
-        box.u(x0), seed=seed, global_stage=False, popsize=0, maxiter=0, polish_evals=polish_evals
-    )
-    grammar = base_grammar_string(controls(box.x(stages.best_u)), d)
+    def curve_of(self, x: np.ndarray) -> np.ndarray:
+        """The sampled profile of the vector ``x``."""
+        cs = self.controls(x)
+        return np.vstack([cs[0][:1]] + [bezier(c, self.ts[len(c)])[1:] for c in cs])
+
+
+def _base_result(
+    ref: np.ndarray,
+    column: ColumnParams,
+    grammar: str,
+    measure: str,
+    iterations: int,
+    calls: int,
+    t0: float,
+    notes: list[str],
+    hit: tuple[str, ...],
+    diameter: float,
+    n_modules: int,
+) -> FitResult:
+    """The fit's report: ``column`` with the fitted ``grammar`` (of ``n_modules`` modules),
+    both measured against the reference ``ref``."""
+    from ionic_usd.evaluate.sections import base_section
     from ionic_usd.grammar.base import parse_base_grammar
 
     height = parse_base_grammar(grammar, 2).height
@@ -335,22 +391,8 @@ def fit_base(
     after, al, fit_al = compare_aligned(
         ref, base_section(col), allow_mirror=False, max_segment=core.report_spacing(ref)
     )
-    names = tuple(f"x{i}" for i in range(len(x0)))
-    hit = tuple(
-        n
-        for n in box.hit(stages.best_u, names)
-        if box.hi[int(n[1:])] - box.lo[int(n[1:])] > 0 and stages.best_u[int(n[1:])] >= 1.0 - 1e-3
-    )  # lower bounds are R > 0, h >= 0
-    notes = [
-        f"{len(counts)} modules, points {list(counts)}",
-        f"reference shifted by ({-shift[0]:+.6g}, {-shift[1]:+.6g}) m into column "
-        f"coordinates (shaft radius d = {d:g} m)",
-        f"diameter estimate {diameter:.4g} m (Vitruvius: the base is D/2 high)"
-        + ("; the starting column scaled to it" if initial is None else ""),
-    ]
-    if hit:
-        notes.append(f"WARNING: {len(hit)} control-point coordinates ended on a search bound")
-    values = {"modules": float(len(counts)), "base_height": float(height), "shaft_radius": float(d)}
+    d = column.shaft.bottom_radius
+    values = {"modules": float(n_modules), "base_height": float(height), "shaft_radius": float(d)}
     return FitResult(
         "base",
         grammar,
@@ -358,8 +400,8 @@ def fit_base(
         before,
         after,
         measure,
-        stages.iterations,
-        obj.calls,
+        iterations,
+        calls,
         time.perf_counter() - t0,
         ref,
         fit_al,
@@ -371,4 +413,40 @@ def fit_base(
         diameter=diameter,
         values=values,
         spacing=core.report_spacing(ref),
+    )
+
+
+def _starting_column(ref: np.ndarray, initial: ColumnParams | None) -> tuple[ColumnParams, float]:
+    """(the column the base is fitted into, the diameter the reference's height gives):
+    ``initial``, or the Portunus column scaled to the reference (not shifted to the Portunus
+    radius). Vitruvius (III.5.1–2): the base is half the lower diameter high."""
+    diameter = 2.0 * float(np.ptp(ref[:, 1]))
+    if initial is not None:
+        return initial, diameter
+    column = portunus_column_params(lower_diameter=diameter)
+    if column.lod != portunus_column_params().lod:  # pragma: no cover - defaults agree
+        column = dataclasses.replace(column, lod=portunus_column_params().lod)
+    return column, diameter
+
+
+def _modules_layout(
+    ref_c: np.ndarray, modules: Sequence[int] | None, tolerance: float | None
+) -> BaseLayout:
+    """The given control points per module laid on ``ref_c``, or the suggested layout."""
+    if modules is None:
+        return suggest_base_layout(ref_c, tolerance=tolerance)
+    mods = list(modules)
+    if not mods or any(isinstance(m, bool) or int(m) != m or m < 2 for m in mods):
+        raise ParameterError("modules", modules, "control points per module, each >= 2")
+    return _layout_for_modules(ref_c, mods)
+
+
+def _bound_hits(box: core.Box, best_u: np.ndarray) -> tuple[str, ...]:
+    """The coordinates (``x<i>``) that ended on their upper bound: the lower bounds are the
+    grammar's R > 0 and h >= 0."""
+    names = tuple(f"x{i}" for i in range(len(best_u)))
+    return tuple(
+        n
+        for n in box.hit(best_u, names)
+        if box.hi[int(n[1:])] - box.lo[int(n[1:])] > 0 and best_u[int(n[1:])] >= 1.0 - 1e-3
     )
