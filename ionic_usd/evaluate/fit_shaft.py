@@ -52,86 +52,141 @@ def fit_shaft(
     -------
     FitResult with ``params`` a :class:`ShaftParams`.
     """
-    from ionic_usd.evaluate.sections import shaft_silhouette_section
-
     t0 = time.perf_counter()
     ref = core.check_fit_inputs(reference, measure, seed)
-    if is_closed_curve(ref):
-        from ionic_usd.errors import ParameterError
-
-        raise ParameterError(
-            "reference",
-            "a closed curve",
-            "a silhouette (r, y); fit a closed "
-            "cross-section with fit_shaft_section (CLI: --section)",
-        )
+    _check_closed(ref, closed=False)
     column = initial or portunus_column_params()
     if ref[0, 1] > ref[-1, 1]:
         ref = ref[::-1].copy()
     rmax = float(np.abs(ref[:, 0]).max())
     if ends is None:
         ends = bool(abs(ref[0, 0]) < 0.2 * rmax and abs(ref[-1, 0]) < 0.2 * rmax)
-    s0 = column.shaft_params()
-    span = float(np.ptp(ref[:, 1]))
-    y_base = column.base_params().height
-    x0 = np.array([s0.bottom_radius, s0.top_radius, s0.height, s0.entasis, y_base])
-    # start from the reference's own extent when the initial shaft is far from it
-    fixed = s0.length - s0.height
-    body = span - fixed
-    if body > 0:
-        x0[2] = body
-    x0[4] = float(ref[:, 1].min())
-    x0[0] = float(np.clip(x0[0], 0.3 * rmax, 1.5 * rmax))
-    x0[1] = float(np.clip(x0[1], 0.3 * rmax, 1.5 * rmax))
-    box = core.Box(
-        [0.3 * rmax, 0.3 * rmax, max(0.3 * x0[2], 1e-3), -0.2, x0[4] - 0.2 * span],
-        [1.5 * rmax, 1.5 * rmax, 1.5 * x0[2] + 1e-3, 0.2, x0[4] + 0.2 * span],
-    )
-    ys01 = np.linspace(0.0, 1.0, samples)
-
-    def shaft_of(x: np.ndarray) -> ShaftParams:
-        return dataclasses.replace(
-            s0,
-            bottom_radius=float(x[0]),
-            top_radius=float(x[1]),
-            height=float(x[2]),
-            entasis=float(x[3]),
-        )
-
-    def make(u: np.ndarray) -> np.ndarray | None:
-        x = box.x(u)
-        try:
-            sp = shaft_of(x)
-        except IonicError:
-            return None
-        ys = ys01 * sp.length
-        out = np.column_stack([shaft_radius_at(sp, ys), ys + x[4]])
-        if ends:
-            out = np.vstack([[0.0, x[4]], out, [0.0, x[4] + sp.length]])
-        return out
-
+    sil = _Silhouette(ref, column, rmax, samples, ends)
     obj = core.Objective(ref, measure)
-    stages = core.Stages(make, obj, penalty=10.0 * (span + rmax))
+    stages = core.Stages(sil.make, obj, penalty=10.0 * (sil.span + rmax))
     stages.run(
-        box.u(x0),
+        sil.box.u(sil.x0),
         seed=seed,
         global_stage=True,
         popsize=popsize,
         maxiter=maxiter,
         polish_evals=polish_evals,
     )
-    x = box.x(stages.best_u)
-    fitted = shaft_of(x)
+    x = sil.box.x(stages.best_u)
+    fitted = sil.shaft_of(x)
     col = dataclasses.replace(
         column,
         shaft=dataclasses.replace(
             column.shaft,
-            bottom_radius=fitted.bottom_radius,
-            top_radius=fitted.top_radius,
-            height=fitted.height,
-            entasis=fitted.entasis,
+            **{k: getattr(fitted, k) for k in ("bottom_radius", "top_radius", "height", "entasis")},
         ),
     )
+    names = ("bottom_radius", "top_radius", "height", "entasis", "y_bottom")
+    hit = sil.box.hit(stages.best_u, names)
+    notes = [
+        "rings, flute-end ratio and flutes kept; r measured from the axis",
+        f"ends {'included' if ends else 'left out'}; shaft bottom at y = {x[4]:.6g} m "
+        "in the reference",
+    ]
+    if hit:
+        notes.append("WARNING: ended on a search bound: " + ", ".join(hit))
+    return _silhouette_result(
+        ref,
+        column,
+        col,
+        fitted,
+        measure,
+        (stages.iterations, obj.calls, t0),
+        notes,
+        hit,
+        dict(zip(names, (float(v) for v in x), strict=True)),
+        samples,
+        ends,
+    )
+
+
+def _check_closed(ref: np.ndarray, *, closed: bool) -> None:
+    """Refuse (ParameterError) a closed reference where a silhouette is fitted, an open one
+    where a cross-section is."""
+    from ionic_usd.errors import ParameterError
+
+    if closed and not is_closed_curve(ref):
+        raise ParameterError(
+            "reference", "an open curve", "a closed cross-section (its last node on its first)"
+        )
+    if not closed and is_closed_curve(ref):
+        raise ParameterError(
+            "reference",
+            "a closed curve",
+            "a silhouette (r, y); fit a closed "
+            "cross-section with fit_shaft_section (CLI: --section)",
+        )
+
+
+class _Silhouette:
+    """The silhouette fit's vector (bottom and top radius, fluted height, entasis, the
+    shaft's bottom y in the reference), its start, its box and the curve it makes."""
+
+    def __init__(
+        self, ref: np.ndarray, column: ColumnParams, rmax: float, samples: int, ends: bool
+    ) -> None:
+        s0 = column.shaft_params()
+        span = float(np.ptp(ref[:, 1]))
+        y_base = column.base_params().height
+        x0 = np.array([s0.bottom_radius, s0.top_radius, s0.height, s0.entasis, y_base])
+        # start from the reference's own extent when the initial shaft is far from it
+        fixed = s0.length - s0.height
+        body = span - fixed
+        if body > 0:
+            x0[2] = body
+        x0[4] = float(ref[:, 1].min())
+        x0[0] = float(np.clip(x0[0], 0.3 * rmax, 1.5 * rmax))
+        x0[1] = float(np.clip(x0[1], 0.3 * rmax, 1.5 * rmax))
+        self.box = core.Box(
+            [0.3 * rmax, 0.3 * rmax, max(0.3 * x0[2], 1e-3), -0.2, x0[4] - 0.2 * span],
+            [1.5 * rmax, 1.5 * rmax, 1.5 * x0[2] + 1e-3, 0.2, x0[4] + 0.2 * span],
+        )
+        self.s0, self.x0, self.span, self.ends = s0, x0, span, ends
+        self.ys01 = np.linspace(0.0, 1.0, samples)
+
+    def shaft_of(self, x: np.ndarray) -> ShaftParams:
+        return dataclasses.replace(
+            self.s0,
+            bottom_radius=float(x[0]),
+            top_radius=float(x[1]),
+            height=float(x[2]),
+            entasis=float(x[3]),
+        )
+
+    def make(self, u: np.ndarray) -> np.ndarray | None:
+        x = self.box.x(u)
+        try:
+            sp = self.shaft_of(x)
+        except IonicError:
+            return None
+        ys = self.ys01 * sp.length
+        out = np.column_stack([shaft_radius_at(sp, ys), ys + x[4]])
+        if self.ends:
+            out = np.vstack([[0.0, x[4]], out, [0.0, x[4] + sp.length]])
+        return out
+
+
+def _silhouette_result(
+    ref: np.ndarray,
+    column: ColumnParams,
+    col: ColumnParams,
+    fitted: ShaftParams,
+    measure: str,
+    counts: tuple[int, int, float],
+    notes: list[str],
+    hit: tuple[str, ...],
+    values: dict[str, float],
+    samples: int,
+    ends: bool,
+) -> FitResult:
+    """The silhouette fit's report: the starting ``column`` and the fitted ``col`` measured
+    against ``ref``; ``counts``: (iterations, measure calls, the fit's start time)."""
+    from ionic_usd.evaluate.sections import shaft_silhouette_section
 
     def section(c: ColumnParams) -> np.ndarray:
         return shaft_silhouette_section(c, samples=samples, ends=ends)
@@ -142,15 +197,7 @@ def fit_shaft(
     after, al, fit_al = compare_aligned(
         ref, section(col), allow_mirror=False, max_segment=core.report_spacing(ref)
     )
-    names = ("bottom_radius", "top_radius", "height", "entasis", "y_bottom")
-    hit = box.hit(stages.best_u, names)
-    notes = [
-        "rings, flute-end ratio and flutes kept; r measured from the axis",
-        f"ends {'included' if ends else 'left out'}; shaft bottom at y = {x[4]:.6g} m "
-        "in the reference",
-    ]
-    if hit:
-        notes.append("WARNING: ended on a search bound: " + ", ".join(hit))
+    iterations, calls, t0 = counts
     return FitResult(
         "shaft",
         fitted,
@@ -158,8 +205,8 @@ def fit_shaft(
         before,
         after,
         measure,
-        stages.iterations,
-        obj.calls,
+        iterations,
+        calls,
         time.perf_counter() - t0,
         ref,
         fit_al,
@@ -169,12 +216,11 @@ def fit_shaft(
         model="silhouette",
         bounds_hit=hit,
         diameter=2.0 * fitted.bottom_radius,
-        values=dict(zip(names, (float(v) for v in x), strict=True)),
+        values=values,
         spacing=core.report_spacing(ref),
     )
 
 
-# -- cross-section --------------------------------------------------------------------------------
 def is_closed_curve(curve: np.ndarray, *, rel_tol: float = 1e-3) -> bool:
     """Whether a traced curve closes on itself (end within ``rel_tol`` of its size of the start).
 
@@ -308,35 +354,14 @@ def fit_shaft_section(
     """
     t0 = time.perf_counter()
     ref = core.check_fit_inputs(reference, measure, seed)
-    if not is_closed_curve(ref):
-        from ionic_usd.errors import ParameterError
-
-        raise ParameterError(
-            "reference", "an open curve", "a closed cross-section (its last node on its first)"
-        )
+    _check_closed(ref, closed=True)
     check_simple_section(ref)
     column = initial or portunus_column_params()
-    from ionic_usd.evaluate.reference import arc_centroid
-
-    c0 = arc_centroid(ref)
-    e, rot0, r0 = _flute_estimate(ref, c0)
-    if flutes is not None:
-        e = int(flutes)
-    period = 360.0 / e
-    size = r0
-    x0 = np.array([r0, 0.8 * period, 1.0, rot0, *c0])
-    box = core.Box(
-        [0.8 * r0, 0.2 * period, 0.05, rot0 - 0.5 * period, c0[0] - 0.1 * size, c0[1] - 0.1 * size],
-        [1.2 * r0, 0.98 * period, 1.6, rot0 + 0.5 * period, c0[0] + 0.1 * size, c0[1] + 0.1 * size],
-    )
+    e, x0, box = _section_start(ref, flutes)
     names = ("radius", "flute_angle", "flute_depth", "rotation_deg", "centre_x", "centre_y")
 
-    def make(u: np.ndarray) -> np.ndarray | None:
-        x = box.x(u)
-        return fluted_section(x[0], e, x[1], x[2], x[3], x[4:6], slices=12)
-
     obj = core.Objective(ref, measure)
-    stages = core.Stages(make, obj, penalty=10.0 * size)
+    stages = core.Stages(_section_maker(box, e), obj, penalty=10.0 * x0[0])
     stages.run(
         box.u(x0),
         seed=seed,
@@ -347,48 +372,16 @@ def fit_shaft_section(
     )
     x = box.x(stages.best_u)
     hit = box.hit(stages.best_u, names)
-    s0 = column.shaft
     notes = [
         f"{e} flutes ({'given' if flutes is not None else 'strongest harmonic'}); "
         "radius, flute angle, depth, rotation and centre fitted"
     ]
-    try:
-        shaft = dataclasses.replace(
-            s0,
-            bottom_radius=float(x[0]),
-            top_radius=float(x[0]) * s0.top_radius / s0.bottom_radius,
-            flutes=e,
-            flute_angle=float(x[1]),
-            flute_depth=float(x[2]),
-        )
-        col = dataclasses.replace(column, shaft=shaft)
-        params = col.shaft_params()
-    except IonicError as exc:
-        col, params = column, column.shaft_params()
-        notes.append(f"not put into the column: {exc}")
+    col, params = _section_column(column, x, e, notes)
     if hit:
         notes.append("WARNING: ended on a search bound: " + ", ".join(hit))
     h = core.report_spacing(ref)
-    from ionic_usd.evaluate.fit_core import densify
-    from ionic_usd.evaluate.metrics import compare
-    from ionic_usd.evaluate.reference import Alignment
-
-    fine = fluted_section(x[0], e, x[1], x[2], x[3], x[4:6], slices=48)
-    fitted = closed_like(ref, fine)
-    after = compare(densify(ref, h), densify(fitted, h))
-    start = closed_like(ref, fluted_section(x0[0], e, x0[1], x0[2], x0[3], x0[4:6], slices=48))
-    before = compare(densify(ref, h), densify(start, h))
-    al = Alignment(
-        (float(x[4]), float(x[5])), False, before.hausdorff, after.hausdorff, float(x[3])
-    )
-    if not after.hausdorff_pct <= SECTION_MAX_PCT:
-        raise ReferenceCurveError(
-            f"reference: not a fluted shaft section: the best {e}-flute section stays "
-            f"{after.hausdorff_pct:.3g} % of the curve's length from it (node-to-curve "
-            f"Hausdorff; a fluted section fits within {SECTION_MAX_PCT:g} %)"
-        )
-    values = dict(zip(names, (float(v) for v in x), strict=True))
-    values["flutes"] = float(e)
+    fitted, start, before, after, al = _section_measures(ref, x, x0, e, h)
+    values = {**dict(zip(names, (float(v) for v in x), strict=True)), "flutes": float(e)}
     return FitResult(
         "shaft",
         params,
@@ -410,3 +403,83 @@ def fit_shaft_section(
         values=values,
         spacing=h,
     )
+
+
+def _section_start(ref: np.ndarray, flutes: int | None) -> tuple[int, np.ndarray, core.Box]:
+    """(flute count, start, box) of the section fit: the vector (radius, flute angle, depth,
+    rotation, centre x, y) from the arc centroid and the radius' strongest harmonic (or the
+    given count), within a fifth of the radius, half a flute period of turn and a tenth of
+    the radius of the centre."""
+    from ionic_usd.evaluate.reference import arc_centroid
+
+    c0 = arc_centroid(ref)
+    e, rot0, r0 = _flute_estimate(ref, c0)
+    if flutes is not None:
+        e = int(flutes)
+    period = 360.0 / e
+    size = r0
+    x0 = np.array([r0, 0.8 * period, 1.0, rot0, *c0])
+    box = core.Box(
+        [0.8 * r0, 0.2 * period, 0.05, rot0 - 0.5 * period, c0[0] - 0.1 * size, c0[1] - 0.1 * size],
+        [1.2 * r0, 0.98 * period, 1.6, rot0 + 0.5 * period, c0[0] + 0.1 * size, c0[1] + 0.1 * size],
+    )
+    return e, x0, box
+
+
+def _section_maker(box: core.Box, e: int):
+    """The coarse section (12 slices per flute) of a point ``u`` of the box: what the fit
+    compares with the reference."""
+
+    def make(u: np.ndarray) -> np.ndarray | None:
+        x = box.x(u)
+        return fluted_section(x[0], e, x[1], x[2], x[3], x[4:6], slices=12)
+
+    return make
+
+
+def _section_column(
+    column: ColumnParams, x: np.ndarray, e: int, notes: list[str]
+) -> tuple[ColumnParams, ShaftParams]:
+    """``column`` with the fitted section as its shaft's lower section (the top radius keeps
+    its ratio), and that shaft; the column as it was (with a note) where the values do not
+    make a shaft."""
+    s0 = column.shaft
+    try:
+        shaft = dataclasses.replace(
+            s0,
+            bottom_radius=float(x[0]),
+            top_radius=float(x[0]) * s0.top_radius / s0.bottom_radius,
+            flutes=e,
+            flute_angle=float(x[1]),
+            flute_depth=float(x[2]),
+        )
+        col = dataclasses.replace(column, shaft=shaft)
+        return col, col.shaft_params()
+    except IonicError as exc:
+        notes.append(f"not put into the column: {exc}")
+        return column, column.shaft_params()
+
+
+def _section_measures(ref: np.ndarray, x: np.ndarray, x0: np.ndarray, e: int, h: float):
+    """(fitted and starting sections, fine, closed like ``ref``; the measures before and
+    after; the alignment). Refuses (ReferenceCurveError) a curve no fluted section fits
+    within :data:`SECTION_MAX_PCT`."""
+    from ionic_usd.evaluate.fit_core import densify
+    from ionic_usd.evaluate.metrics import compare
+    from ionic_usd.evaluate.reference import Alignment
+
+    fine = fluted_section(x[0], e, x[1], x[2], x[3], x[4:6], slices=48)
+    fitted = closed_like(ref, fine)
+    after = compare(densify(ref, h), densify(fitted, h))
+    start = closed_like(ref, fluted_section(x0[0], e, x0[1], x0[2], x0[3], x0[4:6], slices=48))
+    before = compare(densify(ref, h), densify(start, h))
+    al = Alignment(
+        (float(x[4]), float(x[5])), False, before.hausdorff, after.hausdorff, float(x[3])
+    )
+    if not after.hausdorff_pct <= SECTION_MAX_PCT:
+        raise ReferenceCurveError(
+            f"reference: not a fluted shaft section: the best {e}-flute section stays "
+            f"{after.hausdorff_pct:.3g} % of the curve's length from it (node-to-curve "
+            f"Hausdorff; a fluted section fits within {SECTION_MAX_PCT:g} %)"
+        )
+    return fitted, start, before, after, al
