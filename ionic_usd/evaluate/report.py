@@ -218,7 +218,6 @@ def plot_overlay(
     if a.shape[1] != 2 or b.shape[1] != 2:
         raise ParameterError("a/b", (a.shape, b.shape), "2D curves (n, 2)")
     from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.collections import EllipseCollection
     from matplotlib.figure import Figure
 
     ra = point_to_polyline_distances(a, b)
@@ -237,20 +236,7 @@ def plot_overlay(
         ax.set_aspect("equal", adjustable="box")
         ax.grid(True, lw=0.3, alpha=0.5)
     for pts, r, colour in ((a, ra, colours[0]), (b, rb, colours[1])):
-        right.add_collection(
-            EllipseCollection(
-                2 * r,
-                2 * r,
-                np.zeros_like(r),
-                units="xy",
-                offsets=pts,
-                offset_transform=right.transData,
-                facecolors="none",
-                edgecolors=colour,
-                linewidths=0.5,
-                alpha=0.8,
-            )
-        )
+        _distance_circles(right, pts, r, colour)
     left.legend(loc="best", fontsize=8)
     left.set_title("curves", fontsize=10)
     for ax in (left, right):
@@ -260,22 +246,7 @@ def plot_overlay(
     right.set_title(f"node-to-curve distances (max {worst * 1000:.3g} mm)", fontsize=10)
     extent = float(np.linalg.norm(span))
     if 0 < worst < 2e-3 * extent:
-        # sub-visible errors: a zoomed inset round the worst node, its scale in millimetres
-        k = int(np.argmax(ra)) if ra.max() >= rb.max() else int(np.argmax(rb))
-        at = a[k] if ra.max() >= rb.max() else b[k]
-        half = max(6.0 * worst, 1e-6 * extent)
-        inset = right.inset_axes([0.58, 0.5, 0.4, 0.4])
-        inset.plot(a[:, 0], a[:, 1], "-o", color=colours[0], lw=1.2, ms=2)
-        inset.plot(b[:, 0], b[:, 1], "-o", color=colours[1], lw=1.0, ms=2)
-        inset.set_xlim(at[0] - half, at[0] + half)
-        inset.set_ylim(at[1] - half, at[1] + half)
-        inset.set_aspect("equal", adjustable="box")
-        inset.tick_params(labelsize=6)
-        ticks = np.array([-half, 0.0, half]) * 0.8
-        inset.set_xticks(at[0] + ticks, [f"{t * 1000:+.2g}" for t in ticks])
-        inset.set_yticks(at[1] + ticks, [f"{t * 1000:+.2g}" for t in ticks])
-        inset.set_title(f"worst node, ×{extent / (2 * half):.0f} (mm)", fontsize=7)
-        right.indicate_inset_zoom(inset, edgecolor="0.3")
+        _worst_node_inset(right, a, b, ra, rb, colours, extent)
     if title:
         fig.suptitle(title)
 
@@ -335,3 +306,43 @@ def write_curves_csv(path: str | Path, curves: Mapping[str, Mapping[str, np.ndar
             )
     text = "\n".join(lines) + "\n"
     return write_atomically(path, lambda fh: fh.write(text.encode("utf-8")))
+
+
+def _distance_circles(ax, pts: np.ndarray, r: np.ndarray, colour: str) -> None:
+    """At every node of ``pts`` a circle of radius ``r`` (its distance to the other curve)."""
+    from matplotlib.collections import EllipseCollection
+
+    ax.add_collection(
+        EllipseCollection(
+            2 * r,
+            2 * r,
+            np.zeros_like(r),
+            units="xy",
+            offsets=pts,
+            offset_transform=ax.transData,
+            facecolors="none",
+            edgecolors=colour,
+            linewidths=0.5,
+            alpha=0.8,
+        )
+    )
+
+
+def _worst_node_inset(right, a, b, ra, rb, colours, extent: float) -> None:
+    """Sub-visible errors: a zoomed inset round the worst node, its scale in millimetres."""
+    worst = float(max(ra.max(), rb.max()))
+    k = int(np.argmax(ra)) if ra.max() >= rb.max() else int(np.argmax(rb))
+    at = a[k] if ra.max() >= rb.max() else b[k]
+    half = max(6.0 * worst, 1e-6 * extent)
+    inset = right.inset_axes([0.58, 0.5, 0.4, 0.4])
+    inset.plot(a[:, 0], a[:, 1], "-o", color=colours[0], lw=1.2, ms=2)
+    inset.plot(b[:, 0], b[:, 1], "-o", color=colours[1], lw=1.0, ms=2)
+    inset.set_xlim(at[0] - half, at[0] + half)
+    inset.set_ylim(at[1] - half, at[1] + half)
+    inset.set_aspect("equal", adjustable="box")
+    inset.tick_params(labelsize=6)
+    ticks = np.array([-half, 0.0, half]) * 0.8
+    inset.set_xticks(at[0] + ticks, [f"{t * 1000:+.2g}" for t in ticks])
+    inset.set_yticks(at[1] + ticks, [f"{t * 1000:+.2g}" for t in ticks])
+    inset.set_title(f"worst node, ×{extent / (2 * half):.0f} (mm)", fontsize=7)
+    right.indicate_inset_zoom(inset, edgecolor="0.3")
