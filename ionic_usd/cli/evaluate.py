@@ -311,22 +311,31 @@ def _fit_part(args: argparse.Namespace, column: ColumnParams, ref: np.ndarray) -
 
 def cmd_fit(args: argparse.Namespace) -> int:
     """Fit a part to a reference; print before/after tables; write (or print) TOML."""
-    from ionic_usd.evaluate.report import format_table, plot_overlay
-
     _check_memory("the fit", args.scan, args.reference, limit=args.max_memory)
     if args.part == "column":
         from ionic_usd.cli.fit_scan import cmd_fit_column
 
         return cmd_fit_column(args)
+    _check_fit_args(args)  # every output checked before the whole fit
+    column = _column(args.config)
+    ref = _reference(args)
+    res = _fit_part(args, column, ref)
+    _print_fit(args, res, len(ref))
+    _write_fit(args, res)
+    return 0
+
+
+def _check_fit_args(args: argparse.Namespace) -> None:
+    """Refuse (ParameterError) a missing reference, an output that would be overwritten or
+    has the wrong suffix, and the flags of other parts, before anything runs."""
     if args.reference is None:
         raise ParameterError("--reference", None, f"a reference curve for `fit {args.part}`")
-    out = args.output
-    if out is not None:
+    if args.output is not None:
         from ionic_usd.io import check_output_file
 
-        if out.suffix.lower() != ".toml":
-            raise ParameterError("--output", str(out), "a file ending in .toml")
-        check_output_file(out, force=args.force, what="--output")  # before the whole fit
+        if args.output.suffix.lower() != ".toml":
+            raise ParameterError("--output", str(args.output), "a file ending in .toml")
+        check_output_file(args.output, force=args.force, what="--output")
     _check_out(args.plot, args.force, ".png", "--plot")
     _check_out(args.json, args.force, ".json", "--json")
     _check_out(args.curves, args.force, ".csv", "--curves")
@@ -342,10 +351,14 @@ def cmd_fit(args: argparse.Namespace) -> int:
         raise ParameterError("--scan", str(args.scan), "used only with `fit column`")
     if args.units is not None:
         raise ParameterError("--units", args.units, "used only with `fit column --scan`")
-    column = _column(args.config)
-    ref = _reference(args)
-    res = _fit_part(args, column, ref)
-    print(f"reference: {args.reference} ({len(ref)} nodes)")
+
+
+def _print_fit(args: argparse.Namespace, res, nodes: int) -> None:
+    """The fit's report on stdout: what was minimised, the notes, the alignment, the
+    before/after table, the volute models side by side and the criterion."""
+    from ionic_usd.evaluate.report import format_table
+
+    print(f"reference: {args.reference} ({nodes} nodes)")
     print(
         f"fit {args.part} ({res.model}): minimised {args.measure}; {res.iterations} "
         f"iterations, {res.evaluations} curve evaluations, {res.seconds:.2f} s"
@@ -360,14 +373,20 @@ def cmd_fit(args: argparse.Namespace) -> int:
         print(f"volute models side by side (best first; chosen: {res.model}):")
         print(format_table(rows))
     _print_criterion(res)
+
+
+def _write_fit(args: argparse.Namespace, res) -> None:
+    """The TOML (to ``--output`` or stdout), and the ``--json``, ``--curves`` and ``--plot``
+    files asked for."""
+    from ionic_usd.evaluate.report import plot_overlay, write_curves_csv, write_fit_json
+
+    out = args.output
     if out is not None:
         res.write_toml(out, force=args.force)
         print(f"wrote {out} (use: ionic-usd column --config {out})")
     else:
         sys.stdout.write(res.to_toml())
     if args.json is not None:
-        from ionic_usd.evaluate.report import write_fit_json
-
         write_fit_json(
             args.json,
             {args.part: res},
@@ -380,8 +399,6 @@ def cmd_fit(args: argparse.Namespace) -> int:
         )
         print(f"wrote {args.json}")
     if args.curves is not None:
-        from ionic_usd.evaluate.report import write_curves_csv
-
         write_curves_csv(
             args.curves, {args.part: {"reference": res.reference, "fitted": res.fitted}}
         )
@@ -395,7 +412,6 @@ def cmd_fit(args: argparse.Namespace) -> int:
             labels=("reference", "fitted"),
         )
         print(f"wrote {args.plot}")
-    return 0
 
 
 def _reference_flags(
