@@ -193,12 +193,7 @@ def fit_column_scan(
         frame = _joint(frame, loc, col, r_bottom, sec, notes)
     col = _scanned_shaft(col, frame, loc, det, sec, e, ring_bottom, notes)
     has_base, has_cap = "base" in frame.parts, "capital" in frame.parts
-    bprof = None
-    if has_base:
-        b0, b1 = frame.parts["base"]
-        bprof = outer_profile(loc, b0, b1, max((b1 - b0) / 80, 0.002))
-    else:
-        notes.append("no base in the scan: the column's base is the Vitruvian one")
+    bprof = _base_profile(frame, loc, notes)
     tree = other_parts_tree(col)
     m, col = _turn_about_axis(sub, rng, frame, col, sec, e, s0, tree, notes)
     base_fit = None
@@ -221,6 +216,15 @@ def fit_column_scan(
     _check_is_column(fits, diameter, e)
     secs = time.perf_counter() - t0
     return ScanFit(col, frame, m, diameter, e, sec, base_fit, dev, secs, slab, bprof, notes, fits)
+
+
+def _base_profile(frame: ColumnFrame, loc: np.ndarray, notes: list[str]) -> np.ndarray | None:
+    """The scanned base's outer profile (thin height bins), or None (with a note)."""
+    if "base" not in frame.parts:
+        notes.append("no base in the scan: the column's base is the Vitruvian one")
+        return None
+    b0, b1 = frame.parts["base"]
+    return outer_profile(loc, b0, b1, max((b1 - b0) / 80, 0.002))
 
 
 def _plain_ring(
