@@ -81,9 +81,10 @@ class UVAtlas:
         Wall time of the xatlas run(s) that produced the atlas; a diagnostic, not stored in
         the cache (0 for an atlas read from disk).
     st_distinct : bool
-        Packed from a mesh whose ``st`` its generator indexed
-        (:attr:`ionic_usd.geometry.mesh.Mesh.st_distinct`): each chart was moved and scaled as a
-        whole, so the values stay one per chart vertex and :func:`attach_uvs` passes it on.
+        Packed from a mesh whose ``st`` its generator indexed (a
+        :class:`~ionic_usd.geometry.corners.CornerValues` with ``distinct``): each chart was
+        moved and scaled as a whole, so the values stay one per chart vertex and
+        :func:`attach_uvs` passes it on.
     """
 
     st_px: np.ndarray
