@@ -144,60 +144,18 @@ def toggled_extents_hints(
     if any(a in known for p in known for a in p.GetAncestorsRange() if a != p):
         return None  # an item inside another
     session = stage.GetSessionLayer()
-    purposes = UsdGeom.Imageable.GetOrderedPurposeTokens()
-
-    def bounds(prim_paths: Sequence[str]) -> list[list[Gf.Range3d]]:
-        # one cache per purpose, shared by the prims of one composition
-        caches = [bbox_cache(stage, [p]) for p in purposes]
-        out = []
-        for path in prim_paths:
-            prim = stage.GetPrimAtPath(path)
-            out.append(
-                [
-                    c.ComputeUntransformedBound(prim).ComputeAlignedRange()
-                    if prim
-                    else Gf.Range3d()
-                    for c in caches
-                ]
-            )
-        return out
-
-    def set_active(active: bool) -> None:
-        with Sdf.ChangeBlock():
-            for path in paths:
-                spec = Sdf.CreatePrimInLayer(session, path)
-                spec.specifier = Sdf.SpecifierOver
-                spec.active = active
-
     try:
-        set_active(True)
+        _set_active(session, paths, True)
         if not _identity_below(stage, root):
             return None
-        item_bounds = bounds(paths)
-        set_active(False)
-        (rest,) = bounds([root])
+        item_bounds = _purpose_bounds(stage, paths)
+        _set_active(session, paths, False)
+        (rest,) = _purpose_bounds(stage, [root])
     finally:
         session.Clear()
-    names = list(vsets)
-    combos = list(itertools.product(*(vsets[n] for n in names)))
-    # active[c, i]: item i is on in combination c (every tag matches)
-    active = np.ones((len(combos), len(paths)), dtype=bool)
-    for k, n in enumerate(names):
-        chosen = np.array([c[k] for c in combos], dtype=object)
-        for i, path in enumerate(paths):
-            want = items[path].get(n)
-            if want is not None:
-                active[:, i] &= chosen == want
-
-    # min and max corners per purpose (items × purposes × 3); an empty range is (+inf, -inf),
-    # the union then takes min/max of the very doubles Gf.Range3d.UnionWith compares
-    def corners(bs: list[list[Gf.Range3d]]) -> tuple[np.ndarray, np.ndarray]:
-        lo = np.array([[r.GetMin() if not r.IsEmpty() else (np.inf,) * 3 for r in b] for b in bs])
-        hi = np.array([[r.GetMax() if not r.IsEmpty() else (-np.inf,) * 3 for r in b] for b in bs])
-        return lo.reshape(len(bs), len(purposes), 3), hi.reshape(len(bs), len(purposes), 3)
-
-    item_lo, item_hi = corners(item_bounds)
-    rest_lo, rest_hi = corners([rest])
+    combos, active = _active_items(items, paths, vsets)
+    item_lo, item_hi = _corners(item_bounds)
+    rest_lo, rest_hi = _corners([rest])
     out: dict[Combo, dict[str, np.ndarray]] = {}
     for c, combo in enumerate(combos):
         on = active[c]
@@ -209,6 +167,59 @@ def toggled_extents_hints(
         ]
         out[combo] = {root: _hint(ranges)}
     return out
+
+
+def _purpose_bounds(stage: Usd.Stage, prim_paths: Sequence[str]) -> list[list[Gf.Range3d]]:
+    """Each prim's untransformed bound per purpose (empty where the prim is missing); one
+    cache per purpose, shared by the prims of one composition."""
+    purposes = UsdGeom.Imageable.GetOrderedPurposeTokens()
+    caches = [bbox_cache(stage, [p]) for p in purposes]
+    out = []
+    for path in prim_paths:
+        prim = stage.GetPrimAtPath(path)
+        out.append(
+            [
+                c.ComputeUntransformedBound(prim).ComputeAlignedRange() if prim else Gf.Range3d()
+                for c in caches
+            ]
+        )
+    return out
+
+
+def _set_active(session: Sdf.Layer, paths: Sequence[str], active: bool) -> None:
+    """Every item of ``paths`` made active or inactive in the session layer."""
+    with Sdf.ChangeBlock():
+        for path in paths:
+            spec = Sdf.CreatePrimInLayer(session, path)
+            spec.specifier = Sdf.SpecifierOver
+            spec.active = active
+
+
+def _active_items(
+    items: Mapping[str, Mapping[str, str]], paths: Sequence[str], vsets: Mapping[str, Sequence[str]]
+) -> tuple[list[tuple], np.ndarray]:
+    """Every combination of ``vsets`` and ``active[c, i]``: item i is on in combination c
+    (every tag matches)."""
+    names = list(vsets)
+    combos = list(itertools.product(*(vsets[n] for n in names)))
+    active = np.ones((len(combos), len(paths)), dtype=bool)
+    for k, n in enumerate(names):
+        chosen = np.array([c[k] for c in combos], dtype=object)
+        for i, path in enumerate(paths):
+            want = items[path].get(n)
+            if want is not None:
+                active[:, i] &= chosen == want
+    return combos, active
+
+
+def _corners(bs: list[list[Gf.Range3d]]) -> tuple[np.ndarray, np.ndarray]:
+    """Min and max corners per purpose (items × purposes × 3); an empty range is
+    (+inf, -inf), so a union takes min/max of the very doubles Gf.Range3d.UnionWith
+    compares."""
+    n_purposes = len(UsdGeom.Imageable.GetOrderedPurposeTokens())
+    lo = np.array([[r.GetMin() if not r.IsEmpty() else (np.inf,) * 3 for r in b] for b in bs])
+    hi = np.array([[r.GetMax() if not r.IsEmpty() else (-np.inf,) * 3 for r in b] for b in bs])
+    return lo.reshape(len(bs), n_purposes, 3), hi.reshape(len(bs), n_purposes, 3)
 
 
 def _same(a: dict[str, np.ndarray], b: dict[str, np.ndarray], tol: float) -> bool:
