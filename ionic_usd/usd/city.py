@@ -236,15 +236,7 @@ def compose_city(
     cp = column_prototypes(folder, columns, finish, column_card_dir)
     secs["prototype stats"] = time.perf_counter() - t1
     t2 = time.perf_counter()
-    placed = _Placed(
-        temples,
-        columns,
-        tp,
-        cp,
-        as_instancer=len(temples) > instancer_threshold,
-        t_ext=instance_bounds(tp.lo, tp.hi, tp.of, temples.xz, temples.yaw, temples.scale),
-        c_ext=instance_bounds(cp.lo, cp.hi, cp.index, columns.xz, columns.yaw, None),
-    )
+    placed = _placed(temples, columns, tp, cp, len(temples) > instancer_threshold)
     body = new_layer("City", kind="assembly")
     with Sdf.ChangeBlock():
         _group(body, "/City/Temples")
@@ -275,6 +267,19 @@ def compose_city(
         triangles,
         (tuple(map(float, lo)), tuple(map(float, hi))),
         secs,
+    )
+
+
+def _placed(temples: TempleInstances, columns: ColumnInstances, tp, cp, as_instancer: bool):
+    """The city's placements with each instance's world bounds (temples and columns)."""
+    return _Placed(
+        temples,
+        columns,
+        tp,
+        cp,
+        as_instancer=as_instancer,
+        t_ext=instance_bounds(tp.lo, tp.hi, tp.of, temples.xz, temples.yaw, temples.scale),
+        c_ext=instance_bounds(cp.lo, cp.hi, cp.index, columns.xz, columns.yaw, None),
     )
 
 
