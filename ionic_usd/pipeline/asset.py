@@ -54,7 +54,7 @@ from ionic_usd.geometry.mesh import Mesh
 from ionic_usd.io import up_to_date
 from ionic_usd.lod import level, lod_rank
 from ionic_usd.pipeline.forms import form_cut, form_cuts, outside_walls
-from ionic_usd.pipeline.keys import build_key, file_digests
+from ionic_usd.pipeline.keys import asset_key
 from ionic_usd.pipeline.mesh_cache import cached_meshes, wait_for_writes
 from ionic_usd.texture.uv import UVCache, attach_uvs, unwrap_parts
 
@@ -496,6 +496,27 @@ def _default_triangles(meshes: list[AssetMesh], opts: ColumnAssetOptions) -> dic
     return tris
 
 
+def _current_report(dest: Path, key: str, t0: float) -> AssetReport | None:
+    """The report of ``dest`` when it already holds this build's intact output (its record
+    and every file's SHA-256 in its manifest), else None (also for a record of another
+    shape: then the asset is built)."""
+    record = up_to_date(dest, key)
+    if record is None:
+        return None
+    try:
+        return AssetReport(
+            dest / f"{ASSET_NAME}.usda",
+            int(record["meshes"]),
+            {str(k): int(v) for k, v in record["triangles_per_lod"].items()},
+            0,
+            time.perf_counter() - t0,
+            sum(f.stat().st_size for f in dest.rglob("*") if f.is_file()),
+            current=True,
+        )
+    except (KeyError, TypeError, ValueError, AttributeError):
+        return None
+
+
 def build_column_asset(
     folder: str | os.PathLike,
     opts: ColumnAssetOptions | None = None,
@@ -534,20 +555,9 @@ def build_column_asset(
         for src in opts.user_textures.values():
             validate_user_texture(src)
     key = asset_key(opts)
-    record = None if rebuild else up_to_date(dest, key)
-    if record is not None:
-        try:
-            return AssetReport(
-                dest / f"{ASSET_NAME}.usda",
-                int(record["meshes"]),
-                {str(k): int(v) for k, v in record["triangles_per_lod"].items()},
-                0,
-                time.perf_counter() - t0,
-                sum(f.stat().st_size for f in dest.rglob("*") if f.is_file()),
-                current=True,
-            )
-        except (KeyError, TypeError, ValueError, AttributeError):
-            pass  # a record of another shape: build
+    current = None if rebuild else _current_report(dest, key, t0)
+    if current is not None:
+        return current
     cache = cache if cache is not None else default_cache()
     misses0 = cache.misses
     # the generated meshes (unions, cuts, the capital's charts) with their packed UVs are a
@@ -585,9 +595,3 @@ def build_column_asset(
         wait_for_writes()  # the mesh cache entry, written while the layers were
     size = sum(f.stat().st_size for f in dest.rglob("*") if f.is_file())
     return AssetReport(path, len(meshes), triangles, unwraps, time.perf_counter() - t0, size)
-
-
-def asset_key(opts: ColumnAssetOptions) -> str:
-    """The content key of an asset build: its options, the bytes of the user's textures, the
-    code and the libraries (:func:`ionic_usd.pipeline.keys.build_key`)."""
-    return build_key("column_asset", opts, file_digests(opts.user_textures))

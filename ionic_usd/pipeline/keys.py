@@ -18,10 +18,14 @@ import hashlib
 from functools import lru_cache
 from importlib import metadata
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ionic_usd import __version__
 
-__all__ = ["build_key", "file_digests", "library_versions", "source_digest"]
+if TYPE_CHECKING:
+    from ionic_usd.blueprint.column_asset import ColumnAssetOptions
+
+__all__ = ["asset_key", "build_key", "file_digests", "library_versions", "source_digest"]
 
 #: the distributions whose code makes the geometry, the charts, the maps and the files
 LIBRARIES = (
@@ -82,3 +86,9 @@ def build_key(tag: str, *inputs: object) -> str:
         h.update(part.encode())
         h.update(b"\0")
     return h.hexdigest()[:32]
+
+
+def asset_key(opts: ColumnAssetOptions) -> str:
+    """The content key of a column asset build: its options, the bytes of the user's
+    textures, the code and the libraries (:func:`build_key`)."""
+    return build_key("column_asset", opts, file_digests(opts.user_textures))
