@@ -181,6 +181,63 @@ class BuildResult:
     task_seconds: dict[str, float]  # key → build time on its worker
 
 
+def _local_cluster(n_workers: int | None, n_builds: int):
+    """A Dask LocalCluster on 127.0.0.1: one single-threaded worker process per build, at
+    most ``n_workers`` (default: the machine's cores)."""
+    from distributed import LocalCluster
+
+    n = n_workers or os.cpu_count() or 1
+    return LocalCluster(
+        n_workers=min(n, n_builds),
+        threads_per_worker=1,
+        processes=True,
+        host="127.0.0.1",
+        dashboard_address=None,
+        silence_logs=logging.ERROR,
+    )
+
+
+def _client(cluster, scheduler: str | None):
+    """A client of the local ``cluster``, or of the scheduler at ``scheduler`` (refused with
+    a ParameterError when it cannot be reached)."""
+    from distributed import Client
+
+    if scheduler is None:
+        return Client(cluster)
+    try:
+        return Client(scheduler, timeout=CONNECT_TIMEOUT)
+    except (OSError, TimeoutError, ValueError, TypeError) as exc:
+        raise ParameterError(
+            "--scheduler",
+            scheduler,
+            f"a reachable Dask scheduler tcp://HOST:PORT ({type(exc).__name__}: {exc})",
+        ) from None
+
+
+def _build_on(client, todo, cache, progress) -> tuple[int, set[str], dict]:
+    """Every build of ``todo`` submitted to ``client`` and put into ``cache`` as it
+    completes: (the workers the scheduler had, the workers that built, seconds per build)."""
+    from distributed import as_completed
+
+    nw = len(client.scheduler_info().get("workers", {}))
+    if nw == 0:
+        client.wait_for_workers(1, timeout=60)
+        nw = len(client.scheduler_info().get("workers", {}))
+    futures = [
+        client.submit(build_temple_files, s, key=f"temple-{s.key}", pure=False) for s in todo
+    ]
+    by_key = {f.key: s for f, s in zip(futures, todo, strict=True)}
+    workers: set[str] = set()
+    task_seconds: dict[str, float] = {}
+    from ionic_usd.progress import progress as bar_over
+
+    with bar_over(len(futures), "building temple prototypes (Dask)", unit="temple") as bar:
+        for fut in as_completed(futures):
+            _take(fut, by_key, cache, workers, task_seconds, progress)
+            bar.update(1)
+    return nw, workers, task_seconds
+
+
 def build_prototypes(
     specs: Sequence[TempleSpec],
     *,
@@ -220,7 +277,7 @@ def build_prototypes(
             {todo[0].key: round(secs, 3)},
         )
     try:
-        from distributed import Client, LocalCluster, as_completed
+        import distributed  # noqa: F401  (the city extra; the helpers below import from it)
     except ImportError:
         raise IonicError(
             "building prototypes on Dask needs distributed: pip install 'ionic_usd[city]'"
@@ -229,43 +286,10 @@ def build_prototypes(
     cluster = None
     try:
         if scheduler is None:
-            n = n_workers or os.cpu_count() or 1
-            cluster = LocalCluster(
-                n_workers=min(n, len(todo)),
-                threads_per_worker=1,
-                processes=True,
-                host="127.0.0.1",
-                dashboard_address=None,
-                silence_logs=logging.ERROR,
-            )
-            client = Client(cluster)
-        else:
-            try:
-                client = Client(scheduler, timeout=CONNECT_TIMEOUT)
-            except (OSError, TimeoutError, ValueError, TypeError) as exc:
-                raise ParameterError(
-                    "--scheduler",
-                    scheduler,
-                    f"a reachable Dask scheduler tcp://HOST:PORT ({type(exc).__name__}: {exc})",
-                ) from None
+            cluster = _local_cluster(n_workers, len(todo))
+        client = _client(cluster, scheduler)
         with client:
-            nw = len(client.scheduler_info().get("workers", {}))
-            if nw == 0:
-                client.wait_for_workers(1, timeout=60)
-                nw = len(client.scheduler_info().get("workers", {}))
-            futures = [
-                client.submit(build_temple_files, s, key=f"temple-{s.key}", pure=False)
-                for s in todo
-            ]
-            by_key = {f.key: s for f, s in zip(futures, todo, strict=True)}
-            workers: set[str] = set()
-            task_seconds: dict[str, float] = {}
-            from ionic_usd.progress import progress as bar_over
-
-            with bar_over(len(futures), "building temple prototypes (Dask)", unit="temple") as bar:
-                for fut in as_completed(futures):
-                    _take(fut, by_key, cache, workers, task_seconds, progress)
-                    bar.update(1)
+            nw, workers, task_seconds = _build_on(client, todo, cache, progress)
     finally:
         if cluster is not None:
             cluster.close()
