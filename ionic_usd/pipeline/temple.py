@@ -172,6 +172,45 @@ def current_temple(
     return _current(Path(folder), temple_key(layout, column, **options), time.perf_counter())
 
 
+def _stage_temple(
+    tmp: Path, plan, layout: TempleLayout, dest: Path, akey: str, *, reuse: bool
+) -> dict[str, Any]:
+    """Write the temple of ``plan`` (from ``layout``) into the staging folder ``tmp``: the
+    column asset (its verified files taken from ``dest`` when ``reuse`` and its key ``akey``
+    is unchanged), the stone maps and the layers; returns the record the manifest keeps."""
+    from ionic_usd.blueprint.temple_plan import TERRACOTTA
+    from ionic_usd.pipeline.asset import (
+        build_column_asset,
+        copy_stone_textures,
+        warm_stone_textures,
+    )
+    from ionic_usd.usd.temple import temple_counts, write_temple
+
+    reused = reuse and dest.is_dir() and _reuse_asset(dest, tmp, akey)
+    # tiles repeat their map every metre (stone: every TILE_METRES = 2 m): half the size
+    # keeps the texel density
+    tiles = (TERRACOTTA[1], max(16, plan.opts.texture_size // 2), plan.opts.seed)
+    if reused:
+        log.info("the column asset is unchanged: its verified files are reused")
+    else:
+        log.info("building the column asset")
+        # the tiles' maps are made in the asset's process pool, beside its geometry
+        build_column_asset(
+            tmp / ASSET_NAME, plan.opts, rebuild=True, side_jobs=[(warm_stone_textures, tiles)]
+        )
+    copy_stone_textures(tmp / "Textures", *tiles)
+    stats = write_temple(plan, tmp)
+    # counted on the staged folder: the scene as generated, with the empty user's layer
+    return {
+        **temple_counts(tmp / ROOT_LAYER),
+        "overrides_sha256": hashlib.sha256((tmp / OVERRIDES_LAYER).read_bytes()).hexdigest(),
+        **stats,
+        "hypotheses": [h.id for h in layout.hypotheses],
+        "asset_key": akey,
+        "asset_reused": reused,
+    }
+
+
 def compose_temple(
     folder: str | os.PathLike,
     layout: TempleLayout,
@@ -221,42 +260,14 @@ def compose_temple(
         current = _current(dest, key, t0)
         if current is not None:
             return current
-    from ionic_usd.blueprint.temple_plan import TERRACOTTA, plan_temple
-    from ionic_usd.pipeline.asset import (
-        asset_key,
-        build_column_asset,
-        copy_stone_textures,
-        warm_stone_textures,
-    )
-    from ionic_usd.usd.temple import temple_counts, write_temple
+    from ionic_usd.blueprint.temple_plan import plan_temple
+    from ionic_usd.pipeline.asset import asset_key
 
     plan = plan_temple(layout, column, **options)
     akey = asset_key(plan.opts)
 
     def build(tmp: Path) -> dict[str, Any]:
-        reused = not rebuild and dest.is_dir() and _reuse_asset(dest, tmp, akey)
-        # tiles repeat their map every metre (stone: every TILE_METRES = 2 m): half the size
-        # keeps the texel density
-        tiles = (TERRACOTTA[1], max(16, plan.opts.texture_size // 2), plan.opts.seed)
-        if reused:
-            log.info("the column asset is unchanged: its verified files are reused")
-        else:
-            log.info("building the column asset")
-            # the tiles' maps are made in the asset's process pool, beside its geometry
-            build_column_asset(
-                tmp / ASSET_NAME, plan.opts, rebuild=True, side_jobs=[(warm_stone_textures, tiles)]
-            )
-        copy_stone_textures(tmp / "Textures", *tiles)
-        stats = write_temple(plan, tmp)
-        # counted on the staged folder: the scene as generated, with the empty user's layer
-        return {
-            **temple_counts(tmp / ROOT_LAYER),
-            "overrides_sha256": hashlib.sha256((tmp / OVERRIDES_LAYER).read_bytes()).hexdigest(),
-            **stats,
-            "hypotheses": [h.id for h in layout.hypotheses],
-            "asset_key": akey,
-            "asset_reused": reused,
-        }
+        return _stage_temple(tmp, plan, layout, dest, akey, reuse=not rebuild)
 
     record = replace_folder(
         build,
