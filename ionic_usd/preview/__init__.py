@@ -130,6 +130,22 @@ def perspective_view(
     return View(viewproj, at, direction)
 
 
+def _load(usd_path, variants: Mapping[str, str] | None, lod: str | None):
+    """(the scene read with these selections and its cards, what to draw, the world corners
+    that frame it); refuses a scene with nothing visible to draw."""
+    from ionic_usd.preview.scene import draw_items, world_corners
+    from ionic_usd.usd.reader import read_scene
+
+    try:
+        scene = read_scene(usd_path, variants=variants, lod=lod, draw_modes=True)
+    except GeometryError as exc:
+        if "has no visible mesh" in str(exc):
+            raise GeometryError(f"{usd_path}: no visible, active mesh to draw") from None
+        raise
+    items = draw_items(scene)
+    return scene, items, world_corners(items)
+
+
 def render_preview(
     usd_path: str | os.PathLike,
     out_png: str | os.PathLike,
@@ -178,22 +194,11 @@ def render_preview(
     GeometryError : nothing visible to draw, or a malformed mesh
     PreviewUnavailableError : no moderngl or no EGL driver
     """
-    from ionic_usd.preview.scene import draw_items, world_corners
-    from ionic_usd.usd.reader import read_scene
-
     t0 = time.perf_counter()
     out = Path(out_png)
     _validate(width, height, camera, samples, background, out, force)
-    try:
-        scene = read_scene(usd_path, variants=variants, lod=lod, draw_modes=True)
-    except GeometryError as exc:
-        if "has no visible mesh" in str(exc):
-            raise GeometryError(f"{usd_path}: no visible, active mesh to draw") from None
-        raise
-    items = draw_items(scene)
-    corners = world_corners(items)
+    scene, items, corners = _load(usd_path, variants, lod)
     t_load = time.perf_counter()
-
     ctx = create_context()
     try:
         view = perspective_view(corners, camera, width / height, eye=eye, target=target)
@@ -214,14 +219,20 @@ def render_preview(
     out.parent.mkdir(parents=True, exist_ok=True)
     write_png(pixels, out)
     t1 = time.perf_counter()
+    return _stats(scene, items, draws, (width, height), (t0, t_load, t_render, t1))
+
+
+def _stats(scene, items, draws: int, size: tuple[int, int], times) -> PreviewStats:
+    """What was drawn and how long it took (``times``: start, loaded, rendered, written)."""
+    t0, t_load, t_render, t1 = times
     return PreviewStats(
         meshes=len(items),
         prototypes=len(scene.prototypes),
         instances=sum(d.instanced for d in items),
         draws=draws,
         triangles=sum(d.triangles * len(d.placements) for d in items),
-        width=width,
-        height=height,
+        width=size[0],
+        height=size[1],
         seconds=t1 - t0,
         load_seconds=t_load - t0,
         render_seconds=t_render - t_load,

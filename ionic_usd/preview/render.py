@@ -197,8 +197,6 @@ def render(
     pixels : (height, width, 3 or 4) uint8, top row first
     draws : instanced draw calls of the colour pass
     """
-    import moderngl  # noqa: PLC0415
-
     lo, hi = corners.min(axis=0), corners.max(axis=0)
     centre = 0.5 * (lo + hi)
     radius = max(0.5 * float(np.linalg.norm(hi - lo)), 1e-6)
@@ -215,8 +213,35 @@ def render(
         vertex_shader=shaders.BACKGROUND_VS, fragment_shader=shaders.BACKGROUND_FS
     )
     ground_prog = ctx.program(vertex_shader=shaders.GROUND_VS, fragment_shader=shaders.GROUND_FS)
+    shadow_tex = _shadow_map(ctx, gpu, light)
+    size = (width, height)
+    fbo = _colour_target(ctx, size, samples, background, bg_prog)
+    shadow_tex.use(location=0)
+    uniforms = {
+        "u_key": tuple(key),
+        "u_fill": tuple(fill),
+        "u_eye": tuple(view.eye),
+        "u_shadow": 0,
+        "u_texel": 2.0 * shadow_half / SHADOW_SIZE,
+        "u_texel_uv": 1.0 / SHADOW_SIZE,
+    }
+    for prog in (gpu.mesh_prog, ground_prog):
+        prog["u_viewproj"].write(_gl_mat(view.viewproj))
+        prog["u_light"].write(_gl_mat(light))
+        for name, value in uniforms.items():
+            if name in prog:  # the compiler drops uniforms a program does not use
+                prog[name].value = value
+    draw_calls = _draw_items(ctx, gpu, view)
+    if ground:
+        _draw_ground(ctx, ground_prog, centre, radius, ground_y)
+    pixels = _read_pixels(ctx, fbo, size, 3 if background is not None else 4)
+    return pixels, draw_calls
 
-    # shadow map from the key light
+
+def _shadow_map(ctx, gpu: _Uploaded, light: np.ndarray):
+    """The depth texture of the scene seen from the key light (``light``: its view-projection)."""
+    import moderngl  # noqa: PLC0415
+
     shadow_tex = ctx.depth_texture((SHADOW_SIZE, SHADOW_SIZE))
     shadow_tex.compare_func = "<="
     shadow_tex.repeat_x = shadow_tex.repeat_y = False
@@ -227,9 +252,15 @@ def render(
     ctx.polygon_offset = (2.0, 4.0)
     gpu.depth(light)
     ctx.polygon_offset = (0.0, 0.0)
+    return shadow_tex
+
+
+def _colour_target(ctx, size: tuple[int, int], samples: int, background, bg_prog):
+    """The multisampled framebuffer, in use and cleared, with the sky gradient drawn when
+    there is a ``background`` (sRGB top colour; None: transparent)."""
+    import moderngl  # noqa: PLC0415
 
     samples = min(samples, ctx.max_samples) if samples > 1 else 0
-    size = (width, height)
     colour_rb = ctx.renderbuffer(size, components=4, samples=samples)
     depth_rb = ctx.depth_renderbuffer(size, samples=samples)
     fbo = ctx.framebuffer(color_attachments=[colour_rb], depth_attachment=depth_rb)
@@ -243,23 +274,13 @@ def render(
         ctx.disable(moderngl.DEPTH_TEST)
         ctx.vertex_array(bg_prog, [(quad, "2f", "in_xy")]).render()
         ctx.enable(moderngl.DEPTH_TEST)
+    return fbo
 
-    shadow_tex.use(location=0)
-    texel = 2.0 * shadow_half / SHADOW_SIZE
-    uniforms = {
-        "u_key": tuple(key),
-        "u_fill": tuple(fill),
-        "u_eye": tuple(view.eye),
-        "u_shadow": 0,
-        "u_texel": texel,
-        "u_texel_uv": 1.0 / SHADOW_SIZE,
-    }
-    for prog in (gpu.mesh_prog, ground_prog):
-        prog["u_viewproj"].write(_gl_mat(view.viewproj))
-        prog["u_light"].write(_gl_mat(light))
-        for name, value in uniforms.items():
-            if name in prog:  # the compiler drops uniforms a program does not use
-                prog[name].value = value
+
+def _draw_items(ctx, gpu: _Uploaded, view: View) -> int:
+    """The colour pass of the meshes, then the cards; returns its instanced draw calls."""
+    import moderngl  # noqa: PLC0415
+
     draw_calls = 0
     for vao, _, n, colour in gpu.meshes:
         gpu.mesh_prog["u_colour"].value = tuple(float(c) for c in colour)
@@ -274,36 +295,45 @@ def render(
             vao.render(instances=n)
             draw_calls += 1
         ctx.disable(moderngl.CULL_FACE)
+    return draw_calls
 
-    if ground:
-        h = 8.0 * radius
-        cx, cz = centre[0], centre[2]
-        plane = np.array(
-            [
-                [cx - h, ground_y, cz - h],
-                [cx + h, ground_y, cz - h],
-                [cx + h, ground_y, cz + h],
-                [cx - h, ground_y, cz - h],
-                [cx + h, ground_y, cz + h],
-                [cx - h, ground_y, cz + h],
-            ],
-            np.float32,
-        )
-        gvao = ctx.vertex_array(ground_prog, [(ctx.buffer(plane.tobytes()), "3f", "in_pos")])
-        ground_prog["u_colour"].value = (0.42, 0.40, 0.36)
-        ground_prog["u_centre"].value = (float(cx), float(cz))
-        ground_prog["u_fade"].value = (1.0 * radius, 3.5 * radius)
-        ctx.enable(moderngl.BLEND)
-        ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA
-        # after the meshes: depth test keeps it behind them, it blends over sky; pushed back
-        # in depth so that a scene's own ground at its lowest point (a city's paving) wins
-        # instead of z-fighting with it far from the camera
-        ctx.polygon_offset = 2.0, 4.0
-        gvao.render()
-        ctx.polygon_offset = 0.0, 0.0
-        ctx.disable(moderngl.BLEND)
 
-    comps = 3 if background is not None else 4
+def _draw_ground(ctx, ground_prog, centre: np.ndarray, radius: float, ground_y: float) -> None:
+    """A ground plane under the scene that fades out with the distance from its centre."""
+    import moderngl  # noqa: PLC0415
+
+    h = 8.0 * radius
+    cx, cz = centre[0], centre[2]
+    plane = np.array(
+        [
+            [cx - h, ground_y, cz - h],
+            [cx + h, ground_y, cz - h],
+            [cx + h, ground_y, cz + h],
+            [cx - h, ground_y, cz - h],
+            [cx + h, ground_y, cz + h],
+            [cx - h, ground_y, cz + h],
+        ],
+        np.float32,
+    )
+    gvao = ctx.vertex_array(ground_prog, [(ctx.buffer(plane.tobytes()), "3f", "in_pos")])
+    ground_prog["u_colour"].value = (0.42, 0.40, 0.36)
+    ground_prog["u_centre"].value = (float(cx), float(cz))
+    ground_prog["u_fade"].value = (1.0 * radius, 3.5 * radius)
+    ctx.enable(moderngl.BLEND)
+    ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA
+    # after the meshes: depth test keeps it behind them, it blends over sky; pushed back
+    # in depth so that a scene's own ground at its lowest point (a city's paving) wins
+    # instead of z-fighting with it far from the camera
+    ctx.polygon_offset = 2.0, 4.0
+    gvao.render()
+    ctx.polygon_offset = 0.0, 0.0
+    ctx.disable(moderngl.BLEND)
+
+
+def _read_pixels(ctx, fbo, size: tuple[int, int], comps: int) -> np.ndarray:
+    """The resolved framebuffer as (height, width, comps) uint8, top row first; RGBA with
+    straight alpha."""
+    width, height = size
     resolved = ctx.framebuffer(color_attachments=[ctx.renderbuffer(size, components=comps)])
     ctx.copy_framebuffer(resolved, fbo)
     data = resolved.read(components=comps, alignment=1)
@@ -312,4 +342,4 @@ def render(
         a = pixels[..., 3:].astype(np.float32)
         rgb = pixels[..., :3] * np.where(a > 0, 255.0 / np.maximum(a, 1), 0.0)
         pixels[..., :3] = np.clip(np.rint(rgb), 0, 255).astype(np.uint8)
-    return np.ascontiguousarray(pixels), draw_calls
+    return np.ascontiguousarray(pixels)
