@@ -74,13 +74,7 @@ def fit_shaft(
     )
     x = sil.box.x(stages.best_u)
     fitted = sil.shaft_of(x)
-    col = dataclasses.replace(
-        column,
-        shaft=dataclasses.replace(
-            column.shaft,
-            **{k: getattr(fitted, k) for k in ("bottom_radius", "top_radius", "height", "entasis")},
-        ),
-    )
+    col = sil.column_with(column, fitted)
     names = ("bottom_radius", "top_radius", "height", "entasis", "y_bottom")
     hit = sil.box.hit(stages.best_u, names)
     notes = [
@@ -157,6 +151,18 @@ class _Silhouette:
             height=float(x[2]),
             entasis=float(x[3]),
         )
+
+    @staticmethod
+    def column_with(column: ColumnParams, fitted: ShaftParams) -> ColumnParams:
+        """``column`` whose shaft takes the fitted radii, fluted height and entasis."""
+        shaft = dataclasses.replace(
+            column.shaft,
+            bottom_radius=fitted.bottom_radius,
+            top_radius=fitted.top_radius,
+            height=fitted.height,
+            entasis=fitted.entasis,
+        )
+        return dataclasses.replace(column, shaft=shaft)
 
     def make(self, u: np.ndarray) -> np.ndarray | None:
         x = self.box.x(u)
