@@ -1,6 +1,7 @@
 """Deviation map of a large scan against its fitted column: ionic_usd vs Open3D.
 
 Usage: python tools/bench_deviation.py [--points 1000000] [--fit-points 6000]
+[--markdown docs/bench/deviation.md]
 
 Fits a column to a subset of a synthetic scan of a fragment (tests/synth_scan.py: a
 square plinth, an Attic base and a fluted drum, 0.8 mm noise, mm units), then times the
@@ -110,4 +111,6 @@ def _best(fn, repeat: int) -> tuple[np.ndarray, float, float]:
 
 
 if __name__ == "__main__":
-    main()
+    import bench_md
+
+    raise SystemExit(bench_md.run(main))
