@@ -319,6 +319,43 @@ def test_png_files_round_trip(tmp_path):
     assert n[..., 2].min() > 0
 
 
+def test_written_pngs_are_checked_whole_without_decoding(tmp_path):
+    """verify_image checks a PNG by its chunks' lengths and CRCs: every written map passes
+    (and decodes), and every damage a failed write leaves is refused: those that lose pixels
+    as OpenImageIO's decoder refuses (or misreads) them, and also a lost or followed IEND,
+    which the decoder lets pass."""
+    from ionic_usd.texture.files import TextureError, verify_image
+
+    out = write_stone_textures(tmp_path / "tex", "travertine", 64, 5)
+    data = out["normal"].read_bytes()
+    for path in out.values():
+        verify_image(path)
+        assert _read(path)[1] is not None
+    bad = tmp_path / "bad.png"
+    flipped = bytearray(data)
+    flipped[len(data) // 2] ^= 0x01
+    damages = {
+        "cut mid-file": data[: len(data) // 2],
+        "cut in IEND": data[:-3],
+        "cut after the signature": data[:8],
+        "a byte changed": bytes(flipped),
+        "bytes after IEND": data + b"\0" * 16,
+        "zeros (a hole)": data[:100] + b"\0" * (len(data) - 100),
+        "not a PNG": b"GIF89a" + data[6:],
+    }
+    for what, damaged in damages.items():
+        bad.write_bytes(damaged)
+        with pytest.raises(TextureError, match="is the disk full"):
+            verify_image(bad)
+        inp = oiio.ImageInput.open(str(bad))  # the decoder does not read it back either
+        if inp is not None and "IEND" not in what:
+            spec = inp.spec()
+            pix = inp.read_image(0, 0, 0, spec.nchannels, oiio.UINT8)
+            decoded = pix is not None and not inp.has_error
+            inp.close()
+            assert not decoded or not np.array_equal(pix, _read(out["normal"])[1]), what
+
+
 def test_write_is_atomic_and_overwrites(tmp_path):
     first = write_stone_textures(tmp_path, "marble", 16, 0)
     before = first["basecolor"].read_bytes()

@@ -72,10 +72,19 @@ def _write_png(buf: Any, path: Path) -> None:
 
 
 def verify_image(path: Path) -> None:
-    """Decode every pixel of an image file; raise :class:`TextureError` if it is incomplete.
+    """Check that an image file was written whole; raise :class:`TextureError` if not.
 
-    OpenImageIO's writers can report success on a full disk and leave a truncated file.
+    OpenImageIO's writers can report success on a full disk and leave a truncated file. A PNG
+    is checked by its own integrity data, without decoding it (~10x faster): the signature,
+    then every chunk's length and CRC-32 (what a decoder checks, over every byte written) up
+    to an IEND that ends the file, IHDR first and some IDAT. Other formats are decoded, every
+    pixel.
     """
+    if path.suffix.lower() == ".png":
+        problem = _png_problem(path.read_bytes())
+        if problem is not None:
+            raise TextureError(path, f"written image is incomplete ({problem}); is the disk full?")
+        return
     import OpenImageIO as oiio
 
     inp = oiio.ImageInput.open(str(path))
@@ -91,6 +100,37 @@ def verify_image(path: Path) -> None:
         inp.close()
     if not ok:
         raise TextureError(path, "written image is incomplete; is the disk full?")
+
+
+_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+def _png_problem(data: bytes) -> str | None:
+    """What is wrong with the bytes of a PNG file as a whole (None: nothing): its signature,
+    each chunk's length and CRC-32, IHDR first, an IDAT, and IEND last, at the end."""
+    import zlib
+
+    if not data.startswith(_PNG_SIGNATURE):
+        return "no PNG signature"
+    view = memoryview(data)
+    pos, first, idat = len(_PNG_SIGNATURE), True, False
+    while True:
+        if pos + 12 > len(data):
+            return f"it ends inside a chunk header at byte {pos:,}"
+        size = int.from_bytes(view[pos : pos + 4], "big")
+        end = pos + 8 + size
+        if size > 0x7FFFFFFF or end + 4 > len(data):
+            return f"a chunk at byte {pos:,} runs past the end of the file"
+        kind = bytes(view[pos + 4 : pos + 8])
+        if zlib.crc32(view[pos + 4 : end]) != int.from_bytes(view[end : end + 4], "big"):
+            return f"the CRC of chunk {kind!r} at byte {pos:,} does not match"
+        if first and kind != b"IHDR":
+            return "the first chunk is not IHDR"
+        first, idat, pos = False, idat or kind == b"IDAT", end + 4
+        if kind == b"IEND":
+            if pos != len(data):
+                return f"{len(data) - pos:,} bytes follow IEND"
+            return None if idat else "no IDAT chunk"
 
 
 def _write_tx(buf: Any, path: Path) -> None:
