@@ -401,6 +401,10 @@ def main(argv: list[str] | None = None) -> int:
     """
     import os
 
+    if argv is None:  # the process is this command: its own settings (not a caller's)
+        from ionic_usd.cli.process import tune
+
+        tune()
     from ionic_usd.usd_warnings import UsdWarnings
 
     usd = UsdWarnings()
