@@ -60,9 +60,10 @@ def _to_uint8(a: np.ndarray) -> np.ndarray:
 def _write_png(buf: Any, path: Path) -> None:
     import OpenImageIO as oiio
 
-    # zlib level 3 with the "average" filter: ~4x faster than the defaults (level 6, adaptive
-    # filters) and no larger on noisy images.
-    buf.specmod().attribute("png:compressionLevel", 3)
+    # zlib level 2 with the "average" filter: ~6x faster than the defaults (level 6, adaptive
+    # filters); on the default temple's 9 maps 0.21 s of CPU where level 3 took 0.33 s, for
+    # files 2.9 % larger (8.14 MB against 7.91; level 1: 0.18 s, 4.9 % larger).
+    buf.specmod().attribute("png:compressionLevel", 2)
     buf.specmod().attribute("png:filter", 64)
     from ionic_usd.io import atomic_path
 
