@@ -6,7 +6,7 @@ pose it was scanned in (a missing sector or holes tilt them a few degrees). Each
 frames they allow (which direction is up, which sign, which of the other two runs through the
 volutes: 12, the capital's 180° turn about its axis halving the 24 of a cube) is placed by
 robust least squares (``soft_l1``) of the scan points' distances to the generator's own
-capital (:class:`.scan_capital.CapitalSurface`, at unit lower diameter), over a rotation, a
+capital (:class:`.capital_surface.CapitalSurface`, at unit lower diameter), over a rotation, a
 translation and a scale; the frame with the smallest robust cost wins and is polished on more
 points. The scale is the lower diameter (the Vitruvian capital scales with it), the
 rotation's y column the axis.
@@ -101,7 +101,7 @@ def capital_pose(points: np.ndarray, *, seed: int = 0, max_points: int = 2000) -
     from scipy.spatial.transform import Rotation
 
     from ionic_usd.column.column import portunus_column_params
-    from ionic_usd.evaluate.scan_capital import capital_surface
+    from ionic_usd.evaluate.capital_surface import capital_surface
 
     pts = np.asarray(points, dtype=np.float64)
     if len(pts) < 200:

@@ -34,7 +34,11 @@ Stages, in column coordinates (y up the axis, the capital's front facing ±z):
    from the side, a trimmed robust circle fit) — its eye on the
    circle's centre, its top radius and the bolsters' radius the circle's — when that is
    nearer the points: the faces' spirals alone held the eye 20 mm off the rolls' axis
-   (a local minimum the least squares did not leave);
+   (a local minimum the least squares did not leave); then, and again before the last
+   polish, the bolsters are put on that circle (the eye's offset from the spiral, the
+   bolsters' radius, the volutes' height and the abacus' thickness solved for, the abacus'
+   seat on the rolls' top and its top kept: :meth:`_Problem.bolster_on_rolls`) when that is
+   nearer the points (the spirals pulled the bolsters 11 mm off the rolls' axis);
 3. placement again at the fitted shape. The model with the smaller robust cost wins; both
    are reported, with what was fitted and what kept from the description (:data:`KEPT`).
 
@@ -52,9 +56,16 @@ from typing import Any
 
 import numpy as np
 
-from ionic_usd.column.capital import CapitalParams, build_capital
+from ionic_usd.column.capital import CapitalParams
 from ionic_usd.errors import GeometryError, ParameterError
-from ionic_usd.evaluate.scan_volute import roll_circle, spiral_growth, with_growth
+from ionic_usd.evaluate.capital_surface import CapitalSurface, capital_surface
+from ionic_usd.evaluate.scan_volute import (
+    bolster_circle,
+    roll_circle,
+    solve_for,
+    spiral_growth,
+    with_growth,
+)
 
 __all__ = ["CapitalFit", "CapitalSurface", "capital_surface", "fit_scanned_capital"]
 
@@ -100,12 +111,20 @@ KEPT = (
 #: faces' points lie between the model's band, channel floor and disc back, each a
 #: minimum), the abacus' side after it (a box's side seen from inside is still near its
 #: top and bottom: past the scanned side the cost is flat)
-_THR = 0.01
 GRIDDED_BEFORE = (3,)
 GRIDDED_AFTER = (7,)
 _X0 = np.array(
     [1.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, np.nan, 1.0, 0.0, 0.0, 1.0, np.nan, 1.0, np.nan]
 )
+#: moved to put the bolsters on the rolls' circle (:meth:`_Problem.bolster_on_rolls`)
+_ON_ROLLS = (
+    "eye_offset_x",
+    "eye_offset_y",
+    "bolster_radius",
+    "eye_dy_parts",
+    "abacus_height",
+)
+_BELT = PROPORTIONS.index("bolster_belt")
 _XSCALE = np.array(
     [0.05, 0.5, 0.5, 0.05, 0.1, 0.1, 0.2, 0.05, 0.1, 0.05, 0.2, 0.05, 0.05, 0.1, 0.1, 0.1, 0.1]
 )
@@ -114,94 +133,6 @@ _ACTIVE = {
     "log_spiral": np.arange(len(PROPORTIONS)),
     "centred_arcs": np.array([k for k in range(len(PROPORTIONS)) if k != 9]),
 }
-
-
-@dataclass(frozen=True)
-class CapitalSurface:
-    """Dense samples of a capital's surface (capital frame: origin at the shaft's top
-    centre), their triangles' unit normals, the sample spacing (m) and the lowest point's
-    height (the volutes' hang below the shaft top is ``-low``)."""
-
-    tree: Any
-    samples: np.ndarray
-    normals: np.ndarray
-    spacing: float
-    low: float
-
-    def distance(self, q: np.ndarray) -> np.ndarray:
-        """(n,) distance of points (n, 3) from the surface: to the nearest sample's
-        triangle plane, plus what lies beyond a sample spacing along the plane."""
-        d, idx = self.tree.query(q, eps=0.5)  # approximate: the plane corrects it
-        v = q - self.samples[idx]
-        dp = np.abs(np.einsum("ij,ij->i", v, self.normals[idx]))
-        lateral = np.sqrt(np.maximum(d**2 - dp**2, 0.0))
-        return np.sqrt(dp**2 + np.maximum(lateral - self.spacing, 0.0) ** 2)
-
-
-def capital_surface(
-    cap: CapitalParams, top_radius: float, count: int = 120_000, *, outer: bool = False
-) -> CapitalSurface:
-    """:class:`CapitalSurface` of ``build_capital(cap, top_radius=top_radius)``.
-
-    ``outer``: drop the samples inside another part (:func:`_inside_other`), so that the
-    surface is the one the column's united capital shows (the deviation map's): a scan point
-    inside the model is then measured to the outer surface, not to a part's face hidden in
-    the solid (a volute face fitted 25 mm too far out still lay a few mm from the hidden
-    backs of the discs and canales: 3.9 mm rms by the parts, 13.3 mm by the union).
-    """
-    from scipy.spatial import cKDTree
-
-    from ionic_usd.evaluate.scan_io import sample_surface
-
-    parts = build_capital(cap, top_radius=top_radius).as_dict()
-    allp, allt, owner, off = [], [], [], 0
-    for k, mesh in enumerate(parts.values()):
-        allp.append(mesh.points)
-        allt.append(mesh.triangles + off)
-        owner.append(np.full(len(mesh.triangles), k))
-        off += len(mesh.points)
-    P, T = np.concatenate(allp), np.concatenate(allt)
-    pp = P[T]
-    cr = np.cross(pp[:, 1] - pp[:, 0], pp[:, 2] - pp[:, 0])
-    norm = np.linalg.norm(cr, axis=1)
-    nrm = cr / np.maximum(norm, 1e-300)[:, None]
-    samples, tri = sample_surface(P, T, count, seed=1)
-    spacing = float(np.sqrt(0.5 * norm.sum() / count))
-    normals = nrm[tri]
-    if outer:
-        keep = ~_inside_other(samples, normals, np.concatenate(owner)[tri], spacing)
-        samples, normals = samples[keep], normals[keep]
-    tree = cKDTree(samples, balanced_tree=False, compact_nodes=False)
-    return CapitalSurface(tree, samples, normals, spacing, float(P[:, 1].min()))
-
-
-def _inside_other(
-    samples: np.ndarray, normals: np.ndarray, owner: np.ndarray, spacing: float
-) -> np.ndarray:
-    """(n,) bool: the sample lies inside a part other than its own (each part a closed,
-    outward-wound shell): behind the outward normal of that part's nearest sample, by more
-    than a hundredth of the sample spacing (faces that only touch are kept)."""
-    from scipy.spatial import cKDTree
-
-    order = np.argsort(owner, kind="stable")
-    bounds = np.searchsorted(owner[order], np.arange(owner.max() + 2))
-    inside = np.zeros(len(samples), dtype=bool)
-    for k in range(len(bounds) - 1):
-        src = order[bounds[k] : bounds[k + 1]]
-        if len(src) == 0:
-            continue
-        lo, hi = samples[src].min(axis=0), samples[src].max(axis=0)
-        box = np.all((samples >= lo) & (samples <= hi), axis=1)
-        box[src] = False
-        cand = np.flatnonzero(box)
-        if len(cand) == 0:
-            continue
-        _, j = cKDTree(samples[src]).query(samples[cand], k=4)
-        j = src[j]
-        v = samples[cand][:, None, :] - samples[j]
-        behind = np.einsum("ikj,ikj->ik", v, normals[j]) < -_THR * spacing
-        inside[cand[behind.all(axis=1)]] = True
-    return inside
 
 
 @dataclass(eq=False)
@@ -480,6 +411,51 @@ class _Problem:
             return xr
         return x
 
+    def bolster_on_rolls(self, model: str, x: np.ndarray, s: float, ty: float) -> np.ndarray:
+        """``x``, or the bolsters' axis and radius on the rolls' circle (the eye's offset
+        from the spiral and the rings' radius moved; the belt kept, or flattened), whichever
+        is nearest the points: the faces' spirals pull the eye, and the bolsters on its axis,
+        off the rolls (12 mm out and 7 mm down on the whole-column scan) when the model's
+        spiral is not the scan's. The volutes' height and the abacus' thickness move with
+        them so that the abacus rests on the rolls (it rests on the volutes' top) and its
+        top stays where it was."""
+        from ionic_usd.column.capital_body import capital_layout
+
+        qm = (self.q - np.array([0.0, self.y_top + ty, 0.0])) / s
+        got = roll_circle(qm, _proportioned(self.cap, model, x), self.f_scale)
+        if got is None:
+            return x
+
+        def circle(xx: np.ndarray) -> np.ndarray | None:  # bolsters, abacus seat and top
+            try:
+                c = _proportioned(self.cap, model, xx)
+                b = bolster_circle(c, self.top_radius)
+                seat = capital_layout(c).abacus_y + c.capital_position_y
+            except (ParameterError, GeometryError):
+                return None
+            return None if b is None else np.append(b, [seat, seat + c.abacus_height])
+
+        now = circle(x)
+        if now is None:
+            return x
+        # the abacus rests on the rolls (their top its seat), its top where it was
+        target = np.array([*got, got[1] + got[2], now[4]])
+        best, cost = x, np.inf
+        which = tuple(PROPORTIONS.index(n) for n in _ON_ROLLS)
+        for belt in (x[_BELT], 0.0):
+            xb = x.copy()
+            xb[_BELT] = belt
+            moved = solve_for(circle, xb, which, target, 1e-4 * self.size)
+            cand = [x] if belt == x[_BELT] else []
+            if moved is not None and np.all((moved >= _LO) & (moved <= _HI)):
+                cand.append(moved)
+            for xc in cand:
+                surf = self.build(model, xc)
+                c = np.inf if surf is None else self.robust(self.dist(surf, s, ty))
+                if c < cost:
+                    best, cost = xc, c
+        return best
+
     def fit_model(self, model: str, s0: float, ty0: float) -> dict[str, Any] | None:
         """Stages 2 and 3 of the module docstring for one volute model: its report entry
         (with the fitted capital under ``_capital``), or None if no size could be built."""
@@ -488,10 +464,10 @@ class _Problem:
             return None
         x, s, ty = start
         x = self.grid(model, np.clip(x, _LO, _HI), s, ty, GRIDDED_BEFORE, 29)
-        x = self.on_rolls(model, x, s, ty)
+        x = self.bolster_on_rolls(model, self.on_rolls(model, x, s, ty), s, ty)
         x = self.grid(model, self.solve(model, x, s, ty, 12), s, ty, GRIDDED_AFTER, 13)
         x = self.grid(model, x, s, ty, GRIDDED_AFTER, 9, span=0.5 * (_HI[7] - _LO[7]) / 12)
-        xs = self.solve(model, x, s, ty, 4)
+        xs = self.solve(model, self.bolster_on_rolls(model, x, s, ty), s, ty, 4)
         c = _proportioned(self.cap, model, xs)
         surf = capital_surface(c, self.top_radius, outer=True)
         s_m, ty_m, cost = self.place(surf, s, ty, 0.02 * self.size)

@@ -4,12 +4,14 @@ the volute's eye."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from ionic_usd.column.capital import CapitalParams
 from ionic_usd.column.volute import VoluteParams
 
-__all__ = ["roll_circle", "spiral_growth", "with_growth"]
+__all__ = ["bolster_circle", "solve_for", "roll_circle", "spiral_growth", "with_growth"]
 
 
 def spiral_growth(v: VoluteParams) -> float:
@@ -70,3 +72,56 @@ def roll_circle(
             f_scale=f_scale,
         ).x
     return float(c[0]), float(c[1]), float(abs(c[2]))
+
+
+def bolster_circle(cap: CapitalParams, top_radius: float) -> np.ndarray | None:
+    """(x, y, radius) of the circle the model's right bolster lies on, seen from the side
+    (capital frame, as :func:`roll_circle`): a circle fitted to its points between a tenth and
+    three tenths of its half-length from the middle (clear of the belt and of the ends' seat
+    in the volute discs). None when the capital has no such bolster (the angle capital)."""
+    from ionic_usd.column.capital import build_capital
+
+    parts = build_capital(cap, top_radius=top_radius).as_dict()
+    if "bolster_right" not in parts:
+        return None
+    p = parts["bolster_right"].points
+    z = np.abs(p[:, 2])
+    sel = (z > 0.1 * z.max()) & (z < 0.3 * z.max())
+    u, y = np.abs(p[sel, 0]), p[sel, 1] + cap.capital_position_y
+    a = np.c_[2.0 * u, 2.0 * y, np.ones_like(u)]
+    cx, cy, k = np.linalg.lstsq(a, u * u + y * y, rcond=None)[0]
+    return np.array([cx, cy, np.sqrt(k + cx * cx + cy * cy)])
+
+
+def solve_for(
+    measure: Callable[[np.ndarray], np.ndarray | None],
+    x: np.ndarray,
+    which: tuple[int, ...],
+    target: np.ndarray,
+    tol: float,
+) -> np.ndarray | None:
+    """``x`` with its entries ``which`` moved (Newton steps, a finite-difference Jacobian) so
+    that the vector ``measure(x)`` (as long as ``which``) is ``target`` within ``tol``; None
+    when that takes more than 4 steps or ``measure`` fails."""
+    y = np.array(x, dtype=np.float64)
+    idx = list(which)
+    for _ in range(5):
+        b = measure(y)
+        if b is None:
+            return None
+        r = b - target
+        if np.abs(r).max() < tol:
+            return y
+        jac = np.empty((len(idx), len(idx)))
+        for j, k in enumerate(idx):
+            yk = y.copy()
+            yk[k] += 1e-3
+            bk = measure(yk)
+            if bk is None:
+                return None
+            jac[:, j] = (bk - b) / 1e-3
+        try:
+            y[idx] -= np.linalg.solve(jac, r)
+        except np.linalg.LinAlgError:
+            return None
+    return None
