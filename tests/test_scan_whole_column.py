@@ -121,7 +121,7 @@ def test_whole_column_base_and_shaft_fit_to_the_noise_any_scan(seed):
     "cannot take this "
     "capital's faces: a full disc carved with a sine channel between Archimedean turns, "
     "against a raised band on a disc bounded by the spiral (the faces' spirals 4.7-6.6 mm rms, the "
-    "canalis 3.3-3.8, the rolls 2.5-3.4); measured 3.3-3.9 mm rms on seeds 0-4 (issue 36)",
+    "canalis 3.2-3.8, the rolls 2.5-3.4); measured 3.3-3.9 mm rms on seeds 0-4 (issue 36)",
 )
 def test_whole_column_capital_fits_to_the_noise():
     _, rms = _fit(0)
