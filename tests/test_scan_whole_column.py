@@ -100,9 +100,9 @@ def _check_base_and_shaft(seed: int) -> None:
 
 def test_whole_column_base_and_shaft_fit_to_the_noise():
     """Measured (seed 0): base 0.89, shaft 0.88 mm rms (the shaft was 1.45 before its top
-    ring and taper were fitted again at the length the capital sets); the capital 3.34 mm
-    (4.05 before the bolsters were put on the rolls, 6.3 before the volute was started on
-    the rolls' circle)."""
+    ring and taper were fitted again at the length the capital sets); the capital 2.80 mm
+    (3.34 before the volute's shape was swept, 4.05 before the bolsters were put on the
+    rolls, 6.3 before the volute was started on the rolls' circle)."""
     _check_base_and_shaft(0)
 
 
@@ -120,8 +120,8 @@ def test_whole_column_base_and_shaft_fit_to_the_noise_any_scan(seed):
     "depth, echinus height and projection, abacus side and height, scale and height free) "
     "cannot take this "
     "capital's faces: a full disc carved with a sine channel between Archimedean turns, "
-    "against a raised band on a disc bounded by the spiral (the faces' spirals 4.7-6.6 mm rms, the "
-    "canalis 3.2-3.8, the rolls 2.5-3.4); measured 3.3-3.9 mm rms on seeds 0-4 (issue 36)",
+    "against a raised band on a disc bounded by the spiral (the faces' spirals 3.9-5.2 mm rms, the "
+    "canalis 2.4-2.7, the rolls 2.4-2.9); measured 2.6-3.1 mm rms on seeds 0-4 (issue 36)",
 )
 def test_whole_column_capital_fits_to_the_noise():
     _, rms = _fit(0)
