@@ -452,21 +452,19 @@ class _Problem:
             return x
         # the abacus rests on the rolls (their top its seat), its top where it was
         target = np.array([*got, got[1] + got[2], now[4]])
-        best, cost = x, np.inf
         which = tuple(PROPORTIONS.index(n) for n in _ON_ROLLS)
-        for belt in (x[_BELT], 0.0):
+        cands = [x]
+        for belt in dict.fromkeys((float(x[_BELT]), 0.0)):  # the belt kept, and flattened
             xb = x.copy()
             xb[_BELT] = belt
             moved = solve_for(circle, xb, which, target, 1e-4 * self.size)
-            cand = [x] if belt == x[_BELT] else []
             if moved is not None and np.all((moved >= _LO) & (moved <= _HI)):
-                cand.append(moved)
-            for xc in cand:
-                surf = self.build(model, xc)
-                c = np.inf if surf is None else self.robust(self.dist(surf, s, ty))
-                if c < cost:
-                    best, cost = xc, c
-        return best
+                cands.append(moved)
+        if len(cands) == 1:
+            return x
+        surfs = [self.build(model, xc) for xc in cands]
+        costs = [np.inf if sf is None else self.robust(self.dist(sf, s, ty)) for sf in surfs]
+        return cands[int(np.argmin(costs))]
 
     def sweep(self, model: str, x: np.ndarray, s: float, ty: float) -> np.ndarray:
         """``x`` with each of :data:`SWEPT` in turn set to the best of 9 values over ±15 % of
