@@ -352,6 +352,38 @@ def test_stable_prototypes_do_not_depend_on_usds_numbering(tiny_temple, tiny_cit
     assert validate_stage(Usd.Stage.Open(other)) == []  # every instance finds its prototype
 
 
+def test_the_packaged_crate_does_not_depend_on_the_order_fields_were_authored(tmp_path):
+    """The crate writer keeps each spec's fields in the order they were authored (Flatten
+    authors them in an order that changed from one process to another): two layers with the
+    same content authored in two orders are different crate bytes, and the same bytes once
+    read back through their text."""
+    from ionic_usd.usd.package import _canonical
+
+    def layer(first_default: bool) -> Sdf.Layer:
+        lay = Sdf.Layer.CreateAnonymous(".usda")
+        prim = Sdf.CreatePrimInLayer(lay, "/Column")
+        prim.specifier = Sdf.SpecifierDef
+        attr = Sdf.AttributeSpec(prim, "primvars:st", Sdf.ValueTypeNames.TexCoord2fArray)
+        steps = [
+            lambda: setattr(attr, "default", [(0.0, 0.5), (1.0, 0.25)]),
+            lambda: attr.SetInfo("interpolation", "vertex"),
+        ]
+        for step in steps if first_default else steps[::-1]:
+            step()
+        prim.typeName = "Mesh"
+        return lay
+
+    def crate(lay: Sdf.Layer, name: str) -> bytes:
+        assert lay.Export(str(tmp_path / name))
+        return (tmp_path / name).read_bytes()
+
+    a, b = layer(True), layer(False)
+    assert a.ExportToString() == b.ExportToString()
+    assert crate(a, "a.usdc") != crate(b, "b.usdc")
+    assert crate(_canonical(a), "ca.usdc") == crate(_canonical(b), "cb.usdc")
+    assert _canonical(a).ExportToString() == a.ExportToString()
+
+
 def test_exports_are_the_same_bytes_run_after_run(tiny_temple, tiny_city, tmp_path):
     """glb, usdz and 3mf of one scene, the glb of a city (its materials inside nested
     instances) and the usdz of a copy of the scene in another folder: the same bytes in two

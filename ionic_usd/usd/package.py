@@ -11,7 +11,11 @@ before it replaces the output.
 The same scene gives the same package, byte for byte: ``Stage.Flatten`` names the prototypes
 ``/Flattened_Prototype_<n>`` in the order USD happened to number them, which changes from one
 opening of the stage to the next (one thread or many), so :func:`stable_prototypes`
-renumbers them by the path of their first instance; the zip stamps each file with its
+renumbers them by the path of their first instance; the flattened layer is written through
+the text format and read back before the crate file is written, as the crate writer keeps
+each spec's fields in the order they were authored, and ``Flatten`` and ``Sdf.CopySpec``
+author them in the order of the field names' addresses in memory, which changes from one
+process to another; the zip stamps each file with its
 modification time, which is set to the zip epoch first (1980-01-01 00:00 local time, as the
 zip stores it); the layer's documentation and the models' ``assetInfo`` identifiers are
 made relative to the scene's folder; and ``UsdUtils.CreateNewARKitUsdzPackage``, which
@@ -204,6 +208,14 @@ def _relative_paths(layer: Sdf.Layer, scene: Path) -> None:
     layer.Traverse(Sdf.Path.absoluteRootPath, visit)
 
 
+def _canonical(layer: Sdf.Layer) -> Sdf.Layer:
+    """The layer read back from its text: every spec's fields in the text format's order."""
+    canonical = Sdf.Layer.CreateAnonymous(".usda")
+    if not canonical.ImportFromString(layer.ExportToString()):
+        raise UsdAuthoringError("could not read back the flattened stage's text")
+    return canonical
+
+
 def _zip_package(root: Path, textures: list[Path], pkg: Path) -> None:
     """The usdz archive (``Sdf.ZipFileWriter``: uncompressed, 64-byte aligned): the root
     layer first, as the format requires, then the textures by name."""
@@ -255,7 +267,7 @@ def write_usdz(
     with tempfile.TemporaryDirectory(prefix=f".{out.stem}.usdz-", dir=out.parent) as tmp:
         _gather_textures(flat, Path(tmp))
         root = Path(tmp) / f"{out.stem or 'scene'}.usdc"
-        if not flat.Export(str(root)):
+        if not _canonical(flat).Export(str(root)):
             raise UsdAuthoringError(f"{scene}: could not write the flattened stage")
         # the zip records local modification times: the epoch in local time, for every file
         epoch = time.mktime((1980, 1, 1, 0, 0, 0, 0, 1, -1))
