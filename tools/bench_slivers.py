@@ -127,7 +127,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--repeat", type=int, default=3)
     args = ap.parse_args(argv)
     base_fn, to_base, from_base = _load_baseline(args.baseline)
-    os.environ["IONIC_USD_CACHE"] = tempfile.mkdtemp(prefix="bench_slivers_")
+    cache = tempfile.TemporaryDirectory(prefix="bench_slivers_")
+    os.environ["IONIC_USD_CACHE"] = cache.name  # removed when the process ends
     from ionic_usd.pipeline import forms
     from ionic_usd.pipeline.asset import column_asset_meshes
     from ionic_usd.usd.column_asset import ColumnAssetOptions
