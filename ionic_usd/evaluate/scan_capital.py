@@ -60,54 +60,22 @@ import numpy as np
 
 from ionic_usd.column.capital import CapitalParams
 from ionic_usd.errors import GeometryError, ParameterError
-from ionic_usd.evaluate.capital_surface import CapitalSurface, capital_surface
-from ionic_usd.evaluate.scan_volute import (
-    bolster_circle,
-    roll_circle,
-    solve_for,
-    spiral_growth,
-    with_growth,
+from ionic_usd.evaluate.capital_shape import (
+    ACTIVE,
+    HI,
+    KEPT,
+    LO,
+    PROPORTIONS,
+    X0,
+    XSCALE,
+    fitted_values,
+    proportioned,
 )
+from ionic_usd.evaluate.capital_surface import CapitalSurface, capital_surface
+from ionic_usd.evaluate.scan_volute import bolster_circle, roll_circle, solve_for, spiral_growth
 
 __all__ = ["CapitalFit", "CapitalSurface", "capital_surface", "fit_scanned_capital"]
 
-#: The fitted shape's parameters (:func:`_proportioned`): the volute's size factor, its eyes'
-#: height and half-spacing offsets (parts of D/18), then factors on the description's
-#: capital width (the volute faces' distance), bolster rings' radii, echinus height and
-#: projection, abacus side and abacus thickness.
-PROPORTIONS = (
-    "volute_scale",
-    "eye_dy_parts",
-    "eye_dx_parts",
-    "capital_width",
-    "bolster_radius",
-    "echinus_height",
-    "echinus_projection",
-    "abacus_side",
-    "abacus_height",
-    "volute_growth",
-    "bolster_belt",
-    "eye_offset_x",
-    "eye_offset_y",
-    "relief_depth",
-    "volute_turns",
-    "band_width",
-    "band_start",
-)
-_LO = np.array(
-    [0.45, -4.0, -4.0, 0.6, 0.4, 0.4, 0.0, 0.8, 0.5, 0.72, 0.0, -0.4, -0.4, 0.3, 2.4, 0.4, 0.1]
-)
-_HI = np.array(
-    [1.25, 4.0, 4.0, 1.3, 2.0, 2.0, 2.5, 1.4, 1.6, 0.98, 2.0, 0.4, 0.4, 2.0, 3.6, 1.6, 1.0]
-)
-#: what the fit keeps from the description (the scale and the factors above aside)
-KEPT = (
-    "volute's start angle and the band's growth angle (increasing_max); the centred arcs' "
-    "construction (arc_square, arc_ratio)",
-    "scroll ring positions",
-    "spiral_margin",
-    "slab_depth",
-)
 #: parameters whose cost has flats or several minima (indices into :data:`PROPORTIONS`),
 #: scanned over their whole range: the capital's width before the least squares (the
 #: faces' points lie between the model's band, channel floor and disc back, each a
@@ -115,9 +83,6 @@ KEPT = (
 #: top and bottom: past the scanned side the cost is flat)
 GRIDDED_BEFORE = (3,)
 GRIDDED_AFTER = (7,)
-_X0 = np.array(
-    [1.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, np.nan, 1.0, 0.0, 0.0, 1.0, np.nan, 1.0, np.nan]
-)
 #: swept one at a time, last (:meth:`_Problem.sweep`): the volute's growth, turns, band
 #: width and start, relief and size
 SWEPT = (
@@ -137,14 +102,6 @@ _ON_ROLLS = (
     "abacus_height",
 )
 _BELT = PROPORTIONS.index("bolster_belt")
-_XSCALE = np.array(
-    [0.05, 0.5, 0.5, 0.05, 0.1, 0.1, 0.2, 0.05, 0.1, 0.05, 0.2, 0.05, 0.05, 0.1, 0.1, 0.1, 0.1]
-)
-#: the volute's growth is the log spiral's (the centred arcs have their own construction)
-_ACTIVE = {
-    "log_spiral": np.arange(len(PROPORTIONS)),
-    "centred_arcs": np.array([k for k in range(len(PROPORTIONS)) if k != 9]),
-}
 
 
 @dataclass(eq=False)
@@ -179,48 +136,6 @@ class CapitalFit:
     kept: list[str] = field(default_factory=lambda: list(KEPT))
 
 
-def _proportioned(cap: CapitalParams, model: str, x: np.ndarray) -> CapitalParams:
-    """``cap`` with the volute model and the shape ``x`` (:data:`PROPORTIONS`)."""
-    from ionic_usd.grammar.scroll import ScrollGrammar, ScrollRing
-
-    part = cap.capital_width / 18.0  # the capital's width is D: a part is D/18
-    vol = cap.volute.scaled(float(x[0])).with_(volute_model=model)
-    turns = float(x[14]) if np.isfinite(x[14]) else vol.spiral_circuits
-    if model == "log_spiral" and np.isfinite(x[9]):
-        vol = with_growth(vol, float(x[9]), turns)
-    elif turns != vol.spiral_circuits:
-        vol = vol.with_(spiral_circuits=turns)
-    if x[15] != 1.0 or np.isfinite(x[16]):  # the band's width and its start's share of it
-        w = vol.thickness * float(x[15])
-        share = float(x[16]) if np.isfinite(x[16]) else vol.min_thickness / vol.thickness
-        vol = vol.with_(thickness=w, min_thickness=w * share)
-    r = vol.capital_spiral_radius
-    if x[11] != 0.0 or x[12] != 0.0:  # the eye (and the bolster's axis) off the spiral's origin
-        vol = vol.with_(
-            offset_x=vol.offset_x + float(x[11]) * r, offset_y=vol.offset_y + float(x[12]) * r
-        )
-    r0 = cap.scroll_grammar.rings[0].radius
-    rings = tuple(
-        ScrollRing(min((r0 + (g.radius - r0) * float(x[10])) * float(x[4]), 2.0), g.position)
-        for g in cap.scroll_grammar.rings
-    )
-    side = float(x[7])
-    return cap.with_(
-        volute=vol,
-        scroll=ScrollGrammar(rings) if x[4] != 1.0 or x[10] != 1.0 else cap.scroll,
-        # the eye's offset moves the eye (and the bolsters on its axis), not the spiral
-        scroll_position_y=cap.scroll_position_y + float(x[1]) * part + float(x[12]) * r,
-        capital_length=cap.capital_length + 2.0 * float(x[2]) * part,
-        capital_width=cap.capital_width * float(x[3]),
-        echinus_height=cap.echinus_height * float(x[5]),
-        echinus_projection=cap.echinus_projection * float(x[6]),
-        abacus_length=cap.abacus_length * side,
-        abacus_width=cap.abacus_width * side,
-        abacus_height=cap.abacus_height * float(x[8]),
-        relief_depth=cap.relief_depth * float(x[13]),
-    )
-
-
 def _eye_on_rolls(
     cap: CapitalParams, model: str, x: np.ndarray, qm: np.ndarray, f_scale: float
 ) -> np.ndarray:
@@ -232,7 +147,7 @@ def _eye_on_rolls(
     from ionic_usd.column.volute import volute_extent, volute_total_radius
 
     try:
-        c = _proportioned(cap, model, x)
+        c = proportioned(cap, model, x)
     except (ParameterError, GeometryError):
         return x
     got = roll_circle(qm, c, f_scale)
@@ -243,22 +158,22 @@ def _eye_on_rolls(
     y[0] *= got[2] / c.volute.capital_spiral_radius
     y[11:13] = 0.0
     try:
-        c = _proportioned(cap, model, y)
+        c = proportioned(cap, model, y)
         ext = volute_extent(c.volute, c.spiral_samples, c.ring_segments)
     except (ParameterError, GeometryError):
         return x
     y[2] += (got[0] + float(ext[1, 0]) - 0.5 * c.capital_length) / part
     y[1] += (got[1] - c.scroll_position_y - c.capital_position_y) / part
-    if not np.all((y > _LO) & (y < _HI)):
+    if not np.all((y > LO) & (y < HI)):
         return x
     try:
-        moved = _proportioned(cap, model, y)
+        moved = proportioned(cap, model, y)
         capital_layout(moved)  # raises when the moved capital cannot be laid out
     except (ParameterError, GeometryError):
         return x
     ring = max(g.radius for g in moved.scroll_grammar.rings)
     y[4] *= got[2] / (ring * volute_total_radius(moved.volute))
-    return np.clip(y, _LO, _HI)
+    return np.clip(y, LO, HI)
 
 
 def _level_eye(cap: CapitalParams, model: str, vs: float) -> float:
@@ -328,7 +243,7 @@ class _Problem:
         """The surface of the capital with proportions ``x``, or None where it cannot be."""
         try:
             return capital_surface(
-                _proportioned(self.cap, model, x), self.top_radius, count=count, outer=True
+                proportioned(self.cap, model, x), self.top_radius, count=count, outer=True
             )
         except (ParameterError, GeometryError):
             return None
@@ -347,8 +262,8 @@ class _Problem:
         over its range, or over ``x ± span`` within it (the others and the placement held)."""
         x = x.copy()
         for k in which:
-            lo, hi = (_LO[k], _HI[k]) if span is None else (x[k] - span, x[k] + span)
-            vals = np.linspace(max(lo, _LO[k]), min(hi, _HI[k]), n)
+            lo, hi = (LO[k], HI[k]) if span is None else (x[k] - span, x[k] + span)
+            vals = np.linspace(max(lo, LO[k]), min(hi, HI[k]), n)
             costs = []
             for v in vals:
                 xk = x.copy()
@@ -363,7 +278,7 @@ class _Problem:
     ) -> np.ndarray:
         """The distances with the model's active parameters set to ``xa`` (the rest ``x``)."""
         xf = x.copy()
-        xf[_ACTIVE[model]] = xa
+        xf[ACTIVE[model]] = xa
         surf = self.build(model, xf)
         return np.full(len(self.q), 10.0 * self.size) if surf is None else self.dist(surf, s, ty)
 
@@ -371,14 +286,14 @@ class _Problem:
         """``x`` with the model's active parameters polished by bounded robust least squares."""
         from scipy.optimize import least_squares
 
-        act = _ACTIVE[model]
+        act = ACTIVE[model]
         sol = least_squares(
             self.residuals,
-            np.clip(x[act], _LO[act], _HI[act]),
-            bounds=(_LO[act], _HI[act]),
+            np.clip(x[act], LO[act], HI[act]),
+            bounds=(LO[act], HI[act]),
             loss="soft_l1",
             f_scale=self.f_scale,
-            x_scale=_XSCALE[act],
+            x_scale=XSCALE[act],
             diff_step=3e-2,
             max_nfev=nfev,
             args=(x, model, s, ty),
@@ -394,7 +309,7 @@ class _Problem:
         keeps a wrong size from being traded for a wrong height."""
         cap, best = self.cap, None
         for vs in (0.5, 0.6, 0.72, 0.86, 1.0, 1.16):
-            x0 = _X0.copy()
+            x0 = X0.copy()
             x0[0], x0[1] = vs, _level_eye(cap, model, vs)
             x0[9] = spiral_growth(cap.volute)
             x0[14] = cap.volute.spiral_circuits
@@ -434,13 +349,13 @@ class _Problem:
         from ionic_usd.column.capital_body import capital_layout
 
         qm = (self.q - np.array([0.0, self.y_top + ty, 0.0])) / s
-        got = roll_circle(qm, _proportioned(self.cap, model, x), self.f_scale)
+        got = roll_circle(qm, proportioned(self.cap, model, x), self.f_scale)
         if got is None:
             return x
 
         def circle(xx: np.ndarray) -> np.ndarray | None:  # bolsters, abacus seat and top
             try:
-                c = _proportioned(self.cap, model, xx)
+                c = proportioned(self.cap, model, xx)
                 b = bolster_circle(c, self.top_radius)
                 seat = capital_layout(c).abacus_y + c.capital_position_y
             except (ParameterError, GeometryError):
@@ -458,7 +373,7 @@ class _Problem:
             xb = x.copy()
             xb[_BELT] = belt
             moved = solve_for(circle, xb, which, target, 1e-4 * self.size)
-            if moved is not None and np.all((moved >= _LO) & (moved <= _HI)):
+            if moved is not None and np.all((moved >= LO) & (moved <= HI)):
                 cands.append(moved)
         if len(cands) == 1:
             return x
@@ -473,8 +388,8 @@ class _Problem:
         least squares' last polish had stopped)."""
         for name in SWEPT:
             k = PROPORTIONS.index(name)
-            if k in _ACTIVE[model]:
-                x = self.grid(model, x, s, ty, (k,), 9, span=0.15 * (_HI[k] - _LO[k]))
+            if k in ACTIVE[model]:
+                x = self.grid(model, x, s, ty, (k,), 9, span=0.15 * (HI[k] - LO[k]))
                 x = self.bolster_on_rolls(model, x, s, ty)
         return x
 
@@ -485,17 +400,17 @@ class _Problem:
         if start is None:
             return None
         x, s, ty = start
-        x = self.grid(model, np.clip(x, _LO, _HI), s, ty, GRIDDED_BEFORE, 29)
+        x = self.grid(model, np.clip(x, LO, HI), s, ty, GRIDDED_BEFORE, 29)
         x = self.bolster_on_rolls(model, self.on_rolls(model, x, s, ty), s, ty)
         x = self.grid(model, self.solve(model, x, s, ty, 12), s, ty, GRIDDED_AFTER, 13)
-        x = self.grid(model, x, s, ty, GRIDDED_AFTER, 9, span=0.5 * (_HI[7] - _LO[7]) / 12)
+        x = self.grid(model, x, s, ty, GRIDDED_AFTER, 9, span=0.5 * (HI[7] - LO[7]) / 12)
         x = self.sweep(model, self.bolster_on_rolls(model, x, s, ty), s, ty)
         xs = self.solve(model, x, s, ty, 4)
-        c = _proportioned(self.cap, model, xs)
+        c = proportioned(self.cap, model, xs)
         surf = capital_surface(c, self.top_radius, outer=True)
         s_m, ty_m, cost = self.place(surf, s, ty, 0.02 * self.size)
         d = self.dist(surf, s_m, ty_m)
-        u = (xs - _LO) / (_HI - _LO)
+        u = (xs - LO) / (HI - LO)
         return {
             "cost": cost,
             "rms": float(np.sqrt(np.mean(d**2))),
@@ -560,7 +475,7 @@ def fit_scanned_capital(
         fitted,
         win["ty"],
         best,
-        _fitted_values(fitted, win["scale"]),
+        fitted_values(fitted, win["scale"]),
         models,
         rms_start,
         win["rms"],
@@ -568,30 +483,3 @@ def fit_scanned_capital(
         time.perf_counter() - t0,
         len(q),
     )
-
-
-def _fitted_values(fitted: CapitalParams, scale: float) -> dict[str, float]:
-    """The fitted capital's measures, as the report lists them."""
-    from ionic_usd.column.capital_body import capital_layout
-    from ionic_usd.column.volute import volute_total_radius
-
-    return {
-        "scale": scale,
-        "capital_spiral_radius": fitted.volute.capital_spiral_radius,
-        "capital_circle_radius": fitted.volute.capital_circle_radius,
-        "scroll_position_y": fitted.scroll_position_y,
-        "eye_x": float(capital_layout(fitted).eye_x),
-        "eye_offset_x": fitted.volute.offset_x,
-        "eye_offset_y": fitted.volute.offset_y,
-        "bolster_radius": float(
-            max(g.radius for g in fitted.scroll_grammar.rings) * volute_total_radius(fitted.volute)
-        ),
-        "relief_depth": fitted.relief_depth,
-        "capital_length": fitted.capital_length,
-        "capital_width": fitted.capital_width,
-        "echinus_height": fitted.echinus_height,
-        "echinus_projection": fitted.echinus_projection,
-        "abacus_length": fitted.abacus_length,
-        "abacus_width": fitted.abacus_width,
-        "abacus_height": fitted.abacus_height,
-    }
