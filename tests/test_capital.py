@@ -323,6 +323,32 @@ def _volute_face_runs(mesh, origins, direction, plane, depth):
     return int(on.sum()), int(np.count_nonzero(np.diff(kinds)))
 
 
+@pytest.mark.parametrize("scroll", ["S1", "S2", "R1.0 P0.05, R0.8 P0.5, R1.0 P0.95"])
+def test_the_volute_face_covers_the_bolsters_end(scroll):
+    """Rays from the front, inside the bolster's end circle about the eye, meet the band's
+    face or the channel floor, never the bolster's end a slab further back: where the roll is
+    wider than the spiral's outer turn (below and inside it, 0.7 of the volute's radius for
+    S1), its end is the volute's face (it was a crescent 45 mm deep on the default capital)."""
+    from ionic_usd.column.capital_body import rim_radius
+
+    p = CapitalParams(scroll=scroll, spiral_samples=96, ring_segments=24, bolster_rows=16)
+    m = capital_mesh(p, top_radius=C)
+    lay = capital_layout(p)
+    r = rim_radius(p, lay)
+    assert r == pytest.approx(p.scroll_grammar.rings[0].radius * lay.total_radius)
+    rng = np.random.default_rng(3)
+    a, q = rng.uniform(0, 2 * np.pi, 300), 0.97 * r * np.sqrt(rng.uniform(0, 1, 300))
+    x = lay.eye_x + q * np.cos(a)
+    y = lay.eye_y + p.capital_position_y + q * np.sin(a)
+    origins = np.stack([x, y, np.full_like(x, 2.0)], axis=1)
+    z = 2.0 - _first_hits(m, origins, (0.0, 0.0, -1.0))
+    floor = lay.face_z - p.relief_depth
+    assert np.all(np.isfinite(z))
+    assert z.min() >= floor - 1e-6, (z.min(), floor)
+    # and both levels are met: the band's face and the floor between its turns
+    assert np.isclose(z, lay.face_z, atol=1e-6).any() and np.isclose(z, floor, atol=1e-6).any()
+
+
 @pytest.fixture(scope="module")
 def angle_low():
     p = CapitalParams(spiral_samples=96, ring_segments=24, bolster_rows=16)

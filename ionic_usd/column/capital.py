@@ -64,6 +64,7 @@ from ionic_usd.column.capital_body import (
     capital_height,
     capital_layout,
     echinus_mesh,
+    rim_radius,
     seat_depth,
 )
 from ionic_usd.column.solids import MIRROR_X, MIRROR_Z, box_mesh, rigid
@@ -130,6 +131,8 @@ def build_capital(
         slab_depth=p.slab_depth,
         margin=margin,
         seat=seat,
+        rim=rim_radius(p, lay),
+        rim_segments=p.ring_segments,  # the bolster's
     )
     fr = rigid(vol, np.eye(3), (lay.eye_x, lay.eye_y, lay.face_z), "volute_front_right")
     fl = rigid(fr, MIRROR_X, name="volute_front_left")

@@ -40,6 +40,7 @@ __all__ = [
     "canalis_bottom",
     "bolster_profile",
     "bolster_mesh",
+    "rim_radius",
 ]
 
 _D = PORTUNUS_LOWER_DIAMETER
@@ -276,6 +277,12 @@ def canalis_bottom(p: CapitalParams, lay: CapitalLayout) -> float:
     runs under the canalis as a moulding (from the eye down it would cut the ovolo's top off
     flat)."""
     return min(max(lay.eye_y, p.echinus_height), lay.abacus_y - 1e-3)
+
+
+def rim_radius(p: CapitalParams, lay: CapitalLayout) -> float:
+    """The bolster's radius where it meets a volute (its first ring's: the scroll grammar's
+    radius × the volute's total radius), about the eye's axis."""
+    return float(p.scroll_grammar.rings[0].radius * lay.total_radius)
 
 
 def bolster_profile(p: CapitalParams, length: float, radius: float) -> np.ndarray:

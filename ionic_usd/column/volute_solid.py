@@ -266,6 +266,8 @@ def build_volute(
     slab_depth: float = 0.03,
     margin: float = 0.0,
     seat: float = 0.0,
+    rim: float = 0.0,
+    rim_segments: int = 48,
     name: str = "volute",
 ) -> Mesh:
     """One volute (three closed shells: backing disc, raised band, eye boss), merged.
@@ -290,4 +292,19 @@ def build_volute(
     )
     back = build_volute_backing(p, samples=samples, z0=-relief_depth - slab_depth, z1=-relief_depth)
     eye = build_volute_eye(p, segments=eye_segments, z0=-relief_depth - seat, z1=0.0)
-    return merge([back, band, eye], name=name)
+    shells = [back, band, eye]
+    if rim > 0:
+        shells.append(_rim_disc(rim, rim_segments, z0=-relief_depth - slab_depth, z1=-relief_depth))
+    return merge(shells, name=name)
+
+
+def _rim_disc(radius: float, segments: int, *, z0: float, z1: float) -> Mesh:
+    """The roll's end as a disc about the eye, level with the channel floor: where the roll
+    (the bolster, a lathe about the eye's axis) is wider than the spiral's outer turn, its end
+    is the volute's face, not a step back to the bolster's end."""
+    a = 2 * np.pi * (np.arange(segments) + 0.5) / segments  # between the bolster's vertices
+    ring = radius * np.stack([np.cos(a), np.sin(a)], axis=1)
+    pts = np.vstack([ring, [[0.0, 0.0]]])
+    i = np.arange(segments)
+    fan = np.stack([np.full(segments, segments), i, (i + 1) % segments], axis=1)
+    return prism(pts, fan, z0, z1, loop=i, crease_deg=90.0, name="volute_rim")
