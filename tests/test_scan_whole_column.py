@@ -102,8 +102,9 @@ def _check_base_and_shaft(seed: int) -> None:
 def test_whole_column_base_and_shaft_fit_to_the_noise():
     """Measured (seed 0): base 0.89, shaft 0.88 mm rms (the shaft was 1.45 before its top
     ring and taper were fitted again at the length the capital sets); the capital 2.30 mm
-    (2.80 before the volute's face covered the bolster's end, 3.34 before its shape was swept, 4.05 before the bolsters were put on the
-    rolls, 6.3 before the volute was started on the rolls' circle)."""
+    (2.80 before the volute's face covered the bolster's end, 3.34 before its shape was
+    swept, 4.05 before the bolsters were put on the rolls, 6.3 before the volute was started
+    on the rolls' circle)."""
     _check_base_and_shaft(0)
 
 
