@@ -34,6 +34,7 @@ import numpy as np
 from ionic_usd.errors import GeometryError, IonicError
 from ionic_usd.evaluate.fit_scan import ScanFit, fit_column_scan
 from ionic_usd.evaluate.scan_axis import VERTICAL, _prism_direction, normals
+from ionic_usd.evaluate.scan_volute import circle_fit
 
 __all__ = [
     "ColonnadeFit",
@@ -157,15 +158,6 @@ SHAFT_BAND = (0.35, 0.65)
 KEEP_RADII = 2.3
 
 
-def _circle(xy: np.ndarray) -> tuple[np.ndarray, float]:
-    """Least-squares circle (Kåsa) through plan points: centre (2,), radius."""
-    a = np.column_stack([xy, np.ones(len(xy))])
-    b = (xy**2).sum(axis=1)
-    sol = np.linalg.lstsq(a, b, rcond=None)[0]
-    c = sol[:2] / 2
-    return c, float(np.sqrt(max(sol[2] + c @ c, 0.0)))
-
-
 def _face(h: np.ndarray, xy: np.ndarray, tol: float, *, top: bool) -> tuple[np.ndarray, float]:
     """A horizontal face joining the columns (a stylobate's top, an architrave's soffit), as
     the plane through its points (``h`` over ``xy``: it need not be level in the scan's up,
@@ -205,9 +197,8 @@ def _split_touching(h: np.ndarray, xy: np.ndarray, cell: float) -> tuple[list[np
     shafts = [k for k in range(count) if sizes[k] >= max(100, MIN_SHARE * sizes.max())]
     if len(shafts) < 2:
         return [np.arange(len(h))], 0
-    circles = [_circle(q[lab == k]) for k in shafts]
-    centres = np.array([c for c, _ in circles])
-    radii = np.array([r for _, r in circles])
+    circles = np.array([circle_fit(q[lab == k]) for k in shafts])
+    centres, radii = circles[:, :2], circles[:, 2]
     d = np.linalg.norm(xy[:, None, :] - centres[None, :, :], axis=2)
     near = np.argmin(d, axis=1)
     on = d[np.arange(len(h)), near] <= KEEP_RADII * radii[near]

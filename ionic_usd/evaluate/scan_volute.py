@@ -11,7 +11,14 @@ import numpy as np
 from ionic_usd.column.capital import CapitalParams
 from ionic_usd.column.volute import VoluteParams
 
-__all__ = ["bolster_circle", "solve_for", "roll_circle", "spiral_growth", "with_growth"]
+__all__ = [
+    "bolster_circle",
+    "circle_fit",
+    "solve_for",
+    "roll_circle",
+    "spiral_growth",
+    "with_growth",
+]
 
 
 def spiral_growth(v: VoluteParams) -> float:
@@ -87,10 +94,15 @@ def bolster_circle(cap: CapitalParams, top_radius: float) -> np.ndarray | None:
     p = parts["bolster_right"].points
     z = np.abs(p[:, 2])
     sel = (z > 0.1 * z.max()) & (z < 0.3 * z.max())
-    u, y = np.abs(p[sel, 0]), p[sel, 1] + cap.capital_position_y
+    return circle_fit(np.c_[np.abs(p[sel, 0]), p[sel, 1] + cap.capital_position_y])
+
+
+def circle_fit(xy: np.ndarray) -> np.ndarray:
+    """(x, y, radius) of the least-squares (Kåsa) circle through points (n, 2)."""
+    u, y = xy[:, 0], xy[:, 1]
     a = np.c_[2.0 * u, 2.0 * y, np.ones_like(u)]
     cx, cy, k = np.linalg.lstsq(a, u * u + y * y, rcond=None)[0]
-    return np.array([cx, cy, np.sqrt(k + cx * cx + cy * cy)])
+    return np.array([cx, cy, np.sqrt(max(k + cx * cx + cy * cy, 0.0))])
 
 
 def solve_for(
