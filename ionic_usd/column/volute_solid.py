@@ -250,11 +250,18 @@ def build_volute_eye(
     name: str = "volute_eye",
 ) -> Mesh:
     """The eye as a cylindrical boss (a closed prism over the eye's circle)."""
-    circle = volute_eye(p, segments)
-    pts = np.vstack([circle, p.eye_center[None, :]])
-    i = np.arange(segments)
-    fan = np.stack([np.full(segments, segments), i, (i + 1) % segments], axis=1)
-    return prism(_lift(p, pts), fan, z0, z1, loop=np.arange(segments), crease_deg=90.0, name=name)
+    return _disc(
+        _lift(p, np.vstack([volute_eye(p, segments), p.eye_center[None, :]])), z0, z1, name
+    )
+
+
+def _disc(pts: np.ndarray, z0: float, z1: float, name: str) -> Mesh:
+    """A closed prism over a polygon (``pts``: its points, then its centre) fanned from the
+    centre, with crisp vertical edges."""
+    n = len(pts) - 1
+    i = np.arange(n)
+    fan = np.stack([np.full(n, n), i, (i + 1) % n], axis=1)
+    return prism(pts, fan, z0, z1, loop=i, crease_deg=90.0, name=name)
 
 
 def build_volute(
@@ -270,7 +277,9 @@ def build_volute(
     rim_segments: int = 48,
     name: str = "volute",
 ) -> Mesh:
-    """One volute (three closed shells: backing disc, raised band, eye boss), merged.
+    """One volute (closed shells: backing disc, raised band, eye boss and, for ``rim`` > 0,
+    the bolster's end: a disc of that radius about the eye, level with the channel floor),
+    merged.
 
     Frame: the eye centre at the origin, the face towards +Z; the band and the eye span ``z ∈
     [−relief_depth − seat, 0]`` (``seat`` sinks them into the backing, and raises the margin's
@@ -304,7 +313,4 @@ def _rim_disc(radius: float, segments: int, *, z0: float, z1: float) -> Mesh:
     is the volute's face, not a step back to the bolster's end."""
     a = 2 * np.pi * (np.arange(segments) + 0.5) / segments  # between the bolster's vertices
     ring = radius * np.stack([np.cos(a), np.sin(a)], axis=1)
-    pts = np.vstack([ring, [[0.0, 0.0]]])
-    i = np.arange(segments)
-    fan = np.stack([np.full(segments, segments), i, (i + 1) % segments], axis=1)
-    return prism(pts, fan, z0, z1, loop=i, crease_deg=90.0, name="volute_rim")
+    return _disc(np.vstack([ring, [[0.0, 0.0]]]), z0, z1, "volute_rim")
