@@ -13,9 +13,9 @@ The same scene gives the same package, byte for byte: ``Stage.Flatten`` names th
 opening of the stage to the next (one thread or many), so :func:`stable_prototypes`
 renumbers them by the path of their first instance; the flattened layer is written through
 the text format and read back before the crate file is written, as the crate writer keeps
-each spec's fields in the order they were authored, and ``Flatten`` and ``Sdf.CopySpec``
-author them in the order of the field names' addresses in memory, which changes from one
-process to another; the zip stamps each file with its
+each spec's fields in the order they were authored, and ``Flatten`` authors them in an
+order that changes from one process to another (``Sdf.CopySpec`` sorts them by the field
+names' addresses in memory); the zip stamps each file with its
 modification time, which is set to the zip epoch first (1980-01-01 00:00 local time, as the
 zip stores it); the layer's documentation and the models' ``assetInfo`` identifiers are
 made relative to the scene's folder; and ``UsdUtils.CreateNewARKitUsdzPackage``, which
