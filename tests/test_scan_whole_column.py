@@ -72,7 +72,7 @@ def _check_capital(fit, rms: dict[str, float]) -> None:
     from ionic_usd.evaluate.scan_volute import bolster_circle
 
     cap = fit.column.capital
-    got = 1000.0 * bolster_circle(cap)
+    got = 1000.0 * bolster_circle(cap, fit.column.shaft.top_radius)
     want = np.array([c.eye_x, c.echinus_top, c.volute_radius])
     assert np.abs(got - want).max() <= 5.0, (got, want)
     seat = 1000.0 * (capital_layout(cap).abacus_y + cap.capital_position_y)

@@ -82,7 +82,6 @@ __all__ = [
     "build_capital",
     "capital_mesh",
     "bolster_profile",
-    "right_bolster",
 ]
 
 
@@ -146,7 +145,12 @@ def build_capital(
         "canalis_front",
     )
     rear = rigid(front, MIRROR_Z, name="canalis_rear")
-    br = right_bolster(p, lay)
+    br = rigid(
+        bolster_mesh(p, 2 * lay.back_z, lay.total_radius, extend=seat, lead=seat),
+        np.eye(3),
+        (lay.eye_x, lay.eye_y, lay.back_z),
+        "bolster_right",
+    )
     bl = rigid(br, MIRROR_X, name="bolster_left")
     parts = CapitalParts(
         abacus_mesh(p, lay),
@@ -156,19 +160,6 @@ def build_capital(
         (br, bl),
     )
     return parts.lifted(p.capital_position_y)
-
-
-def right_bolster(p: CapitalParams, lay: CapitalLayout | None = None) -> Mesh:
-    """The right bolster as :func:`build_capital` places it, before the capital's lift by
-    ``capital_position_y``: on the eyes' axis, its ends sunk a seat into the volutes' discs."""
-    lay = lay or capital_layout(p)
-    seat = seat_depth(p)
-    return rigid(
-        bolster_mesh(p, 2 * lay.back_z, lay.total_radius, extend=seat, lead=seat),
-        np.eye(3),
-        (lay.eye_x, lay.eye_y, lay.back_z),
-        "bolster_right",
-    )
 
 
 def capital_mesh(

@@ -356,11 +356,11 @@ class _Problem:
         def circle(xx: np.ndarray) -> np.ndarray | None:  # bolsters, abacus seat and top
             try:
                 c = proportioned(self.cap, model, xx)
-                b = bolster_circle(c)
+                b = bolster_circle(c, self.top_radius)
                 seat = capital_layout(c).abacus_y + c.capital_position_y
             except (ParameterError, GeometryError):
                 return None
-            return np.append(b, [seat, seat + c.abacus_height])
+            return None if b is None else np.append(b, [seat, seat + c.abacus_height])
 
         now = circle(x)
         if now is None:

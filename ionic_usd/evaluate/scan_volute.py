@@ -81,14 +81,17 @@ def roll_circle(
     return float(c[0]), float(c[1]), float(abs(c[2]))
 
 
-def bolster_circle(cap: CapitalParams) -> np.ndarray:
+def bolster_circle(cap: CapitalParams, top_radius: float) -> np.ndarray | None:
     """(x, y, radius) of the circle the model's right bolster lies on, seen from the side
     (capital frame, as :func:`roll_circle`): a circle fitted to its points between a tenth and
     three tenths of its half-length from the middle (clear of the belt and of the ends' seat
-    in the volute discs). Only the bolster is built, not the whole capital."""
-    from ionic_usd.column.capital import right_bolster
+    in the volute discs). None when the capital has no such bolster (the angle capital)."""
+    from ionic_usd.column.capital import build_capital
 
-    p = right_bolster(cap).points
+    parts = build_capital(cap, top_radius=top_radius).as_dict()
+    if "bolster_right" not in parts:
+        return None
+    p = parts["bolster_right"].points
     z = np.abs(p[:, 2])
     sel = (z > 0.1 * z.max()) & (z < 0.3 * z.max())
     return circle_fit(np.c_[np.abs(p[sel, 0]), p[sel, 1] + cap.capital_position_y])
